@@ -1,0 +1,13 @@
+// hmsm: physically based tree animation in wind (Yang & Wu 2011, the HMSM).
+// The one header an engine includes.
+#pragma once
+
+#include <hmsm/generator.h>
+#include <hmsm/hierarchy.h>
+#include <hmsm/mesh.h>
+#include <hmsm/options.h>
+#include <hmsm/pass.h>
+#include <hmsm/scene.h>
+#include <hmsm/simulation.h>
+#include <hmsm/status.h>
+#include <hmsm/tree.h>

@@ -1,0 +1,37 @@
+// The branch mesh and leaf cards of pass 7 (DESIGN.md 3.8), as a static template in chain-local
+// coordinates; the contour pass makes it world-space each step.
+#pragma once
+
+#include <hmsm/hierarchy.h>
+
+#include <cstdint>
+#include <vector>
+
+namespace hmsm {
+
+struct MeshVertex {
+    int32_t chain = 0;          ///< rigid with this chain
+    int32_t fix_chain = -1;     ///< base-ring vertex of a non-trunk chain: the parent chain
+    glm::dvec3 position{0.0};   ///< in the chain's rest frame, relative to its attach node
+    glm::dvec3 normal{0.0};
+    glm::dvec3 parent_position{0.0};  ///< same rest vertex in fix_chain's frame (if any)
+    glm::dvec3 parent_normal{0.0};
+};
+
+struct MeshTemplate {
+    std::vector<MeshVertex> vertices;  ///< rings of each chain (chain order), tips, leaf cards
+    std::vector<uint32_t> indices;     ///< triangles, counter-clockwise seen from outside
+    uint32_t ring_vertex_count = 0;
+    uint32_t tip_count = 0;
+    uint32_t leaf_count = 0;
+    uint32_t triangle_count() const { return static_cast<uint32_t>(indices.size() / 3); }
+};
+
+/// Vertex count of DESIGN.md 3.8: sum over chains of (members+1)*ring_sides + tips + 4*leaves.
+uint64_t mesh_vertex_count(const TreeModel& tree, const Hierarchy& hierarchy,
+                           const ModelOptions& options);
+
+MeshTemplate build_mesh(const TreeModel& tree, const Hierarchy& hierarchy,
+                        const ModelOptions& options);
+
+}  // namespace hmsm

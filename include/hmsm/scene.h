@@ -1,0 +1,41 @@
+// Instances of one or many tree models (DESIGN.md 3.6) and the forest file (DESIGN.md 4).
+#pragma once
+
+#include <hmsm/tree.h>
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace hmsm {
+
+/// A placed copy of a model: rotated by Ry(yaw) about its origin, then moved to origin.
+struct Instance {
+    uint32_t model = 0;
+    glm::dvec3 origin{0.0};
+    double yaw = 0.0;
+};
+
+struct Scene {
+    std::vector<TreeModel> models;
+    std::vector<std::string> model_names;  ///< same length as models
+    std::vector<Instance> instances;
+};
+
+/// One instance of `tree` (at the origin with yaw 0 by default).
+Scene single_tree_scene(TreeModel tree, glm::dvec3 origin = glm::dvec3(0.0), double yaw = 0.0);
+
+/// `count` instances of `tree` on a square grid `spacing` apart, centred on the origin, with
+/// yaws drawn deterministically from `seed`.
+Result<Scene> grid_scene(TreeModel tree, uint32_t count, double spacing, uint64_t seed);
+
+/// Reads an hmsm-forest JSON v1 file; model paths are relative to the file, "preset:NAME"
+/// generates a preset.
+Result<Scene> load_forest(const std::string& path);
+Result<Scene> parse_forest(std::string_view json, const std::string& base_directory,
+                           std::string_view source = "forest");
+
+/// Checks that every instance names a model and every number is finite.
+Status validate_scene(const Scene& scene);
+
+}  // namespace hmsm

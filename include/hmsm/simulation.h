@@ -1,0 +1,111 @@
+// The simulation: owns the state, the seven-pass sequence (written once, here) and a backend.
+#pragma once
+
+#include <hmsm/hierarchy.h>
+#include <hmsm/mesh.h>
+#include <hmsm/options.h>
+#include <hmsm/pass.h>
+#include <hmsm/scene.h>
+
+#include <memory>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace hmsm {
+
+namespace detail {
+class Backend;
+struct Dispatch;
+struct SceneData;
+}  // namespace detail
+
+/// `cpu` is the serial float reference (the paper's baseline); `cpu64` the double-precision
+/// oracle; `automatic` picks CUDA, then a Vulkan GPU, then the CPU.
+enum class BackendKind { cpu, cpu64, vulkan, cuda, automatic };
+
+const char* to_string(BackendKind kind);
+std::optional<BackendKind> parse_backend_kind(std::string_view name);
+/// Backends compiled into this build (never `automatic`).
+std::vector<BackendKind> compiled_backends();
+
+/// How passes 3 and 5 accumulate down the hierarchy: the paper's pointer jumping in
+/// ceil(log2(D+1)) rounds, or one dispatch per depth level (for comparison).
+enum class Composition { pointer_jumping, level_by_level };
+
+struct SimulationConfig {
+    BackendKind backend = BackendKind::automatic;
+    ModelOptions model;
+    Parameters parameters;
+    Wind wind;
+    Composition composition = Composition::pointer_jumping;
+    bool profile_passes = true;  ///< collect per-pass device times
+};
+
+/// What a caller can read back. Components per element: positions and normals 3 (x, y, z),
+/// chain rotations 9 (column-major), chain origins 3, chain angles 4 (theta_x, theta_z and
+/// their rates). Elements are instance-major; nodes in input order, chains in chain order.
+enum class Output { node_positions, vertex_positions, vertex_normals, chain_rotations,
+                    chain_origins, chain_angles };
+uint32_t output_components(Output output);
+
+class Simulation {
+public:
+    /// Validates everything, builds hierarchies and meshes, creates the backend, uploads the
+    /// scene and poses it at rest (S = V = 0).
+    static Result<std::unique_ptr<Simulation>> create(const Scene& scene,
+                                                      const SimulationConfig& config);
+    ~Simulation();
+    Simulation(const Simulation&) = delete;
+    Simulation& operator=(const Simulation&) = delete;
+
+    /// Advances `count` fixed time steps (all seven passes each). Blocks until done.
+    Status step(uint32_t count = 1);
+
+    uint64_t steps_done() const { return steps_done_; }
+    double time() const { return static_cast<double>(steps_done_) * config_.parameters.dt; }
+
+    /// Reads an output for every instance, converted to the requested precision.
+    Status read(Output output, std::vector<float>& values) const;
+    Status read(Output output, std::vector<double>& values) const;
+
+    /// Device time per pass over the last step() call.
+    PassTimes pass_times() const;
+
+    BackendKind backend_kind() const;
+    std::string device_name() const;
+    const SimulationConfig& config() const { return config_; }
+    const Scene& scene() const { return scene_; }
+    const Hierarchy& hierarchy(uint32_t model) const { return hierarchies_[model]; }
+    const MeshTemplate& mesh(uint32_t model) const { return meshes_[model]; }
+
+    uint64_t instance_count() const;
+    uint64_t chain_count() const;   ///< over all instances
+    uint64_t node_count() const;    ///< over all instances
+    uint64_t vertex_count() const;  ///< over all instances
+    uint32_t jump_rounds() const;   ///< pointer-jumping rounds of passes 3 and 5
+    uint32_t floored_chain_count() const;  ///< over all models, once per model
+
+    /// For tests and tools inside hmsm: the backend and the per-step program.
+    detail::Backend& backend() const { return *backend_; }
+    const std::vector<detail::Dispatch>& step_program() const { return step_program_; }
+    const detail::SceneData& scene_data() const { return *data_; }
+
+private:
+    Simulation() = default;
+    Status read_elements(Output output, std::vector<double>* as_double,
+                         std::vector<float>* as_float) const;
+
+    SimulationConfig config_;
+    Scene scene_;
+    std::vector<Hierarchy> hierarchies_;
+    std::vector<MeshTemplate> meshes_;
+    std::unique_ptr<detail::SceneData> data_;
+    std::unique_ptr<detail::Backend> backend_;
+    std::vector<detail::Dispatch> step_program_;
+    std::vector<double> wind_phases_;  // scratch: one entry per step of a step() call
+    uint64_t steps_done_ = 0;
+};
+
+}  // namespace hmsm

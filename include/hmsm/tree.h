@@ -1,0 +1,53 @@
+// The tree skeleton (DESIGN.md 3.1) and its file formats (DESIGN.md 4).
+#pragma once
+
+#include <hmsm/status.h>
+
+#include <glm/vec2.hpp>
+#include <glm/vec3.hpp>
+
+#include <cstdint>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace hmsm {
+
+/// One skeleton node: rest position (m), radius (m) and parent index (-1 for the root).
+struct TreeNode {
+    int32_t parent = -1;
+    glm::dvec3 position{0.0};
+    double radius = 0.0;
+};
+
+/// A leaf card attached to a node; it moves rigidly with the chain that owns the node.
+struct TreeLeaf {
+    int32_t node = 0;
+    glm::dvec3 offset{0.0};
+    glm::dvec3 normal{0.0, 0.0, 1.0};
+    glm::dvec3 up{0.0, 1.0, 0.0};
+    glm::dvec2 size{0.1, 0.1};
+};
+
+/// A validated skeleton: nodes in input order (ids are indices) plus optional leaves.
+struct TreeModel {
+    std::vector<TreeNode> nodes;
+    std::vector<TreeLeaf> leaves;
+};
+
+/// Checks every rule of DESIGN.md 3.1 plus the leaf fields; the message names node or leaf.
+Status validate_tree(const TreeModel& tree);
+
+/// Parses hmsm-tree JSON v1 and validates it. `source` names the input in error messages.
+Result<TreeModel> parse_tree(std::string_view json, std::string_view source = "tree");
+/// Reads and parses a tree file.
+Result<TreeModel> load_tree(const std::string& path);
+/// Serializes to hmsm-tree JSON v1 (round-trips exactly: numbers are written with 17 digits).
+std::string tree_to_json(const TreeModel& tree);
+/// Writes a tree file; on failure no file is left behind.
+Status save_tree(const TreeModel& tree, const std::string& path);
+
+/// Rest-pose height of a tree: max minus min node y (the conformance error scale, DESIGN.md 7).
+double tree_height(const TreeModel& tree);
+
+}  // namespace hmsm

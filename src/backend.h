@@ -1,0 +1,81 @@
+// The backend interface. A backend knows how to hold the buffers of gpu_layout.h and run one
+// named pass over them; the pass sequence itself lives only in Simulation (simulation.cpp).
+#pragma once
+
+#include "buffers.h"
+#include "scene_data.h"
+
+#include <hmsm/pass.h>
+#include <hmsm/simulation.h>
+#include <hmsm/status.h>
+
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <string>
+
+namespace hmsm::detail {
+
+/// One dispatch of the step program: a pass over one instance group. The integer fields of
+/// `constants` are final; `constants.wind.w` is replaced per step by the backend (see run()).
+/// A CPU backend takes dt, max_angle, fix_weight and the wind vector from SceneData (double),
+/// a GPU backend from the float copies in `constants`.
+struct Dispatch {
+    Pass pass;
+    gpu::PassConstants constants;
+};
+
+enum class Scalar { f32, f64 };
+
+class Backend {
+public:
+    virtual ~Backend() = default;
+
+    virtual BackendKind kind() const = 0;
+    /// Human-readable device, e.g. "NVIDIA H100 80GB HBM3" or "llvmpipe (LLVM 15.0.6, 256 bits)".
+    virtual std::string device_name() const = 0;
+
+    /// Allocates every buffer of kBufferTable sized by scene.element_count(), uploads the static
+    /// buffers and zero-fills the state buffers. Called exactly once, before anything below.
+    /// Fails (never aborts) with out_of_memory or unsupported when the scene does not fit.
+    virtual Status upload(const SceneData& scene) = 0;
+
+    /// Runs `program` wind_x.size() times, in order, one step each; step k runs every
+    /// wind_force dispatch with constants.wind.w = wind_x[k] (= f*t mod 2 of that step).
+    /// Dispatches see the writes of all earlier dispatches. Returns when all work is complete.
+    virtual Status run(std::span<const Dispatch> program, std::span<const double> wind_x) = 0;
+
+    /// Copies elements [first, first+count) of `id` (count * shape_scalars scalars; integer
+    /// buffers are read as their numeric values) into `dst` as float or double.
+    virtual Status read(BufferId id, uint64_t first, uint64_t count, void* dst, Scalar as) const = 0;
+    /// The inverse of read(); for tests that set random states before running one pass.
+    virtual Status write(BufferId id, uint64_t first, uint64_t count, const void* src,
+                         Scalar as) = 0;
+
+    /// Turns per-pass device timing on or off (off: pass_times() returns zeros).
+    virtual void set_profiling(bool enabled) = 0;
+    /// Device seconds per pass summed over the steps of the last run().
+    virtual PassTimes pass_times() const = 0;
+};
+
+/// Backend factories; the registry (backend_registry.cpp) knows which are compiled in.
+/// A factory returns no_device when it is compiled in but finds no usable device.
+Result<std::unique_ptr<Backend>> create_cpu_backend(bool double_precision);
+#ifdef HMSM_HAVE_VULKAN
+Result<std::unique_ptr<Backend>> create_vulkan_backend();
+#endif
+#ifdef HMSM_HAVE_CUDA
+Result<std::unique_ptr<Backend>> create_cuda_backend();
+#endif
+
+/// Creates the backend `kind`; `automatic` tries CUDA, then a Vulkan GPU, then the CPU (float).
+Result<std::unique_ptr<Backend>> create_backend(BackendKind kind);
+
+/// Buffers each pass reads and writes (bit i = BufferId i), for barrier placement.
+uint32_t pass_reads(Pass pass);
+uint32_t pass_writes(Pass pass);
+
+/// Number of threads of a dispatch and the mapping shared by every backend.
+inline uint32_t dispatch_thread_count(const Dispatch& d) { return d.constants.element_count; }
+
+}  // namespace hmsm::detail

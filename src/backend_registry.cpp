@@ -1,0 +1,56 @@
+// Which backends this build has, and `automatic` selection: CUDA, then a Vulkan GPU (not a CPU
+// driver such as lavapipe), then the serial CPU in float.
+#include "backend.h"
+
+namespace hmsm {
+
+std::vector<BackendKind> compiled_backends() {
+    std::vector<BackendKind> kinds = {BackendKind::cpu, BackendKind::cpu64};
+#ifdef HMSM_HAVE_VULKAN
+    kinds.push_back(BackendKind::vulkan);
+#endif
+#ifdef HMSM_HAVE_CUDA
+    kinds.push_back(BackendKind::cuda);
+#endif
+    return kinds;
+}
+
+namespace detail {
+
+#ifdef HMSM_HAVE_VULKAN
+bool vulkan_backend_is_cpu_device(const Backend& backend);  // src/vulkan
+#endif
+
+Result<std::unique_ptr<Backend>> create_backend(BackendKind kind) {
+    switch (kind) {
+        case BackendKind::cpu: return create_cpu_backend(false);
+        case BackendKind::cpu64: return create_cpu_backend(true);
+        case BackendKind::vulkan:
+#ifdef HMSM_HAVE_VULKAN
+            return create_vulkan_backend();
+#else
+            return Status{ErrorCode::no_device, "vulkan: this build of hmsm has no Vulkan backend"};
+#endif
+        case BackendKind::cuda:
+#ifdef HMSM_HAVE_CUDA
+            return create_cuda_backend();
+#else
+            return Status{ErrorCode::no_device, "cuda: this build of hmsm has no CUDA backend"};
+#endif
+        case BackendKind::automatic: {
+#ifdef HMSM_HAVE_CUDA
+            if (auto cuda = create_cuda_backend(); cuda.ok()) return cuda;
+#endif
+#ifdef HMSM_HAVE_VULKAN
+            if (auto vulkan = create_vulkan_backend();
+                vulkan.ok() && !vulkan_backend_is_cpu_device(*vulkan.value()))
+                return vulkan;
+#endif
+            return create_cpu_backend(false);
+        }
+    }
+    return Status{ErrorCode::internal, "unknown backend kind"};
+}
+
+}  // namespace detail
+}  // namespace hmsm

@@ -1,0 +1,39 @@
+// Pass 7: branch-mesh and leaf vertices rigid with their chain, v = O_c + R_c v_local; base-ring
+// vertices of child chains blend with the parent chain (the paper's contour fix-up) so joints
+// stay closed while the child swings.
+#include "cpu_state.h"
+
+#include <glm/geometric.hpp>
+
+namespace hmsm::detail::cpu {
+
+template <class T>
+void contour(State<T>& s, const gpu::PassConstants& pc) {
+    using vec3 = typename State<T>::vec3;
+    const uint64_t pose = uint64_t(pc.src_half) * s.total_chains;
+    const T beta = s.fix_weight;
+    for (uint32_t i = 0; i < pc.element_count; ++i) {
+        Element e = element_of(i, pc.model_vertex_count);
+        uint32_t v = pc.model_vertex_begin + e.index;
+        glm::ivec2 chains = s.vertex_chain[v];
+        uint64_t own = pose + state_chain(pc, e.instance, chains.x);
+        vec3 position = vec3(s.chain_origin[own]) + s.chain_rotation[own] * vec3(s.vertex_rest_position[v]);
+        vec3 normal = s.chain_rotation[own] * vec3(s.vertex_rest_normal[v]);
+        if (chains.y >= 0) {
+            uint64_t parent = pose + state_chain(pc, e.instance, chains.y);
+            vec3 p = vec3(s.chain_origin[parent]) +
+                     s.chain_rotation[parent] * vec3(s.vertex_parent_position[v]);
+            vec3 n = s.chain_rotation[parent] * vec3(s.vertex_parent_normal[v]);
+            position = (T(1) - beta) * position + beta * p;
+            normal = glm::normalize((T(1) - beta) * normal + beta * n);
+        }
+        uint64_t out = pc.vertex_begin + uint64_t(e.instance) * pc.model_vertex_count + e.index;
+        s.vertex_position[out] = {position, T(1)};
+        s.vertex_normal[out] = {normal, T(0)};
+    }
+}
+
+template void contour<float>(State<float>&, const gpu::PassConstants&);
+template void contour<double>(State<double>&, const gpu::PassConstants&);
+
+}  // namespace hmsm::detail::cpu

@@ -1,0 +1,199 @@
+// The CPU backend: plain serial loops over host vectors, float (`cpu`, the paper's baseline) or
+// double (`cpu64`, the oracle of every conformance test). Per-pass times are host wall clock.
+#include "cpu_state.h"
+
+#include <chrono>
+#include <cstring>
+#include <new>
+
+namespace hmsm::detail {
+namespace cpu {
+namespace {
+
+template <class T, class V>
+std::vector<V> convert_vec4(const std::vector<glm::dvec4>& src) {
+    std::vector<V> out(src.size());
+    for (size_t i = 0; i < src.size(); ++i) out[i] = V(src[i]);
+    return out;
+}
+
+/// Copies between a typed host buffer and scalars laid out as gpu_layout.h stores them.
+template <class T>
+struct ScalarView {
+    // Scalars per stored element, and the element -> scalar mapping.
+    static void get(const std::vector<int32_t>& b, uint64_t i, double* out) { out[0] = b[i]; }
+    static void get(const std::vector<glm::ivec2>& b, uint64_t i, double* out) {
+        out[0] = b[i].x; out[1] = b[i].y;
+    }
+    static void get(const std::vector<glm::vec<2, T>>& b, uint64_t i, double* out) {
+        out[0] = double(b[i].x); out[1] = double(b[i].y);
+    }
+    static void get(const std::vector<glm::vec<4, T>>& b, uint64_t i, double* out) {
+        for (int k = 0; k < 4; ++k) out[k] = double(b[i][k]);
+    }
+    static void get(const std::vector<glm::mat<3, 3, T>>& b, uint64_t i, double* out) {
+        for (int c = 0; c < 3; ++c) {
+            for (int r = 0; r < 3; ++r) out[c * 4 + r] = double(b[i][c][r]);
+            out[c * 4 + 3] = 0.0;
+        }
+    }
+    static void set(std::vector<int32_t>& b, uint64_t i, const double* in) { b[i] = int32_t(in[0]); }
+    static void set(std::vector<glm::ivec2>& b, uint64_t i, const double* in) {
+        b[i] = glm::ivec2(int32_t(in[0]), int32_t(in[1]));
+    }
+    static void set(std::vector<glm::vec<2, T>>& b, uint64_t i, const double* in) {
+        b[i] = glm::vec<2, T>(T(in[0]), T(in[1]));
+    }
+    static void set(std::vector<glm::vec<4, T>>& b, uint64_t i, const double* in) {
+        for (int k = 0; k < 4; ++k) b[i][k] = T(in[k]);
+    }
+    static void set(std::vector<glm::mat<3, 3, T>>& b, uint64_t i, const double* in) {
+        for (int c = 0; c < 3; ++c)
+            for (int r = 0; r < 3; ++r) b[i][c][r] = T(in[c * 4 + r]);
+    }
+};
+
+template <class T>
+class CpuBackend final : public Backend {
+public:
+    BackendKind kind() const override {
+        return sizeof(T) == 8 ? BackendKind::cpu64 : BackendKind::cpu;
+    }
+    std::string device_name() const override {
+        return sizeof(T) == 8 ? "host CPU (serial, double)" : "host CPU (serial, float)";
+    }
+
+    Status upload(const SceneData& scene) override {
+        try {
+            upload_unchecked(scene);
+        } catch (const std::bad_alloc&) {
+            return {ErrorCode::out_of_memory, "cpu: not enough host memory for the scene"};
+        }
+        return {};
+    }
+
+    Status run(std::span<const Dispatch> program, std::span<const double> wind_x) override {
+        times_ = {};
+        using clock = std::chrono::steady_clock;
+        for (double x : wind_x) {
+            for (const Dispatch& d : program) {
+                auto start = profiling_ ? clock::now() : clock::time_point{};
+                run_pass(d, x);
+                if (profiling_)
+                    times_.seconds[uint32_t(d.pass)] +=
+                        std::chrono::duration<double>(clock::now() - start).count();
+            }
+        }
+        times_.steps = profiling_ ? wind_x.size() : 0;
+        return {};
+    }
+
+    Status read(BufferId id, uint64_t first, uint64_t count, void* dst, Scalar as) const override {
+        return visit(const_cast<State<T>&>(s_), id, first, count, [&](auto& buffer) {
+            const uint32_t n = shape_scalars(buffer_info(id).shape);
+            double tmp[12];
+            for (uint64_t i = 0; i < count; ++i) {
+                ScalarView<T>::get(buffer, first + i, tmp);
+                for (uint32_t k = 0; k < n; ++k) {
+                    if (as == Scalar::f64) static_cast<double*>(dst)[i * n + k] = tmp[k];
+                    else static_cast<float*>(dst)[i * n + k] = float(tmp[k]);
+                }
+            }
+        });
+    }
+
+    Status write(BufferId id, uint64_t first, uint64_t count, const void* src, Scalar as) override {
+        return visit(s_, id, first, count, [&](auto& buffer) {
+            const uint32_t n = shape_scalars(buffer_info(id).shape);
+            double tmp[12];
+            for (uint64_t i = 0; i < count; ++i) {
+                for (uint32_t k = 0; k < n; ++k)
+                    tmp[k] = as == Scalar::f64 ? static_cast<const double*>(src)[i * n + k]
+                                               : double(static_cast<const float*>(src)[i * n + k]);
+                ScalarView<T>::set(buffer, first + i, tmp);
+            }
+        });
+    }
+
+    void set_profiling(bool enabled) override { profiling_ = enabled; }
+    PassTimes pass_times() const override { return times_; }
+
+private:
+    void upload_unchecked(const SceneData& d) {
+        using vec4 = typename State<T>::vec4;
+        s_.chain_parent = d.chain_parent;
+        s_.chain_jump = d.chain_jump;
+        s_.chain_attach = d.chain_attach;
+        s_.node_owner = d.node_owner;
+        s_.vertex_chain = d.vertex_chain;
+        s_.chain_rest_rotation.assign(d.chain_rest_rotation.begin(), d.chain_rest_rotation.end());
+        s_.chain_constants = convert_vec4<T, vec4>(d.chain_constants);
+        s_.node_local = convert_vec4<T, vec4>(d.node_local);
+        s_.vertex_rest_position = convert_vec4<T, vec4>(d.vertex_rest_position);
+        s_.vertex_rest_normal = convert_vec4<T, vec4>(d.vertex_rest_normal);
+        s_.vertex_parent_position = convert_vec4<T, vec4>(d.vertex_parent_position);
+        s_.vertex_parent_normal = convert_vec4<T, vec4>(d.vertex_parent_normal);
+        s_.instance_origin = convert_vec4<T, vec4>(d.instance_origin);
+        s_.instance_yaw = convert_vec4<T, vec4>(d.instance_yaw);
+        s_.chain_state.assign(d.total_chains, vec4(0));
+        s_.chain_force.assign(d.total_chains, typename State<T>::vec2(0));
+        s_.chain_local.assign(d.total_chains, typename State<T>::mat3(0));
+        s_.chain_rotation.assign(2 * d.total_chains, typename State<T>::mat3(0));
+        s_.node_relative.assign(d.total_nodes, vec4(0));
+        s_.chain_origin.assign(2 * d.total_chains, vec4(0));
+        s_.node_world.assign(d.total_nodes, vec4(0));
+        s_.vertex_position.assign(d.total_vertices, vec4(0));
+        s_.vertex_normal.assign(d.total_vertices, vec4(0));
+        s_.dt = T(d.dt);
+        s_.max_angle = T(d.max_angle);
+        s_.fix_weight = T(d.fix_weight);
+        s_.profile = uint32_t(d.profile);
+        s_.wind_vector = typename State<T>::vec3(d.wind_vector);
+        s_.total_chains = d.total_chains;
+    }
+
+    void run_pass(const Dispatch& d, double wind_x) {
+        switch (d.pass) {
+            case Pass::wind_force: wind_force(s_, d.constants, wind_x); break;
+            case Pass::integrate: integrate(s_, d.constants); break;
+            case Pass::compose: compose(s_, d.constants); break;
+            case Pass::node_relative: node_relative(s_, d.constants); break;
+            case Pass::root_positions: root_positions(s_, d.constants); break;
+            case Pass::node_world: node_world(s_, d.constants); break;
+            case Pass::contour: contour(s_, d.constants); break;
+        }
+    }
+
+    /// Calls f(buffer) for the host vector behind `id` after a range check.
+    template <class F>
+    static Status visit(State<T>& s, BufferId id, uint64_t first, uint64_t count, F&& f) {
+        auto checked = [&](auto& buffer) -> Status {
+            if (first + count > buffer.size())
+                return {ErrorCode::invalid_argument,
+                        "cpu: range past the end of buffer " + std::string(buffer_info(id).name)};
+            f(buffer);
+            return {};
+        };
+        switch (id) {
+#define HMSM_CPU_VISIT(name, binding, shape, scope) \
+    case BufferId::name: return checked(s.name);
+            HMSM_BUFFERS(HMSM_CPU_VISIT)
+#undef HMSM_CPU_VISIT
+        }
+        return {ErrorCode::internal, "cpu: unknown buffer"};
+    }
+
+    State<T> s_;
+    bool profiling_ = false;
+    PassTimes times_;
+};
+
+}  // namespace
+}  // namespace cpu
+
+Result<std::unique_ptr<Backend>> create_cpu_backend(bool double_precision) {
+    if (double_precision) return std::unique_ptr<Backend>(new cpu::CpuBackend<double>());
+    return std::unique_ptr<Backend>(new cpu::CpuBackend<float>());
+}
+
+}  // namespace hmsm::detail

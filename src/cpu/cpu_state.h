@@ -1,0 +1,73 @@
+// Host buffers of the CPU backend (float: the paper's serial baseline; double: the oracle) and
+// the element mapping every pass uses. Same logical layout as gpu_layout.h; matrices are glm
+// 3x3 here.
+#pragma once
+
+#include "../backend.h"
+
+#include <glm/mat3x3.hpp>
+#include <glm/vec2.hpp>
+#include <glm/vec3.hpp>
+#include <glm/vec4.hpp>
+
+#include <vector>
+
+namespace hmsm::detail::cpu {
+
+template <class T>
+struct State {
+    using vec2 = glm::vec<2, T>;
+    using vec3 = glm::vec<3, T>;
+    using vec4 = glm::vec<4, T>;
+    using mat3 = glm::mat<3, 3, T>;
+
+    // Model and instance scope (uploaded once).
+    std::vector<int32_t> chain_parent, chain_jump, chain_attach, node_owner;
+    std::vector<glm::ivec2> vertex_chain;
+    std::vector<mat3> chain_rest_rotation;
+    std::vector<vec4> chain_constants, node_local;
+    std::vector<vec4> vertex_rest_position, vertex_rest_normal;
+    std::vector<vec4> vertex_parent_position, vertex_parent_normal;
+    std::vector<vec4> instance_origin, instance_yaw;
+    // Per-instance state.
+    std::vector<vec4> chain_state;
+    std::vector<vec2> chain_force;
+    std::vector<mat3> chain_local;
+    std::vector<mat3> chain_rotation;  // two halves of total_chains
+    std::vector<vec4> node_relative;
+    std::vector<vec4> chain_origin;    // two halves
+    std::vector<vec4> node_world;
+    std::vector<vec4> vertex_position, vertex_normal;
+    // Uniforms.
+    T dt{}, max_angle{}, fix_weight{};
+    uint32_t profile = 0;
+    vec3 wind_vector{0};
+    uint64_t total_chains = 0;
+};
+
+/// Which instance of the group and which model element thread `i` of a dispatch handles.
+struct Element {
+    uint32_t instance;  ///< index within the group
+    uint32_t index;     ///< model-local chain, node or vertex
+};
+inline Element element_of(uint32_t i, uint32_t per_instance) {
+    return {i / per_instance, i % per_instance};
+}
+/// State index of model chain `c` of group instance `k`.
+inline uint64_t state_chain(const gpu::PassConstants& pc, uint32_t k, int32_t c) {
+    return pc.chain_begin + uint64_t(k) * pc.model_chain_count + uint64_t(c);
+}
+inline uint64_t state_node(const gpu::PassConstants& pc, uint32_t k, int32_t n) {
+    return pc.node_begin + uint64_t(k) * pc.model_node_count + uint64_t(n);
+}
+
+// The seven passes; each runs every thread of one dispatch serially.
+template <class T> void wind_force(State<T>& s, const gpu::PassConstants& pc, double wind_x);
+template <class T> void integrate(State<T>& s, const gpu::PassConstants& pc);
+template <class T> void compose(State<T>& s, const gpu::PassConstants& pc);
+template <class T> void node_relative(State<T>& s, const gpu::PassConstants& pc);
+template <class T> void root_positions(State<T>& s, const gpu::PassConstants& pc);
+template <class T> void node_world(State<T>& s, const gpu::PassConstants& pc);
+template <class T> void contour(State<T>& s, const gpu::PassConstants& pc);
+
+}  // namespace hmsm::detail::cpu

@@ -1,0 +1,97 @@
+// The one description of hmsm's device buffers and per-dispatch constants, included by C++,
+// CUDA and GLSL (shaders compile with -I src). Only the preprocessor and plain structs here.
+//
+// Storage is structure-of-arrays of 16-byte elements (vec4, never vec3). A 3x3 matrix is three
+// vec4 columns (48 bytes). "Model" buffers hold static data once per model (shared by all its
+// instances); "state" buffers hold one element per chain/node/vertex of every instance,
+// instance-major. The ping-pong buffers chain_rotation and chain_origin have two halves of
+// total_chains elements each (the paper's M_temp and Root Positions temporaries).
+#ifndef HMSM_GPU_LAYOUT_H
+#define HMSM_GPU_LAYOUT_H
+
+/// Threads per workgroup / CUDA block, for every pass.
+#define HMSM_WORKGROUP_SIZE 64
+/// Pointer-jumping rounds supported (chain depth up to 2^8 - 1).
+#define HMSM_MAX_JUMP_ROUNDS 8
+
+// Binding numbers (Vulkan descriptor set 0) = hmsm::detail::BufferId values.
+// Model-scope static data:
+#define HMSM_BINDING_CHAIN_PARENT 0          // int   per model chain: parent chain, -1 trunk
+#define HMSM_BINDING_CHAIN_JUMP 1            // int   per (round, model chain): 2^round-th ancestor or -1; round-major, stride total_model_chains
+#define HMSM_BINDING_CHAIN_ATTACH 2          // int   per model chain: attach node (model-local)
+#define HMSM_BINDING_CHAIN_REST_ROTATION 3   // mat3x4 per model chain: Q_c
+#define HMSM_BINDING_CHAIN_CONSTANTS 4       // vec4  per model chain: (I, K, D, A)
+#define HMSM_BINDING_NODE_OWNER 5            // int   per model node: owning chain (model-local)
+#define HMSM_BINDING_NODE_LOCAL 6            // vec4  per model node: l_n (xyz)
+#define HMSM_BINDING_VERTEX_CHAIN 7          // ivec2 per model vertex: (chain, fix-up parent chain or -1)
+#define HMSM_BINDING_VERTEX_REST_POSITION 8  // vec4  per model vertex: in its chain's frame
+#define HMSM_BINDING_VERTEX_REST_NORMAL 9    // vec4
+#define HMSM_BINDING_VERTEX_PARENT_POSITION 10  // vec4: fix-up vertex in the parent chain's frame
+#define HMSM_BINDING_VERTEX_PARENT_NORMAL 11    // vec4
+// Instance scope:
+#define HMSM_BINDING_INSTANCE_ORIGIN 12      // vec4 per instance: (origin xyz, wind phase phi mod 2)
+#define HMSM_BINDING_INSTANCE_YAW 13         // vec4 per instance: (cos yaw, sin yaw, 0, 0)
+// State, one element per chain/node/vertex of every instance:
+#define HMSM_BINDING_CHAIN_STATE 14          // vec4 per chain: (theta_x, theta_z, v_x, v_z)
+#define HMSM_BINDING_CHAIN_FORCE 15          // vec2 per chain: generalized force g
+#define HMSM_BINDING_CHAIN_LOCAL 16          // mat3x4 per chain: local transform T
+#define HMSM_BINDING_CHAIN_ROTATION 17       // mat3x4 per chain, 2 halves: total rotation R
+#define HMSM_BINDING_NODE_RELATIVE 18        // vec4 per node: u_n
+#define HMSM_BINDING_CHAIN_ORIGIN 19         // vec4 per chain, 2 halves: chain origin O
+#define HMSM_BINDING_NODE_WORLD 20           // vec4 per node: W_n
+#define HMSM_BINDING_VERTEX_POSITION 21      // vec4 per vertex
+#define HMSM_BINDING_VERTEX_NORMAL 22        // vec4 per vertex
+#define HMSM_BINDING_COUNT 23
+
+/// composition modes (PassConstants.mode)
+#define HMSM_MODE_POINTER_JUMPING 0u
+#define HMSM_MODE_LEVEL_BY_LEVEL 1u
+
+#ifdef __cplusplus
+#include <cstddef>
+#include <cstdint>
+namespace hmsm::gpu {
+using uint = uint32_t;
+struct alignas(16) vec4 {
+    float x, y, z, w;
+};
+#endif
+
+/// Push constants of one dispatch (<= 128 bytes, std430). One dispatch covers one instance
+/// group: a run of consecutive instances of the same model. Thread i of a dispatch handles
+/// element (i % per_instance) of instance (i / per_instance) of the group, where per_instance is
+/// model_chain_count, model_node_count, model_vertex_count, or level_count for a level-by-level
+/// compose/root_positions dispatch.
+struct PassConstants {
+    uint element_count;       // threads: group instances x per_instance
+    uint instance_begin;      // first global instance of the group
+    uint chain_begin;         // first state chain of the group
+    uint node_begin;          // first state node of the group
+    uint vertex_begin;        // first state vertex of the group
+    uint model_chain_begin;   // first static chain of the group's model
+    uint model_node_begin;    // first static node of the model
+    uint model_vertex_begin;  // first static vertex of the model
+    uint model_chain_count;   // chains per instance
+    uint model_node_count;    // nodes per instance
+    uint model_vertex_count;  // vertices per instance
+    uint level_begin;         // level-by-level: first model chain of the level
+    uint level_count;         // level-by-level: chains per instance in the level
+    uint round;               // pointer jumping: round r reads the 2^r-th ancestor (chain_jump)
+    uint mode;                // HMSM_MODE_*
+    uint profile;             // hmsm::WindProfile value
+    uint total_chains;        // state chains of the scene: stride between ping-pong halves
+    uint total_model_chains;  // static chains of the scene: stride between chain_jump rounds
+    uint src_half;            // ping-pong: half read (pose readers: the half holding R and O)
+    uint dst_half;            // ping-pong: half written
+    vec4 wind;                // (strength * direction, x0 = f*t mod 2) for wind_force
+    vec4 params;              // (dt, max_angle, fix_weight, 0)
+};
+
+#ifdef __cplusplus
+static_assert(sizeof(PassConstants) == 112, "PassConstants must match std430");
+static_assert(offsetof(PassConstants, wind) == 80, "PassConstants must match std430");
+static_assert(sizeof(PassConstants) <= 128, "push constants must fit the guaranteed 128 bytes");
+}  // namespace hmsm::gpu
+#endif
+
+#endif  // HMSM_GPU_LAYOUT_H

@@ -1,0 +1,116 @@
+#include "scene_data.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace hmsm::detail {
+
+uint32_t jump_rounds_for_depth(int32_t max_depth) {
+    uint32_t rounds = 0;
+    while ((int64_t(1) << rounds) < int64_t(max_depth) + 1) ++rounds;
+    return std::max(rounds, 1u);
+}
+
+namespace {
+
+/// x mod 2 in [0, 2): every wind profile has period 2.
+double reduce_phase(double x) { return x - 2.0 * std::floor(x / 2.0); }
+
+glm::dvec4 point(const glm::dvec3& p) { return {p, 0.0}; }
+
+}  // namespace
+
+SceneData flatten_scene(const Scene& scene, const std::vector<Hierarchy>& hierarchies,
+                        const std::vector<MeshTemplate>& meshes, const Parameters& parameters,
+                        const ModelOptions& options, const Wind& wind,
+                        uint64_t max_group_elements) {
+    SceneData d;
+    int32_t max_depth = 0;
+    for (const Hierarchy& h : hierarchies) max_depth = std::max(max_depth, h.max_depth);
+    d.jump_rounds = jump_rounds_for_depth(max_depth);
+
+    // Model-scope arrays.
+    for (size_t m = 0; m < hierarchies.size(); ++m) {
+        const Hierarchy& h = hierarchies[m];
+        const MeshTemplate& mesh = meshes[m];
+        ModelRange range;
+        range.chain_begin = uint32_t(d.chain_parent.size());
+        range.chain_count = uint32_t(h.chains.size());
+        range.node_begin = uint32_t(d.node_owner.size());
+        range.node_count = uint32_t(h.node_owner.size());
+        range.vertex_begin = uint32_t(d.vertex_chain.size());
+        range.vertex_count = uint32_t(mesh.vertices.size());
+        for (int32_t depth = 0, c = 0; depth <= h.max_depth + 1; ++depth) {
+            while (c < int32_t(h.chains.size()) && h.chains[c].depth < depth) ++c;
+            range.level_begin.push_back(uint32_t(c));
+        }
+        for (const Chain& chain : h.chains) {
+            d.chain_parent.push_back(chain.parent);
+            d.chain_attach.push_back(chain.attach_node);
+            d.chain_rest_rotation.push_back(chain.rest_rotation);
+            d.chain_constants.push_back({chain.inertia, chain.stiffness, chain.damping, chain.wind_area});
+        }
+        for (size_t n = 0; n < h.node_owner.size(); ++n) {
+            d.node_owner.push_back(h.node_owner[n]);
+            d.node_local.push_back(point(h.node_local[n]));
+        }
+        for (const MeshVertex& v : mesh.vertices) {
+            d.vertex_chain.push_back({v.chain, v.fix_chain});
+            d.vertex_rest_position.push_back(point(v.position));
+            d.vertex_rest_normal.push_back(point(v.normal));
+            d.vertex_parent_position.push_back(point(v.parent_position));
+            d.vertex_parent_normal.push_back(point(v.parent_normal));
+        }
+        d.models.push_back(std::move(range));
+    }
+
+    // Jump table: round r holds each chain's 2^r-th ancestor (model-local), or -1.
+    const uint32_t total = d.total_model_chains();
+    d.chain_jump.assign(size_t(d.jump_rounds) * total, -1);
+    for (const ModelRange& range : d.models) {
+        for (uint32_t c = 0; c < range.chain_count; ++c)
+            d.chain_jump[range.chain_begin + c] = d.chain_parent[range.chain_begin + c];
+        for (uint32_t r = 1; r < d.jump_rounds; ++r) {
+            for (uint32_t c = 0; c < range.chain_count; ++c) {
+                int32_t half = d.chain_jump[size_t(r - 1) * total + range.chain_begin + c];
+                d.chain_jump[size_t(r) * total + range.chain_begin + c] =
+                    half < 0 ? -1 : d.chain_jump[size_t(r - 1) * total + range.chain_begin + half];
+            }
+        }
+    }
+
+    // Instances and groups.
+    for (size_t i = 0; i < scene.instances.size(); ++i) {
+        const Instance& inst = scene.instances[i];
+        const ModelRange& range = d.models[inst.model];
+        d.instance_origin.push_back({inst.origin, reduce_phase(wind_phase(wind, inst.origin))});
+        d.instance_yaw.push_back({std::cos(inst.yaw), std::sin(inst.yaw), 0.0, 0.0});
+        uint64_t per_instance = std::max({range.chain_count, range.node_count, range.vertex_count});
+        InstanceGroup* group = d.groups.empty() ? nullptr : &d.groups.back();
+        if (!group || group->model != inst.model ||
+            uint64_t(group->instance_count + 1) * per_instance > max_group_elements) {
+            InstanceGroup g;
+            g.model = inst.model;
+            g.instance_begin = uint32_t(i);
+            g.chain_begin = uint32_t(d.total_chains);
+            g.node_begin = uint32_t(d.total_nodes);
+            g.vertex_begin = uint32_t(d.total_vertices);
+            d.groups.push_back(g);
+            group = &d.groups.back();
+        }
+        ++group->instance_count;
+        d.total_chains += range.chain_count;
+        d.total_nodes += range.node_count;
+        d.total_vertices += range.vertex_count;
+    }
+
+    d.dt = parameters.dt;
+    d.max_angle = parameters.max_angle;
+    d.fix_weight = options.fix_weight;
+    d.profile = wind.profile;
+    d.wind_vector = wind.strength * glm::normalize(wind.direction);
+    d.wind_frequency = wind.frequency;
+    return d;
+}
+
+}  // namespace hmsm::detail

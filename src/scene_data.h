@@ -1,0 +1,91 @@
+// A scene flattened into the 1-D arrays of gpu_layout.h, in double precision. Built once by the
+// Simulation from the hierarchies and meshes; every backend uploads it (converting to its own
+// precision) and never sees trees or chains again.
+#pragma once
+
+#include "buffers.h"
+
+#include <hmsm/hierarchy.h>
+#include <hmsm/mesh.h>
+#include <hmsm/options.h>
+#include <hmsm/scene.h>
+
+#include <glm/mat3x3.hpp>
+#include <glm/vec2.hpp>
+#include <glm/vec4.hpp>
+
+#include <cstdint>
+#include <vector>
+
+namespace hmsm::detail {
+
+/// Static data of one model, as offsets into the concatenated model arrays.
+struct ModelRange {
+    uint32_t chain_begin = 0, chain_count = 0;
+    uint32_t node_begin = 0, node_count = 0;
+    uint32_t vertex_begin = 0, vertex_count = 0;
+    /// Model chains of each depth level: [level_begin[d], level_begin[d + 1]).
+    std::vector<uint32_t> level_begin;
+};
+
+/// A run of consecutive instances of one model: the unit of one dispatch.
+struct InstanceGroup {
+    uint32_t model = 0;
+    uint32_t instance_begin = 0, instance_count = 0;
+    uint32_t chain_begin = 0, node_begin = 0, vertex_begin = 0;  // state offsets
+};
+
+struct SceneData {
+    // Model-scope arrays (every model's data concatenated).
+    std::vector<int32_t> chain_parent;
+    std::vector<int32_t> chain_jump;  // jump_rounds x total_model_chains, round-major
+    std::vector<int32_t> chain_attach;
+    std::vector<glm::dmat3> chain_rest_rotation;
+    std::vector<glm::dvec4> chain_constants;  // (I, K, D, A)
+    std::vector<int32_t> node_owner;
+    std::vector<glm::dvec4> node_local;
+    std::vector<glm::ivec2> vertex_chain;
+    std::vector<glm::dvec4> vertex_rest_position;
+    std::vector<glm::dvec4> vertex_rest_normal;
+    std::vector<glm::dvec4> vertex_parent_position;
+    std::vector<glm::dvec4> vertex_parent_normal;
+    // Instance-scope arrays.
+    std::vector<glm::dvec4> instance_origin;  // (origin, wind phase mod 2)
+    std::vector<glm::dvec4> instance_yaw;     // (cos, sin, 0, 0)
+
+    std::vector<ModelRange> models;
+    std::vector<InstanceGroup> groups;
+
+    uint32_t jump_rounds = 1;
+    uint64_t total_chains = 0, total_nodes = 0, total_vertices = 0;  // state element counts
+    uint32_t instance_count() const { return static_cast<uint32_t>(instance_origin.size()); }
+    uint32_t total_model_chains() const { return static_cast<uint32_t>(chain_parent.size()); }
+
+    // Uniforms (double; GPU backends use the float copies in PassConstants).
+    double dt = 1.0 / 120.0;
+    double max_angle = 0.8;
+    double fix_weight = 0.5;
+    WindProfile profile = WindProfile::none;
+    glm::dvec3 wind_vector{0.0};  // strength * normalized direction
+    double wind_frequency = 0.0;
+
+    /// Elements of buffer `id` (vec4/mat/int elements, not scalars).
+    uint64_t element_count(BufferId id) const;
+};
+
+}  // namespace hmsm::detail
+
+namespace hmsm::detail {
+
+/// Flattens models and instances (DESIGN.md 2: ordered chain-by-depth, instance-major state).
+/// Groups are runs of consecutive instances of one model, split so that no dispatch exceeds
+/// `max_group_elements` threads.
+SceneData flatten_scene(const Scene& scene, const std::vector<Hierarchy>& hierarchies,
+                        const std::vector<MeshTemplate>& meshes, const Parameters& parameters,
+                        const ModelOptions& options, const Wind& wind,
+                        uint64_t max_group_elements = (1ull << 31));
+
+/// Pointer-jumping rounds for a maximum chain depth: max(1, ceil(log2(depth + 1))).
+uint32_t jump_rounds_for_depth(int32_t max_depth);
+
+}  // namespace hmsm::detail

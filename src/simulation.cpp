@@ -1,0 +1,260 @@
+// The pass sequence, written once. Every backend runs the same program of dispatches built here.
+#include <hmsm/simulation.h>
+
+#include "backend.h"
+#include "scene_data.h"
+
+#include <cmath>
+#include <limits>
+
+namespace hmsm {
+
+using detail::Dispatch;
+using detail::SceneData;
+
+const char* to_string(BackendKind kind) {
+    switch (kind) {
+        case BackendKind::cpu: return "cpu";
+        case BackendKind::cpu64: return "cpu64";
+        case BackendKind::vulkan: return "vulkan";
+        case BackendKind::cuda: return "cuda";
+        case BackendKind::automatic: return "auto";
+    }
+    return "?";
+}
+
+std::optional<BackendKind> parse_backend_kind(std::string_view name) {
+    for (BackendKind k : {BackendKind::cpu, BackendKind::cpu64, BackendKind::vulkan,
+                          BackendKind::cuda, BackendKind::automatic})
+        if (name == to_string(k)) return k;
+    return std::nullopt;
+}
+
+std::optional<Pass> parse_pass(std::string_view name) {
+    for (Pass p : kAllPasses)
+        if (pass_name(p) == name) return p;
+    return std::nullopt;
+}
+
+uint32_t output_components(Output output) {
+    switch (output) {
+        case Output::chain_rotations: return 9;
+        case Output::chain_angles: return 4;
+        default: return 3;
+    }
+}
+
+namespace {
+
+/// Constants shared by every dispatch of one group.
+gpu::PassConstants group_constants(const SceneData& d, const detail::InstanceGroup& g,
+                                   uint32_t final_half) {
+    const detail::ModelRange& m = d.models[g.model];
+    gpu::PassConstants pc{};
+    pc.instance_begin = g.instance_begin;
+    pc.chain_begin = g.chain_begin;
+    pc.node_begin = g.node_begin;
+    pc.vertex_begin = g.vertex_begin;
+    pc.model_chain_begin = m.chain_begin;
+    pc.model_node_begin = m.node_begin;
+    pc.model_vertex_begin = m.vertex_begin;
+    pc.model_chain_count = m.chain_count;
+    pc.model_node_count = m.node_count;
+    pc.model_vertex_count = m.vertex_count;
+    pc.mode = HMSM_MODE_POINTER_JUMPING;
+    pc.profile = uint32_t(d.profile);
+    pc.total_chains = uint32_t(d.total_chains);
+    pc.total_model_chains = d.total_model_chains();
+    pc.src_half = final_half;
+    pc.dst_half = final_half;
+    pc.wind = {float(d.wind_vector.x), float(d.wind_vector.y), float(d.wind_vector.z), 0.0f};
+    pc.params = {float(d.dt), float(d.max_angle), float(d.fix_weight), 0.0f};
+    return pc;
+}
+
+/// Appends the dispatches of `pass` for every group. Passes 3 and 5 accumulate down the
+/// hierarchy: in pointer jumping, round r reads half (r-1)&1 and writes half r&1 (round 0
+/// starts from T, resp. u), so the last round leaves the pose in final_half; level by level
+/// writes final_half in place, one depth per dispatch.
+void append_pass(std::vector<Dispatch>& program, const SceneData& d, Pass pass,
+                 Composition composition) {
+    const uint32_t final_half = (d.jump_rounds - 1) & 1;
+    const bool hierarchical = pass == Pass::compose || pass == Pass::root_positions;
+    if (!hierarchical) {
+        for (const auto& g : d.groups) {
+            Dispatch dispatch{pass, group_constants(d, g, final_half)};
+            const auto& m = d.models[g.model];
+            uint32_t per_instance = pass == Pass::node_relative || pass == Pass::node_world
+                                        ? m.node_count
+                                        : pass == Pass::contour ? m.vertex_count : m.chain_count;
+            dispatch.constants.element_count = g.instance_count * per_instance;
+            if (dispatch.constants.element_count > 0) program.push_back(dispatch);
+        }
+        return;
+    }
+    if (composition == Composition::pointer_jumping) {
+        for (uint32_t r = 0; r < d.jump_rounds; ++r) {
+            for (const auto& g : d.groups) {
+                Dispatch dispatch{pass, group_constants(d, g, final_half)};
+                dispatch.constants.element_count = g.instance_count * d.models[g.model].chain_count;
+                dispatch.constants.round = r;
+                dispatch.constants.src_half = (r + 1) & 1;  // unused in round 0
+                dispatch.constants.dst_half = r & 1;
+                program.push_back(dispatch);
+            }
+        }
+        return;
+    }
+    size_t levels = 0;
+    for (const auto& m : d.models) levels = std::max(levels, m.level_begin.size() - 1);
+    for (size_t level = 0; level < levels; ++level) {
+        for (const auto& g : d.groups) {
+            const auto& m = d.models[g.model];
+            if (level + 1 >= m.level_begin.size()) continue;
+            uint32_t count = m.level_begin[level + 1] - m.level_begin[level];
+            if (count == 0) continue;
+            Dispatch dispatch{pass, group_constants(d, g, final_half)};
+            dispatch.constants.mode = HMSM_MODE_LEVEL_BY_LEVEL;
+            dispatch.constants.round = uint32_t(level);
+            dispatch.constants.level_begin = m.level_begin[level];
+            dispatch.constants.level_count = count;
+            dispatch.constants.element_count = g.instance_count * count;
+            program.push_back(dispatch);
+        }
+    }
+}
+
+std::vector<Dispatch> build_program(const SceneData& d, Composition composition, Pass first) {
+    std::vector<Dispatch> program;
+    for (Pass pass : kAllPasses)
+        if (uint32_t(pass) >= uint32_t(first)) append_pass(program, d, pass, composition);
+    return program;
+}
+
+}  // namespace
+
+Result<std::unique_ptr<Simulation>> Simulation::create(const Scene& scene,
+                                                       const SimulationConfig& config) {
+    HMSM_TRY(validate(config.model));
+    HMSM_TRY(validate(config.parameters));
+    HMSM_TRY(validate(config.wind));
+    HMSM_TRY(validate_scene(scene));
+
+    std::unique_ptr<Simulation> sim(new Simulation());
+    sim->config_ = config;
+    sim->scene_ = scene;
+    for (size_t m = 0; m < scene.models.size(); ++m) {
+        auto hierarchy = build_hierarchy(scene.models[m], config.model, config.parameters);
+        if (!hierarchy) {
+            return Status{hierarchy.status().code(),
+                          "model '" + scene.model_names[m] + "': " + hierarchy.status().message()};
+        }
+        sim->meshes_.push_back(build_mesh(scene.models[m], *hierarchy, config.model));
+        sim->hierarchies_.push_back(std::move(hierarchy).value());
+    }
+
+    uint64_t vertices = 0, chains = 0;
+    for (const Instance& inst : scene.instances) {
+        vertices += sim->meshes_[inst.model].vertices.size();
+        chains += 2 * sim->hierarchies_[inst.model].chains.size();
+    }
+    if (vertices >= std::numeric_limits<uint32_t>::max() ||
+        chains >= std::numeric_limits<uint32_t>::max())
+        return Status{ErrorCode::unsupported,
+                      "scene too large: " + std::to_string(vertices) +
+                          " mesh vertices over all instances (at most 2^32 - 1 are supported)"};
+
+    sim->data_ = std::make_unique<SceneData>(
+        detail::flatten_scene(scene, sim->hierarchies_, sim->meshes_, config.parameters,
+                              config.model, config.wind));
+
+    auto backend = detail::create_backend(config.backend);
+    if (!backend) return backend.status();
+    sim->backend_ = std::move(backend).value();
+    sim->backend_->set_profiling(config.profile_passes);
+    HMSM_TRY(sim->backend_->upload(*sim->data_));
+
+    sim->step_program_ = build_program(*sim->data_, config.composition, Pass::wind_force);
+    // Pose at rest: with g = 0, integrate keeps S = V = 0 and writes the rest transforms; the
+    // remaining passes then fill R, O, node positions and the mesh.
+    const double no_wind[1] = {0.0};
+    HMSM_TRY(sim->backend_->run(build_program(*sim->data_, config.composition, Pass::integrate),
+                                no_wind));
+    return sim;
+}
+
+Simulation::~Simulation() = default;
+
+Status Simulation::step(uint32_t count) {
+    wind_phases_.resize(count);
+    for (uint32_t k = 0; k < count; ++k) {
+        double t = double(steps_done_ + k) * config_.parameters.dt;  // t = (n - 1) dt
+        double x = data_->wind_frequency * t;
+        wind_phases_[k] = x - 2.0 * std::floor(x / 2.0);
+    }
+    HMSM_TRY(backend_->run(step_program_, wind_phases_));
+    steps_done_ += count;
+    return {};
+}
+
+PassTimes Simulation::pass_times() const { return backend_->pass_times(); }
+BackendKind Simulation::backend_kind() const { return backend_->kind(); }
+std::string Simulation::device_name() const { return backend_->device_name(); }
+uint64_t Simulation::instance_count() const { return scene_.instances.size(); }
+uint64_t Simulation::chain_count() const { return data_->total_chains; }
+uint64_t Simulation::node_count() const { return data_->total_nodes; }
+uint64_t Simulation::vertex_count() const { return data_->total_vertices; }
+uint32_t Simulation::jump_rounds() const { return data_->jump_rounds; }
+uint32_t Simulation::floored_chain_count() const {
+    uint32_t n = 0;
+    for (const auto& h : hierarchies_) n += uint32_t(h.floored_chain_count);
+    return n;
+}
+
+Status Simulation::read_elements(Output output, std::vector<double>* as_double,
+                                 std::vector<float>* as_float) const {
+    using detail::BufferId;
+    const uint32_t final_half = (data_->jump_rounds - 1) & 1;
+    BufferId id = BufferId::node_world;
+    uint64_t first = 0, count = data_->total_nodes;
+    switch (output) {
+        case Output::node_positions: break;
+        case Output::vertex_positions: id = BufferId::vertex_position; count = data_->total_vertices; break;
+        case Output::vertex_normals: id = BufferId::vertex_normal; count = data_->total_vertices; break;
+        case Output::chain_rotations:
+            id = BufferId::chain_rotation; first = final_half * data_->total_chains;
+            count = data_->total_chains; break;
+        case Output::chain_origins:
+            id = BufferId::chain_origin; first = final_half * data_->total_chains;
+            count = data_->total_chains; break;
+        case Output::chain_angles: id = BufferId::chain_state; count = data_->total_chains; break;
+    }
+    const uint32_t stored = detail::shape_scalars(detail::buffer_info(id).shape);
+    const uint32_t wanted = output_components(output);
+    // Stored element -> output components: xyz of a vec4, the 3x3 part of a mat3x4, or all.
+    auto component = [&](uint32_t k) { return stored == 12 ? (k / 3) * 4 + k % 3 : k; };
+    auto repack = [&](auto& raw, auto& out) {
+        out.resize(count * wanted);
+        for (uint64_t i = 0; i < count; ++i)
+            for (uint32_t k = 0; k < wanted; ++k) out[i * wanted + k] = raw[i * stored + component(k)];
+    };
+    if (as_double) {
+        std::vector<double> raw(count * stored);
+        HMSM_TRY(backend_->read(id, first, count, raw.data(), detail::Scalar::f64));
+        repack(raw, *as_double);
+    } else {
+        std::vector<float> raw(count * stored);
+        HMSM_TRY(backend_->read(id, first, count, raw.data(), detail::Scalar::f32));
+        repack(raw, *as_float);
+    }
+    return {};
+}
+
+Status Simulation::read(Output output, std::vector<float>& values) const {
+    return read_elements(output, nullptr, &values);
+}
+Status Simulation::read(Output output, std::vector<double>& values) const {
+    return read_elements(output, &values, nullptr);
+}
+
+}  // namespace hmsm
