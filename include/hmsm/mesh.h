@@ -19,7 +19,7 @@ struct MeshVertex {
 };
 
 struct MeshTemplate {
-    std::vector<MeshVertex> vertices;  ///< rings of each chain (chain order), tips, leaf cards
+    std::vector<MeshVertex> vertices;  ///< per chain (chain order): its rings, then its tip; then leaf cards
     std::vector<uint32_t> indices;     ///< triangles, counter-clockwise seen from outside
     uint32_t ring_vertex_count = 0;
     uint32_t tip_count = 0;

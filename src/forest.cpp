@@ -1,0 +1,76 @@
+// hmsm-forest JSON v1 (DESIGN.md 4): named models (files relative to the forest file, or
+// "preset:NAME") and instances that refer to them.
+#include <hmsm/generator.h>
+#include <hmsm/scene.h>
+
+#include "json_util.h"
+
+#include <filesystem>
+#include <map>
+
+namespace hmsm {
+
+Result<Scene> parse_forest(std::string_view text, const std::string& base_directory,
+                           std::string_view source) {
+    auto parsed = detail::parse_json(text, source);
+    if (!parsed) return parsed.status();
+    const auto& doc = *parsed;
+    detail::JsonReader r(source, ErrorCode::invalid_tree);
+    HMSM_TRY(r.expect_object(doc, ""));
+    HMSM_TRY(r.expect_format(doc, "hmsm-forest"));
+    auto models_it = doc.find("models");
+    if (models_it == doc.end()) return r.error("", "models", "missing");
+    if (!models_it->is_object() || models_it->empty())
+        return r.error("", "models", "expected a non-empty object of name: path");
+
+    Scene scene;
+    std::map<std::string, uint32_t> index;
+    for (auto it = models_it->begin(); it != models_it->end(); ++it) {
+        std::string where = "models." + it.key();
+        if (!it->is_string()) return r.error("models", it.key().c_str(), "expected a path string");
+        const std::string ref = it->get<std::string>();
+        Result<TreeModel> model = Status{};
+        if (ref.rfind("preset:", 0) == 0) {
+            model = generate_preset(ref.substr(7));
+        } else {
+            std::filesystem::path path(ref);
+            if (path.is_relative()) path = std::filesystem::path(base_directory) / path;
+            model = load_tree(path.string());
+        }
+        if (!model)
+            return Status{model.status().code(), std::string(source) + ": " + where + ": " +
+                                                     model.status().message()};
+        index[it.key()] = uint32_t(scene.models.size());
+        scene.models.push_back(std::move(model).value());
+        scene.model_names.push_back(it.key());
+    }
+
+    const nlohmann::json* instances = nullptr;
+    HMSM_TRY(r.array_field(doc, "", "instances", instances));
+    if (instances->empty()) return r.error("", "instances", "must list at least one instance");
+    for (size_t i = 0; i < instances->size(); ++i) {
+        const auto& item = (*instances)[i];
+        std::string where = "instances[" + std::to_string(i) + "]";
+        HMSM_TRY(r.expect_object(item, where));
+        std::string name;
+        HMSM_TRY(r.string_field(item, where, "model", name));
+        auto found = index.find(name);
+        if (found == index.end())
+            return r.error(where, "model", "\"" + name + "\" is not one of the forest's models");
+        Instance inst;
+        inst.model = found->second;
+        HMSM_TRY(r.vec3_field(item, where, "origin", inst.origin));
+        if (item.contains("yaw")) HMSM_TRY(r.number_field(item, where, "yaw", inst.yaw));
+        scene.instances.push_back(inst);
+    }
+    return scene;
+}
+
+Result<Scene> load_forest(const std::string& path) {
+    auto text = detail::read_text_file(path);
+    if (!text) return text.status();
+    std::string base = std::filesystem::path(path).parent_path().string();
+    return parse_forest(*text, base.empty() ? "." : base, path);
+}
+
+}  // namespace hmsm

@@ -1,0 +1,112 @@
+// Wind profiles (DESIGN.md 3.5) and the valid ranges of options and parameters (DESIGN.md 3.4).
+#include <hmsm/options.h>
+
+#include "wind_profile.h"
+
+#include <glm/geometric.hpp>
+
+#include <cmath>
+#include <numbers>
+#include <string>
+
+namespace hmsm {
+
+double wind_profile_value(WindProfile profile, double x) {
+    return detail::wind_profile_y<double>(static_cast<unsigned>(profile), x);
+}
+
+double wind_phase(const Wind& wind, const glm::dvec3& origin) {
+    if (wind.front_speed <= 0.0) return 0.0;
+    return -wind.frequency * glm::dot(origin, glm::normalize(wind.direction)) / wind.front_speed;
+}
+
+glm::dvec3 wind_at(const Wind& wind, const glm::dvec3& origin, double t) {
+    double y = wind_profile_value(wind.profile, wind.frequency * t + wind_phase(wind, origin));
+    return wind.strength * y * glm::normalize(wind.direction);
+}
+
+const char* to_string(Grouping grouping) {
+    return grouping == Grouping::direction ? "direction" : "width";
+}
+
+const char* to_string(WindProfile profile) {
+    switch (profile) {
+        case WindProfile::none: return "none";
+        case WindProfile::constant: return "constant";
+        case WindProfile::y1: return "y1";
+        case WindProfile::y2: return "y2";
+        case WindProfile::y3: return "y3";
+        case WindProfile::y4: return "y4";
+    }
+    return "?";
+}
+
+std::optional<Grouping> parse_grouping(std::string_view name) {
+    if (name == "direction") return Grouping::direction;
+    if (name == "width") return Grouping::width;
+    return std::nullopt;
+}
+
+std::optional<WindProfile> parse_wind_profile(std::string_view name) {
+    for (WindProfile p : {WindProfile::none, WindProfile::constant, WindProfile::y1,
+                          WindProfile::y2, WindProfile::y3, WindProfile::y4})
+        if (name == to_string(p)) return p;
+    return std::nullopt;
+}
+
+namespace {
+
+std::string number(double v) {
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "%.9g", v);
+    return buf;
+}
+
+Status bad(const char* name, double value, const char* rule) {
+    return {ErrorCode::invalid_argument,
+            std::string(name) + " = " + number(value) + " is out of range: " + rule};
+}
+
+}  // namespace
+
+Status validate(const ModelOptions& o) {
+    if (o.ring_sides < 3) return bad("ring_sides", o.ring_sides, "must be >= 3");
+    if (o.ring_sides > 1024) return bad("ring_sides", o.ring_sides, "must be <= 1024");
+    if (!std::isfinite(o.fix_weight) || o.fix_weight < 0.0 || o.fix_weight > 1.0)
+        return bad("fix_weight", o.fix_weight, "must be in [0, 1]");
+    if (o.max_chain_segments < 0)
+        return bad("max_chain_segments", o.max_chain_segments, "must be >= 0");
+    return {};
+}
+
+Status validate(const Parameters& p) {
+    if (!std::isfinite(p.dt) || p.dt <= 0.0) return bad("dt", p.dt, "must be finite and > 0");
+    if (!std::isfinite(p.density) || p.density <= 0.0)
+        return bad("density", p.density, "must be finite and > 0");
+    if (!std::isfinite(p.stiffness) || p.stiffness <= 0.0)
+        return bad("stiffness", p.stiffness, "must be finite and > 0");
+    if (!std::isfinite(p.damping_ratio) || p.damping_ratio < 0.0)
+        return bad("damping_ratio", p.damping_ratio, "must be finite and >= 0");
+    if (!std::isfinite(p.wind_gain) || p.wind_gain < 0.0)
+        return bad("wind_gain", p.wind_gain, "must be finite and >= 0");
+    if (!std::isfinite(p.max_angle) || p.max_angle <= 0.0 || p.max_angle > std::numbers::pi / 2)
+        return bad("max_angle", p.max_angle, "must be in (0, pi/2]");
+    return {};
+}
+
+Status validate(const Wind& w) {
+    if (!std::isfinite(w.strength)) return bad("wind strength", w.strength, "must be finite");
+    if (!std::isfinite(w.frequency) || w.frequency < 0.0)
+        return bad("wind frequency", w.frequency, "must be finite and >= 0");
+    if (!std::isfinite(w.front_speed) || w.front_speed < 0.0)
+        return bad("front speed", w.front_speed, "must be finite and >= 0");
+    for (int i = 0; i < 3; ++i)
+        if (!std::isfinite(w.direction[i]))
+            return bad("wind direction component", w.direction[i], "must be finite");
+    double len = glm::length(w.direction);
+    if (!(len > 1e-12) || !std::isfinite(len))
+        return {ErrorCode::invalid_argument, "wind direction must be non-zero"};
+    return {};
+}
+
+}  // namespace hmsm

@@ -1,0 +1,58 @@
+#include <hmsm/scene.h>
+
+#include "random.h"
+
+#include <cmath>
+#include <numbers>
+
+namespace hmsm {
+
+Scene single_tree_scene(TreeModel tree, glm::dvec3 origin, double yaw) {
+    Scene scene;
+    scene.models.push_back(std::move(tree));
+    scene.model_names.push_back("tree");
+    scene.instances.push_back({0, origin, yaw});
+    return scene;
+}
+
+Result<Scene> grid_scene(TreeModel tree, uint32_t count, double spacing, uint64_t seed) {
+    if (count == 0) return Status{ErrorCode::invalid_argument, "instances must be >= 1"};
+    if (!std::isfinite(spacing) || spacing < 0.0)
+        return Status{ErrorCode::invalid_argument, "spacing must be finite and >= 0"};
+    Scene scene;
+    scene.models.push_back(std::move(tree));
+    scene.model_names.push_back("tree");
+    const uint32_t side = uint32_t(std::ceil(std::sqrt(double(count))));
+    const double centre = 0.5 * double(side - 1) * spacing;
+    detail::Random random(seed);
+    for (uint32_t i = 0; i < count; ++i) {
+        glm::dvec3 origin(double(i % side) * spacing - centre, 0.0, double(i / side) * spacing - centre);
+        scene.instances.push_back({0, origin, random.uniform(0.0, 2.0 * std::numbers::pi)});
+    }
+    return scene;
+}
+
+Status validate_scene(const Scene& scene) {
+    if (scene.models.empty()) return {ErrorCode::invalid_argument, "scene has no models"};
+    if (scene.model_names.size() != scene.models.size())
+        return {ErrorCode::invalid_argument, "scene: model_names and models differ in length"};
+    if (scene.instances.empty()) return {ErrorCode::invalid_argument, "scene has no instances"};
+    for (size_t i = 0; i < scene.instances.size(); ++i) {
+        const Instance& inst = scene.instances[i];
+        std::string where = "instance " + std::to_string(i) + ": ";
+        if (inst.model >= scene.models.size())
+            return {ErrorCode::invalid_argument, where + "model index " + std::to_string(inst.model) +
+                                                     " does not exist"};
+        if (!std::isfinite(inst.origin.x) || !std::isfinite(inst.origin.y) ||
+            !std::isfinite(inst.origin.z))
+            return {ErrorCode::invalid_argument, where + "origin is not finite"};
+        if (!std::isfinite(inst.yaw)) return {ErrorCode::invalid_argument, where + "yaw is not finite"};
+    }
+    for (size_t m = 0; m < scene.models.size(); ++m) {
+        Status valid = validate_tree(scene.models[m]);
+        if (!valid) return {valid.code(), "model '" + scene.model_names[m] + "': " + valid.message()};
+    }
+    return {};
+}
+
+}  // namespace hmsm

@@ -1,0 +1,183 @@
+// hmsm-tree JSON v1 (DESIGN.md 4) and the skeleton rules of DESIGN.md 3.1.
+#include <hmsm/tree.h>
+
+#include "json_util.h"
+
+#include <glm/geometric.hpp>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+namespace hmsm {
+
+namespace {
+
+Status tree_error(std::string message) { return {ErrorCode::invalid_tree, std::move(message)}; }
+
+bool finite3(const glm::dvec3& v) {
+    return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
+}
+
+}  // namespace
+
+Status validate_tree(const TreeModel& tree) {
+    const auto& nodes = tree.nodes;
+    const int64_t n = int64_t(nodes.size());
+    if (n < 2) return tree_error("a tree needs at least two nodes, got " + std::to_string(n));
+    int64_t root = -1;
+    for (int64_t i = 0; i < n; ++i) {
+        const TreeNode& node = nodes[i];
+        std::string where = "node " + std::to_string(i) + ": ";
+        if (!finite3(node.position)) return tree_error(where + "position is not finite");
+        if (!std::isfinite(node.radius) || node.radius <= 0.0)
+            return tree_error(where + "radius must be finite and > 0");
+        if (node.parent == -1) {
+            if (root >= 0)
+                return tree_error(where + "second root (node " + std::to_string(root) +
+                                  " is already the root; exactly one node has parent -1)");
+            root = i;
+            continue;
+        }
+        if (node.parent < 0 || node.parent >= n)
+            return tree_error(where + "parent " + std::to_string(node.parent) +
+                              " is not a node index (0.." + std::to_string(n - 1) + ") or -1");
+        if (node.parent == i) return tree_error(where + "is its own parent");
+        double length = glm::length(node.position - nodes[node.parent].position);
+        if (!(length >= 1e-6))
+            return tree_error(where + "zero-length segment to parent " +
+                              std::to_string(node.parent) + " (shorter than 1e-6 m)");
+    }
+    if (root < 0) return tree_error("no root: exactly one node must have parent -1");
+    // Every node must reach the root: walk up with a visit mark (O(n) overall).
+    std::vector<int8_t> state(n, 0);  // 0 unknown, 1 on the current path, 2 reaches the root
+    state[root] = 2;
+    std::vector<int64_t> path;
+    for (int64_t i = 0; i < n; ++i) {
+        int64_t k = i;
+        path.clear();
+        while (state[k] == 0) {
+            state[k] = 1;
+            path.push_back(k);
+            k = nodes[k].parent;
+        }
+        if (state[k] == 1)
+            return tree_error("node " + std::to_string(k) + ": parent links form a cycle");
+        for (int64_t p : path) state[p] = 2;
+    }
+    for (size_t j = 0; j < tree.leaves.size(); ++j) {
+        const TreeLeaf& leaf = tree.leaves[j];
+        std::string where = "leaf " + std::to_string(j) + ": ";
+        if (leaf.node < 0 || leaf.node >= n)
+            return tree_error(where + "node " + std::to_string(leaf.node) + " does not exist");
+        if (!finite3(leaf.offset) || !finite3(leaf.normal) || !finite3(leaf.up) ||
+            !std::isfinite(leaf.size.x) || !std::isfinite(leaf.size.y))
+            return tree_error(where + "a number is not finite");
+        if (!(leaf.size.x > 0.0 && leaf.size.y > 0.0))
+            return tree_error(where + "size must be > 0 in both dimensions");
+        if (!(glm::length(leaf.normal) > 1e-9)) return tree_error(where + "normal is zero");
+        if (!(glm::length(glm::cross(leaf.up, leaf.normal)) > 1e-9 * glm::length(leaf.normal)))
+            return tree_error(where + "up is zero or parallel to normal");
+    }
+    return {};
+}
+
+double tree_height(const TreeModel& tree) {
+    if (tree.nodes.empty()) return 0.0;
+    double lo = tree.nodes[0].position.y, hi = lo;
+    for (const auto& node : tree.nodes) {
+        lo = std::min(lo, node.position.y);
+        hi = std::max(hi, node.position.y);
+    }
+    return hi - lo;
+}
+
+Result<TreeModel> parse_tree(std::string_view text, std::string_view source) {
+    using detail::JsonReader;
+    auto parsed = detail::parse_json(text, source);
+    if (!parsed) return parsed.status();
+    JsonReader r(source, ErrorCode::invalid_tree);
+    const auto& doc = *parsed;
+    TreeModel tree;
+    HMSM_TRY(r.expect_object(doc, ""));
+    HMSM_TRY(r.expect_format(doc, "hmsm-tree"));
+    const nlohmann::json* nodes = nullptr;
+    HMSM_TRY(r.array_field(doc, "", "nodes", nodes));
+    tree.nodes.resize(nodes->size());
+    for (size_t i = 0; i < nodes->size(); ++i) {
+        const auto& item = (*nodes)[i];
+        std::string where = "nodes[" + std::to_string(i) + "]";
+        HMSM_TRY(r.expect_object(item, where));
+        HMSM_TRY(r.int_field(item, where, "parent", tree.nodes[i].parent));
+        HMSM_TRY(r.vec3_field(item, where, "position", tree.nodes[i].position));
+        HMSM_TRY(r.number_field(item, where, "radius", tree.nodes[i].radius));
+    }
+    if (doc.contains("leaves")) {
+        const nlohmann::json* leaves = nullptr;
+        HMSM_TRY(r.array_field(doc, "", "leaves", leaves));
+        tree.leaves.resize(leaves->size());
+        for (size_t j = 0; j < leaves->size(); ++j) {
+            const auto& item = (*leaves)[j];
+            std::string where = "leaves[" + std::to_string(j) + "]";
+            TreeLeaf& leaf = tree.leaves[j];
+            HMSM_TRY(r.expect_object(item, where));
+            HMSM_TRY(r.int_field(item, where, "node", leaf.node));
+            HMSM_TRY(r.vec3_field(item, where, "offset", leaf.offset));
+            HMSM_TRY(r.vec3_field(item, where, "normal", leaf.normal));
+            HMSM_TRY(r.vec3_field(item, where, "up", leaf.up));
+            HMSM_TRY(r.vec2_field(item, where, "size", leaf.size));
+        }
+    }
+    Status valid = validate_tree(tree);
+    if (!valid) return Status{valid.code(), std::string(source) + ": " + valid.message()};
+    return tree;
+}
+
+Result<TreeModel> load_tree(const std::string& path) {
+    auto text = detail::read_text_file(path);
+    if (!text) return text.status();
+    return parse_tree(*text, path);
+}
+
+std::string tree_to_json(const TreeModel& tree) {
+    std::ostringstream out;
+    auto num = [](double v) {
+        char buf[40];
+        std::snprintf(buf, sizeof buf, "%.17g", v);
+        return std::string(buf);
+    };
+    auto vec = [&](const auto& v, int n) {
+        std::string s = "[";
+        for (int k = 0; k < n; ++k) s += (k ? "," : "") + num(v[k]);
+        return s + "]";
+    };
+    out << "{\"format\": \"hmsm-tree\", \"version\": 1,\n\"nodes\": [\n";
+    for (size_t i = 0; i < tree.nodes.size(); ++i) {
+        const auto& n = tree.nodes[i];
+        out << "{\"parent\": " << n.parent << ", \"position\": " << vec(n.position, 3)
+            << ", \"radius\": " << num(n.radius) << "}" << (i + 1 < tree.nodes.size() ? ",\n" : "\n");
+    }
+    out << "]";
+    if (!tree.leaves.empty()) {
+        out << ",\n\"leaves\": [\n";
+        for (size_t j = 0; j < tree.leaves.size(); ++j) {
+            const auto& l = tree.leaves[j];
+            out << "{\"node\": " << l.node << ", \"offset\": " << vec(l.offset, 3)
+                << ", \"normal\": " << vec(l.normal, 3) << ", \"up\": " << vec(l.up, 3)
+                << ", \"size\": " << vec(l.size, 2) << "}"
+                << (j + 1 < tree.leaves.size() ? ",\n" : "\n");
+        }
+        out << "]";
+    }
+    out << "}\n";
+    return out.str();
+}
+
+Status save_tree(const TreeModel& tree, const std::string& path) {
+    HMSM_TRY(validate_tree(tree));
+    return detail::write_text_file_atomically(path, tree_to_json(tree));
+}
+
+}  // namespace hmsm
