@@ -1,0 +1,172 @@
+#include "cli_common.h"
+
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+
+namespace hmsm::cli {
+
+int fail(const Status& status) {
+    std::fprintf(stderr, "hmsm: error: %s\n", status.message().c_str());
+    return is_input_error(status.code()) ? kExitBadInput : kExitInternal;
+}
+
+int fail_input(const std::string& message) {
+    return fail(Status{ErrorCode::invalid_argument, message});
+}
+
+void add_source_flags(CLI::App& app, SourceFlags& f, bool with_forest_and_instances) {
+    auto* tree = app.add_option("--tree", f.tree, "hmsm-tree JSON file");
+    auto* preset = app.add_option("--preset", f.preset, "built-in tree: paper-1 ... paper-5");
+    tree->excludes(preset);
+    if (!with_forest_and_instances) return;
+    auto* forest = app.add_option("--forest", f.forest, "hmsm-forest JSON file");
+    forest->excludes(tree)->excludes(preset);
+    auto* instances =
+        app.add_option("--instances", f.instances, "N instances of the tree on a square grid");
+    instances->excludes(forest);
+    app.add_option("--spacing", f.spacing, "grid spacing in metres (default 25)");
+    app.add_option("--seed", f.seed, "seed of the grid's random yaws (default 1)");
+    app.add_option("--origin", f.origin, "single instance origin X,Y,Z");
+    app.add_option("--yaw", f.yaw, "single instance yaw in radians");
+}
+
+Result<glm::dvec3> parse_vec3(const std::string& text, const char* flag) {
+    glm::dvec3 v(0.0);
+    const char* p = text.data();
+    const char* end = text.data() + text.size();
+    for (int k = 0; k < 3; ++k) {
+        auto [next, ec] = std::from_chars(p, end, v[k]);
+        if (ec != std::errc() || !std::isfinite(v[k]))
+            return Status{ErrorCode::invalid_argument,
+                          std::string(flag) + " '" + text + "': expected three finite numbers X,Y,Z"};
+        p = next;
+        if (k < 2) {
+            if (p == end || *p != ',')
+                return Status{ErrorCode::invalid_argument,
+                              std::string(flag) + " '" + text + "': expected X,Y,Z"};
+            ++p;
+        }
+    }
+    if (p != end)
+        return Status{ErrorCode::invalid_argument,
+                      std::string(flag) + " '" + text + "': unexpected text after X,Y,Z"};
+    return v;
+}
+
+Result<Scene> load_scene(const SourceFlags& f, CLI::App& app) {
+    if (!f.forest.empty()) return load_forest(f.forest);
+    if (f.tree.empty() && f.preset.empty())
+        return Status{ErrorCode::invalid_argument,
+                      "give the tree with --tree FILE or --preset NAME" +
+                          std::string(app.get_option_no_throw("--forest") ? " (or --forest FILE)" : "")};
+    Result<TreeModel> tree = f.tree.empty() ? generate_preset(f.preset) : load_tree(f.tree);
+    if (!tree) return tree.status();
+    if (app.get_option_no_throw("--instances") && app.count("--instances") > 0) {
+        if (f.instances == 0) return Status{ErrorCode::invalid_argument, "--instances must be >= 1"};
+        if (app.count("--origin") || app.count("--yaw"))
+            return Status{ErrorCode::invalid_argument,
+                          "--origin and --yaw place a single instance; they cannot be used with --instances"};
+        return grid_scene(std::move(tree).value(), f.instances, f.spacing, f.seed);
+    }
+    auto origin = parse_vec3(f.origin, "--origin");
+    if (!origin) return origin.status();
+    if (!std::isfinite(f.yaw)) return Status{ErrorCode::invalid_argument, "--yaw must be finite"};
+    return single_tree_scene(std::move(tree).value(), *origin, f.yaw);
+}
+
+void add_model_flags(CLI::App& app, ModelFlags& f) {
+    app.add_option("--grouping", f.grouping, "chain grouping: direction (default) or width");
+    app.add_option("--max-chain-segments", f.options.max_chain_segments,
+                   "cut chains after K nodes (0 = never, default)");
+    app.add_option("--ring-sides", f.options.ring_sides, "vertices per branch ring (default 8)");
+    app.add_option("--fix-weight", f.options.fix_weight, "contour fix-up weight in [0,1] (default 0.5)");
+}
+
+Result<ModelOptions> model_options(const ModelFlags& f) {
+    auto grouping = parse_grouping(f.grouping);
+    if (!grouping)
+        return Status{ErrorCode::invalid_argument,
+                      "--grouping '" + f.grouping + "': expected direction or width"};
+    ModelOptions options = f.options;
+    options.grouping = *grouping;
+    HMSM_TRY(validate(options));
+    return options;
+}
+
+void add_parameter_flags(CLI::App& app, Parameters& p) {
+    app.add_option("--dt", p.dt, "time step in seconds (default 1/120)");
+    app.add_option("--density", p.density, "density rho (default 1)");
+    app.add_option("--stiffness", p.stiffness, "stiffness k (default 1e7)");
+    app.add_option("--damping-ratio", p.damping_ratio, "damping ratio zeta (default 0.1)");
+    app.add_option("--wind-gain", p.wind_gain, "wind gain gamma (default 15)");
+    app.add_option("--max-angle", p.max_angle, "max joint angle in radians (default 0.8)");
+}
+
+void add_wind_flags(CLI::App& app, WindFlags& f) {
+    app.add_option("--wind", f.profile, "wind profile: none, constant, y1, y2, y3, y4 (default y1)");
+    app.add_option("--wind-dir", f.direction, "wind direction X,Y,Z (default 1,0,0)");
+    app.add_option("--wind-strength", f.wind.strength, "wind strength (default 1)");
+    app.add_option("--wind-frequency", f.wind.frequency, "profile frequency f (default 0.1)");
+    app.add_option("--front-speed", f.wind.front_speed, "travelling front speed v (default 0: none)");
+}
+
+Result<Wind> wind_options(const WindFlags& f) {
+    auto profile = parse_wind_profile(f.profile);
+    if (!profile)
+        return Status{ErrorCode::invalid_argument,
+                      "--wind '" + f.profile + "': expected none, constant, y1, y2, y3 or y4"};
+    auto direction = parse_vec3(f.direction, "--wind-dir");
+    if (!direction) return direction.status();
+    Wind wind = f.wind;
+    wind.profile = *profile;
+    wind.direction = *direction;
+    Status valid = validate(wind);
+    if (!valid) return valid;
+    return wind;
+}
+
+StagedOutputs::~StagedOutputs() {
+    if (committed_) return;
+    for (File& f : files_) {
+        f.handle.reset();
+        std::remove(f.temporary.c_str());
+    }
+}
+
+Result<size_t> StagedOutputs::stage(const std::string& path, const char* flag) {
+    std::error_code ec;
+    if (std::filesystem::is_directory(path, ec))
+        return Status{ErrorCode::io, std::string(flag) + " " + path + ": is a directory"};
+    File f;
+    f.path = path;
+    f.temporary = path + ".tmp-hmsm";
+    f.handle.reset(std::fopen(f.temporary.c_str(), "wb"));
+    if (!f.handle)
+        return Status{ErrorCode::io, std::string(flag) + " " + path + ": cannot open for writing"};
+    files_.push_back(std::move(f));
+    return files_.size() - 1;
+}
+
+Status StagedOutputs::write(size_t index, const void* data, size_t bytes) {
+    File& f = files_[index];
+    if (bytes && std::fwrite(data, 1, bytes, f.handle.get()) != bytes)
+        return {ErrorCode::io, f.path + ": write error"};
+    return {};
+}
+
+Status StagedOutputs::commit() {
+    for (File& f : files_) {
+        if (std::fclose(f.handle.release()) != 0) return {ErrorCode::io, f.path + ": write error"};
+    }
+    for (File& f : files_) {
+        std::error_code ec;
+        std::filesystem::rename(f.temporary, f.path, ec);
+        if (ec) return {ErrorCode::io, f.path + ": cannot write (" + ec.message() + ")"};
+    }
+    committed_ = true;
+    return {};
+}
+
+}  // namespace hmsm::cli

@@ -1,0 +1,87 @@
+// hmsm info (--tree FILE | --preset NAME) [--grouping ...] [--max-chain-segments K] [--json]
+//           [--chains FILE.csv]
+#include "cli_common.h"
+
+#include <nlohmann/json.hpp>
+
+namespace hmsm::cli {
+namespace {
+struct InfoFlags {
+    SourceFlags source;
+    ModelFlags model;
+    bool json = false;
+    std::string chains_csv;
+} flags;
+}  // namespace
+
+void register_info_flags(CLI::App& app) {
+    add_source_flags(app, flags.source, false);
+    app.add_option("--grouping", flags.model.grouping, "chain grouping: direction or width");
+    app.add_option("--max-chain-segments", flags.model.options.max_chain_segments,
+                   "cut chains after K nodes (0 = never)");
+    app.add_option("--ring-sides", flags.model.options.ring_sides, "vertices per ring (default 8)");
+    app.add_flag("--json", flags.json, "print JSON instead of text");
+    app.add_option("--chains", flags.chains_csv, "write chain,parent,depth,attach_node,nodes CSV");
+}
+
+int run_info(CLI::App& app) {
+    auto options = model_options(flags.model);
+    if (!options) return fail(options.status());
+    auto scene = load_scene(flags.source, app);
+    if (!scene) return fail(scene.status());
+    const TreeModel& tree = scene->models[0];
+    StagedOutputs outputs;
+    std::optional<size_t> chains_file;
+    if (!flags.chains_csv.empty()) {
+        auto staged = outputs.stage(flags.chains_csv, "--chains");
+        if (!staged) return fail(staged.status());
+        chains_file = *staged;
+    }
+    auto hierarchy = build_hierarchy(tree, *options);
+    if (!hierarchy) return fail(hierarchy.status());
+    MeshTemplate mesh = build_mesh(tree, *hierarchy, *options);
+
+    if (chains_file) {
+        std::string csv = "chain,parent,depth,attach_node,nodes\n";
+        for (size_t c = 0; c < hierarchy->chains.size(); ++c) {
+            const Chain& chain = hierarchy->chains[c];
+            csv += std::to_string(c) + "," + std::to_string(chain.parent) + "," +
+                   std::to_string(chain.depth) + "," + std::to_string(chain.attach_node) + ",";
+            for (size_t j = 0; j < chain.members.size(); ++j)
+                csv += (j ? " " : "") + std::to_string(chain.members[j]);
+            csv += "\n";
+        }
+        Status written = outputs.write(*chains_file, csv.data(), csv.size());
+        if (!written) return fail(written);
+    }
+    Status committed = outputs.commit();
+    if (!committed) return fail(committed);
+
+    const auto& h = *hierarchy;
+    if (flags.json) {
+        nlohmann::json j;
+        j["nodes"] = tree.nodes.size();
+        j["chains"] = h.chains.size();
+        j["max_depth"] = h.max_depth;
+        j["chains_per_depth"] = h.chains_per_depth;
+        j["mesh_vertices"] = mesh.vertices.size();
+        j["triangles"] = mesh.triangle_count();
+        j["leaves"] = tree.leaves.size();
+        j["height_m"] = tree_height(tree);
+        j["inertia_floored_chains"] = h.floored_chain_count;
+        std::printf("%s\n", j.dump(2).c_str());
+    } else {
+        std::printf("nodes            %zu\n", tree.nodes.size());
+        std::printf("chains           %zu\n", h.chains.size());
+        std::printf("max depth        %d\n", h.max_depth);
+        std::printf("chains per depth");
+        for (int32_t n : h.chains_per_depth) std::printf(" %d", n);
+        std::printf("\nmesh vertices    %zu\n", mesh.vertices.size());
+        std::printf("triangles        %u\n", mesh.triangle_count());
+        std::printf("leaves           %zu\n", tree.leaves.size());
+        std::printf("height           %.3f m\n", tree_height(tree));
+    }
+    return kExitOk;
+}
+
+}  // namespace hmsm::cli

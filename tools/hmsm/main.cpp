@@ -1,0 +1,43 @@
+// hmsm: the command-line tool (DESIGN.md 5). Exit 0 on success, 2 on bad input or arguments,
+// 1 on an internal or device error.
+#include "cli_common.h"
+
+#include <exception>
+
+int main(int argc, char** argv) {
+    using namespace hmsm::cli;
+    CLI::App app{"hmsm: physically based tree animation in wind (HMSM, Yang & Wu 2011)"};
+    app.require_subcommand(1);
+    app.set_help_all_flag("--help-all", "help for every subcommand");
+    CLI::App* generate = app.add_subcommand("generate", "write a preset tree to an hmsm-tree file");
+    CLI::App* info = app.add_subcommand("info", "print the counts of a tree's hierarchy and mesh");
+    CLI::App* simulate = app.add_subcommand("simulate", "run the simulation and dump its outputs");
+    int (*run)(CLI::App&) = nullptr;
+    CLI::App* chosen = nullptr;
+    generate->callback([&] { run = run_generate; chosen = generate; });
+    info->callback([&] { run = run_info; chosen = info; });
+    simulate->callback([&] { run = run_simulate; chosen = simulate; });
+    // Each subcommand registers its own flags; run_* with a null app only registers them.
+    register_generate_flags(*generate);
+    register_info_flags(*info);
+    register_simulate_flags(*simulate);
+    try {
+        app.parse(argc, argv);
+    } catch (const CLI::CallForHelp& e) {
+        return app.exit(e);
+    } catch (const CLI::CallForAllHelp& e) {
+        return app.exit(e);
+    } catch (const CLI::ParseError& e) {
+        std::fprintf(stderr, "hmsm: error: %s (see --help)\n", e.what());
+        return kExitBadInput;
+    }
+    try {
+        return run(*chosen);
+    } catch (const std::bad_alloc&) {
+        std::fprintf(stderr, "hmsm: error: out of host memory\n");
+        return kExitInternal;
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "hmsm: internal error: %s\n", e.what());
+        return kExitInternal;
+    }
+}
