@@ -1,0 +1,31 @@
+# The CUDA backend (kernels/cuda: one .cu per pass; src/cuda: host side). Included by the top
+# CMakeLists after enable_language(CUDA); CMAKE_CUDA_ARCHITECTURES defaults to 90 (H100/H200)
+# there, one architecture to keep CI's compile time small. The CUDA runtime is linked
+# statically, so binaries need nothing from the toolkit where they run.
+find_package(CUDAToolkit REQUIRED)
+
+target_sources(hmsm PRIVATE
+  kernels/cuda/wind_force.cu
+  kernels/cuda/integrate.cu
+  kernels/cuda/compose.cu
+  kernels/cuda/node_relative.cu
+  kernels/cuda/root_positions.cu
+  kernels/cuda/node_world.cu
+  kernels/cuda/contour.cu
+  src/cuda/cuda_backend.cpp
+  src/cuda/cuda_error.cpp
+  src/cuda/device_buffers.cpp
+  src/cuda/device_layout.cpp
+  src/cuda/interop.cpp
+  src/cuda/launch_dispatch.cpp
+  src/cuda/step_graph.cpp)
+target_compile_definitions(hmsm PUBLIC HMSM_HAVE_CUDA=1)
+target_link_libraries(hmsm PRIVATE CUDA::cudart_static)
+set_target_properties(hmsm PROPERTIES
+  CUDA_STANDARD 17
+  CUDA_STANDARD_REQUIRED ON)
+# -lineinfo: compute-sanitizer and Nsight map reports to source lines (no run-time cost).
+target_compile_options(hmsm PRIVATE $<$<COMPILE_LANGUAGE:CUDA>:-lineinfo -Xptxas=-warn-spills>)
+
+# cmake/hmsmConfig.cmake.in: consumers of an installed static hmsm find CUDA::cudart_static.
+set(HMSM_HAVE_CUDA_BOOL TRUE)

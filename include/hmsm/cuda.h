@@ -1,0 +1,48 @@
+// CUDA interop for engines that keep hmsm's outputs on the GPU: the device pointers of the
+// outputs of a Simulation running on the CUDA backend, and running its steps on the engine's
+// own stream. Needs no CUDA header: a stream is passed as its handle type, CUstream_st*
+// (which is what cudaStream_t and CUstream are).
+#pragma once
+
+#include <hmsm/simulation.h>
+#include <hmsm/status.h>
+
+#include <cstdint>
+
+struct CUstream_st;
+
+namespace hmsm::cuda {
+
+/// Device pointers of a simulation's outputs, valid until the Simulation is destroyed and
+/// current after each step() returns. Every element is 4 floats (a CUDA float4, 16-byte
+/// aligned), instance-major, in the order of Simulation::read.
+struct DeviceOutputs {
+    int device = 0;                           ///< CUDA device ordinal that holds the buffers
+    const float* node_positions = nullptr;    ///< node_count x (x, y, z, 1), nodes in input order
+    const float* vertex_positions = nullptr;  ///< vertex_count x (x, y, z, 1)
+    const float* vertex_normals = nullptr;    ///< vertex_count x (x, y, z, 0), unit length
+    uint64_t node_count = 0;
+    uint64_t vertex_count = 0;
+};
+
+#ifdef HMSM_HAVE_CUDA
+
+/// The outputs on the device; invalid_argument when `simulation` does not run on CUDA.
+Result<DeviceOutputs> device_outputs(const Simulation& simulation);
+
+/// Runs later steps of `simulation` on `stream` (nullptr: hmsm's own stream). step() still
+/// returns when the step is complete, so the outputs are ready for work enqueued after it.
+Status set_stream(Simulation& simulation, CUstream_st* stream);
+
+#else
+
+inline Result<DeviceOutputs> device_outputs(const Simulation&) {
+    return Status{ErrorCode::no_device, "cuda: this build of hmsm has no CUDA backend"};
+}
+inline Status set_stream(Simulation&, CUstream_st*) {
+    return {ErrorCode::no_device, "cuda: this build of hmsm has no CUDA backend"};
+}
+
+#endif
+
+}  // namespace hmsm::cuda

@@ -1,0 +1,45 @@
+// Host entry points of the seven CUDA passes (kernels/cuda/NAME.cu, one per pass).
+//
+// Every pass kernel has the same two parameters, passed by value: the device pointers of all
+// buffers (BufferPointers) and the dispatch's PassConstants. A launcher enqueues its kernel on
+// `stream` over pc.element_count threads (blocks of HMSM_WORKGROUP_SIZE, a grid-stride loop
+// beyond the grid) and returns the launch error, if any. Because the signature is uniform, a
+// captured kernel node can be re-parameterized generically (the step graph only changes the
+// wind_force constants between replays; see src/cuda/step_graph.h).
+//
+// emulate_NAME runs the same per-element code serially on the host over host memory laid out
+// exactly like the device buffers; tests use it to check the kernel bodies on machines without
+// a GPU.
+#pragma once
+
+#include "../../src/buffers.h"
+#include "../../src/gpu_layout.h"
+
+#include <hmsm/pass.h>
+
+#include <cuda_runtime_api.h>
+
+namespace hmsm::detail::cuda {
+
+/// Device element type of each buffer shape (a mat3x4 element is 3 consecutive float4 columns).
+using DeviceType_i32 = int;
+using DeviceType_i32x2 = int2;
+using DeviceType_f32x2 = float2;
+using DeviceType_f32x4 = float4;
+using DeviceType_mat3x4 = float4;
+
+/// Base pointers of every buffer of the buffer table, named as in HMSM_BUFFERS.
+struct BufferPointers {
+#define HMSM_CUDA_POINTER(name, binding, shape, scope) DeviceType_##shape* name = nullptr;
+    HMSM_BUFFERS(HMSM_CUDA_POINTER)
+#undef HMSM_CUDA_POINTER
+};
+
+#define HMSM_CUDA_DECLARE_PASS(name)                                                         \
+    cudaError_t launch_##name(const BufferPointers& buffers, const gpu::PassConstants& pc, \
+                              cudaStream_t stream);                                         \
+    void emulate_##name(const BufferPointers& host_buffers, const gpu::PassConstants& pc);
+HMSM_PASSES(HMSM_CUDA_DECLARE_PASS)
+#undef HMSM_CUDA_DECLARE_PASS
+
+}  // namespace hmsm::detail::cuda

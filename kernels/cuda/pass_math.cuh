@@ -1,0 +1,88 @@
+// Shared by the seven pass kernels: loads that go through the read-only cache, 3x3 matrices
+// stored as three float4 columns, and the thread -> element mapping of gpu_layout.h.
+//
+// Everything here is __host__ __device__ so that the same per-element code also runs on the
+// host (emulate_NAME in launchers.h). Within one dispatch no element is both read and written
+// (ping-pong halves, one depth level per dispatch), so every load may use the read-only path.
+#pragma once
+
+#include "launchers.h"
+
+#include "../../src/wind_profile.h"  // HMSM_HOST_DEVICE, wind_profile_y
+
+#include <cstdint>
+
+namespace hmsm::detail::cuda {
+
+template <class T>
+HMSM_HOST_DEVICE T load(const T* p) {
+#ifdef __CUDA_ARCH__
+    return __ldg(p);
+#else
+    return *p;
+#endif
+}
+
+HMSM_HOST_DEVICE float3 xyz(float4 v) { return make_float3(v.x, v.y, v.z); }
+HMSM_HOST_DEVICE float4 with_w(float3 v, float w) { return make_float4(v.x, v.y, v.z, w); }
+HMSM_HOST_DEVICE float3 operator+(float3 a, float3 b) { return make_float3(a.x + b.x, a.y + b.y, a.z + b.z); }
+HMSM_HOST_DEVICE float4 operator+(float4 a, float4 b) {
+    return make_float4(a.x + b.x, a.y + b.y, a.z + b.z, a.w + b.w);
+}
+HMSM_HOST_DEVICE float3 operator*(float s, float3 v) { return make_float3(s * v.x, s * v.y, s * v.z); }
+HMSM_HOST_DEVICE float dot(float3 a, float3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+
+/// A 3x3 matrix by columns; acts on column vectors (DESIGN.md 3).
+struct Mat3 {
+    float3 c0, c1, c2;
+};
+
+HMSM_HOST_DEVICE float3 operator*(const Mat3& m, float3 v) { return v.x * m.c0 + v.y * m.c1 + v.z * m.c2; }
+HMSM_HOST_DEVICE Mat3 operator*(const Mat3& a, const Mat3& b) { return {a * b.c0, a * b.c1, a * b.c2}; }
+/// m^T v: the components of v in the frame whose axes are m's columns.
+HMSM_HOST_DEVICE float3 transpose_times(const Mat3& m, float3 v) {
+    return make_float3(dot(m.c0, v), dot(m.c1, v), dot(m.c2, v));
+}
+
+/// Matrix element `index` of a mat3x4 buffer.
+HMSM_HOST_DEVICE Mat3 load_mat3(const float4* buffer, uint64_t index) {
+    const float4* p = buffer + 3 * index;
+    return {xyz(load(p)), xyz(load(p + 1)), xyz(load(p + 2))};
+}
+/// Stores with w = 0 in every column, as read() reports it.
+HMSM_HOST_DEVICE void store_mat3(float4* buffer, uint64_t index, const Mat3& m) {
+    float4* p = buffer + 3 * index;
+    p[0] = with_w(m.c0, 0.0f);
+    p[1] = with_w(m.c1, 0.0f);
+    p[2] = with_w(m.c2, 0.0f);
+}
+
+/// Thread i of a dispatch handles element `index` of group instance `instance`.
+struct Element {
+    uint32_t instance;
+    uint32_t index;
+};
+HMSM_HOST_DEVICE Element element_of(uint32_t i, uint32_t per_instance) {
+    return {i / per_instance, i % per_instance};
+}
+/// State index of model chain `c` of group instance `k` (one ping-pong half).
+HMSM_HOST_DEVICE uint64_t state_chain(const gpu::PassConstants& pc, uint32_t k, int32_t c) {
+    return pc.chain_begin + uint64_t(k) * pc.model_chain_count + uint64_t(c);
+}
+HMSM_HOST_DEVICE uint64_t state_node(const gpu::PassConstants& pc, uint32_t k, int32_t n) {
+    return pc.node_begin + uint64_t(k) * pc.model_node_count + uint64_t(n);
+}
+/// First element of ping-pong half `half` of a chain_halves buffer.
+HMSM_HOST_DEVICE uint64_t half_begin(const gpu::PassConstants& pc, uint32_t half) {
+    return uint64_t(half) * pc.total_chains;
+}
+
+/// Blocks for n threads. The grid is capped and every kernel strides over the rest, so any
+/// element count (10,000 instances x 78,563 vertices is 7.9e8) fits one launch.
+inline unsigned launch_blocks(uint32_t n) {
+    const uint32_t max_blocks = 1u << 24;
+    uint32_t blocks = (n + HMSM_WORKGROUP_SIZE - 1) / HMSM_WORKGROUP_SIZE;
+    return blocks < max_blocks ? blocks : max_blocks;
+}
+
+}  // namespace hmsm::detail::cuda

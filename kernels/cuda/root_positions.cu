@@ -1,0 +1,64 @@
+// Pass 5: chain origins O_c = O_parent + u_attach(c), O_trunk = the instance origin, summed down
+// the chain tree like compose (the paper's Root Positions temporary). Pointer jumping: round r
+// adds the partial sum of the 2^r-th ancestor, src_half -> dst_half, round 0 starting from each
+// chain's own offset. Level by level: one depth per dispatch, in place in dst_half.
+#include "pass_math.cuh"
+
+namespace hmsm::detail::cuda {
+
+/// What chain c of group instance k contributes on its own: the instance origin for the trunk,
+/// else its attach node's position relative to the parent chain's origin.
+static HMSM_HOST_DEVICE float4 own_offset(const BufferPointers& b, const gpu::PassConstants& pc,
+                                          uint32_t k, int32_t c) {
+    if (load(b.chain_parent + pc.model_chain_begin + c) < 0) {
+        const float4 origin = load(b.instance_origin + pc.instance_begin + k);
+        return make_float4(origin.x, origin.y, origin.z, 0.0f);
+    }
+    return load(b.node_relative + state_node(pc, k, load(b.chain_attach + pc.model_chain_begin + c)));
+}
+
+static HMSM_HOST_DEVICE void root_positions_element(const BufferPointers& b,
+                                                    const gpu::PassConstants& pc, uint32_t i) {
+    const uint64_t dst = half_begin(pc, pc.dst_half);
+    if (pc.mode == HMSM_MODE_LEVEL_BY_LEVEL) {
+        const Element e = element_of(i, pc.level_count);
+        const int32_t c = int32_t(pc.level_begin + e.index);
+        const int32_t parent = load(b.chain_parent + pc.model_chain_begin + c);
+        float4 origin = own_offset(b, pc, e.instance, c);
+        if (parent >= 0) origin = origin + load(b.chain_origin + dst + state_chain(pc, e.instance, parent));
+        b.chain_origin[dst + state_chain(pc, e.instance, c)] = origin;
+        return;
+    }
+    const Element e = element_of(i, pc.model_chain_count);
+    const int32_t c = int32_t(e.index);
+    const int32_t ancestor =
+        load(b.chain_jump + uint64_t(pc.round) * pc.total_model_chains + pc.model_chain_begin + c);
+    const uint64_t src = half_begin(pc, pc.src_half);
+    auto sum_so_far = [&](int32_t chain) {
+        return pc.round == 0 ? own_offset(b, pc, e.instance, chain)
+                             : load(b.chain_origin + src + state_chain(pc, e.instance, chain));
+    };
+    float4 origin = sum_so_far(c);
+    if (ancestor >= 0) origin = origin + sum_so_far(ancestor);
+    b.chain_origin[dst + pc.chain_begin + i] = origin;
+}
+
+static __global__ void __launch_bounds__(HMSM_WORKGROUP_SIZE)
+    root_positions_kernel(const BufferPointers b, const gpu::PassConstants pc) {
+    for (uint32_t i = blockIdx.x * blockDim.x + threadIdx.x; i < pc.element_count;
+         i += gridDim.x * blockDim.x)
+        root_positions_element(b, pc, i);
+}
+
+cudaError_t launch_root_positions(const BufferPointers& b, const gpu::PassConstants& pc,
+                                  cudaStream_t stream) {
+    if (pc.element_count == 0) return cudaSuccess;
+    root_positions_kernel<<<launch_blocks(pc.element_count), HMSM_WORKGROUP_SIZE, 0, stream>>>(b, pc);
+    return cudaGetLastError();
+}
+
+void emulate_root_positions(const BufferPointers& b, const gpu::PassConstants& pc) {
+    for (uint32_t i = 0; i < pc.element_count; ++i) root_positions_element(b, pc, i);
+}
+
+}  // namespace hmsm::detail::cuda

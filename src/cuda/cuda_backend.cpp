@@ -1,0 +1,108 @@
+#include "cuda_backend.h"
+
+#include "cuda_error.h"
+#include "launch_dispatch.h"
+
+#include <cuda_runtime_api.h>
+
+namespace hmsm::detail {
+namespace cuda {
+
+Result<std::unique_ptr<Backend>> CudaBackend::create() {
+    int count = 0;
+    const cudaError_t error = cudaGetDeviceCount(&count);
+    if (error != cudaSuccess || count == 0) {
+        (void)cudaGetLastError();
+        return Status{ErrorCode::no_device,
+                      std::string("cuda: no CUDA device is available (") +
+                          (error != cudaSuccess ? cudaGetErrorName(error) : "0 devices") + ")"};
+    }
+    int device = 0;
+    CUDA_TRY(cudaGetDevice(&device));
+    cudaDeviceProp properties{};
+    CUDA_TRY(cudaGetDeviceProperties(&properties, device));
+    CUDA_TRY(cudaSetDevice(device));
+    cudaStream_t stream = nullptr;
+    CUDA_TRY(cudaStreamCreateWithFlags(&stream, cudaStreamNonBlocking));
+    return std::unique_ptr<Backend>(new CudaBackend(device, properties.name, stream));
+}
+
+CudaBackend::~CudaBackend() {
+    (void)cudaSetDevice(device_);
+    for (cudaEvent_t event : events_) (void)cudaEventDestroy(event);
+    if (own_stream_) (void)cudaStreamDestroy(own_stream_);
+    // buffers_ and graph_ release themselves.
+}
+
+Status CudaBackend::make_current() const {
+    CUDA_TRY(cudaSetDevice(device_));
+    return {};
+}
+
+Status CudaBackend::set_stream(cudaStream_t stream) {
+    HMSM_TRY(make_current());
+    CUDA_TRY(cudaStreamSynchronize(stream_));  // finish what ran on the previous stream
+    stream_ = stream ? stream : own_stream_;
+    return {};
+}
+
+Status CudaBackend::upload(const SceneData& scene) {
+    HMSM_TRY(make_current());
+    HMSM_TRY(buffers_.allocate(scene));
+    return buffers_.upload(scene, stream_);
+}
+
+Status CudaBackend::read(BufferId id, uint64_t first, uint64_t count, void* dst, Scalar as) const {
+    HMSM_TRY(make_current());
+    return buffers_.read(id, first, count, dst, as, stream_);
+}
+
+Status CudaBackend::write(BufferId id, uint64_t first, uint64_t count, const void* src, Scalar as) {
+    HMSM_TRY(make_current());
+    return buffers_.write(id, first, count, src, as, stream_);
+}
+
+Status CudaBackend::run(std::span<const Dispatch> program, std::span<const double> wind_x) {
+    HMSM_TRY(make_current());
+    times_ = {};
+    if (wind_x.empty() || program.empty()) return {};
+    return profiling_ ? run_profiled(program, wind_x) : run_graph(program, wind_x);
+}
+
+Status CudaBackend::run_graph(std::span<const Dispatch> program, std::span<const double> wind_x) {
+    if (!graph_.matches(program, buffers_.pointers()))
+        HMSM_TRY(graph_.capture(program, buffers_.pointers(), stream_));
+    for (double x : wind_x) HMSM_TRY(graph_.replay(float(x), stream_));
+    CUDA_TRY(cudaStreamSynchronize(stream_));
+    return {};
+}
+
+Status CudaBackend::run_profiled(std::span<const Dispatch> program, std::span<const double> wind_x) {
+    while (events_.size() < program.size() + 1) {
+        cudaEvent_t event = nullptr;
+        CUDA_TRY(cudaEventCreate(&event));
+        events_.push_back(event);
+    }
+    for (double x : wind_x) {
+        CUDA_TRY(cudaEventRecord(events_[0], stream_));
+        for (size_t j = 0; j < program.size(); ++j) {
+            CUDA_TRY(launch_dispatch(program[j], buffers_.pointers(), float(x), stream_));
+            CUDA_TRY(cudaEventRecord(events_[j + 1], stream_));
+        }
+        CUDA_TRY(cudaEventSynchronize(events_[program.size()]));
+        for (size_t j = 0; j < program.size(); ++j) {
+            float milliseconds = 0.0f;
+            CUDA_TRY(cudaEventElapsedTime(&milliseconds, events_[j], events_[j + 1]));
+            times_.seconds[uint32_t(program[j].pass)] += 1e-3 * double(milliseconds);
+        }
+    }
+    CUDA_TRY(cudaStreamSynchronize(stream_));
+    times_.steps = wind_x.size();
+    return {};
+}
+
+}  // namespace cuda
+
+Result<std::unique_ptr<Backend>> create_cuda_backend() { return cuda::CudaBackend::create(); }
+
+}  // namespace hmsm::detail

@@ -1,0 +1,46 @@
+// The device buffers of the buffer table (buffers.h), one cudaMalloc each, sized from a
+// SceneData; uploads converted to float (device_layout.h) and the typed read/write hooks.
+#pragma once
+
+#include "../backend.h"
+#include "../../kernels/cuda/launchers.h"
+
+#include <array>
+#include <cstdint>
+
+namespace hmsm::detail::cuda {
+
+class DeviceBuffers {
+public:
+    DeviceBuffers() = default;
+    ~DeviceBuffers();
+    DeviceBuffers(const DeviceBuffers&) = delete;
+    DeviceBuffers& operator=(const DeviceBuffers&) = delete;
+
+    /// Allocates every buffer for `scene`. When the device runs out of memory, frees what it
+    /// took and returns out_of_memory naming the buffer and the bytes it asked for.
+    Status allocate(const SceneData& scene);
+    /// Copies the static buffers and zero-fills the state buffers; complete on return.
+    Status upload(const SceneData& scene, cudaStream_t stream);
+
+    /// Backend::read / Backend::write over elements [first, first + count) of `id`.
+    Status read(BufferId id, uint64_t first, uint64_t count, void* dst, Scalar as,
+                cudaStream_t stream) const;
+    Status write(BufferId id, uint64_t first, uint64_t count, const void* src, Scalar as,
+                 cudaStream_t stream);
+
+    const BufferPointers& pointers() const { return pointers_; }
+    uint64_t element_count(BufferId id) const { return counts_[uint32_t(id)]; }
+    /// Device memory held, in bytes.
+    uint64_t bytes() const;
+
+private:
+    void release();
+    Status check_range(BufferId id, uint64_t first, uint64_t count) const;
+
+    std::array<void*, kBufferCount> bases_{};
+    std::array<uint64_t, kBufferCount> counts_{};
+    BufferPointers pointers_;
+};
+
+}  // namespace hmsm::detail::cuda

@@ -1,0 +1,80 @@
+#include "device_layout.h"
+
+#include <cstring>
+
+namespace hmsm::detail::cuda {
+namespace {
+
+template <class T>
+std::vector<std::byte> raw_bytes(const std::vector<T>& values) {
+    std::vector<std::byte> bytes(values.size() * sizeof(T));
+    if (!values.empty()) std::memcpy(bytes.data(), values.data(), bytes.size());
+    return bytes;
+}
+
+std::vector<std::byte> float4_image(const std::vector<glm::dvec4>& values) {
+    std::vector<float> words(values.size() * 4);
+    for (size_t i = 0; i < values.size(); ++i)
+        for (int k = 0; k < 4; ++k) words[4 * i + k] = float(values[i][k]);
+    return raw_bytes(words);
+}
+
+std::vector<std::byte> mat3x4_image(const std::vector<glm::dmat3>& values) {
+    std::vector<float> words(values.size() * 12, 0.0f);
+    for (size_t i = 0; i < values.size(); ++i)
+        for (int c = 0; c < 3; ++c)
+            for (int r = 0; r < 3; ++r) words[12 * i + 4 * c + r] = float(values[i][c][r]);
+    return raw_bytes(words);
+}
+
+}  // namespace
+
+std::vector<std::byte> device_image(const SceneData& d, BufferId id) {
+    static_assert(sizeof(glm::ivec2) == 8, "ivec2 must be two packed int32");
+    switch (id) {
+        case BufferId::chain_parent: return raw_bytes(d.chain_parent);
+        case BufferId::chain_jump: return raw_bytes(d.chain_jump);
+        case BufferId::chain_attach: return raw_bytes(d.chain_attach);
+        case BufferId::chain_rest_rotation: return mat3x4_image(d.chain_rest_rotation);
+        case BufferId::chain_constants: return float4_image(d.chain_constants);
+        case BufferId::node_owner: return raw_bytes(d.node_owner);
+        case BufferId::node_local: return float4_image(d.node_local);
+        case BufferId::vertex_chain: return raw_bytes(d.vertex_chain);
+        case BufferId::vertex_rest_position: return float4_image(d.vertex_rest_position);
+        case BufferId::vertex_rest_normal: return float4_image(d.vertex_rest_normal);
+        case BufferId::vertex_parent_position: return float4_image(d.vertex_parent_position);
+        case BufferId::vertex_parent_normal: return float4_image(d.vertex_parent_normal);
+        case BufferId::instance_origin: return float4_image(d.instance_origin);
+        case BufferId::instance_yaw: return float4_image(d.instance_yaw);
+        default: return {};  // state buffers start zeroed on the device
+    }
+}
+
+void words_to_scalars(Shape shape, const void* words, uint64_t n, void* dst, Scalar as) {
+    const bool integer = shape_is_integer(shape);
+    const auto* ints = static_cast<const int32_t*>(words);
+    const auto* floats = static_cast<const float*>(words);
+    if (as == Scalar::f64) {
+        auto* out = static_cast<double*>(dst);
+        for (uint64_t i = 0; i < n; ++i) out[i] = integer ? double(ints[i]) : double(floats[i]);
+    } else {
+        auto* out = static_cast<float*>(dst);
+        for (uint64_t i = 0; i < n; ++i) out[i] = integer ? float(ints[i]) : floats[i];
+    }
+}
+
+void scalars_to_words(Shape shape, const void* src, uint64_t n, void* words, Scalar as) {
+    const bool integer = shape_is_integer(shape);
+    const bool matrix = shape == Shape::mat3x4;
+    auto* ints = static_cast<int32_t*>(words);
+    auto* floats = static_cast<float*>(words);
+    for (uint64_t i = 0; i < n; ++i) {
+        double value = as == Scalar::f64 ? static_cast<const double*>(src)[i]
+                                         : double(static_cast<const float*>(src)[i]);
+        if (matrix && i % 4 == 3) value = 0.0;
+        if (integer) ints[i] = int32_t(value);
+        else floats[i] = float(value);
+    }
+}
+
+}  // namespace hmsm::detail::cuda

@@ -1,0 +1,40 @@
+// include/hmsm/cuda.h: the CUDA backend behind a Simulation, for engines.
+#include <hmsm/cuda.h>
+
+#include "cuda_backend.h"
+
+namespace hmsm::cuda {
+namespace {
+
+Result<detail::cuda::CudaBackend*> cuda_backend_of(const Simulation& simulation) {
+    auto* backend = dynamic_cast<detail::cuda::CudaBackend*>(&simulation.backend());
+    if (!backend)
+        return Status{ErrorCode::invalid_argument,
+                      std::string("cuda: the simulation runs on the ") +
+                          to_string(simulation.backend_kind()) + " backend, not on cuda"};
+    return backend;
+}
+
+}  // namespace
+
+Result<DeviceOutputs> device_outputs(const Simulation& simulation) {
+    auto backend = cuda_backend_of(simulation);
+    if (!backend) return backend.status();
+    const detail::cuda::BufferPointers& p = (*backend)->device_pointers();
+    DeviceOutputs outputs;
+    outputs.device = (*backend)->device();
+    outputs.node_positions = reinterpret_cast<const float*>(p.node_world);
+    outputs.vertex_positions = reinterpret_cast<const float*>(p.vertex_position);
+    outputs.vertex_normals = reinterpret_cast<const float*>(p.vertex_normal);
+    outputs.node_count = simulation.node_count();
+    outputs.vertex_count = simulation.vertex_count();
+    return outputs;
+}
+
+Status set_stream(Simulation& simulation, CUstream_st* stream) {
+    auto backend = cuda_backend_of(simulation);
+    if (!backend) return backend.status();
+    return (*backend)->set_stream(stream);
+}
+
+}  // namespace hmsm::cuda

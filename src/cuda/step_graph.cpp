@@ -1,0 +1,103 @@
+#include "step_graph.h"
+
+#include "cuda_error.h"
+#include "launch_dispatch.h"
+
+#include <cstring>
+
+namespace hmsm::detail::cuda {
+namespace {
+
+/// The node that the last operation captured on `stream` added (the stream's only dependency).
+cudaError_t last_captured_node(cudaStream_t stream, cudaGraphNode_t* node) {
+    cudaStreamCaptureStatus status;
+    const cudaGraphNode_t* dependencies = nullptr;
+    size_t count = 0;
+#if CUDART_VERSION >= 13000
+    cudaError_t error = cudaStreamGetCaptureInfo(stream, &status, nullptr, nullptr, &dependencies,
+                                                 nullptr, &count);
+#else
+    cudaError_t error =
+        cudaStreamGetCaptureInfo(stream, &status, nullptr, nullptr, &dependencies, &count);
+#endif
+    if (error != cudaSuccess) return error;
+    if (status != cudaStreamCaptureStatusActive || count != 1) return cudaErrorStreamCaptureInvalidated;
+    *node = dependencies[0];
+    return cudaSuccess;
+}
+
+bool same_bytes(const void* a, const void* b, size_t n) { return std::memcmp(a, b, n) == 0; }
+
+/// Field by field: Dispatch has padding between pass and constants, PassConstants has none.
+bool same_dispatch(const Dispatch& a, const Dispatch& b) {
+    static_assert(sizeof(gpu::PassConstants) == 20 * 4 + 2 * 16, "PassConstants must be unpadded");
+    return a.pass == b.pass && same_bytes(&a.constants, &b.constants, sizeof a.constants);
+}
+
+}  // namespace
+
+StepGraph::~StepGraph() { release(); }
+
+void StepGraph::release() {
+    if (exec_) (void)cudaGraphExecDestroy(exec_);
+    if (graph_) (void)cudaGraphDestroy(graph_);
+    exec_ = nullptr;
+    graph_ = nullptr;
+    wind_nodes_.clear();
+    program_.clear();
+}
+
+bool StepGraph::matches(std::span<const Dispatch> program, const BufferPointers& buffers) const {
+    if (!exec_ || program.size() != program_.size() || !same_bytes(&buffers, &buffers_, sizeof buffers))
+        return false;
+    for (size_t i = 0; i < program.size(); ++i)
+        if (!same_dispatch(program[i], program_[i])) return false;
+    return true;
+}
+
+Status StepGraph::capture(std::span<const Dispatch> program, const BufferPointers& buffers,
+                          cudaStream_t stream) {
+    release();
+    CUDA_TRY(cudaStreamBeginCapture(stream, cudaStreamCaptureModeThreadLocal));
+    cudaError_t error = cudaSuccess;
+    std::vector<WindNode> wind_nodes;
+    for (const Dispatch& d : program) {
+        error = launch_dispatch(d, buffers, 0.0f, stream);
+        if (error == cudaSuccess && d.pass == Pass::wind_force && d.constants.element_count > 0) {
+            WindNode wind{};
+            wind.constants = d.constants;
+            error = last_captured_node(stream, &wind.node);
+            if (error == cudaSuccess) error = cudaGraphKernelNodeGetParams(wind.node, &wind.launch);
+            wind_nodes.push_back(wind);
+        }
+        if (error != cudaSuccess) break;
+    }
+    cudaGraph_t graph = nullptr;
+    const cudaError_t end_error = cudaStreamEndCapture(stream, &graph);
+    if (error == cudaSuccess) error = end_error;
+    if (error != cudaSuccess) {
+        if (graph) (void)cudaGraphDestroy(graph);
+        return cuda_status(error, "capturing the step program", __FILE__, __LINE__);
+    }
+    graph_ = graph;
+    CUDA_TRY(cudaGraphInstantiate(&exec_, graph_, 0));
+    program_.assign(program.begin(), program.end());
+    buffers_ = buffers;
+    wind_nodes_ = std::move(wind_nodes);
+    return {};
+}
+
+Status StepGraph::replay(float wind_x, cudaStream_t stream) {
+    for (WindNode& wind : wind_nodes_) {
+        wind.constants.wind.w = wind_x;
+        void* arguments[] = {&buffers_, &wind.constants};
+        cudaKernelNodeParams params = wind.launch;
+        params.kernelParams = arguments;
+        params.extra = nullptr;
+        CUDA_TRY(cudaGraphExecKernelNodeSetParams(exec_, wind.node, &params));
+    }
+    CUDA_TRY(cudaGraphLaunch(exec_, stream));
+    return {};
+}
+
+}  // namespace hmsm::detail::cuda

@@ -1,0 +1,50 @@
+// One step of a program as an instantiated CUDA graph, replayed once per step.
+//
+// The program is captured once from the stream (every dispatch in order, on one stream, so the
+// graph is a chain and ordering replaces barriers). Between replays only the wind phase
+// x0 = f t mod 2 changes: it lives in the wind_force dispatches' constants (pc.wind.w), so before
+// each replay every wind_force kernel node gets new parameters through
+// cudaGraphExecKernelNodeSetParams. That is possible generically because every pass kernel
+// takes (BufferPointers, PassConstants) by value (launchers.h). Launches already enqueued keep
+// the parameters they were launched with, so steps can be enqueued back to back.
+#pragma once
+
+#include "../backend.h"
+#include "../../kernels/cuda/launchers.h"
+
+#include <span>
+#include <vector>
+
+namespace hmsm::detail::cuda {
+
+class StepGraph {
+public:
+    StepGraph() = default;
+    ~StepGraph();
+    StepGraph(const StepGraph&) = delete;
+    StepGraph& operator=(const StepGraph&) = delete;
+
+    /// True when the captured graph runs exactly `program` over `buffers`.
+    bool matches(std::span<const Dispatch> program, const BufferPointers& buffers) const;
+    /// Captures `program` from `stream` and instantiates it (replacing any earlier graph).
+    Status capture(std::span<const Dispatch> program, const BufferPointers& buffers,
+                   cudaStream_t stream);
+    /// Enqueues one step with wind phase `wind_x` on `stream`.
+    Status replay(float wind_x, cudaStream_t stream);
+
+private:
+    struct WindNode {
+        cudaGraphNode_t node;
+        cudaKernelNodeParams launch;  // function and grid of the captured node
+        gpu::PassConstants constants;
+    };
+    void release();
+
+    std::vector<Dispatch> program_;
+    BufferPointers buffers_;
+    cudaGraph_t graph_ = nullptr;
+    cudaGraphExec_t exec_ = nullptr;
+    std::vector<WindNode> wind_nodes_;
+};
+
+}  // namespace hmsm::detail::cuda
