@@ -45,7 +45,7 @@ Result<nlohmann::json> parse_json(std::string_view text, std::string_view source
         try {
             nlohmann::json unused = nlohmann::json::parse(text);
             (void)unused;
-        } catch (const nlohmann::json::parse_error& e) {
+        } catch (const nlohmann::json::exception& e) {
             return Status{ErrorCode::invalid_tree,
                           std::string(source) + ": not valid JSON (" + e.what() + ")"};
         }

@@ -1,0 +1,197 @@
+// The agreement suite, written once and run per backend: every backend against the cpu64
+// oracle, pass by pass on random states and end to end after many steps (DESIGN.md 7). A
+// backend that is not compiled in or has no device is skipped with the reason.
+#include "test_trees.h"
+
+#include "backend.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+using namespace hmsm;
+using detail::BufferId;
+
+namespace {
+
+/// Creates a simulation on `kind`; sets `skip` to the reason when the backend is unavailable.
+std::unique_ptr<Simulation> create_or_skip(const Scene& scene, SimulationConfig config,
+                                           BackendKind kind, std::string& skip) {
+    config.backend = kind;
+    auto sim = Simulation::create(scene, config);
+    if (!sim.ok()) {
+        if (sim.status().code() == ErrorCode::no_device) skip = sim.status().message();
+        else ADD_FAILURE() << to_string(kind) << ": " << sim.status().message();
+        return nullptr;
+    }
+    return std::move(sim).value();
+}
+
+std::vector<double> read_output(const Simulation& sim, Output output) {
+    std::vector<double> values;
+    Status s = sim.read(output, values);
+    EXPECT_TRUE(s.ok()) << s.message();
+    return values;
+}
+
+struct SceneCase {
+    std::string name;
+    Scene scene;
+    SimulationConfig config;
+};
+
+std::vector<SceneCase> end_to_end_cases() {
+    std::vector<SceneCase> cases;
+    SimulationConfig windy;
+    windy.wind.strength = 8.0;
+    windy.wind.direction = {1, 0, 0.3};
+    cases.push_back({"small_tree", single_tree_scene(test::small_tree()), windy});
+    cases.push_back({"deep_tree_origin_yaw", single_tree_scene(test::deep_tree(6), {3, 1, -2}, 1.1), windy});
+    auto grid = grid_scene(test::small_tree(), 7, 6.0, 42);
+    cases.push_back({"grid_of_7", *grid, windy});
+    Scene mixed;
+    mixed.models = {test::small_tree(), test::rod(5, 4.0, 0.15)};
+    mixed.model_names = {"small", "rod"};
+    mixed.instances = {{1, {0, 0, 0}, 0.0}, {0, {5, 0, 1}, 0.5}, {0, {-4, 0, 3}, 2.0}, {1, {2, 0, -6}, -0.7}};
+    cases.push_back({"two_models_four_groups", mixed, windy});
+    SimulationConfig width = windy;
+    width.model.grouping = Grouping::width;
+    cases.push_back({"width_grouping", single_tree_scene(test::small_tree()), width});
+    SimulationConfig cut = windy;
+    cut.model.max_chain_segments = 2;
+    cut.model.ring_sides = 5;
+    cases.push_back({"cut_chains_5_sides", single_tree_scene(test::small_tree(), {1, 0, 1}, 0.3), cut});
+    SimulationConfig level = windy;
+    level.composition = Composition::level_by_level;
+    cases.push_back({"level_by_level", single_tree_scene(test::deep_tree(5), {0, 0, 0}, 0.2), level});
+    SimulationConfig front = windy;
+    front.wind.profile = WindProfile::y2;
+    front.wind.front_speed = 3.0;
+    front.wind.frequency = 0.4;
+    cases.push_back({"travelling_front_y2", *grid_scene(test::deep_tree(3), 5, 9.0, 7), front});
+    return cases;
+}
+
+double scene_height(const Scene& scene) {
+    double h = 0.0;
+    for (const TreeModel& m : scene.models) h = std::max(h, tree_height(m));
+    return h;
+}
+
+class Agreement : public ::testing::TestWithParam<BackendKind> {};
+
+TEST_P(Agreement, EndToEndAfter1000Steps) {
+    for (SceneCase& c : end_to_end_cases()) {
+        SCOPED_TRACE(c.name);
+        std::string skip;
+        auto sim = create_or_skip(c.scene, c.config, GetParam(), skip);
+        if (!skip.empty()) GTEST_SKIP() << skip;
+        auto oracle = create_or_skip(c.scene, c.config, BackendKind::cpu64, skip);
+        ASSERT_TRUE(sim && oracle);
+        ASSERT_TRUE(sim->step(400).ok());
+        ASSERT_TRUE(sim->step(600).ok());
+        ASSERT_TRUE(oracle->step(1000).ok());
+        const double height = scene_height(c.scene);
+        for (Output o : {Output::node_positions, Output::vertex_positions}) {
+            auto a = read_output(*sim, o), b = read_output(*oracle, o);
+            ASSERT_EQ(a.size(), b.size());
+            EXPECT_LE(test::max_abs_difference(a, b) / height, 1e-4) << "output " << int(o);
+        }
+        auto normals = read_output(*sim, Output::vertex_normals);
+        EXPECT_LE(test::max_abs_difference(normals, read_output(*oracle, Output::vertex_normals)), 1e-3);
+        // The scene really moved: positions differ from the rest pose.
+        auto rest = create_or_skip(c.scene, c.config, BackendKind::cpu64, skip);
+        EXPECT_GT(test::max_abs_difference(read_output(*rest, Output::node_positions),
+                                           read_output(*oracle, Output::node_positions)),
+                  1e-3 * height);
+    }
+}
+
+/// Fills every state buffer of both simulations with the same random values: angles and rates
+/// in range, proper rotations for matrices, positions within a few metres.
+void randomize_state(Simulation& a, Simulation& b, uint32_t seed) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<double> unit(-1.0, 1.0);
+    const auto& data = b.scene_data();
+    auto fill = [&](BufferId id, auto make_element) {
+        uint64_t count = data.element_count(id);
+        uint32_t scalars = detail::shape_scalars(detail::buffer_info(id).shape);
+        std::vector<double> values(count * scalars);
+        for (uint64_t i = 0; i < count; ++i) make_element(&values[i * scalars]);
+        ASSERT_TRUE(a.backend().write(id, 0, count, values.data(), detail::Scalar::f64).ok());
+        ASSERT_TRUE(b.backend().write(id, 0, count, values.data(), detail::Scalar::f64).ok());
+    };
+    auto rotation = [&](double* m) {
+        glm::dvec3 axis = glm::normalize(glm::dvec3(unit(rng), unit(rng), unit(rng)) + glm::dvec3(1e-3));
+        double angle = 3.0 * unit(rng), c = std::cos(angle), s = std::sin(angle);
+        glm::dmat3 k(0.0);
+        k[1][0] = axis.z; k[2][0] = -axis.y; k[0][1] = -axis.z; k[2][1] = axis.x; k[0][2] = axis.y; k[1][2] = -axis.x;
+        glm::dmat3 r = glm::dmat3(1.0) + s * k + (1 - c) * k * k;
+        for (int col = 0; col < 3; ++col) {
+            for (int row = 0; row < 3; ++row) m[4 * col + row] = r[col][row];
+            m[4 * col + 3] = 0.0;
+        }
+    };
+    fill(BufferId::chain_state, [&](double* v) {
+        v[0] = 0.7 * unit(rng); v[1] = 0.7 * unit(rng); v[2] = 2 * unit(rng); v[3] = 2 * unit(rng);
+    });
+    fill(BufferId::chain_force, [&](double* v) { v[0] = 50 * unit(rng); v[1] = 50 * unit(rng); });
+    fill(BufferId::chain_local, rotation);
+    fill(BufferId::chain_rotation, rotation);
+    auto point = [&](double* v) { v[0] = 5 * unit(rng); v[1] = 5 * unit(rng); v[2] = 5 * unit(rng); v[3] = 0; };
+    fill(BufferId::node_relative, point);
+    fill(BufferId::chain_origin, point);
+}
+
+TEST_P(Agreement, EachPassOnRandomStates) {
+    SimulationConfig config;
+    config.wind.strength = 6.0;
+    config.wind.direction = {0.4, 0.1, 1.0};
+    config.wind.front_speed = 2.0;
+    Scene scene = *grid_scene(test::small_tree(), 3, 5.0, 3);
+    scene.models.push_back(test::deep_tree(6));
+    scene.model_names.push_back("deep");
+    scene.instances.push_back({1, {-3, 0, 2}, 0.8});
+    for (Composition composition : {Composition::pointer_jumping, Composition::level_by_level}) {
+        config.composition = composition;
+        std::string skip;
+        auto sim = create_or_skip(scene, config, GetParam(), skip);
+        if (!skip.empty()) GTEST_SKIP() << skip;
+        auto oracle = create_or_skip(scene, config, BackendKind::cpu64, skip);
+        ASSERT_TRUE(sim && oracle);
+        for (Pass pass : kAllPasses) {
+            SCOPED_TRACE(std::string(pass_name(pass)) + (composition == Composition::level_by_level ? " level" : " jump"));
+            randomize_state(*sim, *oracle, 1234 + uint32_t(pass));
+            std::vector<detail::Dispatch> dispatches;
+            for (const auto& d : sim->step_program())
+                if (d.pass == pass) dispatches.push_back(d);
+            ASSERT_FALSE(dispatches.empty());
+            const double wind_x[1] = {0.37};
+            ASSERT_TRUE(sim->backend().run(dispatches, wind_x).ok());
+            ASSERT_TRUE(oracle->backend().run(dispatches, wind_x).ok());
+            uint32_t written = detail::pass_writes(pass);
+            for (const auto& info : detail::kBufferTable) {
+                if (!(written & (1u << uint32_t(info.id)))) continue;
+                uint64_t count = oracle->scene_data().element_count(info.id);
+                uint32_t scalars = detail::shape_scalars(info.shape);
+                std::vector<double> a(count * scalars), b(count * scalars);
+                ASSERT_TRUE(sim->backend().read(info.id, 0, count, a.data(), detail::Scalar::f64).ok());
+                ASSERT_TRUE(oracle->backend().read(info.id, 0, count, b.data(), detail::Scalar::f64).ok());
+                double scale = 1.0;
+                for (double v : b) scale = std::max(scale, std::abs(v));
+                EXPECT_LE(test::max_abs_difference(a, b) / scale, 1e-4) << info.name;
+            }
+        }
+    }
+}
+
+std::string backend_name(const ::testing::TestParamInfo<BackendKind>& info) {
+    return to_string(info.param);
+}
+
+INSTANTIATE_TEST_SUITE_P(Backends, Agreement,
+                         ::testing::Values(BackendKind::cpu, BackendKind::vulkan, BackendKind::cuda),
+                         backend_name);
+
+}  // namespace

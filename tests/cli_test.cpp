@@ -1,0 +1,179 @@
+// The command-line contract (DESIGN.md 5): exit codes, one clear error line, no partial output.
+#include "test_trees.h"
+
+#include <nlohmann/json.hpp>
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <sys/wait.h>
+
+using namespace hmsm;
+namespace fs = std::filesystem;
+
+namespace {
+
+struct CliRun {
+    int exit_code;
+    std::string err;
+};
+
+class Cli : public ::testing::Test {
+protected:
+    void SetUp() override {
+        dir_ = fs::temp_directory_path() /
+               ("hmsm_cli_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+        fs::remove_all(dir_);
+        fs::create_directories(dir_);
+        ASSERT_TRUE(save_tree(test::small_tree(), path("small.json")).ok());
+    }
+    void TearDown() override { fs::remove_all(dir_); }
+
+    std::string path(const std::string& name) const { return (dir_ / name).string(); }
+
+    CliRun run(const std::string& args) const {
+        std::string err_file = path("stderr.txt");
+        std::string command = std::string(HMSM_CLI_PATH) + " " + args + " > " + path("stdout.txt") +
+                              " 2> " + err_file;
+        int status = std::system(command.c_str());
+        std::ifstream in(err_file);
+        std::stringstream err;
+        err << in.rdbuf();
+        return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, err.str()};
+    }
+    std::string stdout_text() const {
+        std::ifstream in(path("stdout.txt"));
+        std::stringstream s;
+        s << in.rdbuf();
+        return s.str();
+    }
+
+    /// Bad input: exit 2, one line naming the problem, no output file.
+    void expect_bad_input(const std::string& args, const std::string& fragment) {
+        SCOPED_TRACE(args);
+        std::string out = path("nodes.csv");
+        CliRun r = run(args + " --dump-nodes " + out);
+        EXPECT_EQ(r.exit_code, 2) << r.err;
+        EXPECT_NE(r.err.find(fragment), std::string::npos) << r.err;
+        EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+        EXPECT_FALSE(fs::exists(out));
+        for (const auto& entry : fs::directory_iterator(dir_))
+            EXPECT_EQ(entry.path().string().find(".tmp-hmsm"), std::string::npos) << entry.path();
+    }
+
+    fs::path dir_;
+};
+
+}  // namespace
+
+TEST_F(Cli, SimulateWritesNodesVerticesAndReport) {
+    CliRun r = run("simulate --tree " + path("small.json") + " --backend cpu --steps 30 --dump-nodes " +
+                path("n.csv") + " --dump-vertices " + path("v.bin") + " --report " + path("r.json") +
+                " --origin 1,0,2 --yaw 0.5");
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    std::ifstream csv(path("n.csv"));
+    std::string line;
+    std::getline(csv, line);
+    EXPECT_EQ(line, "instance,node,x,y,z");
+    int rows = 0;
+    while (std::getline(csv, line)) ++rows;
+    EXPECT_EQ(rows, int(test::small_tree().nodes.size()));
+
+    auto h = build_hierarchy(test::small_tree(), {});
+    uint64_t vertices = mesh_vertex_count(test::small_tree(), *h, {});
+    EXPECT_EQ(fs::file_size(path("v.bin")), vertices * 3 * sizeof(float));
+
+    std::ifstream report_file(path("r.json"));
+    auto report = nlohmann::json::parse(report_file);
+    EXPECT_EQ(report["backend"], "cpu");
+    EXPECT_EQ(report["steps"], 30);
+    EXPECT_EQ(report["mesh_vertices"], vertices);
+    for (Pass p : kAllPasses) EXPECT_GT(report["pass_device_seconds"][std::string(pass_name(p))].get<double>(), 0.0);
+}
+
+TEST_F(Cli, GridForestDumpsEveryInstance) {
+    CliRun r = run("simulate --tree " + path("small.json") +
+                " --instances 3 --spacing 4 --seed 9 --backend cpu64 --steps 5 --dump-nodes " + path("n.csv"));
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    std::ifstream csv(path("n.csv"));
+    std::string line, last;
+    while (std::getline(csv, line)) last = line;
+    EXPECT_EQ(last.rfind("2,15,", 0), 0u) << last;
+}
+
+TEST_F(Cli, InfoPrintsCountsAndChains) {
+    CliRun r = run("info --tree " + path("small.json") + " --json --chains " + path("chains.csv"));
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    auto info = nlohmann::json::parse(stdout_text());
+    auto h = build_hierarchy(test::small_tree(), {});
+    EXPECT_EQ(info["nodes"], 16);
+    EXPECT_EQ(info["chains"], h->chains.size());
+    EXPECT_EQ(info["max_depth"], 3);
+    EXPECT_EQ(info["leaves"], 3);
+    EXPECT_EQ(info["mesh_vertices"], mesh_vertex_count(test::small_tree(), *h, {}));
+    std::ifstream csv(path("chains.csv"));
+    std::string header, trunk;
+    std::getline(csv, header);
+    std::getline(csv, trunk);
+    EXPECT_EQ(header, "chain,parent,depth,attach_node,nodes");
+    EXPECT_EQ(trunk, "0,-1,0,1,2 3 0");  // the trunk lists its members, not the root
+}
+
+TEST_F(Cli, BadArgumentsExitTwoWithoutOutput) {
+    const std::string tree = " --tree " + path("small.json");
+    expect_bad_input("simulate" + tree + " --dt 0", "dt");
+    expect_bad_input("simulate" + tree + " --dt -0.1", "dt");
+    expect_bad_input("simulate" + tree + " --steps -1", "steps");
+    expect_bad_input("simulate" + tree + " --backend quantum", "backend");
+    expect_bad_input("simulate" + tree + " --wind gale", "wind");
+    expect_bad_input("simulate" + tree + " --wind-dir 0,0,0", "direction");
+    expect_bad_input("simulate" + tree + " --wind-dir 1,0", "wind-dir");
+    expect_bad_input("simulate" + tree + " --wind-frequency -1", "frequency");
+    expect_bad_input("simulate" + tree + " --front-speed -2", "front speed");
+    expect_bad_input("simulate" + tree + " --stiffness 0", "stiffness");
+    expect_bad_input("simulate" + tree + " --damping-ratio -1", "damping");
+    expect_bad_input("simulate" + tree + " --max-angle 3", "max_angle");
+    expect_bad_input("simulate" + tree + " --ring-sides 2", "ring_sides");
+    expect_bad_input("simulate" + tree + " --fix-weight 2", "fix_weight");
+    expect_bad_input("simulate" + tree + " --grouping height", "grouping");
+    expect_bad_input("simulate" + tree + " --origin 1,2,x", "origin");
+    expect_bad_input("simulate" + tree + " --no-such-flag", "no-such-flag");
+    expect_bad_input("simulate --steps 3", "--tree");
+    expect_bad_input("simulate --tree " + path("missing.json"), "missing.json");
+    expect_bad_input("simulate" + tree + " --steps abc", "steps");
+}
+
+TEST_F(Cli, BadTreeFilesExitTwoNamingTheNode) {
+    std::ofstream(path("cycle.json")) << R"({"format": "hmsm-tree", "version": 1, "nodes": [
+        {"parent": -1, "position": [0,0,0], "radius": 0.3},
+        {"parent": 2, "position": [0,1,0], "radius": 0.2},
+        {"parent": 1, "position": [0,2,0], "radius": 0.2}]})";
+    expect_bad_input("simulate --tree " + path("cycle.json"), "cycle");
+    std::ofstream(path("radius.json")) << R"({"format": "hmsm-tree", "version": 1, "nodes": [
+        {"parent": -1, "position": [0,0,0], "radius": 0.3},
+        {"parent": 0, "position": [0,1,0], "radius": 0}]})";
+    expect_bad_input("simulate --tree " + path("radius.json"), "node 1");
+    std::ofstream(path("text.json")) << "hello";
+    expect_bad_input("simulate --tree " + path("text.json"), "JSON");
+}
+
+TEST_F(Cli, UnwritableOutputFailsBeforeSimulating) {
+    CliRun r = run("simulate --tree " + path("small.json") + " --steps 1 --dump-nodes " +
+                path("no/such/dir/n.csv"));
+    EXPECT_EQ(r.exit_code, 2);
+    EXPECT_NE(r.err.find("no/such/dir/n.csv"), std::string::npos) << r.err;
+}
+
+TEST_F(Cli, UnavailableBackendExitsOne) {
+    for (const char* backend : {"cuda", "vulkan"}) {
+        bool compiled = false;
+        for (BackendKind k : compiled_backends()) compiled |= std::string(to_string(k)) == backend;
+        CliRun r = run("simulate --tree " + path("small.json") + " --steps 1 --backend " + backend);
+        if (r.exit_code == 0) continue;  // a device exists on this machine
+        EXPECT_EQ(r.exit_code, 1) << r.err;
+        EXPECT_NE(r.err.find(backend), std::string::npos) << r.err;
+        if (!compiled) EXPECT_NE(r.err.find("no"), std::string::npos);
+    }
+}

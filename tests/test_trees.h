@@ -1,0 +1,31 @@
+// Small hand-built trees shared by the tests.
+#pragma once
+
+#include <hmsm/hmsm.h>
+
+#include <initializer_list>
+
+namespace hmsm::test {
+
+struct NodeSpec {
+    int32_t parent;
+    double x, y, z, radius;
+};
+
+TreeModel make_tree(std::initializer_list<NodeSpec> nodes);
+
+/// Root and one straight vertical chain of `segments` segments of `length` metres.
+TreeModel rod(int segments = 4, double length = 5.0, double radius = 0.2);
+
+/// A small tree with side branches at several depths (max depth 3), a leaf, odd counts, and
+/// parents listed after some children.
+TreeModel small_tree();
+
+/// A tree of `depth` + 1 chain levels (each chain one side branch deeper), for pointer jumping.
+TreeModel deep_tree(int depth);
+
+/// Max over elements of |a - b| for xyz arrays.
+double max_abs_difference(const std::vector<double>& a, const std::vector<double>& b);
+bool all_finite(const std::vector<double>& values);
+
+}  // namespace hmsm::test
