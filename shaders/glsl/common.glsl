@@ -1,0 +1,89 @@
+// Shared by the seven passes: the layout header, push constants, every storage buffer of
+// gpu_layout.h (binding = BufferId), the thread -> element mapping and the wind profiles.
+// Every function here mirrors the CPU reference (src/cpu/cpu_state.h, src/wind_profile.h).
+// Each .comp enables GL_GOOGLE_include_directive before including this file.
+#ifndef HMSM_COMMON_GLSL
+#define HMSM_COMMON_GLSL
+
+#include "gpu_layout.h"
+
+layout(local_size_x = HMSM_WORKGROUP_SIZE, local_size_y = 1, local_size_z = 1) in;
+
+layout(push_constant, std430) uniform PushBlock {
+    PassConstants pc;
+};
+
+// Static data (model and instance scope), written only by uploads.
+layout(set = 0, binding = HMSM_BINDING_CHAIN_PARENT, std430) readonly buffer ChainParent { int chain_parent[]; };
+layout(set = 0, binding = HMSM_BINDING_CHAIN_JUMP, std430) readonly buffer ChainJump { int chain_jump[]; };
+layout(set = 0, binding = HMSM_BINDING_CHAIN_ATTACH, std430) readonly buffer ChainAttach { int chain_attach[]; };
+layout(set = 0, binding = HMSM_BINDING_CHAIN_REST_ROTATION, std430) readonly buffer ChainRestRotation { mat3x4 chain_rest_rotation[]; };
+layout(set = 0, binding = HMSM_BINDING_CHAIN_CONSTANTS, std430) readonly buffer ChainConstants { vec4 chain_constants[]; };
+layout(set = 0, binding = HMSM_BINDING_NODE_OWNER, std430) readonly buffer NodeOwner { int node_owner[]; };
+layout(set = 0, binding = HMSM_BINDING_NODE_LOCAL, std430) readonly buffer NodeLocal { vec4 node_local[]; };
+layout(set = 0, binding = HMSM_BINDING_VERTEX_CHAIN, std430) readonly buffer VertexChain { ivec2 vertex_chain[]; };
+layout(set = 0, binding = HMSM_BINDING_VERTEX_REST_POSITION, std430) readonly buffer VertexRestPosition { vec4 vertex_rest_position[]; };
+layout(set = 0, binding = HMSM_BINDING_VERTEX_REST_NORMAL, std430) readonly buffer VertexRestNormal { vec4 vertex_rest_normal[]; };
+layout(set = 0, binding = HMSM_BINDING_VERTEX_PARENT_POSITION, std430) readonly buffer VertexParentPosition { vec4 vertex_parent_position[]; };
+layout(set = 0, binding = HMSM_BINDING_VERTEX_PARENT_NORMAL, std430) readonly buffer VertexParentNormal { vec4 vertex_parent_normal[]; };
+layout(set = 0, binding = HMSM_BINDING_INSTANCE_ORIGIN, std430) readonly buffer InstanceOrigin { vec4 instance_origin[]; };
+layout(set = 0, binding = HMSM_BINDING_INSTANCE_YAW, std430) readonly buffer InstanceYaw { vec4 instance_yaw[]; };
+
+// State, one element per chain/node/vertex of every instance (ping-pong: two halves).
+layout(set = 0, binding = HMSM_BINDING_CHAIN_STATE, std430) buffer ChainState { vec4 chain_state[]; };
+layout(set = 0, binding = HMSM_BINDING_CHAIN_FORCE, std430) buffer ChainForce { vec2 chain_force[]; };
+layout(set = 0, binding = HMSM_BINDING_CHAIN_LOCAL, std430) buffer ChainLocal { mat3x4 chain_local[]; };
+layout(set = 0, binding = HMSM_BINDING_CHAIN_ROTATION, std430) buffer ChainRotation { mat3x4 chain_rotation[]; };
+layout(set = 0, binding = HMSM_BINDING_NODE_RELATIVE, std430) buffer NodeRelative { vec4 node_relative[]; };
+layout(set = 0, binding = HMSM_BINDING_CHAIN_ORIGIN, std430) buffer ChainOrigin { vec4 chain_origin[]; };
+layout(set = 0, binding = HMSM_BINDING_NODE_WORLD, std430) buffer NodeWorld { vec4 node_world[]; };
+layout(set = 0, binding = HMSM_BINDING_VERTEX_POSITION, std430) buffer VertexPosition { vec4 vertex_position[]; };
+layout(set = 0, binding = HMSM_BINDING_VERTEX_NORMAL, std430) buffer VertexNormal { vec4 vertex_normal[]; };
+
+/// Global thread index. The host spreads large dispatches over a 2-D grid of workgroups
+/// (maxComputeWorkGroupCount[0] may be as low as 65535), so the index is linearized here.
+uint thread_index() {
+    uint group = gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x;
+    return group * HMSM_WORKGROUP_SIZE + gl_LocalInvocationID.x;
+}
+
+/// State index of model chain `c` of group instance `k` (cpu_state.h state_chain).
+uint state_chain(uint k, uint c) { return pc.chain_begin + k * pc.model_chain_count + c; }
+/// State index of model node `n` of group instance `k` (cpu_state.h state_node).
+uint state_node(uint k, uint n) { return pc.node_begin + k * pc.model_node_count + n; }
+
+/// Offset of a ping-pong half in chain_rotation / chain_origin.
+uint half_offset(uint which) { return which * pc.total_chains; }
+
+/// A 3x3 matrix stored as three vec4 columns (w = 0).
+mat3 as_mat3(mat3x4 m) { return mat3(m[0].xyz, m[1].xyz, m[2].xyz); }
+mat3x4 as_mat3x4(mat3 m) { return mat3x4(vec4(m[0], 0.0), vec4(m[1], 0.0), vec4(m[2], 0.0)); }
+
+const float HMSM_PI = 3.14159265358979323846;
+
+// sin(pi x) and cos(pi x) with the argument first reduced to [-1, 1): GPU sin/cos are only
+// accurate near [-pi, pi], and the profiles reach 25 pi x with x up to 4.
+float sinpi(float x) { return sin(HMSM_PI * (x - 2.0 * floor(0.5 * x + 0.5))); }
+float cospi(float x) { return cos(HMSM_PI * (x - 2.0 * floor(0.5 * x + 0.5))); }
+
+/// Y(x) of DESIGN.md 3.5 (src/wind_profile.h); profile = hmsm::WindProfile value.
+float wind_profile_y(uint profile, float x) {
+    switch (profile) {
+        case 1u: return 1.0;  // constant
+        case 2u:              // Y1
+            return cospi(x) * cospi(3.0 * x) * cospi(5.0 * x) * cospi(7.0 * x) - 0.1 * sinpi(25.0 * x);
+        case 3u:  // Y2
+            return (sinpi(x) + sinpi(3.0 * x) + sinpi(5.0 * x) + sinpi(7.0 * x)) / 4.0;
+        case 4u: {  // Y3
+            float c = cospi(x);
+            return c * c * cospi(3.0 * x) * cospi(5.0 * x) - 0.02 * sinpi(25.0 * x);
+        }
+        case 5u: {  // Y4
+            float c = cospi(x);
+            return c * c * cospi(3.0 * x) * cospi(5.0 * x) - 0.1 * sinpi(25.0 * x);
+        }
+        default: return 0.0;  // none
+    }
+}
+
+#endif  // HMSM_COMMON_GLSL

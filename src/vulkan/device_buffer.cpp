@@ -1,0 +1,201 @@
+#include "device_buffer.h"
+
+#include "vk_error.h"
+
+#include <algorithm>
+
+namespace hmsm::detail::vk {
+namespace {
+
+/// Staging chunks are at most this large: big enough to stream at full speed, small enough not
+/// to double the memory of a large scene.
+constexpr VkDeviceSize kMaxStagingBytes = VkDeviceSize(64) << 20;
+
+/// The first memory type allowed by `type_bits` with all `required` flags, preferring one that
+/// also has `preferred`; -1 when none.
+int find_memory_type(const VkPhysicalDeviceMemoryProperties& memory, uint32_t type_bits,
+                     VkMemoryPropertyFlags required, VkMemoryPropertyFlags preferred) {
+    int fallback = -1;
+    for (uint32_t i = 0; i < memory.memoryTypeCount; ++i) {
+        if (!(type_bits & (1u << i))) continue;
+        VkMemoryPropertyFlags flags = memory.memoryTypes[i].propertyFlags;
+        if ((flags & required) != required) continue;
+        if ((flags & preferred) == preferred) return int(i);
+        if (fallback < 0) fallback = int(i);
+    }
+    return fallback;
+}
+
+}  // namespace
+
+Buffer& Buffer::operator=(Buffer&& other) noexcept {
+    if (this != &other) {
+        reset();
+        device_ = std::exchange(other.device_, nullptr);
+        buffer_ = std::exchange(other.buffer_, VK_NULL_HANDLE);
+        memory_ = std::exchange(other.memory_, VK_NULL_HANDLE);
+        size_ = std::exchange(other.size_, 0);
+        mapped_ = std::exchange(other.mapped_, nullptr);
+    }
+    return *this;
+}
+
+void Buffer::reset() {
+    if (!device_) return;
+    const VolkDeviceTable& vk = device_->vk();
+    if (buffer_) vk.vkDestroyBuffer(device_->handle(), buffer_, nullptr);
+    if (memory_) vk.vkFreeMemory(device_->handle(), memory_, nullptr);  // also unmaps
+    device_ = nullptr;
+    buffer_ = VK_NULL_HANDLE;
+    memory_ = VK_NULL_HANDLE;
+    mapped_ = nullptr;
+    size_ = 0;
+}
+
+Result<Buffer> Buffer::create(const Device& device, VkDeviceSize size, VkBufferUsageFlags usage,
+                              MemoryUse use, const std::string& name) {
+    const DeviceLimits& limits = device.limits();
+    if (limits.max_memory_allocation_size && size > limits.max_memory_allocation_size)
+        return Status{ErrorCode::unsupported,
+                      "vulkan: buffer " + name + " needs " + std::to_string(size) +
+                          " bytes, more than maxMemoryAllocationSize (" +
+                          std::to_string(limits.max_memory_allocation_size) + ") of " + device.name()};
+    const VolkDeviceTable& vk = device.vk();
+    Buffer b;
+    b.device_ = &device;
+    b.size_ = size;
+    VkBufferCreateInfo info{VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO};
+    info.size = std::max<VkDeviceSize>(size, 16);  // zero-sized buffers are invalid
+    info.usage = usage;
+    info.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
+    HMSM_VK_TRY(vk.vkCreateBuffer(device.handle(), &info, nullptr, &b.buffer_));
+
+    VkMemoryRequirements requirements;
+    vk.vkGetBufferMemoryRequirements(device.handle(), b.buffer_, &requirements);
+    const VkMemoryPropertyFlags required =
+        use == MemoryUse::staging
+            ? VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT
+            : VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT;
+    const VkMemoryPropertyFlags preferred =
+        use == MemoryUse::staging ? required | VK_MEMORY_PROPERTY_HOST_CACHED_BIT : required;
+    int type = find_memory_type(device.memory_properties(), requirements.memoryTypeBits, required,
+                                preferred);
+    if (type < 0)
+        return Status{ErrorCode::unsupported,
+                      "vulkan: no suitable memory type for buffer " + name + " on " + device.name()};
+
+    VkMemoryAllocateInfo allocate{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
+    allocate.allocationSize = requirements.size;
+    allocate.memoryTypeIndex = uint32_t(type);
+    if (VkResult r = vk.vkAllocateMemory(device.handle(), &allocate, nullptr, &b.memory_); r != VK_SUCCESS) {
+        Status failed = failure(r, "vkAllocateMemory", __FILE__, __LINE__);
+        return Status{failed.code(), "vulkan: cannot allocate " + std::to_string(requirements.size) +
+                                         " bytes for buffer " + name + " on " + device.name() +
+                                         ": " + result_name(r)};
+    }
+    HMSM_VK_TRY(vk.vkBindBufferMemory(device.handle(), b.buffer_, b.memory_, 0));
+    if (use == MemoryUse::staging)
+        HMSM_VK_TRY(vk.vkMapMemory(device.handle(), b.memory_, 0, VK_WHOLE_SIZE, 0, &b.mapped_));
+    return b;
+}
+
+void barrier_after_all_writes(const Device& device, VkCommandBuffer cmd, VkPipelineStageFlags dst_stage,
+                              VkAccessFlags dst_access) {
+    VkMemoryBarrier barrier{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
+    barrier.srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT | VK_ACCESS_TRANSFER_WRITE_BIT;
+    barrier.dstAccessMask = dst_access;
+    device.vk().vkCmdPipelineBarrier(
+        cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_TRANSFER_BIT, dst_stage, 0, 1,
+        &barrier, 0, nullptr, 0, nullptr);
+}
+
+Result<std::unique_ptr<Transfer>> Transfer::create(const Device& device) {
+    std::unique_ptr<Transfer> t(new Transfer(device));
+    const VolkDeviceTable& vk = device.vk();
+    VkCommandPoolCreateInfo pool{VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO};
+    pool.flags = VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT | VK_COMMAND_POOL_CREATE_TRANSIENT_BIT;
+    pool.queueFamilyIndex = device.queue_family();
+    HMSM_VK_TRY(vk.vkCreateCommandPool(device.handle(), &pool, nullptr, &t->pool_));
+    VkCommandBufferAllocateInfo allocate{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
+    allocate.commandPool = t->pool_;
+    allocate.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
+    allocate.commandBufferCount = 1;
+    HMSM_VK_TRY(vk.vkAllocateCommandBuffers(device.handle(), &allocate, &t->command_buffer_));
+    VkFenceCreateInfo fence{VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
+    HMSM_VK_TRY(vk.vkCreateFence(device.handle(), &fence, nullptr, &t->fence_));
+    return t;
+}
+
+Transfer::~Transfer() {
+    const VolkDeviceTable& vk = device_.vk();
+    if (fence_) vk.vkDestroyFence(device_.handle(), fence_, nullptr);
+    if (pool_) vk.vkDestroyCommandPool(device_.handle(), pool_, nullptr);
+}
+
+Status Transfer::ensure_staging(VkDeviceSize bytes) {
+    VkDeviceSize wanted = std::clamp<VkDeviceSize>(bytes, 64 << 10, kMaxStagingBytes);
+    if (staging_.handle() && staging_.size() >= wanted) return {};
+    auto staging = Buffer::create(device_, wanted,
+                                  VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                                  MemoryUse::staging, "staging");
+    if (!staging) return staging.status();
+    staging_ = std::move(staging).value();
+    return {};
+}
+
+Status Transfer::submit(const std::function<void(VkCommandBuffer)>& commands) {
+    const VolkDeviceTable& vk = device_.vk();
+    HMSM_VK_TRY(vk.vkResetCommandBuffer(command_buffer_, 0));
+    VkCommandBufferBeginInfo begin{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
+    begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
+    HMSM_VK_TRY(vk.vkBeginCommandBuffer(command_buffer_, &begin));
+    barrier_after_all_writes(device_, command_buffer_, VK_PIPELINE_STAGE_TRANSFER_BIT,
+                             VK_ACCESS_TRANSFER_READ_BIT | VK_ACCESS_TRANSFER_WRITE_BIT);
+    commands(command_buffer_);
+    // Copies into the staging buffer become visible to the host once the fence signals.
+    VkMemoryBarrier to_host{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
+    to_host.srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
+    to_host.dstAccessMask = VK_ACCESS_HOST_READ_BIT;
+    vk.vkCmdPipelineBarrier(command_buffer_, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_HOST_BIT,
+                            0, 1, &to_host, 0, nullptr, 0, nullptr);
+    HMSM_VK_TRY(vk.vkEndCommandBuffer(command_buffer_));
+    VkSubmitInfo submit{VK_STRUCTURE_TYPE_SUBMIT_INFO};
+    submit.commandBufferCount = 1;
+    submit.pCommandBuffers = &command_buffer_;
+    HMSM_VK_TRY(vk.vkResetFences(device_.handle(), 1, &fence_));
+    HMSM_VK_TRY(vk.vkQueueSubmit(device_.queue(), 1, &submit, fence_));
+    HMSM_VK_TRY(vk.vkWaitForFences(device_.handle(), 1, &fence_, VK_TRUE, UINT64_MAX));
+    return {};
+}
+
+Status Transfer::upload(const Buffer& dst, VkDeviceSize offset, VkDeviceSize bytes,
+                        const std::function<void(void*, VkDeviceSize, VkDeviceSize)>& fill) {
+    HMSM_TRY(ensure_staging(bytes));
+    for (VkDeviceSize done = 0; done < bytes;) {
+        VkDeviceSize chunk = std::min(bytes - done, staging_.size());
+        fill(staging_.mapped(), done, chunk);
+        VkBufferCopy region{0, offset + done, chunk};
+        HMSM_TRY(submit([&](VkCommandBuffer cmd) {
+            device_.vk().vkCmdCopyBuffer(cmd, staging_.handle(), dst.handle(), 1, &region);
+        }));
+        done += chunk;
+    }
+    return {};
+}
+
+Status Transfer::download(const Buffer& src, VkDeviceSize offset, VkDeviceSize bytes,
+                          const std::function<void(const void*, VkDeviceSize, VkDeviceSize)>& consume) {
+    HMSM_TRY(ensure_staging(bytes));
+    for (VkDeviceSize done = 0; done < bytes;) {
+        VkDeviceSize chunk = std::min(bytes - done, staging_.size());
+        VkBufferCopy region{offset + done, 0, chunk};
+        HMSM_TRY(submit([&](VkCommandBuffer cmd) {
+            device_.vk().vkCmdCopyBuffer(cmd, src.handle(), staging_.handle(), 1, &region);
+        }));
+        consume(staging_.mapped(), done, chunk);
+        done += chunk;
+    }
+    return {};
+}
+
+}  // namespace hmsm::detail::vk

@@ -1,0 +1,69 @@
+// hmsm/vulkan.h: the engine-facing side of the Vulkan backend.
+#include <hmsm/vulkan.h>
+
+#include "vulkan_backend.h"
+
+namespace hmsm::vulkan {
+namespace {
+
+using detail::BufferId;
+using detail::vk::VulkanBackend;
+
+Result<VulkanBackend*> vulkan_backend_of(const Simulation& simulation) {
+    auto* backend = dynamic_cast<VulkanBackend*>(&simulation.backend());
+    if (!backend)
+        return Status{ErrorCode::invalid_argument,
+                      std::string("vulkan: the simulation runs on the ") +
+                          to_string(simulation.backend_kind()) + " backend, not on Vulkan"};
+    return backend;
+}
+
+BufferRange range_of(const VulkanBackend& backend, BufferId id) {
+    const detail::vk::Buffer& buffer = backend.buffer(id);
+    const uint32_t stride = detail::shape_scalars(detail::buffer_info(id).shape) * 4;
+    return {buffer.handle(), 0, VkDeviceSize(backend.element_count(id)) * stride, stride,
+            backend.element_count(id)};
+}
+
+}  // namespace
+
+Result<std::unique_ptr<Simulation>> create_simulation(const Scene& scene,
+                                                      const SimulationConfig& config,
+                                                      const ExternalContext& context) {
+    SimulationConfig vulkan_config = config;
+    vulkan_config.backend = BackendKind::vulkan;
+    detail::vk::ScopedExternalContext adopt(context);
+    return Simulation::create(scene, vulkan_config);
+}
+
+Result<SharedBuffers> shared_buffers(const Simulation& simulation) {
+    auto backend = vulkan_backend_of(simulation);
+    if (!backend) return backend.status();
+    const VulkanBackend& b = *backend.value();
+    return SharedBuffers{range_of(b, BufferId::vertex_position), range_of(b, BufferId::vertex_normal),
+                         range_of(b, BufferId::node_world)};
+}
+
+Result<DeviceHandles> device_handles(const Simulation& simulation) {
+    auto backend = vulkan_backend_of(simulation);
+    if (!backend) return backend.status();
+    const detail::vk::Device& device = backend.value()->device();
+    return DeviceHandles{device.physical_device(), device.handle(), device.queue(),
+                         device.queue_family()};
+}
+
+Status record_steps(Simulation& simulation, VkCommandBuffer command_buffer, uint32_t count) {
+    auto backend = vulkan_backend_of(simulation);
+    if (!backend) return backend.status();
+    if (!command_buffer)
+        return {ErrorCode::invalid_argument, "vulkan: record_steps needs a command buffer"};
+    // Simulation::step() computes the wind phases, runs the program through the backend and
+    // advances the clock; with a record target the backend records instead of submitting.
+    VulkanBackend& vulkan = *backend.value();
+    vulkan.set_record_target(command_buffer);
+    Status status = simulation.step(count);
+    vulkan.set_record_target(VK_NULL_HANDLE);
+    return status;
+}
+
+}  // namespace hmsm::vulkan

@@ -1,0 +1,126 @@
+#include "pipelines.h"
+
+#include "vk_error.h"
+
+// Generated at build time by cmake/HmsmVulkan.cmake (glslangValidator --vn hmsm_spirv_NAME).
+#include "hmsm_spirv/compose.h"
+#include "hmsm_spirv/contour.h"
+#include "hmsm_spirv/integrate.h"
+#include "hmsm_spirv/node_relative.h"
+#include "hmsm_spirv/node_world.h"
+#include "hmsm_spirv/root_positions.h"
+#include "hmsm_spirv/wind_force.h"
+
+namespace hmsm::detail::vk {
+
+std::span<const uint32_t> pass_spirv(Pass pass) {
+    switch (pass) {
+#define HMSM_PASS_SPIRV(name) \
+    case Pass::name: return hmsm_spirv_##name;
+        HMSM_PASSES(HMSM_PASS_SPIRV)
+#undef HMSM_PASS_SPIRV
+    }
+    return {};
+}
+
+Result<std::unique_ptr<Pipelines>> Pipelines::create(const Device& device) {
+    const DeviceLimits& limits = device.limits();
+    if (limits.max_storage_buffers_per_stage < kBufferCount ||
+        limits.max_storage_buffers_per_set < kBufferCount)
+        return Status{ErrorCode::unsupported,
+                      "vulkan: " + device.name() + " allows " +
+                          std::to_string(limits.max_storage_buffers_per_stage) +
+                          " storage buffers per stage (maxPerStageDescriptorStorageBuffers); hmsm needs " +
+                          std::to_string(kBufferCount)};
+    if (limits.max_push_constants_size < sizeof(gpu::PassConstants))
+        return Status{ErrorCode::unsupported, "vulkan: maxPushConstantsSize below " +
+                                                  std::to_string(sizeof(gpu::PassConstants))};
+    if (limits.max_workgroup_size_x < HMSM_WORKGROUP_SIZE ||
+        limits.max_workgroup_invocations < HMSM_WORKGROUP_SIZE)
+        return Status{ErrorCode::unsupported, "vulkan: workgroups of " +
+                                                  std::to_string(HMSM_WORKGROUP_SIZE) +
+                                                  " invocations are not supported by " + device.name()};
+
+    std::unique_ptr<Pipelines> p(new Pipelines(device));
+    const VolkDeviceTable& vk = device.vk();
+    VkDevice dev = device.handle();
+
+    std::array<VkDescriptorSetLayoutBinding, kBufferCount> bindings{};
+    for (uint32_t b = 0; b < kBufferCount; ++b) {
+        bindings[b].binding = b;
+        bindings[b].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+        bindings[b].descriptorCount = 1;
+        bindings[b].stageFlags = VK_SHADER_STAGE_COMPUTE_BIT;
+    }
+    VkDescriptorSetLayoutCreateInfo set_info{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
+    set_info.bindingCount = kBufferCount;
+    set_info.pBindings = bindings.data();
+    HMSM_VK_TRY(vk.vkCreateDescriptorSetLayout(dev, &set_info, nullptr, &p->set_layout_));
+
+    VkPushConstantRange push{VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(gpu::PassConstants)};
+    VkPipelineLayoutCreateInfo layout_info{VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO};
+    layout_info.setLayoutCount = 1;
+    layout_info.pSetLayouts = &p->set_layout_;
+    layout_info.pushConstantRangeCount = 1;
+    layout_info.pPushConstantRanges = &push;
+    HMSM_VK_TRY(vk.vkCreatePipelineLayout(dev, &layout_info, nullptr, &p->layout_));
+
+    for (Pass pass : kAllPasses) {
+        std::span<const uint32_t> code = pass_spirv(pass);
+        VkShaderModuleCreateInfo module_info{VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};
+        module_info.codeSize = code.size_bytes();
+        module_info.pCode = code.data();
+        VkShaderModule module;
+        HMSM_VK_TRY(vk.vkCreateShaderModule(dev, &module_info, nullptr, &module));
+        VkComputePipelineCreateInfo info{VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO};
+        info.stage.sType = VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO;
+        info.stage.stage = VK_SHADER_STAGE_COMPUTE_BIT;
+        info.stage.module = module;
+        info.stage.pName = "main";
+        info.layout = p->layout_;
+        VkResult result = vk.vkCreateComputePipelines(dev, VK_NULL_HANDLE, 1, &info, nullptr,
+                                                      &p->pipelines_[uint32_t(pass)]);
+        vk.vkDestroyShaderModule(dev, module, nullptr);
+        HMSM_VK_TRY(result);
+    }
+
+    VkDescriptorPoolSize size{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, kBufferCount};
+    VkDescriptorPoolCreateInfo pool_info{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
+    pool_info.maxSets = 1;
+    pool_info.poolSizeCount = 1;
+    pool_info.pPoolSizes = &size;
+    HMSM_VK_TRY(vk.vkCreateDescriptorPool(dev, &pool_info, nullptr, &p->pool_));
+    VkDescriptorSetAllocateInfo allocate{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO};
+    allocate.descriptorPool = p->pool_;
+    allocate.descriptorSetCount = 1;
+    allocate.pSetLayouts = &p->set_layout_;
+    HMSM_VK_TRY(vk.vkAllocateDescriptorSets(dev, &allocate, &p->set_));
+    return p;
+}
+
+Pipelines::~Pipelines() {
+    const VolkDeviceTable& vk = device_.vk();
+    VkDevice dev = device_.handle();
+    if (pool_) vk.vkDestroyDescriptorPool(dev, pool_, nullptr);
+    for (VkPipeline pipeline : pipelines_)
+        if (pipeline) vk.vkDestroyPipeline(dev, pipeline, nullptr);
+    if (layout_) vk.vkDestroyPipelineLayout(dev, layout_, nullptr);
+    if (set_layout_) vk.vkDestroyDescriptorSetLayout(dev, set_layout_, nullptr);
+}
+
+void Pipelines::bind(std::span<const Buffer, kBufferCount> buffers) {
+    std::array<VkDescriptorBufferInfo, kBufferCount> infos{};
+    std::array<VkWriteDescriptorSet, kBufferCount> writes{};
+    for (uint32_t b = 0; b < kBufferCount; ++b) {
+        infos[b] = {buffers[b].handle(), 0, VK_WHOLE_SIZE};
+        writes[b].sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET;
+        writes[b].dstSet = set_;
+        writes[b].dstBinding = b;
+        writes[b].descriptorCount = 1;
+        writes[b].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+        writes[b].pBufferInfo = &infos[b];
+    }
+    device_.vk().vkUpdateDescriptorSets(device_.handle(), kBufferCount, writes.data(), 0, nullptr);
+}
+
+}  // namespace hmsm::detail::vk

@@ -1,0 +1,33 @@
+// Records steps of the step program into a command buffer: every dispatch of every step, a
+// compute->compute barrier only where a dispatch touches a buffer that an earlier dispatch
+// since the last barrier wrote (read-after-write, write-after-write) or writes one it read
+// (write-after-read), from pass_reads/pass_writes. Hazards are tracked per buffer, so the
+// pointer-jumping rounds of compose and root_positions (which read the half the previous round
+// wrote) and dispatches of several instance groups writing the same buffer are separated too.
+#pragma once
+
+#include "device.h"
+#include "pipelines.h"
+
+#include "../backend.h"
+
+#include <span>
+
+namespace hmsm::detail::vk {
+
+/// Workgroups for `threads` threads: a 1-D grid while it fits maxComputeWorkGroupCount[0],
+/// else 2-D (the shaders linearize gl_WorkGroupID); {0, 0} for no threads.
+struct WorkgroupGrid {
+    uint32_t x = 0, y = 0;
+};
+WorkgroupGrid workgroup_grid(uint32_t threads, const DeviceLimits& limits);
+
+/// Records wind_x.size() steps of `program` into `cmd` (already begun). Starts with a barrier
+/// against all earlier shader and transfer writes. With a `timestamps` pool, writes timestamp 0
+/// before the first dispatch and timestamp j + 1 after dispatch j (the pool must hold
+/// wind_x.size() * program.size() + 1 queries; they are reset here).
+void record_steps(const Device& device, const Pipelines& pipelines, VkCommandBuffer cmd,
+                  std::span<const Dispatch> program, std::span<const double> wind_x,
+                  VkQueryPool timestamps);
+
+}  // namespace hmsm::detail::vk

@@ -1,0 +1,349 @@
+#include "vulkan_backend.h"
+
+#include "recorder.h"
+#include "vk_error.h"
+
+#include <algorithm>
+#include <cstring>
+#include <new>
+#include <vector>
+
+namespace hmsm::detail {
+namespace vk {
+namespace {
+
+/// Dispatches per command buffer: large enough that submission costs nothing, small enough that
+/// the host records one chunk while the device runs the other.
+constexpr size_t kDispatchesPerChunk = 2048;
+
+constexpr VkDeviceSize element_bytes(BufferId id) { return shape_scalars(buffer_info(id).shape) * 4; }
+
+/// Buffers an engine may draw from directly (hmsm/vulkan.h SharedBuffers).
+constexpr bool is_shared_output(BufferId id) {
+    return id == BufferId::vertex_position || id == BufferId::vertex_normal || id == BufferId::node_world;
+}
+
+// Static data as the 32-bit words the shaders read: float32 for reals, int32 for integers,
+// vec4 as 4 floats, a 3x3 matrix as three vec4 columns with w = 0.
+void append(std::vector<uint32_t>& out, float f) {
+    uint32_t word;
+    std::memcpy(&word, &f, 4);
+    out.push_back(word);
+}
+void append(std::vector<uint32_t>& out, int32_t i) { out.push_back(uint32_t(i)); }
+void append(std::vector<uint32_t>& out, const glm::ivec2& v) {
+    append(out, int32_t(v.x));
+    append(out, int32_t(v.y));
+}
+void append(std::vector<uint32_t>& out, const glm::dvec4& v) {
+    for (int k = 0; k < 4; ++k) append(out, float(v[k]));
+}
+void append(std::vector<uint32_t>& out, const glm::dmat3& m) {
+    for (int c = 0; c < 3; ++c) {
+        for (int r = 0; r < 3; ++r) append(out, float(m[c][r]));
+        append(out, 0.0f);
+    }
+}
+template <class T>
+std::vector<uint32_t> pack(const std::vector<T>& values) {
+    std::vector<uint32_t> out;
+    out.reserve(values.size() * 12);
+    for (const T& v : values) append(out, v);
+    return out;
+}
+
+std::vector<uint32_t> pack_static(BufferId id, const SceneData& d) {
+    switch (id) {
+        case BufferId::chain_parent: return pack(d.chain_parent);
+        case BufferId::chain_jump: return pack(d.chain_jump);
+        case BufferId::chain_attach: return pack(d.chain_attach);
+        case BufferId::chain_rest_rotation: return pack(d.chain_rest_rotation);
+        case BufferId::chain_constants: return pack(d.chain_constants);
+        case BufferId::node_owner: return pack(d.node_owner);
+        case BufferId::node_local: return pack(d.node_local);
+        case BufferId::vertex_chain: return pack(d.vertex_chain);
+        case BufferId::vertex_rest_position: return pack(d.vertex_rest_position);
+        case BufferId::vertex_rest_normal: return pack(d.vertex_rest_normal);
+        case BufferId::vertex_parent_position: return pack(d.vertex_parent_position);
+        case BufferId::vertex_parent_normal: return pack(d.vertex_parent_normal);
+        case BufferId::instance_origin: return pack(d.instance_origin);
+        case BufferId::instance_yaw: return pack(d.instance_yaw);
+        default: return {};
+    }
+}
+
+/// One stored 32-bit scalar of buffer `id` as a number, and back.
+double scalar_value(bool integer, const unsigned char* word) {
+    if (integer) {
+        int32_t i;
+        std::memcpy(&i, word, 4);
+        return double(i);
+    }
+    float f;
+    std::memcpy(&f, word, 4);
+    return double(f);
+}
+void store_scalar(bool integer, double value, unsigned char* word) {
+    if (integer) {
+        int32_t i = int32_t(value);
+        std::memcpy(word, &i, 4);
+    } else {
+        float f = float(value);
+        std::memcpy(word, &f, 4);
+    }
+}
+
+thread_local const hmsm::vulkan::ExternalContext* pending_external_context = nullptr;
+
+}  // namespace
+
+ScopedExternalContext::ScopedExternalContext(const hmsm::vulkan::ExternalContext& context)
+    : previous_(pending_external_context) {
+    pending_external_context = &context;
+}
+ScopedExternalContext::~ScopedExternalContext() { pending_external_context = previous_; }
+
+Result<std::unique_ptr<VulkanBackend>> VulkanBackend::create(std::shared_ptr<Device> device) {
+    std::unique_ptr<VulkanBackend> b(new VulkanBackend(std::move(device)));
+    const Device& dev = *b->device_;
+    auto pipelines = Pipelines::create(dev);
+    if (!pipelines) return pipelines.status();
+    b->pipelines_ = std::move(pipelines).value();
+    auto transfer = Transfer::create(dev);
+    if (!transfer) return transfer.status();
+    b->transfer_ = std::move(transfer).value();
+
+    const VolkDeviceTable& vk = dev.vk();
+    VkCommandPoolCreateInfo pool{VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO};
+    pool.flags = VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT;
+    pool.queueFamilyIndex = dev.queue_family();
+    HMSM_VK_TRY(vk.vkCreateCommandPool(dev.handle(), &pool, nullptr, &b->pool_));
+    for (Slot& slot : b->slots_) {
+        VkCommandBufferAllocateInfo allocate{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
+        allocate.commandPool = b->pool_;
+        allocate.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
+        allocate.commandBufferCount = 1;
+        HMSM_VK_TRY(vk.vkAllocateCommandBuffers(dev.handle(), &allocate, &slot.command_buffer));
+        VkFenceCreateInfo fence{VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
+        HMSM_VK_TRY(vk.vkCreateFence(dev.handle(), &fence, nullptr, &slot.fence));
+    }
+    HMSM_TRY(b->device_->take_validation_messages());
+    return b;
+}
+
+VulkanBackend::~VulkanBackend() {
+    const VolkDeviceTable& vk = device_->vk();
+    VkDevice dev = device_->handle();
+    for (Slot& slot : slots_) {
+        if (slot.in_flight) vk.vkWaitForFences(dev, 1, &slot.fence, VK_TRUE, UINT64_MAX);
+        if (slot.fence) vk.vkDestroyFence(dev, slot.fence, nullptr);
+        if (slot.timestamps) vk.vkDestroyQueryPool(dev, slot.timestamps, nullptr);
+    }
+    if (pool_) vk.vkDestroyCommandPool(dev, pool_, nullptr);
+    // Buffers, pipelines and the transfer go before the device (member order would not ensure it
+    // for the shared device).
+    for (Buffer& b : buffers_) b = Buffer();
+    pipelines_.reset();
+    transfer_.reset();
+}
+
+Status VulkanBackend::check_scene_limits(const SceneData& scene) const {
+    const DeviceLimits& limits = device_->limits();
+    for (const BufferInfo& info : kBufferTable) {
+        VkDeviceSize bytes = scene.element_count(info.id) * element_bytes(info.id);
+        if (bytes > limits.max_storage_buffer_range)
+            return {ErrorCode::unsupported,
+                    "vulkan: scene too large for " + device_->name() + ": buffer " +
+                        std::string(info.name) + " needs " + std::to_string(bytes) +
+                        " bytes, more than maxStorageBufferRange (" +
+                        std::to_string(limits.max_storage_buffer_range) +
+                        " bytes); use fewer instances per simulation"};
+    }
+    return {};
+}
+
+Status VulkanBackend::upload(const SceneData& scene) {
+    HMSM_TRY(check_scene_limits(scene));
+    for (const BufferInfo& info : kBufferTable) {
+        const uint32_t b = uint32_t(info.id);
+        element_counts_[b] = scene.element_count(info.id);
+        VkBufferUsageFlags usage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT |
+                                   VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT;
+        if (is_shared_output(info.id)) usage |= VK_BUFFER_USAGE_VERTEX_BUFFER_BIT;
+        auto buffer = Buffer::create(*device_, element_counts_[b] * element_bytes(info.id), usage,
+                                     MemoryUse::device_local, std::string(info.name));
+        if (!buffer) return buffer.status();
+        buffers_[b] = std::move(buffer).value();
+    }
+    try {
+        for (const BufferInfo& info : kBufferTable)
+            if (is_static(info.id)) HMSM_TRY(upload_static(info.id, scene));
+    } catch (const std::bad_alloc&) {
+        return {ErrorCode::out_of_memory, "vulkan: not enough host memory to stage the scene"};
+    }
+    // State starts at zero (S = V = 0; the simulation then poses the scene at rest).
+    HMSM_TRY(transfer_->submit([&](VkCommandBuffer cmd) {
+        for (const BufferInfo& info : kBufferTable)
+            if (!is_static(info.id))
+                device_->vk().vkCmdFillBuffer(cmd, buffers_[uint32_t(info.id)].handle(), 0,
+                                              VK_WHOLE_SIZE, 0);
+    }));
+    pipelines_->bind(buffers_);
+    return device_->take_validation_messages();
+}
+
+Status VulkanBackend::upload_static(BufferId id, const SceneData& scene) {
+    std::vector<uint32_t> words = pack_static(id, scene);
+    const auto* bytes = reinterpret_cast<const unsigned char*>(words.data());
+    return transfer_->upload(buffers_[uint32_t(id)], 0, words.size() * 4,
+                             [&](void* staging, VkDeviceSize first, VkDeviceSize count) {
+                                 std::memcpy(staging, bytes + first, count);
+                             });
+}
+
+Status VulkanBackend::ensure_timestamp_capacity(Slot& slot, uint32_t queries) {
+    if (slot.timestamps && slot.timestamp_capacity >= queries) return {};
+    const VolkDeviceTable& vk = device_->vk();
+    if (slot.timestamps) vk.vkDestroyQueryPool(device_->handle(), slot.timestamps, nullptr);
+    slot.timestamps = VK_NULL_HANDLE;
+    VkQueryPoolCreateInfo info{VK_STRUCTURE_TYPE_QUERY_POOL_CREATE_INFO};
+    info.queryType = VK_QUERY_TYPE_TIMESTAMP;
+    info.queryCount = queries;
+    HMSM_VK_TRY(vk.vkCreateQueryPool(device_->handle(), &info, nullptr, &slot.timestamps));
+    slot.timestamp_capacity = queries;
+    return {};
+}
+
+Status VulkanBackend::submit_chunk(Slot& slot, std::span<const Dispatch> program,
+                                   std::span<const double> wind_x) {
+    const VolkDeviceTable& vk = device_->vk();
+    const bool timed = profiling_ && device_->limits().timestamp_period_ns > 0.0;
+    if (timed) HMSM_TRY(ensure_timestamp_capacity(slot, uint32_t(wind_x.size() * program.size() + 1)));
+    HMSM_VK_TRY(vk.vkResetCommandBuffer(slot.command_buffer, 0));
+    VkCommandBufferBeginInfo begin{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
+    begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
+    HMSM_VK_TRY(vk.vkBeginCommandBuffer(slot.command_buffer, &begin));
+    record_steps(*device_, *pipelines_, slot.command_buffer, program, wind_x,
+                 timed ? slot.timestamps : VK_NULL_HANDLE);
+    HMSM_VK_TRY(vk.vkEndCommandBuffer(slot.command_buffer));
+    VkSubmitInfo submit{VK_STRUCTURE_TYPE_SUBMIT_INFO};
+    submit.commandBufferCount = 1;
+    submit.pCommandBuffers = &slot.command_buffer;
+    HMSM_VK_TRY(vk.vkResetFences(device_->handle(), 1, &slot.fence));
+    HMSM_VK_TRY(vk.vkQueueSubmit(device_->queue(), 1, &submit, slot.fence));
+    slot.in_flight = true;
+    slot.steps = timed ? wind_x.size() : 0;
+    return {};
+}
+
+Status VulkanBackend::finish_slot(Slot& slot, std::span<const Dispatch> program) {
+    if (!slot.in_flight) return {};
+    const VolkDeviceTable& vk = device_->vk();
+    slot.in_flight = false;
+    HMSM_VK_TRY(vk.vkWaitForFences(device_->handle(), 1, &slot.fence, VK_TRUE, UINT64_MAX));
+    if (slot.steps == 0) return {};
+    const uint32_t queries = uint32_t(slot.steps * program.size() + 1);
+    std::vector<uint64_t> ticks(queries);
+    HMSM_VK_TRY(vk.vkGetQueryPoolResults(device_->handle(), slot.timestamps, 0, queries,
+                                         ticks.size() * sizeof(uint64_t), ticks.data(),
+                                         sizeof(uint64_t),
+                                         VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT));
+    const DeviceLimits& limits = device_->limits();
+    const uint64_t mask = limits.timestamp_valid_bits >= 64 ? ~uint64_t(0)
+                                                            : (uint64_t(1) << limits.timestamp_valid_bits) - 1;
+    // Timestamps are taken at the compute stage between dispatches, so dispatch j's time runs
+    // from the completion of everything before it to its own completion.
+    for (uint32_t j = 0; j + 1 < queries; ++j) {
+        uint64_t delta = (ticks[j + 1] - ticks[j]) & mask;
+        times_.seconds[uint32_t(program[j % program.size()].pass)] +=
+            double(delta) * limits.timestamp_period_ns * 1e-9;
+    }
+    return {};
+}
+
+Status VulkanBackend::run(std::span<const Dispatch> program, std::span<const double> wind_x) {
+    times_ = {};
+    if (program.empty() || wind_x.empty()) return {};
+    if (record_target_) {
+        record_steps(*device_, *pipelines_, record_target_, program, wind_x, VK_NULL_HANDLE);
+        return device_->take_validation_messages();
+    }
+    const size_t steps_per_chunk = std::max<size_t>(1, kDispatchesPerChunk / program.size());
+    Status status;
+    size_t chunk = 0;
+    for (size_t first = 0; first < wind_x.size() && status.ok(); first += steps_per_chunk, ++chunk) {
+        Slot& slot = slots_[chunk % slots_.size()];
+        status = finish_slot(slot, program);
+        if (status.ok())
+            status = submit_chunk(slot, program,
+                                  wind_x.subspan(first, std::min(steps_per_chunk, wind_x.size() - first)));
+    }
+    // Oldest first; after a failure still wait for whatever was submitted.
+    for (size_t k = 0; k < slots_.size(); ++k) {
+        Status finished = finish_slot(slots_[(chunk + k) % slots_.size()], program);
+        if (status.ok()) status = finished;
+    }
+    HMSM_TRY(status);
+    if (profiling_ && device_->limits().timestamp_period_ns > 0.0) times_.steps = wind_x.size();
+    return device_->take_validation_messages();
+}
+
+Status VulkanBackend::read(BufferId id, uint64_t first, uint64_t count, void* dst, Scalar as) const {
+    const uint32_t b = uint32_t(id);
+    if (first + count > element_counts_[b] || first + count < first)
+        return {ErrorCode::invalid_argument,
+                "vulkan: range past the end of buffer " + std::string(buffer_info(id).name)};
+    if (count == 0) return {};
+    const bool integer = shape_is_integer(buffer_info(id).shape);
+    HMSM_TRY(transfer_->download(
+        buffers_[b], first * element_bytes(id), count * element_bytes(id),
+        [&](const void* staging, VkDeviceSize first_byte, VkDeviceSize bytes) {
+            const auto* words = static_cast<const unsigned char*>(staging);
+            const uint64_t scalar0 = first_byte / 4;
+            for (uint64_t k = 0; k < bytes / 4; ++k) {
+                double value = scalar_value(integer, words + 4 * k);
+                if (as == Scalar::f64) static_cast<double*>(dst)[scalar0 + k] = value;
+                else static_cast<float*>(dst)[scalar0 + k] = float(value);
+            }
+        }));
+    return device_->take_validation_messages();
+}
+
+Status VulkanBackend::write(BufferId id, uint64_t first, uint64_t count, const void* src, Scalar as) {
+    const uint32_t b = uint32_t(id);
+    if (first + count > element_counts_[b] || first + count < first)
+        return {ErrorCode::invalid_argument,
+                "vulkan: range past the end of buffer " + std::string(buffer_info(id).name)};
+    if (count == 0) return {};
+    const bool integer = shape_is_integer(buffer_info(id).shape);
+    HMSM_TRY(transfer_->upload(
+        buffers_[b], first * element_bytes(id), count * element_bytes(id),
+        [&](void* staging, VkDeviceSize first_byte, VkDeviceSize bytes) {
+            auto* words = static_cast<unsigned char*>(staging);
+            const uint64_t scalar0 = first_byte / 4;
+            for (uint64_t k = 0; k < bytes / 4; ++k) {
+                double value = as == Scalar::f64 ? static_cast<const double*>(src)[scalar0 + k]
+                                                 : double(static_cast<const float*>(src)[scalar0 + k]);
+                store_scalar(integer, value, words + 4 * k);
+            }
+        }));
+    return device_->take_validation_messages();
+}
+
+}  // namespace vk
+
+Result<std::unique_ptr<Backend>> create_vulkan_backend() {
+    auto device = vk::pending_external_context ? vk::Device::adopt(*vk::pending_external_context)
+                                               : vk::Device::create();
+    if (!device) return device.status();
+    auto backend = vk::VulkanBackend::create(std::move(device).value());
+    if (!backend) return backend.status();
+    return std::unique_ptr<Backend>(std::move(backend).value());
+}
+
+bool vulkan_backend_is_cpu_device(const Backend& backend) {
+    const auto* vulkan = dynamic_cast<const vk::VulkanBackend*>(&backend);
+    return vulkan && vulkan->device().is_cpu();
+}
+
+}  // namespace hmsm::detail

@@ -1,0 +1,84 @@
+// The Vulkan backend: the scene's buffers in device-local memory, the seven pipelines, and
+// run() recording the step program into command buffers (chunks of steps, two in flight so the
+// host records the next chunk while the device runs the previous one), with per-dispatch
+// timestamps summed into PassTimes when profiling is on.
+#pragma once
+
+#include "device.h"
+#include "device_buffer.h"
+#include "pipelines.h"
+
+#include "../backend.h"
+
+#include <array>
+#include <memory>
+
+namespace hmsm::detail::vk {
+
+class VulkanBackend final : public Backend {
+public:
+    static Result<std::unique_ptr<VulkanBackend>> create(std::shared_ptr<Device> device);
+    ~VulkanBackend() override;
+
+    BackendKind kind() const override { return BackendKind::vulkan; }
+    std::string device_name() const override { return device_->name(); }
+    Status upload(const SceneData& scene) override;
+    Status run(std::span<const Dispatch> program, std::span<const double> wind_x) override;
+    Status read(BufferId id, uint64_t first, uint64_t count, void* dst, Scalar as) const override;
+    Status write(BufferId id, uint64_t first, uint64_t count, const void* src, Scalar as) override;
+    void set_profiling(bool enabled) override { profiling_ = enabled; }
+    PassTimes pass_times() const override { return times_; }
+
+    // Engine interop (hmsm/vulkan.h).
+    const Device& device() const { return *device_; }
+    const Buffer& buffer(BufferId id) const { return buffers_[uint32_t(id)]; }
+    uint64_t element_count(BufferId id) const { return element_counts_[uint32_t(id)]; }
+    /// While set, run() records into `command_buffer` instead of submitting (and returns
+    /// before the work executes); VK_NULL_HANDLE restores normal submission.
+    void set_record_target(VkCommandBuffer command_buffer) { record_target_ = command_buffer; }
+
+private:
+    /// One command buffer in flight: its fence, timestamp pool and what it ran.
+    struct Slot {
+        VkCommandBuffer command_buffer = VK_NULL_HANDLE;
+        VkFence fence = VK_NULL_HANDLE;
+        VkQueryPool timestamps = VK_NULL_HANDLE;
+        uint32_t timestamp_capacity = 0;
+        bool in_flight = false;
+        size_t steps = 0;  // steps recorded into the command buffer
+    };
+
+    explicit VulkanBackend(std::shared_ptr<Device> device) : device_(std::move(device)) {}
+    Status check_scene_limits(const SceneData& scene) const;
+    Status upload_static(BufferId id, const SceneData& scene);
+    Status submit_chunk(Slot& slot, std::span<const Dispatch> program, std::span<const double> wind_x);
+    /// Waits for `slot` and adds its timestamps to times_ (program = what it ran).
+    Status finish_slot(Slot& slot, std::span<const Dispatch> program);
+    Status ensure_timestamp_capacity(Slot& slot, uint32_t queries);
+
+    std::shared_ptr<Device> device_;
+    std::unique_ptr<Pipelines> pipelines_;
+    std::unique_ptr<Transfer> transfer_;
+    std::array<Buffer, kBufferCount> buffers_;
+    std::array<uint64_t, kBufferCount> element_counts_{};
+    VkCommandPool pool_ = VK_NULL_HANDLE;
+    std::array<Slot, 2> slots_;
+    bool profiling_ = false;
+    PassTimes times_;
+    VkCommandBuffer record_target_ = VK_NULL_HANDLE;
+};
+
+/// Makes create_vulkan_backend() on this thread adopt `context` instead of creating a device,
+/// for as long as the guard lives (hmsm::vulkan::create_simulation).
+class ScopedExternalContext {
+public:
+    explicit ScopedExternalContext(const hmsm::vulkan::ExternalContext& context);
+    ~ScopedExternalContext();
+    ScopedExternalContext(const ScopedExternalContext&) = delete;
+    ScopedExternalContext& operator=(const ScopedExternalContext&) = delete;
+
+private:
+    const hmsm::vulkan::ExternalContext* previous_;
+};
+
+}  // namespace hmsm::detail::vk
