@@ -1,0 +1,337 @@
+// The CUDA backend on a device: each pass on random states, whole simulations against the
+// double-precision CPU reference, graph replay against direct launches, profiling, interop and
+// error paths. Every test skips with the reason when there is no CUDA device.
+#include "cuda_test_support.h"
+
+#include <hmsm/cuda.h>
+
+#include "random.h"
+
+#include <cuda_runtime_api.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <tuple>
+
+namespace hmsm::cuda_test {
+namespace {
+
+using detail::BufferId;
+using detail::Scalar;
+
+std::unique_ptr<Simulation> create_or_fail(const Scene& scene, const SimulationConfig& config) {
+    auto sim = Simulation::create(scene, config);
+    EXPECT_TRUE(sim.ok()) << sim.status().message();
+    return sim.ok() ? std::move(sim).value() : nullptr;
+}
+
+std::vector<double> read_buffer(const Simulation& sim, BufferId id) {
+    const uint64_t count = sim.scene_data().element_count(id);
+    std::vector<double> values(count * detail::shape_scalars(detail::buffer_info(id).shape));
+    const Status status = sim.backend().read(id, 0, count, values.data(), Scalar::f64);
+    EXPECT_TRUE(status.ok()) << status.message();
+    return values;
+}
+
+/// A uniformly random rotation as 12 scalars (three columns with w = 0), from a unit quaternion.
+void random_rotation(detail::Random& random, double* out) {
+    double q[4] = {random.normal(), random.normal(), random.normal(), random.normal()};
+    const double n = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+    const double w = q[0] / n, x = q[1] / n, y = q[2] / n, z = q[3] / n;
+    const double m[3][3] = {{1 - 2 * (y * y + z * z), 2 * (x * y + w * z), 2 * (x * z - w * y)},
+                            {2 * (x * y - w * z), 1 - 2 * (x * x + z * z), 2 * (y * z + w * x)},
+                            {2 * (x * z + w * y), 2 * (y * z - w * x), 1 - 2 * (x * x + y * y)}};
+    for (int c = 0; c < 3; ++c) {
+        for (int r = 0; r < 3; ++r) out[4 * c + r] = m[c][r];
+        out[4 * c + 3] = 0.0;
+    }
+}
+
+/// Random values for a state buffer: rotations for matrices, angles inside the stop and
+/// rates for the chain state, metres for vectors.
+std::vector<double> random_state(detail::Random& random, BufferId id, uint64_t count) {
+    const detail::Shape shape = detail::buffer_info(id).shape;
+    const uint32_t n = detail::shape_scalars(shape);
+    std::vector<double> values(count * n);
+    for (uint64_t i = 0; i < count; ++i) {
+        double* v = &values[i * n];
+        if (shape == detail::Shape::mat3x4) random_rotation(random, v);
+        else if (id == BufferId::chain_state) {
+            v[0] = random.uniform(-0.7, 0.7), v[1] = random.uniform(-0.7, 0.7);
+            v[2] = random.uniform(-2.0, 2.0), v[3] = random.uniform(-2.0, 2.0);
+        } else {
+            for (uint32_t k = 0; k < n; ++k) v[k] = random.uniform(-2.0, 2.0);
+        }
+    }
+    return values;
+}
+
+// --- no device ---------------------------------------------------------------------------
+
+TEST(CudaNoDevice, CreatingTheBackendReportsNoDevice) {
+    if (no_cuda_device_reason().empty()) GTEST_SKIP() << "a CUDA device is present";
+    auto backend = detail::create_backend(BackendKind::cuda);
+    ASSERT_FALSE(backend.ok());
+    EXPECT_EQ(backend.status().code(), ErrorCode::no_device);
+    EXPECT_NE(backend.status().message().find("no CUDA device is available"), std::string::npos);
+    auto sim = Simulation::create(forest_scene(1), test_config(BackendKind::cuda, Composition::pointer_jumping, false));
+    ASSERT_FALSE(sim.ok());
+    EXPECT_EQ(sim.status().code(), ErrorCode::no_device);
+}
+
+// --- each pass on random states ----------------------------------------------------------
+
+class CudaPass : public ::testing::TestWithParam<std::tuple<Pass, Composition>> {};
+
+TEST_P(CudaPass, MatchesCpu64OnRandomStates) {
+    HMSM_SKIP_WITHOUT_CUDA();
+    const auto [pass, composition] = GetParam();
+    const Scene scene = forest_scene(5);
+    auto reference = create_or_fail(scene, test_config(BackendKind::cpu64, composition, false));
+    auto device = create_or_fail(scene, test_config(BackendKind::cuda, composition, false));
+    ASSERT_TRUE(reference && device);
+
+    detail::Random random(1000 + uint32_t(pass));
+    for (const detail::BufferInfo& info : detail::kBufferTable) {
+        if (detail::is_static(info.id)) continue;
+        const uint64_t count = reference->scene_data().element_count(info.id);
+        const std::vector<double> values = random_state(random, info.id, count);
+        ASSERT_TRUE(reference->backend().write(info.id, 0, count, values.data(), Scalar::f64).ok());
+        ASSERT_TRUE(device->backend().write(info.id, 0, count, values.data(), Scalar::f64).ok());
+    }
+    std::vector<detail::Dispatch> program;
+    for (const detail::Dispatch& d : reference->step_program())
+        if (d.pass == pass) program.push_back(d);
+    ASSERT_FALSE(program.empty());
+    const double wind_x[1] = {random.uniform(0.0, 2.0)};
+    ASSERT_TRUE(reference->backend().run(program, wind_x).ok());
+    const Status status = device->backend().run(program, wind_x);
+    ASSERT_TRUE(status.ok()) << status.message();
+
+    const double tolerance = pass == Pass::wind_force ? 1e-4 : 1e-5;
+    const uint32_t writes = detail::pass_writes(pass);
+    for (const detail::BufferInfo& info : detail::kBufferTable) {
+        if (!(writes & (1u << uint32_t(info.id)))) continue;
+        const std::vector<double> expected = read_buffer(*reference, info.id);
+        const std::vector<double> actual = read_buffer(*device, info.id);
+        EXPECT_LE(max_abs_difference(actual, expected), tolerance * std::max(1.0, max_abs(expected)))
+            << "buffer " << info.name;
+    }
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    AllPasses, CudaPass,
+    ::testing::Combine(::testing::ValuesIn(kAllPasses),
+                       ::testing::Values(Composition::pointer_jumping, Composition::level_by_level)),
+    [](const auto& info) {
+        return std::string(pass_name(std::get<0>(info.param))) +
+               (std::get<1>(info.param) == Composition::pointer_jumping ? "_pointer_jumping" : "_level_by_level");
+    });
+
+// --- whole simulations -------------------------------------------------------------------
+
+void expect_agreement(const Scene& scene, Composition composition, bool profile,
+                      std::initializer_list<uint32_t> step_calls) {
+    auto reference = create_or_fail(scene, test_config(BackendKind::cpu64, composition, false));
+    auto device = create_or_fail(scene, test_config(BackendKind::cuda, composition, profile));
+    ASSERT_TRUE(reference && device);
+    for (uint32_t steps : step_calls) {
+        ASSERT_TRUE(reference->step(steps).ok());
+        const Status status = device->step(steps);
+        ASSERT_TRUE(status.ok()) << status.message();
+    }
+    const double height = scene_height(scene);
+    for (Output output : {Output::node_positions, Output::vertex_positions, Output::vertex_normals,
+                          Output::chain_origins}) {
+        std::vector<double> expected, actual;
+        ASSERT_TRUE(reference->read(output, expected).ok());
+        ASSERT_TRUE(device->read(output, actual).ok());
+        const double scale = output == Output::vertex_normals ? 1.0 : height;
+        EXPECT_LE(max_abs_difference(actual, expected) / scale, 1e-4) << "output " << int(output);
+    }
+}
+
+class CudaSimulation : public ::testing::TestWithParam<Composition> {};
+
+TEST_P(CudaSimulation, ForestAgreesWithCpu64AfterManySteps) {
+    HMSM_SKIP_WITHOUT_CUDA();
+    expect_agreement(forest_scene(7), GetParam(), false, {100, 1, 139});
+}
+
+TEST_P(CudaSimulation, ProfiledForestAgreesWithCpu64) {
+    HMSM_SKIP_WITHOUT_CUDA();
+    expect_agreement(forest_scene(8), GetParam(), true, {60, 60});
+}
+
+TEST_P(CudaSimulation, PresetForestAgreesWithCpu64) {
+    HMSM_SKIP_WITHOUT_CUDA();
+    auto tree = generate_preset("paper-5");
+    ASSERT_TRUE(tree.ok()) << tree.status().message();
+    auto scene = grid_scene(*tree, 37, 12.0, 3);
+    ASSERT_TRUE(scene.ok()) << scene.status().message();
+    expect_agreement(*scene, GetParam(), false, {30});
+}
+
+INSTANTIATE_TEST_SUITE_P(Compositions, CudaSimulation,
+                         ::testing::Values(Composition::pointer_jumping, Composition::level_by_level),
+                         [](const auto& info) {
+                             return std::string(info.param == Composition::pointer_jumping ? "pointer_jumping"
+                                                                                         : "level_by_level");
+                         });
+
+TEST(CudaGraph, ReplayEqualsDirectLaunchesBitwise) {
+    HMSM_SKIP_WITHOUT_CUDA();
+    const Scene scene = forest_scene(9);
+    auto graph = create_or_fail(scene, test_config(BackendKind::cuda, Composition::pointer_jumping, false));
+    auto direct = create_or_fail(scene, test_config(BackendKind::cuda, Composition::pointer_jumping, true));
+    ASSERT_TRUE(graph && direct);
+    for (uint32_t steps : {1u, 50u, 49u}) {
+        ASSERT_TRUE(graph->step(steps).ok());
+        ASSERT_TRUE(direct->step(steps).ok());
+    }
+    for (Output output : {Output::node_positions, Output::vertex_positions, Output::vertex_normals,
+                          Output::chain_rotations, Output::chain_angles}) {
+        std::vector<float> a, b;
+        ASSERT_TRUE(graph->read(output, a).ok());
+        ASSERT_TRUE(direct->read(output, b).ok());
+        ASSERT_EQ(a.size(), b.size());
+        EXPECT_EQ(std::memcmp(a.data(), b.data(), a.size() * sizeof(float)), 0) << "output " << int(output);
+    }
+}
+
+TEST(CudaProfiling, PassTimesAreReportedOnlyWhenProfiling) {
+    HMSM_SKIP_WITHOUT_CUDA();
+    const Scene scene = forest_scene(10);
+    auto profiled = create_or_fail(scene, test_config(BackendKind::cuda, Composition::pointer_jumping, true));
+    auto plain = create_or_fail(scene, test_config(BackendKind::cuda, Composition::pointer_jumping, false));
+    ASSERT_TRUE(profiled && plain);
+    ASSERT_TRUE(profiled->step(20).ok());
+    ASSERT_TRUE(plain->step(20).ok());
+    const PassTimes times = profiled->pass_times();
+    EXPECT_EQ(times.steps, 20u);
+    for (Pass pass : kAllPasses) EXPECT_GT(times.seconds[uint32_t(pass)], 0.0) << pass_name(pass);
+    EXPECT_EQ(plain->pass_times().total(), 0.0);
+    EXPECT_EQ(plain->pass_times().steps, 0u);
+}
+
+// --- interop -----------------------------------------------------------------------------
+
+TEST(CudaInterop, DeviceOutputsHoldWhatReadReturns) {
+    HMSM_SKIP_WITHOUT_CUDA();
+    const Scene scene = forest_scene(12);
+    auto sim = create_or_fail(scene, test_config(BackendKind::cuda, Composition::pointer_jumping, false));
+    ASSERT_TRUE(sim);
+    ASSERT_TRUE(sim->step(10).ok());
+    auto outputs = cuda::device_outputs(*sim);
+    ASSERT_TRUE(outputs.ok()) << outputs.status().message();
+    EXPECT_EQ(outputs->node_count, sim->node_count());
+    EXPECT_EQ(outputs->vertex_count, sim->vertex_count());
+    struct Check {
+        const float* device;
+        uint64_t count;
+        Output output;
+        float w;
+    };
+    for (Check check : {Check{outputs->node_positions, outputs->node_count, Output::node_positions, 1.0f},
+                        Check{outputs->vertex_positions, outputs->vertex_count, Output::vertex_positions, 1.0f},
+                        Check{outputs->vertex_normals, outputs->vertex_count, Output::vertex_normals, 0.0f}}) {
+        std::vector<float> raw(check.count * 4), expected;
+        ASSERT_EQ(cudaMemcpy(raw.data(), check.device, raw.size() * sizeof(float), cudaMemcpyDeviceToHost), cudaSuccess);
+        ASSERT_TRUE(sim->read(check.output, expected).ok());
+        for (uint64_t i = 0; i < check.count; ++i) {
+            for (int k = 0; k < 3; ++k) ASSERT_EQ(raw[4 * i + k], expected[3 * i + k]) << "element " << i;
+            ASSERT_EQ(raw[4 * i + 3], check.w);
+        }
+    }
+}
+
+TEST(CudaInterop, StepsRunOnAnEngineStream) {
+    HMSM_SKIP_WITHOUT_CUDA();
+    const Scene scene = forest_scene(13);
+    auto engine = create_or_fail(scene, test_config(BackendKind::cuda, Composition::pointer_jumping, false));
+    auto own = create_or_fail(scene, test_config(BackendKind::cuda, Composition::pointer_jumping, false));
+    ASSERT_TRUE(engine && own);
+    cudaStream_t stream = nullptr;
+    ASSERT_EQ(cudaStreamCreate(&stream), cudaSuccess);
+    ASSERT_TRUE(cuda::set_stream(*engine, stream).ok());
+    ASSERT_TRUE(engine->step(25).ok());
+    ASSERT_TRUE(cuda::set_stream(*engine, nullptr).ok());
+    ASSERT_TRUE(engine->step(5).ok());
+    ASSERT_TRUE(own->step(30).ok());
+    std::vector<float> a, b;
+    ASSERT_TRUE(engine->read(Output::vertex_positions, a).ok());
+    ASSERT_TRUE(own->read(Output::vertex_positions, b).ok());
+    EXPECT_EQ(a, b);
+    EXPECT_EQ(cudaStreamDestroy(stream), cudaSuccess);
+}
+
+TEST(CudaInterop, OtherBackendsHaveNoDeviceOutputs) {
+    auto sim = create_or_fail(forest_scene(14), test_config(BackendKind::cpu, Composition::pointer_jumping, false));
+    ASSERT_TRUE(sim);
+    auto outputs = cuda::device_outputs(*sim);
+    ASSERT_FALSE(outputs.ok());
+    EXPECT_EQ(outputs.status().code(), ErrorCode::invalid_argument);
+}
+
+// --- errors ------------------------------------------------------------------------------
+
+TEST(CudaErrors, OutOfMemoryNamesTheBufferAndKeepsTheDeviceUsable) {
+    HMSM_SKIP_WITHOUT_CUDA();
+    auto backend = detail::create_backend(BackendKind::cuda);
+    ASSERT_TRUE(backend.ok());
+    size_t free_bytes = 0, total_bytes = 0;
+    ASSERT_EQ(cudaMemGetInfo(&free_bytes, &total_bytes), cudaSuccess);
+    detail::SceneData huge;  // a "forest" whose vertex positions alone exceed device memory
+    huge.total_vertices = total_bytes / 16 + (1ull << 24);
+    const Status status = (*backend)->upload(huge);
+    EXPECT_EQ(status.code(), ErrorCode::out_of_memory) << status.message();
+    EXPECT_NE(status.message().find("vertex_position"), std::string::npos) << status.message();
+    EXPECT_NE(status.message().find("bytes"), std::string::npos) << status.message();
+    EXPECT_NE(status.message().find("cudaErrorMemoryAllocation"), std::string::npos) << status.message();
+
+    auto sim = create_or_fail(forest_scene(15), test_config(BackendKind::cuda, Composition::pointer_jumping, false));
+    ASSERT_TRUE(sim);
+    EXPECT_TRUE(sim->step(3).ok());
+}
+
+TEST(CudaErrors, RangesPastTheEndAreRejected) {
+    HMSM_SKIP_WITHOUT_CUDA();
+    auto sim = create_or_fail(forest_scene(16), test_config(BackendKind::cuda, Composition::pointer_jumping, false));
+    ASSERT_TRUE(sim);
+    const uint64_t nodes = sim->node_count();
+    std::vector<double> values(8 * 4);
+    const Status status = sim->backend().read(BufferId::node_world, nodes - 4, 8, values.data(), Scalar::f64);
+    EXPECT_EQ(status.code(), ErrorCode::invalid_argument);
+    EXPECT_NE(status.message().find("node_world"), std::string::npos);
+}
+
+/// In a fresh process (a sticky error ruins the CUDA context for good): a jump table pointing
+/// far outside the buffers makes compose fault; the step must report device_error with the
+/// CUDA error name, and later calls must fail the same way instead of aborting.
+[[noreturn]] void fault_and_exit() {
+    auto sim = Simulation::create(forest_scene(17), test_config(BackendKind::cuda, Composition::pointer_jumping, false));
+    if (!sim.ok()) std::exit(2);
+    const uint64_t count = (*sim)->scene_data().element_count(BufferId::chain_jump);
+    std::vector<double> far(count, double(0x7fffff00));
+    if (!(*sim)->backend().write(BufferId::chain_jump, 0, count, far.data(), Scalar::f64).ok()) std::exit(3);
+    const Status step = (*sim)->step(1);
+    if (step.code() != ErrorCode::device_error || step.message().find("cudaError") == std::string::npos) {
+        std::fprintf(stderr, "step: %s\n", step.message().c_str());
+        std::exit(4);
+    }
+    std::fprintf(stderr, "step failed as expected: %s\n", step.message().c_str());
+    std::vector<float> positions;
+    if ((*sim)->read(Output::node_positions, positions).code() != ErrorCode::device_error) std::exit(5);
+    sim = Status{};  // destroying the simulation on a broken context must not abort either
+    std::exit(0);
+}
+
+TEST(CudaErrorsStickyDeathTest, DeviceFaultIsAnErrorValue) {
+    HMSM_SKIP_WITHOUT_CUDA();
+    GTEST_FLAG_SET(death_test_style, "threadsafe");
+    EXPECT_EXIT(fault_and_exit(), ::testing::ExitedWithCode(0), "step failed as expected: .*cudaError");
+}
+
+}  // namespace
+}  // namespace hmsm::cuda_test

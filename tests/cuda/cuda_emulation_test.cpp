@@ -1,0 +1,120 @@
+// The CUDA kernel bodies run serially on the host (emulate_NAME of kernels/cuda/launchers.h)
+// over host images of the device buffers, against the double-precision CPU reference. Needs no
+// GPU, so CI checks the kernels' arithmetic and indexing on every machine; the tests in
+// cuda_device_test.cpp check the same on the device.
+#include "cuda_test_support.h"
+
+#include "cuda/device_layout.h"
+#include "cuda/launch_dispatch.h"
+
+#include <array>
+#include <cmath>
+#include <limits>
+
+namespace hmsm::cuda_test {
+namespace {
+
+using detail::BufferId;
+using detail::cuda::BufferPointers;
+
+/// Every buffer of the table in host memory, laid out as on the device.
+struct HostImage {
+    std::array<std::vector<std::byte>, detail::kBufferCount> bytes;
+    BufferPointers pointers;
+};
+
+/// Host image of a cpu64 simulation's buffers: static data converted like an upload, state
+/// as the reference holds it now (converted to float).
+HostImage image_of(const Simulation& reference) {
+    HostImage image;
+    const detail::SceneData& scene = reference.scene_data();
+    for (const detail::BufferInfo& info : detail::kBufferTable) {
+        const uint64_t count = scene.element_count(info.id);
+        auto& bytes = image.bytes[uint32_t(info.id)];
+        if (detail::is_static(info.id)) {
+            bytes = detail::cuda::device_image(scene, info.id);
+        } else {
+            std::vector<double> values(count * detail::shape_scalars(info.shape));
+            EXPECT_TRUE(reference.backend().read(info.id, 0, count, values.data(), detail::Scalar::f64).ok());
+            bytes.resize(count * detail::cuda::device_element_bytes(info.id));
+            detail::cuda::scalars_to_words(info.shape, values.data(), values.size(), bytes.data(),
+                                           detail::Scalar::f64);
+        }
+        bytes.resize(std::max<size_t>(bytes.size(), 16));
+    }
+#define HMSM_TEST_BIND(name, binding, shape, scope) \
+    image.pointers.name = reinterpret_cast<detail::cuda::DeviceType_##shape*>(image.bytes[binding].data());
+    HMSM_BUFFERS(HMSM_TEST_BIND)
+#undef HMSM_TEST_BIND
+    return image;
+}
+
+/// xyz of every float4 of an output buffer of the image.
+std::vector<double> xyz_of(const HostImage& image, BufferId id) {
+    const auto* words = reinterpret_cast<const float*>(image.bytes[uint32_t(id)].data());
+    const size_t count = image.bytes[uint32_t(id)].size() / 16;
+    std::vector<double> out;
+    for (size_t i = 0; i < count; ++i)
+        for (int k = 0; k < 3; ++k) out.push_back(words[4 * i + k]);
+    return out;
+}
+
+void poison(HostImage& image, BufferId id) {
+    auto* words = reinterpret_cast<float*>(image.bytes[uint32_t(id)].data());
+    const size_t n = image.bytes[uint32_t(id)].size() / 4;
+    for (size_t i = 0; i < n; ++i) words[i] = std::numeric_limits<float>::quiet_NaN();
+}
+
+class CudaEmulation : public ::testing::TestWithParam<Composition> {};
+
+TEST_P(CudaEmulation, KernelBodiesFollowCpu64OverManySteps) {
+    const Scene scene = forest_scene(11);
+    auto reference = Simulation::create(scene, test_config(BackendKind::cpu64, GetParam(), false));
+    ASSERT_TRUE(reference.ok()) << reference.status().message();
+    Simulation& sim = **reference;
+    HostImage image = image_of(sim);
+    for (BufferId id : {BufferId::node_world, BufferId::vertex_position, BufferId::vertex_normal})
+        poison(image, id);
+
+    const uint32_t steps = 240;
+    const double dt = sim.config().parameters.dt;
+    const double frequency = sim.scene_data().wind_frequency;
+    for (uint32_t k = 0; k < steps; ++k) {
+        const double x = frequency * (double(k) * dt);  // as Simulation::step: x = f t mod 2
+        const float phase = float(x - 2.0 * std::floor(x / 2.0));
+        for (const detail::Dispatch& d : sim.step_program()) detail::cuda::emulate_dispatch(d, image.pointers, phase);
+    }
+    ASSERT_TRUE(sim.step(steps).ok());
+
+    const double height = scene_height(scene);
+    struct Check {
+        Output output;
+        BufferId buffer;
+        double scale;
+    };
+    for (Check check : {Check{Output::node_positions, BufferId::node_world, height},
+                        Check{Output::vertex_positions, BufferId::vertex_position, height},
+                        Check{Output::vertex_normals, BufferId::vertex_normal, 1.0}}) {
+        std::vector<double> expected;
+        ASSERT_TRUE(sim.read(check.output, expected).ok());
+        const double error = max_abs_difference(xyz_of(image, check.buffer), expected) / check.scale;
+        EXPECT_LE(error, 1e-4) << "output " << int(check.output);
+    }
+    // The wind must have moved the trees, or the comparison above proves little.
+    std::vector<double> rest, now;
+    auto at_rest = Simulation::create(scene, test_config(BackendKind::cpu64, GetParam(), false));
+    ASSERT_TRUE(at_rest.ok());
+    ASSERT_TRUE((*at_rest)->read(Output::node_positions, rest).ok());
+    ASSERT_TRUE(sim.read(Output::node_positions, now).ok());
+    EXPECT_GT(max_abs_difference(rest, now) / height, 1e-3);
+}
+
+INSTANTIATE_TEST_SUITE_P(Compositions, CudaEmulation,
+                         ::testing::Values(Composition::pointer_jumping, Composition::level_by_level),
+                         [](const auto& info) {
+                             return std::string(info.param == Composition::pointer_jumping ? "pointer_jumping"
+                                                                                         : "level_by_level");
+                         });
+
+}  // namespace
+}  // namespace hmsm::cuda_test

@@ -1,0 +1,103 @@
+#include "cuda_test_support.h"
+
+#include "random.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace hmsm::cuda_test {
+
+TreeModel random_tree(uint64_t seed, int node_count, int leaf_count) {
+    detail::Random random(seed);
+    TreeModel tree;
+    std::vector<glm::dvec3> direction;  // of the segment ending at each node
+    tree.nodes.push_back({-1, {0.0, 0.0, 0.0}, 0.3});
+    direction.push_back({0.0, 1.0, 0.0});
+    // Trunk: six segments of 1.5 m.
+    for (int i = 1; i <= 6 && int(tree.nodes.size()) < node_count; ++i) {
+        tree.nodes.push_back({i - 1, {0.0, 1.5 * i, 0.05 * i}, 0.3 - 0.03 * i});
+        direction.push_back(glm::normalize(glm::dvec3(0.0, 1.5, 0.05)));
+    }
+    while (int(tree.nodes.size()) < node_count) {
+        // Grow from a recent node most of the time (long chains), sometimes branch lower down.
+        const int n = int(tree.nodes.size());
+        int parent = random.uniform() < 0.7 ? n - 1 - int(random.below(std::min(n, 3)))
+                                            : 1 + int(random.below(n - 1));
+        const glm::dvec3 jitter(random.normal(), random.normal(), random.normal());
+        glm::dvec3 d = glm::normalize(direction[parent] + 0.6 * jitter + glm::dvec3(0.0, 0.3, 0.0));
+        const double length = random.uniform(0.2, 0.6);
+        const double radius = std::max(0.06, 0.9 * tree.nodes[parent].radius);
+        tree.nodes.push_back({parent, tree.nodes[parent].position + length * d, radius});
+        direction.push_back(d);
+    }
+    for (int l = 0; l < leaf_count; ++l) {
+        TreeLeaf leaf;
+        leaf.node = 1 + int(random.below(tree.nodes.size() - 1));
+        leaf.offset = {random.uniform(-0.05, 0.05), random.uniform(0.0, 0.1), random.uniform(-0.05, 0.05)};
+        leaf.normal = glm::normalize(glm::dvec3(random.normal(), random.normal(), 2.0));
+        leaf.up = {0.0, 1.0, 0.0};
+        leaf.size = {random.uniform(0.05, 0.15), random.uniform(0.05, 0.15)};
+        tree.leaves.push_back(leaf);
+    }
+    return tree;
+}
+
+Scene forest_scene(uint64_t seed) {
+    detail::Random random(seed * 7919 + 1);
+    Scene scene;
+    scene.models = {random_tree(seed, 157, 23), random_tree(seed + 1, 611, 101)};
+    scene.model_names = {"small", "large"};
+    for (uint32_t model : {0u, 0u, 1u, 1u, 0u}) {
+        Instance instance;
+        instance.model = model;
+        instance.origin = {random.uniform(-40.0, 40.0), random.uniform(-1.0, 1.0), random.uniform(-40.0, 40.0)};
+        instance.yaw = random.uniform(-3.0, 3.0);
+        scene.instances.push_back(instance);
+    }
+    return scene;
+}
+
+SimulationConfig test_config(BackendKind backend, Composition composition, bool profile) {
+    SimulationConfig config;
+    config.backend = backend;
+    config.composition = composition;
+    config.profile_passes = profile;
+    config.wind.profile = WindProfile::y1;
+    config.wind.direction = {1.0, 0.0, 0.4};
+    config.wind.strength = 10.0;
+    config.wind.frequency = 0.3;
+    config.wind.front_speed = 8.0;
+    return config;
+}
+
+std::string no_cuda_device_reason() {
+    auto backend = detail::create_backend(BackendKind::cuda);
+    if (backend) return {};
+    return backend.status().message();
+}
+
+double max_abs_difference(const std::vector<double>& a, const std::vector<double>& b) {
+    if (a.size() != b.size()) return std::numeric_limits<double>::infinity();
+    double worst = 0.0;
+    for (size_t i = 0; i < a.size(); ++i) {
+        const double d = std::abs(a[i] - b[i]);
+        if (std::isnan(d)) return std::numeric_limits<double>::infinity();
+        worst = std::max(worst, d);
+    }
+    return worst;
+}
+
+double max_abs(const std::vector<double>& values) {
+    double m = 0.0;
+    for (double v : values) m = std::max(m, std::abs(v));
+    return m;
+}
+
+double scene_height(const Scene& scene) {
+    double height = 0.0;
+    for (const TreeModel& model : scene.models) height = std::max(height, tree_height(model));
+    return height;
+}
+
+}  // namespace hmsm::cuda_test

@@ -1,0 +1,45 @@
+// Scenes, configurations and comparisons shared by the CUDA tests.
+#pragma once
+
+#include <hmsm/hmsm.h>
+
+#include "backend.h"
+
+#include <gtest/gtest.h>
+
+#include <string>
+#include <vector>
+
+namespace hmsm::cuda_test {
+
+/// A random but valid tree: a trunk and `node_count` nodes in all, branching at random with
+/// real-world sizes (about 10 m tall), and `leaf_count` leaf cards. Counts are chosen by the
+/// callers so that no element count is a multiple of the block size.
+TreeModel random_tree(uint64_t seed, int node_count, int leaf_count);
+
+/// Two random models in five instances (model order 0 0 1 1 0: three dispatch groups), at
+/// scattered origins and yaws.
+Scene forest_scene(uint64_t seed);
+
+/// Wind strong enough that chains bend visibly, with a travelling front so every instance has
+/// its own phase.
+SimulationConfig test_config(BackendKind backend, Composition composition, bool profile);
+
+/// Message of the CUDA backend's no_device error, or empty when a CUDA device is present.
+std::string no_cuda_device_reason();
+
+/// Largest |a - b| over two arrays of the same size; infinity on a NaN or a size mismatch.
+double max_abs_difference(const std::vector<double>& a, const std::vector<double>& b);
+double max_abs(const std::vector<double>& values);
+
+/// Rest-pose height of every model of the scene, the largest: DESIGN.md 7's error scale.
+double scene_height(const Scene& scene);
+
+}  // namespace hmsm::cuda_test
+
+/// Every CUDA test starts with this: without a device it skips and says why.
+#define HMSM_SKIP_WITHOUT_CUDA()                                                       \
+    do {                                                                              \
+        const std::string hmsm_no_cuda_ = ::hmsm::cuda_test::no_cuda_device_reason();  \
+        if (!hmsm_no_cuda_.empty()) GTEST_SKIP() << hmsm_no_cuda_;                     \
+    } while (0)
