@@ -1,0 +1,99 @@
+#!/usr/bin/env bash
+# Runs hmsm's GPU checks on the lent NVIDIA machine, called through the `device` tool from the
+# repository root with the build folder carried from the development machine (nothing is built
+# there):
+#
+#   bash tools/gpu/run.sh [BUILD_DIR]        (default: build-gpu; carry BUILD_DIR and .gl)
+#
+# In order, each under its own time limit inside the device tool's 10 minutes: unpack the
+# carried Vulkan loader (.gl/*.deb, see the device README), the CUDA suite, the core suite's
+# backend agreement tests (CUDA and Vulkan against cpu64), the Vulkan suite if built,
+# compute-sanitizer memcheck, racecheck, initcheck and synccheck over the CUDA suite, a
+# `hmsm simulate --backend cuda` run and `hmsm bench` if the CLI has it. Logs go to $OUT
+# (at most 8 files); summary.log gathers the lines that matter and ends with a short table.
+set -u
+BUILD=${1:-build-gpu}
+OUT=${OUT:-/tmp/hmsm-gpu-out}
+mkdir -p "$OUT"
+SUMMARY=$OUT/summary.log
+DEADLINE=${HMSM_GPU_DEADLINE:-570}  # seconds; the device tool stops a command at 600
+: >"$SUMMARY"
+
+say() { echo "$*" | tee -a "$SUMMARY"; }
+# run_step SECONDS LOG COMMAND...: runs COMMAND with stdout+stderr appended to LOG, stopped
+# after SECONDS or at the deadline, whichever comes first; records its exit status.
+run_step() {
+    local budget=$1 log=$2
+    shift 2
+    local left=$((DEADLINE - SECONDS - 5))
+    if ((left < 15)); then
+        say "SKIPPED (no time left): $*"
+        return 0
+    fi
+    ((budget > left)) && budget=$left
+    echo "### $* (limit ${budget}s)" >>"$log"
+    local start=$SECONDS
+    timeout --kill-after=5 "$budget" "$@" >>"$log" 2>&1
+    local rc=$?
+    say "rc=$rc in $((SECONDS - start))s: $*"
+    return 0
+}
+
+# --- environment -----------------------------------------------------------------------
+if compgen -G ".gl/*.deb" >/dev/null; then
+    for f in .gl/*.deb; do dpkg -x "$f" /; done
+    ldconfig
+fi
+export PATH=$PATH:/usr/local/cuda/bin
+ICD=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
+[[ -f $ICD ]] && export VK_DRIVER_FILES=$ICD
+say "== $(date -u +%FT%TZ) build=$BUILD"
+nvidia-smi --query-gpu=name,driver_version,memory.total,clocks.sm,clocks.max.sm --format=csv,noheader 2>&1 | tee -a "$SUMMARY"
+
+CUDA_TESTS=$BUILD/tests/cuda/hmsm_cuda_tests
+CORE_TESTS=$BUILD/tests/hmsm_tests
+VULKAN_TESTS=$BUILD/tests/vulkan/hmsm_vulkan_tests
+CLI=$BUILD/hmsm
+# Tests that cannot be sanitizer-clean by design: a deliberate out-of-memory cudaMalloc (an API
+# error to the sanitizer) and a deliberate device fault in a child process.
+SANITIZER_FILTER='-CudaErrors.OutOfMemory*:CudaErrorsStickyDeathTest.*'
+
+# --- suites ----------------------------------------------------------------------------
+[[ -x $CUDA_TESTS ]] && run_step 150 "$OUT/cuda_tests.log" "$CUDA_TESTS"
+# The CLI tests run the CLI by its build-machine path; the rest of the core suite runs here.
+[[ -x $CORE_TESTS ]] && run_step 150 "$OUT/core_tests.log" "$CORE_TESTS" --gtest_filter='-Cli.*'
+[[ -x $VULKAN_TESTS ]] && run_step 90 "$OUT/vulkan_tests.log" "$VULKAN_TESTS"
+
+# --- compute-sanitizer over the CUDA suite ---------------------------------------------
+if [[ -x $CUDA_TESTS ]] && command -v compute-sanitizer >/dev/null; then
+    for tool in memcheck racecheck initcheck synccheck; do
+        extra=()
+        [[ $tool == memcheck ]] && extra=(--leak-check full)
+        run_step 75 "$OUT/sanitizers.log" compute-sanitizer --tool "$tool" "${extra[@]}" \
+            --error-exitcode 99 "$CUDA_TESTS" --gtest_filter="$SANITIZER_FILTER" --gtest_brief=1
+    done
+fi
+
+# --- CLI -------------------------------------------------------------------------------
+if [[ -x $CLI ]]; then
+    run_step 60 "$OUT/cli.log" "$CLI" simulate --preset paper-1 --backend cuda --steps 240 \
+        --dump-nodes "$OUT/nodes_cuda.csv" --report "$OUT/report_cuda.json"
+    if "$CLI" bench --help >/dev/null 2>&1; then
+        run_step 200 "$OUT/cli.log" "$CLI" bench
+    fi
+    rm -f "$OUT/nodes_cuda.csv"
+fi
+
+# --- summary ---------------------------------------------------------------------------
+{
+    echo "== test results"
+    for log in cuda_tests core_tests vulkan_tests; do
+        [[ -f $OUT/$log.log ]] && grep -HE '^\[==========\] .* ran|^\[  PASSED  \] [0-9]|^\[  SKIPPED \] [0-9]|^\[  FAILED  \]' "$OUT/$log.log" | head -40
+    done
+    echo "== sanitizers"
+    [[ -f $OUT/sanitizers.log ]] && grep -E '^### |ERROR SUMMARY|LEAK SUMMARY|RACECHECK SUMMARY|Target application returned' "$OUT/sanitizers.log"
+    echo "== report"
+    [[ -f $OUT/report_cuda.json ]] && head -c 1500 "$OUT/report_cuda.json" && echo
+} >>"$SUMMARY" 2>&1
+echo "----- summary -----"
+cat "$SUMMARY"
