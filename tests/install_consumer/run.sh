@@ -1,0 +1,10 @@
+#!/usr/bin/env bash
+# Installs the built hmsm into a temporary prefix and builds and runs a consumer against it.
+set -euo pipefail
+build="$1"; source_dir="$2"
+work="$(mktemp -d)"
+trap 'rm -rf "$work"' EXIT
+cmake --install "$build" --prefix "$work/prefix" >/dev/null
+cmake -S "$source_dir" -B "$work/consumer" -G Ninja -DCMAKE_PREFIX_PATH="$work/prefix" >/dev/null
+cmake --build "$work/consumer" >/dev/null
+"$work/consumer/consumer"
