@@ -44,6 +44,7 @@ public:
     Device& operator=(const Device&) = delete;
 
     const VolkDeviceTable& vk() const { return table_; }
+    VkInstance instance() const { return instance_; }
     VkDevice handle() const { return device_; }
     VkPhysicalDevice physical_device() const { return physical_; }
     VkQueue queue() const { return queue_; }

@@ -82,3 +82,8 @@ private:
 };
 
 }  // namespace hmsm::detail::vk
+
+namespace hmsm::detail {
+/// True when `backend` is a Vulkan backend on a CPU driver such as lavapipe (`auto` skips it).
+bool vulkan_backend_is_cpu_device(const Backend& backend);
+}  // namespace hmsm::detail

@@ -1,0 +1,164 @@
+// The Vulkan backend through Simulation and directly: profiling, chunked submission, buffer
+// round trips, the 2-D dispatch grid and the storage-buffer-range limit.
+#include "random_scene.h"
+#include "test_trees.h"
+#include "vulkan_test_support.h"
+
+#include "vulkan/recorder.h"
+
+namespace hmsm::test {
+namespace {
+
+using detail::BufferId;
+
+SimulationConfig windy_config() {
+    SimulationConfig config;
+    config.wind.strength = 8.0;
+    config.wind.direction = {1, 0, 0.3};
+    return config;
+}
+
+TEST_F(VulkanTest, ProfilingGivesEveryPassATime) {
+    std::string skip;
+    SimulationConfig config = windy_config();
+    config.profile_passes = true;
+    auto sim = create_simulation_or_skip(*grid_scene(small_tree(), 3, 5.0, 1), config,
+                                         BackendKind::vulkan, skip);
+    if (!skip.empty()) GTEST_SKIP() << skip;
+    ASSERT_TRUE(sim);
+    ASSERT_TRUE(sim->step(400).ok());  // several command buffers of steps
+    PassTimes times = sim->pass_times();
+    EXPECT_EQ(times.steps, 400u);
+    for (Pass pass : kAllPasses) EXPECT_GT(times.seconds[uint32_t(pass)], 0.0) << pass_name(pass);
+
+    sim->backend().set_profiling(false);
+    ASSERT_TRUE(sim->step(3).ok());
+    EXPECT_EQ(sim->pass_times().total(), 0.0);
+    EXPECT_EQ(sim->pass_times().steps, 0u);
+}
+
+TEST_F(VulkanTest, StepsGiveTheSameResultInOneCallOrMany) {
+    // One call records several command buffers (two in flight); one step per call records one.
+    std::string skip;
+    Scene scene = *grid_scene(deep_tree(5), 4, 6.0, 9);
+    auto batched = create_simulation_or_skip(scene, windy_config(), BackendKind::vulkan, skip);
+    if (!skip.empty()) GTEST_SKIP() << skip;
+    auto single = create_simulation_or_skip(scene, windy_config(), BackendKind::vulkan, skip);
+    ASSERT_TRUE(batched && single);
+    ASSERT_TRUE(batched->step(600).ok());
+    for (int k = 0; k < 600; ++k) ASSERT_TRUE(single->step(1).ok());
+    std::vector<float> a, b;
+    ASSERT_TRUE(batched->read(Output::vertex_positions, a).ok());
+    ASSERT_TRUE(single->read(Output::vertex_positions, b).ok());
+    EXPECT_EQ(a, b);  // same device, same dispatches: bitwise identical
+}
+
+TEST_F(VulkanTest, EveryBufferRoundTripsThroughWriteAndRead) {
+    std::mt19937 rng(5);
+    detail::SceneData data = random_scene_data(rng, {{7, 13, 101}}, {0, 0, 0}, 2);
+    std::string skip;
+    auto vulkan = create_vulkan_or_skip(skip);
+    if (!skip.empty()) GTEST_SKIP() << skip;
+    ASSERT_TRUE(vulkan);
+    ASSERT_TRUE(vulkan->upload(data).ok());
+    for (const auto& info : detail::kBufferTable) {
+        SCOPED_TRACE(std::string(info.name));
+        const uint64_t count = data.element_count(info.id);
+        const uint32_t scalars = detail::shape_scalars(info.shape);
+        std::vector<float> values(count * scalars);
+        for (size_t i = 0; i < values.size(); ++i)
+            values[i] = detail::shape_is_integer(info.shape) ? float(int(i % 1000) - 500) : float(i) * 0.25f - 3.0f;
+        // A sub-range first, then the whole buffer; read back as float and as double.
+        ASSERT_TRUE(vulkan->write(info.id, 1, count - 1, values.data() + scalars, detail::Scalar::f32).ok());
+        ASSERT_TRUE(vulkan->write(info.id, 0, 1, values.data(), detail::Scalar::f32).ok());
+        std::vector<float> as_float(values.size());
+        ASSERT_TRUE(vulkan->read(info.id, 0, count, as_float.data(), detail::Scalar::f32).ok());
+        EXPECT_EQ(as_float, values);
+        std::vector<double> as_double = read_buffer(*vulkan, info.id, count);
+        EXPECT_EQ(as_double, std::vector<double>(values.begin(), values.end()));
+    }
+    double dummy[12];
+    Status past = vulkan->read(BufferId::chain_state, data.total_chains, 1, dummy, detail::Scalar::f64);
+    EXPECT_EQ(past.code(), ErrorCode::invalid_argument);
+    EXPECT_NE(past.message().find("chain_state"), std::string::npos) << past.message();
+}
+
+TEST_F(VulkanTest, StaticBuffersHoldTheSceneInFloat) {
+    std::mt19937 rng(8);
+    detail::SceneData data = random_scene_data(rng, {{11, 20, 70}, {3, 5, 9}}, {1, 0, 1}, 4);
+    std::string skip;
+    auto vulkan = create_vulkan_or_skip(skip);
+    if (!skip.empty()) GTEST_SKIP() << skip;
+    auto oracle = detail::create_cpu_backend(true);
+    ASSERT_TRUE(vulkan && oracle.ok());
+    ASSERT_TRUE(vulkan->upload(data).ok());
+    ASSERT_TRUE(oracle.value()->upload(data).ok());
+    for (const auto& info : detail::kBufferTable) {
+        const uint64_t count = data.element_count(info.id);
+        EXPECT_LE(relative_difference(read_buffer(*vulkan, info.id, count),
+                                      read_buffer(*oracle.value(), info.id, count)),
+                  1e-7)
+            << info.name;
+    }
+}
+
+TEST_F(VulkanTest, WorkgroupGridGoesTwoDimensionalPastTheLimit) {
+    detail::vk::DeviceLimits limits;
+    limits.max_workgroup_count[0] = limits.max_workgroup_count[1] = 65535;
+    auto grid = detail::vk::workgroup_grid(65535u * HMSM_WORKGROUP_SIZE, limits);
+    EXPECT_EQ(grid.x, 65535u);
+    EXPECT_EQ(grid.y, 1u);
+    grid = detail::vk::workgroup_grid(65535u * HMSM_WORKGROUP_SIZE + 1, limits);
+    EXPECT_EQ(grid.x, 65535u);
+    EXPECT_EQ(grid.y, 2u);
+    grid = detail::vk::workgroup_grid(UINT32_MAX, limits);
+    EXPECT_GE(uint64_t(grid.x) * grid.y * HMSM_WORKGROUP_SIZE, uint64_t(UINT32_MAX));
+    EXPECT_EQ(detail::vk::workgroup_grid(0, limits).x, 0u);
+    EXPECT_EQ(detail::vk::workgroup_grid(1, limits).x, 1u);
+}
+
+TEST_F(VulkanTest, DispatchBeyondTheWorkgroupCountLimitMatchesCpu64) {
+    // A contour dispatch of more than 65535 * 64 threads (the usual maxComputeWorkGroupCount[0])
+    // runs on a 2-D grid; its last vertices must still be right.
+    std::mt19937 rng(21);
+    const uint32_t vertices = 65535u * HMSM_WORKGROUP_SIZE / 4 + 4099;
+    detail::SceneData data = random_scene_data(rng, {{9, 17, vertices}}, {0, 0, 0, 0}, 4);
+    std::string skip;
+    auto vulkan = create_vulkan_or_skip(skip);
+    if (!skip.empty()) GTEST_SKIP() << skip;
+    auto oracle = detail::create_cpu_backend(true);
+    ASSERT_TRUE(vulkan && oracle.ok());
+    ASSERT_TRUE(vulkan->upload(data).ok());
+    ASSERT_TRUE(oracle.value()->upload(data).ok());
+    randomize_state(data, *vulkan, *oracle.value(), rng);
+    auto variants = pass_variants(data, Pass::contour, Composition::pointer_jumping, rng);
+    ASSERT_EQ(variants.size(), 1u);
+    ASSERT_GT(variants[0][0].constants.element_count, 65535u * HMSM_WORKGROUP_SIZE);
+    const double wind_x[1] = {0.0};
+    ASSERT_TRUE(vulkan->run(variants[0], wind_x).ok());
+    ASSERT_TRUE(oracle.value()->run(variants[0], wind_x).ok());
+    const uint64_t tail = 300000, first = data.total_vertices - tail;
+    std::vector<double> a(tail * 4), b(tail * 4);
+    ASSERT_TRUE(vulkan->read(BufferId::vertex_position, first, tail, a.data(), detail::Scalar::f64).ok());
+    ASSERT_TRUE(oracle.value()->read(BufferId::vertex_position, first, tail, b.data(), detail::Scalar::f64).ok());
+    EXPECT_LE(relative_difference(a, b), 2e-5);
+}
+
+TEST_F(VulkanTest, SceneBeyondStorageBufferRangeIsRefused) {
+    std::string skip;
+    auto vulkan = create_vulkan_or_skip(skip);
+    if (!skip.empty()) GTEST_SKIP() << skip;
+    ASSERT_TRUE(vulkan);
+    const auto& device = static_cast<detail::vk::VulkanBackend&>(*vulkan).device();
+    std::mt19937 rng(3);
+    detail::SceneData data = random_scene_data(rng, {{2, 3, 4}}, {0}, 1);
+    // Only the element counts matter: the limit is checked before anything is allocated.
+    data.total_vertices = device.limits().max_storage_buffer_range / 16 + 1;
+    Status s = vulkan->upload(data);
+    EXPECT_EQ(s.code(), ErrorCode::unsupported);
+    EXPECT_NE(s.message().find("vertex_position"), std::string::npos) << s.message();
+    EXPECT_NE(s.message().find("maxStorageBufferRange"), std::string::npos) << s.message();
+}
+
+}  // namespace
+}  // namespace hmsm::test

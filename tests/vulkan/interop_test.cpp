@@ -1,0 +1,99 @@
+// hmsm/vulkan.h: a simulation on an engine's device, steps recorded into the engine's command
+// buffer, and the shared output buffers.
+#include "test_trees.h"
+#include "vulkan_test_support.h"
+
+#include "vulkan/device.h"
+
+#include <hmsm/vulkan.h>
+
+namespace hmsm::test {
+namespace {
+
+TEST_F(VulkanTest, EngineDeviceWithRecordedStepsMatchesOwnDevice) {
+    // The "engine": a device hmsm did not create for this simulation.
+    auto engine = detail::vk::Device::create();
+    if (!engine.ok() && engine.status().code() == ErrorCode::no_device) GTEST_SKIP() << engine.status().message();
+    ASSERT_TRUE(engine.ok()) << engine.status().message();
+    const detail::vk::Device& device = *engine.value();
+    vulkan::ExternalContext context;
+    context.instance = device.instance();
+    context.physical_device = device.physical_device();
+    context.device = device.handle();
+    context.queue = device.queue();
+    context.queue_family_index = device.queue_family();
+
+    SimulationConfig config;
+    config.wind.strength = 6.0;
+    Scene scene = *grid_scene(small_tree(), 3, 5.0, 4);
+    auto shared = vulkan::create_simulation(scene, config, context);
+    ASSERT_TRUE(shared.ok()) << shared.status().message();
+    Simulation& sim = *shared.value();
+    auto handles = vulkan::device_handles(sim);
+    ASSERT_TRUE(handles.ok());
+    EXPECT_EQ(handles->device, device.handle());
+
+    std::string skip;
+    auto reference = create_simulation_or_skip(scene, config, BackendKind::vulkan, skip);
+    ASSERT_TRUE(reference);
+
+    // 10 steps submitted by hmsm, then 20 recorded into the engine's command buffer.
+    ASSERT_TRUE(sim.step(10).ok());
+    const VolkDeviceTable& vk = device.vk();
+    VkCommandPoolCreateInfo pool_info{VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO};
+    pool_info.queueFamilyIndex = device.queue_family();
+    VkCommandPool pool;
+    ASSERT_EQ(vk.vkCreateCommandPool(device.handle(), &pool_info, nullptr, &pool), VK_SUCCESS);
+    VkCommandBufferAllocateInfo allocate{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
+    allocate.commandPool = pool;
+    allocate.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
+    allocate.commandBufferCount = 1;
+    VkCommandBuffer cmd;
+    ASSERT_EQ(vk.vkAllocateCommandBuffers(device.handle(), &allocate, &cmd), VK_SUCCESS);
+    VkCommandBufferBeginInfo begin{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
+    ASSERT_EQ(vk.vkBeginCommandBuffer(cmd, &begin), VK_SUCCESS);
+    ASSERT_TRUE(vulkan::record_steps(sim, cmd, 20).ok());
+    ASSERT_EQ(vk.vkEndCommandBuffer(cmd), VK_SUCCESS);
+    EXPECT_EQ(sim.steps_done(), 30u);
+    VkSubmitInfo submit{VK_STRUCTURE_TYPE_SUBMIT_INFO};
+    submit.commandBufferCount = 1;
+    submit.pCommandBuffers = &cmd;
+    ASSERT_EQ(vk.vkQueueSubmit(device.queue(), 1, &submit, VK_NULL_HANDLE), VK_SUCCESS);
+    ASSERT_EQ(vk.vkQueueWaitIdle(device.queue()), VK_SUCCESS);
+    vk.vkDestroyCommandPool(device.handle(), pool, nullptr);
+
+    ASSERT_TRUE(reference->step(30).ok());
+    for (Output output : {Output::node_positions, Output::vertex_positions, Output::vertex_normals}) {
+        std::vector<float> a, b;
+        ASSERT_TRUE(sim.read(output, a).ok());
+        ASSERT_TRUE(reference->read(output, b).ok());
+        EXPECT_EQ(a, b) << "output " << int(output);
+    }
+
+    auto buffers = vulkan::shared_buffers(sim);
+    ASSERT_TRUE(buffers.ok());
+    EXPECT_NE(buffers->vertex_positions.buffer, VK_NULL_HANDLE);
+    EXPECT_EQ(buffers->vertex_positions.count, sim.vertex_count());
+    EXPECT_EQ(buffers->vertex_normals.count, sim.vertex_count());
+    EXPECT_EQ(buffers->node_positions.count, sim.node_count());
+    EXPECT_EQ(buffers->vertex_positions.stride, 16u);
+    EXPECT_EQ(buffers->node_positions.size, sim.node_count() * 16);
+    shared.value().reset();  // before the engine's device goes away
+}
+
+TEST_F(VulkanTest, InteropRefusesOtherBackends) {
+    SimulationConfig config;
+    config.backend = BackendKind::cpu64;
+    auto sim = Simulation::create(single_tree_scene(small_tree()), config);
+    ASSERT_TRUE(sim.ok());
+    auto buffers = vulkan::shared_buffers(*sim.value());
+    EXPECT_EQ(buffers.status().code(), ErrorCode::invalid_argument);
+    EXPECT_EQ(vulkan::record_steps(*sim.value(), VkCommandBuffer(VK_NULL_HANDLE)).code(),
+              ErrorCode::invalid_argument);
+    vulkan::ExternalContext empty;
+    EXPECT_EQ(vulkan::create_simulation(single_tree_scene(small_tree()), {}, empty).status().code(),
+              ErrorCode::invalid_argument);
+}
+
+}  // namespace
+}  // namespace hmsm::test

@@ -1,0 +1,256 @@
+#include "random_scene.h"
+
+#include <glm/geometric.hpp>
+#include <glm/mat3x3.hpp>
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace hmsm::test {
+namespace {
+
+double uniform(std::mt19937& rng, double lo, double hi) {
+    return std::uniform_real_distribution<double>(lo, hi)(rng);
+}
+uint32_t pick(std::mt19937& rng, uint32_t lo, uint32_t hi) {  // [lo, hi]
+    return std::uniform_int_distribution<uint32_t>(lo, hi)(rng);
+}
+
+glm::dmat3 random_rotation(std::mt19937& rng) {
+    glm::dvec3 axis = glm::normalize(glm::dvec3(uniform(rng, -1, 1), uniform(rng, -1, 1),
+                                                uniform(rng, -1, 1)) + glm::dvec3(1e-3));
+    double angle = uniform(rng, -3.0, 3.0), c = std::cos(angle), s = std::sin(angle);
+    glm::dmat3 k(0.0);
+    k[1][0] = axis.z; k[2][0] = -axis.y; k[0][1] = -axis.z;
+    k[2][1] = axis.x; k[0][2] = axis.y; k[1][2] = -axis.x;
+    return glm::dmat3(1.0) + s * k + (1 - c) * k * k;
+}
+
+glm::dvec4 random_point(std::mt19937& rng, double extent) {
+    return {uniform(rng, -extent, extent), uniform(rng, -extent, extent), uniform(rng, -extent, extent), 0.0};
+}
+
+gpu::PassConstants group_constants(const detail::SceneData& d, const detail::InstanceGroup& g) {
+    const detail::ModelRange& m = d.models[g.model];
+    gpu::PassConstants pc{};
+    pc.instance_begin = g.instance_begin;
+    pc.chain_begin = g.chain_begin;
+    pc.node_begin = g.node_begin;
+    pc.vertex_begin = g.vertex_begin;
+    pc.model_chain_begin = m.chain_begin;
+    pc.model_node_begin = m.node_begin;
+    pc.model_vertex_begin = m.vertex_begin;
+    pc.model_chain_count = m.chain_count;
+    pc.model_node_count = m.node_count;
+    pc.model_vertex_count = m.vertex_count;
+    pc.profile = uint32_t(d.profile);
+    pc.total_chains = uint32_t(d.total_chains);
+    pc.total_model_chains = d.total_model_chains();
+    pc.wind = {float(d.wind_vector.x), float(d.wind_vector.y), float(d.wind_vector.z), 0.0f};
+    pc.params = {float(d.dt), float(d.max_angle), float(d.fix_weight), 0.0f};
+    return pc;
+}
+
+}  // namespace
+
+detail::SceneData random_scene_data(std::mt19937& rng, const std::vector<ModelShape>& models,
+                                    const std::vector<uint32_t>& instance_models,
+                                    uint32_t max_group_instances) {
+    detail::SceneData d;
+    int32_t max_depth = 0;
+    for (const ModelShape& shape : models) {
+        detail::ModelRange range;
+        range.chain_begin = uint32_t(d.chain_parent.size());
+        range.chain_count = shape.chains;
+        range.node_begin = uint32_t(d.node_owner.size());
+        range.node_count = shape.nodes;
+        range.vertex_begin = uint32_t(d.vertex_chain.size());
+        range.vertex_count = shape.vertices;
+        // Chains in depth order: a chain's parent is at most one level above its predecessor.
+        std::vector<int32_t> parent(shape.chains, -1), depth(shape.chains, 0);
+        for (uint32_t c = 1; c < shape.chains; ++c) {
+            uint32_t lo = 0;
+            while (depth[lo] < depth[c - 1] - 1) ++lo;
+            parent[c] = int32_t(pick(rng, lo, c - 1));
+            depth[c] = depth[parent[c]] + 1;
+        }
+        max_depth = std::max(max_depth, depth.back());
+        for (int32_t level = 0, c = 0; level <= depth.back() + 1; ++level) {
+            while (c < int32_t(shape.chains) && depth[c] < level) ++c;
+            range.level_begin.push_back(uint32_t(c));
+        }
+        // Every chain owns at least one node; the rest are spread at random.
+        std::vector<int32_t> owner(shape.nodes);
+        for (uint32_t n = 0; n < shape.nodes; ++n)
+            owner[n] = n < shape.chains ? int32_t(n) : int32_t(pick(rng, 0, shape.chains - 1));
+        for (uint32_t c = 0; c < shape.chains; ++c) {
+            d.chain_parent.push_back(parent[c]);
+            int32_t attach = 0;  // the trunk's attach node is the root, owned by chain 0
+            if (parent[c] >= 0) {
+                std::vector<int32_t> candidates;
+                for (uint32_t n = 0; n < shape.nodes; ++n)
+                    if (owner[n] == parent[c]) candidates.push_back(int32_t(n));
+                attach = candidates[pick(rng, 0, uint32_t(candidates.size() - 1))];
+            }
+            d.chain_attach.push_back(attach);
+            d.chain_rest_rotation.push_back(random_rotation(rng));
+            d.chain_constants.push_back({uniform(rng, 1, 5), uniform(rng, 10, 100),
+                                         uniform(rng, 0, 2), uniform(rng, 0.1, 1)});
+        }
+        for (uint32_t n = 0; n < shape.nodes; ++n) {
+            d.node_owner.push_back(owner[n]);
+            d.node_local.push_back(random_point(rng, 3.0));
+        }
+        for (uint32_t v = 0; v < shape.vertices; ++v) {
+            int32_t chain = int32_t(pick(rng, 0, shape.chains - 1));
+            int32_t fix = parent[chain] >= 0 && pick(rng, 0, 2) == 0 ? parent[chain] : -1;
+            d.vertex_chain.push_back({chain, fix});
+            d.vertex_rest_position.push_back(random_point(rng, 1.0));
+            d.vertex_rest_normal.push_back(glm::dvec4(glm::normalize(glm::dvec3(random_point(rng, 1.0)) + 1e-3), 0.0));
+            d.vertex_parent_position.push_back(random_point(rng, 1.0));
+            d.vertex_parent_normal.push_back(glm::dvec4(glm::normalize(glm::dvec3(random_point(rng, 1.0)) + 1e-3), 0.0));
+        }
+        d.models.push_back(std::move(range));
+    }
+
+    d.jump_rounds = detail::jump_rounds_for_depth(max_depth);
+    const uint32_t total = d.total_model_chains();
+    d.chain_jump.assign(size_t(d.jump_rounds) * total, -1);
+    for (const detail::ModelRange& range : d.models) {
+        for (uint32_t c = 0; c < range.chain_count; ++c)
+            d.chain_jump[range.chain_begin + c] = d.chain_parent[range.chain_begin + c];
+        for (uint32_t r = 1; r < d.jump_rounds; ++r)
+            for (uint32_t c = 0; c < range.chain_count; ++c) {
+                int32_t half = d.chain_jump[size_t(r - 1) * total + range.chain_begin + c];
+                d.chain_jump[size_t(r) * total + range.chain_begin + c] =
+                    half < 0 ? -1 : d.chain_jump[size_t(r - 1) * total + range.chain_begin + half];
+            }
+    }
+
+    for (uint32_t i = 0; i < instance_models.size(); ++i) {
+        const detail::ModelRange& range = d.models[instance_models[i]];
+        d.instance_origin.push_back({uniform(rng, -20, 20), uniform(rng, -1, 1), uniform(rng, -20, 20),
+                                     uniform(rng, 0, 2)});
+        double yaw = uniform(rng, -3, 3);
+        d.instance_yaw.push_back({std::cos(yaw), std::sin(yaw), 0, 0});
+        detail::InstanceGroup* group = d.groups.empty() ? nullptr : &d.groups.back();
+        if (!group || group->model != instance_models[i] || group->instance_count == max_group_instances) {
+            d.groups.push_back({instance_models[i], i, 0, uint32_t(d.total_chains),
+                                uint32_t(d.total_nodes), uint32_t(d.total_vertices)});
+            group = &d.groups.back();
+        }
+        ++group->instance_count;
+        d.total_chains += range.chain_count;
+        d.total_nodes += range.node_count;
+        d.total_vertices += range.vertex_count;
+    }
+    d.dt = 1.0 / 120.0;
+    d.max_angle = 0.8;
+    d.fix_weight = 0.4;
+    d.profile = WindProfile::y1;
+    d.wind_vector = {3.0, 0.5, -2.0};
+    d.wind_frequency = 0.1;
+    return d;
+}
+
+std::vector<std::vector<detail::Dispatch>> pass_variants(const detail::SceneData& d, Pass pass,
+                                                         Composition composition, std::mt19937& rng) {
+    std::vector<std::vector<detail::Dispatch>> variants;
+    const bool hierarchical = pass == Pass::compose || pass == Pass::root_positions;
+    if (!hierarchical) {
+        std::vector<detail::Dispatch> list;
+        uint32_t half = pick(rng, 0, 1);
+        for (const auto& g : d.groups) {
+            detail::Dispatch dispatch{pass, group_constants(d, g)};
+            const auto& m = d.models[g.model];
+            uint32_t per_instance = pass == Pass::node_relative || pass == Pass::node_world ? m.node_count
+                                    : pass == Pass::contour                              ? m.vertex_count
+                                                                                         : m.chain_count;
+            dispatch.constants.element_count = g.instance_count * per_instance;
+            dispatch.constants.src_half = dispatch.constants.dst_half = half;
+            list.push_back(dispatch);
+        }
+        variants.push_back(list);
+        return variants;
+    }
+    if (composition == Composition::pointer_jumping) {
+        for (uint32_t r = 0; r < d.jump_rounds; ++r) {
+            std::vector<detail::Dispatch> list;
+            uint32_t src = pick(rng, 0, 1);
+            for (const auto& g : d.groups) {
+                detail::Dispatch dispatch{pass, group_constants(d, g)};
+                dispatch.constants.element_count = g.instance_count * d.models[g.model].chain_count;
+                dispatch.constants.round = r;
+                dispatch.constants.src_half = src;
+                dispatch.constants.dst_half = 1 - src;
+                list.push_back(dispatch);
+            }
+            variants.push_back(list);
+        }
+        return variants;
+    }
+    size_t levels = 0;
+    for (const auto& m : d.models) levels = std::max(levels, m.level_begin.size() - 1);
+    for (size_t level = 0; level < levels; ++level) {
+        std::vector<detail::Dispatch> list;
+        uint32_t half = pick(rng, 0, 1);
+        for (const auto& g : d.groups) {
+            const auto& m = d.models[g.model];
+            if (level + 1 >= m.level_begin.size()) continue;
+            uint32_t count = m.level_begin[level + 1] - m.level_begin[level];
+            if (count == 0) continue;
+            detail::Dispatch dispatch{pass, group_constants(d, g)};
+            dispatch.constants.mode = HMSM_MODE_LEVEL_BY_LEVEL;
+            dispatch.constants.round = uint32_t(level);
+            dispatch.constants.level_begin = m.level_begin[level];
+            dispatch.constants.level_count = count;
+            dispatch.constants.element_count = g.instance_count * count;
+            dispatch.constants.src_half = dispatch.constants.dst_half = half;
+            list.push_back(dispatch);
+        }
+        if (!list.empty()) variants.push_back(list);
+    }
+    return variants;
+}
+
+double uniform_wind_phase(std::mt19937& rng) { return uniform(rng, 0.0, 2.0); }
+
+void randomize_state(const detail::SceneData& d, detail::Backend& a, detail::Backend& b,
+                     std::mt19937& rng) {
+    using detail::BufferId;
+    auto fill = [&](BufferId id, auto make_element) {
+        uint64_t count = d.element_count(id);
+        uint32_t scalars = detail::shape_scalars(detail::buffer_info(id).shape);
+        std::vector<double> values(count * scalars);
+        for (uint64_t i = 0; i < count; ++i) make_element(&values[i * scalars]);
+        ASSERT_TRUE(a.write(id, 0, count, values.data(), detail::Scalar::f64).ok());
+        ASSERT_TRUE(b.write(id, 0, count, values.data(), detail::Scalar::f64).ok());
+    };
+    auto rotation = [&](double* m) {
+        glm::dmat3 r = random_rotation(rng);
+        for (int col = 0; col < 3; ++col) {
+            for (int row = 0; row < 3; ++row) m[4 * col + row] = r[col][row];
+            m[4 * col + 3] = 0.0;
+        }
+    };
+    auto point = [&](double* v) {
+        glm::dvec4 p = random_point(rng, 5.0);
+        for (int k = 0; k < 4; ++k) v[k] = p[k];
+    };
+    fill(BufferId::chain_state, [&](double* v) {
+        v[0] = uniform(rng, -0.7, 0.7); v[1] = uniform(rng, -0.7, 0.7);
+        v[2] = uniform(rng, -2, 2); v[3] = uniform(rng, -2, 2);
+    });
+    fill(BufferId::chain_force, [&](double* v) { v[0] = uniform(rng, -50, 50); v[1] = uniform(rng, -50, 50); });
+    fill(BufferId::chain_local, rotation);
+    fill(BufferId::chain_rotation, rotation);
+    fill(BufferId::node_relative, point);
+    fill(BufferId::chain_origin, point);
+    fill(BufferId::node_world, point);
+    fill(BufferId::vertex_position, point);
+    fill(BufferId::vertex_normal, point);
+}
+
+}  // namespace hmsm::test

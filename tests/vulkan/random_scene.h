@@ -1,0 +1,37 @@
+// Random but consistent scene data for per-dispatch tests: chain trees ordered by depth, nodes,
+// mesh vertices with fix-up chains, and instances of several models in several groups, with
+// sizes that are not multiples of the workgroup size. Plus the dispatches of one pass.
+#pragma once
+
+#include "scene_data.h"
+#include "backend.h"
+
+#include <random>
+#include <vector>
+
+namespace hmsm::test {
+
+struct ModelShape {
+    uint32_t chains, nodes, vertices;
+};
+
+/// `instance_models[i]` is the model of instance i; runs of one model are split into groups of
+/// at most `max_group_instances`.
+detail::SceneData random_scene_data(std::mt19937& rng, const std::vector<ModelShape>& models,
+                                    const std::vector<uint32_t>& instance_models,
+                                    uint32_t max_group_instances);
+
+/// Every variant of `pass` as separate dispatch lists (one dispatch per group each): one list
+/// for a flat pass; one per pointer-jumping round, or one per level, for compose and
+/// root_positions. Ping-pong halves are drawn from `rng`.
+std::vector<std::vector<detail::Dispatch>> pass_variants(const detail::SceneData& d, Pass pass,
+                                                         Composition composition, std::mt19937& rng);
+
+/// A wind phase f*t mod 2 in [0, 2).
+double uniform_wind_phase(std::mt19937& rng);
+
+/// Writes the same random state (angles in range, rotations, positions) to both backends.
+void randomize_state(const detail::SceneData& d, detail::Backend& a, detail::Backend& b,
+                     std::mt19937& rng);
+
+}  // namespace hmsm::test
