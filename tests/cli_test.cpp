@@ -177,3 +177,31 @@ TEST_F(Cli, UnavailableBackendExitsOne) {
         if (!compiled) EXPECT_NE(r.err.find("no"), std::string::npos);
     }
 }
+
+// The acceptance commands of the core issue.
+TEST_F(Cli, PresetInfoAndSimulateAcceptance) {
+    CliRun r = run("info --preset paper-1 --json");
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    auto info = nlohmann::json::parse(stdout_text());
+    EXPECT_NEAR(info["mesh_vertices"].get<double>(), 78563.0, 785.63);
+    EXPECT_EQ(info["max_depth"], 4);
+    EXPECT_GT(info["leaves"].get<int>(), 0);
+
+    r = run("simulate --preset paper-5 --backend cpu --steps 60 --dump-nodes " + path("out.csv") +
+            " --report " + path("r.json"));
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    std::ifstream report_file(path("r.json"));
+    auto report = nlohmann::json::parse(report_file);
+    for (Pass p : kAllPasses)
+        EXPECT_GT(report["pass_device_seconds"][std::string(pass_name(p))].get<double>(), 0.0);
+    EXPECT_TRUE(fs::exists(path("out.csv")));
+
+    r = run("generate --preset paper-2 --seed 3 --out " + path("p2.json"));
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    auto tree = load_tree(path("p2.json"));
+    ASSERT_TRUE(tree.ok()) << tree.status().message();
+    r = run("generate --preset paper-9 --out " + path("p9.json"));
+    EXPECT_EQ(r.exit_code, 2);
+    EXPECT_NE(r.err.find("paper-9"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(path("p9.json")));
+}

@@ -48,3 +48,13 @@ TEST(Golden, SmallTreeCpu64After1000Steps) {
     std::printf("small tree hash: 0x%016llx\n", (unsigned long long)h);
     EXPECT_EQ(h, 0x9fd140ebb69351dfull);
 }
+
+TEST(Golden, Paper5Cpu64After1000Steps) {
+    auto tree = generate_preset("paper-5");
+    ASSERT_TRUE(tree.ok()) << tree.status().message();
+    SimulationConfig config;  // default Y1 wind along +x
+    config.wind.strength = 4.0;
+    uint64_t h = run_and_hash(single_tree_scene(*tree), config, 1000);
+    std::printf("paper-5 hash: 0x%016llx\n", (unsigned long long)h);
+    EXPECT_EQ(h, 0xa0fc030e406c8482ull);
+}
