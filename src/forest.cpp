@@ -26,7 +26,7 @@ Result<Scene> parse_forest(std::string_view text, const std::string& base_direct
     Scene scene;
     std::map<std::string, uint32_t> index;
     for (auto it = models_it->begin(); it != models_it->end(); ++it) {
-        std::string where = "models." + it.key();
+        std::string where = "models." + detail::one_line(it.key());
         if (!it->is_string()) return r.error("models", it.key().c_str(), "expected a path string");
         const std::string ref = it->get<std::string>();
         Result<TreeModel> model = Status{};
@@ -38,8 +38,8 @@ Result<Scene> parse_forest(std::string_view text, const std::string& base_direct
             model = load_tree(path.string());
         }
         if (!model)
-            return Status{model.status().code(), std::string(source) + ": " + where + ": " +
-                                                     model.status().message()};
+            return Status{model.status().code(), detail::one_line(std::string(source) + ": " + where + ": " +
+                                                                  model.status().message())};
         index[it.key()] = uint32_t(scene.models.size());
         scene.models.push_back(std::move(model).value());
         scene.model_names.push_back(it.key());

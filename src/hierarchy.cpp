@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 namespace hmsm {
 
@@ -38,6 +39,13 @@ std::vector<int32_t> continuation_children(const TreeModel& tree,
         kappa[i] = best;
     }
     return kappa;
+}
+
+/// Zero, or a magnitude the float backends (cpu, Vulkan, CUDA) hold without flushing to zero or
+/// overflowing in a product: outside [1e-30, 1e30] a step can turn into inf * 0 = NaN.
+bool float_safe(double v, bool may_be_zero) {
+    if (v == 0.0) return may_be_zero;
+    return std::isfinite(v) && std::abs(v) >= 1e-30 && std::abs(v) <= 1e30;
 }
 
 glm::dmat3 rest_frame(const glm::dvec3& attach, const glm::dvec3& first_member) {
@@ -110,7 +118,18 @@ Result<Hierarchy> build_hierarchy(const TreeModel& tree, const ModelOptions& opt
     // Frames, local coordinates and constants.
     h.node_local.assign(n, glm::dvec3(0.0));
     const double dt = parameters.dt;
-    for (Chain& chain : h.chains) {
+    // Stability floor (DESIGN.md 3.4). Symplectic Euler on I S'' = -K S - D S' with
+    // x = omega dt (omega = sqrt(K/I)) and D dt / I = 2 zeta x is stable only while
+    // x^2 + 4 zeta x < 4. The design's floor x <= 0.5 covers zeta <= 1.875 only; for heavy
+    // damping the velocity update itself overshoots (D dt / I > 1) and then diverges (> 2),
+    // bounded only by the angle clamp, so the joints chatter between +-theta_max. We therefore
+    // also require D dt / I <= 1, i.e. x <= 1/(2 zeta) (which binds only for zeta > 1 and so
+    // leaves the default parameters and the golden hashes unchanged), and count such chains
+    // with the floored ones (Hierarchy::floored_chain_count, `--report` inertia_floored_chains).
+    const double zeta = parameters.damping_ratio;
+    const double max_omega_dt = zeta > 1.0 ? 1.0 / (2.0 * zeta) : 0.5;
+    for (size_t c = 0; c < h.chains.size(); ++c) {
+        Chain& chain = h.chains[c];
         const glm::dvec3 attach = nodes[chain.attach_node].position;
         const TreeNode& first = nodes[chain.members.front()];
         chain.frame = rest_frame(attach, first.position);
@@ -127,7 +146,7 @@ Result<Hierarchy> build_hierarchy(const TreeModel& tree, const ModelOptions& opt
         const double r = chain.radius, L = chain.length;
         chain.inertia = parameters.density * r * r * L * L * L;
         chain.stiffness = parameters.stiffness * r * r * r * r / L;
-        const double floor = chain.stiffness * (dt / 0.5) * (dt / 0.5);
+        const double floor = chain.stiffness * (dt / max_omega_dt) * (dt / max_omega_dt);
         if (chain.inertia < floor) {
             chain.inertia = floor;
             chain.inertia_floored = true;
@@ -135,6 +154,17 @@ Result<Hierarchy> build_hierarchy(const TreeModel& tree, const ModelOptions& opt
         }
         chain.damping = 2.0 * parameters.damping_ratio * std::sqrt(chain.stiffness * chain.inertia);
         chain.wind_area = parameters.wind_gain * r * L * L;
+        if (!float_safe(chain.inertia, false) || !float_safe(chain.stiffness, false) ||
+            !float_safe(dt / chain.inertia, false) || !float_safe(chain.damping, true) ||
+            !float_safe(chain.wind_area, true)) {
+            char buf[200];
+            std::snprintf(buf, sizeof buf, "inertia %.3g, stiffness %.3g, damping %.3g, wind area %.3g, dt/I %.3g",
+                          chain.inertia, chain.stiffness, chain.damping, chain.wind_area, dt / chain.inertia);
+            return Status{ErrorCode::invalid_argument,
+                          "chain " + std::to_string(c) + " (attach node " + std::to_string(chain.attach_node) +
+                              "): constants out of the computable range [1e-30, 1e30] (" + buf +
+                              "): radius, segment length, density, stiffness or dt too extreme"};
+        }
         h.max_depth = std::max(h.max_depth, chain.depth);
     }
     h.chains_per_depth.assign(h.max_depth + 1, 0);

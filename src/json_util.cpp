@@ -33,6 +33,24 @@ int nesting_depth(std::string_view text) {
 
 }  // namespace
 
+std::string one_line(std::string_view text) {
+    std::string out;
+    out.reserve(text.size());
+    for (unsigned char ch : text) {
+        if (ch == '\n') out += "\\n";
+        else if (ch == '\r') out += "\\r";
+        else if (ch == '\t') out += "\\t";
+        else if (ch < 0x20 || ch == 0x7f) {
+            char buf[8];
+            std::snprintf(buf, sizeof buf, "\\x%02x", ch);
+            out += buf;
+        } else {
+            out += char(ch);
+        }
+    }
+    return out;
+}
+
 Result<nlohmann::json> parse_json(std::string_view text, std::string_view source) {
     if (text.find_first_not_of(" \t\r\n") == std::string_view::npos)
         return Status{ErrorCode::invalid_tree, std::string(source) + ": empty file, expected JSON"};
@@ -47,7 +65,7 @@ Result<nlohmann::json> parse_json(std::string_view text, std::string_view source
             (void)unused;
         } catch (const nlohmann::json::exception& e) {
             return Status{ErrorCode::invalid_tree,
-                          std::string(source) + ": not valid JSON (" + e.what() + ")"};
+                          one_line(std::string(source) + ": not valid JSON (" + e.what() + ")")};
         }
         return Status{ErrorCode::invalid_tree, std::string(source) + ": not valid JSON"};
     }
@@ -89,7 +107,7 @@ Status write_text_file_atomically(const std::string& path, std::string_view text
 
 Status JsonReader::error(const std::string& where, const char* key, const std::string& what) const {
     std::string item = where.empty() ? std::string(key) : where + "." + key;
-    return {code_, source_ + ": " + item + ": " + what};
+    return {code_, one_line(source_ + ": " + item + ": " + what)};
 }
 
 const nlohmann::json* JsonReader::field(const nlohmann::json& obj, const char* key) const {

@@ -15,6 +15,10 @@ namespace hmsm::detail {
 /// Deepest nesting accepted; deeper documents are rejected before parsing.
 inline constexpr int kMaxJsonDepth = 64;
 
+/// `text` with control characters escaped (\n, \t, \xNN), so that names taken from a file
+/// (object keys, strings) cannot split an error message over several lines.
+std::string one_line(std::string_view text);
+
 Result<nlohmann::json> parse_json(std::string_view text, std::string_view source);
 Result<std::string> read_text_file(const std::string& path);
 /// Writes to a temporary file beside `path`, then renames: no partial file on failure.

@@ -5,6 +5,7 @@
 #include "scene_data.h"
 
 #include <cmath>
+#include <cstdio>
 #include <limits>
 
 namespace hmsm {
@@ -45,6 +46,12 @@ uint32_t output_components(Output output) {
 }
 
 namespace {
+
+std::string number(double v) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.6g", v);
+    return buf;
+}
 
 /// Constants shared by every dispatch of one group.
 gpu::PassConstants group_constants(const SceneData& d, const detail::InstanceGroup& g,
@@ -153,6 +160,22 @@ Result<std::unique_ptr<Simulation>> Simulation::create(const Scene& scene,
         sim->hierarchies_.push_back(std::move(hierarchy).value());
     }
 
+    // The wind force A s must stay in the range the float backends compute in (see the
+    // constants check in build_hierarchy); a front so slow that -f (o.d)/v overflows would make
+    // the phase, and every force, NaN.
+    const double strength = std::abs(config.wind.strength);
+    for (size_t m = 0; m < sim->hierarchies_.size(); ++m)
+        for (const Chain& chain : sim->hierarchies_[m].chains)
+            if (strength > 1e30 || chain.wind_area * strength > 1e30)
+                return Status{ErrorCode::invalid_argument,
+                              "wind strength " + number(config.wind.strength) + " is too strong for model '" +
+                                  scene.model_names[m] + "': wind force A*s above 1e30, beyond the computable range"};
+    for (size_t i = 0; i < scene.instances.size(); ++i)
+        if (!std::isfinite(wind_phase(config.wind, scene.instances[i].origin)))
+            return Status{ErrorCode::invalid_argument,
+                          "instance " + std::to_string(i) + ": wind phase -f (o.d)/v is not finite (front speed " +
+                              number(config.wind.front_speed) + " too small for its origin)"};
+
     uint64_t vertices = 0, chains = 0;
     for (const Instance& inst : scene.instances) {
         vertices += sim->meshes_[inst.model].vertices.size();
@@ -190,6 +213,10 @@ Status Simulation::step(uint32_t count) {
     for (uint32_t k = 0; k < count; ++k) {
         double t = double(steps_done_ + k) * config_.parameters.dt;  // t = (n - 1) dt
         double x = data_->wind_frequency * t;
+        if (!std::isfinite(x))  // f * t overflowed: no phase, and the profile would be NaN
+            return Status{ErrorCode::invalid_argument,
+                          "wind frequency " + number(data_->wind_frequency) + " times time " +
+                              number(t) + " s overflows: the wind phase is not finite"};
         wind_phases_[k] = x - 2.0 * std::floor(x / 2.0);
     }
     HMSM_TRY(backend_->run(step_program_, wind_phases_));

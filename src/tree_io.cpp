@@ -144,6 +144,7 @@ Result<TreeModel> load_tree(const std::string& path) {
 std::string tree_to_json(const TreeModel& tree) {
     std::ostringstream out;
     auto num = [](double v) {
+        if (v == 0.0 && std::signbit(v)) return std::string("-0.0");  // "-0" would read back as +0
         char buf[40];
         std::snprintf(buf, sizeof buf, "%.17g", v);
         return std::string(buf);

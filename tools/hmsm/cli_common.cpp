@@ -8,7 +8,11 @@
 namespace hmsm::cli {
 
 int fail(const Status& status) {
-    std::fprintf(stderr, "hmsm: error: %s\n", status.message().c_str());
+    // One line, whatever the message quotes (a file name with a newline, say).
+    std::string line = status.message();
+    for (char& c : line)
+        if (c == '\n' || c == '\r') c = ' ';
+    std::fprintf(stderr, "hmsm: error: %s\n", line.c_str());
     return is_input_error(status.code()) ? kExitBadInput : kExitInternal;
 }
 

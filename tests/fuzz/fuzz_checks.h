@@ -1,0 +1,80 @@
+// Properties the tree and forest parsers must have for ANY input (issue 7), shared by the
+// libFuzzer targets (fuzz_tree.cpp, fuzz_forest.cpp) and the corpus replay in the normal test
+// suite (fuzz_replay_test.cpp). Each check returns "" or a description of the violation.
+//
+// For any byte string the parser returns (it must not crash, hang, leak or hit undefined
+// behaviour: the sanitizers check that) either
+//   - an error of an input class (invalid_tree, invalid_argument or io) with a non-empty message
+//     on one line (the CLI prints it as its single stderr line), or
+//   - a tree that validates and survives tree_to_json -> parse_tree bit for bit, resp. a scene
+//     whose instances all name a model and whose numbers are finite.
+#pragma once
+
+#include <hmsm/scene.h>
+#include <hmsm/tree.h>
+
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <string>
+#include <string_view>
+
+namespace hmsm::fuzz {
+
+inline std::string check_error(const Status& status) {
+    if (status.ok()) return "an error Status without a code";
+    if (!is_input_error(status.code()))
+        return std::string("bad input reported as ") + to_string(status.code()) + ": " + status.message();
+    if (status.message().empty()) return "empty error message";
+    for (char c : status.message())
+        if (c == '\n' || c == '\r') return "error message spans lines: " + status.message();
+    return "";
+}
+
+inline bool same_bits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
+
+inline std::string check_tree(const uint8_t* data, size_t size) {
+    std::string_view text(reinterpret_cast<const char*>(data), size);
+    Result<TreeModel> tree = parse_tree(text, "fuzz.json");
+    if (!tree.ok()) return check_error(tree.status());
+    Status valid = validate_tree(*tree);
+    if (!valid.ok()) return "parse_tree accepted a tree validate_tree rejects: " + valid.message();
+    // Round trip: what we write reads back to the same bits (17 significant digits).
+    std::string json = tree_to_json(*tree);
+    Result<TreeModel> again = parse_tree(json, "round-trip");
+    if (!again.ok()) return "tree_to_json output does not parse: " + again.status().message();
+    const TreeModel& a = *tree;
+    const TreeModel& b = *again;
+    if (a.nodes.size() != b.nodes.size() || a.leaves.size() != b.leaves.size())
+        return "round trip changed the counts";
+    for (size_t i = 0; i < a.nodes.size(); ++i) {
+        bool same = a.nodes[i].parent == b.nodes[i].parent && same_bits(a.nodes[i].radius, b.nodes[i].radius);
+        for (int k = 0; k < 3; ++k) same = same && same_bits(a.nodes[i].position[k], b.nodes[i].position[k]);
+        if (!same) return "round trip changed node " + std::to_string(i);
+    }
+    for (size_t j = 0; j < a.leaves.size(); ++j) {
+        const TreeLeaf& x = a.leaves[j];
+        const TreeLeaf& y = b.leaves[j];
+        bool same = x.node == y.node && same_bits(x.size.x, y.size.x) && same_bits(x.size.y, y.size.y);
+        for (int k = 0; k < 3; ++k)
+            same = same && same_bits(x.offset[k], y.offset[k]) && same_bits(x.normal[k], y.normal[k]) &&
+                   same_bits(x.up[k], y.up[k]);
+        if (!same) return "round trip changed leaf " + std::to_string(j);
+    }
+    return "";
+}
+
+/// `models_dir` is where relative model paths resolve (a folder with a few valid trees).
+inline std::string check_forest(const uint8_t* data, size_t size, const std::string& models_dir) {
+    std::string_view text(reinterpret_cast<const char*>(data), size);
+    Result<Scene> scene = parse_forest(text, models_dir, "fuzz-forest.json");
+    if (!scene.ok()) return check_error(scene.status());
+    const Scene& s = *scene;
+    if (s.models.empty() || s.instances.empty()) return "accepted a forest without models or instances";
+    if (s.model_names.size() != s.models.size()) return "model names and models differ in length";
+    Status valid = validate_scene(s);
+    if (!valid.ok()) return "parse_forest accepted a scene validate_scene rejects: " + valid.message();
+    return "";
+}
+
+}  // namespace hmsm::fuzz
