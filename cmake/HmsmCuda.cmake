@@ -16,7 +16,7 @@ target_sources(hmsm PRIVATE
   src/cuda/cuda_error.cpp
   src/cuda/device_buffers.cpp
   src/cuda/device_layout.cpp
-  src/cuda/interop.cpp
+  src/cuda/cuda_interop.cpp
   src/cuda/launch_dispatch.cpp
   src/cuda/step_graph.cpp)
 target_compile_definitions(hmsm PUBLIC HMSM_HAVE_CUDA=1)
@@ -29,3 +29,10 @@ target_compile_options(hmsm PRIVATE $<$<COMPILE_LANGUAGE:CUDA>:-lineinfo -Xptxas
 
 # cmake/hmsmConfig.cmake.in: consumers of an installed static hmsm find CUDA::cudart_static.
 set(HMSM_HAVE_CUDA_BOOL TRUE)
+
+# Forest throughput of this backend on the lent GPU (tools/gpu/run.sh); not installed.
+if(HMSM_BUILD_TOOLS)
+  add_executable(hmsm_cuda_throughput tools/gpu/cuda_throughput.cpp)
+  target_link_libraries(hmsm_cuda_throughput PRIVATE hmsm::hmsm)
+  set_target_properties(hmsm_cuda_throughput PROPERTIES RUNTIME_OUTPUT_DIRECTORY ${PROJECT_BINARY_DIR})
+endif()

@@ -10,7 +10,8 @@
 # backend agreement tests (CUDA and Vulkan against cpu64), the Vulkan suite if built,
 # compute-sanitizer memcheck, racecheck, initcheck and synccheck over the CUDA suite, a
 # `hmsm simulate --backend cuda` run and `hmsm bench` if the CLI has it. Logs go to $OUT
-# (at most 8 files); summary.log gathers the lines that matter and ends with a short table.
+# (8 files at most: summary, four logs of suites and sanitizers, cli.log,
+# report_cuda.json, bench.json); summary.log gathers the lines that matter and ends with a short table.
 set -u
 BUILD=${1:-build-gpu}
 OUT=${OUT:-/tmp/hmsm-gpu-out}
@@ -82,9 +83,11 @@ if [[ -x $CLI ]]; then
         --dump-nodes "$OUT/nodes_cuda.csv" --report "$OUT/report_cuda.json"
     # A forest of 10,000 paper-1 trees (7.9e8 mesh vertices, about 31 GB on the device).
     run_step 120 "$OUT/cli.log" "$CLI" simulate --preset paper-1 --instances 10000 --spacing 15 \
-        --backend cuda --steps 10 --report "$OUT/report_forest.json"
+        --backend cuda --steps 10
+    [[ -x $BUILD/hmsm_cuda_throughput ]] && run_step 150 "$OUT/cli.log" "$BUILD/hmsm_cuda_throughput"
     if "$CLI" --help 2>&1 | grep -qE '^ +bench'; then
-        run_step 200 "$OUT/cli.log" "$CLI" bench
+        run_step 240 "$OUT/cli.log" "$CLI" bench --backends cpu,vulkan,cuda --case-budget 5 \
+            --no-progress --json "$OUT/bench.json"
     fi
     rm -f "$OUT/nodes_cuda.csv"
 fi
@@ -97,10 +100,10 @@ fi
     done
     echo "== sanitizers"
     [[ -f $OUT/sanitizers.log ]] && grep -E '^### |ERROR SUMMARY|LEAK SUMMARY|RACECHECK SUMMARY|Target application returned' "$OUT/sanitizers.log"
+    echo "== throughput"
+    [[ -f $OUT/cli.log ]] && sed -n '/hmsm_cuda_throughput/,/^###/p' "$OUT/cli.log"
     echo "== report"
-    for report in report_cuda report_forest; do
-        [[ -f $OUT/$report.json ]] && echo "$report:" && tr -d ' \n' <"$OUT/$report.json" && echo
-    done
+    [[ -f $OUT/report_cuda.json ]] && tr -d ' \n' <"$OUT/report_cuda.json" && echo
 } >>"$SUMMARY" 2>&1
 echo "----- summary -----"
 cat "$SUMMARY"
