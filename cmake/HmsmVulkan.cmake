@@ -95,3 +95,6 @@ target_link_libraries(hmsm_vulkan_internal INTERFACE hmsm Vulkan::Headers)
 
 set(HMSM_HAVE_VULKAN_BOOL TRUE)
 message(STATUS "hmsm: Vulkan backend enabled (glslangValidator: ${HMSM_GLSLANG_VALIDATOR})")
+
+# The offscreen renderer draws on the backend's device (cmake/HmsmRender.cmake).
+include(${CMAKE_CURRENT_LIST_DIR}/HmsmRender.cmake OPTIONAL)
