@@ -17,6 +17,11 @@ int main(int argc, char** argv) {
     generate->callback([&] { run = run_generate; chosen = generate; });
     info->callback([&] { run = run_info; chosen = info; });
     simulate->callback([&] { run = run_simulate; chosen = simulate; });
+#ifdef HMSM_HAVE_RENDER
+    CLI::App* render = app.add_subcommand("render", "draw the animated tree offscreen to PNG frames and a GIF");
+    render->callback([&] { run = run_render; chosen = render; });
+    register_render_flags(*render);
+#endif
     // Each subcommand registers its own flags; run_* with a null app only registers them.
     register_generate_flags(*generate);
     register_info_flags(*info);
