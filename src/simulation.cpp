@@ -142,6 +142,12 @@ std::vector<Dispatch> build_program(const SceneData& d, Composition composition,
 
 Result<std::unique_ptr<Simulation>> Simulation::create(const Scene& scene,
                                                        const SimulationConfig& config) {
+    return create(scene, config, nullptr);
+}
+
+Result<std::unique_ptr<Simulation>> Simulation::create(const Scene& scene,
+                                                       const SimulationConfig& config,
+                                                       std::unique_ptr<detail::Backend> backend) {
     HMSM_TRY(validate(config.model));
     HMSM_TRY(validate(config.parameters));
     HMSM_TRY(validate(config.wind));
@@ -191,9 +197,14 @@ Result<std::unique_ptr<Simulation>> Simulation::create(const Scene& scene,
         detail::flatten_scene(scene, sim->hierarchies_, sim->meshes_, config.parameters,
                               config.model, config.wind));
 
-    auto backend = detail::create_backend(config.backend);
-    if (!backend) return backend.status();
-    sim->backend_ = std::move(backend).value();
+    if (backend) {
+        sim->backend_ = std::move(backend);
+        sim->config_.backend = sim->backend_->kind();
+    } else {
+        auto created = detail::create_backend(config.backend);
+        if (!created) return created.status();
+        sim->backend_ = std::move(created).value();
+    }
     sim->backend_->set_profiling(config.profile_passes);
     HMSM_TRY(sim->backend_->upload(*sim->data_));
 

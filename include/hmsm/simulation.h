@@ -56,6 +56,11 @@ public:
     /// scene and poses it at rest (S = V = 0).
     static Result<std::unique_ptr<Simulation>> create(const Scene& scene,
                                                       const SimulationConfig& config);
+    /// The same on a backend the caller made (e.g. hmsm::vulkan::create_simulation on an
+    /// engine's device); config.backend is ignored.
+    static Result<std::unique_ptr<Simulation>> create(const Scene& scene,
+                                                      const SimulationConfig& config,
+                                                      std::unique_ptr<detail::Backend> backend);
     ~Simulation();
     Simulation(const Simulation&) = delete;
     Simulation& operator=(const Simulation&) = delete;

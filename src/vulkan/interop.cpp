@@ -30,10 +30,11 @@ BufferRange range_of(const VulkanBackend& backend, BufferId id) {
 Result<std::unique_ptr<Simulation>> create_simulation(const Scene& scene,
                                                       const SimulationConfig& config,
                                                       const ExternalContext& context) {
-    SimulationConfig vulkan_config = config;
-    vulkan_config.backend = BackendKind::vulkan;
-    detail::vk::ScopedExternalContext adopt(context);
-    return Simulation::create(scene, vulkan_config);
+    auto device = detail::vk::Device::adopt(context);
+    if (!device) return device.status();
+    auto backend = detail::vk::VulkanBackend::create(std::move(device).value());
+    if (!backend) return backend.status();
+    return Simulation::create(scene, config, std::move(backend).value());
 }
 
 Result<SharedBuffers> shared_buffers(const Simulation& simulation) {

@@ -93,15 +93,7 @@ void store_scalar(bool integer, double value, unsigned char* word) {
     }
 }
 
-thread_local const hmsm::vulkan::ExternalContext* pending_external_context = nullptr;
-
 }  // namespace
-
-ScopedExternalContext::ScopedExternalContext(const hmsm::vulkan::ExternalContext& context)
-    : previous_(pending_external_context) {
-    pending_external_context = &context;
-}
-ScopedExternalContext::~ScopedExternalContext() { pending_external_context = previous_; }
 
 Result<std::unique_ptr<VulkanBackend>> VulkanBackend::create(std::shared_ptr<Device> device) {
     std::unique_ptr<VulkanBackend> b(new VulkanBackend(std::move(device)));
@@ -333,8 +325,7 @@ Status VulkanBackend::write(BufferId id, uint64_t first, uint64_t count, const v
 }  // namespace vk
 
 Result<std::unique_ptr<Backend>> create_vulkan_backend() {
-    auto device = vk::pending_external_context ? vk::Device::adopt(*vk::pending_external_context)
-                                               : vk::Device::create();
+    auto device = vk::Device::create();
     if (!device) return device.status();
     auto backend = vk::VulkanBackend::create(std::move(device).value());
     if (!backend) return backend.status();

@@ -68,19 +68,6 @@ private:
     VkCommandBuffer record_target_ = VK_NULL_HANDLE;
 };
 
-/// Makes create_vulkan_backend() on this thread adopt `context` instead of creating a device,
-/// for as long as the guard lives (hmsm::vulkan::create_simulation).
-class ScopedExternalContext {
-public:
-    explicit ScopedExternalContext(const hmsm::vulkan::ExternalContext& context);
-    ~ScopedExternalContext();
-    ScopedExternalContext(const ScopedExternalContext&) = delete;
-    ScopedExternalContext& operator=(const ScopedExternalContext&) = delete;
-
-private:
-    const hmsm::vulkan::ExternalContext* previous_;
-};
-
 }  // namespace hmsm::detail::vk
 
 namespace hmsm::detail {
