@@ -56,6 +56,14 @@ public:
     virtual void set_profiling(bool enabled) = 0;
     /// Device seconds per pass summed over the steps of the last run().
     virtual PassTimes pass_times() const = 0;
+
+    /// Optional, for `hmsm bench`'s roofline: copies `bytes` between two device scratch
+    /// buffers (allocated and freed here) a few times and returns the median device copy
+    /// bandwidth, counted as (bytes read + bytes written) / device seconds. Default: unsupported.
+    virtual Result<double> measure_copy_bandwidth(uint64_t bytes) {
+        (void)bytes;
+        return Status{ErrorCode::unsupported, "this backend cannot measure device copy bandwidth"};
+    }
 };
 
 /// Backend factories; the registry (backend_registry.cpp) knows which are compiled in.

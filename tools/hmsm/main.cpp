@@ -12,11 +12,13 @@ int main(int argc, char** argv) {
     CLI::App* generate = app.add_subcommand("generate", "write a preset tree to an hmsm-tree file");
     CLI::App* info = app.add_subcommand("info", "print the counts of a tree's hierarchy and mesh");
     CLI::App* simulate = app.add_subcommand("simulate", "run the simulation and dump its outputs");
+    CLI::App* bench = app.add_subcommand("bench", "benchmark the backends: Table 1, passes, forests");
     int (*run)(CLI::App&) = nullptr;
     CLI::App* chosen = nullptr;
     generate->callback([&] { run = run_generate; chosen = generate; });
     info->callback([&] { run = run_info; chosen = info; });
     simulate->callback([&] { run = run_simulate; chosen = simulate; });
+    bench->callback([&] { run = run_bench; chosen = bench; });
 #ifdef HMSM_HAVE_RENDER
     CLI::App* render = app.add_subcommand("render", "draw the animated tree offscreen to PNG frames and a GIF");
     render->callback([&] { run = run_render; chosen = render; });
@@ -26,6 +28,7 @@ int main(int argc, char** argv) {
     register_generate_flags(*generate);
     register_info_flags(*info);
     register_simulate_flags(*simulate);
+    register_bench_flags(*bench);
     try {
         app.parse(argc, argv);
     } catch (const CLI::CallForHelp& e) {

@@ -1,0 +1,213 @@
+// `hmsm bench --quick` through the CLI binary: the JSON schema of docs/benchmarks/README.md, every
+// figure finite and positive, the markdown on stdout and --render agreeing. No timing thresholds.
+#include <hmsm/simulation.h>
+
+#include <nlohmann/json.hpp>
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <sys/wait.h>
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+struct BenchRun {
+    int exit_code;
+    std::string out, err;
+};
+
+std::string slurp(const fs::path& path) {
+    std::ifstream in(path);
+    std::stringstream s;
+    s << in.rdbuf();
+    return s.str();
+}
+
+class BenchCli : public ::testing::Test {
+protected:
+    void SetUp() override {
+        dir_ = fs::temp_directory_path() /
+               ("hmsm_bench_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+        fs::remove_all(dir_);
+        fs::create_directories(dir_);
+    }
+    void TearDown() override { fs::remove_all(dir_); }
+
+    BenchRun run(const std::string& args) const {
+        const std::string command = std::string(HMSM_CLI_PATH) + " " + args + " > " +
+                                    (dir_ / "stdout.txt").string() + " 2> " + (dir_ / "stderr.txt").string();
+        const int status = std::system(command.c_str());
+        return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(dir_ / "stdout.txt"),
+                slurp(dir_ / "stderr.txt")};
+    }
+
+    /// Runs the quick bench on one backend; returns its JSON document.
+    json quick(const std::string& backend, BenchRun& r) {
+        const std::string path = (dir_ / "bench.json").string();
+        r = run("bench --quick --no-progress --backends " + backend + " --json " + path + " --commit test");
+        EXPECT_EQ(r.exit_code, 0) << r.err;
+        if (!fs::exists(path)) return json();
+        json document = json::parse(slurp(path), nullptr, false);
+        EXPECT_FALSE(document.is_discarded()) << "not JSON";
+        return document;
+    }
+
+    fs::path dir_;
+};
+
+/// Every number under `j` is finite and positive; nothing is null (NaN and inf dump as null).
+void expect_figures_positive(const json& j, const std::string& where) {
+    if (j.is_null()) {
+        ADD_FAILURE() << where << " is null";
+    } else if (j.is_number()) {
+        const double v = j.get<double>();
+        EXPECT_TRUE(std::isfinite(v) && v > 0.0) << where << " = " << v;
+    } else if (j.is_object()) {
+        for (const auto& [key, value] : j.items()) expect_figures_positive(value, where + "." + key);
+    } else if (j.is_array()) {
+        for (size_t i = 0; i < j.size(); ++i) expect_figures_positive(j[i], where + "[" + std::to_string(i) + "]");
+    }
+}
+
+void expect_number(const json& j, const char* key, const std::string& where) {
+    ASSERT_TRUE(j.is_object()) << where;
+    ASSERT_TRUE(j.contains(key) && j[key].is_number()) << where << " lacks number '" << key << "'";
+}
+
+void expect_pass_table(const json& j, const std::string& where) {
+    ASSERT_TRUE(j.is_object()) << where;
+    for (const char* pass : {"wind_force", "integrate", "compose", "node_relative", "root_positions",
+                             "node_world", "contour"})
+        expect_number(j, pass, where);
+    EXPECT_EQ(j.size(), 7u) << where;
+}
+
+/// The schema of docs/benchmarks/README.md for a quick run of `backend` (cpu always measured).
+void expect_schema(const json& d, const std::string& backend) {
+    ASSERT_TRUE(d.is_object());
+    EXPECT_EQ(d.value("format", ""), "hmsm-bench");
+    EXPECT_EQ(d.value("version", 0), 1);
+    EXPECT_TRUE(d["date"].is_string());
+    EXPECT_EQ(d.value("commit", ""), "test");
+    EXPECT_EQ(d.value("quick", false), true);
+    EXPECT_TRUE(d["host"]["cpu"].is_string());
+    expect_number(d["host"], "hardware_threads", "host");
+    for (const char* key : {"steps_per_batch", "warmup_steps", "repeats", "case_budget_seconds", "spacing"})
+        expect_number(d["settings"], key, "settings");
+    EXPECT_EQ(d["settings"]["instances"], json::array({1, 10}));
+    EXPECT_EQ(d["settings"].value("forest_model", ""), "paper-1");
+    for (const char* key : {"backends", "presets", "forest", "copy_bandwidth", "skipped", "notes"})
+        ASSERT_TRUE(d.contains(key) && d[key].is_array()) << key;
+
+    ASSERT_EQ(d["presets"].size(), 1u);
+    const json& p = d["presets"][0];
+    EXPECT_EQ(p.value("preset", ""), "paper-5");
+    EXPECT_EQ(p.value("backend", ""), backend);
+    EXPECT_TRUE(p["device"].is_string());
+    for (const char* key : {"nodes", "chains", "mesh_vertices", "instances", "steps_per_batch", "repeats",
+                            "effective_bandwidth"})
+        expect_number(p, key, "presets[0]");
+    EXPECT_TRUE(p["budget_reduced"].is_boolean());
+    for (const char* key : {"per_call", "batched", "readback"}) {
+        expect_number(p["steps_per_second"], key, "steps_per_second");
+        expect_number(p["speedup_over_cpu"], key, "speedup_over_cpu");
+    }
+    for (const char* key : {"state", "static", "total"}) expect_number(p["bytes_per_step"], key, "bytes_per_step");
+    expect_pass_table(p["bytes_per_step"]["per_pass"], "bytes_per_step.per_pass");
+    for (const char* mode : {"pointer_jumping", "level_by_level"}) {
+        const json& m = p[mode];
+        expect_number(m, mode == std::string("pointer_jumping") ? "rounds" : "levels", mode);
+        for (const char* key : {"steps_per_second_batched", "steps_per_second_profiled",
+                                "device_seconds_per_step", "device_effective_bandwidth"})
+            expect_number(m, key, mode);
+        expect_pass_table(m["pass_seconds_per_step"], std::string(mode) + ".pass_seconds_per_step");
+    }
+
+    // Forest: 1 and 10 instances of paper-1, each measured or skipped with a reason.
+    for (uint32_t n : {1u, 10u}) {
+        const json* measured = nullptr;
+        for (const json& f : d["forest"])
+            if (f.value("instances", 0u) == n && f.value("backend", "") == backend) measured = &f;
+        bool skipped = false;
+        for (const json& s : d["skipped"])
+            if (s.value("section", "") == "forest" && s.value("instances", 0u) == n &&
+                s.value("backend", "") == backend) {
+                skipped = true;
+                EXPECT_TRUE(s["reason"].is_string());
+            }
+        ASSERT_TRUE(measured != nullptr || skipped) << "forest " << n;
+        if (!measured) continue;
+        for (const char* key : {"mesh_vertices", "seconds_per_step", "steps_per_second", "vertices_per_second",
+                                "bytes_per_step", "state_bytes_per_step", "effective_bandwidth",
+                                "device_seconds_per_step", "device_effective_bandwidth",
+                                "copy_bandwidth_fraction", "device_copy_bandwidth_fraction",
+                                "steps_per_batch", "repeats"})
+            expect_number(*measured, key, "forest " + std::to_string(n));
+    }
+    ASSERT_EQ(d["copy_bandwidth"].size(), 1u);
+    const json& c = d["copy_bandwidth"][0];
+    EXPECT_EQ(c.value("backend", ""), backend);
+    expect_number(c, "bytes_per_second", "copy_bandwidth");
+    expect_number(c, "bytes", "copy_bandwidth");
+    EXPECT_TRUE(c["method"].is_string());
+
+    for (const char* key : {"settings", "presets", "forest", "copy_bandwidth"})
+        expect_figures_positive(d[key], key);
+}
+
+}  // namespace
+
+TEST_F(BenchCli, QuickCpuWritesSchemaAndTables) {
+    BenchRun r;
+    json d = quick("cpu", r);
+    expect_schema(d, "cpu");
+    EXPECT_NE(r.out.find("| preset | vertices | backend |"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("### Forest scaling"), std::string::npos) << r.out;
+    // --render prints the same tables from the JSON.
+    BenchRun rendered = run("bench --render " + (dir_ / "bench.json").string());
+    EXPECT_EQ(rendered.exit_code, 0) << rendered.err;
+    EXPECT_EQ(rendered.out, r.out);
+}
+
+TEST_F(BenchCli, QuickVulkanWritesSchema) {
+    const auto kinds = hmsm::compiled_backends();
+    if (std::find(kinds.begin(), kinds.end(), hmsm::BackendKind::vulkan) == kinds.end())
+        GTEST_SKIP() << "the Vulkan backend is not compiled into this build";
+    BenchRun r;
+    const std::string path = (dir_ / "bench.json").string();
+    r = run("bench --quick --no-progress --backends cpu,vulkan --json " + path + " --commit test");
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    json d = json::parse(slurp(path), nullptr, false);
+    ASSERT_FALSE(d.is_discarded());
+    for (const json& b : d["backends"])
+        if (b.value("backend", "") == "vulkan" && !b.value("available", false))
+            GTEST_SKIP() << "no Vulkan device: " << d["skipped"].dump();
+    // Keep only the vulkan figures (speed-ups need the cpu run beside them) and check them.
+    json only = d;
+    for (const char* key : {"presets", "forest", "copy_bandwidth"}) {
+        only[key] = json::array();
+        for (const json& e : d[key])
+            if (e.value("backend", "") == "vulkan") only[key].push_back(e);
+    }
+    expect_schema(only, "vulkan");
+    expect_figures_positive(d["presets"], "presets");
+}
+
+TEST_F(BenchCli, BadArgumentsExitTwoWithOneLine) {
+    for (const std::string args : {"bench --steps 0", "bench --backends cpu,metal", "bench --instances 1,x",
+                                   "bench --presets paper-9 --instances none", "bench --render /nonexistent.json"}) {
+        SCOPED_TRACE(args);
+        BenchRun r = run(args + " --json " + (dir_ / "out.json").string());
+        EXPECT_EQ(r.exit_code, 2) << r.err;
+        EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+        EXPECT_FALSE(fs::exists(dir_ / "out.json"));
+    }
+}

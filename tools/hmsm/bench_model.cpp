@@ -1,0 +1,151 @@
+// hmsm bench: bytes per step from the buffer table and the copy bandwidth to compare them with.
+#include "bench_model.h"
+
+#include "backend.h"
+#include "buffers.h"
+#include "scene_data.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <memory>
+#include <new>
+#include <vector>
+
+namespace hmsm::cli::bench {
+namespace {
+
+using detail::BufferId;
+using detail::Scope;
+
+double median_of(std::vector<double> v) {
+    std::sort(v.begin(), v.end());
+    const size_t n = v.size();
+    return n == 0 ? 0.0 : n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+/// Bytes of one element as gpu_layout.h stores it (every scalar is 4 bytes).
+double element_bytes(const detail::BufferInfo& info) {
+    return 4.0 * detail::shape_scalars(info.shape);
+}
+
+/// Bytes one sweep of a pass moves through buffer `info`: one half of a ping-pong buffer, one
+/// round of the jump table, all of anything else.
+double sweep_bytes(const detail::SceneData& d, const detail::BufferInfo& info) {
+    double elements = double(d.element_count(info.id));
+    if (info.scope == Scope::chain_halves) elements /= 2.0;
+    if (info.scope == Scope::model_chain_jump) elements /= double(std::max(1u, d.jump_rounds));
+    return elements * element_bytes(info);
+}
+
+bool is_state_scope(Scope s) {
+    return s == Scope::chain || s == Scope::chain_halves || s == Scope::node || s == Scope::vertex;
+}
+
+}  // namespace
+
+Traffic step_traffic(const Simulation& sim) {
+    const detail::SceneData& d = sim.scene_data();
+    Traffic t;
+    for (Pass p : kAllPasses) {
+        const uint32_t reads = detail::pass_reads(p), writes = detail::pass_writes(p);
+        for (const detail::BufferInfo& info : detail::kBufferTable) {
+            const uint32_t bit = 1u << uint32_t(info.id);
+            const int touches = ((reads & bit) ? 1 : 0) + ((writes & bit) ? 1 : 0);
+            if (touches == 0) continue;
+            const double bytes = touches * sweep_bytes(d, info);
+            t.pass_bytes[uint32_t(p)] += bytes;
+            (detail::is_static(info.id) ? t.static_bytes : t.state_bytes) += bytes;
+        }
+    }
+    return t;
+}
+
+double state_bytes_per_instance(const Simulation& sim) {
+    const detail::SceneData& d = sim.scene_data();
+    double bytes = 0.0;
+    for (const detail::BufferInfo& info : detail::kBufferTable)
+        if (is_state_scope(info.scope)) bytes += double(d.element_count(info.id)) * element_bytes(info);
+    return bytes / double(std::max<uint64_t>(1, sim.instance_count()));
+}
+
+Result<CopyBandwidth> host_memcpy_bandwidth(uint64_t bytes, uint32_t repeats) {
+    std::unique_ptr<char[]> src, dst;
+    try {
+        src.reset(new char[bytes]);
+        dst.reset(new char[bytes]);
+    } catch (const std::bad_alloc&) {
+        return Status{ErrorCode::out_of_memory,
+                      "host memcpy: cannot allocate 2 x " + std::to_string(bytes) + " bytes"};
+    }
+    std::memset(src.get(), 1, bytes);  // fault the pages in before timing
+    std::memset(dst.get(), 2, bytes);
+    std::vector<double> seconds;
+    for (uint32_t r = 0; r < std::max(1u, repeats); ++r) {
+        auto start = std::chrono::steady_clock::now();
+        std::memcpy(dst.get(), src.get(), bytes);
+        seconds.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+        src[r % bytes] ^= dst[(r * 7919) % bytes];  // keep the copies observable
+    }
+    const double s = median_of(seconds);
+    if (!(s > 0.0)) return Status{ErrorCode::internal, "host memcpy: timer resolution too coarse"};
+    return CopyBandwidth{2.0 * double(bytes) / s, "host_memcpy", bytes};
+}
+
+Result<CopyBandwidth> host_transfer_bandwidth(Simulation& sim, uint32_t repeats) {
+    const uint64_t count = sim.vertex_count();
+    const double bytes = double(count) * 16.0;
+    std::vector<float> host(count * 4, 0.0f);
+    std::vector<double> write_s, read_s;
+    detail::Backend& backend = sim.backend();
+    for (uint32_t r = 0; r < std::max(1u, repeats); ++r) {
+        auto t0 = std::chrono::steady_clock::now();
+        HMSM_TRY(backend.write(BufferId::vertex_position, 0, count, host.data(), detail::Scalar::f32));
+        auto t1 = std::chrono::steady_clock::now();
+        HMSM_TRY(backend.read(BufferId::vertex_position, 0, count, host.data(), detail::Scalar::f32));
+        auto t2 = std::chrono::steady_clock::now();
+        write_s.push_back(std::chrono::duration<double>(t1 - t0).count());
+        read_s.push_back(std::chrono::duration<double>(t2 - t1).count());
+    }
+    const double s = median_of(write_s) + median_of(read_s);
+    if (!(s > 0.0)) return Status{ErrorCode::internal, "host transfer: timer resolution too coarse"};
+    // The next step's contour pass rewrites every vertex position, so the scribble is harmless.
+    return CopyBandwidth{2.0 * bytes / s, "host_transfer_estimate", uint64_t(bytes)};
+}
+
+Result<CopyBandwidth> device_copy_bandwidth(Simulation& sim, uint64_t bytes) {
+    Result<double> measured = sim.backend().measure_copy_bandwidth(bytes);
+    if (measured) return CopyBandwidth{*measured, "device_copy", bytes};
+    const ErrorCode code = measured.status().code();
+    if (code != ErrorCode::unsupported && code != ErrorCode::out_of_memory) return measured.status();
+    return host_transfer_bandwidth(sim, 3);
+}
+
+double host_available_memory() {
+    std::ifstream in("/proc/meminfo");
+    std::string line;
+    while (std::getline(in, line)) {
+        double kib = 0.0;
+        if (std::sscanf(line.c_str(), "MemAvailable: %lf kB", &kib) == 1) return kib * 1024.0;
+    }
+    return 0.0;
+}
+
+std::string host_cpu_name() {
+    std::ifstream in("/proc/cpuinfo");
+    std::string line;
+    while (std::getline(in, line)) {
+        if (line.rfind("model name", 0) == 0) {
+            size_t colon = line.find(':');
+            if (colon != std::string::npos) {
+                size_t start = line.find_first_not_of(' ', colon + 1);
+                return start == std::string::npos ? "unknown" : line.substr(start);
+            }
+        }
+    }
+    return "unknown";
+}
+
+}  // namespace hmsm::cli::bench
