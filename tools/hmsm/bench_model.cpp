@@ -31,10 +31,12 @@ double element_bytes(const detail::BufferInfo& info) {
     return 4.0 * detail::shape_scalars(info.shape);
 }
 
-/// Bytes one sweep of a pass moves through buffer `info`: one half of a ping-pong buffer, one
-/// round of the jump table, all of anything else.
-double sweep_bytes(const detail::SceneData& d, const detail::BufferInfo& info) {
+/// Bytes one sweep of pass `p` moves through buffer `info`: one half of a ping-pong buffer, one
+/// round of the jump table, the attach node of each chain where root_positions gathers relative
+/// positions, all of anything else.
+double sweep_bytes(const detail::SceneData& d, Pass p, const detail::BufferInfo& info) {
     double elements = double(d.element_count(info.id));
+    if (p == Pass::root_positions && info.id == BufferId::node_relative) elements = double(d.total_chains);
     if (info.scope == Scope::chain_halves) elements /= 2.0;
     if (info.scope == Scope::model_chain_jump) elements /= double(std::max(1u, d.jump_rounds));
     return elements * element_bytes(info);
@@ -55,7 +57,7 @@ Traffic step_traffic(const Simulation& sim) {
             const uint32_t bit = 1u << uint32_t(info.id);
             const int touches = ((reads & bit) ? 1 : 0) + ((writes & bit) ? 1 : 0);
             if (touches == 0) continue;
-            const double bytes = touches * sweep_bytes(d, info);
+            const double bytes = touches * sweep_bytes(d, p, info);
             t.pass_bytes[uint32_t(p)] += bytes;
             (detail::is_static(info.id) ? t.static_bytes : t.state_bytes) += bytes;
         }
