@@ -1,0 +1,407 @@
+// The offscreen renderer and `hmsm render`: deterministic pictures, a plausible tree, motion
+// under wind and none without it, a silent validation layer, and the CLI's all-or-nothing
+// outputs. Without a Vulkan device the device tests skip with the reason.
+#include "render/renderer.h"
+#include "vulkan/validation.h"
+
+#include "test_trees.h"
+
+#include <hmsm/hmsm.h>
+
+#include <gtest/gtest.h>
+
+#define STB_IMAGE_IMPLEMENTATION
+#define STBI_ONLY_PNG
+#define STBI_ONLY_GIF
+#include <stb/stb_image.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <mutex>
+#include <string>
+#include <sys/wait.h>
+#include <unistd.h>
+#include <vector>
+
+namespace hmsm::test {
+namespace {
+
+namespace fs = std::filesystem;
+
+// --- validation: every message while a test runs fails it ------------------------------------
+
+struct Messages {
+    std::mutex mutex;
+    std::vector<std::string> list;
+    bool enabled = false;
+} g_messages;
+
+std::vector<std::string> take_messages() {
+    std::lock_guard lock(g_messages.mutex);
+    return std::exchange(g_messages.list, {});
+}
+
+class RenderTest : public ::testing::Test {
+protected:
+    void SetUp() override { take_messages(); }
+    void TearDown() override {
+        auto messages = take_messages();
+        EXPECT_TRUE(messages.empty()) << messages.size() << " validation message(s), first: "
+                                      << messages.front();
+    }
+};
+
+const Scene& test_scene() {
+    static const Scene scene = single_tree_scene(*generate_preset("paper-5"));
+    return scene;
+}
+
+render::RenderSettings small_settings() {
+    render::RenderSettings settings;
+    settings.width = 96;
+    settings.height = 72;
+    return settings;
+}
+
+/// A session, or null with `skip` set when this machine has no Vulkan device.
+std::unique_ptr<render::Session> open_or_skip(const Scene& scene, SimulationConfig config,
+                                              const render::RenderSettings& settings,
+                                              std::string& skip) {
+    config.profile_passes = false;
+    auto session = render::open_session(scene, config, settings);
+    if (!session.ok()) {
+        if (session.status().code() == ErrorCode::no_device) skip = session.status().message();
+        else ADD_FAILURE() << session.status().message();
+        return nullptr;
+    }
+    return std::move(session).value();
+}
+
+#define OPEN_OR_SKIP(var, scene, config, settings)                    \
+    std::string var##_skip;                                           \
+    auto var = open_or_skip(scene, config, settings, var##_skip);     \
+    if (!var) {                                                       \
+        if (!var##_skip.empty()) GTEST_SKIP() << var##_skip;          \
+        return;                                                       \
+    }
+
+/// `frames` pictures, `steps` simulation steps apart (the first after `steps` too).
+std::vector<render::Image> render_frames(render::Session& session, int frames, uint32_t steps) {
+    std::vector<render::Image> images(frames);
+    for (auto& image : images) {
+        Status drawn = session.renderer->render(steps, image);
+        EXPECT_TRUE(drawn.ok()) << drawn.message();
+    }
+    return images;
+}
+
+/// Share of pixels whose colour differs between two pictures of one size.
+double differing_share(const render::Image& a, const render::Image& b) {
+    if (a.rgba.size() != b.rgba.size() || a.rgba.empty()) return -1.0;
+    size_t differ = 0;
+    for (size_t p = 0; p < a.rgba.size(); p += 4)
+        differ += std::memcmp(&a.rgba[p], &b.rgba[p], 3) != 0;
+    return double(differ) / double(a.rgba.size() / 4);
+}
+
+// --- without a device ------------------------------------------------------------------------
+
+TEST(RenderSettings, RejectsBadValuesNamingTheFlag) {
+    render::RenderSettings s;
+    EXPECT_TRUE(render::validate(s).ok());
+    auto bad = [](auto change, const char* flag) {
+        render::RenderSettings s;
+        change(s);
+        Status status = render::validate(s);
+        EXPECT_EQ(status.code(), ErrorCode::invalid_argument) << flag;
+        EXPECT_NE(status.message().find(flag), std::string::npos) << status.message();
+    };
+    bad([](auto& s) { s.width = 4; }, "--width");
+    bad([](auto& s) { s.height = 100000; }, "--height");
+    bad([](auto& s) { s.msaa = 3; }, "--msaa");
+    bad([](auto& s) { s.camera.distance = -1.0; }, "--camera-distance");
+    bad([](auto& s) { s.camera.pitch_degrees = 90.0; }, "--camera-pitch");
+    bad([](auto& s) { s.camera.fov_degrees = 1.0; }, "--fov");
+    bad([](auto& s) { s.leaf_scale = 50.0; }, "--leaf-scale");
+}
+
+TEST(RenderCamera, DefaultFramingKeepsTheBoundsInsideThePicture) {
+    render::Bounds bounds{{-3.0, 0.0, -2.0}, {4.0, 15.0, 2.5}};
+    for (double yaw : {0.0, 40.0, 180.0, -75.0}) {
+        render::CameraSettings settings;
+        settings.yaw_degrees = yaw;
+        const render::Camera camera = render::frame_camera(bounds, settings, 4.0 / 3.0, false);
+        const glm::dmat4 vp = camera.view_projection();
+        double widest = 0.0;
+        for (int k = 0; k < 8; ++k) {
+            glm::dvec4 corner((k & 1) ? bounds.max.x : bounds.min.x, (k & 2) ? bounds.max.y : bounds.min.y,
+                              (k & 4) ? bounds.max.z : bounds.min.z, 1.0);
+            glm::dvec4 clip = vp * corner;
+            ASSERT_GT(clip.w, 0.0);
+            const double x = clip.x / clip.w, y = clip.y / clip.w, z = clip.z / clip.w;
+            EXPECT_LE(std::abs(x), 0.9 + 1e-9) << "yaw " << yaw;
+            EXPECT_LE(std::abs(y), 0.9 + 1e-9) << "yaw " << yaw;
+            EXPECT_GT(z, 0.0);
+            EXPECT_LT(z, 1.0);
+            widest = std::max({widest, std::abs(x), std::abs(y)});
+        }
+        EXPECT_GT(widest, 0.85) << "the bounds should fill the picture, yaw " << yaw;
+    }
+}
+
+TEST(RenderImages, PngRoundTripsThroughADecoder) {
+    render::Image image{7, 5, {}};
+    for (uint32_t i = 0; i < 7 * 5; ++i)
+        image.rgba.insert(image.rgba.end(), {uint8_t(i * 7), uint8_t(255 - i), uint8_t(i * 3), 255});
+    auto png = render::encode_png(image);
+    ASSERT_TRUE(png.ok()) << png.status().message();
+    int w = 0, h = 0, channels = 0;
+    stbi_uc* decoded = stbi_load_from_memory(png->data(), int(png->size()), &w, &h, &channels, 4);
+    ASSERT_NE(decoded, nullptr);
+    EXPECT_EQ(w, 7);
+    EXPECT_EQ(h, 5);
+    EXPECT_EQ(channels, 3);  // RGB: alpha dropped
+    EXPECT_EQ(std::vector<uint8_t>(decoded, decoded + 7 * 5 * 4), image.rgba);
+    stbi_image_free(decoded);
+}
+
+TEST(RenderImages, GifHoldsEveryFrameWithItsColours) {
+    std::vector<uint8_t> bytes;
+    auto gif = render::GifWriter::create(16, 8, [&](const uint8_t* data, size_t count) {
+        bytes.insert(bytes.end(), data, data + count);
+        return Status{};
+    });
+    ASSERT_TRUE(gif.ok());
+    const uint8_t colours[3][3] = {{200, 30, 30}, {30, 200, 30}, {30, 30, 200}};
+    for (const auto& colour : colours) {
+        render::Image image{16, 8, {}};
+        for (int p = 0; p < 16 * 8; ++p) image.rgba.insert(image.rgba.end(), {colour[0], colour[1], colour[2], 255});
+        if (&colour == &colours[0])  // the palette comes from the first frame: give it all three
+            for (int p = 0; p < 3; ++p) std::memcpy(&image.rgba[4 * p], colours[p], 3);
+        ASSERT_TRUE(gif.value()->add_frame(image, 4).ok());
+    }
+    ASSERT_TRUE(gif.value()->finish().ok());
+    int* delays = nullptr;
+    int w = 0, h = 0, frames = 0, channels = 0;
+    stbi_uc* decoded = stbi_load_gif_from_memory(bytes.data(), int(bytes.size()), &delays, &w, &h,
+                                                 &frames, &channels, 4);
+    ASSERT_NE(decoded, nullptr);
+    EXPECT_EQ(w, 16);
+    EXPECT_EQ(h, 8);
+    ASSERT_EQ(frames, 3);
+    for (int f = 0; f < 3; ++f) {
+        EXPECT_EQ(delays[f], 40);  // milliseconds
+        const stbi_uc* pixel = decoded + (size_t(f) * 16 * 8 + 16 * 8 - 1) * 4;
+        for (int c = 0; c < 3; ++c) EXPECT_NEAR(pixel[c], colours[f][c], 8) << "frame " << f;
+    }
+    stbi_image_free(decoded);
+    stbi_image_free(delays);
+}
+
+// --- on the device ---------------------------------------------------------------------------
+
+TEST_F(RenderTest, SameRenderTwiceIsBitwiseIdentical) {
+    SimulationConfig config;
+    config.backend = BackendKind::vulkan;
+    std::vector<render::Image> runs[2];
+    for (auto& run : runs) {
+        OPEN_OR_SKIP(session, test_scene(), config, small_settings());
+        EXPECT_EQ(session->renderer->vertex_source(), render::VertexSource::device_buffers);
+        run = render_frames(*session, 3, 12);
+    }
+    for (int f = 0; f < 3; ++f) EXPECT_EQ(runs[0][f].rgba, runs[1][f].rgba) << "frame " << f;
+}
+
+TEST_F(RenderTest, TreeCoversAPlausibleShareOfThePicture) {
+    SimulationConfig config;
+    config.backend = BackendKind::vulkan;
+    render::RenderSettings settings = small_settings();
+    settings.shadows = false;  // compare against the same picture without trees
+    OPEN_OR_SKIP(with_tree, test_scene(), config, settings);
+    settings.draw_trees = false;
+    OPEN_OR_SKIP(empty, test_scene(), config, settings);
+    render::Image tree, backdrop;
+    ASSERT_TRUE(with_tree->renderer->render(0, tree).ok());
+    ASSERT_TRUE(empty->renderer->render(0, backdrop).ok());
+    const double share = differing_share(tree, backdrop);
+    EXPECT_GT(share, 0.02);
+    EXPECT_LT(share, 0.60);
+    // The framing centres the tree: its pixels reach neither the left nor the right edge.
+    for (uint32_t y = 0; y < tree.height; ++y)
+        for (uint32_t x : {0u, tree.width - 1}) {
+            const size_t p = (size_t(y) * tree.width + x) * 4;
+            EXPECT_EQ(std::memcmp(&tree.rgba[p], &backdrop.rgba[p], 3), 0) << "x " << x << " y " << y;
+        }
+}
+
+TEST_F(RenderTest, FramesDifferUnderWindAndNotWithout) {
+    SimulationConfig windy;
+    windy.backend = BackendKind::vulkan;
+    windy.wind.strength = 2.0;
+    OPEN_OR_SKIP(moving, test_scene(), windy, small_settings());
+    auto frames = render_frames(*moving, 3, 30);
+    EXPECT_GT(differing_share(frames[0], frames[1]), 0.001);
+    EXPECT_GT(differing_share(frames[1], frames[2]), 0.001);
+
+    SimulationConfig calm = windy;
+    calm.wind.profile = WindProfile::none;
+    OPEN_OR_SKIP(still, test_scene(), calm, small_settings());
+    auto calm_frames = render_frames(*still, 3, 30);
+    EXPECT_EQ(calm_frames[0].rgba, calm_frames[1].rgba);
+    EXPECT_EQ(calm_frames[1].rgba, calm_frames[2].rgba);
+}
+
+TEST_F(RenderTest, HostUploadDrawsWhatTheDeviceBuffersDraw) {
+    SimulationConfig config;
+    config.backend = BackendKind::vulkan;
+    OPEN_OR_SKIP(device, test_scene(), config, small_settings());
+    config.backend = BackendKind::cpu64;
+    OPEN_OR_SKIP(host, test_scene(), config, small_settings());
+    EXPECT_EQ(host->renderer->vertex_source(), render::VertexSource::host_upload);
+    auto a = render_frames(*device, 2, 20);
+    auto b = render_frames(*host, 2, 20);
+    // float32 on the device against double on the host: a few edge pixels may differ.
+    for (int f = 0; f < 2; ++f) EXPECT_LT(differing_share(a[f], b[f]), 0.01) << "frame " << f;
+}
+
+TEST_F(RenderTest, ValidationLayerIsSilentForAForestWithoutAndWithMsaa) {
+    if (!g_messages.enabled) GTEST_SKIP() << "VK_LAYER_KHRONOS_validation is not installed";
+    Scene forest = *grid_scene(small_tree(), 4, 6.0, 3);
+    for (uint32_t msaa : {1u, 4u}) {
+        render::RenderSettings settings = small_settings();
+        settings.msaa = msaa;
+        settings.leaf_scale = 2.0;
+        SimulationConfig config;
+        config.backend = BackendKind::vulkan;
+        OPEN_OR_SKIP(session, forest, config, settings);
+        render_frames(*session, 2, 3);
+        config.backend = BackendKind::cpu;
+        OPEN_OR_SKIP(upload, forest, config, settings);
+        render_frames(*upload, 2, 3);
+    }
+    // TearDown fails the test on any message; say so here too for a clearer report.
+    EXPECT_TRUE(g_messages.enabled);
+}
+
+// --- hmsm render ------------------------------------------------------------------------------
+
+struct CliRun {
+    int exit_code = -1;
+    std::string stderr_text;
+};
+
+CliRun run_cli(const std::string& arguments, const std::string& environment = "") {
+    const std::string log = (fs::temp_directory_path() / ("hmsm_render_test_" + std::to_string(getpid()) + ".log")).string();
+    const std::string command = environment + " " HMSM_CLI_PATH " render " + arguments + " 2>" + log;
+    const int status = std::system(command.c_str());
+    CliRun run;
+    run.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    std::ifstream file(log);
+    run.stderr_text.assign(std::istreambuf_iterator<char>(file), {});
+    fs::remove(log);
+    return run;
+}
+
+class RenderCli : public ::testing::Test {
+protected:
+    void SetUp() override {
+        dir_ = fs::temp_directory_path() / ("hmsm_render_cli_" + std::to_string(getpid()));
+        fs::remove_all(dir_);
+        fs::create_directories(dir_);
+    }
+    void TearDown() override { fs::remove_all(dir_); }
+    /// Files and folders left in the scratch folder (names).
+    std::vector<std::string> leftovers() const {
+        std::vector<std::string> names;
+        for (const auto& e : fs::directory_iterator(dir_)) names.push_back(e.path().filename().string());
+        std::sort(names.begin(), names.end());
+        return names;
+    }
+    std::string path(const std::string& name) const { return (dir_ / name).string(); }
+    fs::path dir_;
+};
+
+TEST_F(RenderCli, BadArgumentsExitTwoWithOneLineAndNoOutput) {
+    const std::string outs = " --out " + path("frames") + " --gif " + path("a.gif") + " --strip " + path("s.png");
+    for (const std::string args : {"--preset paper-5 --frames 0", "--preset paper-5 --fps -1",
+                                   "--preset paper-5 --width 2", "--preset paper-5 --msaa 3",
+                                   "--preset paper-5 --camera-pitch 95", "--preset nope",
+                                   "--preset paper-5 --wind gale", "--preset paper-5 --look-at 1,2",
+                                   "--preset paper-5 --leaf-scale big", "--frames 2"}) {
+        CliRun run = run_cli(args + outs);
+        EXPECT_EQ(run.exit_code, 2) << args << ": " << run.stderr_text;
+        EXPECT_EQ(std::count(run.stderr_text.begin(), run.stderr_text.end(), '\n'), 1) << run.stderr_text;
+        EXPECT_TRUE(leftovers().empty()) << args;
+    }
+    std::ofstream(path("file")) << "x";
+    CliRun run = run_cli("--preset paper-5 --frames 1 --out " + path("file"));
+    EXPECT_EQ(run.exit_code, 2) << run.stderr_text;
+    CliRun missing_parent = run_cli("--preset paper-5 --frames 1 --out " + path("no/such/dir"));
+    EXPECT_EQ(missing_parent.exit_code, 2) << missing_parent.stderr_text;
+    EXPECT_EQ(leftovers(), std::vector<std::string>{"file"});
+}
+
+TEST_F(RenderCli, DeviceErrorExitsOneWithoutOutput) {
+    CliRun run = run_cli("--preset paper-5 --frames 1 --width 32 --height 32 --out " + path("frames") +
+                          " --gif " + path("a.gif"),
+                      "HMSM_VULKAN_DEVICE=no-such-device-anywhere");
+    EXPECT_EQ(run.exit_code, 1) << run.stderr_text;
+    EXPECT_TRUE(leftovers().empty());
+}
+
+TEST_F(RenderCli, WritesFramesGifAndStripAndReplacesAnEarlierRender) {
+    const std::string common = "--preset paper-5 --width 48 --height 36 --fps 10 --no-progress --out " + path("frames");
+    fs::create_directories(dir_ / "frames");
+    std::ofstream(dir_ / "frames" / "frame_0007.png") << "stale";
+    std::ofstream(dir_ / "frames" / "notes.txt") << "kept";
+    CliRun run = run_cli(common + " --frames 3 --gif " + path("anim.gif") + " --strip " + path("strip.png"));
+    if (run.exit_code == 1 && run.stderr_text.find("vulkan") != std::string::npos)
+        GTEST_SKIP() << run.stderr_text;
+    ASSERT_EQ(run.exit_code, 0) << run.stderr_text;
+    std::vector<std::string> frames;
+    for (const auto& e : fs::directory_iterator(dir_ / "frames")) frames.push_back(e.path().filename().string());
+    std::sort(frames.begin(), frames.end());
+    EXPECT_EQ(frames, (std::vector<std::string>{"frame_0000.png", "frame_0001.png", "frame_0002.png", "notes.txt"}));
+    EXPECT_EQ(leftovers(), (std::vector<std::string>{"anim.gif", "frames", "strip.png"}));
+
+    int w = 0, h = 0, channels = 0;
+    stbi_uc* strip = stbi_load(path("strip.png").c_str(), &w, &h, &channels, 4);
+    ASSERT_NE(strip, nullptr);
+    EXPECT_EQ(w, 3 * 48 + 2 * 2);  // --strip-frames 4 capped at 3 frames, 2-pixel gaps
+    EXPECT_EQ(h, 36);
+    stbi_image_free(strip);
+    std::ifstream gif_file(path("anim.gif"), std::ios::binary);
+    std::vector<uint8_t> gif((std::istreambuf_iterator<char>(gif_file)), {});
+    int* delays = nullptr;
+    int frames_in_gif = 0;
+    stbi_uc* decoded = stbi_load_gif_from_memory(gif.data(), int(gif.size()), &delays, &w, &h,
+                                                 &frames_in_gif, &channels, 4);
+    ASSERT_NE(decoded, nullptr);
+    EXPECT_EQ(frames_in_gif, 3);
+    EXPECT_EQ(delays[0], 100);
+    stbi_image_free(decoded);
+    stbi_image_free(delays);
+}
+
+}  // namespace
+}  // namespace hmsm::test
+
+int main(int argc, char** argv) {
+    ::testing::InitGoogleTest(&argc, argv);
+    using hmsm::test::g_messages;
+    if (hmsm::detail::vulkan_validation_layer_available()) {
+        hmsm::detail::vulkan_set_validation(true, [](const std::string& message) {
+            std::lock_guard lock(g_messages.mutex);
+            g_messages.list.push_back(message);
+        });
+        g_messages.enabled = true;
+    } else {
+        std::fprintf(stderr, "note: VK_LAYER_KHRONOS_validation is not installed; the render "
+                             "tests run without validation\n");
+    }
+    return RUN_ALL_TESTS();
+}
