@@ -32,7 +32,7 @@ struct CopyBandwidth {
     uint64_t bytes = 0;  ///< size of the copied block
 };
 
-/// Single-threaded memcpy between two host blocks of `bytes`: median of `repeats`,
+/// Single-threaded memcpy between two host blocks of `bytes`: best of `repeats`,
 /// counted as (read + written) / seconds, the roofline of the serial CPU backend.
 Result<CopyBandwidth> host_memcpy_bandwidth(uint64_t bytes, uint32_t repeats);
 
