@@ -78,10 +78,17 @@ Result<std::string> read_text_file(const std::string& path) {
         return Status{ErrorCode::io, path + ": is a directory, expected a file"};
     std::ifstream in(path, std::ios::binary);
     if (!in) return Status{ErrorCode::io, path + ": cannot open file for reading"};
-    std::ostringstream buffer;
-    buffer << in.rdbuf();
+    std::string text;
+    char chunk[1 << 16];
+    while (in.read(chunk, sizeof chunk) || in.gcount() > 0) {
+        text.append(chunk, size_t(in.gcount()));
+        if (text.size() > kMaxTextFileBytes)
+            return Status{ErrorCode::io, one_line(path + ": larger than " +
+                                                  std::to_string(kMaxTextFileBytes >> 20) +
+                                                  " MiB, not a tree or forest file")};
+    }
     if (in.bad()) return Status{ErrorCode::io, path + ": read error"};
-    return buffer.str();
+    return text;
 }
 
 Status write_text_file_atomically(const std::string& path, std::string_view text) {

@@ -7,6 +7,7 @@
 #include <glm/vec3.hpp>
 #include <nlohmann/json.hpp>
 
+#include <cstdint>
 #include <string>
 #include <string_view>
 
@@ -14,6 +15,9 @@ namespace hmsm::detail {
 
 /// Deepest nesting accepted; deeper documents are rejected before parsing.
 inline constexpr int kMaxJsonDepth = 64;
+/// Largest file read_text_file accepts (a 1M-node tree is ~100 MB): without a bound, a path such
+/// as /dev/zero would be read until memory runs out.
+inline constexpr uint64_t kMaxTextFileBytes = uint64_t(256) << 20;
 
 /// `text` with control characters escaped (\n, \t, \xNN), so that names taken from a file
 /// (object keys, strings) cannot split an error message over several lines.

@@ -122,10 +122,10 @@ void run_bounded(const TreeModel& tree, const SimulationConfig& config, uint64_t
 
 // The paper's float path and the double oracle, 1,000,000 steps each (2.3 hours of simulated
 // time at dt = 1/120) of a y1 wind four times stronger than what holds every chain at
-// theta_max. Unoptimized or sanitized builds run 50,000 steps: the same code paths, in the
+// theta_max. Unoptimized or sanitized builds run 20,000 steps: the same code paths, in the
 // time budget of CI.
 TEST(Stability, MillionStepsOfSaturatingWindStayFiniteAndBounded) {
-    const uint64_t steps = kOptimized ? 1'000'000 : 50'000;
+    const uint64_t steps = kOptimized ? 1'000'000 : 20'000;
     const TreeModel tree = test::small_tree();
     for (BackendKind backend : {BackendKind::cpu, BackendKind::cpu64}) {
         SCOPED_TRACE(to_string(backend));
@@ -133,9 +133,11 @@ TEST(Stability, MillionStepsOfSaturatingWindStayFiniteAndBounded) {
     }
 }
 
+// Every preset (10 s of simulated time); unoptimized or sanitized builds take the smallest one.
 TEST(Stability, PresetsUnderSaturatingWindStayFiniteAndBounded) {
-    const uint64_t steps = kOptimized ? 1200 : 60;
+    const uint64_t steps = kOptimized ? 1200 : 120;
     for (std::string_view name : preset_names()) {
+        if (!kOptimized && name != preset_names().back()) continue;
         SCOPED_TRACE(std::string(name));
         auto tree = generate_preset(name);
         ASSERT_TRUE(tree.ok()) << tree.status().message();
@@ -225,7 +227,7 @@ TEST(Stability, HeavyDampingDecaysInsteadOfChattering) {
                 ASSERT_TRUE((*sim)->backend().write(detail::BufferId::chain_state, 0, chains, state.data(),
                                                     detail::Scalar::f64).ok());
                 double worst = 0.0;
-                for (int k = 0; k < 40; ++k) {
+                for (int k = 0; k < (kOptimized ? 40 : 8); ++k) {
                     ASSERT_TRUE((*sim)->step(50).ok());
                     std::vector<double> angles;
                     ASSERT_TRUE((*sim)->read(Output::chain_angles, angles).ok());

@@ -6,7 +6,8 @@ packages=(cmake ninja-build g++ pkg-config
   libvulkan-dev mesa-vulkan-drivers vulkan-tools vulkan-validationlayers glslang-tools spirv-tools
   libglm-dev libvulkan-volk-dev libgtest-dev libgmock-dev libbenchmark-dev
   nlohmann-json3-dev libcli11-dev
-  libpng-dev libgif-dev libstb-dev)  # libpng, giflib: hmsm render; stb_image: its tests
+  libpng-dev libgif-dev libstb-dev  # libpng, giflib: hmsm render; stb_image: its tests
+  clang libclang-rt-14-dev)  # clang + compiler-rt: libFuzzer (tools/fuzz.sh)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
