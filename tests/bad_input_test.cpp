@@ -4,6 +4,8 @@
 // class without the CLI.
 #include "test_trees.h"
 
+#include "backend.h"
+
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -394,3 +396,82 @@ TEST(Resources, CliSceneTooLargeExitsOneWithoutOutput) {
     EXPECT_TRUE(fs::is_empty(dir / "out"));
     fs::remove_all(dir);
 }
+
+// Device failures through an injected backend: the CPU backend wrapped so that upload runs out
+// of memory, or the device is lost at the Nth run() and stays lost (as VK_ERROR_DEVICE_LOST and
+// sticky CUDA errors do). Simulation must hand each failure back as a value, of a device class
+// (CLI exit 1), without crashing, leaking or pretending the steps were done. The Vulkan and CUDA
+// backends need the same through a fault-injection hook of their own (see issue 7's report).
+namespace {
+
+class FailingBackend : public detail::Backend {
+public:
+    enum class Fault { upload_oom, lost_at_run };
+    FailingBackend(Fault fault, int fail_at_run) : fault_(fault), fail_at_run_(fail_at_run) {
+        inner_ = std::move(detail::create_cpu_backend(false)).value();
+    }
+    BackendKind kind() const override { return BackendKind::cpu; }
+    std::string device_name() const override { return "failing test device"; }
+    Status upload(const detail::SceneData& scene) override {
+        if (fault_ == Fault::upload_oom)
+            return {ErrorCode::out_of_memory, "failing test device: out of device memory (injected)"};
+        return inner_->upload(scene);
+    }
+    Status run(std::span<const detail::Dispatch> program, std::span<const double> wind_x) override {
+        if (lost_ || ++runs_ == fail_at_run_) {
+            lost_ = true;
+            return {ErrorCode::device_error, "failing test device: device lost (injected)"};
+        }
+        return inner_->run(program, wind_x);
+    }
+    Status read(detail::BufferId id, uint64_t first, uint64_t count, void* dst, detail::Scalar as) const override {
+        if (lost_) return {ErrorCode::device_error, "failing test device: device lost (injected)"};
+        return inner_->read(id, first, count, dst, as);
+    }
+    Status write(detail::BufferId id, uint64_t first, uint64_t count, const void* src, detail::Scalar as) override {
+        if (lost_) return {ErrorCode::device_error, "failing test device: device lost (injected)"};
+        return inner_->write(id, first, count, src, as);
+    }
+    void set_profiling(bool enabled) override { inner_->set_profiling(enabled); }
+    PassTimes pass_times() const override { return inner_->pass_times(); }
+
+private:
+    std::unique_ptr<detail::Backend> inner_;
+    Fault fault_;
+    int fail_at_run_;
+    int runs_ = 0;
+    bool lost_ = false;
+};
+
+}  // namespace
+
+TEST(DeviceFailure, UploadOutOfMemoryIsReturnedFromCreate) {
+    auto sim = Simulation::create(single_tree_scene(test::small_tree()), {},
+                                  std::make_unique<FailingBackend>(FailingBackend::Fault::upload_oom, 0));
+    ASSERT_FALSE(sim.ok());
+    EXPECT_EQ(sim.status().code(), ErrorCode::out_of_memory);
+    EXPECT_FALSE(is_input_error(sim.status().code()));
+    EXPECT_NE(sim.status().message().find("out of device memory"), std::string::npos);
+}
+
+TEST(DeviceFailure, LostDeviceFailsStepsAndReadsWithoutCrashing) {
+    // run() 1 poses the scene at rest in create(); the device is lost at the third step() call.
+    auto created = Simulation::create(single_tree_scene(test::small_tree()), {},
+                                      std::make_unique<FailingBackend>(FailingBackend::Fault::lost_at_run, 4));
+    ASSERT_TRUE(created.ok()) << created.status().message();
+    Simulation& sim = **created;
+    ASSERT_TRUE(sim.step(10).ok());
+    ASSERT_TRUE(sim.step(10).ok());
+    EXPECT_EQ(sim.steps_done(), 20u);
+    for (int attempt = 0; attempt < 3; ++attempt) {
+        Status s = sim.step(10);
+        ASSERT_FALSE(s.ok());
+        EXPECT_EQ(s.code(), ErrorCode::device_error);
+        EXPECT_NE(s.message().find("device lost"), std::string::npos) << s.message();
+        EXPECT_EQ(sim.steps_done(), 20u) << "failed steps must not count";
+    }
+    std::vector<float> nodes;
+    Status read = sim.read(Output::node_positions, nodes);
+    EXPECT_EQ(read.code(), ErrorCode::device_error);
+    (void)sim.pass_times();  // still answers
+}  // destroying a simulation on a lost device is fine
