@@ -5,6 +5,8 @@
 
 #include <cuda_runtime_api.h>
 
+#include <algorithm>
+
 namespace hmsm::detail {
 namespace cuda {
 
@@ -60,6 +62,42 @@ Status CudaBackend::read(BufferId id, uint64_t first, uint64_t count, void* dst,
 Status CudaBackend::write(BufferId id, uint64_t first, uint64_t count, const void* src, Scalar as) {
     HMSM_TRY(make_current());
     return buffers_.write(id, first, count, src, as, stream_);
+}
+
+Result<double> CudaBackend::measure_copy_bandwidth(uint64_t bytes) {
+    HMSM_TRY(make_current());
+    void* source = nullptr;
+    void* target = nullptr;
+    cudaEvent_t start = nullptr, stop = nullptr;
+    std::vector<float> milliseconds;
+    auto measure = [&]() -> Status {
+        CUDA_TRY(cudaMalloc(&source, bytes));
+        CUDA_TRY(cudaMalloc(&target, bytes));
+        CUDA_TRY(cudaEventCreate(&start));
+        CUDA_TRY(cudaEventCreate(&stop));
+        CUDA_TRY(cudaMemsetAsync(source, 0x3c, bytes, stream_));
+        CUDA_TRY(cudaMemcpyAsync(target, source, bytes, cudaMemcpyDeviceToDevice, stream_));  // warm-up
+        for (int repeat = 0; repeat < 7; ++repeat) {
+            CUDA_TRY(cudaEventRecord(start, stream_));
+            CUDA_TRY(cudaMemcpyAsync(target, source, bytes, cudaMemcpyDeviceToDevice, stream_));
+            CUDA_TRY(cudaEventRecord(stop, stream_));
+            CUDA_TRY(cudaEventSynchronize(stop));
+            float ms = 0.0f;
+            CUDA_TRY(cudaEventElapsedTime(&ms, start, stop));
+            milliseconds.push_back(ms);
+        }
+        return {};
+    };
+    const Status status = measure();
+    if (start) (void)cudaEventDestroy(start);
+    if (stop) (void)cudaEventDestroy(stop);
+    if (source) (void)cudaFree(source);
+    if (target) (void)cudaFree(target);
+    if (!status.ok()) return status;
+    std::sort(milliseconds.begin(), milliseconds.end());
+    const double median_seconds = 1e-3 * double(milliseconds[milliseconds.size() / 2]);
+    if (!(median_seconds > 0.0)) return Status{ErrorCode::device_error, "cuda: copy took no measurable time"};
+    return 2.0 * double(bytes) / median_seconds;
 }
 
 Status CudaBackend::run(std::span<const Dispatch> program, std::span<const double> wind_x) {

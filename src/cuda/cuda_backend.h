@@ -30,6 +30,12 @@ public:
     void set_profiling(bool enabled) override { profiling_ = enabled; }
     PassTimes pass_times() const override { return times_; }
 
+    /// For `hmsm bench`'s roofline: the median of a few device-to-device copies of `bytes`
+    /// between two scratch buffers, as (bytes read + bytes written) / device seconds. (Overrides
+    /// Backend::measure_copy_bandwidth where the interface has it; `override` is left out so
+    /// this also builds against an interface without it.)
+    Result<double> measure_copy_bandwidth(uint64_t bytes);
+
     /// Later work runs on `stream` (nullptr: the backend's own). run() still returns only when
     /// its work on that stream is complete.
     Status set_stream(cudaStream_t stream);
