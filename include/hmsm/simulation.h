@@ -40,7 +40,9 @@ struct SimulationConfig {
     Parameters parameters;
     Wind wind;
     Composition composition = Composition::pointer_jumping;
-    bool profile_passes = true;  ///< collect per-pass device times
+    /// Collect per-pass device times (pass_times()). Off by default: timers serialize GPU work
+    /// and keep CUDA from replaying a step as one graph.
+    bool profile_passes = false;
 };
 
 /// What a caller can read back. Components per element: positions and normals 3 (x, y, z),

@@ -31,10 +31,8 @@ public:
     PassTimes pass_times() const override { return times_; }
 
     /// For `hmsm bench`'s roofline: the median of a few device-to-device copies of `bytes`
-    /// between two scratch buffers, as (bytes read + bytes written) / device seconds. (Overrides
-    /// Backend::measure_copy_bandwidth where the interface has it; `override` is left out so
-    /// this also builds against an interface without it.)
-    Result<double> measure_copy_bandwidth(uint64_t bytes);
+    /// between two scratch buffers, as (bytes read + bytes written) / device seconds.
+    Result<double> measure_copy_bandwidth(uint64_t bytes) override;
 
     /// Later work runs on `stream` (nullptr: the backend's own). run() still returns only when
     /// its work on that stream is complete.

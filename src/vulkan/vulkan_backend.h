@@ -37,6 +37,10 @@ public:
     /// before the work executes); VK_NULL_HANDLE restores normal submission.
     void set_record_target(VkCommandBuffer command_buffer) { record_target_ = command_buffer; }
 
+    /// For `hmsm bench`'s roofline: median device time of vkCmdCopyBuffer between two scratch
+    /// device-local buffers, from timestamps, as (bytes read + bytes written) / seconds.
+    Result<double> measure_copy_bandwidth(uint64_t bytes) override;
+
 private:
     /// One command buffer in flight: its fence, timestamp pool and what it ran.
     struct Slot {

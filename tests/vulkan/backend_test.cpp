@@ -37,6 +37,18 @@ TEST_F(VulkanTest, ProfilingGivesEveryPassATime) {
     EXPECT_EQ(sim->pass_times().steps, 0u);
 }
 
+TEST_F(VulkanTest, CopyBandwidthIsMeasuredOnTheDevice) {
+    std::string skip;
+    auto sim = create_simulation_or_skip(single_tree_scene(small_tree()), windy_config(),
+                                         BackendKind::vulkan, skip);
+    if (!skip.empty()) GTEST_SKIP() << skip;
+    ASSERT_TRUE(sim);
+    auto bandwidth = sim->backend().measure_copy_bandwidth(8u << 20);
+    ASSERT_TRUE(bandwidth.ok()) << bandwidth.status().message();
+    EXPECT_GT(*bandwidth, 1e8);    // more than 0.1 GB/s on any device, lavapipe included
+    EXPECT_LT(*bandwidth, 1e14);   // and less than 100 TB/s
+}
+
 TEST_F(VulkanTest, StepsGiveTheSameResultInOneCallOrMany) {
     // One call records several command buffers (two in flight); one step per call records one.
     std::string skip;

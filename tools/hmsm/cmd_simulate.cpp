@@ -57,6 +57,7 @@ int run_simulate(CLI::App& app) {
     if (!backend)
         return fail_input("--backend '" + flags.backend + "': expected cpu, cpu64, vulkan, cuda or auto");
     config.backend = *backend;
+    config.profile_passes = !flags.report.empty();  // per-pass times only feed the report
     if (flags.composition == "pointer-jumping") config.composition = Composition::pointer_jumping;
     else if (flags.composition == "level-by-level") config.composition = Composition::level_by_level;
     else return fail_input("--composition '" + flags.composition +
