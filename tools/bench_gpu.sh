@@ -16,6 +16,9 @@ if compgen -G ".gl/*.deb" >/dev/null; then
     for f in .gl/*.deb; do dpkg -x "$f" /; done
     ldconfig
 fi
+# Shared libraries the CLI links that the GPU machine lacks (libgif for `hmsm render`), copied
+# from the build machine into .gl/lib (see tools/gpu/run.sh).
+[[ -d .gl/lib ]] && export LD_LIBRARY_PATH=$PWD/.gl/lib${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}
 ICD=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
 [[ -f $ICD ]] && export VK_DRIVER_FILES=$ICD
 nvidia-smi --query-gpu=name,driver_version,memory.total,clocks.sm,clocks.max.sm --format=csv >"$OUT/gpu.txt" 2>&1
