@@ -123,6 +123,7 @@ struct Renderer::State {
     VkFence fence = VK_NULL_HANDLE;
 
     Buffer uniforms, readback, indices;
+    bool device_hung = false;  // a frame never finished (see draw_frame)
     Buffer upload_positions, upload_normals;  // host_upload only
     VkBuffer positions = VK_NULL_HANDLE, normals = VK_NULL_HANDLE;
     VkDeviceSize positions_offset = 0, normals_offset = 0, positions_size = 0;
@@ -156,7 +157,9 @@ struct Renderer::State {
 };
 
 Renderer::State::~State() {
-    if (!device) return;
+    // After a frame timed out the device will not go idle: leave its objects to the driver
+    // rather than wait forever.
+    if (!device || device_hung) return;
     const VolkDeviceTable& t = vk();
     VkDevice d = dev();
     t.vkDeviceWaitIdle(d);
@@ -855,7 +858,17 @@ Status Renderer::render(uint32_t steps, Image& image) {
     submit.commandBufferCount = 1;
     submit.pCommandBuffers = &cmd;
     HMSM_VK_TRY(t.vkQueueSubmit(s.device->queue(), 1, &submit, s.fence));
-    HMSM_VK_TRY(t.vkWaitForFences(s.dev(), 1, &s.fence, VK_TRUE, UINT64_MAX));
+    // A frame that the device never finishes is reported, not waited for forever (seen on an
+    // H100 with driver 580: graphics submissions there never signal their fence).
+    constexpr uint64_t kFrameTimeoutNs = 30'000'000'000ull;
+    VkResult waited = t.vkWaitForFences(s.dev(), 1, &s.fence, VK_TRUE, kFrameTimeoutNs);
+    if (waited == VK_TIMEOUT) {
+        s.device_hung = true;
+        s.device->abandon();
+        return Status{ErrorCode::device_error, "render: " + s.device->name() +
+                                                   " did not finish drawing a frame within 30 s"};
+    }
+    HMSM_VK_TRY(waited);
     HMSM_VK_TRY(t.vkResetFences(s.dev(), 1, &s.fence));
     HMSM_TRY(s.device->take_validation_messages());
 

@@ -162,7 +162,7 @@ Result<std::shared_ptr<Device>> Device::adopt(const hmsm::vulkan::ExternalContex
 }
 
 Device::~Device() {
-    if (!owned_) return;
+    if (!owned_ || abandoned_) return;
     if (device_) {
         table_.vkDeviceWaitIdle(device_);
         table_.vkDestroyDevice(device_, nullptr);

@@ -54,6 +54,9 @@ public:
     std::string name() const { return properties_.deviceName; }
     bool is_cpu() const { return properties_.deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU; }
     bool is_external() const { return !owned_; }
+    /// After the device stopped making progress (a wait timed out): the destructor neither
+    /// waits for it nor destroys it, so the process can still report the error and exit.
+    void abandon() { abandoned_ = true; }
 
     /// Ok, or an internal error carrying the first validation message reported since the last
     /// call (always ok when validation is off). Clears the messages.
@@ -71,6 +74,7 @@ private:
                                          void* user);
 
     bool owned_ = true;
+    bool abandoned_ = false;
     VkInstance instance_ = VK_NULL_HANDLE;
     VkDebugUtilsMessengerEXT messenger_ = VK_NULL_HANDLE;
     PFN_vkDestroyDebugUtilsMessengerEXT destroy_messenger_ = nullptr;
