@@ -4,6 +4,7 @@
 #include "vk_error.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cstring>
 #include <new>
 #include <vector>
@@ -154,8 +155,26 @@ Status VulkanBackend::check_scene_limits(const SceneData& scene) const {
     return {};
 }
 
+namespace {
+std::atomic<VulkanFault> g_injected_fault{VulkanFault::none};
+std::atomic<uint32_t> g_injected_fault_after{0};
+}  // namespace
+
+VulkanBackend::VulkanBackend(std::shared_ptr<Device> device)
+    : device_(std::move(device)),
+      fault_(g_injected_fault.load()),
+      submissions_before_fault_(g_injected_fault_after.load()) {}
+
+Status VulkanBackend::check_device_lost() const {
+    if (device_lost_)
+        return failure(VK_ERROR_DEVICE_LOST, "device lost earlier (injected)", __FILE__, __LINE__);
+    return {};
+}
+
 Status VulkanBackend::upload(const SceneData& scene) {
     HMSM_TRY(check_scene_limits(scene));
+    if (fault_ == VulkanFault::out_of_device_memory_at_upload)
+        return failure(VK_ERROR_OUT_OF_DEVICE_MEMORY, "vkAllocateMemory (injected)", __FILE__, __LINE__);
     for (const BufferInfo& info : kBufferTable) {
         const uint32_t b = uint32_t(info.id);
         element_counts_[b] = scene.element_count(info.id);
@@ -222,6 +241,9 @@ Status VulkanBackend::submit_chunk(Slot& slot, std::span<const Dispatch> program
     submit.commandBufferCount = 1;
     submit.pCommandBuffers = &slot.command_buffer;
     HMSM_VK_TRY(vk.vkResetFences(device_->handle(), 1, &slot.fence));
+    if (fault_ == VulkanFault::device_lost_at_submit && submissions_before_fault_-- == 0)
+        device_lost_ = true;
+    HMSM_TRY(check_device_lost());
     HMSM_VK_TRY(vk.vkQueueSubmit(device_->queue(), 1, &submit, slot.fence));
     slot.in_flight = true;
     slot.steps = timed ? wind_x.size() : 0;
@@ -281,6 +303,7 @@ Status VulkanBackend::run(std::span<const Dispatch> program, std::span<const dou
 }
 
 Status VulkanBackend::read(BufferId id, uint64_t first, uint64_t count, void* dst, Scalar as) const {
+    HMSM_TRY(check_device_lost());
     const uint32_t b = uint32_t(id);
     if (first + count > element_counts_[b] || first + count < first)
         return {ErrorCode::invalid_argument,
@@ -302,6 +325,7 @@ Status VulkanBackend::read(BufferId id, uint64_t first, uint64_t count, void* ds
 }
 
 Status VulkanBackend::write(BufferId id, uint64_t first, uint64_t count, const void* src, Scalar as) {
+    HMSM_TRY(check_device_lost());
     const uint32_t b = uint32_t(id);
     if (first + count > element_counts_[b] || first + count < first)
         return {ErrorCode::invalid_argument,
@@ -370,6 +394,11 @@ Result<double> VulkanBackend::measure_copy_bandwidth(uint64_t bytes) {
 }
 
 }  // namespace vk
+
+void vulkan_inject_fault(VulkanFault fault, uint32_t after) {
+    vk::g_injected_fault_after = after;
+    vk::g_injected_fault = fault;
+}
 
 Result<std::unique_ptr<Backend>> create_vulkan_backend() {
     auto device = vk::Device::create();

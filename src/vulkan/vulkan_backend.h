@@ -5,6 +5,7 @@
 #pragma once
 
 #include "device.h"
+#include "fault_injection.h"
 #include "device_buffer.h"
 #include "pipelines.h"
 
@@ -52,7 +53,9 @@ private:
         size_t steps = 0;  // steps recorded into the command buffer
     };
 
-    explicit VulkanBackend(std::shared_ptr<Device> device) : device_(std::move(device)) {}
+    explicit VulkanBackend(std::shared_ptr<Device> device);
+    /// A lost device (injected) fails every later operation, as a real lost device does.
+    Status check_device_lost() const;
     Status check_scene_limits(const SceneData& scene) const;
     Status upload_static(BufferId id, const SceneData& scene);
     Status submit_chunk(Slot& slot, std::span<const Dispatch> program, std::span<const double> wind_x);
@@ -68,6 +71,9 @@ private:
     VkCommandPool pool_ = VK_NULL_HANDLE;
     std::array<Slot, 2> slots_;
     bool profiling_ = false;
+    VulkanFault fault_ = VulkanFault::none;  // vulkan_inject_fault() when the backend was made
+    uint32_t submissions_before_fault_ = 0;
+    bool device_lost_ = false;
     PassTimes times_;
     VkCommandBuffer record_target_ = VK_NULL_HANDLE;
 };

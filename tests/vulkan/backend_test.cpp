@@ -4,6 +4,7 @@
 #include "test_trees.h"
 #include "vulkan_test_support.h"
 
+#include "vulkan/fault_injection.h"
 #include "vulkan/recorder.h"
 
 namespace hmsm::test {
@@ -47,6 +48,48 @@ TEST_F(VulkanTest, CopyBandwidthIsMeasuredOnTheDevice) {
     ASSERT_TRUE(bandwidth.ok()) << bandwidth.status().message();
     EXPECT_GT(*bandwidth, 1e8);    // more than 0.1 GB/s on any device, lavapipe included
     EXPECT_LT(*bandwidth, 1e14);   // and less than 100 TB/s
+}
+
+/// Turns an injected fault on for one test and off again, whatever the test does.
+struct InjectedFault {
+    InjectedFault(detail::VulkanFault fault, uint32_t after) { detail::vulkan_inject_fault(fault, after); }
+    ~InjectedFault() { detail::vulkan_inject_fault(detail::VulkanFault::none); }
+};
+
+TEST_F(VulkanTest, OutOfDeviceMemoryAtUploadIsAnError) {
+    std::string skip;
+    auto probe = create_simulation_or_skip(single_tree_scene(small_tree()), windy_config(),
+                                           BackendKind::vulkan, skip);
+    if (!skip.empty()) GTEST_SKIP() << skip;
+    InjectedFault fault(detail::VulkanFault::out_of_device_memory_at_upload, 0);
+    SimulationConfig config = windy_config();
+    config.backend = BackendKind::vulkan;
+    auto sim = Simulation::create(single_tree_scene(small_tree()), config);
+    ASSERT_FALSE(sim.ok());
+    EXPECT_EQ(sim.status().code(), ErrorCode::out_of_memory);
+    EXPECT_NE(sim.status().message().find("VK_ERROR_OUT_OF_DEVICE_MEMORY"), std::string::npos)
+        << sim.status().message();
+}
+
+TEST_F(VulkanTest, DeviceLostMidRunFailsThatStepAndEveryLaterCall) {
+    std::string skip;
+    std::unique_ptr<Simulation> sim;
+    {
+        // One submission succeeds (the rest pose at creation); the first step's is lost.
+        InjectedFault fault(detail::VulkanFault::device_lost_at_submit, 1);
+        sim = create_simulation_or_skip(single_tree_scene(small_tree()), windy_config(),
+                                        BackendKind::vulkan, skip);
+    }
+    if (!skip.empty()) GTEST_SKIP() << skip;
+    ASSERT_TRUE(sim);
+    Status stepped = sim->step(5);
+    EXPECT_EQ(stepped.code(), ErrorCode::device_error);
+    EXPECT_NE(stepped.message().find("VK_ERROR_DEVICE_LOST"), std::string::npos) << stepped.message();
+    EXPECT_EQ(sim->steps_done(), 0u);  // a failed step does not advance the clock
+    EXPECT_EQ(sim->step(1).code(), ErrorCode::device_error);  // lost for good
+    std::vector<float> positions;
+    EXPECT_EQ(sim->read(Output::node_positions, positions).code(), ErrorCode::device_error);
+    sim.reset();  // and it still tears down without hanging
 }
 
 TEST_F(VulkanTest, StepsGiveTheSameResultInOneCallOrMany) {
