@@ -20,6 +20,30 @@ glm::dvec4 point(const glm::dvec3& p) { return {p, 0.0}; }
 
 }  // namespace
 
+gpu::PassConstants group_constants(const SceneData& d, const InstanceGroup& g, uint32_t final_half) {
+    const ModelRange& m = d.models[g.model];
+    gpu::PassConstants pc{};
+    pc.instance_begin = g.instance_begin;
+    pc.chain_begin = g.chain_begin;
+    pc.node_begin = g.node_begin;
+    pc.vertex_begin = g.vertex_begin;
+    pc.model_chain_begin = m.chain_begin;
+    pc.model_node_begin = m.node_begin;
+    pc.model_vertex_begin = m.vertex_begin;
+    pc.model_chain_count = m.chain_count;
+    pc.model_node_count = m.node_count;
+    pc.model_vertex_count = m.vertex_count;
+    pc.mode = HMSM_MODE_POINTER_JUMPING;
+    pc.profile = uint32_t(d.profile);
+    pc.total_chains = uint32_t(d.total_chains);
+    pc.total_model_chains = d.total_model_chains();
+    pc.src_half = final_half;
+    pc.dst_half = final_half;
+    pc.wind = {float(d.wind_vector.x), float(d.wind_vector.y), float(d.wind_vector.z), 0.0f};
+    pc.params = {float(d.dt), float(d.max_angle), float(d.fix_weight), 0.0f};
+    return pc;
+}
+
 SceneData flatten_scene(const Scene& scene, const std::vector<Hierarchy>& hierarchies,
                         const std::vector<MeshTemplate>& meshes, const Parameters& parameters,
                         const ModelOptions& options, const Wind& wind,

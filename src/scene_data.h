@@ -85,6 +85,12 @@ SceneData flatten_scene(const Scene& scene, const std::vector<Hierarchy>& hierar
                         const ModelOptions& options, const Wind& wind,
                         uint64_t max_group_elements = (1ull << 31));
 
+/// The constants every dispatch over `group` shares (offsets, counts, wind, parameters), with
+/// pointer jumping as the mode and `final_half` as both halves; a dispatch then sets its own
+/// element count, round, halves and level.
+gpu::PassConstants group_constants(const SceneData& scene, const InstanceGroup& group,
+                                   uint32_t final_half);
+
 /// Pointer-jumping rounds for a maximum chain depth: max(1, ceil(log2(depth + 1))).
 uint32_t jump_rounds_for_depth(int32_t max_depth);
 

@@ -53,32 +53,6 @@ std::string number(double v) {
     return buf;
 }
 
-/// Constants shared by every dispatch of one group.
-gpu::PassConstants group_constants(const SceneData& d, const detail::InstanceGroup& g,
-                                   uint32_t final_half) {
-    const detail::ModelRange& m = d.models[g.model];
-    gpu::PassConstants pc{};
-    pc.instance_begin = g.instance_begin;
-    pc.chain_begin = g.chain_begin;
-    pc.node_begin = g.node_begin;
-    pc.vertex_begin = g.vertex_begin;
-    pc.model_chain_begin = m.chain_begin;
-    pc.model_node_begin = m.node_begin;
-    pc.model_vertex_begin = m.vertex_begin;
-    pc.model_chain_count = m.chain_count;
-    pc.model_node_count = m.node_count;
-    pc.model_vertex_count = m.vertex_count;
-    pc.mode = HMSM_MODE_POINTER_JUMPING;
-    pc.profile = uint32_t(d.profile);
-    pc.total_chains = uint32_t(d.total_chains);
-    pc.total_model_chains = d.total_model_chains();
-    pc.src_half = final_half;
-    pc.dst_half = final_half;
-    pc.wind = {float(d.wind_vector.x), float(d.wind_vector.y), float(d.wind_vector.z), 0.0f};
-    pc.params = {float(d.dt), float(d.max_angle), float(d.fix_weight), 0.0f};
-    return pc;
-}
-
 /// Appends the dispatches of `pass` for every group. Passes 3 and 5 accumulate down the
 /// hierarchy: in pointer jumping, round r reads half (r-1)&1 and writes half r&1 (round 0
 /// starts from T, resp. u), so the last round leaves the pose in final_half; level by level
@@ -89,7 +63,7 @@ void append_pass(std::vector<Dispatch>& program, const SceneData& d, Pass pass,
     const bool hierarchical = pass == Pass::compose || pass == Pass::root_positions;
     if (!hierarchical) {
         for (const auto& g : d.groups) {
-            Dispatch dispatch{pass, group_constants(d, g, final_half)};
+            Dispatch dispatch{pass, detail::group_constants(d, g, final_half)};
             const auto& m = d.models[g.model];
             uint32_t per_instance = pass == Pass::node_relative || pass == Pass::node_world
                                         ? m.node_count
@@ -102,7 +76,7 @@ void append_pass(std::vector<Dispatch>& program, const SceneData& d, Pass pass,
     if (composition == Composition::pointer_jumping) {
         for (uint32_t r = 0; r < d.jump_rounds; ++r) {
             for (const auto& g : d.groups) {
-                Dispatch dispatch{pass, group_constants(d, g, final_half)};
+                Dispatch dispatch{pass, detail::group_constants(d, g, final_half)};
                 dispatch.constants.element_count = g.instance_count * d.models[g.model].chain_count;
                 dispatch.constants.round = r;
                 dispatch.constants.src_half = (r + 1) & 1;  // unused in round 0
@@ -120,7 +94,7 @@ void append_pass(std::vector<Dispatch>& program, const SceneData& d, Pass pass,
             if (level + 1 >= m.level_begin.size()) continue;
             uint32_t count = m.level_begin[level + 1] - m.level_begin[level];
             if (count == 0) continue;
-            Dispatch dispatch{pass, group_constants(d, g, final_half)};
+            Dispatch dispatch{pass, detail::group_constants(d, g, final_half)};
             dispatch.constants.mode = HMSM_MODE_LEVEL_BY_LEVEL;
             dispatch.constants.round = uint32_t(level);
             dispatch.constants.level_begin = m.level_begin[level];

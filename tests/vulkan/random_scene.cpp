@@ -32,27 +32,6 @@ glm::dvec4 random_point(std::mt19937& rng, double extent) {
     return {uniform(rng, -extent, extent), uniform(rng, -extent, extent), uniform(rng, -extent, extent), 0.0};
 }
 
-gpu::PassConstants group_constants(const detail::SceneData& d, const detail::InstanceGroup& g) {
-    const detail::ModelRange& m = d.models[g.model];
-    gpu::PassConstants pc{};
-    pc.instance_begin = g.instance_begin;
-    pc.chain_begin = g.chain_begin;
-    pc.node_begin = g.node_begin;
-    pc.vertex_begin = g.vertex_begin;
-    pc.model_chain_begin = m.chain_begin;
-    pc.model_node_begin = m.node_begin;
-    pc.model_vertex_begin = m.vertex_begin;
-    pc.model_chain_count = m.chain_count;
-    pc.model_node_count = m.node_count;
-    pc.model_vertex_count = m.vertex_count;
-    pc.profile = uint32_t(d.profile);
-    pc.total_chains = uint32_t(d.total_chains);
-    pc.total_model_chains = d.total_model_chains();
-    pc.wind = {float(d.wind_vector.x), float(d.wind_vector.y), float(d.wind_vector.z), 0.0f};
-    pc.params = {float(d.dt), float(d.max_angle), float(d.fix_weight), 0.0f};
-    return pc;
-}
-
 }  // namespace
 
 detail::SceneData random_scene_data(std::mt19937& rng, const std::vector<ModelShape>& models,
@@ -163,7 +142,7 @@ std::vector<std::vector<detail::Dispatch>> pass_variants(const detail::SceneData
         std::vector<detail::Dispatch> list;
         uint32_t half = pick(rng, 0, 1);
         for (const auto& g : d.groups) {
-            detail::Dispatch dispatch{pass, group_constants(d, g)};
+            detail::Dispatch dispatch{pass, detail::group_constants(d, g, 0)};
             const auto& m = d.models[g.model];
             uint32_t per_instance = pass == Pass::node_relative || pass == Pass::node_world ? m.node_count
                                     : pass == Pass::contour                              ? m.vertex_count
@@ -180,7 +159,7 @@ std::vector<std::vector<detail::Dispatch>> pass_variants(const detail::SceneData
             std::vector<detail::Dispatch> list;
             uint32_t src = pick(rng, 0, 1);
             for (const auto& g : d.groups) {
-                detail::Dispatch dispatch{pass, group_constants(d, g)};
+                detail::Dispatch dispatch{pass, detail::group_constants(d, g, 0)};
                 dispatch.constants.element_count = g.instance_count * d.models[g.model].chain_count;
                 dispatch.constants.round = r;
                 dispatch.constants.src_half = src;
@@ -201,7 +180,7 @@ std::vector<std::vector<detail::Dispatch>> pass_variants(const detail::SceneData
             if (level + 1 >= m.level_begin.size()) continue;
             uint32_t count = m.level_begin[level + 1] - m.level_begin[level];
             if (count == 0) continue;
-            detail::Dispatch dispatch{pass, group_constants(d, g)};
+            detail::Dispatch dispatch{pass, detail::group_constants(d, g, 0)};
             dispatch.constants.mode = HMSM_MODE_LEVEL_BY_LEVEL;
             dispatch.constants.round = uint32_t(level);
             dispatch.constants.level_begin = m.level_begin[level];
