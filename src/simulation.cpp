@@ -244,20 +244,28 @@ Status Simulation::read_elements(Output output, std::vector<double>* as_double,
     const uint32_t stored = detail::shape_scalars(detail::buffer_info(id).shape);
     const uint32_t wanted = output_components(output);
     // Stored element -> output components: xyz of a vec4, the 3x3 part of a mat3x4, or all.
-    auto component = [&](uint32_t k) { return stored == 12 ? (k / 3) * 4 + k % 3 : k; };
-    auto repack = [&](auto& raw, auto& out) {
+    auto repack = [&](const auto& raw, auto& out) {
         out.resize(count * wanted);
+        if (stored == 4 && wanted == 3) {  // positions and normals: the per-frame hot path
+            for (uint64_t i = 0; i < count; ++i) {
+                out[3 * i] = raw[4 * i];
+                out[3 * i + 1] = raw[4 * i + 1];
+                out[3 * i + 2] = raw[4 * i + 2];
+            }
+            return;
+        }
         for (uint64_t i = 0; i < count; ++i)
-            for (uint32_t k = 0; k < wanted; ++k) out[i * wanted + k] = raw[i * stored + component(k)];
+            for (uint32_t k = 0; k < wanted; ++k)
+                out[i * wanted + k] = raw[i * stored + (stored == 12 ? (k / 3) * 4 + k % 3 : k)];
     };
     if (as_double) {
-        std::vector<double> raw(count * stored);
-        HMSM_TRY(backend_->read(id, first, count, raw.data(), detail::Scalar::f64));
-        repack(raw, *as_double);
+        stored_f64_.resize(count * stored);
+        HMSM_TRY(backend_->read(id, first, count, stored_f64_.data(), detail::Scalar::f64));
+        repack(stored_f64_, *as_double);
     } else {
-        std::vector<float> raw(count * stored);
-        HMSM_TRY(backend_->read(id, first, count, raw.data(), detail::Scalar::f32));
-        repack(raw, *as_float);
+        stored_f32_.resize(count * stored);
+        HMSM_TRY(backend_->read(id, first, count, stored_f32_.data(), detail::Scalar::f32));
+        repack(stored_f32_, *as_float);
     }
     return {};
 }

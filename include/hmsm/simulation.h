@@ -112,6 +112,10 @@ private:
     std::unique_ptr<detail::Backend> backend_;
     std::vector<detail::Dispatch> step_program_;
     std::vector<double> wind_phases_;  // scratch: one entry per step of a step() call
+    // Scratch for read(): elements as the backend stores them, kept between calls so a
+    // per-frame readback neither allocates nor zero-fills.
+    mutable std::vector<float> stored_f32_;
+    mutable std::vector<double> stored_f64_;
     uint64_t steps_done_ = 0;
 };
 
