@@ -15,19 +15,6 @@ using detail::BufferId;
 
 namespace {
 
-/// Creates a simulation on `kind`; sets `skip` to the reason when the backend is unavailable.
-std::unique_ptr<Simulation> create_or_skip(const Scene& scene, SimulationConfig config,
-                                           BackendKind kind, std::string& skip) {
-    config.backend = kind;
-    auto sim = Simulation::create(scene, config);
-    if (!sim.ok()) {
-        if (sim.status().code() == ErrorCode::no_device) skip = sim.status().message();
-        else ADD_FAILURE() << to_string(kind) << ": " << sim.status().message();
-        return nullptr;
-    }
-    return std::move(sim).value();
-}
-
 std::vector<double> read_output(const Simulation& sim, Output output) {
     std::vector<double> values;
     Status s = sim.read(output, values);
@@ -94,9 +81,9 @@ TEST_P(Agreement, EndToEndAfter1000Steps) {
     for (SceneCase& c : end_to_end_cases()) {
         SCOPED_TRACE(c.name);
         std::string skip;
-        auto sim = create_or_skip(c.scene, c.config, GetParam(), skip);
+        auto sim = test::create_simulation_or_skip(c.scene, c.config, GetParam(), skip);
         if (!skip.empty()) GTEST_SKIP() << skip;
-        auto oracle = create_or_skip(c.scene, c.config, BackendKind::cpu64, skip);
+        auto oracle = test::create_simulation_or_skip(c.scene, c.config, BackendKind::cpu64, skip);
         ASSERT_TRUE(sim && oracle);
         ASSERT_TRUE(sim->step(400).ok());
         ASSERT_TRUE(sim->step(600).ok());
@@ -110,7 +97,7 @@ TEST_P(Agreement, EndToEndAfter1000Steps) {
         auto normals = read_output(*sim, Output::vertex_normals);
         EXPECT_LE(test::max_abs_difference(normals, read_output(*oracle, Output::vertex_normals)), 1e-3);
         // The scene really moved: positions differ from the rest pose.
-        auto rest = create_or_skip(c.scene, c.config, BackendKind::cpu64, skip);
+        auto rest = test::create_simulation_or_skip(c.scene, c.config, BackendKind::cpu64, skip);
         EXPECT_GT(test::max_abs_difference(read_output(*rest, Output::node_positions),
                                            read_output(*oracle, Output::node_positions)),
                   1e-3 * height);
@@ -165,9 +152,9 @@ TEST_P(Agreement, EachPassOnRandomStates) {
     for (Composition composition : {Composition::pointer_jumping, Composition::level_by_level}) {
         config.composition = composition;
         std::string skip;
-        auto sim = create_or_skip(scene, config, GetParam(), skip);
+        auto sim = test::create_simulation_or_skip(scene, config, GetParam(), skip);
         if (!skip.empty()) GTEST_SKIP() << skip;
-        auto oracle = create_or_skip(scene, config, BackendKind::cpu64, skip);
+        auto oracle = test::create_simulation_or_skip(scene, config, BackendKind::cpu64, skip);
         ASSERT_TRUE(sim && oracle);
         for (Pass pass : kAllPasses) {
             SCOPED_TRACE(std::string(pass_name(pass)) + (composition == Composition::level_by_level ? " level" : " jump"));

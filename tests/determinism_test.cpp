@@ -72,18 +72,6 @@ SimulationConfig test_config(BackendKind backend) {
     return config;
 }
 
-/// Creates the simulation or skips the test when this machine has no such device.
-std::unique_ptr<Simulation> create_or_skip(const Scene& scene, const SimulationConfig& config,
-                                           std::string& skip_reason) {
-    auto sim = Simulation::create(scene, config);
-    if (!sim.ok()) {
-        if (sim.status().code() == ErrorCode::no_device) skip_reason = sim.status().message();
-        else ADD_FAILURE() << sim.status().message();
-        return nullptr;
-    }
-    return std::move(sim).value();
-}
-
 class Determinism : public ::testing::TestWithParam<BackendKind> {};
 
 }  // namespace
@@ -92,10 +80,10 @@ TEST_P(Determinism, SameInputsGiveBitwiseIdenticalOutputs) {
     const Scene scene = test_scene();
     const SimulationConfig config = test_config(GetParam());
     std::string skip;
-    auto first = create_or_skip(scene, config, skip);
+    auto first = test::create_simulation_or_skip(scene, config, config.backend, skip);
     if (!skip.empty()) GTEST_SKIP() << skip;
     ASSERT_TRUE(first);
-    auto second = create_or_skip(scene, config, skip);
+    auto second = test::create_simulation_or_skip(scene, config, config.backend, skip);
     ASSERT_TRUE(second);
     ASSERT_TRUE(first->step(700).ok());
     // The second run takes the same 700 steps in uneven pieces.
@@ -103,7 +91,7 @@ TEST_P(Determinism, SameInputsGiveBitwiseIdenticalOutputs) {
     ASSERT_EQ(first->steps_done(), second->steps_done());
     expect_identical(snapshot(*first), snapshot(*second));
     // And a third, created after the others ran, agrees too (no hidden shared state).
-    auto third = create_or_skip(scene, config, skip);
+    auto third = test::create_simulation_or_skip(scene, config, config.backend, skip);
     ASSERT_TRUE(third);
     ASSERT_TRUE(third->step(700).ok());
     expect_identical(snapshot(*first), snapshot(*third));
@@ -114,10 +102,10 @@ TEST_P(Determinism, LevelByLevelIsAlsoRepeatable) {
     SimulationConfig config = test_config(GetParam());
     config.composition = Composition::level_by_level;
     std::string skip;
-    auto first = create_or_skip(scene, config, skip);
+    auto first = test::create_simulation_or_skip(scene, config, config.backend, skip);
     if (!skip.empty()) GTEST_SKIP() << skip;
     ASSERT_TRUE(first);
-    auto second = create_or_skip(scene, config, skip);
+    auto second = test::create_simulation_or_skip(scene, config, config.backend, skip);
     ASSERT_TRUE(second);
     ASSERT_TRUE(first->step(300).ok());
     ASSERT_TRUE(second->step(300).ok());

@@ -1,5 +1,7 @@
 #include "test_trees.h"
 
+#include <gtest/gtest.h>
+
 #include <cmath>
 
 namespace hmsm::test {
@@ -66,6 +68,18 @@ TreeModel deep_tree(int depth) {
         radius *= 0.6;
     }
     return tree;
+}
+
+std::unique_ptr<Simulation> create_simulation_or_skip(const Scene& scene, SimulationConfig config,
+                                                      BackendKind kind, std::string& skip) {
+    config.backend = kind;
+    auto sim = Simulation::create(scene, config);
+    if (!sim.ok()) {
+        if (sim.status().code() == ErrorCode::no_device) skip = sim.status().message();
+        else ADD_FAILURE() << to_string(kind) << ": " << sim.status().message();
+        return nullptr;
+    }
+    return std::move(sim).value();
 }
 
 double max_abs_difference(const std::vector<double>& a, const std::vector<double>& b) {

@@ -24,6 +24,11 @@ TreeModel small_tree();
 /// A tree of `depth` + 1 chain levels (each chain one side branch deeper), for pointer jumping.
 TreeModel deep_tree(int depth);
 
+/// Simulation::create() on `kind`; null with `skip` set to the reason when that backend is not
+/// compiled in or has no device (the caller then GTEST_SKIPs); any other error fails the test.
+std::unique_ptr<Simulation> create_simulation_or_skip(const Scene& scene, SimulationConfig config,
+                                                      BackendKind kind, std::string& skip);
+
 /// Max over elements of |a - b| for xyz arrays.
 double max_abs_difference(const std::vector<double>& a, const std::vector<double>& b);
 bool all_finite(const std::vector<double>& values);

@@ -171,6 +171,13 @@ Status VulkanBackend::check_device_lost() const {
     return {};
 }
 
+Status VulkanBackend::check_range(BufferId id, uint64_t first, uint64_t count) const {
+    if (first + count > element_counts_[uint32_t(id)] || first + count < first)
+        return {ErrorCode::invalid_argument,
+                "vulkan: range past the end of buffer " + std::string(buffer_info(id).name)};
+    return {};
+}
+
 Status VulkanBackend::upload(const SceneData& scene) {
     HMSM_TRY(check_scene_limits(scene));
     if (fault_ == VulkanFault::out_of_device_memory_at_upload)
@@ -304,11 +311,9 @@ Status VulkanBackend::run(std::span<const Dispatch> program, std::span<const dou
 
 Status VulkanBackend::read(BufferId id, uint64_t first, uint64_t count, void* dst, Scalar as) const {
     HMSM_TRY(check_device_lost());
-    const uint32_t b = uint32_t(id);
-    if (first + count > element_counts_[b] || first + count < first)
-        return {ErrorCode::invalid_argument,
-                "vulkan: range past the end of buffer " + std::string(buffer_info(id).name)};
+    HMSM_TRY(check_range(id, first, count));
     if (count == 0) return {};
+    const uint32_t b = uint32_t(id);
     const bool integer = shape_is_integer(buffer_info(id).shape);
     HMSM_TRY(transfer_->download(
         buffers_[b], first * element_bytes(id), count * element_bytes(id),
@@ -326,11 +331,9 @@ Status VulkanBackend::read(BufferId id, uint64_t first, uint64_t count, void* ds
 
 Status VulkanBackend::write(BufferId id, uint64_t first, uint64_t count, const void* src, Scalar as) {
     HMSM_TRY(check_device_lost());
-    const uint32_t b = uint32_t(id);
-    if (first + count > element_counts_[b] || first + count < first)
-        return {ErrorCode::invalid_argument,
-                "vulkan: range past the end of buffer " + std::string(buffer_info(id).name)};
+    HMSM_TRY(check_range(id, first, count));
     if (count == 0) return {};
+    const uint32_t b = uint32_t(id);
     const bool integer = shape_is_integer(buffer_info(id).shape);
     HMSM_TRY(transfer_->upload(
         buffers_[b], first * element_bytes(id), count * element_bytes(id),

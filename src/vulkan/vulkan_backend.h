@@ -56,6 +56,8 @@ private:
     explicit VulkanBackend(std::shared_ptr<Device> device);
     /// A lost device (injected) fails every later operation, as a real lost device does.
     Status check_device_lost() const;
+    /// [first, first + count) lies inside buffer `id` (read/write).
+    Status check_range(BufferId id, uint64_t first, uint64_t count) const;
     Status check_scene_limits(const SceneData& scene) const;
     Status upload_static(BufferId id, const SceneData& scene);
     Status submit_chunk(Slot& slot, std::span<const Dispatch> program, std::span<const double> wind_x);

@@ -48,18 +48,6 @@ std::unique_ptr<detail::Backend> create_vulkan_or_skip(std::string& skip) {
     return std::move(backend).value();
 }
 
-std::unique_ptr<Simulation> create_simulation_or_skip(const Scene& scene, SimulationConfig config,
-                                                      BackendKind kind, std::string& skip) {
-    config.backend = kind;
-    auto sim = Simulation::create(scene, config);
-    if (!sim.ok()) {
-        if (sim.status().code() == ErrorCode::no_device) skip = sim.status().message();
-        else ADD_FAILURE() << to_string(kind) << ": " << sim.status().message();
-        return nullptr;
-    }
-    return std::move(sim).value();
-}
-
 std::vector<double> read_buffer(const detail::Backend& backend, detail::BufferId id, uint64_t count) {
     std::vector<double> values(count * detail::shape_scalars(detail::buffer_info(id).shape));
     Status s = backend.read(id, 0, count, values.data(), detail::Scalar::f64);

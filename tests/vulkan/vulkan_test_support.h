@@ -33,9 +33,6 @@ protected:
 
 /// A Vulkan backend, or null with `skip` set to the reason (no device); other errors fail.
 std::unique_ptr<detail::Backend> create_vulkan_or_skip(std::string& skip);
-/// Simulation::create() on `kind`, or null with `skip` set when Vulkan has no device.
-std::unique_ptr<Simulation> create_simulation_or_skip(const Scene& scene, SimulationConfig config,
-                                                      BackendKind kind, std::string& skip);
 
 /// Reads a whole buffer as doubles.
 std::vector<double> read_buffer(const detail::Backend& backend, detail::BufferId id, uint64_t count);
