@@ -86,4 +86,23 @@ uint32_t pass_writes(Pass pass);
 /// Number of threads of a dispatch and the mapping shared by every backend.
 inline uint32_t dispatch_thread_count(const Dispatch& d) { return d.constants.element_count; }
 
+/// How a dispatch is launched: `workgroups` groups of `workgroup_size` threads. Every mode
+/// maps thread i to element i (gpu_layout.h) except HMSM_MODE_POINTER_JUMPING_IN_DISPATCH,
+/// whose workgroup k runs every round for group instance k.
+struct LaunchShape {
+    uint64_t workgroups = 0;
+    uint32_t workgroup_size = HMSM_WORKGROUP_SIZE;
+};
+inline bool runs_rounds_in_dispatch(const Dispatch& d) {
+    return (d.pass == Pass::compose || d.pass == Pass::root_positions) &&
+           d.constants.mode == HMSM_MODE_POINTER_JUMPING_IN_DISPATCH;
+}
+inline LaunchShape launch_shape(const Dispatch& d) {
+    const uint32_t threads = dispatch_thread_count(d);
+    if (threads == 0) return {};
+    if (runs_rounds_in_dispatch(d))
+        return {threads / d.constants.model_chain_count, gpu::rounds_workgroup_size(d.constants.model_chain_count)};
+    return {(uint64_t(threads) + HMSM_WORKGROUP_SIZE - 1) / HMSM_WORKGROUP_SIZE, HMSM_WORKGROUP_SIZE};
+}
+
 }  // namespace hmsm::detail

@@ -46,6 +46,13 @@
 /// composition modes (PassConstants.mode)
 #define HMSM_MODE_POINTER_JUMPING 0u
 #define HMSM_MODE_LEVEL_BY_LEVEL 1u
+/// Pointer jumping with every round in one dispatch: one workgroup per instance of the group
+/// loops over the instance's chains, round after round, with a workgroup barrier between rounds
+/// (PassConstants.round holds the number of rounds; round r still reads half (r+1)&1 and writes
+/// half r&1). Workgroups of this mode have a power-of-two size from 64 to
+/// HMSM_MAX_ROUNDS_WORKGROUP_SIZE (hmsm::gpu::rounds_workgroup_size).
+#define HMSM_MODE_POINTER_JUMPING_IN_DISPATCH 2u
+#define HMSM_MAX_ROUNDS_WORKGROUP_SIZE 1024
 
 #ifdef __cplusplus
 #include <cstddef>
@@ -76,7 +83,7 @@ struct PassConstants {
     uint model_vertex_count;  // vertices per instance
     uint level_begin;         // level-by-level: first model chain of the level
     uint level_count;         // level-by-level: chains per instance in the level
-    uint round;               // pointer jumping: round r reads the 2^r-th ancestor (chain_jump)
+    uint round;               // pointer jumping: round r reads the 2^r-th ancestor (chain_jump); in-dispatch mode: number of rounds
     uint mode;                // HMSM_MODE_*
     uint profile;             // hmsm::WindProfile value
     uint total_chains;        // state chains of the scene: stride between ping-pong halves
@@ -91,6 +98,15 @@ struct PassConstants {
 static_assert(sizeof(PassConstants) == 112, "PassConstants must match std430");
 static_assert(offsetof(PassConstants, wind) == 80, "PassConstants must match std430");
 static_assert(sizeof(PassConstants) <= 128, "push constants must fit the guaranteed 128 bytes");
+
+/// Workgroup size of an in-dispatch pointer-jumping dispatch over `chains` chains per instance:
+/// the smallest power of two from 64 to HMSM_MAX_ROUNDS_WORKGROUP_SIZE that is >= `chains`
+/// (or the maximum).
+constexpr uint32_t rounds_workgroup_size(uint32_t chains) {
+    uint32_t size = 64;
+    while (size < chains && size < HMSM_MAX_ROUNDS_WORKGROUP_SIZE) size *= 2;
+    return size;
+}
 }  // namespace hmsm::gpu
 #endif
 

@@ -31,6 +31,22 @@ std::optional<BackendKind> parse_backend_kind(std::string_view name) {
     return std::nullopt;
 }
 
+const char* to_string(Composition composition) {
+    switch (composition) {
+        case Composition::pointer_jumping: return "pointer_jumping";
+        case Composition::pointer_jumping_per_round: return "pointer_jumping_per_round";
+        case Composition::level_by_level: return "level_by_level";
+    }
+    return "?";
+}
+
+std::optional<Composition> parse_composition(std::string_view name) {
+    for (Composition c : {Composition::pointer_jumping, Composition::pointer_jumping_per_round,
+                          Composition::level_by_level})
+        if (name == to_string(c)) return c;
+    return std::nullopt;
+}
+
 std::optional<Pass> parse_pass(std::string_view name) {
     for (Pass p : kAllPasses)
         if (pass_name(p) == name) return p;
@@ -53,6 +69,10 @@ std::string number(double v) {
     return buf;
 }
 
+/// Largest model whose pointer-jumping rounds run in one dispatch: 16 chains per thread of the
+/// largest workgroup, so a round stays a short loop.
+constexpr uint32_t kMaxChainsForRoundsInDispatch = 16 * HMSM_MAX_ROUNDS_WORKGROUP_SIZE;
+
 /// Appends the dispatches of `pass` for every group. Passes 3 and 5 accumulate down the
 /// hierarchy: in pointer jumping, round r reads half (r-1)&1 and writes half r&1 (round 0
 /// starts from T, resp. u), so the last round leaves the pose in final_half; level by level
@@ -73,9 +93,24 @@ void append_pass(std::vector<Dispatch>& program, const SceneData& d, Pass pass,
         }
         return;
     }
-    if (composition == Composition::pointer_jumping) {
+    if (composition != Composition::level_by_level) {
+        // One dispatch per pass runs every round where a workgroup can loop over an instance's
+        // chains; larger models (and pointer_jumping_per_round) take one dispatch per round.
+        auto in_dispatch = [&](const detail::InstanceGroup& g) {
+            return composition == Composition::pointer_jumping &&
+                   d.models[g.model].chain_count <= kMaxChainsForRoundsInDispatch;
+        };
+        for (const auto& g : d.groups) {
+            if (!in_dispatch(g)) continue;
+            Dispatch dispatch{pass, detail::group_constants(d, g, final_half)};
+            dispatch.constants.element_count = g.instance_count * d.models[g.model].chain_count;
+            dispatch.constants.mode = HMSM_MODE_POINTER_JUMPING_IN_DISPATCH;
+            dispatch.constants.round = d.jump_rounds;
+            if (dispatch.constants.element_count > 0) program.push_back(dispatch);
+        }
         for (uint32_t r = 0; r < d.jump_rounds; ++r) {
             for (const auto& g : d.groups) {
+                if (in_dispatch(g)) continue;
                 Dispatch dispatch{pass, detail::group_constants(d, g, final_half)};
                 dispatch.constants.element_count = g.instance_count * d.models[g.model].chain_count;
                 dispatch.constants.round = r;

@@ -5,6 +5,8 @@
 
 #include "backend.h"
 
+#include <hmsm/generator.h>
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -149,7 +151,8 @@ TEST_P(Agreement, EachPassOnRandomStates) {
     scene.models.push_back(test::deep_tree(6));
     scene.model_names.push_back("deep");
     scene.instances.push_back({1, {-3, 0, 2}, 0.8});
-    for (Composition composition : {Composition::pointer_jumping, Composition::level_by_level}) {
+    for (Composition composition : {Composition::pointer_jumping, Composition::pointer_jumping_per_round,
+                                    Composition::level_by_level}) {
         config.composition = composition;
         std::string skip;
         auto sim = test::create_simulation_or_skip(scene, config, GetParam(), skip);
@@ -157,7 +160,7 @@ TEST_P(Agreement, EachPassOnRandomStates) {
         auto oracle = test::create_simulation_or_skip(scene, config, BackendKind::cpu64, skip);
         ASSERT_TRUE(sim && oracle);
         for (Pass pass : kAllPasses) {
-            SCOPED_TRACE(std::string(pass_name(pass)) + (composition == Composition::level_by_level ? " level" : " jump"));
+            SCOPED_TRACE(std::string(pass_name(pass)) + " " + to_string(composition));
             randomize_state(*sim, *oracle, 1234 + uint32_t(pass));
             std::vector<detail::Dispatch> dispatches;
             for (const auto& d : sim->step_program())
@@ -178,6 +181,47 @@ TEST_P(Agreement, EachPassOnRandomStates) {
                 for (double v : b) scale = std::max(scale, std::abs(v));
                 EXPECT_LE(test::max_abs_difference(a, b) / scale, 1e-4) << info.name;
             }
+        }
+    }
+}
+
+TEST_P(Agreement, RoundsInOneDispatchMatchOneDispatchPerRound) {
+    // The default runs each pointer-jumping pass as one dispatch with a workgroup per instance
+    // looping over its chains round by round; it must give the per-round result. paper-1 has
+    // 2,345 chains, more than one workgroup (1,024) covers at once; the mixed scene has two
+    // models in several instance groups.
+    auto paper = generate_preset("paper-1");
+    ASSERT_TRUE(paper.ok());
+    Scene mixed = *grid_scene(test::small_tree(), 3, 5.0, 3);
+    mixed.models.push_back(test::deep_tree(6));
+    mixed.model_names.push_back("deep");
+    mixed.instances.push_back({1, {-3, 0, 2}, 0.8});
+    mixed.instances.push_back({0, {6, 0, -2}, 0.1});
+    for (const auto& [name, scene] : {std::pair{"paper-1", single_tree_scene(*paper, {1, 0, 2}, 0.4)},
+                                      std::pair{"mixed", mixed}}) {
+        SCOPED_TRACE(name);
+        SimulationConfig config;
+        config.wind.strength = 8.0;
+        std::string skip;
+        auto one = test::create_simulation_or_skip(scene, config, GetParam(), skip);
+        if (!skip.empty()) GTEST_SKIP() << skip;
+        config.composition = Composition::pointer_jumping_per_round;
+        auto per_round = test::create_simulation_or_skip(scene, config, GetParam(), skip);
+        ASSERT_TRUE(one && per_round);
+        uint32_t in_dispatch = 0;
+        for (const auto& d : one->step_program())
+            in_dispatch += d.constants.mode == HMSM_MODE_POINTER_JUMPING_IN_DISPATCH;
+        EXPECT_GT(in_dispatch, 0u);
+        ASSERT_TRUE(one->step(40).ok());
+        ASSERT_TRUE(per_round->step(40).ok());
+        const double height = scene_height(scene);
+        for (Output o : {Output::chain_rotations, Output::chain_origins, Output::node_positions,
+                         Output::vertex_positions}) {
+            auto a = read_output(*one, o), b = read_output(*per_round, o);
+            ASSERT_EQ(a.size(), b.size());
+            ASSERT_TRUE(test::all_finite(a));
+            const double scale = o == Output::chain_rotations ? 1.0 : height;
+            EXPECT_LE(test::max_abs_difference(a, b) / scale, 1e-6) << "output " << int(o);
         }
     }
 }

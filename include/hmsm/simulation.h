@@ -30,9 +30,19 @@ std::optional<BackendKind> parse_backend_kind(std::string_view name);
 /// Backends compiled into this build (never `automatic`).
 std::vector<BackendKind> compiled_backends();
 
-/// How passes 3 and 5 accumulate down the hierarchy: the paper's pointer jumping in
-/// ceil(log2(D+1)) rounds, or one dispatch per depth level (for comparison).
-enum class Composition { pointer_jumping, level_by_level };
+/// How passes 3 and 5 accumulate down the hierarchy. All three give the same poses.
+enum class Composition {
+    /// The paper's pointer jumping in ceil(log2(D+1)) rounds, all rounds in one dispatch per
+    /// pass: one workgroup per instance runs round after round with a barrier in between
+    /// (models of more than 16,384 chains fall back to one dispatch per round).
+    pointer_jumping,
+    /// Pointer jumping with one dispatch per round over every instance (for comparison).
+    pointer_jumping_per_round,
+    /// One dispatch per depth level, D+1 in all (for comparison).
+    level_by_level,
+};
+const char* to_string(Composition composition);
+std::optional<Composition> parse_composition(std::string_view name);
 
 struct SimulationConfig {
     BackendKind backend = BackendKind::automatic;

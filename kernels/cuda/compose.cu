@@ -1,17 +1,39 @@
 // Pass 3: total rotation R_c = R_parent T_c, accumulated down the chain tree.
 // Pointer jumping (the paper's M_temp): round r replaces each chain's partial product P by
 // P(2^r-th ancestor) P, reading half src_half of chain_rotation and writing half dst_half
-// (round 0 starts from T), so after ceil(log2(D+1)) rounds P is the full product. Level by
-// level: one depth per dispatch, R = R_parent T in place in the pose half (dst_half), the
-// parent having been written by the previous dispatch.
+// (round 0 starts from T), so after ceil(log2(D+1)) rounds P is the full product. In-dispatch
+// mode runs every round in one launch, one block per instance, __syncthreads() between rounds.
+// Level by level: one depth per dispatch, R = R_parent T in place in the pose half (dst_half),
+// the parent having been written by the previous dispatch.
 #include "pass_math.cuh"
 
 namespace hmsm::detail::cuda {
 
+/// One pointer-jumping round for model chain c of group instance k. kWrittenInBlock: the src
+/// half was written by this block's previous round (in-dispatch mode).
+template <bool kWrittenInBlock>
+static HMSM_HOST_DEVICE void compose_jump(const BufferPointers& b, const gpu::PassConstants& pc,
+                                          uint32_t k, uint32_t c, uint32_t round,
+                                          uint32_t src_half, uint32_t dst_half) {
+    const uint64_t chain = state_chain(pc, k, int32_t(c));
+    const int32_t ancestor =
+        load(b.chain_jump + uint64_t(round) * pc.total_model_chains + pc.model_chain_begin + c);
+    // The product accumulated so far: T itself before round 0, else the src half.
+    auto product_so_far = [&](uint64_t state) {
+        if (round == 0) return load_mat3(b.chain_local, state);
+        const uint64_t at = half_begin(pc, src_half) + state;
+        return kWrittenInBlock ? load_mat3_written_in_block(b.chain_rotation, at)
+                               : load_mat3(b.chain_rotation, at);
+    };
+    Mat3 rotation = product_so_far(chain);
+    if (ancestor >= 0) rotation = product_so_far(state_chain(pc, k, ancestor)) * rotation;
+    store_mat3(b.chain_rotation, half_begin(pc, dst_half) + chain, rotation);
+}
+
 static HMSM_HOST_DEVICE void compose_element(const BufferPointers& b,
                                              const gpu::PassConstants& pc, uint32_t i) {
-    const uint64_t dst = half_begin(pc, pc.dst_half);
     if (pc.mode == HMSM_MODE_LEVEL_BY_LEVEL) {
+        const uint64_t dst = half_begin(pc, pc.dst_half);
         const Element e = element_of(i, pc.level_count);
         const int32_t c = int32_t(pc.level_begin + e.index);
         const int32_t parent = load(b.chain_parent + pc.model_chain_begin + c);
@@ -23,16 +45,7 @@ static HMSM_HOST_DEVICE void compose_element(const BufferPointers& b,
         return;
     }
     const Element e = element_of(i, pc.model_chain_count);
-    const uint64_t chain = pc.chain_begin + i;
-    const int32_t ancestor =
-        load(b.chain_jump + uint64_t(pc.round) * pc.total_model_chains + pc.model_chain_begin + e.index);
-    // The product accumulated so far: T itself before round 0, else the src half.
-    const float4* product = pc.round == 0 ? b.chain_local : b.chain_rotation;
-    const uint64_t src = pc.round == 0 ? 0 : half_begin(pc, pc.src_half);
-    Mat3 rotation = load_mat3(product, src + chain);
-    if (ancestor >= 0)
-        rotation = load_mat3(product, src + state_chain(pc, e.instance, ancestor)) * rotation;
-    store_mat3(b.chain_rotation, dst + chain, rotation);
+    compose_jump<false>(b, pc, e.instance, e.index, pc.round, pc.src_half, pc.dst_half);
 }
 
 static __global__ void __launch_bounds__(HMSM_WORKGROUP_SIZE)
@@ -42,14 +55,38 @@ static __global__ void __launch_bounds__(HMSM_WORKGROUP_SIZE)
         compose_element(b, pc, i);
 }
 
+/// In-dispatch mode: block k runs every round for instance k (and k + gridDim.x, ...).
+static __global__ void __launch_bounds__(HMSM_MAX_ROUNDS_WORKGROUP_SIZE)
+    compose_rounds_kernel(const BufferPointers b, const gpu::PassConstants pc) {
+    for (uint32_t k = blockIdx.x; k < dispatch_instances(pc); k += gridDim.x) {
+        for (uint32_t round = 0; round < pc.round; ++round) {
+            for (uint32_t c = threadIdx.x; c < pc.model_chain_count; c += blockDim.x)
+                compose_jump<true>(b, pc, k, c, round, (round + 1) & 1, round & 1);
+            __syncthreads();
+        }
+    }
+}
+
 cudaError_t launch_compose(const BufferPointers& b, const gpu::PassConstants& pc,
                            cudaStream_t stream) {
     if (pc.element_count == 0) return cudaSuccess;
-    compose_kernel<<<launch_blocks(pc.element_count), HMSM_WORKGROUP_SIZE, 0, stream>>>(b, pc);
+    if (pc.mode == HMSM_MODE_POINTER_JUMPING_IN_DISPATCH)
+        compose_rounds_kernel<<<launch_blocks_per_instance(pc), gpu::rounds_workgroup_size(pc.model_chain_count), 0,
+                                stream>>>(b, pc);
+    else
+        compose_kernel<<<launch_blocks(pc.element_count), HMSM_WORKGROUP_SIZE, 0, stream>>>(b, pc);
     return cudaGetLastError();
 }
 
 void emulate_compose(const BufferPointers& b, const gpu::PassConstants& pc) {
+    if (pc.mode == HMSM_MODE_POINTER_JUMPING_IN_DISPATCH) {
+        for (uint32_t round = 0; round < pc.round; ++round)
+            for (uint32_t i = 0; i < pc.element_count; ++i) {
+                const Element e = element_of(i, pc.model_chain_count);
+                compose_jump<false>(b, pc, e.instance, e.index, round, (round + 1) & 1, round & 1);
+            }
+        return;
+    }
     for (uint32_t i = 0; i < pc.element_count; ++i) compose_element(b, pc, i);
 }
 

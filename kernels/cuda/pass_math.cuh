@@ -3,7 +3,9 @@
 //
 // Everything here is __host__ __device__ so that the same per-element code also runs on the
 // host (emulate_NAME in launchers.h). Within one dispatch no element is both read and written
-// (ping-pong halves, one depth level per dispatch), so every load may use the read-only path.
+// (ping-pong halves, one depth level per dispatch), so every load may use the read-only path,
+// except in the in-dispatch pointer-jumping rounds, where a block reads what it wrote in its
+// previous round (load_mat3_written_in_block).
 #pragma once
 
 #include "launchers.h"
@@ -49,6 +51,13 @@ HMSM_HOST_DEVICE Mat3 load_mat3(const float4* buffer, uint64_t index) {
     const float4* p = buffer + 3 * index;
     return {xyz(load(p)), xyz(load(p + 1)), xyz(load(p + 2))};
 }
+/// The same for data written earlier in the same dispatch by another thread of the block (the
+/// in-dispatch pointer-jumping rounds): a plain load, which __syncthreads() makes see the
+/// block's earlier writes, where the read-only path would not.
+HMSM_HOST_DEVICE Mat3 load_mat3_written_in_block(const float4* buffer, uint64_t index) {
+    const float4* p = buffer + 3 * index;
+    return {xyz(p[0]), xyz(p[1]), xyz(p[2])};
+}
 /// Stores with w = 0 in every column, as read() reports it.
 HMSM_HOST_DEVICE void store_mat3(float4* buffer, uint64_t index, const Mat3& m) {
     float4* p = buffer + 3 * index;
@@ -77,12 +86,24 @@ HMSM_HOST_DEVICE uint64_t half_begin(const gpu::PassConstants& pc, uint32_t half
     return uint64_t(half) * pc.total_chains;
 }
 
+/// Instances of a dispatch, for the one-block-per-instance in-dispatch rounds.
+HMSM_HOST_DEVICE uint32_t dispatch_instances(const gpu::PassConstants& pc) {
+    return pc.element_count / pc.model_chain_count;
+}
+
 /// Blocks for n threads. The grid is capped and every kernel strides over the rest, so any
 /// element count (10,000 instances x 78,563 vertices is 7.9e8) fits one launch.
 inline unsigned launch_blocks(uint32_t n) {
     const uint32_t max_blocks = 1u << 24;
     uint32_t blocks = (n + HMSM_WORKGROUP_SIZE - 1) / HMSM_WORKGROUP_SIZE;
     return blocks < max_blocks ? blocks : max_blocks;
+}
+
+/// Blocks of an in-dispatch pointer-jumping launch: one per instance (kernels stride beyond).
+inline unsigned launch_blocks_per_instance(const gpu::PassConstants& pc) {
+    const uint32_t max_blocks = 1u << 24;
+    const uint32_t instances = dispatch_instances(pc);
+    return instances < max_blocks ? instances : max_blocks;
 }
 
 }  // namespace hmsm::detail::cuda

@@ -1,7 +1,8 @@
 // Pass 5: chain origins O_c = O_parent + u_attach(c), O_trunk = the instance origin, summed down
 // the chain tree like compose (the paper's Root Positions temporary). Pointer jumping: round r
 // adds the partial sum of the 2^r-th ancestor, src_half -> dst_half, round 0 starting from each
-// chain's own offset. Level by level: one depth per dispatch, in place in dst_half.
+// chain's own offset; in-dispatch mode runs every round in one launch, one block per instance.
+// Level by level: one depth per dispatch, in place in dst_half.
 #include "pass_math.cuh"
 
 namespace hmsm::detail::cuda {
@@ -17,10 +18,30 @@ static HMSM_HOST_DEVICE float4 own_offset(const BufferPointers& b, const gpu::Pa
     return load(b.node_relative + state_node(pc, k, load(b.chain_attach + pc.model_chain_begin + c)));
 }
 
+/// One pointer-jumping round for model chain c of group instance k. kWrittenInBlock: the src
+/// half was written by this block's previous round (in-dispatch mode).
+template <bool kWrittenInBlock>
+static HMSM_HOST_DEVICE void root_positions_jump(const BufferPointers& b,
+                                                 const gpu::PassConstants& pc, uint32_t k,
+                                                 int32_t c, uint32_t round, uint32_t src_half,
+                                                 uint32_t dst_half) {
+    const int32_t ancestor =
+        load(b.chain_jump + uint64_t(round) * pc.total_model_chains + pc.model_chain_begin + c);
+    const uint64_t src = half_begin(pc, src_half);
+    auto sum_so_far = [&](int32_t chain) {
+        if (round == 0) return own_offset(b, pc, k, chain);
+        const float4* at = b.chain_origin + src + state_chain(pc, k, chain);
+        return kWrittenInBlock ? *at : load(at);
+    };
+    float4 origin = sum_so_far(c);
+    if (ancestor >= 0) origin = origin + sum_so_far(ancestor);
+    b.chain_origin[half_begin(pc, dst_half) + state_chain(pc, k, c)] = origin;
+}
+
 static HMSM_HOST_DEVICE void root_positions_element(const BufferPointers& b,
                                                     const gpu::PassConstants& pc, uint32_t i) {
-    const uint64_t dst = half_begin(pc, pc.dst_half);
     if (pc.mode == HMSM_MODE_LEVEL_BY_LEVEL) {
+        const uint64_t dst = half_begin(pc, pc.dst_half);
         const Element e = element_of(i, pc.level_count);
         const int32_t c = int32_t(pc.level_begin + e.index);
         const int32_t parent = load(b.chain_parent + pc.model_chain_begin + c);
@@ -30,17 +51,7 @@ static HMSM_HOST_DEVICE void root_positions_element(const BufferPointers& b,
         return;
     }
     const Element e = element_of(i, pc.model_chain_count);
-    const int32_t c = int32_t(e.index);
-    const int32_t ancestor =
-        load(b.chain_jump + uint64_t(pc.round) * pc.total_model_chains + pc.model_chain_begin + c);
-    const uint64_t src = half_begin(pc, pc.src_half);
-    auto sum_so_far = [&](int32_t chain) {
-        return pc.round == 0 ? own_offset(b, pc, e.instance, chain)
-                             : load(b.chain_origin + src + state_chain(pc, e.instance, chain));
-    };
-    float4 origin = sum_so_far(c);
-    if (ancestor >= 0) origin = origin + sum_so_far(ancestor);
-    b.chain_origin[dst + pc.chain_begin + i] = origin;
+    root_positions_jump<false>(b, pc, e.instance, int32_t(e.index), pc.round, pc.src_half, pc.dst_half);
 }
 
 static __global__ void __launch_bounds__(HMSM_WORKGROUP_SIZE)
@@ -50,14 +61,39 @@ static __global__ void __launch_bounds__(HMSM_WORKGROUP_SIZE)
         root_positions_element(b, pc, i);
 }
 
+/// In-dispatch mode: block k runs every round for instance k (and k + gridDim.x, ...).
+static __global__ void __launch_bounds__(HMSM_MAX_ROUNDS_WORKGROUP_SIZE)
+    root_positions_rounds_kernel(const BufferPointers b, const gpu::PassConstants pc) {
+    for (uint32_t k = blockIdx.x; k < dispatch_instances(pc); k += gridDim.x) {
+        for (uint32_t round = 0; round < pc.round; ++round) {
+            for (uint32_t c = threadIdx.x; c < pc.model_chain_count; c += blockDim.x)
+                root_positions_jump<true>(b, pc, k, int32_t(c), round, (round + 1) & 1, round & 1);
+            __syncthreads();
+        }
+    }
+}
+
 cudaError_t launch_root_positions(const BufferPointers& b, const gpu::PassConstants& pc,
                                   cudaStream_t stream) {
     if (pc.element_count == 0) return cudaSuccess;
-    root_positions_kernel<<<launch_blocks(pc.element_count), HMSM_WORKGROUP_SIZE, 0, stream>>>(b, pc);
+    if (pc.mode == HMSM_MODE_POINTER_JUMPING_IN_DISPATCH)
+        root_positions_rounds_kernel<<<launch_blocks_per_instance(pc),
+                                       gpu::rounds_workgroup_size(pc.model_chain_count), 0, stream>>>(b, pc);
+    else
+        root_positions_kernel<<<launch_blocks(pc.element_count), HMSM_WORKGROUP_SIZE, 0, stream>>>(b, pc);
     return cudaGetLastError();
 }
 
 void emulate_root_positions(const BufferPointers& b, const gpu::PassConstants& pc) {
+    if (pc.mode == HMSM_MODE_POINTER_JUMPING_IN_DISPATCH) {
+        for (uint32_t round = 0; round < pc.round; ++round)
+            for (uint32_t i = 0; i < pc.element_count; ++i) {
+                const Element e = element_of(i, pc.model_chain_count);
+                root_positions_jump<false>(b, pc, e.instance, int32_t(e.index), round, (round + 1) & 1,
+                                           round & 1);
+            }
+        return;
+    }
     for (uint32_t i = 0; i < pc.element_count; ++i) root_positions_element(b, pc, i);
 }
 

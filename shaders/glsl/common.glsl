@@ -7,7 +7,19 @@
 
 #include "gpu_layout.h"
 
+#ifdef HMSM_SPECIALIZED_WORKGROUP_SIZE
+// compose and root_positions: the size is specialization constant 0, set per pipeline
+// (HMSM_WORKGROUP_SIZE, or gpu::rounds_workgroup_size for in-dispatch rounds).
+layout(local_size_x_id = 0, local_size_y = 1, local_size_z = 1) in;
+#else
 layout(local_size_x = HMSM_WORKGROUP_SIZE, local_size_y = 1, local_size_z = 1) in;
+#endif
+
+// The ping-pong pose buffers are coherent where a workgroup reads, after a barrier, what other
+// invocations of it wrote (in-dispatch pointer-jumping rounds).
+#ifndef HMSM_POSE_COHERENCE
+#define HMSM_POSE_COHERENCE
+#endif
 
 layout(push_constant, std430) uniform PushBlock {
     PassConstants pc;
@@ -33,19 +45,17 @@ layout(set = 0, binding = HMSM_BINDING_INSTANCE_YAW, std430) readonly buffer Ins
 layout(set = 0, binding = HMSM_BINDING_CHAIN_STATE, std430) buffer ChainState { vec4 chain_state[]; };
 layout(set = 0, binding = HMSM_BINDING_CHAIN_FORCE, std430) buffer ChainForce { vec2 chain_force[]; };
 layout(set = 0, binding = HMSM_BINDING_CHAIN_LOCAL, std430) buffer ChainLocal { mat3x4 chain_local[]; };
-layout(set = 0, binding = HMSM_BINDING_CHAIN_ROTATION, std430) buffer ChainRotation { mat3x4 chain_rotation[]; };
+layout(set = 0, binding = HMSM_BINDING_CHAIN_ROTATION, std430) HMSM_POSE_COHERENCE buffer ChainRotation { mat3x4 chain_rotation[]; };
 layout(set = 0, binding = HMSM_BINDING_NODE_RELATIVE, std430) buffer NodeRelative { vec4 node_relative[]; };
-layout(set = 0, binding = HMSM_BINDING_CHAIN_ORIGIN, std430) buffer ChainOrigin { vec4 chain_origin[]; };
+layout(set = 0, binding = HMSM_BINDING_CHAIN_ORIGIN, std430) HMSM_POSE_COHERENCE buffer ChainOrigin { vec4 chain_origin[]; };
 layout(set = 0, binding = HMSM_BINDING_NODE_WORLD, std430) buffer NodeWorld { vec4 node_world[]; };
 layout(set = 0, binding = HMSM_BINDING_VERTEX_POSITION, std430) buffer VertexPosition { vec4 vertex_position[]; };
 layout(set = 0, binding = HMSM_BINDING_VERTEX_NORMAL, std430) buffer VertexNormal { vec4 vertex_normal[]; };
 
 /// Global thread index. The host spreads large dispatches over a 2-D grid of workgroups
 /// (maxComputeWorkGroupCount[0] may be as low as 65535), so the index is linearized here.
-uint thread_index() {
-    uint group = gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x;
-    return group * HMSM_WORKGROUP_SIZE + gl_LocalInvocationID.x;
-}
+uint workgroup_index() { return gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x; }
+uint thread_index() { return workgroup_index() * gl_WorkGroupSize.x + gl_LocalInvocationID.x; }
 
 /// State index of model chain `c` of group instance `k` (cpu_state.h state_chain).
 uint state_chain(uint k, uint c) { return pc.chain_begin + k * pc.model_chain_count + c; }

@@ -1,22 +1,45 @@
 #version 450
 // Pass 3: total rotation R_c = R_parent T_c (src/cpu/compose.cpp). Pointer jumping: round r
-// multiplies in the product held by the 2^r-th ancestor, reading half src_half and writing
-// half dst_half (round 0 reads T), so no thread reads what another writes. Level by level:
+// multiplies in the product held by the 2^round-th ancestor, reading half src_half and writing
+// half dst_half (round 0 reads T), so no thread reads what another writes. In-dispatch mode:
+// workgroup k runs every round for group instance k, a barrier between rounds. Level by level:
 // one depth per dispatch, in place in half dst_half.
 #extension GL_GOOGLE_include_directive : require
+#define HMSM_SPECIALIZED_WORKGROUP_SIZE
+#define HMSM_POSE_COHERENCE coherent
 #include "common.glsl"
 
 /// Product of T over the chains between c and its 2^round-th ancestor (exclusive) so far.
-mat3 product_so_far(uint chain) {
-    return pc.round == 0u ? as_mat3(chain_local[chain])
-                          : as_mat3(chain_rotation[half_offset(pc.src_half) + chain]);
+mat3 product_so_far(uint round, uint src_half, uint chain) {
+    return round == 0u ? as_mat3(chain_local[chain])
+                       : as_mat3(chain_rotation[half_offset(src_half) + chain]);
+}
+
+/// One pointer-jumping round for model chain c of group instance k.
+void jump(uint k, uint c, uint round, uint src_half, uint dst_half) {
+    uint chain = state_chain(k, c);
+    int ancestor = chain_jump[round * pc.total_model_chains + pc.model_chain_begin + c];
+    mat3 r = product_so_far(round, src_half, chain);
+    if (ancestor >= 0) r = product_so_far(round, src_half, state_chain(k, uint(ancestor))) * r;
+    chain_rotation[half_offset(dst_half) + chain] = as_mat3x4(r);
 }
 
 void main() {
+    if (pc.mode == HMSM_MODE_POINTER_JUMPING_IN_DISPATCH) {
+        uint k = workgroup_index();
+        if (k >= pc.element_count / pc.model_chain_count) return;  // uniform per workgroup
+        for (uint round = 0u; round < pc.round; ++round) {
+            for (uint c = gl_LocalInvocationID.x; c < pc.model_chain_count; c += gl_WorkGroupSize.x)
+                jump(k, c, round, (round + 1u) & 1u, round & 1u);
+            memoryBarrierBuffer();
+            barrier();
+        }
+        return;
+    }
     uint i = thread_index();
     if (i >= pc.element_count) return;
-    uint dst = half_offset(pc.dst_half);
     if (pc.mode == HMSM_MODE_LEVEL_BY_LEVEL) {
+        uint dst = half_offset(pc.dst_half);
         uint k = i / pc.level_count;
         uint c = pc.level_begin + i % pc.level_count;
         int parent = chain_parent[pc.model_chain_begin + c];
@@ -26,11 +49,5 @@ void main() {
         chain_rotation[dst + chain] = as_mat3x4(r);
         return;
     }
-    uint k = i / pc.model_chain_count;
-    uint c = i % pc.model_chain_count;
-    uint chain = state_chain(k, c);
-    int ancestor = chain_jump[pc.round * pc.total_model_chains + pc.model_chain_begin + c];
-    mat3 r = ancestor < 0 ? product_so_far(chain)
-                          : product_so_far(state_chain(k, uint(ancestor))) * product_so_far(chain);
-    chain_rotation[dst + chain] = as_mat3x4(r);
+    jump(i / pc.model_chain_count, i % pc.model_chain_count, pc.round, pc.src_half, pc.dst_half);
 }

@@ -1,9 +1,12 @@
 #version 450
 // Pass 5: chain origins O_c = O_parent + u_attach(c), O_trunk = instance origin
-// (src/cpu/root_positions.cpp). Pointer jumping adds the partial sum held by the 2^r-th
+// (src/cpu/root_positions.cpp). Pointer jumping adds the partial sum held by the 2^round-th
 // ancestor (round 0 starts from each chain's own offset), half src_half -> half dst_half;
-// level by level: one depth per dispatch, in place in half dst_half.
+// in-dispatch mode: workgroup k runs every round for group instance k, a barrier between
+// rounds. Level by level: one depth per dispatch, in place in half dst_half.
 #extension GL_GOOGLE_include_directive : require
+#define HMSM_SPECIALIZED_WORKGROUP_SIZE
+#define HMSM_POSE_COHERENCE coherent
 #include "common.glsl"
 
 /// The offset chain c of group instance k contributes on its own: the instance origin for the
@@ -14,16 +17,34 @@ vec4 own_offset(uint k, uint c) {
     return node_relative[state_node(k, uint(chain_attach[pc.model_chain_begin + c]))];
 }
 
-vec4 sum_so_far(uint k, uint c) {
-    return pc.round == 0u ? own_offset(k, c)
-                          : chain_origin[half_offset(pc.src_half) + state_chain(k, c)];
+vec4 sum_so_far(uint k, uint c, uint round, uint src_half) {
+    return round == 0u ? own_offset(k, c) : chain_origin[half_offset(src_half) + state_chain(k, c)];
+}
+
+/// One pointer-jumping round for model chain c of group instance k.
+void jump(uint k, uint c, uint round, uint src_half, uint dst_half) {
+    int ancestor = chain_jump[round * pc.total_model_chains + pc.model_chain_begin + c];
+    vec4 origin = sum_so_far(k, c, round, src_half);
+    if (ancestor >= 0) origin += sum_so_far(k, uint(ancestor), round, src_half);
+    chain_origin[half_offset(dst_half) + state_chain(k, c)] = origin;
 }
 
 void main() {
+    if (pc.mode == HMSM_MODE_POINTER_JUMPING_IN_DISPATCH) {
+        uint k = workgroup_index();
+        if (k >= pc.element_count / pc.model_chain_count) return;  // uniform per workgroup
+        for (uint round = 0u; round < pc.round; ++round) {
+            for (uint c = gl_LocalInvocationID.x; c < pc.model_chain_count; c += gl_WorkGroupSize.x)
+                jump(k, c, round, (round + 1u) & 1u, round & 1u);
+            memoryBarrierBuffer();
+            barrier();
+        }
+        return;
+    }
     uint i = thread_index();
     if (i >= pc.element_count) return;
-    uint dst = half_offset(pc.dst_half);
     if (pc.mode == HMSM_MODE_LEVEL_BY_LEVEL) {
+        uint dst = half_offset(pc.dst_half);
         uint k = i / pc.level_count;
         uint c = pc.level_begin + i % pc.level_count;
         int parent = chain_parent[pc.model_chain_begin + c];
@@ -32,10 +53,5 @@ void main() {
         chain_origin[dst + state_chain(k, c)] = origin;
         return;
     }
-    uint k = i / pc.model_chain_count;
-    uint c = i % pc.model_chain_count;
-    int ancestor = chain_jump[pc.round * pc.total_model_chains + pc.model_chain_begin + c];
-    vec4 origin = sum_so_far(k, c);
-    if (ancestor >= 0) origin += sum_so_far(k, uint(ancestor));
-    chain_origin[dst + state_chain(k, c)] = origin;
+    jump(i / pc.model_chain_count, i % pc.model_chain_count, pc.round, pc.src_half, pc.dst_half);
 }

@@ -1,15 +1,37 @@
 // Pass 3: total rotation R_c = R_parent T_c. Pointer jumping: round r multiplies in the product
 // held by the 2^r-th ancestor, reading one half of chain_rotation and writing the other (round 0
-// reads T). Level by level: one depth per dispatch, in place in the pose half.
+// reads T); in-dispatch mode runs every round in turn. Level by level: one depth per dispatch,
+// in place in the pose half.
 #include "cpu_state.h"
 
 namespace hmsm::detail::cpu {
+namespace {
+
+template <class T>
+void compose_round(State<T>& s, const gpu::PassConstants& pc, uint32_t round, uint32_t src_half,
+                   uint32_t dst_half) {
+    const uint64_t src = uint64_t(src_half) * s.total_chains;
+    const uint64_t dst = uint64_t(dst_half) * s.total_chains;
+    auto product_so_far = [&](uint64_t gc) -> const auto& {
+        return round == 0 ? s.chain_local[gc] : s.chain_rotation[src + gc];
+    };
+    for (uint32_t i = 0; i < pc.element_count; ++i) {
+        Element e = element_of(i, pc.model_chain_count);
+        uint64_t gc = state_chain(pc, e.instance, int32_t(e.index));
+        int32_t ancestor =
+            s.chain_jump[uint64_t(round) * pc.total_model_chains + pc.model_chain_begin + e.index];
+        s.chain_rotation[dst + gc] =
+            ancestor < 0 ? product_so_far(gc)
+                         : product_so_far(state_chain(pc, e.instance, ancestor)) * product_so_far(gc);
+    }
+}
+
+}  // namespace
 
 template <class T>
 void compose(State<T>& s, const gpu::PassConstants& pc) {
-    const uint64_t src = uint64_t(pc.src_half) * s.total_chains;
-    const uint64_t dst = uint64_t(pc.dst_half) * s.total_chains;
     if (pc.mode == HMSM_MODE_LEVEL_BY_LEVEL) {
+        const uint64_t dst = uint64_t(pc.dst_half) * s.total_chains;
         for (uint32_t i = 0; i < pc.element_count; ++i) {
             Element e = element_of(i, pc.level_count);
             int32_t c = int32_t(pc.level_begin + e.index);
@@ -22,18 +44,12 @@ void compose(State<T>& s, const gpu::PassConstants& pc) {
         }
         return;
     }
-    auto product_so_far = [&](uint64_t gc) -> const auto& {
-        return pc.round == 0 ? s.chain_local[gc] : s.chain_rotation[src + gc];
-    };
-    for (uint32_t i = 0; i < pc.element_count; ++i) {
-        Element e = element_of(i, pc.model_chain_count);
-        uint64_t gc = state_chain(pc, e.instance, int32_t(e.index));
-        int32_t ancestor =
-            s.chain_jump[uint64_t(pc.round) * pc.total_model_chains + pc.model_chain_begin + e.index];
-        s.chain_rotation[dst + gc] =
-            ancestor < 0 ? product_so_far(gc)
-                         : product_so_far(state_chain(pc, e.instance, ancestor)) * product_so_far(gc);
+    if (pc.mode == HMSM_MODE_POINTER_JUMPING_IN_DISPATCH) {
+        for (uint32_t round = 0; round < pc.round; ++round)
+            compose_round(s, pc, round, (round + 1) & 1, round & 1);
+        return;
     }
+    compose_round(s, pc, pc.round, pc.src_half, pc.dst_half);
 }
 
 template void compose<float>(State<float>&, const gpu::PassConstants&);

@@ -1,47 +1,67 @@
 // Pass 5: chain origins O_c = O_parent + u_attach(c), O_trunk = instance origin. Pointer jumping
 // adds the partial sum held by the 2^r-th ancestor (round 0 starts from u at the attach node);
-// level by level: one depth per dispatch, in place in the pose half.
+// in-dispatch mode runs every round in turn. Level by level: one depth per dispatch, in place
+// in the pose half.
 #include "cpu_state.h"
 
 namespace hmsm::detail::cpu {
+namespace {
+
+/// The offset a chain contributes on its own: the instance origin for the trunk, else the
+/// attach node's position relative to the parent chain's origin.
+template <class T>
+typename State<T>::vec4 own_offset(const State<T>& s, const gpu::PassConstants& pc, uint32_t k,
+                                   int32_t c) {
+    if (s.chain_parent[pc.model_chain_begin + c] < 0) {
+        const auto& o = s.instance_origin[pc.instance_begin + k];
+        return {o.x, o.y, o.z, T(0)};
+    }
+    return s.node_relative[state_node(pc, k, s.chain_attach[pc.model_chain_begin + c])];
+}
 
 template <class T>
-void root_positions(State<T>& s, const gpu::PassConstants& pc) {
+void root_positions_round(State<T>& s, const gpu::PassConstants& pc, uint32_t round, uint32_t src_half,
+                          uint32_t dst_half) {
     using vec4 = typename State<T>::vec4;
-    const uint64_t src = uint64_t(pc.src_half) * s.total_chains;
-    const uint64_t dst = uint64_t(pc.dst_half) * s.total_chains;
-    // The offset a chain contributes on its own: the instance origin for the trunk, else the
-    // attach node's position relative to the parent chain's origin.
-    auto own_offset = [&](uint32_t k, int32_t c) -> vec4 {
-        if (s.chain_parent[pc.model_chain_begin + c] < 0) {
-            const auto& o = s.instance_origin[pc.instance_begin + k];
-            return {o.x, o.y, o.z, T(0)};
-        }
-        return s.node_relative[state_node(pc, k, s.chain_attach[pc.model_chain_begin + c])];
-    };
-    if (pc.mode == HMSM_MODE_LEVEL_BY_LEVEL) {
-        for (uint32_t i = 0; i < pc.element_count; ++i) {
-            Element e = element_of(i, pc.level_count);
-            int32_t c = int32_t(pc.level_begin + e.index);
-            int32_t parent = s.chain_parent[pc.model_chain_begin + c];
-            vec4 origin = own_offset(e.instance, c);
-            if (parent >= 0) origin += s.chain_origin[dst + state_chain(pc, e.instance, parent)];
-            s.chain_origin[dst + state_chain(pc, e.instance, c)] = origin;
-        }
-        return;
-    }
+    const uint64_t src = uint64_t(src_half) * s.total_chains;
+    const uint64_t dst = uint64_t(dst_half) * s.total_chains;
     auto sum_so_far = [&](uint32_t k, int32_t c) -> vec4 {
-        return pc.round == 0 ? own_offset(k, c) : s.chain_origin[src + state_chain(pc, k, c)];
+        return round == 0 ? own_offset(s, pc, k, c) : s.chain_origin[src + state_chain(pc, k, c)];
     };
     for (uint32_t i = 0; i < pc.element_count; ++i) {
         Element e = element_of(i, pc.model_chain_count);
         int32_t c = int32_t(e.index);
         int32_t ancestor =
-            s.chain_jump[uint64_t(pc.round) * pc.total_model_chains + pc.model_chain_begin + c];
+            s.chain_jump[uint64_t(round) * pc.total_model_chains + pc.model_chain_begin + c];
         vec4 origin = sum_so_far(e.instance, c);
         if (ancestor >= 0) origin += sum_so_far(e.instance, ancestor);
         s.chain_origin[dst + state_chain(pc, e.instance, c)] = origin;
     }
+}
+
+}  // namespace
+
+template <class T>
+void root_positions(State<T>& s, const gpu::PassConstants& pc) {
+    using vec4 = typename State<T>::vec4;
+    if (pc.mode == HMSM_MODE_LEVEL_BY_LEVEL) {
+        const uint64_t dst = uint64_t(pc.dst_half) * s.total_chains;
+        for (uint32_t i = 0; i < pc.element_count; ++i) {
+            Element e = element_of(i, pc.level_count);
+            int32_t c = int32_t(pc.level_begin + e.index);
+            int32_t parent = s.chain_parent[pc.model_chain_begin + c];
+            vec4 origin = own_offset(s, pc, e.instance, c);
+            if (parent >= 0) origin += s.chain_origin[dst + state_chain(pc, e.instance, parent)];
+            s.chain_origin[dst + state_chain(pc, e.instance, c)] = origin;
+        }
+        return;
+    }
+    if (pc.mode == HMSM_MODE_POINTER_JUMPING_IN_DISPATCH) {
+        for (uint32_t round = 0; round < pc.round; ++round)
+            root_positions_round(s, pc, round, (round + 1) & 1, round & 1);
+        return;
+    }
+    root_positions_round(s, pc, pc.round, pc.src_half, pc.dst_half);
 }
 
 template void root_positions<float>(State<float>&, const gpu::PassConstants&);

@@ -2,6 +2,8 @@
 
 #include "vk_error.h"
 
+#include <algorithm>
+
 // Generated at build time by cmake/HmsmVulkan.cmake (glslangValidator --vn hmsm_spirv_NAME).
 #include "hmsm_spirv/compose.h"
 #include "hmsm_spirv/contour.h"
@@ -66,22 +68,9 @@ Result<std::unique_ptr<Pipelines>> Pipelines::create(const Device& device) {
     HMSM_VK_TRY(vk.vkCreatePipelineLayout(dev, &layout_info, nullptr, &p->layout_));
 
     for (Pass pass : kAllPasses) {
-        std::span<const uint32_t> code = pass_spirv(pass);
-        VkShaderModuleCreateInfo module_info{VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};
-        module_info.codeSize = code.size_bytes();
-        module_info.pCode = code.data();
-        VkShaderModule module;
-        HMSM_VK_TRY(vk.vkCreateShaderModule(dev, &module_info, nullptr, &module));
-        VkComputePipelineCreateInfo info{VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO};
-        info.stage.sType = VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO;
-        info.stage.stage = VK_SHADER_STAGE_COMPUTE_BIT;
-        info.stage.module = module;
-        info.stage.pName = "main";
-        info.layout = p->layout_;
-        VkResult result = vk.vkCreateComputePipelines(dev, VK_NULL_HANDLE, 1, &info, nullptr,
-                                                      &p->pipelines_[uint32_t(pass)]);
-        vk.vkDestroyShaderModule(dev, module, nullptr);
-        HMSM_VK_TRY(result);
+        auto pipeline = p->create_pipeline(pass, HMSM_WORKGROUP_SIZE);
+        if (!pipeline) return pipeline.status();
+        p->pipelines_[uint32_t(pass)] = *pipeline;
     }
 
     VkDescriptorPoolSize size{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, kBufferCount};
@@ -98,12 +87,88 @@ Result<std::unique_ptr<Pipelines>> Pipelines::create(const Device& device) {
     return p;
 }
 
+namespace {
+
+/// compose and root_positions take their workgroup size as specialization constant 0.
+bool has_specialized_workgroup_size(Pass pass) {
+    return pass == Pass::compose || pass == Pass::root_positions;
+}
+
+uint32_t rounds_slot(Pass pass) { return pass == Pass::compose ? 0 : 1; }
+
+uint32_t size_index(uint32_t workgroup_size) {
+    uint32_t index = 0;
+    while ((64u << index) < workgroup_size) ++index;
+    return index;
+}
+
+}  // namespace
+
+static_assert((64u << 4) == HMSM_MAX_ROUNDS_WORKGROUP_SIZE, "one rounds pipeline per power of two");
+
+Result<VkPipeline> Pipelines::create_pipeline(Pass pass, uint32_t workgroup_size) const {
+    const VolkDeviceTable& vk = device_.vk();
+    VkDevice dev = device_.handle();
+    std::span<const uint32_t> code = pass_spirv(pass);
+    VkShaderModuleCreateInfo module_info{VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};
+    module_info.codeSize = code.size_bytes();
+    module_info.pCode = code.data();
+    VkShaderModule module;
+    HMSM_VK_TRY(vk.vkCreateShaderModule(dev, &module_info, nullptr, &module));
+    VkSpecializationMapEntry entry{0, 0, sizeof(uint32_t)};
+    VkSpecializationInfo specialization{1, &entry, sizeof(uint32_t), &workgroup_size};
+    VkComputePipelineCreateInfo info{VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO};
+    info.stage.sType = VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO;
+    info.stage.stage = VK_SHADER_STAGE_COMPUTE_BIT;
+    info.stage.module = module;
+    info.stage.pName = "main";
+    if (has_specialized_workgroup_size(pass)) info.stage.pSpecializationInfo = &specialization;
+    info.layout = layout_;
+    VkPipeline pipeline = VK_NULL_HANDLE;
+    VkResult result = vk.vkCreateComputePipelines(dev, VK_NULL_HANDLE, 1, &info, nullptr, &pipeline);
+    vk.vkDestroyShaderModule(dev, module, nullptr);
+    HMSM_VK_TRY(result);
+    return pipeline;
+}
+
+uint32_t Pipelines::rounds_size(const Dispatch& dispatch) const {
+    // The largest power of two the device allows (at least HMSM_WORKGROUP_SIZE, checked in
+    // create()); the shaders loop over an instance's chains with any size.
+    const DeviceLimits& limits = device_.limits();
+    const uint32_t device_max = std::min(limits.max_workgroup_size_x, limits.max_workgroup_invocations);
+    uint32_t size = gpu::rounds_workgroup_size(dispatch.constants.model_chain_count);
+    while (size > device_max) size /= 2;
+    return size;
+}
+
+Pipelines::Choice Pipelines::pipeline_for(const Dispatch& dispatch) const {
+    if (!runs_rounds_in_dispatch(dispatch)) return {pipeline(dispatch.pass), HMSM_WORKGROUP_SIZE};
+    const uint32_t size = rounds_size(dispatch);
+    return {rounds_pipelines_[rounds_slot(dispatch.pass)][size_index(size)], size};
+}
+
+Status Pipelines::prepare(std::span<const Dispatch> program) {
+    for (const Dispatch& dispatch : program) {
+        if (!runs_rounds_in_dispatch(dispatch)) continue;
+        const uint32_t size = rounds_size(dispatch);
+        VkPipeline& slot = rounds_pipelines_[rounds_slot(dispatch.pass)][size_index(size)];
+        if (slot) continue;
+        auto pipeline = create_pipeline(dispatch.pass, size);
+        if (!pipeline) return pipeline.status();
+        slot = *pipeline;
+    }
+    return {};
+}
+
 Pipelines::~Pipelines() {
     const VolkDeviceTable& vk = device_.vk();
     VkDevice dev = device_.handle();
     if (pool_) vk.vkDestroyDescriptorPool(dev, pool_, nullptr);
     for (VkPipeline pipeline : pipelines_)
         if (pipeline) vk.vkDestroyPipeline(dev, pipeline, nullptr);
+    for (const auto& sizes : rounds_pipelines_)
+        for (VkPipeline pipeline : sizes)
+            if (pipeline) vk.vkDestroyPipeline(dev, pipeline, nullptr);
     if (layout_) vk.vkDestroyPipelineLayout(dev, layout_, nullptr);
     if (set_layout_) vk.vkDestroyDescriptorSetLayout(dev, set_layout_, nullptr);
 }

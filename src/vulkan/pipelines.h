@@ -1,4 +1,5 @@
-// The seven compute pipelines (one per pass, SPIR-V embedded at build time), their shared
+// The seven compute pipelines (one per pass, SPIR-V embedded at build time; compose and
+// root_positions also in larger workgroup sizes for in-dispatch rounds), their shared
 // layout (descriptor set 0 with one storage buffer per BufferId, push constants =
 // gpu::PassConstants) and the one descriptor set that binds the scene's buffers.
 #pragma once
@@ -6,6 +7,7 @@
 #include "device.h"
 #include "device_buffer.h"
 
+#include "../backend.h"
 #include "../buffers.h"
 
 #include <hmsm/pass.h>
@@ -25,7 +27,18 @@ public:
     static Result<std::unique_ptr<Pipelines>> create(const Device& device);
     ~Pipelines();
 
+    /// The pipeline of `pass` with workgroups of HMSM_WORKGROUP_SIZE.
     VkPipeline pipeline(Pass pass) const { return pipelines_[uint32_t(pass)]; }
+    /// The pipeline and workgroup size a dispatch runs with: in-dispatch pointer-jumping
+    /// rounds use gpu::rounds_workgroup_size, capped at the device's limits. The pipeline must
+    /// have been created by prepare().
+    struct Choice {
+        VkPipeline pipeline;
+        uint32_t workgroup_size;
+    };
+    Choice pipeline_for(const Dispatch& dispatch) const;
+    /// Creates the pipelines with other workgroup sizes that `program` needs (once each).
+    Status prepare(std::span<const Dispatch> program);
     VkPipelineLayout layout() const { return layout_; }
 
     /// Binds `buffers` (indexed by BufferId, whole ranges) into the set every pipeline uses.
@@ -38,7 +51,13 @@ private:
     const Device& device_;
     VkDescriptorSetLayout set_layout_ = VK_NULL_HANDLE;
     VkPipelineLayout layout_ = VK_NULL_HANDLE;
+    Result<VkPipeline> create_pipeline(Pass pass, uint32_t workgroup_size) const;
+    uint32_t rounds_size(const Dispatch& dispatch) const;
+
     std::array<VkPipeline, kPassCount> pipelines_{};
+    /// In-dispatch rounds pipelines: [compose, root_positions][log2(size / 64)].
+    static constexpr uint32_t kRoundsSizes = 5;  // 64 .. HMSM_MAX_ROUNDS_WORKGROUP_SIZE
+    std::array<std::array<VkPipeline, kRoundsSizes>, 2> rounds_pipelines_{};
     VkDescriptorPool pool_ = VK_NULL_HANDLE;
     VkDescriptorSet set_ = VK_NULL_HANDLE;
 };

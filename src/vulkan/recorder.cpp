@@ -6,9 +6,8 @@
 
 namespace hmsm::detail::vk {
 
-WorkgroupGrid workgroup_grid(uint32_t threads, const DeviceLimits& limits) {
-    if (threads == 0) return {};
-    uint64_t groups = (uint64_t(threads) + HMSM_WORKGROUP_SIZE - 1) / HMSM_WORKGROUP_SIZE;
+WorkgroupGrid workgroup_grid(uint64_t groups, const DeviceLimits& limits) {
+    if (groups == 0) return {};
     uint64_t x = std::min<uint64_t>(groups, limits.max_workgroup_count[0]);
     uint64_t y = (groups + x - 1) / x;  // <= 2^26 / 65535 + 1, within the guaranteed 65535
     return {uint32_t(x), uint32_t(y)};
@@ -45,16 +44,18 @@ void record_steps(const Device& device, const Pipelines& pipelines, VkCommandBuf
             written |= writes;
             read |= reads;
 
-            VkPipeline pipeline = pipelines.pipeline(d.pass);
-            if (pipeline != bound) {
-                vk.vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline);
-                bound = pipeline;
+            const Pipelines::Choice choice = pipelines.pipeline_for(d);
+            if (choice.pipeline != bound) {
+                vk.vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, choice.pipeline);
+                bound = choice.pipeline;
             }
             gpu::PassConstants constants = d.constants;
             if (d.pass == Pass::wind_force) constants.wind.w = float(x);
             vk.vkCmdPushConstants(cmd, pipelines.layout(), VK_SHADER_STAGE_COMPUTE_BIT, 0,
                                   sizeof(constants), &constants);
-            WorkgroupGrid grid = workgroup_grid(dispatch_thread_count(d), device.limits());
+            // One workgroup per instance for in-dispatch rounds, else one per
+            // HMSM_WORKGROUP_SIZE threads.
+            WorkgroupGrid grid = workgroup_grid(launch_shape(d).workgroups, device.limits());
             if (grid.x) vk.vkCmdDispatch(cmd, grid.x, grid.y, 1);
             if (timestamps)
                 vk.vkCmdWriteTimestamp(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, timestamps, query++);

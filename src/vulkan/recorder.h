@@ -15,14 +15,15 @@
 
 namespace hmsm::detail::vk {
 
-/// Workgroups for `threads` threads: a 1-D grid while it fits maxComputeWorkGroupCount[0],
-/// else 2-D (the shaders linearize gl_WorkGroupID); {0, 0} for no threads.
+/// `groups` workgroups as a 1-D grid while it fits maxComputeWorkGroupCount[0], else 2-D (the
+/// shaders linearize gl_WorkGroupID); {0, 0} for none.
 struct WorkgroupGrid {
     uint32_t x = 0, y = 0;
 };
-WorkgroupGrid workgroup_grid(uint32_t threads, const DeviceLimits& limits);
+WorkgroupGrid workgroup_grid(uint64_t groups, const DeviceLimits& limits);
 
-/// Records wind_x.size() steps of `program` into `cmd` (already begun). Starts with a barrier
+/// Records wind_x.size() steps of `program` into `cmd` (already begun); `pipelines` must have
+/// been prepared for `program` (Pipelines::prepare). Starts with a barrier
 /// against all earlier shader and transfer writes. With a `timestamps` pool, writes timestamp 0
 /// before the first dispatch and timestamp j + 1 after dispatch j (the pool must hold
 /// wind_x.size() * program.size() + 1 queries; they are reset here).

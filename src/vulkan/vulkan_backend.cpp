@@ -285,6 +285,7 @@ Status VulkanBackend::finish_slot(Slot& slot, std::span<const Dispatch> program)
 Status VulkanBackend::run(std::span<const Dispatch> program, std::span<const double> wind_x) {
     times_ = {};
     if (program.empty() || wind_x.empty()) return {};
+    HMSM_TRY(pipelines_->prepare(program));
     if (record_target_) {
         record_steps(*device_, *pipelines_, record_target_, program, wind_x, VK_NULL_HANDLE);
         return device_->take_validation_messages();

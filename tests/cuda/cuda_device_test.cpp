@@ -123,10 +123,10 @@ TEST_P(CudaPass, MatchesCpu64OnRandomStates) {
 INSTANTIATE_TEST_SUITE_P(
     AllPasses, CudaPass,
     ::testing::Combine(::testing::ValuesIn(kAllPasses),
-                       ::testing::Values(Composition::pointer_jumping, Composition::level_by_level)),
+                       ::testing::Values(Composition::pointer_jumping, Composition::pointer_jumping_per_round,
+                                         Composition::level_by_level)),
     [](const auto& info) {
-        return std::string(pass_name(std::get<0>(info.param))) +
-               (std::get<1>(info.param) == Composition::pointer_jumping ? "_pointer_jumping" : "_level_by_level");
+        return std::string(pass_name(std::get<0>(info.param))) + "_" + to_string(std::get<1>(info.param));
     });
 
 // --- whole simulations -------------------------------------------------------------------
@@ -179,11 +179,9 @@ TEST_P(CudaSimulation, PresetForestAgreesWithCpu64) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Compositions, CudaSimulation,
-                         ::testing::Values(Composition::pointer_jumping, Composition::level_by_level),
-                         [](const auto& info) {
-                             return std::string(info.param == Composition::pointer_jumping ? "pointer_jumping"
-                                                                                         : "level_by_level");
-                         });
+                         ::testing::Values(Composition::pointer_jumping, Composition::pointer_jumping_per_round,
+                                           Composition::level_by_level),
+                         [](const auto& info) { return std::string(to_string(info.param)); });
 
 TEST(CudaGraph, ReplayEqualsDirectLaunchesBitwise) {
     HMSM_SKIP_WITHOUT_CUDA();

@@ -110,11 +110,9 @@ TEST_P(CudaEmulation, KernelBodiesFollowCpu64OverManySteps) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Compositions, CudaEmulation,
-                         ::testing::Values(Composition::pointer_jumping, Composition::level_by_level),
-                         [](const auto& info) {
-                             return std::string(info.param == Composition::pointer_jumping ? "pointer_jumping"
-                                                                                         : "level_by_level");
-                         });
+                         ::testing::Values(Composition::pointer_jumping, Composition::pointer_jumping_per_round,
+                                           Composition::level_by_level),
+                         [](const auto& info) { return std::string(to_string(info.param)); });
 
 }  // namespace
 }  // namespace hmsm::cuda_test

@@ -160,14 +160,16 @@ TEST_F(VulkanTest, StaticBuffersHoldTheSceneInFloat) {
 TEST_F(VulkanTest, WorkgroupGridGoesTwoDimensionalPastTheLimit) {
     detail::vk::DeviceLimits limits;
     limits.max_workgroup_count[0] = limits.max_workgroup_count[1] = 65535;
-    auto grid = detail::vk::workgroup_grid(65535u * HMSM_WORKGROUP_SIZE, limits);
+    auto grid = detail::vk::workgroup_grid(65535u, limits);
     EXPECT_EQ(grid.x, 65535u);
     EXPECT_EQ(grid.y, 1u);
-    grid = detail::vk::workgroup_grid(65535u * HMSM_WORKGROUP_SIZE + 1, limits);
+    grid = detail::vk::workgroup_grid(65536u, limits);
     EXPECT_EQ(grid.x, 65535u);
     EXPECT_EQ(grid.y, 2u);
-    grid = detail::vk::workgroup_grid(UINT32_MAX, limits);
-    EXPECT_GE(uint64_t(grid.x) * grid.y * HMSM_WORKGROUP_SIZE, uint64_t(UINT32_MAX));
+    const uint64_t most = (uint64_t(UINT32_MAX) + HMSM_WORKGROUP_SIZE - 1) / HMSM_WORKGROUP_SIZE;
+    grid = detail::vk::workgroup_grid(most, limits);
+    EXPECT_GE(uint64_t(grid.x) * grid.y, most);
+    EXPECT_LE(grid.y, 65535u);
     EXPECT_EQ(detail::vk::workgroup_grid(0, limits).x, 0u);
     EXPECT_EQ(detail::vk::workgroup_grid(1, limits).x, 1u);
 }

@@ -20,6 +20,7 @@
 #include <optional>
 #include <sstream>
 #include <thread>
+#include <tuple>
 
 namespace hmsm::cli {
 namespace {
@@ -210,28 +211,33 @@ public:
         }
         entry["pointer_jumping"] = pj;
         const uint32_t levels = uint32_t(sim->scene_data().models[0].level_begin.size() - 1);
+        const uint32_t rounds = sim->jump_rounds();
         copy_bandwidth(b, *sim);
         sim.reset();
 
-        progress_.begin(m.name + " on " + backend + ", level by level");
-        json where = {{"section", "presets"}, {"preset", m.name}, {"backend", backend},
-                      {"composition", "level_by_level"}};
-        if (auto lbl = create(scene, b, Composition::level_by_level, where)) {
-            auto measured_lbl = measure(*lbl, settings_, kBatched | kPasses);
-            if (!measured_lbl) {
-                record_failure(where, measured_lbl.status());
-            } else {
-                json l = {{"levels", levels}};
-                put(l, "steps_per_second_batched", measured_lbl->batched);
-                put(l, "steps_per_second_profiled", measured_lbl->profiled);
-                if (measured_lbl->has_passes) {
-                    l["pass_seconds_per_step"] = pass_seconds_json(*measured_lbl);
-                    put(l, "device_seconds_per_step", measured_lbl->device_seconds);
-                    put(l, "device_effective_bandwidth", traffic.total() / measured_lbl->device_seconds);
-                }
-                entry["level_by_level"] = l;
-                entry["budget_reduced"] = r.reduced || measured_lbl->reduced;
+        for (auto [composition, count_key, count] :
+             {std::tuple{Composition::pointer_jumping_per_round, "rounds", rounds},
+              std::tuple{Composition::level_by_level, "levels", levels}}) {
+            const std::string name = to_string(composition);
+            progress_.begin(m.name + " on " + backend + ", " + name);
+            json where = {{"section", "presets"}, {"preset", m.name}, {"backend", backend}, {"composition", name}};
+            auto other = create(scene, b, composition, where);
+            if (!other) continue;
+            auto measured_other = measure(*other, settings_, kBatched | kPasses);
+            if (!measured_other) {
+                record_failure(where, measured_other.status());
+                continue;
             }
+            json c = {{count_key, count}};
+            put(c, "steps_per_second_batched", measured_other->batched);
+            put(c, "steps_per_second_profiled", measured_other->profiled);
+            if (measured_other->has_passes) {
+                c["pass_seconds_per_step"] = pass_seconds_json(*measured_other);
+                put(c, "device_seconds_per_step", measured_other->device_seconds);
+                put(c, "device_effective_bandwidth", traffic.total() / measured_other->device_seconds);
+            }
+            entry[name] = c;
+            entry["budget_reduced"] = entry["budget_reduced"].get<bool>() || measured_other->reduced;
         }
         presets.push_back(entry);
     }

@@ -3,6 +3,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <chrono>
 #include <cinttypes>
 
@@ -44,7 +45,8 @@ void register_simulate_flags(CLI::App& app) {
     add_wind_flags(app, flags.wind);
     app.add_option("--backend", flags.backend, "cpu, cpu64, vulkan, cuda or auto (default)");
     app.add_option("--composition", flags.composition,
-                   "passes 3 and 5: pointer-jumping (default, the paper) or level-by-level");
+                   "passes 3 and 5: pointer-jumping (default, the paper's rounds in one dispatch per "
+                   "pass), pointer-jumping-per-round or level-by-level");
     app.add_option("--steps", flags.steps, "time steps to run (default 120)");
     app.add_option("--dump-nodes", flags.dump_nodes, "CSV instance,node,x,y,z after the last step");
     app.add_option("--dump-vertices", flags.dump_vertices, "float32 xyz per mesh vertex");
@@ -58,10 +60,11 @@ int run_simulate(CLI::App& app) {
         return fail_input("--backend '" + flags.backend + "': expected cpu, cpu64, vulkan, cuda or auto");
     config.backend = *backend;
     config.profile_passes = !flags.report.empty();  // per-pass times only feed the report
-    if (flags.composition == "pointer-jumping") config.composition = Composition::pointer_jumping;
-    else if (flags.composition == "level-by-level") config.composition = Composition::level_by_level;
+    std::string composition = flags.composition;
+    std::replace(composition.begin(), composition.end(), '-', '_');
+    if (auto parsed = parse_composition(composition)) config.composition = *parsed;
     else return fail_input("--composition '" + flags.composition +
-                           "': expected pointer-jumping or level-by-level");
+                           "': expected pointer-jumping, pointer-jumping-per-round or level-by-level");
     if (flags.steps < 0) return fail_input("--steps " + std::to_string(flags.steps) + ": must be >= 0");
     auto options = model_options(flags.model);
     if (!options) return fail(options.status());

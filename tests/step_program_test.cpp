@@ -1,0 +1,120 @@
+// The step program (src/simulation.cpp): which dispatches one step issues for each way of
+// composing passes 3 and 5.
+#include "test_trees.h"
+
+#include "backend.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+using namespace hmsm;
+
+namespace {
+
+std::unique_ptr<Simulation> cpu_simulation(const Scene& scene, Composition composition) {
+    SimulationConfig config;
+    config.backend = BackendKind::cpu;
+    config.composition = composition;
+    auto sim = Simulation::create(scene, config);
+    EXPECT_TRUE(sim.ok()) << sim.status().message();
+    return sim.ok() ? std::move(sim).value() : nullptr;
+}
+
+std::vector<detail::Dispatch> dispatches_of(const Simulation& sim, Pass pass) {
+    std::vector<detail::Dispatch> out;
+    for (const auto& d : sim.step_program())
+        if (d.pass == pass) out.push_back(d);
+    return out;
+}
+
+/// A trunk ending in `branches` one-segment branches: one continues the trunk, so the tree has
+/// `branches` chains, of depth <= 1.
+TreeModel broom(uint32_t branches) {
+    TreeModel tree;
+    tree.nodes.push_back({-1, {0, 0, 0}, 0.3});
+    tree.nodes.push_back({0, {0, 10, 0}, 0.2});
+    for (uint32_t b = 0; b < branches; ++b) {
+        const double a = 0.001 * b;
+        tree.nodes.push_back({1, {std::cos(a), 10.0 + 1e-4 * b, std::sin(a)}, 0.01});
+    }
+    return tree;
+}
+
+}  // namespace
+
+TEST(StepProgram, RoundsInOneDispatchGiveOneDispatchPerPass) {
+    auto sim = cpu_simulation(single_tree_scene(test::deep_tree(6)), Composition::pointer_jumping);
+    ASSERT_TRUE(sim);
+    ASSERT_EQ(sim->jump_rounds(), 3u);
+    EXPECT_EQ(sim->step_program().size(), kPassCount);  // the seven passes, one dispatch each
+    for (Pass pass : {Pass::compose, Pass::root_positions}) {
+        auto d = dispatches_of(*sim, pass);
+        ASSERT_EQ(d.size(), 1u);
+        EXPECT_EQ(d[0].constants.mode, HMSM_MODE_POINTER_JUMPING_IN_DISPATCH);
+        EXPECT_EQ(d[0].constants.round, 3u);  // every round
+        const detail::LaunchShape shape = detail::launch_shape(d[0]);
+        EXPECT_EQ(shape.workgroups, 1u);  // one workgroup per instance
+        EXPECT_EQ(shape.workgroup_size, gpu::rounds_workgroup_size(sim->hierarchy(0).chains.size()));
+    }
+}
+
+TEST(StepProgram, GridOfInstancesGetsOneWorkgroupPerInstance) {
+    auto sim = cpu_simulation(*grid_scene(test::small_tree(), 7, 6.0, 42), Composition::pointer_jumping);
+    ASSERT_TRUE(sim);
+    auto d = dispatches_of(*sim, Pass::compose);
+    ASSERT_EQ(d.size(), 1u);
+    EXPECT_EQ(detail::launch_shape(d[0]).workgroups, 7u);
+}
+
+TEST(StepProgram, PerRoundAndLevelByLevelIssueOneDispatchPerRoundOrLevel) {
+    const Scene scene = single_tree_scene(test::deep_tree(6));
+    auto per_round = cpu_simulation(scene, Composition::pointer_jumping_per_round);
+    auto level = cpu_simulation(scene, Composition::level_by_level);
+    ASSERT_TRUE(per_round && level);
+    for (Pass pass : {Pass::compose, Pass::root_positions}) {
+        auto rounds = dispatches_of(*per_round, pass);
+        ASSERT_EQ(rounds.size(), 3u);
+        for (uint32_t r = 0; r < rounds.size(); ++r) {
+            EXPECT_EQ(rounds[r].constants.mode, HMSM_MODE_POINTER_JUMPING);
+            EXPECT_EQ(rounds[r].constants.round, r);
+            EXPECT_EQ(rounds[r].constants.dst_half, r & 1);
+        }
+        EXPECT_EQ(dispatches_of(*level, pass).size(), 7u);  // depths 0..6
+    }
+    EXPECT_EQ(per_round->step_program().size(), kPassCount - 2 + 2 * 3);
+}
+
+TEST(StepProgram, ModelsBeyondTheRoundsLimitFallBackToOneDispatchPerRound) {
+    // 16,385 chains: more than 16 per thread of the largest workgroup.
+    auto sim = cpu_simulation(single_tree_scene(broom(16385)), Composition::pointer_jumping);
+    ASSERT_TRUE(sim);
+    ASSERT_EQ(sim->hierarchy(0).chains.size(), 16385u);
+    for (Pass pass : {Pass::compose, Pass::root_positions}) {
+        auto d = dispatches_of(*sim, pass);
+        ASSERT_EQ(d.size(), sim->jump_rounds());
+        for (const auto& dispatch : d) EXPECT_EQ(dispatch.constants.mode, HMSM_MODE_POINTER_JUMPING);
+    }
+    // And just under the limit the rounds stay in one dispatch.
+    auto under = cpu_simulation(single_tree_scene(broom(16384)), Composition::pointer_jumping);
+    ASSERT_TRUE(under);
+    ASSERT_EQ(under->hierarchy(0).chains.size(), 16384u);
+    EXPECT_EQ(dispatches_of(*under, Pass::compose)[0].constants.mode, HMSM_MODE_POINTER_JUMPING_IN_DISPATCH);
+}
+
+TEST(StepProgram, RoundsWorkgroupSizeIsThePowerOfTwoThatCoversTheChains) {
+    EXPECT_EQ(gpu::rounds_workgroup_size(1), 64u);
+    EXPECT_EQ(gpu::rounds_workgroup_size(64), 64u);
+    EXPECT_EQ(gpu::rounds_workgroup_size(65), 128u);
+    EXPECT_EQ(gpu::rounds_workgroup_size(393), 512u);
+    EXPECT_EQ(gpu::rounds_workgroup_size(1024), 1024u);
+    EXPECT_EQ(gpu::rounds_workgroup_size(2345), 1024u);  // larger models loop
+    EXPECT_EQ(gpu::rounds_workgroup_size(1u << 30), 1024u);
+}
+
+TEST(StepProgram, CompositionNamesRoundTrip) {
+    for (Composition c : {Composition::pointer_jumping, Composition::pointer_jumping_per_round,
+                          Composition::level_by_level})
+        EXPECT_EQ(parse_composition(to_string(c)), c);
+    EXPECT_FALSE(parse_composition("pointer-jumping").has_value());  // the CLI maps '-' to '_'
+}
