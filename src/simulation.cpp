@@ -35,6 +35,7 @@ const char* to_string(Composition composition) {
     switch (composition) {
         case Composition::pointer_jumping: return "pointer_jumping";
         case Composition::pointer_jumping_per_round: return "pointer_jumping_per_round";
+        case Composition::pointer_jumping_in_dispatch: return "pointer_jumping_in_dispatch";
         case Composition::level_by_level: return "level_by_level";
     }
     return "?";
@@ -42,7 +43,7 @@ const char* to_string(Composition composition) {
 
 std::optional<Composition> parse_composition(std::string_view name) {
     for (Composition c : {Composition::pointer_jumping, Composition::pointer_jumping_per_round,
-                          Composition::level_by_level})
+                          Composition::pointer_jumping_in_dispatch, Composition::level_by_level})
         if (name == to_string(c)) return c;
     return std::nullopt;
 }
@@ -69,8 +70,14 @@ std::string number(double v) {
     return buf;
 }
 
-/// Largest model whose pointer-jumping rounds run in one dispatch: 16 chains per thread of the
-/// largest workgroup, so a round stays a short loop.
+/// pointer_jumping runs all rounds in one dispatch (one workgroup per instance) for groups of at
+/// least kMinInstancesForRoundsInDispatch instances: with fewer, a handful of workgroups each
+/// loop over whole instances while most of the GPU idles, and one dispatch per round over every
+/// chain is faster (H100, paper-1: 55,000 vs 31,000 steps/s for one tree, 27,000 vs 20,000 for
+/// 10, but 3-6% slower from 100 trees up; docs/benchmarks). Rounds run in one dispatch only for
+/// models of at most kMaxChainsForRoundsInDispatch chains (16 per thread of the largest
+/// workgroup).
+constexpr uint32_t kMinInstancesForRoundsInDispatch = 64;
 constexpr uint32_t kMaxChainsForRoundsInDispatch = 16 * HMSM_MAX_ROUNDS_WORKGROUP_SIZE;
 
 /// Appends the dispatches of `pass` for every group. Passes 3 and 5 accumulate down the
@@ -94,11 +101,14 @@ void append_pass(std::vector<Dispatch>& program, const SceneData& d, Pass pass,
         return;
     }
     if (composition != Composition::level_by_level) {
-        // One dispatch per pass runs every round where a workgroup can loop over an instance's
-        // chains; larger models (and pointer_jumping_per_round) take one dispatch per round.
+        // One dispatch per pass runs every round for groups of many instances of models a
+        // workgroup can loop over; other groups (and pointer_jumping_per_round) take one
+        // dispatch per round.
         auto in_dispatch = [&](const detail::InstanceGroup& g) {
-            return composition == Composition::pointer_jumping &&
-                   d.models[g.model].chain_count <= kMaxChainsForRoundsInDispatch;
+            if (d.models[g.model].chain_count > kMaxChainsForRoundsInDispatch) return false;
+            return composition == Composition::pointer_jumping_in_dispatch ||
+                   (composition == Composition::pointer_jumping &&
+                    g.instance_count >= kMinInstancesForRoundsInDispatch);
         };
         for (const auto& g : d.groups) {
             if (!in_dispatch(g)) continue;

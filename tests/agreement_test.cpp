@@ -152,7 +152,7 @@ TEST_P(Agreement, EachPassOnRandomStates) {
     scene.model_names.push_back("deep");
     scene.instances.push_back({1, {-3, 0, 2}, 0.8});
     for (Composition composition : {Composition::pointer_jumping, Composition::pointer_jumping_per_round,
-                                    Composition::level_by_level}) {
+                                    Composition::pointer_jumping_in_dispatch, Composition::level_by_level}) {
         config.composition = composition;
         std::string skip;
         auto sim = test::create_simulation_or_skip(scene, config, GetParam(), skip);
@@ -186,10 +186,9 @@ TEST_P(Agreement, EachPassOnRandomStates) {
 }
 
 TEST_P(Agreement, RoundsInOneDispatchMatchOneDispatchPerRound) {
-    // The default runs each pointer-jumping pass as one dispatch with a workgroup per instance
-    // looping over its chains round by round; it must give the per-round result. paper-1 has
-    // 2,345 chains, more than one workgroup (1,024) covers at once; the mixed scene has two
-    // models in several instance groups.
+    // In-dispatch pointer jumping (a workgroup per instance loops over its chains round by
+    // round) must give the per-round result. paper-1 has 2,345 chains, more than one workgroup
+    // (1,024) covers at once; the mixed scene has two models in several instance groups.
     auto paper = generate_preset("paper-1");
     ASSERT_TRUE(paper.ok());
     Scene mixed = *grid_scene(test::small_tree(), 3, 5.0, 3);
@@ -202,6 +201,7 @@ TEST_P(Agreement, RoundsInOneDispatchMatchOneDispatchPerRound) {
         SCOPED_TRACE(name);
         SimulationConfig config;
         config.wind.strength = 8.0;
+        config.composition = Composition::pointer_jumping_in_dispatch;
         std::string skip;
         auto one = test::create_simulation_or_skip(scene, config, GetParam(), skip);
         if (!skip.empty()) GTEST_SKIP() << skip;

@@ -44,7 +44,7 @@ TreeModel broom(uint32_t branches) {
 }  // namespace
 
 TEST(StepProgram, RoundsInOneDispatchGiveOneDispatchPerPass) {
-    auto sim = cpu_simulation(single_tree_scene(test::deep_tree(6)), Composition::pointer_jumping);
+    auto sim = cpu_simulation(single_tree_scene(test::deep_tree(6)), Composition::pointer_jumping_in_dispatch);
     ASSERT_TRUE(sim);
     ASSERT_EQ(sim->jump_rounds(), 3u);
     EXPECT_EQ(sim->step_program().size(), kPassCount);  // the seven passes, one dispatch each
@@ -60,11 +60,25 @@ TEST(StepProgram, RoundsInOneDispatchGiveOneDispatchPerPass) {
 }
 
 TEST(StepProgram, GridOfInstancesGetsOneWorkgroupPerInstance) {
-    auto sim = cpu_simulation(*grid_scene(test::small_tree(), 7, 6.0, 42), Composition::pointer_jumping);
+    auto sim = cpu_simulation(*grid_scene(test::small_tree(), 7, 6.0, 42), Composition::pointer_jumping_in_dispatch);
     ASSERT_TRUE(sim);
     auto d = dispatches_of(*sim, Pass::compose);
     ASSERT_EQ(d.size(), 1u);
     EXPECT_EQ(detail::launch_shape(d[0]).workgroups, 7u);
+}
+
+TEST(StepProgram, PointerJumpingRunsRoundsInOneDispatchFromSixtyFourInstances) {
+    for (uint32_t instances : {1u, 7u, 63u, 64u, 100u}) {
+        SCOPED_TRACE(instances);
+        auto sim = cpu_simulation(*grid_scene(test::small_tree(), instances, 6.0, 42), Composition::pointer_jumping);
+        ASSERT_TRUE(sim);
+        const uint32_t expected_mode = instances >= 64 ? HMSM_MODE_POINTER_JUMPING_IN_DISPATCH : HMSM_MODE_POINTER_JUMPING;
+        for (Pass pass : {Pass::compose, Pass::root_positions}) {
+            auto d = dispatches_of(*sim, pass);
+            ASSERT_EQ(d.size(), instances >= 64 ? 1u : sim->jump_rounds());
+            for (const auto& dispatch : d) EXPECT_EQ(dispatch.constants.mode, expected_mode);
+        }
+    }
 }
 
 TEST(StepProgram, PerRoundAndLevelByLevelIssueOneDispatchPerRoundOrLevel) {
@@ -87,7 +101,7 @@ TEST(StepProgram, PerRoundAndLevelByLevelIssueOneDispatchPerRoundOrLevel) {
 
 TEST(StepProgram, ModelsBeyondTheRoundsLimitFallBackToOneDispatchPerRound) {
     // 16,385 chains: more than 16 per thread of the largest workgroup.
-    auto sim = cpu_simulation(single_tree_scene(broom(16385)), Composition::pointer_jumping);
+    auto sim = cpu_simulation(single_tree_scene(broom(16385)), Composition::pointer_jumping_in_dispatch);
     ASSERT_TRUE(sim);
     ASSERT_EQ(sim->hierarchy(0).chains.size(), 16385u);
     for (Pass pass : {Pass::compose, Pass::root_positions}) {
@@ -96,7 +110,7 @@ TEST(StepProgram, ModelsBeyondTheRoundsLimitFallBackToOneDispatchPerRound) {
         for (const auto& dispatch : d) EXPECT_EQ(dispatch.constants.mode, HMSM_MODE_POINTER_JUMPING);
     }
     // And just under the limit the rounds stay in one dispatch.
-    auto under = cpu_simulation(single_tree_scene(broom(16384)), Composition::pointer_jumping);
+    auto under = cpu_simulation(single_tree_scene(broom(16384)), Composition::pointer_jumping_in_dispatch);
     ASSERT_TRUE(under);
     ASSERT_EQ(under->hierarchy(0).chains.size(), 16384u);
     EXPECT_EQ(dispatches_of(*under, Pass::compose)[0].constants.mode, HMSM_MODE_POINTER_JUMPING_IN_DISPATCH);
@@ -114,7 +128,7 @@ TEST(StepProgram, RoundsWorkgroupSizeIsThePowerOfTwoThatCoversTheChains) {
 
 TEST(StepProgram, CompositionNamesRoundTrip) {
     for (Composition c : {Composition::pointer_jumping, Composition::pointer_jumping_per_round,
-                          Composition::level_by_level})
+                          Composition::pointer_jumping_in_dispatch, Composition::level_by_level})
         EXPECT_EQ(parse_composition(to_string(c)), c);
     EXPECT_FALSE(parse_composition("pointer-jumping").has_value());  // the CLI maps '-' to '_'
 }

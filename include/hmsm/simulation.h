@@ -32,12 +32,16 @@ std::vector<BackendKind> compiled_backends();
 
 /// How passes 3 and 5 accumulate down the hierarchy. All three give the same poses.
 enum class Composition {
-    /// The paper's pointer jumping in ceil(log2(D+1)) rounds, all rounds in one dispatch per
-    /// pass: one workgroup per instance runs round after round with a barrier in between
-    /// (models of more than 16,384 chains fall back to one dispatch per round).
+    /// The paper's pointer jumping in ceil(log2(D+1)) rounds: in one dispatch per pass for
+    /// instance groups of 64 or more instances (as pointer_jumping_in_dispatch), else one
+    /// dispatch per round (as pointer_jumping_per_round), whichever measured faster.
     pointer_jumping,
-    /// Pointer jumping with one dispatch per round over every instance (for comparison).
+    /// Pointer jumping with one dispatch per round over every chain of every instance.
     pointer_jumping_per_round,
+    /// Pointer jumping with every round in one dispatch per pass: one workgroup per instance
+    /// runs round after round with a barrier in between (models of more than 16,384 chains
+    /// still take one dispatch per round).
+    pointer_jumping_in_dispatch,
     /// One dispatch per depth level, D+1 in all (for comparison).
     level_by_level,
 };

@@ -50,6 +50,7 @@ static HMSM_HOST_DEVICE void compose_element(const BufferPointers& b,
 
 static __global__ void __launch_bounds__(HMSM_WORKGROUP_SIZE)
     compose_kernel(const BufferPointers b, const gpu::PassConstants pc) {
+    begin_pass();
     for (uint32_t i = blockIdx.x * blockDim.x + threadIdx.x; i < pc.element_count;
          i += gridDim.x * blockDim.x)
         compose_element(b, pc, i);
@@ -58,6 +59,7 @@ static __global__ void __launch_bounds__(HMSM_WORKGROUP_SIZE)
 /// In-dispatch mode: block k runs every round for instance k (and k + gridDim.x, ...).
 static __global__ void __launch_bounds__(HMSM_MAX_ROUNDS_WORKGROUP_SIZE)
     compose_rounds_kernel(const BufferPointers b, const gpu::PassConstants pc) {
+    begin_pass();
     for (uint32_t k = blockIdx.x; k < dispatch_instances(pc); k += gridDim.x) {
         for (uint32_t round = 0; round < pc.round; ++round) {
             for (uint32_t c = threadIdx.x; c < pc.model_chain_count; c += blockDim.x)
@@ -71,11 +73,9 @@ cudaError_t launch_compose(const BufferPointers& b, const gpu::PassConstants& pc
                            cudaStream_t stream) {
     if (pc.element_count == 0) return cudaSuccess;
     if (pc.mode == HMSM_MODE_POINTER_JUMPING_IN_DISPATCH)
-        compose_rounds_kernel<<<launch_blocks_per_instance(pc), gpu::rounds_workgroup_size(pc.model_chain_count), 0,
-                                stream>>>(b, pc);
-    else
-        compose_kernel<<<launch_blocks(pc.element_count), HMSM_WORKGROUP_SIZE, 0, stream>>>(b, pc);
-    return cudaGetLastError();
+        return launch_pass(compose_rounds_kernel, launch_blocks_per_instance(pc),
+                           gpu::rounds_workgroup_size(pc.model_chain_count), stream, b, pc);
+    return launch_pass(compose_kernel, launch_blocks(pc.element_count), HMSM_WORKGROUP_SIZE, stream, b, pc);
 }
 
 void emulate_compose(const BufferPointers& b, const gpu::PassConstants& pc) {

@@ -86,6 +86,44 @@ HMSM_HOST_DEVICE uint64_t half_begin(const gpu::PassConstants& pc, uint32_t half
     return uint64_t(half) * pc.total_chains;
 }
 
+/// Programmatic dependent launch (compute capability 9.0 and later): every pass kernel starts
+/// with this. It lets the next pass's blocks be scheduled as soon as all of this pass's blocks
+/// have started, then waits until the previous pass has completed and its writes are visible —
+/// so each kernel boundary of a step costs less than a full launch. A no-op on older GPUs and
+/// for kernels launched without the attribute (launch_pass).
+__device__ __forceinline__ void begin_pass() {
+#if defined(__CUDA_ARCH__) && __CUDA_ARCH__ >= 900
+    asm volatile("griddepcontrol.launch_dependents;" ::: "memory");
+    asm volatile("griddepcontrol.wait;" ::: "memory");
+#endif
+}
+
+/// Launches a pass kernel on `stream` with programmatic stream serialization allowed (see
+/// begin_pass); stream order and graph capture are otherwise as for <<<...>>>.
+/// HMSM_CUDA_PROGRAMMATIC_LAUNCH=0 in the environment turns programmatic launch off (for
+/// measuring what it brings); read once.
+bool programmatic_launch_enabled();
+
+template <class Kernel>
+cudaError_t launch_pass(Kernel kernel, unsigned blocks, unsigned threads, cudaStream_t stream,
+                        const BufferPointers& b, const gpu::PassConstants& pc) {
+    if (!programmatic_launch_enabled()) {
+        kernel<<<blocks, threads, 0, stream>>>(b, pc);
+        return cudaGetLastError();
+    }
+    cudaLaunchAttribute attribute{};
+    attribute.id = cudaLaunchAttributeProgrammaticStreamSerialization;
+    attribute.val.programmaticStreamSerializationAllowed = 1;
+    cudaLaunchConfig_t config{};
+    config.gridDim = dim3(blocks);
+    config.blockDim = dim3(threads);
+    config.dynamicSmemBytes = 0;
+    config.stream = stream;
+    config.attrs = &attribute;
+    config.numAttrs = 1;
+    return cudaLaunchKernelEx(&config, kernel, b, pc);
+}
+
 /// Instances of a dispatch, for the one-block-per-instance in-dispatch rounds.
 HMSM_HOST_DEVICE uint32_t dispatch_instances(const gpu::PassConstants& pc) {
     return pc.element_count / pc.model_chain_count;

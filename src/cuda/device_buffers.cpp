@@ -7,13 +7,16 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <cstring>
 #include <vector>
 
 namespace hmsm::detail::cuda {
 namespace {
 
-/// Elements per host staging chunk of read/write: bounded host memory for any buffer size.
+/// Host staging of read/write: two halves, so the copy of one chunk overlaps the conversion of
+/// the previous one; bounded host memory for any buffer size.
 constexpr uint64_t kStagingBytes = 16ull << 20;
+constexpr uint64_t kHalfStagingBytes = kStagingBytes / 2;
 
 std::string human_bytes(uint64_t bytes) {
     char text[64];
@@ -31,6 +34,8 @@ void DeviceBuffers::release() {
         if (base) (void)cudaFree(base);
         base = nullptr;
     }
+    if (pinned_) (void)cudaFreeHost(pinned_);
+    pinned_ = nullptr;
     counts_ = {};
     pointers_ = {};
 }
@@ -97,28 +102,58 @@ Status DeviceBuffers::check_range(BufferId id, uint64_t first, uint64_t count) c
     return {};
 }
 
+std::byte* DeviceBuffers::pinned_staging() const {
+    if (!pinned_ && !pinned_refused_) {
+        void* host = nullptr;
+        if (cudaMallocHost(&host, kStagingBytes) == cudaSuccess) {
+            pinned_ = static_cast<std::byte*>(host);
+        } else {
+            (void)cudaGetLastError();
+            pinned_refused_ = true;
+        }
+    }
+    return pinned_;
+}
+
 Status DeviceBuffers::read(BufferId id, uint64_t first, uint64_t count, void* dst, Scalar as,
                            cudaStream_t stream) const {
     HMSM_TRY(check_range(id, first, count));
+    if (count == 0) return {};
     const Shape shape = buffer_info(id).shape;
     const uint64_t element_bytes = device_element_bytes(id);
     const auto* base = static_cast<const std::byte*>(bases_[uint32_t(id)]) + first * element_bytes;
-    if (as == Scalar::f32 && !shape_is_integer(shape)) {  // same words on both sides
+    const uint64_t scalars = shape_scalars(shape);
+    const uint64_t scalar_bytes = as == Scalar::f64 ? 8 : 4;
+    const bool same_words = as == Scalar::f32 && !shape_is_integer(shape);
+    std::byte* pinned = pinned_staging();
+    if (!pinned && same_words) {  // pageable fallback: straight into the caller's memory
         CUDA_TRY(cudaMemcpyAsync(dst, base, count * element_bytes, cudaMemcpyDeviceToHost, stream));
         CUDA_TRY(cudaStreamSynchronize(stream));
         return {};
     }
-    const uint64_t scalars = shape_scalars(shape);
-    const uint64_t scalar_bytes = as == Scalar::f64 ? 8 : 4;
-    const uint64_t chunk = std::max<uint64_t>(1, kStagingBytes / element_bytes);
-    std::vector<std::byte> staging(std::min(count, chunk) * element_bytes);
-    for (uint64_t done = 0; done < count; done += chunk) {
-        const uint64_t n = std::min(chunk, count - done);
-        CUDA_TRY(cudaMemcpyAsync(staging.data(), base + done * element_bytes, n * element_bytes,
-                                 cudaMemcpyDeviceToHost, stream));
+    const uint64_t chunk = std::max<uint64_t>(1, kHalfStagingBytes / element_bytes);
+    const uint64_t half_bytes = pinned ? kHalfStagingBytes : std::min(count, chunk) * element_bytes;
+    std::vector<std::byte> pageable(pinned ? 0 : 2 * half_bytes);
+    std::byte* staging = pinned ? pinned : pageable.data();
+    std::byte* halves[2] = {staging, staging + half_bytes};
+    // Chunk k is copied into half k % 2; the copy of chunk k + 1 is queued before chunk k is
+    // converted, so the two overlap.
+    auto queue_copy = [&](uint64_t k) -> Status {
+        const uint64_t done = k * chunk;
+        CUDA_TRY(cudaMemcpyAsync(halves[k % 2], base + done * element_bytes,
+                                 std::min(chunk, count - done) * element_bytes, cudaMemcpyDeviceToHost, stream));
+        return {};
+    };
+    const uint64_t chunks = (count + chunk - 1) / chunk;
+    HMSM_TRY(queue_copy(0));
+    CUDA_TRY(cudaStreamSynchronize(stream));
+    for (uint64_t k = 0; k < chunks; ++k) {
+        if (k + 1 < chunks) HMSM_TRY(queue_copy(k + 1));
+        const uint64_t done = k * chunk, n = std::min(chunk, count - done);
+        auto* out = static_cast<std::byte*>(dst) + done * scalars * scalar_bytes;
+        if (same_words) std::memcpy(out, halves[k % 2], n * element_bytes);
+        else words_to_scalars(shape, halves[k % 2], n * scalars, out, as);
         CUDA_TRY(cudaStreamSynchronize(stream));
-        words_to_scalars(shape, staging.data(), n * scalars,
-                         static_cast<std::byte*>(dst) + done * scalars * scalar_bytes, as);
     }
     return {};
 }
@@ -131,13 +166,15 @@ Status DeviceBuffers::write(BufferId id, uint64_t first, uint64_t count, const v
     auto* base = static_cast<std::byte*>(bases_[uint32_t(id)]) + first * element_bytes;
     const uint64_t scalars = shape_scalars(shape);
     const uint64_t scalar_bytes = as == Scalar::f64 ? 8 : 4;
-    const uint64_t chunk = std::max<uint64_t>(1, kStagingBytes / element_bytes);
-    std::vector<std::byte> staging(std::min(count, chunk) * element_bytes);
+    const uint64_t chunk = std::max<uint64_t>(1, kHalfStagingBytes / element_bytes);
+    std::byte* pinned = pinned_staging();
+    std::vector<std::byte> pageable(pinned ? 0 : std::min(count, chunk) * element_bytes);
+    std::byte* staging = pinned ? pinned : pageable.data();
     for (uint64_t done = 0; done < count; done += chunk) {
         const uint64_t n = std::min(chunk, count - done);
         scalars_to_words(shape, static_cast<const std::byte*>(src) + done * scalars * scalar_bytes,
-                         n * scalars, staging.data(), as);
-        CUDA_TRY(cudaMemcpyAsync(base + done * element_bytes, staging.data(), n * element_bytes,
+                         n * scalars, staging, as);
+        CUDA_TRY(cudaMemcpyAsync(base + done * element_bytes, staging, n * element_bytes,
                                  cudaMemcpyHostToDevice, stream));
         CUDA_TRY(cudaStreamSynchronize(stream));
     }

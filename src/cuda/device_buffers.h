@@ -1,5 +1,7 @@
 // The device buffers of the buffer table (buffers.h), one cudaMalloc each, sized from a
-// SceneData; uploads converted to float (device_layout.h) and the typed read/write hooks.
+// SceneData; uploads converted to float (device_layout.h) and the typed read/write hooks, which
+// move data through a pinned host staging buffer (device-to-host copies into pageable memory
+// run at a fraction of the PCIe/NVLink rate).
 #pragma once
 
 #include "../backend.h"
@@ -37,8 +39,14 @@ public:
 private:
     void release();
     Status check_range(BufferId id, uint64_t first, uint64_t count) const;
+    /// The pinned (page-locked) host staging buffer of read/write, two halves of
+    /// kStagingBytes / 2, allocated on first use; nullptr where pinned memory is refused (the
+    /// copies then go through pageable memory).
+    std::byte* pinned_staging() const;
 
     std::array<void*, kBufferCount> bases_{};
+    mutable std::byte* pinned_ = nullptr;
+    mutable bool pinned_refused_ = false;
     std::array<uint64_t, kBufferCount> counts_{};
     BufferPointers pointers_;
 };

@@ -1,6 +1,17 @@
 #include "launch_dispatch.h"
 
+#include <cstdlib>
+#include <string_view>
+
 namespace hmsm::detail::cuda {
+
+bool programmatic_launch_enabled() {
+    static const bool enabled = [] {
+        const char* value = std::getenv("HMSM_CUDA_PROGRAMMATIC_LAUNCH");
+        return !(value && std::string_view(value) == "0");
+    }();
+    return enabled;
+}
 
 cudaError_t launch_dispatch(const Dispatch& dispatch, const BufferPointers& buffers, float wind_x,
                             cudaStream_t stream) {

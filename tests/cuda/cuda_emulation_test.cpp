@@ -110,7 +110,7 @@ TEST_P(CudaEmulation, KernelBodiesFollowCpu64OverManySteps) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Compositions, CudaEmulation,
-                         ::testing::Values(Composition::pointer_jumping, Composition::pointer_jumping_per_round,
+                         ::testing::Values(Composition::pointer_jumping_per_round, Composition::pointer_jumping_in_dispatch,
                                            Composition::level_by_level),
                          [](const auto& info) { return std::string(to_string(info.param)); });
 

@@ -2,24 +2,53 @@
 // second with the step graph (profiling off, outputs left on the device) and per-pass device
 // times from a profiled run. Run by tools/gpu/run.sh on the lent GPU; `hmsm bench` is the
 // cross-backend benchmark.
+//
+//   hmsm_cuda_throughput [COMPOSITION [N,N,...]]   (default: pointer_jumping 1,10,100,1000,10000)
 #include <hmsm/hmsm.h>
 
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
+#include <vector>
 
 namespace {
+
+hmsm::Composition composition = hmsm::Composition::pointer_jumping;
 
 hmsm::SimulationConfig cuda_config(bool profile) {
     hmsm::SimulationConfig config;
     config.backend = hmsm::BackendKind::cuda;
     config.profile_passes = profile;
+    config.composition = composition;
     return config;
+}
+
+std::vector<uint32_t> parse_counts(const char* text) {
+    std::vector<uint32_t> counts;
+    for (const char* p = text; *p;) {
+        char* end = nullptr;
+        counts.push_back(uint32_t(std::strtoul(p, &end, 10)));
+        p = *end == ',' ? end + 1 : end;
+        if (end == p && *p) break;
+    }
+    return counts;
 }
 
 }  // namespace
 
-int main() {
+int main(int argc, char** argv) {
+    if (argc > 1) {
+        auto parsed = hmsm::parse_composition(argv[1]);
+        if (!parsed) {
+            std::fprintf(stderr, "cuda_throughput: unknown composition '%s'\n", argv[1]);
+            return 2;
+        }
+        composition = *parsed;
+    }
+    const std::vector<uint32_t> counts =
+        argc > 2 ? parse_counts(argv[2]) : std::vector<uint32_t>{1, 10, 100, 1000, 10000};
+    std::printf("composition %s\n", hmsm::to_string(composition));
     auto tree = hmsm::generate_preset("paper-1");
     if (!tree) {
         std::fprintf(stderr, "cuda_throughput: %s\n", tree.status().message().c_str());
@@ -28,7 +57,7 @@ int main() {
     std::printf("%9s %12s %10s %10s %12s |", "instances", "vertices", "steps/s", "ms/step", "Gvertex/s");
     for (hmsm::Pass pass : hmsm::kAllPasses) std::printf(" %14.14s", std::string(hmsm::pass_name(pass)).c_str());
     std::printf("   (device us per step)\n");
-    for (uint32_t instances : {1u, 10u, 100u, 1000u, 10000u}) {
+    for (uint32_t instances : counts) {
         auto scene = instances == 1 ? hmsm::Result<hmsm::Scene>(hmsm::single_tree_scene(*tree))
                                     : hmsm::grid_scene(*tree, instances, 15.0, 1);
         if (!scene) return 1;

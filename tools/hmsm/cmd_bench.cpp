@@ -216,7 +216,7 @@ public:
         sim.reset();
 
         for (auto [composition, count_key, count] :
-             {std::tuple{Composition::pointer_jumping_per_round, "rounds", rounds},
+             {std::tuple{Composition::pointer_jumping_in_dispatch, "rounds", rounds},
               std::tuple{Composition::level_by_level, "levels", levels}}) {
             const std::string name = to_string(composition);
             progress_.begin(m.name + " on " + backend + ", " + name);

@@ -45,8 +45,9 @@ void register_simulate_flags(CLI::App& app) {
     add_wind_flags(app, flags.wind);
     app.add_option("--backend", flags.backend, "cpu, cpu64, vulkan, cuda or auto (default)");
     app.add_option("--composition", flags.composition,
-                   "passes 3 and 5: pointer-jumping (default, the paper's rounds in one dispatch per "
-                   "pass), pointer-jumping-per-round or level-by-level");
+                   "passes 3 and 5: pointer-jumping (default: the paper's rounds, per round or in one "
+                   "dispatch by scene size), pointer-jumping-per-round, pointer-jumping-in-dispatch "
+                   "or level-by-level");
     app.add_option("--steps", flags.steps, "time steps to run (default 120)");
     app.add_option("--dump-nodes", flags.dump_nodes, "CSV instance,node,x,y,z after the last step");
     app.add_option("--dump-vertices", flags.dump_vertices, "float32 xyz per mesh vertex");
@@ -64,7 +65,8 @@ int run_simulate(CLI::App& app) {
     std::replace(composition.begin(), composition.end(), '-', '_');
     if (auto parsed = parse_composition(composition)) config.composition = *parsed;
     else return fail_input("--composition '" + flags.composition +
-                           "': expected pointer-jumping, pointer-jumping-per-round or level-by-level");
+                           "': expected pointer-jumping, pointer-jumping-per-round, pointer-jumping-in-dispatch or "
+                           "level-by-level");
     if (flags.steps < 0) return fail_input("--steps " + std::to_string(flags.steps) + ": must be >= 0");
     auto options = model_options(flags.model);
     if (!options) return fail(options.status());
