@@ -57,7 +57,8 @@ uint64_t SceneData::element_count(BufferId id) const {
         case Scope::chain: return total_chains;
         case Scope::chain_halves: return 2 * total_chains;
         case Scope::node: return total_nodes;
-        case Scope::vertex: return total_vertices;
+        case Scope::vertex:
+            return id == BufferId::vertex_normal && packed_vertices() ? 0 : total_vertices;
     }
     return 0;
 }

@@ -6,6 +6,7 @@
 #define HMSM_COMMON_GLSL
 
 #include "gpu_layout.h"
+#include "octahedral.glsl"  // oct_encode / oct_decode for VertexLayout::packed
 
 layout(local_size_x = HMSM_WORKGROUP_SIZE, local_size_y = 1, local_size_z = 1) in;
 
