@@ -20,9 +20,10 @@ foreach(shader mesh.vert mesh.frag backdrop.vert backdrop.frag)
   add_custom_command(
     OUTPUT "${_out}"
     COMMAND "${HMSM_GLSLANG_VALIDATOR}" -V --target-env vulkan1.1 --quiet
-            "-I${_hmsm_render_glsl_dir}" --vn "hmsm_spirv_render_${_name}"
+            "-I${_hmsm_render_glsl_dir}" "-I${CMAKE_CURRENT_SOURCE_DIR}/shaders/glsl" --vn "hmsm_spirv_render_${_name}"
             -o "${_out}" "${_hmsm_render_glsl_dir}/${shader}"
     DEPENDS "${_hmsm_render_glsl_dir}/${shader}" "${_hmsm_render_glsl_dir}/render_common.glsl"
+            "${CMAKE_CURRENT_SOURCE_DIR}/shaders/glsl/octahedral.glsl"
     COMMENT "hmsm: compiling shaders/glsl/render/${shader} to SPIR-V"
     VERBATIM)
   list(APPEND _hmsm_render_spirv_headers "${_out}")

@@ -59,6 +59,7 @@ foreach(pass IN LISTS HMSM_VULKAN_PASSES)
             "-I${CMAKE_CURRENT_SOURCE_DIR}/src" "-I${_hmsm_glsl_dir}"
             --vn "hmsm_spirv_${pass}" -o "${_out}" "${_hmsm_glsl_dir}/${pass}.comp"
     DEPENDS "${_hmsm_glsl_dir}/${pass}.comp" "${_hmsm_glsl_dir}/common.glsl"
+            "${_hmsm_glsl_dir}/octahedral.glsl"
             "${CMAKE_CURRENT_SOURCE_DIR}/src/gpu_layout.h"
     COMMENT "hmsm: compiling shaders/glsl/${pass}.comp to SPIR-V"
     VERBATIM)

@@ -39,8 +39,8 @@
 #define HMSM_BINDING_NODE_RELATIVE 18        // vec4 per node: u_n
 #define HMSM_BINDING_CHAIN_ORIGIN 19         // vec4 per chain, 2 halves: chain origin O
 #define HMSM_BINDING_NODE_WORLD 20           // vec4 per node: W_n
-#define HMSM_BINDING_VERTEX_POSITION 21      // vec4 per vertex
-#define HMSM_BINDING_VERTEX_NORMAL 22        // vec4 per vertex
+#define HMSM_BINDING_VERTEX_POSITION 21      // vec4 per vertex: (x, y, z, 1), packed: (x, y, z, normal word)
+#define HMSM_BINDING_VERTEX_NORMAL 22        // vec4 per vertex: (nx, ny, nz, 0); packed: no elements
 #define HMSM_BINDING_COUNT 23
 
 /// composition modes (PassConstants.mode)
@@ -53,6 +53,12 @@
 /// HMSM_MAX_ROUNDS_WORKGROUP_SIZE (hmsm::gpu::rounds_workgroup_size).
 #define HMSM_MODE_POINTER_JUMPING_IN_DISPATCH 2u
 #define HMSM_MAX_ROUNDS_WORKGROUP_SIZE 1024
+
+/// vertex layouts (PassConstants.mode of a contour dispatch; hmsm::VertexLayout values):
+/// separate writes vertex_position (x, y, z, 1) and vertex_normal (nx, ny, nz, 0); packed writes
+/// only vertex_position, its w the bits of the octahedral normal word (src/octahedral.h).
+#define HMSM_VERTEX_LAYOUT_SEPARATE 0u
+#define HMSM_VERTEX_LAYOUT_PACKED 1u
 
 #ifdef __cplusplus
 #include <cstddef>
@@ -68,7 +74,9 @@ struct alignas(16) vec4 {
 /// group: a run of consecutive instances of the same model. Thread i of a dispatch handles
 /// element (i % per_instance) of instance (i / per_instance) of the group, where per_instance is
 /// model_chain_count, model_node_count, model_vertex_count, or level_count for a level-by-level
-/// compose/root_positions dispatch.
+/// compose/root_positions dispatch. `mode` is per pass: the composition mode (HMSM_MODE_*) for
+/// compose and root_positions, the vertex layout (HMSM_VERTEX_LAYOUT_*) for contour, ignored
+/// by the other passes.
 struct PassConstants {
     uint element_count;       // threads: group instances x per_instance
     uint instance_begin;      // first global instance of the group
@@ -84,7 +92,7 @@ struct PassConstants {
     uint level_begin;         // level-by-level: first model chain of the level
     uint level_count;         // level-by-level: chains per instance in the level
     uint round;               // pointer jumping: round r reads the 2^r-th ancestor (chain_jump); in-dispatch mode: number of rounds
-    uint mode;                // HMSM_MODE_*
+    uint mode;                // HMSM_MODE_* (compose, root_positions); HMSM_VERTEX_LAYOUT_* (contour)
     uint profile;             // hmsm::WindProfile value
     uint total_chains;        // state chains of the scene: stride between ping-pong halves
     uint total_model_chains;  // static chains of the scene: stride between chain_jump rounds

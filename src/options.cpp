@@ -1,5 +1,6 @@
-// Wind profiles (DESIGN.md 3.5) and the valid ranges of options and parameters (DESIGN.md 3.4).
+// Wind profiles (DESIGN.md 3.5), option names and the valid ranges of options and parameters (DESIGN.md 3.4).
 #include <hmsm/options.h>
+#include <hmsm/simulation.h>
 
 #include "wind_profile.h"
 
@@ -51,6 +52,16 @@ std::optional<WindProfile> parse_wind_profile(std::string_view name) {
     for (WindProfile p : {WindProfile::none, WindProfile::constant, WindProfile::y1,
                           WindProfile::y2, WindProfile::y3, WindProfile::y4})
         if (name == to_string(p)) return p;
+    return std::nullopt;
+}
+
+const char* to_string(VertexLayout layout) {
+    return layout == VertexLayout::packed ? "packed" : "separate";
+}
+
+std::optional<VertexLayout> parse_vertex_layout(std::string_view name) {
+    if (name == "separate") return VertexLayout::separate;
+    if (name == "packed") return VertexLayout::packed;
     return std::nullopt;
 }
 

@@ -42,6 +42,7 @@ uint32_t pass_writes(Pass pass) {
         case Pass::node_relative: return bit(B::node_relative);
         case Pass::root_positions: return bit(B::chain_origin);
         case Pass::node_world: return bit(B::node_world);
+        // In the packed vertex layout vertex_normal has no elements and is not written.
         case Pass::contour: return bit(B::vertex_position) | bit(B::vertex_normal);
     }
     return 0;
@@ -57,7 +58,8 @@ uint64_t SceneData::element_count(BufferId id) const {
         case Scope::chain: return total_chains;
         case Scope::chain_halves: return 2 * total_chains;
         case Scope::node: return total_nodes;
-        case Scope::vertex: return total_vertices;
+        case Scope::vertex:
+            return id == BufferId::vertex_normal && packed_vertices() ? 0 : total_vertices;
     }
     return 0;
 }

@@ -9,6 +9,7 @@
 #include <hmsm/mesh.h>
 #include <hmsm/options.h>
 #include <hmsm/scene.h>
+#include <hmsm/simulation.h>
 
 #include <glm/mat3x3.hpp>
 #include <glm/vec2.hpp>
@@ -68,6 +69,9 @@ struct SceneData {
     WindProfile profile = WindProfile::none;
     glm::dvec3 wind_vector{0.0};  // strength * normalized direction
     double wind_frequency = 0.0;
+    /// The contour pass's output layout; packed leaves vertex_normal without elements.
+    VertexLayout vertex_layout = VertexLayout::separate;
+    bool packed_vertices() const { return vertex_layout == VertexLayout::packed; }
 
     /// Elements of buffer `id` (vec4/mat/int elements, not scalars).
     uint64_t element_count(BufferId id) const;

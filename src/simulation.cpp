@@ -2,11 +2,13 @@
 #include <hmsm/simulation.h>
 
 #include "backend.h"
+#include "octahedral.h"
 #include "scene_data.h"
 
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <type_traits>
 
 namespace hmsm {
 
@@ -96,6 +98,9 @@ void append_pass(std::vector<Dispatch>& program, const SceneData& d, Pass pass,
                                         ? m.node_count
                                         : pass == Pass::contour ? m.vertex_count : m.chain_count;
             dispatch.constants.element_count = g.instance_count * per_instance;
+            if (pass == Pass::contour)
+                dispatch.constants.mode = d.packed_vertices() ? HMSM_VERTEX_LAYOUT_PACKED
+                                                              : HMSM_VERTEX_LAYOUT_SEPARATE;
             if (dispatch.constants.element_count > 0) program.push_back(dispatch);
         }
         return;
@@ -215,6 +220,7 @@ Result<std::unique_ptr<Simulation>> Simulation::create(const Scene& scene,
     sim->data_ = std::make_unique<SceneData>(
         detail::flatten_scene(scene, sim->hierarchies_, sim->meshes_, config.parameters,
                               config.model, config.wind));
+    sim->data_->vertex_layout = config.vertex_layout;
 
     if (backend) {
         sim->backend_ = std::move(backend);
@@ -271,6 +277,8 @@ uint32_t Simulation::floored_chain_count() const {
 Status Simulation::read_elements(Output output, std::vector<double>* as_double,
                                  std::vector<float>* as_float) const {
     using detail::BufferId;
+    if (output == Output::vertex_normals && data_->packed_vertices())
+        return read_packed_normals(as_double, as_float);
     const uint32_t final_half = (data_->jump_rounds - 1) & 1;
     BufferId id = BufferId::node_world;
     uint64_t first = 0, count = data_->total_nodes;
@@ -311,6 +319,42 @@ Status Simulation::read_elements(Output output, std::vector<double>* as_double,
         stored_f32_.resize(count * stored);
         HMSM_TRY(backend_->read(id, first, count, stored_f32_.data(), detail::Scalar::f32));
         repack(stored_f32_, *as_float);
+    }
+    return {};
+}
+
+Status Simulation::read_packed_normals(std::vector<double>* as_double,
+                                       std::vector<float>* as_float) const {
+    // VertexLayout::packed: each normal is the octahedral word in its position's w. The double
+    // CPU oracle holds the word as an integer value, every other backend as float bits
+    // (detail::packed_word_to_w), so the positions are read in the precision they are stored in.
+    const uint64_t count = data_->total_vertices;
+    auto decode = [count](const auto& positions, auto& normals) {
+        using Stored = typename std::decay_t<decltype(positions)>::value_type;
+        using Decoded = typename std::decay_t<decltype(normals)>::value_type;
+        normals.resize(count * 3);
+        for (uint64_t i = 0; i < count; ++i) {
+            const auto n = detail::decode_normal_word<Decoded>(
+                detail::packed_word_from_w<Stored>(positions[4 * i + 3]));
+            normals[3 * i] = n.x;
+            normals[3 * i + 1] = n.y;
+            normals[3 * i + 2] = n.z;
+        }
+    };
+    auto decode_into_request = [&](const auto& positions) {
+        if (as_double) decode(positions, *as_double);
+        else decode(positions, *as_float);
+    };
+    if (backend_->kind() == BackendKind::cpu64) {
+        stored_f64_.resize(count * 4);
+        HMSM_TRY(backend_->read(detail::BufferId::vertex_position, 0, count, stored_f64_.data(),
+                                detail::Scalar::f64));
+        decode_into_request(stored_f64_);
+    } else {
+        stored_f32_.resize(count * 4);
+        HMSM_TRY(backend_->read(detail::BufferId::vertex_position, 0, count, stored_f32_.data(),
+                                detail::Scalar::f32));
+        decode_into_request(stored_f32_);
     }
     return {};
 }

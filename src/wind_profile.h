@@ -2,11 +2,7 @@
 // twin is shaders/glsl/common.glsl). All profiles have period 2 in x, so callers pass x mod 2.
 #pragma once
 
-#ifdef __CUDACC__
-#define HMSM_HOST_DEVICE __host__ __device__ __forceinline__
-#else
-#define HMSM_HOST_DEVICE inline
-#endif
+#include "host_device.h"
 
 #include <cmath>
 

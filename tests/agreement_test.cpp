@@ -4,6 +4,7 @@
 #include "test_trees.h"
 
 #include "backend.h"
+#include "octahedral.h"
 
 #include <hmsm/generator.h>
 
@@ -104,6 +105,86 @@ TEST_P(Agreement, EndToEndAfter1000Steps) {
                                            read_output(*oracle, Output::node_positions)),
                   1e-3 * height);
     }
+}
+
+/// VertexLayout::packed on every backend: the same positions as the separate layout, bit for
+/// bit; normals decoded from the positions' w within the quantization of the separate layout's
+/// and within 1e-3 of the cpu64 oracle; the word itself the C++ encoder's for that normal; and
+/// no vertex_normal elements on the device.
+TEST_P(Agreement, PackedVertexLayoutAfter300Steps) {
+    auto cases = end_to_end_cases();
+    for (SceneCase& c : cases) {
+        if (c.name != "small_tree" && c.name != "two_models_four_groups" && c.name != "level_by_level")
+            continue;
+        SCOPED_TRACE(c.name);
+        SimulationConfig packed_config = c.config;
+        packed_config.vertex_layout = VertexLayout::packed;
+        std::string skip;
+        auto packed = test::create_simulation_or_skip(c.scene, packed_config, GetParam(), skip);
+        if (!skip.empty()) GTEST_SKIP() << skip;
+        auto separate = test::create_simulation_or_skip(c.scene, c.config, GetParam(), skip);
+        auto oracle = test::create_simulation_or_skip(c.scene, c.config, BackendKind::cpu64, skip);
+        ASSERT_TRUE(packed && separate && oracle);
+        for (auto* sim : {packed.get(), separate.get(), oracle.get()}) ASSERT_TRUE(sim->step(300).ok());
+
+        // The contour dispatches carry the layout; the normal buffer has no elements.
+        for (const auto& d : packed->step_program())
+            if (d.pass == Pass::contour) EXPECT_EQ(d.constants.mode, HMSM_VERTEX_LAYOUT_PACKED);
+        EXPECT_EQ(packed->scene_data().element_count(BufferId::vertex_normal), 0u);
+        EXPECT_EQ(separate->scene_data().element_count(BufferId::vertex_normal), separate->vertex_count());
+        float unused[4];
+        EXPECT_FALSE(packed->backend().read(BufferId::vertex_normal, 0, 1, unused, detail::Scalar::f32).ok());
+
+        std::vector<float> packed_positions, separate_positions;
+        ASSERT_TRUE(packed->read(Output::vertex_positions, packed_positions).ok());
+        ASSERT_TRUE(separate->read(Output::vertex_positions, separate_positions).ok());
+        EXPECT_EQ(packed_positions, separate_positions);
+        std::vector<float> packed_nodes, separate_nodes;
+        ASSERT_TRUE(packed->read(Output::node_positions, packed_nodes).ok());
+        ASSERT_TRUE(separate->read(Output::node_positions, separate_nodes).ok());
+        EXPECT_EQ(packed_nodes, separate_nodes);
+
+        auto normals = read_output(*packed, Output::vertex_normals);
+        auto separate_normals = read_output(*separate, Output::vertex_normals);
+        ASSERT_EQ(normals.size(), 3 * packed->vertex_count());
+        EXPECT_LE(test::max_abs_difference(normals, read_output(*oracle, Output::vertex_normals)), 1e-3);
+        EXPECT_LE(test::max_abs_difference(normals, separate_normals), 1e-4);
+        std::vector<float> normals_f32;
+        ASSERT_TRUE(packed->read(Output::vertex_normals, normals_f32).ok());
+        EXPECT_LE(test::max_abs_difference(std::vector<double>(normals_f32.begin(), normals_f32.end()), normals), 1e-6);
+
+        // The stored word is the C++ encoder's word for the separate layout's normal (float
+        // backends: every encoder divides with correct rounding here, so bit for bit).
+        std::vector<float> raw(4 * packed->vertex_count()), separate_raw(4 * packed->vertex_count());
+        ASSERT_TRUE(packed->backend().read(BufferId::vertex_position, 0, packed->vertex_count(), raw.data(), detail::Scalar::f32).ok());
+        ASSERT_TRUE(separate->backend().read(BufferId::vertex_normal, 0, separate->vertex_count(), separate_raw.data(), detail::Scalar::f32).ok());
+        uint64_t differing = 0;
+        for (uint64_t v = 0; v < packed->vertex_count(); ++v) {
+            const uint32_t expected = detail::encode_normal_word(separate_raw[4 * v], separate_raw[4 * v + 1], separate_raw[4 * v + 2]);
+            if (detail::bits_from_float(raw[4 * v + 3]) != expected) ++differing;
+        }
+        EXPECT_EQ(differing, 0u) << "of " << packed->vertex_count() << " vertices";
+    }
+}
+
+TEST(AgreementOracle, PackedVertexLayoutOnCpu64) {
+    SimulationConfig config;
+    config.wind.strength = 8.0;
+    config.vertex_layout = VertexLayout::packed;
+    Scene scene = *grid_scene(test::small_tree(), 3, 6.0, 5);
+    std::string skip;
+    auto packed = test::create_simulation_or_skip(scene, config, BackendKind::cpu64, skip);
+    config.vertex_layout = VertexLayout::separate;
+    auto separate = test::create_simulation_or_skip(scene, config, BackendKind::cpu64, skip);
+    ASSERT_TRUE(packed && separate);
+    ASSERT_TRUE(packed->step(200).ok());
+    ASSERT_TRUE(separate->step(200).ok());
+    EXPECT_EQ(read_output(*packed, Output::vertex_positions), read_output(*separate, Output::vertex_positions));
+    auto normals = read_output(*packed, Output::vertex_normals);
+    EXPECT_LE(test::max_abs_difference(normals, read_output(*separate, Output::vertex_normals)), 1e-4);
+    std::vector<float> normals_f32;
+    ASSERT_TRUE(packed->read(Output::vertex_normals, normals_f32).ok());
+    EXPECT_LE(test::max_abs_difference(std::vector<double>(normals_f32.begin(), normals_f32.end()), normals), 1e-6);
 }
 
 /// Fills every state buffer of both simulations with the same random values: angles and rates

@@ -10,6 +10,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <sstream>
 #include <string>
 #include <sys/wait.h>
@@ -132,25 +133,42 @@ void expect_schema(const json& d, const std::string& backend) {
     }
 
     // Forest: 1 and 10 instances of paper-1, each measured or skipped with a reason.
+    EXPECT_EQ(d["settings"]["forest_layouts"], json::array({"separate", "packed"}));
+    for (const json& f : d["forest"]) {
+        const std::string layout = f.value("layout", "");
+        EXPECT_TRUE(layout == "separate" || layout == "packed") << f.dump();
+    }
     for (uint32_t n : {1u, 10u}) {
-        const json* measured = nullptr;
-        for (const json& f : d["forest"])
-            if (f.value("instances", 0u) == n && f.value("backend", "") == backend) measured = &f;
-        bool skipped = false;
-        for (const json& s : d["skipped"])
-            if (s.value("section", "") == "forest" && s.value("instances", 0u) == n &&
-                s.value("backend", "") == backend) {
-                skipped = true;
-                EXPECT_TRUE(s["reason"].is_string());
-            }
-        ASSERT_TRUE(measured != nullptr || skipped) << "forest " << n;
-        if (!measured) continue;
-        for (const char* key : {"mesh_vertices", "seconds_per_step", "steps_per_second", "vertices_per_second",
-                                "bytes_per_step", "state_bytes_per_step", "effective_bandwidth",
-                                "device_seconds_per_step", "device_effective_bandwidth",
-                                "copy_bandwidth_fraction", "device_copy_bandwidth_fraction",
-                                "steps_per_batch", "repeats"})
-            expect_number(*measured, key, "forest " + std::to_string(n));
+        std::map<std::string, const json*> measured;  // by layout
+        for (const std::string layout : {"separate", "packed"}) {
+            for (const json& f : d["forest"])
+                if (f.value("instances", 0u) == n && f.value("backend", "") == backend &&
+                    f.value("layout", "") == layout)
+                    measured[layout] = &f;
+            bool skipped = false;
+            for (const json& s : d["skipped"])
+                if (s.value("section", "") == "forest" && s.value("instances", 0u) == n &&
+                    s.value("backend", "") == backend && s.value("layout", "") == layout) {
+                    skipped = true;
+                    EXPECT_TRUE(s["reason"].is_string());
+                }
+            ASSERT_TRUE(measured.count(layout) || skipped) << "forest " << n << " " << layout;
+            if (!measured.count(layout)) continue;
+            for (const char* key : {"mesh_vertices", "seconds_per_step", "steps_per_second", "vertices_per_second",
+                                    "bytes_per_step", "state_bytes_per_step", "effective_bandwidth",
+                                    "device_seconds_per_step", "device_effective_bandwidth",
+                                    "copy_bandwidth_fraction", "device_copy_bandwidth_fraction",
+                                    "steps_per_batch", "repeats"})
+                expect_number(*measured[layout], key, "forest " + std::to_string(n) + " " + layout);
+        }
+        if (measured.count("separate") && measured.count("packed")) {
+            // The bytes model: the packed contour pass writes 16 bytes per vertex instead of 32.
+            const json& separate = *measured["separate"];
+            const json& packed = *measured["packed"];
+            EXPECT_EQ(packed["mesh_vertices"], separate["mesh_vertices"]);
+            EXPECT_DOUBLE_EQ(separate["bytes_per_step"].get<double>() - packed["bytes_per_step"].get<double>(),
+                             16.0 * separate["mesh_vertices"].get<double>());
+        }
     }
     ASSERT_EQ(d["copy_bandwidth"].size(), 1u);
     const json& c = d["copy_bandwidth"][0];
@@ -171,6 +189,7 @@ TEST_F(BenchCli, QuickCpuWritesSchemaAndTables) {
     expect_schema(d, "cpu");
     EXPECT_NE(r.out.find("| preset | vertices | backend |"), std::string::npos) << r.out;
     EXPECT_NE(r.out.find("### Forest scaling"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("| backend | instances | layout |"), std::string::npos) << r.out;
     // --render prints the same tables from the JSON.
     BenchRun rendered = run("bench --render " + (dir_ / "bench.json").string());
     EXPECT_EQ(rendered.exit_code, 0) << rendered.err;

@@ -7,6 +7,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <sstream>
 #include <sys/wait.h>
 
@@ -93,6 +94,22 @@ TEST_F(Cli, SimulateWritesNodesVerticesAndReport) {
     for (Pass p : kAllPasses) EXPECT_GT(report["pass_device_seconds"][std::string(pass_name(p))].get<double>(), 0.0);
 }
 
+TEST_F(Cli, PackedVertexLayoutDumpsTheSameVertices) {
+    for (const std::string layout : {"separate", "packed"}) {
+        CliRun r = run("simulate --tree " + path("small.json") + " --backend cpu --steps 20 --vertex-layout " +
+                       layout + " --dump-vertices " + path(layout + ".bin") + " --report " + path(layout + ".json"));
+        ASSERT_EQ(r.exit_code, 0) << r.err;
+        std::ifstream report_file(path(layout + ".json"));
+        EXPECT_EQ(nlohmann::json::parse(report_file)["vertex_layout"], layout);
+    }
+    auto bytes = [&](const std::string& name) {
+        std::ifstream in(path(name), std::ios::binary);
+        return std::string(std::istreambuf_iterator<char>(in), {});
+    };
+    EXPECT_FALSE(bytes("separate.bin").empty());
+    EXPECT_EQ(bytes("separate.bin"), bytes("packed.bin"));
+}
+
 TEST_F(Cli, GridForestDumpsEveryInstance) {
     CliRun r = run("simulate --tree " + path("small.json") +
                 " --instances 3 --spacing 4 --seed 9 --backend cpu64 --steps 5 --dump-nodes " + path("n.csv"));
@@ -138,6 +155,7 @@ TEST_F(Cli, BadArgumentsExitTwoWithoutOutput) {
     expect_bad_input("simulate" + tree + " --ring-sides 2", "ring_sides");
     expect_bad_input("simulate" + tree + " --fix-weight 2", "fix_weight");
     expect_bad_input("simulate" + tree + " --grouping height", "grouping");
+    expect_bad_input("simulate" + tree + " --vertex-layout interleaved", "--vertex-layout");
     expect_bad_input("simulate" + tree + " --origin 1,2,x", "origin");
     expect_bad_input("simulate" + tree + " --no-such-flag", "no-such-flag");
     expect_bad_input("simulate --steps 3", "--tree");

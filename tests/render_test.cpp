@@ -268,6 +268,29 @@ TEST_F(RenderTest, HostUploadDrawsWhatTheDeviceBuffersDraw) {
     for (int f = 0; f < 2; ++f) EXPECT_LT(differing_share(a[f], b[f]), 0.01) << "frame " << f;
 }
 
+TEST_F(RenderTest, PackedVertexLayoutDrawsWhatTheSeparateLayoutDraws) {
+    // Device buffers decoded in the vertex shader (Vulkan) and the host upload of decoded
+    // normals (CPU), both against the separate layout: only the snorm16 quantization of the
+    // normals (< 1e-4 rad) may flip a pixel's colour by a step.
+    SimulationConfig config;
+    config.backend = BackendKind::vulkan;
+    config.wind.strength = 2.0;
+    OPEN_OR_SKIP(separate, test_scene(), config, small_settings());
+    config.vertex_layout = VertexLayout::packed;
+    OPEN_OR_SKIP(packed, test_scene(), config, small_settings());
+    EXPECT_EQ(packed->renderer->vertex_source(), render::VertexSource::device_buffers);
+    config.backend = BackendKind::cpu;
+    OPEN_OR_SKIP(host, test_scene(), config, small_settings());
+    EXPECT_EQ(host->renderer->vertex_source(), render::VertexSource::host_upload);
+    auto a = render_frames(*separate, 2, 20);
+    auto b = render_frames(*packed, 2, 20);
+    auto c = render_frames(*host, 2, 20);
+    for (int f = 0; f < 2; ++f) {
+        EXPECT_LT(differing_share(a[f], b[f]), 0.003) << "frame " << f;
+        EXPECT_LT(differing_share(a[f], c[f]), 0.01) << "frame " << f;
+    }
+}
+
 TEST_F(RenderTest, ValidationLayerIsSilentForAForestWithoutAndWithMsaa) {
     if (!g_messages.enabled) GTEST_SKIP() << "VK_LAYER_KHRONOS_validation is not installed";
     Scene forest = *grid_scene(small_tree(), 4, 6.0, 3);

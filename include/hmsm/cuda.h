@@ -20,9 +20,13 @@ struct DeviceOutputs {
     int device = 0;                           ///< CUDA device ordinal that holds the buffers
     const float* node_positions = nullptr;    ///< node_count x (x, y, z, 1), nodes in input order
     const float* vertex_positions = nullptr;  ///< vertex_count x (x, y, z, 1)
-    const float* vertex_normals = nullptr;    ///< vertex_count x (x, y, z, 0), unit length
+    /// vertex_count x (x, y, z, 0), unit length; nullptr in VertexLayout::packed, where each
+    /// vertex_positions w holds the normal word instead (docs/cuda.md: decode with
+    /// oct_decode(unpack_snorm2x16(__float_as_uint(w)))).
+    const float* vertex_normals = nullptr;
     uint64_t node_count = 0;
     uint64_t vertex_count = 0;
+    VertexLayout vertex_layout = VertexLayout::separate;  ///< the simulation's config().vertex_layout
 };
 
 #ifdef HMSM_HAVE_CUDA

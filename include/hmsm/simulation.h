@@ -48,12 +48,28 @@ enum class Composition {
 const char* to_string(Composition composition);
 std::optional<Composition> parse_composition(std::string_view name);
 
+/// How the contour pass stores the mesh vertices on the device (docs/formats.md, "Vertex
+/// layouts"). Both give the same positions and Simulation::read() returns the same outputs.
+/// - `separate`: vertex_position is (x, y, z, 1) and vertex_normal (nx, ny, nz, 0), float32 vec4
+///   each: 32 bytes per vertex.
+/// - `packed`: only vertex_position (x, y, z, w), 16 bytes per vertex. w holds, bit for bit, the
+///   unit normal octahedral-encoded as two snorm16: GLSL `packSnorm2x16(oct_encode(n))`, read
+///   back with `oct_decode(unpackSnorm2x16(floatBitsToUint(p.w)))` (oct_encode and oct_decode as
+///   documented there; decoding error below 1e-4 rad). The vertex_normal buffer then has zero
+///   elements and is never written; hmsm::vulkan::SharedBuffers and
+///   hmsm::cuda::DeviceOutputs report the layout.
+enum class VertexLayout { separate, packed };
+const char* to_string(VertexLayout layout);
+std::optional<VertexLayout> parse_vertex_layout(std::string_view name);
+
 struct SimulationConfig {
     BackendKind backend = BackendKind::automatic;
     ModelOptions model;
     Parameters parameters;
     Wind wind;
     Composition composition = Composition::pointer_jumping;
+    /// The device layout of the mesh vertices; packed halves the bytes the contour pass writes.
+    VertexLayout vertex_layout = VertexLayout::separate;
     /// Collect per-pass device times (pass_times()). Off by default: timers serialize GPU work
     /// and keep CUDA from replaying a step as one graph.
     bool profile_passes = false;
@@ -62,6 +78,8 @@ struct SimulationConfig {
 /// What a caller can read back. Components per element: positions and normals 3 (x, y, z),
 /// chain rotations 9 (column-major), chain origins 3, chain angles 4 (theta_x, theta_z and
 /// their rates). Elements are instance-major; nodes in input order, chains in chain order.
+/// vertex_normals are unit normals in both vertex layouts (decoded from the positions' w when
+/// packed); vertex_positions are x, y, z in both.
 enum class Output { node_positions, vertex_positions, vertex_normals, chain_rotations,
                     chain_origins, chain_angles };
 uint32_t output_components(Output output);
@@ -117,6 +135,7 @@ private:
     Simulation() = default;
     Status read_elements(Output output, std::vector<double>* as_double,
                          std::vector<float>* as_float) const;
+    Status read_packed_normals(std::vector<double>* as_double, std::vector<float>* as_float) const;
 
     SimulationConfig config_;
     Scene scene_;

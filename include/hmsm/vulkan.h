@@ -39,8 +39,10 @@ Result<std::unique_ptr<Simulation>> create_simulation(const Scene& scene,
 
 /// One output as a range of a device buffer: `count` elements of `stride` bytes starting at
 /// `offset`. Positions are vec4 (x, y, z, 1) and normals vec4 (x, y, z, 0), float32,
-/// instance-major, in the same order as Simulation::read(). The buffers carry the usage flags
-/// STORAGE_BUFFER, VERTEX_BUFFER, TRANSFER_SRC and TRANSFER_DST.
+/// instance-major, in the same order as Simulation::read(); in VertexLayout::packed a
+/// position's w holds the normal word instead (decode it with
+/// oct_decode(unpackSnorm2x16(floatBitsToUint(p.w))), docs/vulkan.md). The buffers carry the
+/// usage flags STORAGE_BUFFER, VERTEX_BUFFER, TRANSFER_SRC and TRANSFER_DST.
 struct BufferRange {
     VkBuffer buffer = VK_NULL_HANDLE;
     VkDeviceSize offset = 0;
@@ -53,8 +55,11 @@ struct BufferRange {
 /// contents change in every step.
 struct SharedBuffers {
     BufferRange vertex_positions;  ///< branch-mesh and leaf vertices (DESIGN.md 3.8)
+    /// Empty (VK_NULL_HANDLE, count 0) in VertexLayout::packed: the normals are in
+    /// vertex_positions' w.
     BufferRange vertex_normals;
     BufferRange node_positions;    ///< skeleton nodes in input order
+    VertexLayout vertex_layout = VertexLayout::separate;  ///< the simulation's config().vertex_layout
 };
 
 /// Fails with invalid_argument when `simulation` does not run on the Vulkan backend.

@@ -3,8 +3,12 @@
 // (1 - beta) own + beta parent of the same rest vertex carried by the parent chain, normal
 // renormalized, so the joint stays closed while the child swings. The largest pass (one thread
 // per vertex of every instance): the model-scope inputs are shared by all instances and stay in
-// L2, the outputs are written once, 16 bytes per thread, coalesced.
+// L2, the outputs are written once, coalesced: 32 bytes per thread (position and normal), or 16
+// in the packed vertex layout (pc.mode, gpu_layout.h), where the position's w carries the
+// octahedral normal word (src/octahedral.h) and vertex_normal is not written.
 #include "pass_math.cuh"
+
+#include "../../src/octahedral.h"
 
 #include <cmath>
 
@@ -31,8 +35,13 @@ static HMSM_HOST_DEVICE void contour_element(const BufferPointers& b,
         normal = (1.0f / sqrtf(dot(normal, normal))) * normal;
     }
     const uint64_t out = pc.vertex_begin + i;
-    b.vertex_position[out] = with_w(position, 1.0f);
-    b.vertex_normal[out] = with_w(normal, 0.0f);
+    if (pc.mode == HMSM_VERTEX_LAYOUT_PACKED) {
+        b.vertex_position[out] =
+            with_w(position, packed_word_to_w<float>(encode_normal_word(normal.x, normal.y, normal.z)));
+    } else {
+        b.vertex_position[out] = with_w(position, 1.0f);
+        b.vertex_normal[out] = with_w(normal, 0.0f);
+    }
 }
 
 static __global__ void __launch_bounds__(HMSM_WORKGROUP_SIZE)

@@ -6,6 +6,7 @@
 #define HMSM_COMMON_GLSL
 
 #include "gpu_layout.h"
+#include "octahedral.glsl"  // oct_encode / oct_decode for VertexLayout::packed
 
 #ifdef HMSM_SPECIALIZED_WORKGROUP_SIZE
 // compose and root_positions: the size is specialization constant 0, set per pipeline

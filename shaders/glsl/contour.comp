@@ -1,7 +1,9 @@
 #version 450
 // Pass 7: branch-mesh and leaf vertices rigid with their chain, v = O_c + R_c v_local. The base
 // ring of a child chain blends with the parent chain by fix_weight (the paper's contour fix-up)
-// so joints stay closed while the child swings (src/cpu/contour.cpp).
+// so joints stay closed while the child swings (src/cpu/contour.cpp). pc.mode is the vertex
+// layout: separate writes vec4(position, 1) and vec4(normal, 0); packed writes only the position,
+// with the octahedral normal word (octahedral.glsl) as its w.
 #extension GL_GOOGLE_include_directive : require
 #include "common.glsl"
 
@@ -28,6 +30,10 @@ void main() {
         normal = normalize((1.0 - beta) * normal + beta * n);
     }
     uint out_index = pc.vertex_begin + k * pc.model_vertex_count + e;
-    vertex_position[out_index] = vec4(position, 1.0);
-    vertex_normal[out_index] = vec4(normal, 0.0);
+    if (pc.mode == HMSM_VERTEX_LAYOUT_PACKED) {
+        vertex_position[out_index] = vec4(position, uintBitsToFloat(packSnorm2x16(oct_encode(normal))));
+    } else {
+        vertex_position[out_index] = vec4(position, 1.0);
+        vertex_normal[out_index] = vec4(normal, 0.0);
+    }
 }

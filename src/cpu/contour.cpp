@@ -1,7 +1,10 @@
 // Pass 7: branch-mesh and leaf vertices rigid with their chain, v = O_c + R_c v_local; base-ring
 // vertices of child chains blend with the parent chain (the paper's contour fix-up) so joints
-// stay closed while the child swings.
+// stay closed while the child swings. pc.mode is the vertex layout (gpu_layout.h): packed stores
+// the octahedral normal word in the position's w (src/octahedral.h) and no vertex_normal.
 #include "cpu_state.h"
+
+#include "../octahedral.h"
 
 #include <glm/geometric.hpp>
 
@@ -28,8 +31,12 @@ void contour(State<T>& s, const gpu::PassConstants& pc) {
             normal = glm::normalize((T(1) - beta) * normal + beta * n);
         }
         uint64_t out = pc.vertex_begin + uint64_t(e.instance) * pc.model_vertex_count + e.index;
-        s.vertex_position[out] = {position, T(1)};
-        s.vertex_normal[out] = {normal, T(0)};
+        if (pc.mode == HMSM_VERTEX_LAYOUT_PACKED) {
+            s.vertex_position[out] = {position, packed_word_to_w<T>(encode_normal_word(normal.x, normal.y, normal.z))};
+        } else {
+            s.vertex_position[out] = {position, T(1)};
+            s.vertex_normal[out] = {normal, T(0)};
+        }
     }
 }
 

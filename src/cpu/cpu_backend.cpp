@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cstring>
 #include <new>
+#include <type_traits>
 
 namespace hmsm::detail {
 namespace cpu {
@@ -90,6 +91,16 @@ public:
 
     Status read(BufferId id, uint64_t first, uint64_t count, void* dst, Scalar as) const override {
         return visit(const_cast<State<T>&>(s_), id, first, count, [&](auto& buffer) {
+            using Element = typename std::decay_t<decltype(buffer)>::value_type;
+            if constexpr (std::is_same_v<Element, glm::vec4>) {
+                // Float vec4 as float: copied bit for bit, since in the packed vertex layout a
+                // position's w is a normal word (src/octahedral.h) that may read as a
+                // signalling NaN, which a round trip through double would quiet.
+                if (as == Scalar::f32) {
+                    if (count > 0) std::memcpy(dst, buffer.data() + first, count * sizeof(Element));
+                    return;
+                }
+            }
             const uint32_t n = shape_scalars(buffer_info(id).shape);
             double tmp[12];
             for (uint64_t i = 0; i < count; ++i) {
@@ -143,7 +154,7 @@ private:
         s_.chain_origin.assign(2 * d.total_chains, vec4(0));
         s_.node_world.assign(d.total_nodes, vec4(0));
         s_.vertex_position.assign(d.total_vertices, vec4(0));
-        s_.vertex_normal.assign(d.total_vertices, vec4(0));
+        s_.vertex_normal.assign(d.element_count(BufferId::vertex_normal), vec4(0));  // 0 if packed
         s_.dt = T(d.dt);
         s_.max_angle = T(d.max_angle);
         s_.fix_weight = T(d.fix_weight);

@@ -28,6 +28,8 @@ Result<DeviceOutputs> device_outputs(const Simulation& simulation) {
     outputs.vertex_normals = reinterpret_cast<const float*>(p.vertex_normal);
     outputs.node_count = simulation.node_count();
     outputs.vertex_count = simulation.vertex_count();
+    outputs.vertex_layout = simulation.config().vertex_layout;
+    if (outputs.vertex_layout == VertexLayout::packed) outputs.vertex_normals = nullptr;
     return outputs;
 }
 

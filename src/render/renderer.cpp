@@ -47,6 +47,7 @@ struct DrawConstants {
 };
 constexpr int32_t kModeBark = 0, kModeLeaf = 1, kModeShadowBark = 2, kModeShadowLeaf = 3;
 constexpr int32_t kFlagAlphaToCoverage = 1;
+constexpr int32_t kFlagPackedNormals = 2;  // normals decoded from the positions' w (mesh.vert)
 
 constexpr VkFormat kColourFormat = VK_FORMAT_R8G8B8A8_SRGB;
 
@@ -127,6 +128,10 @@ struct Renderer::State {
     Buffer upload_positions, upload_normals;  // host_upload only
     VkBuffer positions = VK_NULL_HANDLE, normals = VK_NULL_HANDLE;
     VkDeviceSize positions_offset = 0, normals_offset = 0, positions_size = 0;
+    // device_buffers of a VertexLayout::packed simulation: no normal buffer; the vertex shader
+    // decodes each normal from its position's w, and the normal attribute is bound to the
+    // positions (read, never used).
+    bool packed_normals = false;
 
     // Per model: first index and counts; per instance: vertex base and model.
     struct ModelDraw {
@@ -571,10 +576,12 @@ Status Renderer::State::create_geometry() {
         source = VertexSource::device_buffers;
         positions = shared->vertex_positions.buffer;
         positions_offset = shared->vertex_positions.offset;
-        normals = shared->vertex_normals.buffer;
-        normals_offset = shared->vertex_normals.offset;
+        packed_normals = shared->vertex_layout == VertexLayout::packed;
+        const hmsm::vulkan::BufferRange& normal_range = packed_normals ? shared->vertex_positions : shared->vertex_normals;
+        normals = normal_range.buffer;
+        normals_offset = normal_range.offset;
         positions_size = shared->vertex_positions.size;
-        if (shared->vertex_positions.stride != 16 || shared->vertex_normals.stride != 16)
+        if (shared->vertex_positions.stride != 16 || normal_range.stride != 16)
             return {ErrorCode::internal, "render: the simulation's vertex buffers are not vec4"};
     } else {
         source = VertexSource::host_upload;
@@ -723,7 +730,8 @@ void Renderer::State::record_draws(VkCommandBuffer cmd) {
     VkDeviceSize offsets[2] = {positions_offset, normals_offset};
     t.vkCmdBindVertexBuffers(cmd, 0, 2, buffers, offsets);
     t.vkCmdBindIndexBuffer(cmd, indices.handle(), 0, VK_INDEX_TYPE_UINT32);
-    const int32_t flags = samples != VK_SAMPLE_COUNT_1_BIT ? kFlagAlphaToCoverage : 0;
+    const int32_t flags = (samples != VK_SAMPLE_COUNT_1_BIT ? kFlagAlphaToCoverage : 0) |
+                          (packed_normals ? kFlagPackedNormals : 0);
     auto draw_all = [&](int32_t bark_mode, int32_t leaf_mode) {
         for (size_t i = 0; i < instances.size(); ++i) {
             const ModelDraw& m = models[instances[i].first];

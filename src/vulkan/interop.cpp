@@ -18,7 +18,10 @@ Result<VulkanBackend*> vulkan_backend_of(const Simulation& simulation) {
     return backend;
 }
 
+/// An empty range (no buffer) for a buffer without elements, such as vertex_normal in the packed
+/// vertex layout: its VkBuffer is a 16-byte placeholder an engine must not draw from.
 BufferRange range_of(const VulkanBackend& backend, BufferId id) {
+    if (backend.element_count(id) == 0) return {};
     const detail::vk::Buffer& buffer = backend.buffer(id);
     const uint32_t stride = detail::shape_scalars(detail::buffer_info(id).shape) * 4;
     return {buffer.handle(), 0, VkDeviceSize(backend.element_count(id)) * stride, stride,
@@ -42,7 +45,7 @@ Result<SharedBuffers> shared_buffers(const Simulation& simulation) {
     if (!backend) return backend.status();
     const VulkanBackend& b = *backend.value();
     return SharedBuffers{range_of(b, BufferId::vertex_position), range_of(b, BufferId::vertex_normal),
-                         range_of(b, BufferId::node_world)};
+                         range_of(b, BufferId::node_world), simulation.config().vertex_layout};
 }
 
 Result<DeviceHandles> device_handles(const Simulation& simulation) {

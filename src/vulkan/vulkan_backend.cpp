@@ -320,6 +320,11 @@ Status VulkanBackend::read(BufferId id, uint64_t first, uint64_t count, void* ds
         buffers_[b], first * element_bytes(id), count * element_bytes(id),
         [&](const void* staging, VkDeviceSize first_byte, VkDeviceSize bytes) {
             const auto* words = static_cast<const unsigned char*>(staging);
+            if (!integer && as == Scalar::f32) {  // the same words on both sides, bit for bit
+                // (a packed vertex's w is a normal word that may read as a signalling NaN)
+                std::memcpy(static_cast<unsigned char*>(dst) + first_byte, words, bytes);
+                return;
+            }
             const uint64_t scalar0 = first_byte / 4;
             for (uint64_t k = 0; k < bytes / 4; ++k) {
                 double value = scalar_value(integer, words + 4 * k);

@@ -5,9 +5,11 @@
 
 #include <hmsm/cuda.h>
 
+#include "octahedral.h"
 #include "random.h"
 
 #include <cuda_runtime_api.h>
+#include <algorithm>
 
 #include <cmath>
 #include <cstdlib>
@@ -247,6 +249,44 @@ TEST(CudaInterop, DeviceOutputsHoldWhatReadReturns) {
             ASSERT_EQ(raw[4 * i + 3], check.w);
         }
     }
+}
+
+TEST(CudaInterop, PackedLayoutHasNoNormalBufferAndNormalWordsInW) {
+    HMSM_SKIP_WITHOUT_CUDA();
+    const Scene scene = forest_scene(16);
+    SimulationConfig config = test_config(BackendKind::cuda, Composition::pointer_jumping, false);
+    config.vertex_layout = VertexLayout::packed;
+    auto sim = create_or_fail(scene, config);
+    ASSERT_TRUE(sim);
+    ASSERT_TRUE(sim->step(10).ok());
+    auto outputs = cuda::device_outputs(*sim);
+    ASSERT_TRUE(outputs.ok()) << outputs.status().message();
+    EXPECT_EQ(outputs->vertex_layout, VertexLayout::packed);
+    EXPECT_EQ(outputs->vertex_normals, nullptr);
+    ASSERT_NE(outputs->vertex_positions, nullptr);
+    std::vector<float> raw(outputs->vertex_count * 4), positions, normals;
+    ASSERT_EQ(cudaMemcpy(raw.data(), outputs->vertex_positions, raw.size() * sizeof(float), cudaMemcpyDeviceToHost),
+              cudaSuccess);
+    ASSERT_TRUE(sim->read(Output::vertex_positions, positions).ok());
+    ASSERT_TRUE(sim->read(Output::vertex_normals, normals).ok());
+    for (uint64_t i = 0; i < outputs->vertex_count; ++i) {
+        for (int k = 0; k < 3; ++k) ASSERT_EQ(raw[4 * i + k], positions[3 * i + k]) << "vertex " << i;
+        const auto n = detail::decode_normal_word<float>(detail::bits_from_float(raw[4 * i + 3]));
+        ASSERT_EQ(n.x, normals[3 * i]) << "vertex " << i;
+        ASSERT_EQ(n.y, normals[3 * i + 1]) << "vertex " << i;
+        ASSERT_EQ(n.z, normals[3 * i + 2]) << "vertex " << i;
+    }
+    // The separate layout of the same scene: the same positions, normals within quantization.
+    auto separate = create_or_fail(scene, test_config(BackendKind::cuda, Composition::pointer_jumping, false));
+    ASSERT_TRUE(separate);
+    ASSERT_TRUE(separate->step(10).ok());
+    std::vector<float> separate_positions, separate_normals;
+    ASSERT_TRUE(separate->read(Output::vertex_positions, separate_positions).ok());
+    ASSERT_TRUE(separate->read(Output::vertex_normals, separate_normals).ok());
+    EXPECT_EQ(positions, separate_positions);
+    double worst = 0.0;
+    for (size_t i = 0; i < normals.size(); ++i) worst = std::max(worst, double(std::abs(normals[i] - separate_normals[i])));
+    EXPECT_LE(worst, 1e-4);
 }
 
 TEST(CudaInterop, StepsRunOnAnEngineStream) {

@@ -6,6 +6,7 @@
 
 #include "cuda/device_layout.h"
 #include "cuda/launch_dispatch.h"
+#include "octahedral.h"
 
 #include <array>
 #include <cmath>
@@ -107,6 +108,44 @@ TEST_P(CudaEmulation, KernelBodiesFollowCpu64OverManySteps) {
     ASSERT_TRUE((*at_rest)->read(Output::node_positions, rest).ok());
     ASSERT_TRUE(sim.read(Output::node_positions, now).ok());
     EXPECT_GT(max_abs_difference(rest, now) / height, 1e-3);
+}
+
+TEST(CudaEmulationPacked, ContourWritesThePositionAndTheNormalWordOnly) {
+    const Scene scene = forest_scene(15);
+    SimulationConfig config = test_config(BackendKind::cpu64, Composition::pointer_jumping, false);
+    config.vertex_layout = VertexLayout::packed;
+    auto reference = Simulation::create(scene, config);
+    ASSERT_TRUE(reference.ok()) << reference.status().message();
+    Simulation& sim = **reference;
+    ASSERT_EQ(sim.scene_data().element_count(BufferId::vertex_normal), 0u);
+    HostImage image = image_of(sim);
+    for (BufferId id : {BufferId::node_world, BufferId::vertex_position, BufferId::vertex_normal})
+        poison(image, id);
+
+    const uint32_t steps = 120;
+    const double dt = sim.config().parameters.dt;
+    const double frequency = sim.scene_data().wind_frequency;
+    for (uint32_t k = 0; k < steps; ++k) {
+        const double x = frequency * (double(k) * dt);
+        const float phase = float(x - 2.0 * std::floor(x / 2.0));
+        for (const detail::Dispatch& d : sim.step_program()) detail::cuda::emulate_dispatch(d, image.pointers, phase);
+    }
+    ASSERT_TRUE(sim.step(steps).ok());
+
+    std::vector<double> positions, normals;
+    ASSERT_TRUE(sim.read(Output::vertex_positions, positions).ok());
+    ASSERT_TRUE(sim.read(Output::vertex_normals, normals).ok());
+    EXPECT_LE(max_abs_difference(xyz_of(image, BufferId::vertex_position), positions) / scene_height(scene), 1e-4);
+    // Each w is the octahedral word of the vertex normal (src/octahedral.h).
+    const auto* words = reinterpret_cast<const float*>(image.bytes[uint32_t(BufferId::vertex_position)].data());
+    std::vector<double> decoded;
+    for (uint64_t v = 0; v < sim.vertex_count(); ++v) {
+        const auto n = detail::decode_normal_word<double>(detail::bits_from_float(words[4 * v + 3]));
+        decoded.insert(decoded.end(), {n.x, n.y, n.z});
+    }
+    EXPECT_LE(max_abs_difference(decoded, normals), 1e-3);
+    // The placeholder behind the empty vertex_normal buffer is never written.
+    for (float w : xyz_of(image, BufferId::vertex_normal)) EXPECT_TRUE(std::isnan(w));
 }
 
 INSTANTIATE_TEST_SUITE_P(Compositions, CudaEmulation,

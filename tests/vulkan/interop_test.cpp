@@ -3,6 +3,7 @@
 #include "test_trees.h"
 #include "vulkan_test_support.h"
 
+#include "octahedral.h"
 #include "vulkan/device.h"
 
 #include <hmsm/vulkan.h>
@@ -79,6 +80,48 @@ TEST_F(VulkanTest, EngineDeviceWithRecordedStepsMatchesOwnDevice) {
     EXPECT_EQ(buffers->vertex_positions.stride, 16u);
     EXPECT_EQ(buffers->node_positions.size, sim.node_count() * 16);
     shared.value().reset();  // before the engine's device goes away
+}
+
+TEST_F(VulkanTest, PackedLayoutSharesPositionsWithNormalWordsAndNoNormalBuffer) {
+    SimulationConfig config;
+    config.wind.strength = 6.0;
+    config.vertex_layout = VertexLayout::packed;
+    Scene scene = *grid_scene(small_tree(), 3, 5.0, 4);
+    std::string skip;
+    auto sim = create_simulation_or_skip(scene, config, BackendKind::vulkan, skip);
+    if (!skip.empty()) GTEST_SKIP() << skip;
+    ASSERT_TRUE(sim);
+    ASSERT_TRUE(sim->step(12).ok());
+    auto buffers = vulkan::shared_buffers(*sim);
+    ASSERT_TRUE(buffers.ok()) << buffers.status().message();
+    EXPECT_EQ(buffers->vertex_layout, VertexLayout::packed);
+    EXPECT_EQ(buffers->vertex_positions.count, sim->vertex_count());
+    EXPECT_EQ(buffers->vertex_positions.stride, 16u);
+    EXPECT_EQ(buffers->vertex_normals.buffer, VK_NULL_HANDLE);
+    EXPECT_EQ(buffers->vertex_normals.count, 0u);
+    EXPECT_EQ(buffers->vertex_normals.size, 0u);
+
+    // What the shared buffer holds: xyz as read() returns them, w the word read() decodes.
+    std::vector<float> raw(4 * sim->vertex_count()), positions, normals;
+    ASSERT_TRUE(sim->backend().read(detail::BufferId::vertex_position, 0, sim->vertex_count(), raw.data(),
+                                    detail::Scalar::f32).ok());
+    ASSERT_TRUE(sim->read(Output::vertex_positions, positions).ok());
+    ASSERT_TRUE(sim->read(Output::vertex_normals, normals).ok());
+    for (uint64_t v = 0; v < sim->vertex_count(); ++v) {
+        for (int k = 0; k < 3; ++k) ASSERT_EQ(raw[4 * v + k], positions[3 * v + k]) << "vertex " << v;
+        const auto n = detail::decode_normal_word<float>(detail::bits_from_float(raw[4 * v + 3]));
+        ASSERT_EQ(n.x, normals[3 * v]) << "vertex " << v;
+        ASSERT_EQ(n.y, normals[3 * v + 1]) << "vertex " << v;
+        ASSERT_EQ(n.z, normals[3 * v + 2]) << "vertex " << v;
+    }
+
+    config.vertex_layout = VertexLayout::separate;
+    auto separate = create_simulation_or_skip(scene, config, BackendKind::vulkan, skip);
+    ASSERT_TRUE(separate);
+    auto separate_buffers = vulkan::shared_buffers(*separate);
+    ASSERT_TRUE(separate_buffers.ok());
+    EXPECT_EQ(separate_buffers->vertex_layout, VertexLayout::separate);
+    EXPECT_EQ(separate_buffers->vertex_normals.count, separate->vertex_count());
 }
 
 TEST_F(VulkanTest, InteropRefusesOtherBackends) {

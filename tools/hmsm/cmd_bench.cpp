@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <ctime>
@@ -106,6 +107,8 @@ void put(json& j, const char* key, double value) {
     if (std::isfinite(value) && value > 0.0) j[key] = value;
 }
 
+constexpr std::array<VertexLayout, 2> kVertexLayouts = {VertexLayout::separate, VertexLayout::packed};
+
 class BenchRun {
 public:
     BenchRun(const Settings& settings, uint64_t device_copy_bytes, uint64_t host_copy_bytes,
@@ -120,10 +123,11 @@ public:
     /// Creates a simulation; on failure records why (a skip, an unavailable backend or a
     /// failure) under `where` and returns null.
     std::unique_ptr<Simulation> create(const Scene& scene, BackendRun& b, Composition composition,
-                                       json where) {
+                                       json where, VertexLayout layout = VertexLayout::separate) {
         SimulationConfig config;
         config.backend = b.kind;
         config.composition = composition;
+        config.vertex_layout = layout;
         config.profile_passes = false;
         auto sim = Simulation::create(scene, config);
         if (sim) {
@@ -242,6 +246,8 @@ public:
         presets.push_back(entry);
     }
 
+    /// Each forest size in both vertex layouts, side by side: the contour pass writes 32 bytes
+    /// per vertex in the separate layout and 16 in the packed one.
     void forest_cases(const Model& model, BackendRun& b, const std::vector<uint32_t>& counts,
                       double spacing, double state_per_instance) {
         const std::string backend = to_string(b.kind);
@@ -249,63 +255,73 @@ public:
         uint32_t last_count = 0;
         for (uint32_t n : counts) {
             if (!b.available) return;
-            progress_.begin(std::to_string(n) + " x " + model.name + " on " + backend);
-            json where = {{"section", "forest"}, {"backend", backend}, {"instances", n}};
+            auto skip_size = [&](const std::string& reason) {
+                for (VertexLayout layout : kVertexLayouts)
+                    skipped.push_back({{"section", "forest"}, {"backend", backend}, {"instances", n},
+                                       {"layout", to_string(layout)}, {"reason", reason}});
+                progress_.note("skipped " + std::to_string(n) + " x " + model.name + " on " + backend + ": " + reason);
+            };
             const double available = host_available_memory();
             const double needed = state_per_instance * n * (is_host_kind(b.kind) ? 1.0 : 2.0);
             if (uses_host_memory(b) && available > 0.0 && needed > 0.8 * available) {
                 char reason[160];
                 std::snprintf(reason, sizeof reason, "needs about %.1f GB of host memory, %.1f GB available",
                               needed * 1e-9, available * 1e-9);
-                where["reason"] = reason;
-                skipped.push_back(where);
-                progress_.note("skipped " + std::to_string(n) + " x " + model.name + " on " + backend + ": " + reason);
+                skip_size(reason);
                 continue;
             }
             if (last_count > 0) {
-                // Linear extrapolation; the least a case runs is 1 warm-up + 3 x (batched + timed).
+                // Linear extrapolation from the slowest layout of the last size; the least a
+                // case runs is 1 warm-up + 3 x (batched + timed), once per layout.
                 const double estimate = last_per_step * double(n) / double(last_count);
-                if (estimate * 7.0 > settings_.case_budget) {
-                    where["reason"] = "about " + format_seconds(estimate) + " per step (extrapolated from " +
-                                      std::to_string(last_count) + " instances), over the " +
-                                      format_seconds(settings_.case_budget) + " case budget (--case-budget)";
-                    skipped.push_back(where);
-                    progress_.note("skipped " + std::to_string(n) + " x " + model.name + " on " + backend +
-                                   ": " + where["reason"].get<std::string>());
+                if (estimate * 7.0 * double(kVertexLayouts.size()) > settings_.case_budget) {
+                    skip_size("about " + format_seconds(estimate) + " per step (extrapolated from " +
+                              std::to_string(last_count) + " instances), over the " +
+                              format_seconds(settings_.case_budget) + " case budget (--case-budget)");
                     continue;
                 }
             }
             auto scene = grid_scene(model.tree, n, spacing, 1);
-            if (!scene) {
-                record_failure(where, scene.status());
-                continue;
+            double slowest = 0.0;
+            for (VertexLayout layout : kVertexLayouts) {
+                if (!b.available) return;
+                const std::string layout_name = to_string(layout);
+                progress_.begin(std::to_string(n) + " x " + model.name + " on " + backend + ", " + layout_name);
+                json where = {{"section", "forest"}, {"backend", backend}, {"instances", n}, {"layout", layout_name}};
+                if (!scene) {
+                    record_failure(where, scene.status());
+                    continue;
+                }
+                auto sim = create(*scene, b, Composition::pointer_jumping, where, layout);
+                if (!sim) continue;
+                auto measured = measure(*sim, settings_, kBatched | kPasses);
+                if (!measured) {
+                    record_failure(where, measured.status());
+                    continue;
+                }
+                const CaseResult& r = *measured;
+                slowest = std::max(slowest, r.warmup_seconds_per_step);
+                const Traffic traffic = step_traffic(*sim);
+                json f = {{"backend", backend}, {"device", sim->device_name()}, {"instances", n},
+                          {"layout", layout_name}, {"mesh_vertices", sim->vertex_count()},
+                          {"steps_per_batch", r.steps}, {"repeats", r.repeats}, {"budget_reduced", r.reduced},
+                          {"bytes_per_step", traffic.total()}, {"state_bytes_per_step", traffic.state_bytes}};
+                put(f, "steps_per_second", r.batched);
+                put(f, "seconds_per_step", 1.0 / r.batched);
+                put(f, "vertices_per_second", double(sim->vertex_count()) * r.batched);
+                put(f, "effective_bandwidth", traffic.total() * r.batched);
+                put(f, "steps_per_second_profiled", r.profiled);
+                if (r.has_passes) {
+                    put(f, "device_seconds_per_step", r.device_seconds);
+                    put(f, "device_effective_bandwidth", traffic.total() / r.device_seconds);
+                }
+                copy_bandwidth(b, *sim);
+                forest.push_back(f);
             }
-            auto sim = create(*scene, b, Composition::pointer_jumping, where);
-            if (!sim) continue;
-            auto measured = measure(*sim, settings_, kBatched | kPasses);
-            if (!measured) {
-                record_failure(where, measured.status());
-                continue;
+            if (slowest > 0.0) {
+                last_per_step = slowest;
+                last_count = n;
             }
-            const CaseResult& r = *measured;
-            last_per_step = r.warmup_seconds_per_step;
-            last_count = n;
-            const Traffic traffic = step_traffic(*sim);
-            json f = {{"backend", backend}, {"device", sim->device_name()}, {"instances", n},
-                      {"mesh_vertices", sim->vertex_count()}, {"steps_per_batch", r.steps},
-                      {"repeats", r.repeats}, {"budget_reduced", r.reduced},
-                      {"bytes_per_step", traffic.total()}, {"state_bytes_per_step", traffic.state_bytes}};
-            put(f, "steps_per_second", r.batched);
-            put(f, "seconds_per_step", 1.0 / r.batched);
-            put(f, "vertices_per_second", double(sim->vertex_count()) * r.batched);
-            put(f, "effective_bandwidth", traffic.total() * r.batched);
-            put(f, "steps_per_second_profiled", r.profiled);
-            if (r.has_passes) {
-                put(f, "device_seconds_per_step", r.device_seconds);
-                put(f, "device_effective_bandwidth", traffic.total() / r.device_seconds);
-            }
-            copy_bandwidth(b, *sim);
-            forest.push_back(f);
         }
     }
 
@@ -519,7 +535,8 @@ int run_bench(CLI::App& app) {
         {"host", {{"cpu", host_cpu_name()}, {"hardware_threads", std::max(1u, std::thread::hardware_concurrency())}}},
         {"settings", {{"steps_per_batch", settings.steps}, {"warmup_steps", settings.warmup},
                       {"repeats", settings.repeats}, {"case_budget_seconds", settings.case_budget},
-                      {"instances", counts}, {"forest_model", forest_model.name}, {"spacing", flags.spacing}}},
+                      {"instances", counts}, {"forest_model", forest_model.name}, {"spacing", flags.spacing},
+                      {"forest_layouts", {to_string(kVertexLayouts[0]), to_string(kVertexLayouts[1])}}}},
         {"backends", backends_json},
         {"presets", run.presets},
         {"forest", run.forest},
@@ -527,7 +544,10 @@ int run_bench(CLI::App& app) {
         {"skipped", run.skipped},
         {"notes", notes},
     };
-    if (counts.empty()) document["settings"].erase("forest_model");
+    if (counts.empty()) {
+        document["settings"].erase("forest_model");
+        document["settings"].erase("forest_layouts");
+    }
 
     std::fputs(render_markdown(document).c_str(), stdout);
     std::fflush(stdout);

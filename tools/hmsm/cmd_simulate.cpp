@@ -16,6 +16,7 @@ struct SimulateFlags {
     WindFlags wind;
     std::string backend = "auto";
     std::string composition = "pointer-jumping";
+    std::string vertex_layout = "separate";
     int64_t steps = 120;
     std::string dump_nodes, dump_vertices, report;
 } flags;
@@ -48,6 +49,9 @@ void register_simulate_flags(CLI::App& app) {
                    "passes 3 and 5: pointer-jumping (default: the paper's rounds, per round or in one "
                    "dispatch by scene size), pointer-jumping-per-round, pointer-jumping-in-dispatch "
                    "or level-by-level");
+    app.add_option("--vertex-layout", flags.vertex_layout,
+                   "device layout of the mesh vertices: separate (default; position and normal "
+                   "vec4) or packed (the normal octahedral-encoded in the position's w)");
     app.add_option("--steps", flags.steps, "time steps to run (default 120)");
     app.add_option("--dump-nodes", flags.dump_nodes, "CSV instance,node,x,y,z after the last step");
     app.add_option("--dump-vertices", flags.dump_vertices, "float32 xyz per mesh vertex");
@@ -67,6 +71,10 @@ int run_simulate(CLI::App& app) {
     else return fail_input("--composition '" + flags.composition +
                            "': expected pointer-jumping, pointer-jumping-per-round, pointer-jumping-in-dispatch or "
                            "level-by-level");
+    auto vertex_layout = parse_vertex_layout(flags.vertex_layout);
+    if (!vertex_layout)
+        return fail_input("--vertex-layout '" + flags.vertex_layout + "': expected separate or packed");
+    config.vertex_layout = *vertex_layout;
     if (flags.steps < 0) return fail_input("--steps " + std::to_string(flags.steps) + ": must be >= 0");
     auto options = model_options(flags.model);
     if (!options) return fail(options.status());
@@ -131,6 +139,7 @@ int run_simulate(CLI::App& app) {
         r["backend"] = to_string(sim.backend_kind());
         r["device"] = sim.device_name();
         r["composition"] = flags.composition;
+        r["vertex_layout"] = to_string(config.vertex_layout);
         r["instances"] = sim.instance_count();
         r["models"] = sim.scene().models.size();
         r["nodes"] = sim.node_count();

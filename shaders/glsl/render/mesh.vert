@@ -1,8 +1,10 @@
 #version 450
 // Branch mesh and leaf cards straight from the simulation's vertex buffers (vec4 position and
-// normal per vertex), and the same geometry flattened onto the ground along the sun for shadows.
+// normal per vertex, or in the packed vertex layout the normal octahedral-encoded in the
+// position's w), and the same geometry flattened onto the ground along the sun for shadows.
 #extension GL_GOOGLE_include_directive : require
 #include "render_common.glsl"
+#include "octahedral.glsl"  // shaders/glsl/octahedral.glsl
 
 // The same positions as a storage buffer: a leaf vertex finds its card's centre there.
 layout(set = 0, binding = 1, std430) readonly buffer Positions { vec4 positions[]; };
@@ -41,6 +43,8 @@ void main() {
         p.y = frame.ground.x + frame.ground.y;
     }
     v_world = p;
-    v_normal = in_normal.xyz;
+    v_normal = (draw.flags & FLAG_PACKED_NORMALS) != 0
+                   ? oct_decode(unpackSnorm2x16(floatBitsToUint(in_position.w)))
+                   : in_normal.xyz;
     gl_Position = frame.view_proj * vec4(p, 1.0);
 }

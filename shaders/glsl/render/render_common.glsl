@@ -25,6 +25,7 @@ layout(push_constant) uniform Draw {
 #define MODE_SHADOW_BARK 2
 #define MODE_SHADOW_LEAF 3
 #define FLAG_ALPHA_TO_COVERAGE 1
+#define FLAG_PACKED_NORMALS 2  // VertexLayout::packed: the normal is the word in in_position.w
 
 const vec3 kSunColour = vec3(1.00, 0.93, 0.80) * 2.4;
 const vec3 kSkyZenith = vec3(0.16, 0.34, 0.70);

@@ -1,0 +1,9 @@
+// HMSM_HOST_DEVICE: marks the small functions shared by the C++ model, the CPU passes and the
+// CUDA kernels (src/wind_profile.h, src/octahedral.h) so that nvcc compiles them for both sides.
+#pragma once
+
+#ifdef __CUDACC__
+#define HMSM_HOST_DEVICE __host__ __device__ __forceinline__
+#else
+#define HMSM_HOST_DEVICE inline
+#endif
