@@ -1,6 +1,6 @@
 // The seven compute pipelines (one per pass, SPIR-V embedded at build time), their shared
 // layout (descriptor set 0 with one storage buffer per BufferId, push constants =
-// gpu::PassConstants) and the one descriptor set that binds the scene's buffers.
+// gpu::PassConstants). The descriptor sets binding the scene's buffers are in windows.h.
 #pragma once
 
 #include "device.h"
@@ -27,10 +27,7 @@ public:
 
     VkPipeline pipeline(Pass pass) const { return pipelines_[uint32_t(pass)]; }
     VkPipelineLayout layout() const { return layout_; }
-
-    /// Binds `buffers` (indexed by BufferId, whole ranges) into the set every pipeline uses.
-    void bind(std::span<const Buffer, kBufferCount> buffers);
-    VkDescriptorSet descriptor_set() const { return set_; }
+    VkDescriptorSetLayout set_layout() const { return set_layout_; }
 
 private:
     explicit Pipelines(const Device& device) : device_(device) {}
@@ -39,8 +36,6 @@ private:
     VkDescriptorSetLayout set_layout_ = VK_NULL_HANDLE;
     VkPipelineLayout layout_ = VK_NULL_HANDLE;
     std::array<VkPipeline, kPassCount> pipelines_{};
-    VkDescriptorPool pool_ = VK_NULL_HANDLE;
-    VkDescriptorSet set_ = VK_NULL_HANDLE;
 };
 
 }  // namespace hmsm::detail::vk

@@ -14,17 +14,14 @@ WorkgroupGrid workgroup_grid(uint32_t threads, const DeviceLimits& limits) {
     return {uint32_t(x), uint32_t(y)};
 }
 
-void record_steps(const Device& device, const Pipelines& pipelines, VkCommandBuffer cmd,
-                  std::span<const Dispatch> program, std::span<const double> wind_x,
-                  VkQueryPool timestamps) {
+void record_steps(const Device& device, const Pipelines& pipelines, const Windows& windows,
+                  VkCommandBuffer cmd, std::span<const Dispatch> program,
+                  std::span<const double> wind_x, VkQueryPool timestamps) {
     const VolkDeviceTable& vk = device.vk();
     const uint32_t queries = uint32_t(wind_x.size() * program.size() + 1);
     if (timestamps) vk.vkCmdResetQueryPool(cmd, timestamps, 0, queries);
     barrier_after_all_writes(device, cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
                              VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT);
-    VkDescriptorSet set = pipelines.descriptor_set();
-    vk.vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipelines.layout(), 0, 1, &set,
-                               0, nullptr);
     if (timestamps) vk.vkCmdWriteTimestamp(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, timestamps, 0);
 
     VkMemoryBarrier barrier{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
@@ -32,30 +29,39 @@ void record_steps(const Device& device, const Pipelines& pipelines, VkCommandBuf
     barrier.dstAccessMask = VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT;
     uint32_t written = 0, read = 0;  // buffers touched since the last barrier (bit = BufferId)
     VkPipeline bound = VK_NULL_HANDLE;
+    VkDescriptorSet bound_set = VK_NULL_HANDLE;
     uint32_t query = 1;
     for (double x : wind_x) {
         for (const Dispatch& d : program) {
             const uint32_t reads = pass_reads(d.pass), writes = pass_writes(d.pass);
-            if (((reads | writes) & written) || (writes & read)) {
-                vk.vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
-                                        VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, 0, 1, &barrier, 0,
-                                        nullptr, 0, nullptr);
-                written = read = 0;
-            }
-            written |= writes;
-            read |= reads;
+            windows.plan.for_each_part(d, [&](uint32_t segment, const gpu::PassConstants& part) {
+                if (((reads | writes) & written) || (writes & read)) {
+                    vk.vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
+                                            VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, 0, 1, &barrier, 0,
+                                            nullptr, 0, nullptr);
+                    written = read = 0;
+                }
+                written |= writes;
+                read |= reads;
 
-            VkPipeline pipeline = pipelines.pipeline(d.pass);
-            if (pipeline != bound) {
-                vk.vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline);
-                bound = pipeline;
-            }
-            gpu::PassConstants constants = d.constants;
-            if (d.pass == Pass::wind_force) constants.wind.w = float(x);
-            vk.vkCmdPushConstants(cmd, pipelines.layout(), VK_SHADER_STAGE_COMPUTE_BIT, 0,
-                                  sizeof(constants), &constants);
-            WorkgroupGrid grid = workgroup_grid(dispatch_thread_count(d), device.limits());
-            if (grid.x) vk.vkCmdDispatch(cmd, grid.x, grid.y, 1);
+                VkPipeline pipeline = pipelines.pipeline(d.pass);
+                if (pipeline != bound) {
+                    vk.vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline);
+                    bound = pipeline;
+                }
+                VkDescriptorSet set = windows.sets.set(segment);
+                if (set != bound_set) {
+                    vk.vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipelines.layout(),
+                                               0, 1, &set, 0, nullptr);
+                    bound_set = set;
+                }
+                gpu::PassConstants constants = part;
+                if (d.pass == Pass::wind_force) constants.wind.w = float(x);
+                vk.vkCmdPushConstants(cmd, pipelines.layout(), VK_SHADER_STAGE_COMPUTE_BIT, 0,
+                                      sizeof(constants), &constants);
+                WorkgroupGrid grid = workgroup_grid(constants.element_count, device.limits());
+                if (grid.x) vk.vkCmdDispatch(cmd, grid.x, grid.y, 1);
+            });
             if (timestamps)
                 vk.vkCmdWriteTimestamp(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, timestamps, query++);
         }
