@@ -40,7 +40,10 @@ Result<std::unique_ptr<Simulation>> create_simulation(const Scene& scene,
 /// One output as a range of a device buffer: `count` elements of `stride` bytes starting at
 /// `offset`. Positions are vec4 (x, y, z, 1) and normals vec4 (x, y, z, 0), float32,
 /// instance-major, in the same order as Simulation::read(). The buffers carry the usage flags
-/// STORAGE_BUFFER, VERTEX_BUFFER, TRANSFER_SRC and TRANSFER_DST.
+/// STORAGE_BUFFER, VERTEX_BUFFER, TRANSFER_SRC and TRANSFER_DST. Each output is one VkBuffer
+/// however large the scene, also when hmsm itself binds it in windows because it exceeds
+/// maxStorageBufferRange (docs/vulkan.md); a storage-buffer binding of the engine's own must
+/// keep its range within that limit.
 struct BufferRange {
     VkBuffer buffer = VK_NULL_HANDLE;
     VkDeviceSize offset = 0;
