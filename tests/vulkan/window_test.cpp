@@ -8,6 +8,8 @@
 
 #include "vulkan/windows.h"
 
+#include <hmsm/vulkan.h>
+
 #include <cmath>
 #include <random>
 #include <tuple>
@@ -252,6 +254,73 @@ TEST_F(VulkanTest, SceneBeyondTheStorageBufferRangeRuns) {
             worst = std::max(worst, std::abs(double(positions[3 * per_instance * i + k]) - expected[k]));
         EXPECT_LE(worst / tree_height(tree), 1e-4);
     }
+}
+
+TEST_F(VulkanTest, SplitSceneOnAnEngineDeviceRecordsStepsAndSharesWholeBuffers) {
+    auto engine = detail::vk::Device::create();
+    if (!engine.ok() && engine.status().code() == ErrorCode::no_device) GTEST_SKIP() << engine.status().message();
+    ASSERT_TRUE(engine.ok()) << engine.status().message();
+    const detail::vk::Device& device = *engine.value();
+    vulkan::ExternalContext context;
+    context.instance = device.instance();
+    context.physical_device = device.physical_device();
+    context.device = device.handle();
+    context.queue = device.queue();
+    context.queue_family_index = device.queue_family();
+
+    const Scene scene = two_model_scene();
+    const SimulationConfig config = windy_config(Composition::pointer_jumping);
+    std::string skip;
+    auto reference = create_simulation_or_skip(scene, config, BackendKind::vulkan, skip);
+    ASSERT_TRUE(reference);
+    const uint64_t window =
+        2 * instance_bytes(reference->scene_data(), device.limits().min_storage_buffer_offset_alignment) + 7;
+    Result<std::unique_ptr<Simulation>> created = Status{};
+    {
+        ForcedWindow forced(window);
+        created = vulkan::create_simulation(scene, config, context);
+    }
+    ASSERT_TRUE(created.ok()) << created.status().message();
+    Simulation& sim = *created.value();
+    ASSERT_GT(vulkan_of(sim).window_plan().segments().size(), 2u);
+
+    // 5 steps submitted by hmsm, then 15 recorded into the engine's command buffer.
+    ASSERT_TRUE(sim.step(5).ok());
+    const VolkDeviceTable& vk = device.vk();
+    VkCommandPoolCreateInfo pool_info{VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO};
+    pool_info.queueFamilyIndex = device.queue_family();
+    VkCommandPool pool;
+    ASSERT_EQ(vk.vkCreateCommandPool(device.handle(), &pool_info, nullptr, &pool), VK_SUCCESS);
+    VkCommandBufferAllocateInfo allocate{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
+    allocate.commandPool = pool;
+    allocate.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
+    allocate.commandBufferCount = 1;
+    VkCommandBuffer cmd;
+    ASSERT_EQ(vk.vkAllocateCommandBuffers(device.handle(), &allocate, &cmd), VK_SUCCESS);
+    VkCommandBufferBeginInfo begin{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
+    ASSERT_EQ(vk.vkBeginCommandBuffer(cmd, &begin), VK_SUCCESS);
+    ASSERT_TRUE(vulkan::record_steps(sim, cmd, 15).ok());
+    ASSERT_EQ(vk.vkEndCommandBuffer(cmd), VK_SUCCESS);
+    VkSubmitInfo submit{VK_STRUCTURE_TYPE_SUBMIT_INFO};
+    submit.commandBufferCount = 1;
+    submit.pCommandBuffers = &cmd;
+    ASSERT_EQ(vk.vkQueueSubmit(device.queue(), 1, &submit, VK_NULL_HANDLE), VK_SUCCESS);
+    ASSERT_EQ(vk.vkQueueWaitIdle(device.queue()), VK_SUCCESS);
+    vk.vkDestroyCommandPool(device.handle(), pool, nullptr);
+
+    ASSERT_TRUE(reference->step(20).ok());
+    for (Output o : kOutputs) EXPECT_EQ(read_f32(sim, o), read_f32(*reference, o)) << int(o);
+
+    // The shared outputs are whole buffers, larger than the windows hmsm binds them in.
+    auto buffers = vulkan::shared_buffers(sim);
+    ASSERT_TRUE(buffers.ok());
+    EXPECT_EQ(buffers->vertex_positions.offset, 0u);
+    EXPECT_EQ(buffers->vertex_positions.count, sim.vertex_count());
+    EXPECT_EQ(buffers->vertex_positions.size, sim.vertex_count() * 16);
+    EXPECT_GT(buffers->vertex_positions.size, window);
+    EXPECT_EQ(buffers->vertex_normals.size, sim.vertex_count() * 16);
+    EXPECT_EQ(buffers->node_positions.size, sim.node_count() * 16);
+    created.value().reset();  // before the engine's device goes away
 }
 
 }  // namespace
