@@ -62,7 +62,11 @@ Result<Buffer> Buffer::create(const Device& device, VkDeviceSize size, VkBufferU
     info.size = std::max<VkDeviceSize>(size, 16);  // zero-sized buffers are invalid
     info.usage = usage;
     info.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
-    HMSM_VK_TRY(vk.vkCreateBuffer(device.handle(), &info, nullptr, &b.buffer_));
+    if (VkResult r = vk.vkCreateBuffer(device.handle(), &info, nullptr, &b.buffer_); r != VK_SUCCESS) {
+        Status failed = failure(r, "vkCreateBuffer", __FILE__, __LINE__);
+        return Status{failed.code(), "vulkan: cannot create buffer " + name + " of " + std::to_string(size) +
+                                         " bytes on " + device.name() + ": " + result_name(r)};
+    }
 
     VkMemoryRequirements requirements;
     vk.vkGetBufferMemoryRequirements(device.handle(), b.buffer_, &requirements);

@@ -323,5 +323,27 @@ TEST_F(VulkanTest, SplitSceneOnAnEngineDeviceRecordsStepsAndSharesWholeBuffers) 
     created.value().reset();  // before the engine's device goes away
 }
 
+TEST_F(VulkanTest, BufferBeyondItsMemoryHeapIsRefusedBeforeAllocating) {
+    std::string skip;
+    auto vulkan = create_vulkan_or_skip(skip);
+    if (!skip.empty()) GTEST_SKIP() << skip;
+    ASSERT_TRUE(vulkan);
+    const auto& device = static_cast<detail::vk::VulkanBackend&>(*vulkan).device();
+    VkDeviceSize largest_heap = 0;
+    for (uint32_t h = 0; h < device.memory_properties().memoryHeapCount; ++h)
+        largest_heap = std::max(largest_heap, device.memory_properties().memoryHeaps[h].size);
+    std::mt19937 rng(3);
+    detail::SceneData data = random_scene_data(rng, {{2, 3, 4}}, {0}, 1);
+    // Only the element count matters: the heap is checked before anything is allocated.
+    data.total_vertices = largest_heap / 16 + 1;
+    Status s = vulkan->upload(data);
+    EXPECT_EQ(s.code(), ErrorCode::out_of_memory);
+    EXPECT_NE(s.message().find("vertex_position"), std::string::npos) << s.message();
+    // Refused by hmsm before allocating (or, on a driver that already refuses the VkBuffer,
+    // by vkCreateBuffer), naming the buffer either way.
+    if (s.message().find("vkCreateBuffer") == std::string::npos && s.message().find("cannot create") == std::string::npos)
+        EXPECT_NE(s.message().find("memory heap"), std::string::npos) << s.message();
+}
+
 }  // namespace
 }  // namespace hmsm::test
