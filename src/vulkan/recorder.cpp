@@ -22,6 +22,9 @@ void record_steps(const Device& device, const Pipelines& pipelines, const Window
     if (timestamps) vk.vkCmdResetQueryPool(cmd, timestamps, 0, queries);
     barrier_after_all_writes(device, cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
                              VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT);
+    // Each dispatch as its parts, one per segment of the scene it covers (windows.h).
+    const std::vector<WindowPlan::Part> parts = windows.plan.expand(program);
+    VkDescriptorSet bound_set = VK_NULL_HANDLE;
     if (timestamps) vk.vkCmdWriteTimestamp(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, timestamps, 0);
 
     VkMemoryBarrier barrier{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
@@ -29,40 +32,37 @@ void record_steps(const Device& device, const Pipelines& pipelines, const Window
     barrier.dstAccessMask = VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT;
     uint32_t written = 0, read = 0;  // buffers touched since the last barrier (bit = BufferId)
     VkPipeline bound = VK_NULL_HANDLE;
-    VkDescriptorSet bound_set = VK_NULL_HANDLE;
     uint32_t query = 1;
     for (double x : wind_x) {
-        for (const Dispatch& d : program) {
+        for (const WindowPlan::Part& part : parts) {
+            const Dispatch& d = part.dispatch;
             const uint32_t reads = pass_reads(d.pass), writes = pass_writes(d.pass);
-            windows.plan.for_each_part(d, [&](uint32_t segment, const gpu::PassConstants& part) {
-                if (((reads | writes) & written) || (writes & read)) {
-                    vk.vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
-                                            VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, 0, 1, &barrier, 0,
-                                            nullptr, 0, nullptr);
-                    written = read = 0;
-                }
-                written |= writes;
-                read |= reads;
+            if (((reads | writes) & written) || (writes & read)) {
+                vk.vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
+                                        VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, 0, 1, &barrier, 0,
+                                        nullptr, 0, nullptr);
+                written = read = 0;
+            }
+            written |= writes;
+            read |= reads;
 
-                VkPipeline pipeline = pipelines.pipeline(d.pass);
-                if (pipeline != bound) {
-                    vk.vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline);
-                    bound = pipeline;
-                }
-                VkDescriptorSet set = windows.sets.set(segment);
-                if (set != bound_set) {
-                    vk.vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipelines.layout(),
-                                               0, 1, &set, 0, nullptr);
-                    bound_set = set;
-                }
-                gpu::PassConstants constants = part;
-                if (d.pass == Pass::wind_force) constants.wind.w = float(x);
-                vk.vkCmdPushConstants(cmd, pipelines.layout(), VK_SHADER_STAGE_COMPUTE_BIT, 0,
-                                      sizeof(constants), &constants);
-                WorkgroupGrid grid = workgroup_grid(constants.element_count, device.limits());
-                if (grid.x) vk.vkCmdDispatch(cmd, grid.x, grid.y, 1);
-            });
-            if (timestamps)
+            VkPipeline pipeline = pipelines.pipeline(d.pass);
+            if (pipeline != bound) {
+                vk.vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline);
+                bound = pipeline;
+            }
+            if (VkDescriptorSet set = windows.sets.set(part.segment); set != bound_set) {
+                vk.vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipelines.layout(), 0,
+                                           1, &set, 0, nullptr);
+                bound_set = set;
+            }
+            gpu::PassConstants constants = d.constants;
+            if (d.pass == Pass::wind_force) constants.wind.w = float(x);
+            vk.vkCmdPushConstants(cmd, pipelines.layout(), VK_SHADER_STAGE_COMPUTE_BIT, 0,
+                                  sizeof(constants), &constants);
+            WorkgroupGrid grid = workgroup_grid(dispatch_thread_count(d), device.limits());
+            if (grid.x) vk.vkCmdDispatch(cmd, grid.x, grid.y, 1);
+            if (timestamps && part.last)
                 vk.vkCmdWriteTimestamp(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, timestamps, query++);
         }
     }

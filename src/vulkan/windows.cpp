@@ -254,6 +254,20 @@ void WindowPlan::for_each_part_split(
     }
 }
 
+std::vector<WindowPlan::Part> WindowPlan::expand(std::span<const Dispatch> program) const {
+    std::vector<Part> parts;
+    parts.reserve(program.size());
+    for (const Dispatch& d : program) {
+        const size_t first = parts.size();
+        for_each_part(d, [&](uint32_t segment, const gpu::PassConstants& c) {
+            parts.push_back({Dispatch{d.pass, c}, segment, false});
+        });
+        if (parts.size() == first) parts.push_back({d, 0, false});
+        parts.back().last = true;
+    }
+    return parts;
+}
+
 Result<std::unique_ptr<WindowSets>> WindowSets::create(const Device& device, VkDescriptorSetLayout layout,
                                                        const WindowPlan& plan,
                                                        std::span<const Buffer, kBufferCount> buffers) {

@@ -94,6 +94,17 @@ public:
     };
     Range window(BufferId id, uint32_t s) const;
 
+    /// A dispatch of the program as recorded: the whole dispatch (unsplit scene) or its part in
+    /// one segment, with rebased constants; `last` marks the last part of a dispatch.
+    struct Part {
+        Dispatch dispatch;
+        uint32_t segment = 0;
+        bool last = true;
+    };
+    /// The parts of every dispatch of `program`, in order (a dispatch without threads keeps one
+    /// part, so that every dispatch has a last part).
+    std::vector<Part> expand(std::span<const Dispatch> program) const;
+
     /// Calls part(segment, constants) for every piece of `d` inside one segment, in instance
     /// order, with the constants rebased to the segment's windows.
     template <class Part>

@@ -275,11 +275,10 @@ TEST_F(VulkanTest, SplitSceneOnAnEngineDeviceRecordsStepsAndSharesWholeBuffers) 
     ASSERT_TRUE(reference);
     const uint64_t window =
         2 * instance_bytes(reference->scene_data(), device.limits().min_storage_buffer_offset_alignment) + 7;
-    Result<std::unique_ptr<Simulation>> created = Status{};
-    {
+    auto created = [&] {
         ForcedWindow forced(window);
-        created = vulkan::create_simulation(scene, config, context);
-    }
+        return vulkan::create_simulation(scene, config, context);
+    }();
     ASSERT_TRUE(created.ok()) << created.status().message();
     Simulation& sim = *created.value();
     ASSERT_GT(vulkan_of(sim).window_plan().segments().size(), 2u);
