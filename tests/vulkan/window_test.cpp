@@ -157,6 +157,19 @@ TEST_F(VulkanTest, SegmentsCutInstanceGroupsIntoSeveralParts) {
         cut = cut || parts > 1;
     }
     EXPECT_TRUE(cut);
+    // As recorded: every dispatch ends in exactly one last part (its timestamp).
+    const auto expanded = plan.expand(split->step_program());
+    EXPECT_GT(expanded.size(), split->step_program().size());
+    size_t last = 0;
+    for (const auto& part : expanded) last += part.last;
+    EXPECT_EQ(last, split->step_program().size());
+
+    // Profiling a split scene: one time per dispatch, every pass timed.
+    split->backend().set_profiling(true);
+    ASSERT_TRUE(split->step(3).ok());
+    const PassTimes times = split->pass_times();
+    EXPECT_EQ(times.steps, 3u);
+    for (Pass pass : kAllPasses) EXPECT_GT(times.seconds[uint32_t(pass)], 0.0) << pass_name(pass);
 }
 
 TEST_F(VulkanTest, InstanceLargerThanAWindowIsRefused) {
