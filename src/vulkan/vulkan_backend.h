@@ -1,7 +1,9 @@
 // The Vulkan backend: the scene's buffers in device-local memory, the seven pipelines, and
 // run() recording the step program into command buffers (chunks of steps, two in flight so the
 // host records the next chunk while the device runs the previous one), with per-dispatch
-// timestamps summed into PassTimes when profiling is on.
+// timestamps summed into PassTimes when profiling is on. Scenes whose state buffers exceed
+// maxStorageBufferRange are bound in windows, one descriptor set per segment of instances, and
+// each dispatch is recorded as one part per segment (windows.h).
 #pragma once
 
 #include "device.h"
