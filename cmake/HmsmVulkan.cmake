@@ -74,6 +74,7 @@ set(_hmsm_vulkan_sources
   src/vulkan/device_buffer.cpp
   src/vulkan/pipelines.cpp
   src/vulkan/recorder.cpp
+  src/vulkan/windows.cpp
   src/vulkan/vulkan_backend.cpp
   src/vulkan/interop.cpp)
 target_sources(hmsm PRIVATE ${_hmsm_vulkan_sources} $<TARGET_OBJECTS:hmsm_volk>)

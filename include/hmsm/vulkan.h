@@ -42,7 +42,10 @@ Result<std::unique_ptr<Simulation>> create_simulation(const Scene& scene,
 /// instance-major, in the same order as Simulation::read(); in VertexLayout::packed a
 /// position's w holds the normal word instead (decode it with
 /// oct_decode(unpackSnorm2x16(floatBitsToUint(p.w))), docs/vulkan.md). The buffers carry the
-/// usage flags STORAGE_BUFFER, VERTEX_BUFFER, TRANSFER_SRC and TRANSFER_DST.
+/// usage flags STORAGE_BUFFER, VERTEX_BUFFER, TRANSFER_SRC and TRANSFER_DST. Each output is one
+/// VkBuffer however large the scene, also when hmsm itself binds it in windows because it
+/// exceeds maxStorageBufferRange (docs/vulkan.md); a storage-buffer binding of the engine's own
+/// must keep its range within that limit.
 struct BufferRange {
     VkBuffer buffer = VK_NULL_HANDLE;
     VkDeviceSize offset = 0;

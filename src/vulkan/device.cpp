@@ -314,6 +314,7 @@ Status Device::load_device_info() {
     const VkPhysicalDeviceLimits& l = properties_.limits;
     limits_.max_storage_buffer_range = l.maxStorageBufferRange;
     limits_.max_memory_allocation_size = maintenance3.maxMemoryAllocationSize;
+    limits_.min_storage_buffer_offset_alignment = std::max<VkDeviceSize>(1, l.minStorageBufferOffsetAlignment);
     for (int i = 0; i < 3; ++i) limits_.max_workgroup_count[i] = l.maxComputeWorkGroupCount[i];
     limits_.max_workgroup_size_x = l.maxComputeWorkGroupSize[0];
     limits_.max_workgroup_invocations = l.maxComputeWorkGroupInvocations;

@@ -20,6 +20,7 @@ namespace hmsm::detail::vk {
 struct DeviceLimits {
     VkDeviceSize max_storage_buffer_range = 0;
     VkDeviceSize max_memory_allocation_size = 0;
+    VkDeviceSize min_storage_buffer_offset_alignment = 1;
     uint32_t max_workgroup_count[3] = {};
     uint32_t max_workgroup_size_x = 0;
     uint32_t max_workgroup_invocations = 0;

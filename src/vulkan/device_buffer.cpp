@@ -54,12 +54,6 @@ void Buffer::reset() {
 
 Result<Buffer> Buffer::create(const Device& device, VkDeviceSize size, VkBufferUsageFlags usage,
                               MemoryUse use, const std::string& name) {
-    const DeviceLimits& limits = device.limits();
-    if (limits.max_memory_allocation_size && size > limits.max_memory_allocation_size)
-        return Status{ErrorCode::unsupported,
-                      "vulkan: buffer " + name + " needs " + std::to_string(size) +
-                          " bytes, more than maxMemoryAllocationSize (" +
-                          std::to_string(limits.max_memory_allocation_size) + ") of " + device.name()};
     const VolkDeviceTable& vk = device.vk();
     Buffer b;
     b.device_ = &device;
@@ -68,7 +62,11 @@ Result<Buffer> Buffer::create(const Device& device, VkDeviceSize size, VkBufferU
     info.size = std::max<VkDeviceSize>(size, 16);  // zero-sized buffers are invalid
     info.usage = usage;
     info.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
-    HMSM_VK_TRY(vk.vkCreateBuffer(device.handle(), &info, nullptr, &b.buffer_));
+    if (VkResult r = vk.vkCreateBuffer(device.handle(), &info, nullptr, &b.buffer_); r != VK_SUCCESS) {
+        Status failed = failure(r, "vkCreateBuffer", __FILE__, __LINE__);
+        return Status{failed.code(), "vulkan: cannot create buffer " + name + " of " + std::to_string(size) +
+                                         " bytes on " + device.name() + ": " + result_name(r)};
+    }
 
     VkMemoryRequirements requirements;
     vk.vkGetBufferMemoryRequirements(device.handle(), b.buffer_, &requirements);
@@ -83,15 +81,32 @@ Result<Buffer> Buffer::create(const Device& device, VkDeviceSize size, VkBufferU
     if (type < 0)
         return Status{ErrorCode::unsupported,
                       "vulkan: no suitable memory type for buffer " + name + " on " + device.name()};
+    // maxMemoryAllocationSize is a soft limit ("may" fail with VK_ERROR_OUT_OF_DEVICE_MEMORY;
+    // NVIDIA reports 4 GiB and allocates more): a buffer beyond it is tried, and a failure names
+    // the limit. One beyond its heap cannot succeed and is refused before allocating.
+    const DeviceLimits& limits = device.limits();
+    const VkMemoryHeap& heap =
+        device.memory_properties().memoryHeaps[device.memory_properties().memoryTypes[type].heapIndex];
+    const bool above_soft_limit =
+        limits.max_memory_allocation_size && requirements.size > limits.max_memory_allocation_size;
+    if (requirements.size > heap.size)
+        return Status{ErrorCode::out_of_memory,
+                      "vulkan: buffer " + name + " needs " + std::to_string(requirements.size) +
+                          " bytes, more than its memory heap (" + std::to_string(heap.size) +
+                          " bytes) of " + device.name()};
 
     VkMemoryAllocateInfo allocate{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
     allocate.allocationSize = requirements.size;
     allocate.memoryTypeIndex = uint32_t(type);
     if (VkResult r = vk.vkAllocateMemory(device.handle(), &allocate, nullptr, &b.memory_); r != VK_SUCCESS) {
         Status failed = failure(r, "vkAllocateMemory", __FILE__, __LINE__);
-        return Status{failed.code(), "vulkan: cannot allocate " + std::to_string(requirements.size) +
-                                         " bytes for buffer " + name + " on " + device.name() +
-                                         ": " + result_name(r)};
+        return Status{failed.code(),
+                      "vulkan: cannot allocate " + std::to_string(requirements.size) + " bytes for buffer " +
+                          name + " on " + device.name() + ": " + result_name(r) +
+                          (above_soft_limit ? " (more than maxMemoryAllocationSize, " +
+                                                  std::to_string(limits.max_memory_allocation_size) +
+                                                  " bytes; use fewer instances per simulation)"
+                                            : std::string())};
     }
     HMSM_VK_TRY(vk.vkBindBufferMemory(device.handle(), b.buffer_, b.memory_, 0));
     if (use == MemoryUse::staging)

@@ -73,17 +73,6 @@ Result<std::unique_ptr<Pipelines>> Pipelines::create(const Device& device) {
         p->pipelines_[uint32_t(pass)] = *pipeline;
     }
 
-    VkDescriptorPoolSize size{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, kBufferCount};
-    VkDescriptorPoolCreateInfo pool_info{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
-    pool_info.maxSets = 1;
-    pool_info.poolSizeCount = 1;
-    pool_info.pPoolSizes = &size;
-    HMSM_VK_TRY(vk.vkCreateDescriptorPool(dev, &pool_info, nullptr, &p->pool_));
-    VkDescriptorSetAllocateInfo allocate{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO};
-    allocate.descriptorPool = p->pool_;
-    allocate.descriptorSetCount = 1;
-    allocate.pSetLayouts = &p->set_layout_;
-    HMSM_VK_TRY(vk.vkAllocateDescriptorSets(dev, &allocate, &p->set_));
     return p;
 }
 
@@ -163,7 +152,6 @@ Status Pipelines::prepare(std::span<const Dispatch> program) {
 Pipelines::~Pipelines() {
     const VolkDeviceTable& vk = device_.vk();
     VkDevice dev = device_.handle();
-    if (pool_) vk.vkDestroyDescriptorPool(dev, pool_, nullptr);
     for (VkPipeline pipeline : pipelines_)
         if (pipeline) vk.vkDestroyPipeline(dev, pipeline, nullptr);
     for (const auto& sizes : rounds_pipelines_)
@@ -171,21 +159,6 @@ Pipelines::~Pipelines() {
             if (pipeline) vk.vkDestroyPipeline(dev, pipeline, nullptr);
     if (layout_) vk.vkDestroyPipelineLayout(dev, layout_, nullptr);
     if (set_layout_) vk.vkDestroyDescriptorSetLayout(dev, set_layout_, nullptr);
-}
-
-void Pipelines::bind(std::span<const Buffer, kBufferCount> buffers) {
-    std::array<VkDescriptorBufferInfo, kBufferCount> infos{};
-    std::array<VkWriteDescriptorSet, kBufferCount> writes{};
-    for (uint32_t b = 0; b < kBufferCount; ++b) {
-        infos[b] = {buffers[b].handle(), 0, VK_WHOLE_SIZE};
-        writes[b].sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET;
-        writes[b].dstSet = set_;
-        writes[b].dstBinding = b;
-        writes[b].descriptorCount = 1;
-        writes[b].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
-        writes[b].pBufferInfo = &infos[b];
-    }
-    device_.vk().vkUpdateDescriptorSets(device_.handle(), kBufferCount, writes.data(), 0, nullptr);
 }
 
 }  // namespace hmsm::detail::vk

@@ -1,7 +1,7 @@
 // The seven compute pipelines (one per pass, SPIR-V embedded at build time; compose and
 // root_positions also in larger workgroup sizes for in-dispatch rounds), their shared
 // layout (descriptor set 0 with one storage buffer per BufferId, push constants =
-// gpu::PassConstants) and the one descriptor set that binds the scene's buffers.
+// gpu::PassConstants). The descriptor sets binding the scene's buffers are in windows.h.
 #pragma once
 
 #include "device.h"
@@ -40,10 +40,7 @@ public:
     /// Creates the pipelines with other workgroup sizes that `program` needs (once each).
     Status prepare(std::span<const Dispatch> program);
     VkPipelineLayout layout() const { return layout_; }
-
-    /// Binds `buffers` (indexed by BufferId, whole ranges) into the set every pipeline uses.
-    void bind(std::span<const Buffer, kBufferCount> buffers);
-    VkDescriptorSet descriptor_set() const { return set_; }
+    VkDescriptorSetLayout set_layout() const { return set_layout_; }
 
 private:
     explicit Pipelines(const Device& device) : device_(device) {}
@@ -58,8 +55,6 @@ private:
     /// In-dispatch rounds pipelines: [compose, root_positions][log2(size / 64)].
     static constexpr uint32_t kRoundsSizes = 5;  // 64 .. HMSM_MAX_ROUNDS_WORKGROUP_SIZE
     std::array<std::array<VkPipeline, kRoundsSizes>, 2> rounds_pipelines_{};
-    VkDescriptorPool pool_ = VK_NULL_HANDLE;
-    VkDescriptorSet set_ = VK_NULL_HANDLE;
 };
 
 }  // namespace hmsm::detail::vk

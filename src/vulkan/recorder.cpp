@@ -13,17 +13,17 @@ WorkgroupGrid workgroup_grid(uint64_t groups, const DeviceLimits& limits) {
     return {uint32_t(x), uint32_t(y)};
 }
 
-void record_steps(const Device& device, const Pipelines& pipelines, VkCommandBuffer cmd,
-                  std::span<const Dispatch> program, std::span<const double> wind_x,
-                  VkQueryPool timestamps) {
+void record_steps(const Device& device, const Pipelines& pipelines, const Windows& windows,
+                  VkCommandBuffer cmd, std::span<const Dispatch> program,
+                  std::span<const double> wind_x, VkQueryPool timestamps) {
     const VolkDeviceTable& vk = device.vk();
     const uint32_t queries = uint32_t(wind_x.size() * program.size() + 1);
     if (timestamps) vk.vkCmdResetQueryPool(cmd, timestamps, 0, queries);
     barrier_after_all_writes(device, cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
                              VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT);
-    VkDescriptorSet set = pipelines.descriptor_set();
-    vk.vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipelines.layout(), 0, 1, &set,
-                               0, nullptr);
+    // Each dispatch as its parts, one per segment of the scene it covers (windows.h).
+    const std::vector<WindowPlan::Part> parts = windows.plan.expand(program);
+    VkDescriptorSet bound_set = VK_NULL_HANDLE;
     if (timestamps) vk.vkCmdWriteTimestamp(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, timestamps, 0);
 
     VkMemoryBarrier barrier{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
@@ -33,7 +33,8 @@ void record_steps(const Device& device, const Pipelines& pipelines, VkCommandBuf
     VkPipeline bound = VK_NULL_HANDLE;
     uint32_t query = 1;
     for (double x : wind_x) {
-        for (const Dispatch& d : program) {
+        for (const WindowPlan::Part& part : parts) {
+            const Dispatch& d = part.dispatch;
             const uint32_t reads = pass_reads(d.pass), writes = pass_writes(d.pass);
             if (((reads | writes) & written) || (writes & read)) {
                 vk.vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
@@ -49,6 +50,11 @@ void record_steps(const Device& device, const Pipelines& pipelines, VkCommandBuf
                 vk.vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, choice.pipeline);
                 bound = choice.pipeline;
             }
+            if (VkDescriptorSet set = windows.sets.set(part.segment); set != bound_set) {
+                vk.vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipelines.layout(), 0,
+                                           1, &set, 0, nullptr);
+                bound_set = set;
+            }
             gpu::PassConstants constants = d.constants;
             if (d.pass == Pass::wind_force) constants.wind.w = float(x);
             vk.vkCmdPushConstants(cmd, pipelines.layout(), VK_SHADER_STAGE_COMPUTE_BIT, 0,
@@ -57,7 +63,7 @@ void record_steps(const Device& device, const Pipelines& pipelines, VkCommandBuf
             // HMSM_WORKGROUP_SIZE threads.
             WorkgroupGrid grid = workgroup_grid(launch_shape(d).workgroups, device.limits());
             if (grid.x) vk.vkCmdDispatch(cmd, grid.x, grid.y, 1);
-            if (timestamps)
+            if (timestamps && part.last)
                 vk.vkCmdWriteTimestamp(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, timestamps, query++);
         }
     }

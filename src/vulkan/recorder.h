@@ -8,6 +8,7 @@
 
 #include "device.h"
 #include "pipelines.h"
+#include "windows.h"
 
 #include "../backend.h"
 
@@ -26,9 +27,11 @@ WorkgroupGrid workgroup_grid(uint64_t groups, const DeviceLimits& limits);
 /// been prepared for `program` (Pipelines::prepare). Starts with a barrier
 /// against all earlier shader and transfer writes. With a `timestamps` pool, writes timestamp 0
 /// before the first dispatch and timestamp j + 1 after dispatch j (the pool must hold
-/// wind_x.size() * program.size() + 1 queries; they are reset here).
-void record_steps(const Device& device, const Pipelines& pipelines, VkCommandBuffer cmd,
-                  std::span<const Dispatch> program, std::span<const double> wind_x,
-                  VkQueryPool timestamps);
+/// wind_x.size() * program.size() + 1 queries; they are reset here). A dispatch of a split
+/// scene is recorded as one part per segment it overlaps (windows.h), each with its segment's
+/// descriptor set; hazards are tracked per part, so the parts are separated by barriers.
+void record_steps(const Device& device, const Pipelines& pipelines, const Windows& windows,
+                  VkCommandBuffer cmd, std::span<const Dispatch> program,
+                  std::span<const double> wind_x, VkQueryPool timestamps);
 
 }  // namespace hmsm::detail::vk

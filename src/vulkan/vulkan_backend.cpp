@@ -7,6 +7,7 @@
 #include <atomic>
 #include <cstring>
 #include <new>
+#include <numeric>
 #include <vector>
 
 namespace hmsm::detail {
@@ -135,23 +136,33 @@ VulkanBackend::~VulkanBackend() {
     if (pool_) vk.vkDestroyCommandPool(dev, pool_, nullptr);
     // Buffers, pipelines and the transfer go before the device (member order would not ensure it
     // for the shared device).
+    sets_.reset();
     for (Buffer& b : buffers_) b = Buffer();
     pipelines_.reset();
     transfer_.reset();
 }
 
-Status VulkanBackend::check_scene_limits(const SceneData& scene) const {
+Status VulkanBackend::plan_windows(const SceneData& scene) {
     const DeviceLimits& limits = device_->limits();
+    // Static model data is bound whole (it is shared by all instances of a model).
     for (const BufferInfo& info : kBufferTable) {
+        if (!is_static(info.id) || info.scope == Scope::instance) continue;
         VkDeviceSize bytes = scene.element_count(info.id) * element_bytes(info.id);
         if (bytes > limits.max_storage_buffer_range)
             return {ErrorCode::unsupported,
-                    "vulkan: scene too large for " + device_->name() + ": buffer " +
+                    "vulkan: scene too large for " + device_->name() + ": model buffer " +
                         std::string(info.name) + " needs " + std::to_string(bytes) +
                         " bytes, more than maxStorageBufferRange (" +
                         std::to_string(limits.max_storage_buffer_range) +
-                        " bytes); use fewer instances per simulation"};
+                        " bytes); use fewer distinct models per simulation"};
     }
+    uint64_t window = limits.max_storage_buffer_range;
+    if (window_bytes_) window = std::min<uint64_t>(window, window_bytes_);
+    uint64_t alignment = limits.min_storage_buffer_offset_alignment;
+    if (window_alignment_) alignment = std::lcm<uint64_t>(alignment, window_alignment_);
+    auto plan = WindowPlan::build(scene, window, alignment, device_->name());
+    if (!plan) return plan.status();
+    plan_ = std::make_unique<WindowPlan>(std::move(plan).value());
     return {};
 }
 
@@ -162,6 +173,8 @@ std::atomic<uint32_t> g_injected_fault_after{0};
 
 VulkanBackend::VulkanBackend(std::shared_ptr<Device> device)
     : device_(std::move(device)),
+      window_bytes_(requested_window_bytes()),
+      window_alignment_(requested_window_alignment()),
       fault_(g_injected_fault.load()),
       submissions_before_fault_(g_injected_fault_after.load()) {}
 
@@ -179,7 +192,7 @@ Status VulkanBackend::check_range(BufferId id, uint64_t first, uint64_t count) c
 }
 
 Status VulkanBackend::upload(const SceneData& scene) {
-    HMSM_TRY(check_scene_limits(scene));
+    HMSM_TRY(plan_windows(scene));
     if (fault_ == VulkanFault::out_of_device_memory_at_upload)
         return failure(VK_ERROR_OUT_OF_DEVICE_MEMORY, "vkAllocateMemory (injected)", __FILE__, __LINE__);
     for (const BufferInfo& info : kBufferTable) {
@@ -188,8 +201,8 @@ Status VulkanBackend::upload(const SceneData& scene) {
         VkBufferUsageFlags usage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT |
                                    VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT;
         if (is_shared_output(info.id)) usage |= VK_BUFFER_USAGE_VERTEX_BUFFER_BIT;
-        auto buffer = Buffer::create(*device_, element_counts_[b] * element_bytes(info.id), usage,
-                                     MemoryUse::device_local, std::string(info.name));
+        auto buffer = Buffer::create(*device_, plan_->physical_elements(info.id, scene) * element_bytes(info.id),
+                                     usage, MemoryUse::device_local, std::string(info.name));
         if (!buffer) return buffer.status();
         buffers_[b] = std::move(buffer).value();
     }
@@ -206,7 +219,9 @@ Status VulkanBackend::upload(const SceneData& scene) {
                 device_->vk().vkCmdFillBuffer(cmd, buffers_[uint32_t(info.id)].handle(), 0,
                                               VK_WHOLE_SIZE, 0);
     }));
-    pipelines_->bind(buffers_);
+    auto sets = WindowSets::create(*device_, pipelines_->set_layout(), *plan_, buffers_);
+    if (!sets) return sets.status();
+    sets_ = std::move(sets).value();
     return device_->take_validation_messages();
 }
 
@@ -241,7 +256,7 @@ Status VulkanBackend::submit_chunk(Slot& slot, std::span<const Dispatch> program
     VkCommandBufferBeginInfo begin{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
     begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
     HMSM_VK_TRY(vk.vkBeginCommandBuffer(slot.command_buffer, &begin));
-    record_steps(*device_, *pipelines_, slot.command_buffer, program, wind_x,
+    record_steps(*device_, *pipelines_, Windows{*plan_, *sets_}, slot.command_buffer, program, wind_x,
                  timed ? slot.timestamps : VK_NULL_HANDLE);
     HMSM_VK_TRY(vk.vkEndCommandBuffer(slot.command_buffer));
     VkSubmitInfo submit{VK_STRUCTURE_TYPE_SUBMIT_INFO};
@@ -285,9 +300,11 @@ Status VulkanBackend::finish_slot(Slot& slot, std::span<const Dispatch> program)
 Status VulkanBackend::run(std::span<const Dispatch> program, std::span<const double> wind_x) {
     times_ = {};
     if (program.empty() || wind_x.empty()) return {};
+    if (!plan_ || !sets_) return {ErrorCode::internal, "vulkan: run() before upload()"};
     HMSM_TRY(pipelines_->prepare(program));
     if (record_target_) {
-        record_steps(*device_, *pipelines_, record_target_, program, wind_x, VK_NULL_HANDLE);
+        record_steps(*device_, *pipelines_, Windows{*plan_, *sets_}, record_target_, program, wind_x,
+                     VK_NULL_HANDLE);
         return device_->take_validation_messages();
     }
     const size_t steps_per_chunk = std::max<size_t>(1, kDispatchesPerChunk / program.size());
@@ -316,22 +333,26 @@ Status VulkanBackend::read(BufferId id, uint64_t first, uint64_t count, void* ds
     if (count == 0) return {};
     const uint32_t b = uint32_t(id);
     const bool integer = shape_is_integer(buffer_info(id).shape);
-    HMSM_TRY(transfer_->download(
-        buffers_[b], first * element_bytes(id), count * element_bytes(id),
-        [&](const void* staging, VkDeviceSize first_byte, VkDeviceSize bytes) {
-            const auto* words = static_cast<const unsigned char*>(staging);
-            if (!integer && as == Scalar::f32) {  // the same words on both sides, bit for bit
-                // (a packed vertex's w is a normal word that may read as a signalling NaN)
-                std::memcpy(static_cast<unsigned char*>(dst) + first_byte, words, bytes);
-                return;
-            }
-            const uint64_t scalar0 = first_byte / 4;
-            for (uint64_t k = 0; k < bytes / 4; ++k) {
-                double value = scalar_value(integer, words + 4 * k);
-                if (as == Scalar::f64) static_cast<double*>(dst)[scalar0 + k] = value;
-                else static_cast<float*>(dst)[scalar0 + k] = float(value);
-            }
-        }));
+    // Pieces: one unless a ping-pong buffer of a split scene is read across segments.
+    for (const WindowPlan::Piece& piece : plan_->pieces(id, first, count)) {
+        const uint64_t out0 = (piece.logical - first) * shape_scalars(buffer_info(id).shape);
+        HMSM_TRY(transfer_->download(
+            buffers_[b], piece.physical * element_bytes(id), piece.count * element_bytes(id),
+            [&](const void* staging, VkDeviceSize first_byte, VkDeviceSize bytes) {
+                const auto* words = static_cast<const unsigned char*>(staging);
+                const uint64_t scalar0 = out0 + first_byte / 4;
+                if (!integer && as == Scalar::f32) {  // the same words on both sides, bit for bit
+                    // (a packed vertex's w is a normal word that may read as a signalling NaN)
+                    std::memcpy(static_cast<float*>(dst) + scalar0, words, bytes);
+                    return;
+                }
+                for (uint64_t k = 0; k < bytes / 4; ++k) {
+                    double value = scalar_value(integer, words + 4 * k);
+                    if (as == Scalar::f64) static_cast<double*>(dst)[scalar0 + k] = value;
+                    else static_cast<float*>(dst)[scalar0 + k] = float(value);
+                }
+            }));
+    }
     return device_->take_validation_messages();
 }
 
@@ -341,17 +362,20 @@ Status VulkanBackend::write(BufferId id, uint64_t first, uint64_t count, const v
     if (count == 0) return {};
     const uint32_t b = uint32_t(id);
     const bool integer = shape_is_integer(buffer_info(id).shape);
-    HMSM_TRY(transfer_->upload(
-        buffers_[b], first * element_bytes(id), count * element_bytes(id),
-        [&](void* staging, VkDeviceSize first_byte, VkDeviceSize bytes) {
-            auto* words = static_cast<unsigned char*>(staging);
-            const uint64_t scalar0 = first_byte / 4;
-            for (uint64_t k = 0; k < bytes / 4; ++k) {
-                double value = as == Scalar::f64 ? static_cast<const double*>(src)[scalar0 + k]
-                                                 : double(static_cast<const float*>(src)[scalar0 + k]);
-                store_scalar(integer, value, words + 4 * k);
-            }
-        }));
+    for (const WindowPlan::Piece& piece : plan_->pieces(id, first, count)) {
+        const uint64_t in0 = (piece.logical - first) * shape_scalars(buffer_info(id).shape);
+        HMSM_TRY(transfer_->upload(
+            buffers_[b], piece.physical * element_bytes(id), piece.count * element_bytes(id),
+            [&](void* staging, VkDeviceSize first_byte, VkDeviceSize bytes) {
+                auto* words = static_cast<unsigned char*>(staging);
+                const uint64_t scalar0 = in0 + first_byte / 4;
+                for (uint64_t k = 0; k < bytes / 4; ++k) {
+                    double value = as == Scalar::f64 ? static_cast<const double*>(src)[scalar0 + k]
+                                                     : double(static_cast<const float*>(src)[scalar0 + k]);
+                    store_scalar(integer, value, words + 4 * k);
+                }
+            }));
+    }
     return device_->take_validation_messages();
 }
 

@@ -1,13 +1,16 @@
 // The Vulkan backend: the scene's buffers in device-local memory, the seven pipelines, and
 // run() recording the step program into command buffers (chunks of steps, two in flight so the
 // host records the next chunk while the device runs the previous one), with per-dispatch
-// timestamps summed into PassTimes when profiling is on.
+// timestamps summed into PassTimes when profiling is on. Scenes whose state buffers exceed
+// maxStorageBufferRange are bound in windows, one descriptor set per segment of instances, and
+// each dispatch is recorded as one part per segment (windows.h).
 #pragma once
 
 #include "device.h"
 #include "fault_injection.h"
 #include "device_buffer.h"
 #include "pipelines.h"
+#include "windows.h"
 
 #include "../backend.h"
 
@@ -32,8 +35,13 @@ public:
 
     // Engine interop (hmsm/vulkan.h).
     const Device& device() const { return *device_; }
+    /// One VkBuffer per BufferId, whatever its size. Every buffer but chain_rotation and
+    /// chain_origin is laid out as gpu_layout.h says; those two are segment-major in a split
+    /// scene (windows.h).
     const Buffer& buffer(BufferId id) const { return buffers_[uint32_t(id)]; }
     uint64_t element_count(BufferId id) const { return element_counts_[uint32_t(id)]; }
+    /// The scene's segments (one unless a buffer exceeds the window); valid after upload().
+    const WindowPlan& window_plan() const { return *plan_; }
     /// While set, run() records into `command_buffer` instead of submitting (and returns
     /// before the work executes); VK_NULL_HANDLE restores normal submission.
     void set_record_target(VkCommandBuffer command_buffer) { record_target_ = command_buffer; }
@@ -58,7 +66,8 @@ private:
     Status check_device_lost() const;
     /// [first, first + count) lies inside buffer `id` (read/write).
     Status check_range(BufferId id, uint64_t first, uint64_t count) const;
-    Status check_scene_limits(const SceneData& scene) const;
+    /// Static model buffers within maxStorageBufferRange; the segments of the state buffers.
+    Status plan_windows(const SceneData& scene);
     Status upload_static(BufferId id, const SceneData& scene);
     Status submit_chunk(Slot& slot, std::span<const Dispatch> program, std::span<const double> wind_x);
     /// Waits for `slot` and adds its timestamps to times_ (program = what it ran).
@@ -69,7 +78,11 @@ private:
     std::unique_ptr<Pipelines> pipelines_;
     std::unique_ptr<Transfer> transfer_;
     std::array<Buffer, kBufferCount> buffers_;
-    std::array<uint64_t, kBufferCount> element_counts_{};
+    std::array<uint64_t, kBufferCount> element_counts_{};  // logical (read/write) counts
+    uint64_t window_bytes_ = 0;  // vulkan_set_window_bytes() when the backend was made; 0: none
+    uint64_t window_alignment_ = 0;
+    std::unique_ptr<WindowPlan> plan_;
+    std::unique_ptr<WindowSets> sets_;
     VkCommandPool pool_ = VK_NULL_HANDLE;
     std::array<Slot, 2> slots_;
     bool profiling_ = false;

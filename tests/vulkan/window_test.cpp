@@ -1,0 +1,362 @@
+// Scenes whose state buffers exceed one descriptor's window (src/vulkan/windows.h): forced small
+// windows on small scenes must give bitwise the results of the unsplit run (the same shader
+// arithmetic) and agree with cpu64; one instance larger than a window is refused; read/write
+// cross segment boundaries; and a scene beyond lavapipe's real maxStorageBufferRange runs.
+#include "random_scene.h"
+#include "test_trees.h"
+#include "vulkan_test_support.h"
+
+#include "vulkan/windows.h"
+
+#include <hmsm/vulkan.h>
+
+#include <cmath>
+#include <random>
+#include <tuple>
+
+namespace hmsm::test {
+namespace {
+
+using detail::BufferId;
+
+/// Forces windows of `bytes` (starts aligned to `alignment` too) for the backends created
+/// while it lives.
+struct ForcedWindow {
+    explicit ForcedWindow(uint64_t bytes, uint64_t alignment = 0) {
+        detail::vulkan_set_window_bytes(bytes, alignment);
+    }
+    ~ForcedWindow() { detail::vulkan_set_window_bytes(0); }
+};
+
+const detail::vk::VulkanBackend& vulkan_of(const Simulation& sim) {
+    return dynamic_cast<const detail::vk::VulkanBackend&>(sim.backend());
+}
+
+SimulationConfig windy_config(Composition composition) {
+    SimulationConfig config;
+    config.wind.strength = 8.0;
+    config.wind.direction = {1, 0, 0.3};
+    config.wind.front_speed = 4.0;
+    config.wind.profile = WindProfile::y1;
+    config.composition = composition;
+    return config;
+}
+
+/// Two models in several runs (instance groups), odd counts.
+Scene two_model_scene() {
+    Scene scene;
+    scene.models = {small_tree(), deep_tree(6)};
+    scene.model_names = {"small", "deep"};
+    const uint32_t models[] = {0, 0, 0, 1, 1, 0, 1, 1, 1, 1, 0, 0, 0, 0, 0, 1, 0};
+    for (uint32_t i = 0; i < std::size(models); ++i)
+        scene.instances.push_back({models[i], {3.0 * (i % 5), 0.0, 4.0 * (i / 5)}, 0.37 * i});
+    return scene;
+}
+
+/// The largest window one instance of `data` needs, alignment slack included.
+uint64_t instance_bytes(const detail::SceneData& data, uint64_t alignment) {
+    uint64_t bytes = 0;
+    const uint64_t slack = alignment / 8 + 1;  // elements a window start may move back
+    for (const detail::ModelRange& m : data.models) {
+        bytes = std::max<uint64_t>(bytes, (m.vertex_count + slack) * 16);
+        bytes = std::max<uint64_t>(bytes, (m.node_count + slack) * 16);
+        bytes = std::max<uint64_t>(bytes, 2 * (m.chain_count + 2 * slack) * 48);
+    }
+    return bytes + 2 * alignment;
+}
+
+std::vector<float> read_f32(const Simulation& sim, Output output) {
+    std::vector<float> values;
+    Status s = sim.read(output, values);
+    EXPECT_TRUE(s.ok()) << s.message();
+    return values;
+}
+std::vector<double> read_f64(const Simulation& sim, Output output) {
+    std::vector<double> values;
+    Status s = sim.read(output, values);
+    EXPECT_TRUE(s.ok()) << s.message();
+    return values;
+}
+
+constexpr Output kOutputs[] = {Output::node_positions, Output::vertex_positions, Output::vertex_normals,
+                               Output::chain_rotations, Output::chain_origins, Output::chain_angles};
+
+TEST_F(VulkanTest, SplitScenesMatchTheUnsplitRunBitwise) {
+    const Scene scenes[] = {two_model_scene(), *grid_scene(small_tree(), 11, 5.0, 3)};
+    for (Composition composition : {Composition::pointer_jumping_per_round, Composition::pointer_jumping_in_dispatch,
+                                    Composition::level_by_level}) {
+        for (const Scene& scene : scenes) {
+            SCOPED_TRACE(std::string(to_string(composition)) +
+                         " models " + std::to_string(scene.models.size()));
+            const SimulationConfig config = windy_config(composition);
+            std::string skip;
+            auto whole = create_simulation_or_skip(scene, config, BackendKind::vulkan, skip);
+            if (!skip.empty()) GTEST_SKIP() << skip;
+            ASSERT_TRUE(whole);
+            ASSERT_EQ(vulkan_of(*whole).window_plan().segments().size(), 1u);
+            ASSERT_TRUE(whole->step(60).ok());
+            auto oracle = create_simulation_or_skip(scene, config, BackendKind::cpu64, skip);
+            ASSERT_TRUE(oracle && oracle->step(60).ok());
+
+            // About one, two and three instances per window, at odd sizes; window starts
+            // aligned as the device asks, and to 256 bytes (a GPU's alignment: more slack).
+            const uint64_t device_alignment =
+                vulkan_of(*whole).device().limits().min_storage_buffer_offset_alignment;
+            for (auto [instances, extra, alignment] :
+                 {std::tuple{1, 4, uint64_t(0)}, std::tuple{2, 13, uint64_t(0)}, std::tuple{3, 101, uint64_t(0)},
+                  std::tuple{1, 4, uint64_t(256)}, std::tuple{2, 29, uint64_t(256)}}) {
+                const uint64_t one = instance_bytes(whole->scene_data(), std::max(alignment, device_alignment));
+                const uint64_t window = instances * one + extra;
+                SCOPED_TRACE("window " + std::to_string(window) + " alignment " + std::to_string(alignment));
+                std::unique_ptr<Simulation> split;
+                {
+                    ForcedWindow forced(window, alignment);
+                    split = create_simulation_or_skip(scene, config, BackendKind::vulkan, skip);
+                }
+                ASSERT_TRUE(split);
+                const auto& segments = vulkan_of(*split).window_plan().segments();
+                EXPECT_GT(segments.size(), 2u);
+                ASSERT_TRUE(split->step(25).ok());
+                ASSERT_TRUE(split->step(35).ok());
+                for (Output o : kOutputs) EXPECT_EQ(read_f32(*split, o), read_f32(*whole, o)) << int(o);
+                double height = 0.0;
+                for (const TreeModel& m : scene.models) height = std::max(height, tree_height(m));
+                for (Output o : {Output::node_positions, Output::vertex_positions})
+                    EXPECT_LE(max_abs_difference(read_f64(*split, o), read_f64(*oracle, o)) / height, 1e-4);
+            }
+        }
+    }
+}
+
+TEST_F(VulkanTest, SegmentsCutInstanceGroupsIntoSeveralParts) {
+    std::string skip;
+    Scene scene = two_model_scene();
+    auto whole = create_simulation_or_skip(scene, windy_config(Composition::pointer_jumping),
+                                           BackendKind::vulkan, skip);
+    if (!skip.empty()) GTEST_SKIP() << skip;
+    ASSERT_TRUE(whole);
+    const uint64_t alignment = vulkan_of(*whole).device().limits().min_storage_buffer_offset_alignment;
+    ForcedWindow forced(2 * instance_bytes(whole->scene_data(), alignment) + 13);
+    auto split = create_simulation_or_skip(scene, windy_config(Composition::pointer_jumping),
+                                           BackendKind::vulkan, skip);
+    ASSERT_TRUE(split);
+    const auto& plan = vulkan_of(*split).window_plan();
+    // Some group spans several segments, and every dispatch's parts cover its threads exactly.
+    bool cut = false;
+    for (const detail::Dispatch& d : split->step_program()) {
+        uint64_t threads = 0;
+        uint32_t parts = 0;
+        plan.for_each_part(d, [&](uint32_t segment, const gpu::PassConstants& c) {
+            ++parts;
+            threads += c.element_count;
+            const auto& s = plan.segments()[segment];
+            EXPECT_EQ(c.total_chains, s.halves_stride);
+            EXPECT_LE(plan.window(BufferId::vertex_position, segment).bytes, plan.window_bytes());
+            EXPECT_LE(plan.window(BufferId::chain_rotation, segment).bytes, plan.window_bytes());
+        });
+        EXPECT_EQ(threads, d.constants.element_count);
+        cut = cut || parts > 1;
+    }
+    EXPECT_TRUE(cut);
+    // As recorded: every dispatch ends in exactly one last part (its timestamp).
+    const auto expanded = plan.expand(split->step_program());
+    EXPECT_GT(expanded.size(), split->step_program().size());
+    size_t last = 0;
+    for (const auto& part : expanded) last += part.last;
+    EXPECT_EQ(last, split->step_program().size());
+
+    // Profiling a split scene: one time per dispatch, every pass timed.
+    split->backend().set_profiling(true);
+    ASSERT_TRUE(split->step(3).ok());
+    const PassTimes times = split->pass_times();
+    EXPECT_EQ(times.steps, 3u);
+    for (Pass pass : kAllPasses) EXPECT_GT(times.seconds[uint32_t(pass)], 0.0) << pass_name(pass);
+}
+
+TEST_F(VulkanTest, InstanceLargerThanAWindowIsRefused) {
+    std::string skip;
+    auto probe = create_simulation_or_skip(single_tree_scene(small_tree()), windy_config(Composition::pointer_jumping),
+                                           BackendKind::vulkan, skip);
+    if (!skip.empty()) GTEST_SKIP() << skip;
+    ForcedWindow forced(256);
+    SimulationConfig config = windy_config(Composition::pointer_jumping);
+    config.backend = BackendKind::vulkan;
+    auto sim = Simulation::create(*grid_scene(small_tree(), 3, 5.0, 1), config);
+    ASSERT_FALSE(sim.ok());
+    EXPECT_EQ(sim.status().code(), ErrorCode::unsupported);
+    EXPECT_NE(sim.status().message().find("instance 0 alone needs"), std::string::npos) << sim.status().message();
+    EXPECT_NE(sim.status().message().find("maxStorageBufferRange"), std::string::npos) << sim.status().message();
+}
+
+TEST_F(VulkanTest, ReadAndWriteCrossSegments) {
+    std::string skip;
+    Scene scene = two_model_scene();
+    auto probe = create_simulation_or_skip(scene, windy_config(Composition::pointer_jumping),
+                                           BackendKind::vulkan, skip);
+    if (!skip.empty()) GTEST_SKIP() << skip;
+    const uint64_t alignment = vulkan_of(*probe).device().limits().min_storage_buffer_offset_alignment;
+    ForcedWindow forced(instance_bytes(probe->scene_data(), alignment) + 4);
+    auto sim = create_simulation_or_skip(scene, windy_config(Composition::pointer_jumping),
+                                         BackendKind::vulkan, skip);
+    ASSERT_TRUE(sim);
+    ASSERT_GT(vulkan_of(*sim).window_plan().segments().size(), 2u);
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<double> unit(-1.0, 1.0);
+    const auto& data = sim->scene_data();
+    for (BufferId id : {BufferId::chain_rotation, BufferId::chain_origin, BufferId::chain_state,
+                        BufferId::vertex_position}) {
+        SCOPED_TRACE(std::string(detail::buffer_info(id).name));
+        const uint64_t count = data.element_count(id);
+        const uint32_t scalars = detail::shape_scalars(detail::buffer_info(id).shape);
+        std::vector<float> values(count * scalars);
+        for (float& v : values) v = float(unit(rng));
+        ASSERT_TRUE(sim->backend().write(id, 0, count, values.data(), detail::Scalar::f32).ok());
+        std::vector<float> back(count * scalars);
+        ASSERT_TRUE(sim->backend().read(id, 0, count, back.data(), detail::Scalar::f32).ok());
+        EXPECT_EQ(back, values);
+        // A sub-range across the middle (the half boundary of the ping-pong buffers).
+        const uint64_t first = count / 2 - 7, n = 19;
+        std::vector<float> part(n * scalars);
+        for (float& v : part) v = float(unit(rng));
+        ASSERT_TRUE(sim->backend().write(id, first, n, part.data(), detail::Scalar::f32).ok());
+        std::copy(part.begin(), part.end(), values.begin() + first * scalars);
+        ASSERT_TRUE(sim->backend().read(id, 0, count, back.data(), detail::Scalar::f32).ok());
+        EXPECT_EQ(back, values);
+        std::vector<float> middle(n * scalars);
+        ASSERT_TRUE(sim->backend().read(id, first, n, middle.data(), detail::Scalar::f32).ok());
+        EXPECT_EQ(middle, part);
+    }
+}
+
+TEST_F(VulkanTest, SceneBeyondTheStorageBufferRangeRuns) {
+    std::string skip;
+    SimulationConfig config = windy_config(Composition::pointer_jumping);
+    config.model.ring_sides = 24;
+    const TreeModel tree = small_tree();
+    auto probe = create_simulation_or_skip(single_tree_scene(tree), config, BackendKind::vulkan, skip);
+    if (!skip.empty()) GTEST_SKIP() << skip;
+    ASSERT_TRUE(probe);
+    const uint64_t range = vulkan_of(*probe).device().limits().max_storage_buffer_range;
+    const uint64_t per_instance = probe->vertex_count();
+    // Just past the range in vertex_position (16 bytes a vertex); skip on a device whose range
+    // would make that scene too slow for a test.
+    const uint64_t instances = range / 16 / per_instance + 1;
+    if (instances * per_instance > (uint64_t(40) << 20))
+        GTEST_SKIP() << "maxStorageBufferRange " << range << " needs " << instances * per_instance << " vertices";
+    const uint32_t side = uint32_t(std::ceil(std::sqrt(double(instances))));
+    auto grid = grid_scene(tree, side * side, 6.0, 9);
+    ASSERT_TRUE(grid.ok());
+    auto sim = create_simulation_or_skip(*grid, config, BackendKind::vulkan, skip);
+    ASSERT_TRUE(sim);
+    ASSERT_GT(sim->vertex_count() * 16, range);
+    ASSERT_GT(vulkan_of(*sim).window_plan().segments().size(), 1u);
+    ASSERT_TRUE(sim->step(1).ok());
+    std::vector<float> positions = read_f32(*sim, Output::vertex_positions);
+    // A few instances, from the first and last segments, against cpu64 alone.
+    for (uint32_t i : {0u, uint32_t(grid->instances.size() / 2), uint32_t(grid->instances.size() - 1)}) {
+        SCOPED_TRACE("instance " + std::to_string(i));
+        Scene one;
+        one.models = grid->models;
+        one.model_names = grid->model_names;
+        one.instances = {grid->instances[i]};
+        auto oracle = create_simulation_or_skip(one, config, BackendKind::cpu64, skip);
+        ASSERT_TRUE(oracle && oracle->step(1).ok());
+        std::vector<double> expected = read_f64(*oracle, Output::vertex_positions);
+        ASSERT_EQ(expected.size(), 3 * per_instance);
+        double worst = 0.0;
+        for (uint64_t k = 0; k < expected.size(); ++k)
+            worst = std::max(worst, std::abs(double(positions[3 * per_instance * i + k]) - expected[k]));
+        EXPECT_LE(worst / tree_height(tree), 1e-4);
+    }
+}
+
+TEST_F(VulkanTest, SplitSceneOnAnEngineDeviceRecordsStepsAndSharesWholeBuffers) {
+    auto engine = detail::vk::Device::create();
+    if (!engine.ok() && engine.status().code() == ErrorCode::no_device) GTEST_SKIP() << engine.status().message();
+    ASSERT_TRUE(engine.ok()) << engine.status().message();
+    const detail::vk::Device& device = *engine.value();
+    vulkan::ExternalContext context;
+    context.instance = device.instance();
+    context.physical_device = device.physical_device();
+    context.device = device.handle();
+    context.queue = device.queue();
+    context.queue_family_index = device.queue_family();
+
+    const Scene scene = two_model_scene();
+    const SimulationConfig config = windy_config(Composition::pointer_jumping);
+    std::string skip;
+    auto reference = create_simulation_or_skip(scene, config, BackendKind::vulkan, skip);
+    ASSERT_TRUE(reference);
+    const uint64_t window =
+        2 * instance_bytes(reference->scene_data(), device.limits().min_storage_buffer_offset_alignment) + 7;
+    auto created = [&] {
+        ForcedWindow forced(window);
+        return vulkan::create_simulation(scene, config, context);
+    }();
+    ASSERT_TRUE(created.ok()) << created.status().message();
+    Simulation& sim = *created.value();
+    ASSERT_GT(vulkan_of(sim).window_plan().segments().size(), 2u);
+
+    // 5 steps submitted by hmsm, then 15 recorded into the engine's command buffer.
+    ASSERT_TRUE(sim.step(5).ok());
+    const VolkDeviceTable& vk = device.vk();
+    VkCommandPoolCreateInfo pool_info{VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO};
+    pool_info.queueFamilyIndex = device.queue_family();
+    VkCommandPool pool;
+    ASSERT_EQ(vk.vkCreateCommandPool(device.handle(), &pool_info, nullptr, &pool), VK_SUCCESS);
+    VkCommandBufferAllocateInfo allocate{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
+    allocate.commandPool = pool;
+    allocate.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
+    allocate.commandBufferCount = 1;
+    VkCommandBuffer cmd;
+    ASSERT_EQ(vk.vkAllocateCommandBuffers(device.handle(), &allocate, &cmd), VK_SUCCESS);
+    VkCommandBufferBeginInfo begin{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
+    ASSERT_EQ(vk.vkBeginCommandBuffer(cmd, &begin), VK_SUCCESS);
+    ASSERT_TRUE(vulkan::record_steps(sim, cmd, 15).ok());
+    ASSERT_EQ(vk.vkEndCommandBuffer(cmd), VK_SUCCESS);
+    VkSubmitInfo submit{VK_STRUCTURE_TYPE_SUBMIT_INFO};
+    submit.commandBufferCount = 1;
+    submit.pCommandBuffers = &cmd;
+    ASSERT_EQ(vk.vkQueueSubmit(device.queue(), 1, &submit, VK_NULL_HANDLE), VK_SUCCESS);
+    ASSERT_EQ(vk.vkQueueWaitIdle(device.queue()), VK_SUCCESS);
+    vk.vkDestroyCommandPool(device.handle(), pool, nullptr);
+
+    ASSERT_TRUE(reference->step(20).ok());
+    for (Output o : kOutputs) EXPECT_EQ(read_f32(sim, o), read_f32(*reference, o)) << int(o);
+
+    // The shared outputs are whole buffers, larger than the windows hmsm binds them in.
+    auto buffers = vulkan::shared_buffers(sim);
+    ASSERT_TRUE(buffers.ok());
+    EXPECT_EQ(buffers->vertex_positions.offset, 0u);
+    EXPECT_EQ(buffers->vertex_positions.count, sim.vertex_count());
+    EXPECT_EQ(buffers->vertex_positions.size, sim.vertex_count() * 16);
+    EXPECT_GT(buffers->vertex_positions.size, window);
+    EXPECT_EQ(buffers->vertex_normals.size, sim.vertex_count() * 16);
+    EXPECT_EQ(buffers->node_positions.size, sim.node_count() * 16);
+    created.value().reset();  // before the engine's device goes away
+}
+
+TEST_F(VulkanTest, BufferBeyondItsMemoryHeapIsRefusedBeforeAllocating) {
+    std::string skip;
+    auto vulkan = create_vulkan_or_skip(skip);
+    if (!skip.empty()) GTEST_SKIP() << skip;
+    ASSERT_TRUE(vulkan);
+    const auto& device = static_cast<detail::vk::VulkanBackend&>(*vulkan).device();
+    VkDeviceSize largest_heap = 0;
+    for (uint32_t h = 0; h < device.memory_properties().memoryHeapCount; ++h)
+        largest_heap = std::max(largest_heap, device.memory_properties().memoryHeaps[h].size);
+    std::mt19937 rng(3);
+    detail::SceneData data = random_scene_data(rng, {{2, 3, 4}}, {0}, 1);
+    // Only the element count matters: the heap is checked before anything is allocated.
+    data.total_vertices = largest_heap / 16 + 1;
+    Status s = vulkan->upload(data);
+    EXPECT_EQ(s.code(), ErrorCode::out_of_memory);
+    EXPECT_NE(s.message().find("vertex_position"), std::string::npos) << s.message();
+    // Refused by hmsm before allocating (or, on a driver that already refuses the VkBuffer,
+    // by vkCreateBuffer), naming the buffer either way.
+    if (s.message().find("vkCreateBuffer") == std::string::npos && s.message().find("cannot create") == std::string::npos)
+        EXPECT_NE(s.message().find("memory heap"), std::string::npos) << s.message();
+}
+
+}  // namespace
+}  // namespace hmsm::test
