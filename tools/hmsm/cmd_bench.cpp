@@ -345,7 +345,7 @@ int render(const std::string& path) {
 }  // namespace
 
 void register_bench_flags(CLI::App& app) {
-    app.add_option("--presets", flags.presets, "comma-separated presets (default paper-1,...,paper-5)");
+    app.add_option("--presets", flags.presets, "comma-separated presets (default paper-1,...,paper-5; none: forest only)");
     app.add_option("--tree", flags.tree, "benchmark this hmsm-tree file instead of the presets "
                                          "(also the forest model)");
     app.add_option("--backends", flags.backends, "comma-separated backends (default cpu,vulkan,cuda; "
@@ -426,7 +426,7 @@ int run_bench(CLI::App& app) {
         forest_model = {std::filesystem::path(flags.tree).stem().string(), *tree};
         models.push_back(forest_model);
     } else {
-        for (const std::string& name : split_list(flags.presets)) {
+        for (const std::string& name : split_list(flags.presets == "none" ? "" : flags.presets)) {
             auto tree = generate_preset(name);
             if (!tree) return fail(Status{tree.status().code(), "--presets: " + tree.status().message()});
             models.push_back({name, std::move(tree).value()});
