@@ -153,15 +153,20 @@ TEST_P(Agreement, PackedVertexLayoutAfter300Steps) {
         ASSERT_TRUE(packed->read(Output::vertex_normals, normals_f32).ok());
         EXPECT_LE(test::max_abs_difference(std::vector<double>(normals_f32.begin(), normals_f32.end()), normals), 1e-6);
 
-        // The stored word is the C++ encoder's word for the separate layout's normal (float
-        // backends: every encoder divides with correct rounding here, so bit for bit).
+        // The stored word is the C++ encoder's word for the separate layout's normal, each
+        // snorm16 half within one step: GLSL float division need not be correctly rounded, so a
+        // GPU driver may round a component the other way (1 of 488 words on the NVIDIA driver;
+        // bit for bit on the CPU and lavapipe).
         std::vector<float> raw(4 * packed->vertex_count()), separate_raw(4 * packed->vertex_count());
         ASSERT_TRUE(packed->backend().read(BufferId::vertex_position, 0, packed->vertex_count(), raw.data(), detail::Scalar::f32).ok());
         ASSERT_TRUE(separate->backend().read(BufferId::vertex_normal, 0, separate->vertex_count(), separate_raw.data(), detail::Scalar::f32).ok());
         uint64_t differing = 0;
         for (uint64_t v = 0; v < packed->vertex_count(); ++v) {
             const uint32_t expected = detail::encode_normal_word(separate_raw[4 * v], separate_raw[4 * v + 1], separate_raw[4 * v + 2]);
-            if (detail::bits_from_float(raw[4 * v + 3]) != expected) ++differing;
+            const uint32_t stored = detail::bits_from_float(raw[4 * v + 3]);
+            auto half = [](uint32_t word, int k) { return int32_t(int16_t(uint16_t(word >> (16 * k)))); };
+            for (int k = 0; k < 2; ++k)
+                if (std::abs(half(stored, k) - half(expected, k)) > 1) ++differing;
         }
         EXPECT_EQ(differing, 0u) << "of " << packed->vertex_count() << " vertices";
     }
