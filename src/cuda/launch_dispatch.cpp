@@ -13,6 +13,15 @@ bool programmatic_launch_enabled() {
     return enabled;
 }
 
+uint32_t max_launch_blocks() {
+    static const uint32_t blocks = [] {
+        const char* value = std::getenv("HMSM_CUDA_MAX_BLOCKS");
+        const unsigned long parsed = value ? std::strtoul(value, nullptr, 10) : 0;
+        return parsed >= 1 && parsed <= (1ul << 24) ? uint32_t(parsed) : uint32_t(1) << 16;
+    }();
+    return blocks;
+}
+
 cudaError_t launch_dispatch(const Dispatch& dispatch, const BufferPointers& buffers, float wind_x,
                             cudaStream_t stream) {
     gpu::PassConstants pc = dispatch.constants;

@@ -81,6 +81,9 @@ SANITIZER_FILTER='-CudaErrors.OutOfMemory*:CudaErrorsStickyDeathTest.*'
 # The CUDA suite last: its sticky-error test faults the GPU on purpose (in a child process),
 # and on the H100 (driver 580) graphics submissions made after that never complete.
 [[ -x $CUDA_TESTS ]] && run_step 150 "$OUT/cuda_tests.log" "$CUDA_TESTS"
+# Again with a grid of at most 3 blocks per launch, so every kernel's grid-stride loop runs.
+[[ -x $CUDA_TESTS ]] && run_step 150 "$OUT/cuda_tests.log" env HMSM_CUDA_MAX_BLOCKS=3 "$CUDA_TESTS" \
+    --gtest_filter='-CudaErrors*'
 
 # --- compute-sanitizer over the CUDA suite ---------------------------------------------
 if [[ -x $CUDA_TESTS ]] && command -v compute-sanitizer >/dev/null; then
