@@ -57,6 +57,11 @@ public:
     /// Device seconds per pass summed over the steps of the last run().
     virtual PassTimes pass_times() const = 0;
 
+    /// True where each dispatch costs much more than a CUDA graph node (Vulkan: a pipeline
+    /// barrier and its own command); the step program then runs pointer-jumping rounds in one
+    /// dispatch for somewhat larger models (simulation.cpp).
+    virtual bool dispatches_are_expensive() const { return false; }
+
     /// Optional, for `hmsm bench`'s roofline: copies `bytes` between two device scratch
     /// buffers (allocated and freed here) a few times and returns the median device copy
     /// bandwidth, counted as (bytes read + bytes written) / device seconds. Default: unsupported.

@@ -72,22 +72,28 @@ std::string number(double v) {
     return buf;
 }
 
-/// pointer_jumping runs all rounds in one dispatch (one workgroup per instance) for groups of at
-/// least kMinInstancesForRoundsInDispatch instances: with fewer, a handful of workgroups each
-/// loop over whole instances while most of the GPU idles, and one dispatch per round over every
-/// chain is faster (H100, paper-1: 55,000 vs 31,000 steps/s for one tree, 27,000 vs 20,000 for
-/// 10, but 3-6% slower from 100 trees up; docs/benchmarks). Rounds run in one dispatch only for
-/// models of at most kMaxChainsForRoundsInDispatch chains (16 per thread of the largest
-/// workgroup).
-constexpr uint32_t kMinInstancesForRoundsInDispatch = 64;
+/// Models of more than this many chains (16 per thread of the largest workgroup) always take
+/// one dispatch per round.
 constexpr uint32_t kMaxChainsForRoundsInDispatch = 16 * HMSM_MAX_ROUNDS_WORKGROUP_SIZE;
+
+/// Whether Composition::pointer_jumping runs a group's rounds in one dispatch (one workgroup per
+/// instance, round after round) rather than one dispatch per round over every chain. Measured on
+/// the H100 (docs/benchmarks): in one dispatch wins for forests (64+ instances: 3-6% from 100
+/// paper-1 trees up), and for single trees whose chains one workgroup covers in one go (paper-5,
+/// 393 chains: +16% on CUDA, +61% on Vulkan); it loses where a few workgroups each loop over
+/// many chains while the GPU idles (one paper-1 tree, 2,345 chains: 31,000 vs 55,000 steps/s on
+/// CUDA). Between 512 and 1,024 chains it pays only where dispatches are expensive (Vulkan:
+/// +10-39% for paper-2/3/4; CUDA -4 to -13%).
+bool rounds_in_dispatch_pay(uint32_t instances, uint32_t chains, bool dispatches_are_expensive) {
+    return instances >= 64 || chains <= 512 || (dispatches_are_expensive && chains <= 1024);
+}
 
 /// Appends the dispatches of `pass` for every group. Passes 3 and 5 accumulate down the
 /// hierarchy: in pointer jumping, round r reads half (r-1)&1 and writes half r&1 (round 0
 /// starts from T, resp. u), so the last round leaves the pose in final_half; level by level
 /// writes final_half in place, one depth per dispatch.
 void append_pass(std::vector<Dispatch>& program, const SceneData& d, Pass pass,
-                 Composition composition) {
+                 Composition composition, bool dispatches_are_expensive) {
     const uint32_t final_half = (d.jump_rounds - 1) & 1;
     const bool hierarchical = pass == Pass::compose || pass == Pass::root_positions;
     if (!hierarchical) {
@@ -106,14 +112,14 @@ void append_pass(std::vector<Dispatch>& program, const SceneData& d, Pass pass,
         return;
     }
     if (composition != Composition::level_by_level) {
-        // One dispatch per pass runs every round for groups of many instances of models a
-        // workgroup can loop over; other groups (and pointer_jumping_per_round) take one
+        // Groups whose rounds run in one dispatch per pass come first; the others take one
         // dispatch per round.
         auto in_dispatch = [&](const detail::InstanceGroup& g) {
-            if (d.models[g.model].chain_count > kMaxChainsForRoundsInDispatch) return false;
+            const uint32_t chains = d.models[g.model].chain_count;
+            if (chains > kMaxChainsForRoundsInDispatch) return false;
             return composition == Composition::pointer_jumping_in_dispatch ||
                    (composition == Composition::pointer_jumping &&
-                    g.instance_count >= kMinInstancesForRoundsInDispatch);
+                    rounds_in_dispatch_pay(g.instance_count, chains, dispatches_are_expensive));
         };
         for (const auto& g : d.groups) {
             if (!in_dispatch(g)) continue;
@@ -155,10 +161,12 @@ void append_pass(std::vector<Dispatch>& program, const SceneData& d, Pass pass,
     }
 }
 
-std::vector<Dispatch> build_program(const SceneData& d, Composition composition, Pass first) {
+std::vector<Dispatch> build_program(const SceneData& d, Composition composition,
+                                    bool dispatches_are_expensive, Pass first) {
     std::vector<Dispatch> program;
     for (Pass pass : kAllPasses)
-        if (uint32_t(pass) >= uint32_t(first)) append_pass(program, d, pass, composition);
+        if (uint32_t(pass) >= uint32_t(first))
+            append_pass(program, d, pass, composition, dispatches_are_expensive);
     return program;
 }
 
@@ -233,11 +241,12 @@ Result<std::unique_ptr<Simulation>> Simulation::create(const Scene& scene,
     sim->backend_->set_profiling(config.profile_passes);
     HMSM_TRY(sim->backend_->upload(*sim->data_));
 
-    sim->step_program_ = build_program(*sim->data_, config.composition, Pass::wind_force);
+    const bool expensive = sim->backend_->dispatches_are_expensive();
+    sim->step_program_ = build_program(*sim->data_, config.composition, expensive, Pass::wind_force);
     // Pose at rest: with g = 0, integrate keeps S = V = 0 and writes the rest transforms; the
     // remaining passes then fill R, O, node positions and the mesh.
     const double no_wind[1] = {0.0};
-    HMSM_TRY(sim->backend_->run(build_program(*sim->data_, config.composition, Pass::integrate),
+    HMSM_TRY(sim->backend_->run(build_program(*sim->data_, config.composition, expensive, Pass::integrate),
                                 no_wind));
     return sim;
 }

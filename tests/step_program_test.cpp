@@ -6,8 +6,6 @@
 
 #include <gtest/gtest.h>
 
-#include <cmath>
-
 using namespace hmsm;
 
 namespace {
@@ -28,18 +26,6 @@ std::vector<detail::Dispatch> dispatches_of(const Simulation& sim, Pass pass) {
     return out;
 }
 
-/// A trunk ending in `branches` one-segment branches: one continues the trunk, so the tree has
-/// `branches` chains, of depth <= 1.
-TreeModel broom(uint32_t branches) {
-    TreeModel tree;
-    tree.nodes.push_back({-1, {0, 0, 0}, 0.3});
-    tree.nodes.push_back({0, {0, 10, 0}, 0.2});
-    for (uint32_t b = 0; b < branches; ++b) {
-        const double a = 0.001 * b;
-        tree.nodes.push_back({1, {std::cos(a), 10.0 + 1e-4 * b, std::sin(a)}, 0.01});
-    }
-    return tree;
-}
 
 }  // namespace
 
@@ -67,18 +53,29 @@ TEST(StepProgram, GridOfInstancesGetsOneWorkgroupPerInstance) {
     EXPECT_EQ(detail::launch_shape(d[0]).workgroups, 7u);
 }
 
-TEST(StepProgram, PointerJumpingRunsRoundsInOneDispatchFromSixtyFourInstances) {
-    for (uint32_t instances : {1u, 7u, 63u, 64u, 100u}) {
-        SCOPED_TRACE(instances);
-        auto sim = cpu_simulation(*grid_scene(test::small_tree(), instances, 6.0, 42), Composition::pointer_jumping);
-        ASSERT_TRUE(sim);
-        const uint32_t expected_mode = instances >= 64 ? HMSM_MODE_POINTER_JUMPING_IN_DISPATCH : HMSM_MODE_POINTER_JUMPING;
-        for (Pass pass : {Pass::compose, Pass::root_positions}) {
-            auto d = dispatches_of(*sim, pass);
-            ASSERT_EQ(d.size(), instances >= 64 ? 1u : sim->jump_rounds());
-            for (const auto& dispatch : d) EXPECT_EQ(dispatch.constants.mode, expected_mode);
-        }
-    }
+/// The modes pointer_jumping gives compose and root_positions for `instances` of `tree`.
+static std::vector<uint32_t> default_modes(const TreeModel& tree, uint32_t instances) {
+    auto scene = grid_scene(tree, instances, 6.0, 42);
+    EXPECT_TRUE(scene.ok());
+    auto sim = cpu_simulation(*scene, Composition::pointer_jumping);
+    std::vector<uint32_t> modes;
+    if (!sim) return modes;
+    for (Pass pass : {Pass::compose, Pass::root_positions})
+        for (const auto& d : dispatches_of(*sim, pass)) modes.push_back(d.constants.mode);
+    return modes;
+}
+
+TEST(StepProgram, PointerJumpingRunsRoundsInOneDispatchForForestsAndSmallModels) {
+    const std::vector<uint32_t> in_dispatch(2, HMSM_MODE_POINTER_JUMPING_IN_DISPATCH);
+    // Models of at most 512 chains: always (one workgroup covers all chains in one go).
+    EXPECT_EQ(default_modes(test::small_tree(), 1), in_dispatch);
+    EXPECT_EQ(default_modes(test::broom(512), 1), in_dispatch);
+    // Larger models: from 64 instances up; with fewer, one dispatch per round (a depth-1 broom
+    // has one round).
+    const std::vector<uint32_t> per_round(2, HMSM_MODE_POINTER_JUMPING);
+    EXPECT_EQ(default_modes(test::broom(513), 1), per_round);
+    EXPECT_EQ(default_modes(test::broom(1100), 63), per_round);
+    EXPECT_EQ(default_modes(test::broom(1100), 64), in_dispatch);
 }
 
 TEST(StepProgram, PerRoundAndLevelByLevelIssueOneDispatchPerRoundOrLevel) {
@@ -101,7 +98,7 @@ TEST(StepProgram, PerRoundAndLevelByLevelIssueOneDispatchPerRoundOrLevel) {
 
 TEST(StepProgram, ModelsBeyondTheRoundsLimitFallBackToOneDispatchPerRound) {
     // 16,385 chains: more than 16 per thread of the largest workgroup.
-    auto sim = cpu_simulation(single_tree_scene(broom(16385)), Composition::pointer_jumping_in_dispatch);
+    auto sim = cpu_simulation(single_tree_scene(test::broom(16385)), Composition::pointer_jumping_in_dispatch);
     ASSERT_TRUE(sim);
     ASSERT_EQ(sim->hierarchy(0).chains.size(), 16385u);
     for (Pass pass : {Pass::compose, Pass::root_positions}) {
@@ -110,7 +107,7 @@ TEST(StepProgram, ModelsBeyondTheRoundsLimitFallBackToOneDispatchPerRound) {
         for (const auto& dispatch : d) EXPECT_EQ(dispatch.constants.mode, HMSM_MODE_POINTER_JUMPING);
     }
     // And just under the limit the rounds stay in one dispatch.
-    auto under = cpu_simulation(single_tree_scene(broom(16384)), Composition::pointer_jumping_in_dispatch);
+    auto under = cpu_simulation(single_tree_scene(test::broom(16384)), Composition::pointer_jumping_in_dispatch);
     ASSERT_TRUE(under);
     ASSERT_EQ(under->hierarchy(0).chains.size(), 16384u);
     EXPECT_EQ(dispatches_of(*under, Pass::compose)[0].constants.mode, HMSM_MODE_POINTER_JUMPING_IN_DISPATCH);

@@ -20,6 +20,17 @@ TreeModel rod(int segments, double length, double radius) {
     return tree;
 }
 
+TreeModel broom(uint32_t branches) {
+    TreeModel tree;
+    tree.nodes.push_back({-1, {0, 0, 0}, 0.3});
+    tree.nodes.push_back({0, {0, 10, 0}, 0.2});
+    for (uint32_t b = 0; b < branches; ++b) {
+        const double a = 0.001 * b;
+        tree.nodes.push_back({1, {std::cos(a), 10.0 + 1e-4 * b, std::sin(a)}, 0.01});
+    }
+    return tree;
+}
+
 TreeModel small_tree() {
     // Node 0 is listed with parent 3 to check that parents may come after children.
     TreeModel tree = make_tree({

@@ -24,6 +24,10 @@ TreeModel small_tree();
 /// A tree of `depth` + 1 chain levels (each chain one side branch deeper), for pointer jumping.
 TreeModel deep_tree(int depth);
 
+/// A trunk ending in `branches` one-segment branches: one continues the trunk, so the tree has
+/// `branches` chains, of depth <= 1 (for models of a chosen chain count).
+TreeModel broom(uint32_t branches);
+
 /// Simulation::create() on `kind`; null with `skip` set to the reason when that backend is not
 /// compiled in or has no device (the caller then GTEST_SKIPs); any other error fails the test.
 std::unique_ptr<Simulation> create_simulation_or_skip(const Scene& scene, SimulationConfig config,

@@ -32,9 +32,10 @@ std::vector<BackendKind> compiled_backends();
 
 /// How passes 3 and 5 accumulate down the hierarchy. All three give the same poses.
 enum class Composition {
-    /// The paper's pointer jumping in ceil(log2(D+1)) rounds: in one dispatch per pass for
-    /// instance groups of 64 or more instances (as pointer_jumping_in_dispatch), else one
-    /// dispatch per round (as pointer_jumping_per_round), whichever measured faster.
+    /// The paper's pointer jumping in ceil(log2(D+1)) rounds, per instance group in one
+    /// dispatch per pass (as pointer_jumping_in_dispatch) or one dispatch per round (as
+    /// pointer_jumping_per_round), whichever measured faster: in one dispatch for 64 or more
+    /// instances, or models of at most 512 chains (1,024 on Vulkan).
     pointer_jumping,
     /// Pointer jumping with one dispatch per round over every chain of every instance.
     pointer_jumping_per_round,

@@ -49,6 +49,7 @@ public:
     /// For `hmsm bench`'s roofline: median device time of vkCmdCopyBuffer between two scratch
     /// device-local buffers, from timestamps, as (bytes read + bytes written) / seconds.
     Result<double> measure_copy_bandwidth(uint64_t bytes) override;
+    bool dispatches_are_expensive() const override { return true; }
 
 private:
     /// One command buffer in flight: its fence, timestamp pool and what it ran.

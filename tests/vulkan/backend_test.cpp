@@ -38,6 +38,27 @@ TEST_F(VulkanTest, ProfilingGivesEveryPassATime) {
     EXPECT_EQ(sim->pass_times().steps, 0u);
 }
 
+TEST_F(VulkanTest, RoundsRunInOneDispatchForModelsOfUpTo1024Chains) {
+    // Dispatches cost more on Vulkan, so pointer_jumping keeps the rounds in one dispatch for
+    // models that one 1,024-wide workgroup covers; the CPU (like CUDA) takes one per round.
+    const Scene scene = single_tree_scene(test::broom(700));
+    std::string skip;
+    auto vulkan = create_simulation_or_skip(scene, windy_config(), BackendKind::vulkan, skip);
+    if (!skip.empty()) GTEST_SKIP() << skip;
+    auto cpu = create_simulation_or_skip(scene, windy_config(), BackendKind::cpu, skip);
+    ASSERT_TRUE(vulkan && cpu);
+    for (const auto& [sim, mode] : {std::pair{vulkan.get(), HMSM_MODE_POINTER_JUMPING_IN_DISPATCH},
+                                    std::pair{cpu.get(), HMSM_MODE_POINTER_JUMPING}})
+        for (const auto& d : sim->step_program())
+            if (d.pass == Pass::compose || d.pass == Pass::root_positions) EXPECT_EQ(d.constants.mode, mode);
+    ASSERT_TRUE(vulkan->step(20).ok());
+    ASSERT_TRUE(cpu->step(20).ok());
+    std::vector<double> a, b;
+    ASSERT_TRUE(vulkan->read(Output::node_positions, a).ok());
+    ASSERT_TRUE(cpu->read(Output::node_positions, b).ok());
+    EXPECT_LE(test::max_abs_difference(a, b), 1e-4 * 10.0);
+}
+
 TEST_F(VulkanTest, CopyBandwidthIsMeasuredOnTheDevice) {
     std::string skip;
     auto sim = create_simulation_or_skip(single_tree_scene(small_tree()), windy_config(),

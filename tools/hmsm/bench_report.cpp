@@ -134,10 +134,11 @@ std::string render_markdown(const json& d) {
             out += line;
         }
 
-        out += "\n### Passes 3 and 5: pointer jumping per round vs in one dispatch vs level by level\n\n";
+        out += "\n### Passes 3 and 5: pointer jumping (default) vs all rounds in one dispatch vs level by level\n\n";
         out += "µs per step with device timers on; batched/s with them off. PJ: pointer jumping as "
-               "the default runs it for one tree (one dispatch per round); PJ/1: every round in one "
-               "dispatch per pass, a workgroup per instance; LbL: one dispatch per depth level.\n\n";
+               "the default runs it (one dispatch per round, or all rounds in one dispatch for models "
+               "of at most 512 chains, 1,024 on Vulkan; docs/architecture.md); PJ/1: every round in "
+               "one dispatch per pass, a workgroup per instance; LbL: one dispatch per depth level.\n\n";
         out += row({"preset", "backend", "rounds / levels", "compose PJ", "compose PJ/1", "compose LbL",
                     "root_positions PJ", "root_positions PJ/1", "root_positions LbL", "all passes PJ",
                     "all passes PJ/1", "all passes LbL", "batched/s PJ", "batched/s PJ/1", "batched/s LbL"});
