@@ -68,6 +68,18 @@ void poison(HostImage& image, BufferId id) {
 
 class CudaEmulation : public ::testing::TestWithParam<Composition> {};
 
+/// Runs the first `steps` steps of `sim`'s step program through the kernel bodies on the host,
+/// with the wind phase of each step as Simulation::step computes it (x = f t mod 2).
+void emulate_steps(const Simulation& sim, HostImage& image, uint32_t steps) {
+    const double dt = sim.config().parameters.dt;
+    const double frequency = sim.scene_data().wind_frequency;
+    for (uint32_t k = 0; k < steps; ++k) {
+        const double x = frequency * (double(k) * dt);
+        const float phase = float(x - 2.0 * std::floor(x / 2.0));
+        for (const detail::Dispatch& d : sim.step_program()) detail::cuda::emulate_dispatch(d, image.pointers, phase);
+    }
+}
+
 TEST_P(CudaEmulation, KernelBodiesFollowCpu64OverManySteps) {
     const Scene scene = forest_scene(11);
     auto reference = Simulation::create(scene, test_config(BackendKind::cpu64, GetParam(), false));
@@ -78,13 +90,7 @@ TEST_P(CudaEmulation, KernelBodiesFollowCpu64OverManySteps) {
         poison(image, id);
 
     const uint32_t steps = 240;
-    const double dt = sim.config().parameters.dt;
-    const double frequency = sim.scene_data().wind_frequency;
-    for (uint32_t k = 0; k < steps; ++k) {
-        const double x = frequency * (double(k) * dt);  // as Simulation::step: x = f t mod 2
-        const float phase = float(x - 2.0 * std::floor(x / 2.0));
-        for (const detail::Dispatch& d : sim.step_program()) detail::cuda::emulate_dispatch(d, image.pointers, phase);
-    }
+    emulate_steps(sim, image, steps);
     ASSERT_TRUE(sim.step(steps).ok());
 
     const double height = scene_height(scene);
@@ -123,13 +129,7 @@ TEST(CudaEmulationPacked, ContourWritesThePositionAndTheNormalWordOnly) {
         poison(image, id);
 
     const uint32_t steps = 120;
-    const double dt = sim.config().parameters.dt;
-    const double frequency = sim.scene_data().wind_frequency;
-    for (uint32_t k = 0; k < steps; ++k) {
-        const double x = frequency * (double(k) * dt);
-        const float phase = float(x - 2.0 * std::floor(x / 2.0));
-        for (const detail::Dispatch& d : sim.step_program()) detail::cuda::emulate_dispatch(d, image.pointers, phase);
-    }
+    emulate_steps(sim, image, steps);
     ASSERT_TRUE(sim.step(steps).ok());
 
     std::vector<double> positions, normals;

@@ -17,12 +17,7 @@ TEST_F(VulkanTest, EngineDeviceWithRecordedStepsMatchesOwnDevice) {
     if (!engine.ok() && engine.status().code() == ErrorCode::no_device) GTEST_SKIP() << engine.status().message();
     ASSERT_TRUE(engine.ok()) << engine.status().message();
     const detail::vk::Device& device = *engine.value();
-    vulkan::ExternalContext context;
-    context.instance = device.instance();
-    context.physical_device = device.physical_device();
-    context.device = device.handle();
-    context.queue = device.queue();
-    context.queue_family_index = device.queue_family();
+    const vulkan::ExternalContext context = engine_context(device);
 
     SimulationConfig config;
     config.wind.strength = 6.0;
@@ -40,28 +35,9 @@ TEST_F(VulkanTest, EngineDeviceWithRecordedStepsMatchesOwnDevice) {
 
     // 10 steps submitted by hmsm, then 20 recorded into the engine's command buffer.
     ASSERT_TRUE(sim.step(10).ok());
-    const VolkDeviceTable& vk = device.vk();
-    VkCommandPoolCreateInfo pool_info{VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO};
-    pool_info.queueFamilyIndex = device.queue_family();
-    VkCommandPool pool;
-    ASSERT_EQ(vk.vkCreateCommandPool(device.handle(), &pool_info, nullptr, &pool), VK_SUCCESS);
-    VkCommandBufferAllocateInfo allocate{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
-    allocate.commandPool = pool;
-    allocate.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
-    allocate.commandBufferCount = 1;
-    VkCommandBuffer cmd;
-    ASSERT_EQ(vk.vkAllocateCommandBuffers(device.handle(), &allocate, &cmd), VK_SUCCESS);
-    VkCommandBufferBeginInfo begin{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
-    ASSERT_EQ(vk.vkBeginCommandBuffer(cmd, &begin), VK_SUCCESS);
-    ASSERT_TRUE(vulkan::record_steps(sim, cmd, 20).ok());
-    ASSERT_EQ(vk.vkEndCommandBuffer(cmd), VK_SUCCESS);
+    record_steps_on_engine_queue(device, sim, 20);
+    if (HasFatalFailure()) return;
     EXPECT_EQ(sim.steps_done(), 30u);
-    VkSubmitInfo submit{VK_STRUCTURE_TYPE_SUBMIT_INFO};
-    submit.commandBufferCount = 1;
-    submit.pCommandBuffers = &cmd;
-    ASSERT_EQ(vk.vkQueueSubmit(device.queue(), 1, &submit, VK_NULL_HANDLE), VK_SUCCESS);
-    ASSERT_EQ(vk.vkQueueWaitIdle(device.queue()), VK_SUCCESS);
-    vk.vkDestroyCommandPool(device.handle(), pool, nullptr);
 
     ASSERT_TRUE(reference->step(30).ok());
     for (Output output : {Output::node_positions, Output::vertex_positions, Output::vertex_normals}) {

@@ -6,6 +6,7 @@
 #include "vulkan/vulkan_backend.h"
 
 #include <hmsm/hmsm.h>
+#include <hmsm/vulkan.h>
 
 #include <gtest/gtest.h>
 
@@ -33,6 +34,14 @@ protected:
 
 /// A Vulkan backend, or null with `skip` set to the reason (no device); other errors fail.
 std::unique_ptr<detail::Backend> create_vulkan_or_skip(std::string& skip);
+
+/// The hmsm/vulkan.h context of a device created as an engine would (not by hmsm).
+vulkan::ExternalContext engine_context(const detail::vk::Device& device);
+
+/// As an engine would: records `steps` steps of `simulation` (created on `device`) into a
+/// command buffer of its own pool with hmsm::vulkan::record_steps, submits it to the device's
+/// queue and waits for it. Failures are reported as test failures (check HasFatalFailure()).
+void record_steps_on_engine_queue(const detail::vk::Device& device, Simulation& simulation, uint32_t steps);
 
 /// Reads a whole buffer as doubles.
 std::vector<double> read_buffer(const detail::Backend& backend, detail::BufferId id, uint64_t count);

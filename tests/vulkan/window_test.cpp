@@ -275,12 +275,7 @@ TEST_F(VulkanTest, SplitSceneOnAnEngineDeviceRecordsStepsAndSharesWholeBuffers) 
     if (!engine.ok() && engine.status().code() == ErrorCode::no_device) GTEST_SKIP() << engine.status().message();
     ASSERT_TRUE(engine.ok()) << engine.status().message();
     const detail::vk::Device& device = *engine.value();
-    vulkan::ExternalContext context;
-    context.instance = device.instance();
-    context.physical_device = device.physical_device();
-    context.device = device.handle();
-    context.queue = device.queue();
-    context.queue_family_index = device.queue_family();
+    const vulkan::ExternalContext context = engine_context(device);
 
     const Scene scene = two_model_scene();
     const SimulationConfig config = windy_config(Composition::pointer_jumping);
@@ -299,27 +294,8 @@ TEST_F(VulkanTest, SplitSceneOnAnEngineDeviceRecordsStepsAndSharesWholeBuffers) 
 
     // 5 steps submitted by hmsm, then 15 recorded into the engine's command buffer.
     ASSERT_TRUE(sim.step(5).ok());
-    const VolkDeviceTable& vk = device.vk();
-    VkCommandPoolCreateInfo pool_info{VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO};
-    pool_info.queueFamilyIndex = device.queue_family();
-    VkCommandPool pool;
-    ASSERT_EQ(vk.vkCreateCommandPool(device.handle(), &pool_info, nullptr, &pool), VK_SUCCESS);
-    VkCommandBufferAllocateInfo allocate{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
-    allocate.commandPool = pool;
-    allocate.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
-    allocate.commandBufferCount = 1;
-    VkCommandBuffer cmd;
-    ASSERT_EQ(vk.vkAllocateCommandBuffers(device.handle(), &allocate, &cmd), VK_SUCCESS);
-    VkCommandBufferBeginInfo begin{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
-    ASSERT_EQ(vk.vkBeginCommandBuffer(cmd, &begin), VK_SUCCESS);
-    ASSERT_TRUE(vulkan::record_steps(sim, cmd, 15).ok());
-    ASSERT_EQ(vk.vkEndCommandBuffer(cmd), VK_SUCCESS);
-    VkSubmitInfo submit{VK_STRUCTURE_TYPE_SUBMIT_INFO};
-    submit.commandBufferCount = 1;
-    submit.pCommandBuffers = &cmd;
-    ASSERT_EQ(vk.vkQueueSubmit(device.queue(), 1, &submit, VK_NULL_HANDLE), VK_SUCCESS);
-    ASSERT_EQ(vk.vkQueueWaitIdle(device.queue()), VK_SUCCESS);
-    vk.vkDestroyCommandPool(device.handle(), pool, nullptr);
+    record_steps_on_engine_queue(device, sim, 15);
+    if (HasFatalFailure()) return;
 
     ASSERT_TRUE(reference->step(20).ok());
     for (Output o : kOutputs) EXPECT_EQ(read_f32(sim, o), read_f32(*reference, o)) << int(o);
