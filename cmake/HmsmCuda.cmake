@@ -15,7 +15,6 @@ target_sources(hmsm PRIVATE
   src/cuda/cuda_backend.cpp
   src/cuda/cuda_error.cpp
   src/cuda/device_buffers.cpp
-  src/cuda/device_layout.cpp
   src/cuda/cuda_interop.cpp
   src/cuda/launch_dispatch.cpp
   src/cuda/step_graph.cpp)

@@ -143,6 +143,30 @@ inline unsigned launch_blocks(uint32_t n) {
     return blocks < max_blocks ? blocks : max_blocks;
 }
 
+/// In-dispatch pointer jumping (compose, root_positions): block k runs every round for group
+/// instance k (and k + gridDim.x, ...), calling jump(k, chain, round, src_half, dst_half) for
+/// each of the instance's chains, with __syncthreads() between rounds.
+template <class Jump>
+__device__ void run_rounds_in_block(const gpu::PassConstants& pc, Jump jump) {
+    for (uint32_t k = blockIdx.x; k < dispatch_instances(pc); k += gridDim.x) {
+        for (uint32_t round = 0; round < pc.round; ++round) {
+            for (uint32_t c = threadIdx.x; c < pc.model_chain_count; c += blockDim.x)
+                jump(k, c, round, (round + 1) & 1, round & 1);
+            __syncthreads();
+        }
+    }
+}
+
+/// The same on the host (emulate_NAME): round after round over every chain of every instance.
+template <class Jump>
+void emulate_rounds(const gpu::PassConstants& pc, Jump jump) {
+    for (uint32_t round = 0; round < pc.round; ++round)
+        for (uint32_t i = 0; i < pc.element_count; ++i) {
+            const Element e = element_of(i, pc.model_chain_count);
+            jump(e.instance, e.index, round, (round + 1) & 1, round & 1);
+        }
+}
+
 /// Blocks of an in-dispatch pointer-jumping launch: one per instance (kernels stride beyond).
 inline unsigned launch_blocks_per_instance(const gpu::PassConstants& pc) {
     const uint32_t max_blocks = 1u << 24;

@@ -62,17 +62,13 @@ static __global__ void __launch_bounds__(HMSM_WORKGROUP_SIZE)
         root_positions_element(b, pc, i);
 }
 
-/// In-dispatch mode: block k runs every round for instance k (and k + gridDim.x, ...).
+/// In-dispatch mode: one block per instance runs every round (run_rounds_in_block).
 static __global__ void __launch_bounds__(HMSM_MAX_ROUNDS_WORKGROUP_SIZE)
     root_positions_rounds_kernel(const BufferPointers b, const gpu::PassConstants pc) {
     begin_pass();
-    for (uint32_t k = blockIdx.x; k < dispatch_instances(pc); k += gridDim.x) {
-        for (uint32_t round = 0; round < pc.round; ++round) {
-            for (uint32_t c = threadIdx.x; c < pc.model_chain_count; c += blockDim.x)
-                root_positions_jump<true>(b, pc, k, int32_t(c), round, (round + 1) & 1, round & 1);
-            __syncthreads();
-        }
-    }
+    run_rounds_in_block(pc, [&](uint32_t k, uint32_t c, uint32_t round, uint32_t src, uint32_t dst) {
+        root_positions_jump<true>(b, pc, k, int32_t(c), round, src, dst);
+    });
 }
 
 cudaError_t launch_root_positions(const BufferPointers& b, const gpu::PassConstants& pc,
@@ -86,12 +82,9 @@ cudaError_t launch_root_positions(const BufferPointers& b, const gpu::PassConsta
 
 void emulate_root_positions(const BufferPointers& b, const gpu::PassConstants& pc) {
     if (pc.mode == HMSM_MODE_POINTER_JUMPING_IN_DISPATCH) {
-        for (uint32_t round = 0; round < pc.round; ++round)
-            for (uint32_t i = 0; i < pc.element_count; ++i) {
-                const Element e = element_of(i, pc.model_chain_count);
-                root_positions_jump<false>(b, pc, e.instance, int32_t(e.index), round, (round + 1) & 1,
-                                           round & 1);
-            }
+        emulate_rounds(pc, [&](uint32_t k, uint32_t c, uint32_t round, uint32_t src, uint32_t dst) {
+            root_positions_jump<false>(b, pc, k, int32_t(c), round, src, dst);
+        });
         return;
     }
     for (uint32_t i = 0; i < pc.element_count; ++i) root_positions_element(b, pc, i);

@@ -1,7 +1,7 @@
 #include "device_buffers.h"
 
 #include "cuda_error.h"
-#include "device_layout.h"
+#include "../device_words.h"
 
 #include <cuda_runtime_api.h>
 
@@ -151,8 +151,7 @@ Status DeviceBuffers::read(BufferId id, uint64_t first, uint64_t count, void* ds
         if (k + 1 < chunks) HMSM_TRY(queue_copy(k + 1));
         const uint64_t done = k * chunk, n = std::min(chunk, count - done);
         auto* out = static_cast<std::byte*>(dst) + done * scalars * scalar_bytes;
-        if (same_words) std::memcpy(out, halves[k % 2], n * element_bytes);
-        else words_to_scalars(shape, halves[k % 2], n * scalars, out, as);
+        words_to_scalars(shape, halves[k % 2], n * scalars, out, as);
         CUDA_TRY(cudaStreamSynchronize(stream));
     }
     return {};

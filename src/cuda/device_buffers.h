@@ -1,5 +1,5 @@
 // The device buffers of the buffer table (buffers.h), one cudaMalloc each, sized from a
-// SceneData; uploads converted to float (device_layout.h) and the typed read/write hooks, which
+// SceneData; uploads converted to float (src/device_words.h) and the typed read/write hooks, which
 // move data through a pinned host staging buffer (device-to-host copies into pageable memory
 // run at a fraction of the PCIe/NVLink rate).
 #pragma once

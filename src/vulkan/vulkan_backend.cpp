@@ -3,6 +3,8 @@
 #include "recorder.h"
 #include "vk_error.h"
 
+#include "../device_words.h"
+
 #include <algorithm>
 #include <atomic>
 #include <cstring>
@@ -18,81 +20,9 @@ namespace {
 /// the host records one chunk while the device runs the other.
 constexpr size_t kDispatchesPerChunk = 2048;
 
-constexpr VkDeviceSize element_bytes(BufferId id) { return shape_scalars(buffer_info(id).shape) * 4; }
-
 /// Buffers an engine may draw from directly (hmsm/vulkan.h SharedBuffers).
 constexpr bool is_shared_output(BufferId id) {
     return id == BufferId::vertex_position || id == BufferId::vertex_normal || id == BufferId::node_world;
-}
-
-// Static data as the 32-bit words the shaders read: float32 for reals, int32 for integers,
-// vec4 as 4 floats, a 3x3 matrix as three vec4 columns with w = 0.
-void append(std::vector<uint32_t>& out, float f) {
-    uint32_t word;
-    std::memcpy(&word, &f, 4);
-    out.push_back(word);
-}
-void append(std::vector<uint32_t>& out, int32_t i) { out.push_back(uint32_t(i)); }
-void append(std::vector<uint32_t>& out, const glm::ivec2& v) {
-    append(out, int32_t(v.x));
-    append(out, int32_t(v.y));
-}
-void append(std::vector<uint32_t>& out, const glm::dvec4& v) {
-    for (int k = 0; k < 4; ++k) append(out, float(v[k]));
-}
-void append(std::vector<uint32_t>& out, const glm::dmat3& m) {
-    for (int c = 0; c < 3; ++c) {
-        for (int r = 0; r < 3; ++r) append(out, float(m[c][r]));
-        append(out, 0.0f);
-    }
-}
-template <class T>
-std::vector<uint32_t> pack(const std::vector<T>& values) {
-    std::vector<uint32_t> out;
-    out.reserve(values.size() * 12);
-    for (const T& v : values) append(out, v);
-    return out;
-}
-
-std::vector<uint32_t> pack_static(BufferId id, const SceneData& d) {
-    switch (id) {
-        case BufferId::chain_parent: return pack(d.chain_parent);
-        case BufferId::chain_jump: return pack(d.chain_jump);
-        case BufferId::chain_attach: return pack(d.chain_attach);
-        case BufferId::chain_rest_rotation: return pack(d.chain_rest_rotation);
-        case BufferId::chain_constants: return pack(d.chain_constants);
-        case BufferId::node_owner: return pack(d.node_owner);
-        case BufferId::node_local: return pack(d.node_local);
-        case BufferId::vertex_chain: return pack(d.vertex_chain);
-        case BufferId::vertex_rest_position: return pack(d.vertex_rest_position);
-        case BufferId::vertex_rest_normal: return pack(d.vertex_rest_normal);
-        case BufferId::vertex_parent_position: return pack(d.vertex_parent_position);
-        case BufferId::vertex_parent_normal: return pack(d.vertex_parent_normal);
-        case BufferId::instance_origin: return pack(d.instance_origin);
-        case BufferId::instance_yaw: return pack(d.instance_yaw);
-        default: return {};
-    }
-}
-
-/// One stored 32-bit scalar of buffer `id` as a number, and back.
-double scalar_value(bool integer, const unsigned char* word) {
-    if (integer) {
-        int32_t i;
-        std::memcpy(&i, word, 4);
-        return double(i);
-    }
-    float f;
-    std::memcpy(&f, word, 4);
-    return double(f);
-}
-void store_scalar(bool integer, double value, unsigned char* word) {
-    if (integer) {
-        int32_t i = int32_t(value);
-        std::memcpy(word, &i, 4);
-    } else {
-        float f = float(value);
-        std::memcpy(word, &f, 4);
-    }
 }
 
 }  // namespace
@@ -147,7 +77,7 @@ Status VulkanBackend::plan_windows(const SceneData& scene) {
     // Static model data is bound whole (it is shared by all instances of a model).
     for (const BufferInfo& info : kBufferTable) {
         if (!is_static(info.id) || info.scope == Scope::instance) continue;
-        VkDeviceSize bytes = scene.element_count(info.id) * element_bytes(info.id);
+        VkDeviceSize bytes = scene.element_count(info.id) * device_element_bytes(info.id);
         if (bytes > limits.max_storage_buffer_range)
             return {ErrorCode::unsupported,
                     "vulkan: scene too large for " + device_->name() + ": model buffer " +
@@ -201,7 +131,7 @@ Status VulkanBackend::upload(const SceneData& scene) {
         VkBufferUsageFlags usage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT |
                                    VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT;
         if (is_shared_output(info.id)) usage |= VK_BUFFER_USAGE_VERTEX_BUFFER_BIT;
-        auto buffer = Buffer::create(*device_, plan_->physical_elements(info.id, scene) * element_bytes(info.id),
+        auto buffer = Buffer::create(*device_, plan_->physical_elements(info.id, scene) * device_element_bytes(info.id),
                                      usage, MemoryUse::device_local, std::string(info.name));
         if (!buffer) return buffer.status();
         buffers_[b] = std::move(buffer).value();
@@ -226,11 +156,10 @@ Status VulkanBackend::upload(const SceneData& scene) {
 }
 
 Status VulkanBackend::upload_static(BufferId id, const SceneData& scene) {
-    std::vector<uint32_t> words = pack_static(id, scene);
-    const auto* bytes = reinterpret_cast<const unsigned char*>(words.data());
-    return transfer_->upload(buffers_[uint32_t(id)], 0, words.size() * 4,
+    const std::vector<std::byte> image = device_image(scene, id);
+    return transfer_->upload(buffers_[uint32_t(id)], 0, image.size(),
                              [&](void* staging, VkDeviceSize first, VkDeviceSize count) {
-                                 std::memcpy(staging, bytes + first, count);
+                                 std::memcpy(staging, image.data() + first, count);
                              });
 }
 
@@ -331,26 +260,15 @@ Status VulkanBackend::read(BufferId id, uint64_t first, uint64_t count, void* ds
     HMSM_TRY(check_device_lost());
     HMSM_TRY(check_range(id, first, count));
     if (count == 0) return {};
-    const uint32_t b = uint32_t(id);
-    const bool integer = shape_is_integer(buffer_info(id).shape);
+    const Shape shape = buffer_info(id).shape;
+    const uint64_t scalar_bytes = as == Scalar::f64 ? 8 : 4;
     // Pieces: one unless a ping-pong buffer of a split scene is read across segments.
     for (const WindowPlan::Piece& piece : plan_->pieces(id, first, count)) {
-        const uint64_t out0 = (piece.logical - first) * shape_scalars(buffer_info(id).shape);
+        auto* out = static_cast<std::byte*>(dst) + (piece.logical - first) * shape_scalars(shape) * scalar_bytes;
         HMSM_TRY(transfer_->download(
-            buffers_[b], piece.physical * element_bytes(id), piece.count * element_bytes(id),
+            buffers_[uint32_t(id)], piece.physical * device_element_bytes(id), piece.count * device_element_bytes(id),
             [&](const void* staging, VkDeviceSize first_byte, VkDeviceSize bytes) {
-                const auto* words = static_cast<const unsigned char*>(staging);
-                const uint64_t scalar0 = out0 + first_byte / 4;
-                if (!integer && as == Scalar::f32) {  // the same words on both sides, bit for bit
-                    // (a packed vertex's w is a normal word that may read as a signalling NaN)
-                    std::memcpy(static_cast<float*>(dst) + scalar0, words, bytes);
-                    return;
-                }
-                for (uint64_t k = 0; k < bytes / 4; ++k) {
-                    double value = scalar_value(integer, words + 4 * k);
-                    if (as == Scalar::f64) static_cast<double*>(dst)[scalar0 + k] = value;
-                    else static_cast<float*>(dst)[scalar0 + k] = float(value);
-                }
+                words_to_scalars(shape, staging, bytes / 4, out + first_byte / 4 * scalar_bytes, as);
             }));
     }
     return device_->take_validation_messages();
@@ -360,20 +278,15 @@ Status VulkanBackend::write(BufferId id, uint64_t first, uint64_t count, const v
     HMSM_TRY(check_device_lost());
     HMSM_TRY(check_range(id, first, count));
     if (count == 0) return {};
-    const uint32_t b = uint32_t(id);
-    const bool integer = shape_is_integer(buffer_info(id).shape);
+    const Shape shape = buffer_info(id).shape;
+    const uint64_t scalar_bytes = as == Scalar::f64 ? 8 : 4;
     for (const WindowPlan::Piece& piece : plan_->pieces(id, first, count)) {
-        const uint64_t in0 = (piece.logical - first) * shape_scalars(buffer_info(id).shape);
+        const auto* in =
+            static_cast<const std::byte*>(src) + (piece.logical - first) * shape_scalars(shape) * scalar_bytes;
         HMSM_TRY(transfer_->upload(
-            buffers_[b], piece.physical * element_bytes(id), piece.count * element_bytes(id),
+            buffers_[uint32_t(id)], piece.physical * device_element_bytes(id), piece.count * device_element_bytes(id),
             [&](void* staging, VkDeviceSize first_byte, VkDeviceSize bytes) {
-                auto* words = static_cast<unsigned char*>(staging);
-                const uint64_t scalar0 = in0 + first_byte / 4;
-                for (uint64_t k = 0; k < bytes / 4; ++k) {
-                    double value = as == Scalar::f64 ? static_cast<const double*>(src)[scalar0 + k]
-                                                     : double(static_cast<const float*>(src)[scalar0 + k]);
-                    store_scalar(integer, value, words + 4 * k);
-                }
+                scalars_to_words(shape, in + first_byte / 4 * scalar_bytes, bytes / 4, staging, as);
             }));
     }
     return device_->take_validation_messages();

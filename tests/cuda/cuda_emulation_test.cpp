@@ -4,7 +4,7 @@
 // cuda_device_test.cpp check the same on the device.
 #include "cuda_test_support.h"
 
-#include "cuda/device_layout.h"
+#include "device_words.h"
 #include "cuda/launch_dispatch.h"
 #include "octahedral.h"
 
@@ -33,12 +33,12 @@ HostImage image_of(const Simulation& reference) {
         const uint64_t count = scene.element_count(info.id);
         auto& bytes = image.bytes[uint32_t(info.id)];
         if (detail::is_static(info.id)) {
-            bytes = detail::cuda::device_image(scene, info.id);
+            bytes = detail::device_image(scene, info.id);
         } else {
             std::vector<double> values(count * detail::shape_scalars(info.shape));
             EXPECT_TRUE(reference.backend().read(info.id, 0, count, values.data(), detail::Scalar::f64).ok());
-            bytes.resize(count * detail::cuda::device_element_bytes(info.id));
-            detail::cuda::scalars_to_words(info.shape, values.data(), values.size(), bytes.data(),
+            bytes.resize(count * detail::device_element_bytes(info.id));
+            detail::scalars_to_words(info.shape, values.data(), values.size(), bytes.data(),
                                            detail::Scalar::f64);
         }
         bytes.resize(std::max<size_t>(bytes.size(), 16));

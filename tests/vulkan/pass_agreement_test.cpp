@@ -66,17 +66,18 @@ std::string variant_name(const ::testing::TestParamInfo<std::tuple<Pass, Composi
     const bool hierarchical = std::get<0>(info.param) == Pass::compose ||
                               std::get<0>(info.param) == Pass::root_positions;
     if (!hierarchical) return std::string(pass_name(std::get<0>(info.param)));
-    return std::string(pass_name(std::get<0>(info.param))) +
-           (std::get<1>(info.param) == Composition::level_by_level ? "_level_by_level" : "_pointer_jumping");
+    return std::string(pass_name(std::get<0>(info.param))) + "_" + to_string(std::get<1>(info.param));
 }
 
-/// Every pass; compose and root_positions also level by level.
+/// Every pass; compose and root_positions also with every round in one dispatch and level by level.
 std::vector<std::tuple<Pass, Composition>> pass_compositions() {
     std::vector<std::tuple<Pass, Composition>> params;
     for (Pass pass : kAllPasses) {
         params.push_back({pass, Composition::pointer_jumping});
-        if (pass == Pass::compose || pass == Pass::root_positions)
+        if (pass == Pass::compose || pass == Pass::root_positions) {
+            params.push_back({pass, Composition::pointer_jumping_in_dispatch});
             params.push_back({pass, Composition::level_by_level});
+        }
     }
     return params;
 }

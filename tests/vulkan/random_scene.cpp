@@ -154,7 +154,19 @@ std::vector<std::vector<detail::Dispatch>> pass_variants(const detail::SceneData
         variants.push_back(list);
         return variants;
     }
-    if (composition == Composition::pointer_jumping) {
+    if (composition == Composition::pointer_jumping_in_dispatch) {
+        std::vector<detail::Dispatch> list;  // every round in one dispatch per group
+        for (const auto& g : d.groups) {
+            detail::Dispatch dispatch{pass, detail::group_constants(d, g, 0)};
+            dispatch.constants.element_count = g.instance_count * d.models[g.model].chain_count;
+            dispatch.constants.mode = HMSM_MODE_POINTER_JUMPING_IN_DISPATCH;
+            dispatch.constants.round = d.jump_rounds;
+            list.push_back(dispatch);
+        }
+        variants.push_back(list);
+        return variants;
+    }
+    if (composition != Composition::level_by_level) {  // one dispatch list per round
         for (uint32_t r = 0; r < d.jump_rounds; ++r) {
             std::vector<detail::Dispatch> list;
             uint32_t src = pick(rng, 0, 1);

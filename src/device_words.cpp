@@ -1,8 +1,8 @@
-#include "device_layout.h"
+#include "device_words.h"
 
 #include <cstring>
 
-namespace hmsm::detail::cuda {
+namespace hmsm::detail {
 namespace {
 
 template <class T>
@@ -57,24 +57,24 @@ void words_to_scalars(Shape shape, const void* words, uint64_t n, void* dst, Sca
     if (as == Scalar::f64) {
         auto* out = static_cast<double*>(dst);
         for (uint64_t i = 0; i < n; ++i) out[i] = integer ? double(ints[i]) : double(floats[i]);
-    } else {
+    } else if (integer) {
         auto* out = static_cast<float*>(dst);
-        for (uint64_t i = 0; i < n; ++i) out[i] = integer ? float(ints[i]) : floats[i];
+        for (uint64_t i = 0; i < n; ++i) out[i] = float(ints[i]);
+    } else {
+        std::memcpy(dst, words, n * 4);  // the same words, bit for bit
     }
 }
 
 void scalars_to_words(Shape shape, const void* src, uint64_t n, void* words, Scalar as) {
     const bool integer = shape_is_integer(shape);
-    const bool matrix = shape == Shape::mat3x4;
     auto* ints = static_cast<int32_t*>(words);
     auto* floats = static_cast<float*>(words);
     for (uint64_t i = 0; i < n; ++i) {
         double value = as == Scalar::f64 ? static_cast<const double*>(src)[i]
                                          : double(static_cast<const float*>(src)[i]);
-        if (matrix && i % 4 == 3) value = 0.0;
         if (integer) ints[i] = int32_t(value);
         else floats[i] = float(value);
     }
 }
 
-}  // namespace hmsm::detail::cuda
+}  // namespace hmsm::detail
