@@ -1,4 +1,4 @@
-// hmsm-forest JSON v1 (DESIGN.md 4): named models (files relative to the forest file, or
+// hmsm-forest JSON v1 (docs/model.md 4): named models (files relative to the forest file, or
 // "preset:NAME") and instances that refer to them.
 #include <hmsm/generator.h>
 #include <hmsm/scene.h>

@@ -1,4 +1,4 @@
-// The paper presets (DESIGN.md 6): grow a deterministic skeleton from the preset's parameters
+// The paper presets (docs/model.md 6): grow a deterministic skeleton from the preset's parameters
 // and seed, then fill the rest of the paper's Table 1 vertex budget with leaf cards.
 #include <hmsm/generator.h>
 #include <hmsm/hierarchy.h>
@@ -29,7 +29,7 @@ namespace {
 using detail::gen::PresetSpec;
 using detail::gen::Skeleton;
 
-/// Branch-mesh vertices of a grown skeleton (DESIGN.md 3.8): every branch is one chain with
+/// Branch-mesh vertices of a grown skeleton (docs/model.md 3.8): every branch is one chain with
 /// members + 1 rings and ends in a tip, and the members are all nodes but the root.
 int64_t branch_vertex_count(const Skeleton& skeleton, int32_t ring_sides) {
     const int64_t members = int64_t(skeleton.tree.nodes.size()) - 1;

@@ -1,4 +1,4 @@
-// Direction-first chain decomposition (DESIGN.md 3.2), frames (3.3) and constants (3.4).
+// Direction-first chain decomposition (docs/model.md 3.2), frames (3.3) and constants (3.4).
 #include <hmsm/hierarchy.h>
 
 #include <glm/geometric.hpp>
@@ -118,7 +118,7 @@ Result<Hierarchy> build_hierarchy(const TreeModel& tree, const ModelOptions& opt
     // Frames, local coordinates and constants.
     h.node_local.assign(n, glm::dvec3(0.0));
     const double dt = parameters.dt;
-    // Stability floor (DESIGN.md 3.4). Symplectic Euler on I S'' = -K S - D S' with
+    // Stability floor (docs/model.md 3.4). Symplectic Euler on I S'' = -K S - D S' with
     // x = omega dt (omega = sqrt(K/I)) and D dt / I = 2 zeta x is stable only while
     // x^2 + 4 zeta x < 4. The design's floor x <= 0.5 covers zeta <= 1.875 only; for heavy
     // damping the velocity update itself overshoots (D dt / I > 1) and then diverges (> 2),

@@ -1,4 +1,4 @@
-// Branch mesh and leaf cards in chain-local rest coordinates (DESIGN.md 3.8).
+// Branch mesh and leaf cards in chain-local rest coordinates (docs/model.md 3.8).
 #include <hmsm/mesh.h>
 
 #include <glm/geometric.hpp>

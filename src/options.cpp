@@ -1,4 +1,4 @@
-// Wind profiles (DESIGN.md 3.5), option names and the valid ranges of options and parameters (DESIGN.md 3.4).
+// Wind profiles (docs/model.md 3.5), option names and the valid ranges of options and parameters (docs/model.md 3.4).
 #include <hmsm/options.h>
 #include <hmsm/simulation.h>
 

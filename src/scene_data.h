@@ -81,7 +81,7 @@ struct SceneData {
 
 namespace hmsm::detail {
 
-/// Flattens models and instances (DESIGN.md 2: ordered chain-by-depth, instance-major state).
+/// Flattens models and instances (docs/model.md 2: ordered chain-by-depth, instance-major state).
 /// Groups are runs of consecutive instances of one model, split so that no dispatch exceeds
 /// `max_group_elements` threads.
 SceneData flatten_scene(const Scene& scene, const std::vector<Hierarchy>& hierarchies,

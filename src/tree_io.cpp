@@ -1,4 +1,4 @@
-// hmsm-tree JSON v1 (DESIGN.md 4) and the skeleton rules of DESIGN.md 3.1.
+// hmsm-tree JSON v1 (docs/model.md 4) and the skeleton rules of docs/model.md 3.1.
 #include <hmsm/tree.h>
 
 #include "json_util.h"

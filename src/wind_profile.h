@@ -1,4 +1,4 @@
-// Y(x) of DESIGN.md 3.5, shared by the C++ model, the CPU passes and the CUDA kernels (the GLSL
+// Y(x) of docs/model.md 3.5, shared by the C++ model, the CPU passes and the CUDA kernels (the GLSL
 // twin is shaders/glsl/common.glsl). All profiles have period 2 in x, so callers pass x mod 2.
 #pragma once
 

@@ -1,5 +1,5 @@
 // The agreement suite, written once and run per backend: every backend against the cpu64
-// oracle, pass by pass on random states and end to end after many steps (DESIGN.md 7). A
+// oracle, pass by pass on random states and end to end after many steps (docs/model.md 7). A
 // backend that is not compiled in or has no device is skipped with the reason.
 #include "test_trees.h"
 

@@ -1,4 +1,4 @@
-// The bad-input catalog (tests/data/bad/catalog.json, issue 7): every malformed tree, forest and
+// The bad-input catalog (tests/data/bad/catalog.json): every malformed tree, forest and
 // argument set makes the CLI exit 2 with one stderr line naming the problem and the item, leaves
 // no output or temporary file, never crashes or hangs; the library API returns the same error
 // class without the CLI.
@@ -174,7 +174,7 @@ protected:
         return list;
     }
 
-    /// Runs the CLI once and checks the contract of DESIGN.md 5 for bad input.
+    /// Runs the CLI once and checks the contract of docs/model.md 5 for bad input.
     void expect_cli_rejects(std::vector<std::string> args) {
         std::string shown;
         for (auto& a : args) {
@@ -401,7 +401,7 @@ TEST(Resources, CliSceneTooLargeExitsOneWithoutOutput) {
 // of memory, or the device is lost at the Nth run() and stays lost (as VK_ERROR_DEVICE_LOST and
 // sticky CUDA errors do). Simulation must hand each failure back as a value, of a device class
 // (CLI exit 1), without crashing, leaking or pretending the steps were done. The Vulkan and CUDA
-// backends need the same through a fault-injection hook of their own (see issue 7's report).
+// backends need the same through a fault-injection hook of their own.
 namespace {
 
 class FailingBackend : public detail::Backend {

@@ -1,4 +1,4 @@
-// The command-line contract (DESIGN.md 5): exit codes, one clear error line, no partial output.
+// The command-line contract (docs/model.md 5): exit codes, one clear error line, no partial output.
 #include "test_trees.h"
 
 #include <nlohmann/json.hpp>

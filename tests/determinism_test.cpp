@@ -1,4 +1,4 @@
-// Determinism (issue 7): the same inputs give bitwise-identical outputs run after run, on each
+// Determinism: the same inputs give bitwise-identical outputs run after run, on each
 // backend this machine has; how a run is cut into step() calls does not matter either.
 // (The CPU reference's golden hash, tests/golden_test.cpp, runs in every build of this suite:
 // Release in tools/test.sh, Debug + ASan/UBSan in tools/sanitize.sh.)

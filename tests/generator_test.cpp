@@ -1,4 +1,4 @@
-// The paper presets (DESIGN.md 6): Table 1 vertex counts, five branching orders, leaves,
+// The paper presets (docs/model.md 6): Table 1 vertex counts, five branching orders, leaves,
 // real-world size and natural trunk sway, determinism, and the error for an unknown name.
 #include <hmsm/generator.h>
 #include <hmsm/hierarchy.h>

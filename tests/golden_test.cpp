@@ -1,5 +1,5 @@
 // Pins the CPU reference (cpu64): a hash of quantized outputs after 1000 steps. A change here
-// means the model changed; update the constant only for an intended change of DESIGN.md 3.
+// means the model changed; update the constant only for an intended change of docs/model.md 3.
 #include "test_trees.h"
 
 #include <gtest/gtest.h>

@@ -1,4 +1,4 @@
-// Stability (issue 7): the strongest wind for a million steps stays finite with every joint
+// Stability: the strongest wind for a million steps stays finite with every joint
 // angle within +-theta_max; parameters outside the stable range are rejected or handled by the
 // inertia floor, which is counted and reported, never silently exploding.
 #include "test_trees.h"

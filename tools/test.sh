@@ -7,7 +7,7 @@ root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 build="${HMSM_BUILD_DIR:-$root/build}"
 cd "$build"
 ctest --output-on-failure -j "$(nproc 2>/dev/null || echo 2)"
-# Hard to break (issue 7): the whole suite under ASan + UBSan (Debug, in build-asan), then each
+# Hard to break: the whole suite under ASan + UBSan (Debug, in build-asan), then each
 # libFuzzer target on the parsers for HMSM_FUZZ_SECONDS (default 60). HMSM_HARDENING=0 skips both.
 if [ "${HMSM_HARDENING:-1}" != 0 ]; then
   "$root/tools/sanitize.sh"

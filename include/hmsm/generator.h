@@ -1,4 +1,4 @@
-// Deterministic procedural trees and the paper presets (DESIGN.md 6).
+// Deterministic procedural trees and the paper presets (docs/model.md 6).
 #pragma once
 
 #include <hmsm/tree.h>

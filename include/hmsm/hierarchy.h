@@ -1,4 +1,4 @@
-// Chains, frames, local coordinates and per-chain constants (DESIGN.md 3.2-3.4): a pure
+// Chains, frames, local coordinates and per-chain constants (docs/model.md 3.2-3.4): a pure
 // function of a validated tree, the model options and the parameters.
 #pragma once
 

@@ -1,4 +1,4 @@
-// The branch mesh and leaf cards of pass 7 (DESIGN.md 3.8), as a static template in chain-local
+// The branch mesh and leaf cards of pass 7 (docs/model.md 3.8), as a static template in chain-local
 // coordinates; the contour pass makes it world-space each step.
 #pragma once
 
@@ -27,7 +27,7 @@ struct MeshTemplate {
     uint32_t triangle_count() const { return static_cast<uint32_t>(indices.size() / 3); }
 };
 
-/// Vertex count of DESIGN.md 3.8: sum over chains of (members+1)*ring_sides + tips + 4*leaves.
+/// Vertex count of docs/model.md 3.8: sum over chains of (members+1)*ring_sides + tips + 4*leaves.
 uint64_t mesh_vertex_count(const TreeModel& tree, const Hierarchy& hierarchy,
                            const ModelOptions& options);
 

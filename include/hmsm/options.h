@@ -1,4 +1,4 @@
-// Model options, physical parameters and wind (DESIGN.md 3.2, 3.4, 3.5, 3.8).
+// Model options, physical parameters and wind (docs/model.md 3.2, 3.4, 3.5, 3.8).
 #pragma once
 
 #include <hmsm/status.h>
@@ -11,7 +11,7 @@
 
 namespace hmsm {
 
-/// How a node picks the child that continues its chain (DESIGN.md 3.2).
+/// How a node picks the child that continues its chain (docs/model.md 3.2).
 enum class Grouping { direction, width };
 
 /// Options that shape the hierarchy and the branch mesh.
@@ -22,7 +22,7 @@ struct ModelOptions {
     double fix_weight = 0.5;         ///< contour fix-up weight beta in [0, 1]
 };
 
-/// Physical parameters (DESIGN.md 3.4); defaults give natural sway at real-world tree sizes.
+/// Physical parameters (docs/model.md 3.4); defaults give natural sway at real-world tree sizes.
 struct Parameters {
     double density = 1.0;         ///< rho
     double stiffness = 1.0e7;     ///< k
@@ -43,9 +43,9 @@ struct Wind {
     double front_speed = 0.0;  ///< v > 0: a front travelling along direction; 0: none
 };
 
-/// Y(x) of DESIGN.md 3.5.
+/// Y(x) of docs/model.md 3.5.
 double wind_profile_value(WindProfile profile, double x);
-/// w(t) for an instance at `origin` (DESIGN.md 3.5).
+/// w(t) for an instance at `origin` (docs/model.md 3.5).
 glm::dvec3 wind_at(const Wind& wind, const glm::dvec3& origin, double t);
 /// Phase offset phi of an instance at `origin`: -f (o.d)/v, or 0 without a front.
 double wind_phase(const Wind& wind, const glm::dvec3& origin);
@@ -55,7 +55,7 @@ const char* to_string(WindProfile profile);
 std::optional<Grouping> parse_grouping(std::string_view name);
 std::optional<WindProfile> parse_wind_profile(std::string_view name);
 
-/// Valid ranges of DESIGN.md 3.4; messages name the option.
+/// Valid ranges of docs/model.md 3.4; messages name the option.
 Status validate(const ModelOptions& options);
 Status validate(const Parameters& parameters);
 Status validate(const Wind& wind);

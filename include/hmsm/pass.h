@@ -1,4 +1,4 @@
-// The seven passes of one step (DESIGN.md 2, 3.7). The same names are used for the CPU sources
+// The seven passes of one step (docs/model.md 2, 3.7). The same names are used for the CPU sources
 // (src/cpu/NAME.cpp), the shaders (shaders/glsl/NAME.comp) and the kernels (kernels/cuda/NAME.cu).
 #pragma once
 

@@ -1,4 +1,4 @@
-// Instances of one or many tree models (DESIGN.md 3.6) and the forest file (DESIGN.md 4).
+// Instances of one or many tree models (docs/model.md 3.6) and the forest file (docs/model.md 4).
 #pragma once
 
 #include <hmsm/tree.h>

@@ -13,7 +13,7 @@ namespace hmsm {
 enum class ErrorCode {
     ok = 0,
     invalid_argument,  ///< an option or parameter out of its valid range
-    invalid_tree,      ///< a tree or forest file that violates DESIGN.md section 3.1 or 4
+    invalid_tree,      ///< a tree or forest file that violates docs/model.md section 3.1 or 4
     io,                ///< a file could not be read or written
     no_device,         ///< the requested backend has no usable device on this machine
     device_error,      ///< a device call failed (launch failure, device lost, ...)

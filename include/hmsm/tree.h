@@ -1,4 +1,4 @@
-// The tree skeleton (DESIGN.md 3.1) and its file formats (DESIGN.md 4).
+// The tree skeleton (docs/model.md 3.1) and its file formats (docs/model.md 4).
 #pragma once
 
 #include <hmsm/status.h>
@@ -35,7 +35,7 @@ struct TreeModel {
     std::vector<TreeLeaf> leaves;
 };
 
-/// Checks every rule of DESIGN.md 3.1 plus the leaf fields; the message names node or leaf.
+/// Checks every rule of docs/model.md 3.1 plus the leaf fields; the message names node or leaf.
 Status validate_tree(const TreeModel& tree);
 
 /// Parses hmsm-tree JSON v1 and validates it. `source` names the input in error messages.
@@ -47,7 +47,7 @@ std::string tree_to_json(const TreeModel& tree);
 /// Writes a tree file; on failure no file is left behind.
 Status save_tree(const TreeModel& tree, const std::string& path);
 
-/// Rest-pose height of a tree: max minus min node y (the conformance error scale, DESIGN.md 7).
+/// Rest-pose height of a tree: max minus min node y (the conformance error scale, docs/model.md 7).
 double tree_height(const TreeModel& tree);
 
 }  // namespace hmsm

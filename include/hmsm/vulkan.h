@@ -57,7 +57,7 @@ struct BufferRange {
 /// The device buffers an engine can draw from. Valid for the simulation's lifetime; their
 /// contents change in every step.
 struct SharedBuffers {
-    BufferRange vertex_positions;  ///< branch-mesh and leaf vertices (DESIGN.md 3.8)
+    BufferRange vertex_positions;  ///< branch-mesh and leaf vertices (docs/model.md 3.8)
     /// Empty (VK_NULL_HANDLE, count 0) in VertexLayout::packed: the normals are in
     /// vertex_positions' w.
     BufferRange vertex_normals;

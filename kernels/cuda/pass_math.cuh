@@ -34,7 +34,7 @@ HMSM_HOST_DEVICE float4 operator+(float4 a, float4 b) {
 HMSM_HOST_DEVICE float3 operator*(float s, float3 v) { return make_float3(s * v.x, s * v.y, s * v.z); }
 HMSM_HOST_DEVICE float dot(float3 a, float3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
 
-/// A 3x3 matrix by columns; acts on column vectors (DESIGN.md 3).
+/// A 3x3 matrix by columns; acts on column vectors (docs/model.md 3).
 struct Mat3 {
     float3 c0, c1, c2;
 };

@@ -77,7 +77,7 @@ const float HMSM_PI = 3.14159265358979323846;
 float sinpi(float x) { return sin(HMSM_PI * (x - 2.0 * floor(0.5 * x + 0.5))); }
 float cospi(float x) { return cos(HMSM_PI * (x - 2.0 * floor(0.5 * x + 0.5))); }
 
-/// Y(x) of DESIGN.md 3.5 (src/wind_profile.h); profile = hmsm::WindProfile value.
+/// Y(x) of docs/model.md 3.5 (src/wind_profile.h); profile = hmsm::WindProfile value.
 float wind_profile_y(uint profile, float x) {
     switch (profile) {
         case 1u: return 1.0;  // constant

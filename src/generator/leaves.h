@@ -1,4 +1,4 @@
-// Leaf cards on the leaf-bearing twig nodes (DESIGN.md 3.8 cards, 4 vertices each).
+// Leaf cards on the leaf-bearing twig nodes (docs/model.md 3.8 cards, 4 vertices each).
 #pragma once
 
 #include "generator/params.h"

@@ -1,5 +1,5 @@
 // Parameters of the procedural tree generator: one set per branching order plus the trunk,
-// fork and leaf settings of a preset (DESIGN.md 6). Plain data; the presets live in presets.h.
+// fork and leaf settings of a preset (docs/model.md 6). Plain data; the presets live in presets.h.
 #pragma once
 
 #include <cstdint>

@@ -1,4 +1,4 @@
-// The five paper presets (DESIGN.md 6): real-world sizes, five branching orders, shapes after
+// The five paper presets (docs/model.md 6): real-world sizes, five branching orders, shapes after
 // the paper's Fig. 9 (multi-branch and forked crowns). The skeleton parameters are chosen so
 // that the leaves which fill the rest of the Table 1 vertex budget are a plausible number.
 #pragma once

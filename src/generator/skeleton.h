@@ -1,7 +1,7 @@
 // Growth of the branch skeleton: each branch is a polyline grown segment by segment (tropism
 // plus a small random turn) whose interior nodes carry lateral branches of the next order.
 //
-// The generator knows the chain structure it produces (DESIGN.md 3.2, direction grouping): a
+// The generator knows the chain structure it produces (docs/model.md 3.2, direction grouping): a
 // lateral leaves its parent at >= kMinLateralAngle while the parent itself turns by at most
 // kMaxTurn per segment, so the continuation child is always the parent's own next node; a
 // fork's continuing leader bends by less than the other leaders. Hence every branch is one

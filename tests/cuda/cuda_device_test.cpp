@@ -149,7 +149,7 @@ void expect_agreement(const Scene& scene, Composition composition, bool profile,
         std::vector<double> expected, actual;
         ASSERT_TRUE(reference->read(output, expected).ok());
         ASSERT_TRUE(device->read(output, actual).ok());
-        // Positions: DESIGN.md 7's bound, relative to the tree height. Normals are unit vectors
+        // Positions: docs/model.md 7's bound, relative to the tree height. Normals are unit vectors
         // renormalized after the fix-up blend, which amplifies rounding where the own and the
         // parent normal nearly cancel: the serial float path is 2.4e-4 off cpu64 on the preset
         // forest, so they get a looser absolute bound.

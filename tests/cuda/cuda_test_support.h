@@ -32,7 +32,7 @@ std::string no_cuda_device_reason();
 double max_abs_difference(const std::vector<double>& a, const std::vector<double>& b);
 double max_abs(const std::vector<double>& values);
 
-/// Rest-pose height of every model of the scene, the largest: DESIGN.md 7's error scale.
+/// Rest-pose height of every model of the scene, the largest: docs/model.md 7's error scale.
 double scene_height(const Scene& scene);
 
 }  // namespace hmsm::cuda_test

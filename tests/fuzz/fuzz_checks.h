@@ -1,4 +1,4 @@
-// Properties the tree and forest parsers must have for ANY input (issue 7), shared by the
+// Properties the tree and forest parsers must have for ANY input, shared by the
 // libFuzzer targets (fuzz_tree.cpp, fuzz_forest.cpp) and the corpus replay in the normal test
 // suite (fuzz_replay_test.cpp). Each check returns "" or a description of the violation.
 //

@@ -1,4 +1,4 @@
-// Options and plumbing shared by the hmsm subcommands: exit codes (DESIGN.md 5), scene sources,
+// Options and plumbing shared by the hmsm subcommands: exit codes (docs/model.md 5), scene sources,
 // model/parameter/wind flags, and outputs that appear whole or not at all.
 #pragma once
 

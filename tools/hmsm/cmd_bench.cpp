@@ -1,4 +1,4 @@
-// hmsm bench (DESIGN.md 7, issue 5): the paper's Table 1 per preset and backend, pointer jumping
+// hmsm bench (docs/model.md 7): the paper's Table 1 per preset and backend, pointer jumping
 // vs level by level, and forest scaling against the copy-bandwidth roofline. Markdown on stdout,
 // JSON with --json (schema: docs/benchmarks/README.md).
 #include "bench_measure.h"

@@ -1,4 +1,4 @@
-// hmsm: the command-line tool (DESIGN.md 5). Exit 0 on success, 2 on bad input or arguments,
+// hmsm: the command-line tool (docs/model.md 5). Exit 0 on success, 2 on bad input or arguments,
 // 1 on an internal or device error.
 #include "cli_common.h"
 
