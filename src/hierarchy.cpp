@@ -125,7 +125,7 @@ Result<Hierarchy> build_hierarchy(const TreeModel& tree, const ModelOptions& opt
     // bounded only by the angle clamp, so the joints chatter between +-theta_max. We therefore
     // also require D dt / I <= 1, i.e. x <= 1/(2 zeta) (which binds only for zeta > 1 and so
     // leaves the default parameters and the golden hashes unchanged), and count such chains
-    // with the floored ones (Hierarchy::floored_chain_count, `--report` inertia_floored_chains).
+    // with the floored ones (Hierarchy::capped_chain_count, `--report` capped_chains).
     const double zeta = parameters.damping_ratio;
     const double max_omega_dt = zeta > 1.0 ? 1.0 / (2.0 * zeta) : 0.5;
     for (size_t c = 0; c < h.chains.size(); ++c) {
@@ -149,8 +149,8 @@ Result<Hierarchy> build_hierarchy(const TreeModel& tree, const ModelOptions& opt
         const double floor = chain.stiffness * (dt / max_omega_dt) * (dt / max_omega_dt);
         if (chain.inertia < floor) {
             chain.inertia = floor;
-            chain.inertia_floored = true;
-            ++h.floored_chain_count;
+            chain.capped = true;
+            ++h.capped_chain_count;
         }
         chain.damping = 2.0 * parameters.damping_ratio * std::sqrt(chain.stiffness * chain.inertia);
         chain.wind_area = parameters.wind_gain * r * L * L;

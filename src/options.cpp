@@ -21,6 +21,8 @@ double wind_phase(const Wind& wind, const glm::dvec3& origin) {
     return -wind.frequency * glm::dot(origin, glm::normalize(wind.direction)) / wind.front_speed;
 }
 
+double wind_strength_for_speed(double speed) { return (speed / 6.0) * (speed / 6.0); }
+
 glm::dvec3 wind_at(const Wind& wind, const glm::dvec3& origin, double t) {
     double y = wind_profile_value(wind.profile, wind.frequency * t + wind_phase(wind, origin));
     return wind.strength * y * glm::normalize(wind.direction);
@@ -38,6 +40,7 @@ const char* to_string(WindProfile profile) {
         case WindProfile::y2: return "y2";
         case WindProfile::y3: return "y3";
         case WindProfile::y4: return "y4";
+        case WindProfile::turbulent: return "turbulent";
     }
     return "?";
 }
@@ -50,7 +53,8 @@ std::optional<Grouping> parse_grouping(std::string_view name) {
 
 std::optional<WindProfile> parse_wind_profile(std::string_view name) {
     for (WindProfile p : {WindProfile::none, WindProfile::constant, WindProfile::y1,
-                          WindProfile::y2, WindProfile::y3, WindProfile::y4})
+                          WindProfile::y2, WindProfile::y3, WindProfile::y4,
+                          WindProfile::turbulent})
         if (name == to_string(p)) return p;
     return std::nullopt;
 }

@@ -4,6 +4,7 @@
 #include "backend.h"
 #include "octahedral.h"
 #include "scene_data.h"
+#include "simulation_impl.h"
 
 #include <cmath>
 #include <cstdio>
@@ -174,18 +175,21 @@ std::vector<Dispatch> build_program(const SceneData& d, Composition composition,
 
 Result<std::unique_ptr<Simulation>> Simulation::create(const Scene& scene,
                                                        const SimulationConfig& config) {
-    return create(scene, config, nullptr);
+    return Impl::create(scene, config, nullptr);
 }
 
-Result<std::unique_ptr<Simulation>> Simulation::create(const Scene& scene,
-                                                       const SimulationConfig& config,
-                                                       std::unique_ptr<detail::Backend> backend) {
+Simulation::Simulation(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+
+Result<std::unique_ptr<Simulation>> Simulation::Impl::create(const Scene& scene,
+                                                             const SimulationConfig& config,
+                                                             std::unique_ptr<detail::Backend> backend) {
     HMSM_TRY(validate(config.model));
     HMSM_TRY(validate(config.parameters));
     HMSM_TRY(validate(config.wind));
     HMSM_TRY(validate_scene(scene));
 
-    std::unique_ptr<Simulation> sim(new Simulation());
+    std::unique_ptr<Simulation> created(new Simulation(std::make_unique<Impl>()));
+    Impl* sim = created->impl_.get();
     sim->config_ = config;
     sim->scene_ = scene;
     for (size_t m = 0; m < scene.models.size(); ++m) {
@@ -248,12 +252,12 @@ Result<std::unique_ptr<Simulation>> Simulation::create(const Scene& scene,
     const double no_wind[1] = {0.0};
     HMSM_TRY(sim->backend_->run(build_program(*sim->data_, config.composition, expensive, Pass::integrate),
                                 no_wind));
-    return sim;
+    return created;
 }
 
 Simulation::~Simulation() = default;
 
-Status Simulation::step(uint32_t count) {
+Status Simulation::Impl::step(uint32_t count) {
     wind_phases_.resize(count);
     for (uint32_t k = 0; k < count; ++k) {
         double t = double(steps_done_ + k) * config_.parameters.dt;  // t = (n - 1) dt
@@ -269,21 +273,31 @@ Status Simulation::step(uint32_t count) {
     return {};
 }
 
-PassTimes Simulation::pass_times() const { return backend_->pass_times(); }
-BackendKind Simulation::backend_kind() const { return backend_->kind(); }
-std::string Simulation::device_name() const { return backend_->device_name(); }
-uint64_t Simulation::instance_count() const { return scene_.instances.size(); }
-uint64_t Simulation::chain_count() const { return data_->total_chains; }
-uint64_t Simulation::node_count() const { return data_->total_nodes; }
-uint64_t Simulation::vertex_count() const { return data_->total_vertices; }
-uint32_t Simulation::jump_rounds() const { return data_->jump_rounds; }
-uint32_t Simulation::floored_chain_count() const {
+Status Simulation::step(uint32_t count) { return impl_->step(count); }
+uint64_t Simulation::steps_done() const { return impl_->steps_done_; }
+double Simulation::time() const { return double(impl_->steps_done_) * impl_->config_.parameters.dt; }
+PassTimes Simulation::pass_times() const { return impl_->backend_->pass_times(); }
+BackendKind Simulation::backend_kind() const { return impl_->backend_->kind(); }
+std::string Simulation::device_name() const { return impl_->backend_->device_name(); }
+const SimulationConfig& Simulation::config() const { return impl_->config_; }
+const Scene& Simulation::scene() const { return impl_->scene_; }
+const Hierarchy& Simulation::hierarchy(uint32_t model) const { return impl_->hierarchies_[model]; }
+const MeshTemplate& Simulation::mesh(uint32_t model) const { return impl_->meshes_[model]; }
+uint64_t Simulation::instance_count() const { return impl_->scene_.instances.size(); }
+uint64_t Simulation::chain_count() const { return impl_->data_->total_chains; }
+uint64_t Simulation::node_count() const { return impl_->data_->total_nodes; }
+uint64_t Simulation::vertex_count() const { return impl_->data_->total_vertices; }
+uint32_t Simulation::jump_rounds() const { return impl_->data_->jump_rounds; }
+uint32_t Simulation::capped_chain_count() const {
     uint32_t n = 0;
-    for (const auto& h : hierarchies_) n += uint32_t(h.floored_chain_count);
+    for (const auto& h : impl_->hierarchies_) n += uint32_t(h.capped_chain_count);
     return n;
 }
+const Wind& Simulation::wind() const { return impl_->config_.wind; }
+std::span<const ForceField> Simulation::force_fields() const { return impl_->force_fields_; }
+std::span<const Instance> Simulation::instances() const { return impl_->scene_.instances; }
 
-Status Simulation::read_elements(Output output, std::vector<double>* as_double,
+Status Simulation::Impl::read_elements(Output output, std::vector<double>* as_double,
                                  std::vector<float>* as_float) const {
     using detail::BufferId;
     if (output == Output::vertex_normals && data_->packed_vertices())
@@ -332,7 +346,7 @@ Status Simulation::read_elements(Output output, std::vector<double>* as_double,
     return {};
 }
 
-Status Simulation::read_packed_normals(std::vector<double>* as_double,
+Status Simulation::Impl::read_packed_normals(std::vector<double>* as_double,
                                        std::vector<float>* as_float) const {
     // VertexLayout::packed: each normal is the octahedral word in its position's w. The double
     // CPU oracle holds the word as an integer value, every other backend as float bits
@@ -369,10 +383,10 @@ Status Simulation::read_packed_normals(std::vector<double>* as_double,
 }
 
 Status Simulation::read(Output output, std::vector<float>& values) const {
-    return read_elements(output, nullptr, &values);
+    return impl_->read_elements(output, nullptr, &values);
 }
 Status Simulation::read(Output output, std::vector<double>& values) const {
-    return read_elements(output, &values, nullptr);
+    return impl_->read_elements(output, &values, nullptr);
 }
 
 }  // namespace hmsm

@@ -1,6 +1,7 @@
 // The agreement suite, written once and run per backend: every backend against the cpu64
 // oracle, pass by pass on random states and end to end after many steps (docs/model.md 7). A
 // backend that is not compiled in or has no device is skipped with the reason.
+#include "simulation_access.h"
 #include "test_trees.h"
 
 #include "backend.h"
@@ -128,12 +129,12 @@ TEST_P(Agreement, PackedVertexLayoutAfter300Steps) {
         for (auto* sim : {packed.get(), separate.get(), oracle.get()}) ASSERT_TRUE(sim->step(300).ok());
 
         // The contour dispatches carry the layout; the normal buffer has no elements.
-        for (const auto& d : packed->step_program())
+        for (const auto& d : hmsm::detail::step_program_of(*packed))
             if (d.pass == Pass::contour) EXPECT_EQ(d.constants.mode, HMSM_VERTEX_LAYOUT_PACKED);
-        EXPECT_EQ(packed->scene_data().element_count(BufferId::vertex_normal), 0u);
-        EXPECT_EQ(separate->scene_data().element_count(BufferId::vertex_normal), separate->vertex_count());
+        EXPECT_EQ(hmsm::detail::scene_data_of(*packed).element_count(BufferId::vertex_normal), 0u);
+        EXPECT_EQ(hmsm::detail::scene_data_of(*separate).element_count(BufferId::vertex_normal), separate->vertex_count());
         float unused[4];
-        EXPECT_FALSE(packed->backend().read(BufferId::vertex_normal, 0, 1, unused, detail::Scalar::f32).ok());
+        EXPECT_FALSE(hmsm::detail::backend_of(*packed).read(BufferId::vertex_normal, 0, 1, unused, detail::Scalar::f32).ok());
 
         std::vector<float> packed_positions, separate_positions;
         ASSERT_TRUE(packed->read(Output::vertex_positions, packed_positions).ok());
@@ -158,8 +159,8 @@ TEST_P(Agreement, PackedVertexLayoutAfter300Steps) {
         // GPU driver may round a component the other way (1 of 488 words on the NVIDIA driver;
         // bit for bit on the CPU and lavapipe).
         std::vector<float> raw(4 * packed->vertex_count()), separate_raw(4 * packed->vertex_count());
-        ASSERT_TRUE(packed->backend().read(BufferId::vertex_position, 0, packed->vertex_count(), raw.data(), detail::Scalar::f32).ok());
-        ASSERT_TRUE(separate->backend().read(BufferId::vertex_normal, 0, separate->vertex_count(), separate_raw.data(), detail::Scalar::f32).ok());
+        ASSERT_TRUE(hmsm::detail::backend_of(*packed).read(BufferId::vertex_position, 0, packed->vertex_count(), raw.data(), detail::Scalar::f32).ok());
+        ASSERT_TRUE(hmsm::detail::backend_of(*separate).read(BufferId::vertex_normal, 0, separate->vertex_count(), separate_raw.data(), detail::Scalar::f32).ok());
         uint64_t differing = 0;
         for (uint64_t v = 0; v < packed->vertex_count(); ++v) {
             const uint32_t expected = detail::encode_normal_word(separate_raw[4 * v], separate_raw[4 * v + 1], separate_raw[4 * v + 2]);
@@ -197,14 +198,14 @@ TEST(AgreementOracle, PackedVertexLayoutOnCpu64) {
 void randomize_state(Simulation& a, Simulation& b, uint32_t seed) {
     std::mt19937 rng(seed);
     std::uniform_real_distribution<double> unit(-1.0, 1.0);
-    const auto& data = b.scene_data();
+    const auto& data = hmsm::detail::scene_data_of(b);
     auto fill = [&](BufferId id, auto make_element) {
         uint64_t count = data.element_count(id);
         uint32_t scalars = detail::shape_scalars(detail::buffer_info(id).shape);
         std::vector<double> values(count * scalars);
         for (uint64_t i = 0; i < count; ++i) make_element(&values[i * scalars]);
-        ASSERT_TRUE(a.backend().write(id, 0, count, values.data(), detail::Scalar::f64).ok());
-        ASSERT_TRUE(b.backend().write(id, 0, count, values.data(), detail::Scalar::f64).ok());
+        ASSERT_TRUE(hmsm::detail::backend_of(a).write(id, 0, count, values.data(), detail::Scalar::f64).ok());
+        ASSERT_TRUE(hmsm::detail::backend_of(b).write(id, 0, count, values.data(), detail::Scalar::f64).ok());
     };
     auto rotation = [&](double* m) {
         glm::dvec3 axis = glm::normalize(glm::dvec3(unit(rng), unit(rng), unit(rng)) + glm::dvec3(1e-3));
@@ -249,20 +250,20 @@ TEST_P(Agreement, EachPassOnRandomStates) {
             SCOPED_TRACE(std::string(pass_name(pass)) + " " + to_string(composition));
             randomize_state(*sim, *oracle, 1234 + uint32_t(pass));
             std::vector<detail::Dispatch> dispatches;
-            for (const auto& d : sim->step_program())
+            for (const auto& d : hmsm::detail::step_program_of(*sim))
                 if (d.pass == pass) dispatches.push_back(d);
             ASSERT_FALSE(dispatches.empty());
             const double wind_x[1] = {0.37};
-            ASSERT_TRUE(sim->backend().run(dispatches, wind_x).ok());
-            ASSERT_TRUE(oracle->backend().run(dispatches, wind_x).ok());
+            ASSERT_TRUE(hmsm::detail::backend_of(*sim).run(dispatches, wind_x).ok());
+            ASSERT_TRUE(hmsm::detail::backend_of(*oracle).run(dispatches, wind_x).ok());
             uint32_t written = detail::pass_writes(pass);
             for (const auto& info : detail::kBufferTable) {
                 if (!(written & (1u << uint32_t(info.id)))) continue;
-                uint64_t count = oracle->scene_data().element_count(info.id);
+                uint64_t count = hmsm::detail::scene_data_of(*oracle).element_count(info.id);
                 uint32_t scalars = detail::shape_scalars(info.shape);
                 std::vector<double> a(count * scalars), b(count * scalars);
-                ASSERT_TRUE(sim->backend().read(info.id, 0, count, a.data(), detail::Scalar::f64).ok());
-                ASSERT_TRUE(oracle->backend().read(info.id, 0, count, b.data(), detail::Scalar::f64).ok());
+                ASSERT_TRUE(hmsm::detail::backend_of(*sim).read(info.id, 0, count, a.data(), detail::Scalar::f64).ok());
+                ASSERT_TRUE(hmsm::detail::backend_of(*oracle).read(info.id, 0, count, b.data(), detail::Scalar::f64).ok());
                 double scale = 1.0;
                 for (double v : b) scale = std::max(scale, std::abs(v));
                 EXPECT_LE(test::max_abs_difference(a, b) / scale, 1e-4) << info.name;
@@ -295,7 +296,7 @@ TEST_P(Agreement, RoundsInOneDispatchMatchOneDispatchPerRound) {
         auto per_round = test::create_simulation_or_skip(scene, config, GetParam(), skip);
         ASSERT_TRUE(one && per_round);
         uint32_t in_dispatch = 0;
-        for (const auto& d : one->step_program())
+        for (const auto& d : hmsm::detail::step_program_of(*one))
             in_dispatch += d.constants.mode == HMSM_MODE_POINTER_JUMPING_IN_DISPATCH;
         EXPECT_GT(in_dispatch, 0u);
         ASSERT_TRUE(one->step(40).ok());

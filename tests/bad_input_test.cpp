@@ -2,6 +2,7 @@
 // argument set makes the CLI exit 2 with one stderr line naming the problem and the item, leaves
 // no output or temporary file, never crashes or hangs; the library API returns the same error
 // class without the CLI.
+#include "simulation_access.h"
 #include "test_trees.h"
 
 #include "backend.h"
@@ -446,7 +447,7 @@ private:
 }  // namespace
 
 TEST(DeviceFailure, UploadOutOfMemoryIsReturnedFromCreate) {
-    auto sim = Simulation::create(single_tree_scene(test::small_tree()), {},
+    auto sim = detail::SimulationAccess::create(single_tree_scene(test::small_tree()), {},
                                   std::make_unique<FailingBackend>(FailingBackend::Fault::upload_oom, 0));
     ASSERT_FALSE(sim.ok());
     EXPECT_EQ(sim.status().code(), ErrorCode::out_of_memory);
@@ -456,7 +457,7 @@ TEST(DeviceFailure, UploadOutOfMemoryIsReturnedFromCreate) {
 
 TEST(DeviceFailure, LostDeviceFailsStepsAndReadsWithoutCrashing) {
     // run() 1 poses the scene at rest in create(); the device is lost at the third step() call.
-    auto created = Simulation::create(single_tree_scene(test::small_tree()), {},
+    auto created = detail::SimulationAccess::create(single_tree_scene(test::small_tree()), {},
                                       std::make_unique<FailingBackend>(FailingBackend::Fault::lost_at_run, 4));
     ASSERT_TRUE(created.ok()) << created.status().message();
     Simulation& sim = **created;

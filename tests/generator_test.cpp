@@ -118,7 +118,7 @@ TEST_P(PresetTest, RealWorldSize) {
 
 TEST_P(PresetTest, TrunkSwaysAtANaturalFrequency) {
     const Chain& trunk = h_.chains[0];
-    EXPECT_FALSE(trunk.inertia_floored);
+    EXPECT_FALSE(trunk.capped);
     const double frequency = std::sqrt(trunk.stiffness / trunk.inertia) / (2.0 * std::numbers::pi);
     EXPECT_GE(frequency, 0.2);
     EXPECT_LE(frequency, 0.8);

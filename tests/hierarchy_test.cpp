@@ -153,8 +153,8 @@ TEST(Hierarchy, ConstantsFollowTheFormulas) {
     EXPECT_NEAR(c.stiffness, 1e5 * std::pow(r, 4) / L, 1e-12);
     EXPECT_NEAR(c.damping, 2 * 0.2 * std::sqrt(c.stiffness * c.inertia), 1e-12);
     EXPECT_NEAR(c.wind_area, 3.0 * r * L * L, 1e-12);
-    EXPECT_FALSE(c.inertia_floored);
-    EXPECT_EQ(h->floored_chain_count, 0);
+    EXPECT_FALSE(c.capped);
+    EXPECT_EQ(h->capped_chain_count, 0);
 }
 
 TEST(Hierarchy, StabilityFloorRaisesInertiaAndCountsIt) {
@@ -164,7 +164,7 @@ TEST(Hierarchy, StabilityFloorRaisesInertiaAndCountsIt) {
     auto h = build_hierarchy(tree, {}, p);
     ASSERT_TRUE(h.ok());
     const Chain& c = h->chains[0];
-    EXPECT_TRUE(c.inertia_floored);
-    EXPECT_EQ(h->floored_chain_count, 1);
+    EXPECT_TRUE(c.capped);
+    EXPECT_EQ(h->capped_chain_count, 1);
     EXPECT_NEAR(std::sqrt(c.stiffness / c.inertia) * p.dt, 0.5, 1e-12);
 }

@@ -1,5 +1,6 @@
 // The model's physics on the CPU oracle: rest pose, the analytic single-chain response, joint
 // consistency and pointer jumping against serial composition.
+#include "simulation_access.h"
 #include "test_trees.h"
 
 #include "backend.h"
@@ -79,7 +80,7 @@ TEST(Physics, SingleChainSettlesOscillatesAndDecaysAnalytically) {
     config.wind.strength = 0.01 * K / A;  // small angle: about 0.01 rad
     auto sim = make(single_tree_scene(tree), config);
     ASSERT_TRUE(sim);
-    ASSERT_FALSE(sim->hierarchy(0).chains[0].inertia_floored);
+    ASSERT_FALSE(sim->hierarchy(0).chains[0].capped);
 
     double equilibrium = 0.0;  // solve K theta = -A s cos(theta)
     for (int i = 0; i < 50; ++i) equilibrium = -A * config.wind.strength * std::cos(equilibrium) / K;
@@ -188,7 +189,7 @@ TEST(Physics, PointerJumpingEqualsSerialComposition) {
     }
     // And R_c equals the serial product of local transforms down the chain path.
     std::vector<double> local(12 * jump->chain_count());
-    ASSERT_TRUE(jump->backend().read(detail::BufferId::chain_local, 0, jump->chain_count(),
+    ASSERT_TRUE(hmsm::detail::backend_of(*jump).read(detail::BufferId::chain_local, 0, jump->chain_count(),
                                      local.data(), detail::Scalar::f64).ok());
     auto rotations = read(*jump, Output::chain_rotations);
     const Hierarchy& h = jump->hierarchy(0);

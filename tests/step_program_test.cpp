@@ -1,5 +1,6 @@
 // The step program (src/simulation.cpp): which dispatches one step issues for each way of
 // composing passes 3 and 5.
+#include "simulation_access.h"
 #include "test_trees.h"
 
 #include "backend.h"
@@ -21,7 +22,7 @@ std::unique_ptr<Simulation> cpu_simulation(const Scene& scene, Composition compo
 
 std::vector<detail::Dispatch> dispatches_of(const Simulation& sim, Pass pass) {
     std::vector<detail::Dispatch> out;
-    for (const auto& d : sim.step_program())
+    for (const auto& d : hmsm::detail::step_program_of(sim))
         if (d.pass == pass) out.push_back(d);
     return out;
 }
@@ -33,7 +34,7 @@ TEST(StepProgram, RoundsInOneDispatchGiveOneDispatchPerPass) {
     auto sim = cpu_simulation(single_tree_scene(test::deep_tree(6)), Composition::pointer_jumping_in_dispatch);
     ASSERT_TRUE(sim);
     ASSERT_EQ(sim->jump_rounds(), 3u);
-    EXPECT_EQ(sim->step_program().size(), kPassCount);  // the seven passes, one dispatch each
+    EXPECT_EQ(hmsm::detail::step_program_of(*sim).size(), kPassCount);  // the seven passes, one dispatch each
     for (Pass pass : {Pass::compose, Pass::root_positions}) {
         auto d = dispatches_of(*sim, pass);
         ASSERT_EQ(d.size(), 1u);
@@ -93,7 +94,7 @@ TEST(StepProgram, PerRoundAndLevelByLevelIssueOneDispatchPerRoundOrLevel) {
         }
         EXPECT_EQ(dispatches_of(*level, pass).size(), 7u);  // depths 0..6
     }
-    EXPECT_EQ(per_round->step_program().size(), kPassCount - 2 + 2 * 3);
+    EXPECT_EQ(hmsm::detail::step_program_of(*per_round).size(), kPassCount - 2 + 2 * 3);
 }
 
 TEST(StepProgram, ModelsBeyondTheRoundsLimitFallBackToOneDispatchPerRound) {

@@ -4,8 +4,7 @@
 
 #include <hmsm/options.h>
 #include <hmsm/tree.h>
-
-#include <glm/mat3x3.hpp>
+#include <hmsm/types.h>
 
 #include <vector>
 
@@ -16,25 +15,25 @@ struct Chain {
     int32_t depth = 0;         ///< trunk 0
     int32_t attach_node = 0;   ///< node the chain hangs from (owned by the parent chain)
     std::vector<int32_t> members;  ///< member node ids in chain order (the trunk: not the root)
-    glm::dmat3 frame{1.0};          ///< rest frame B_c = [x y z]
-    glm::dmat3 rest_rotation{1.0};  ///< Q_c = B_parent^T B_c (trunk: B_0)
+    Mat3 frame{1.0};          ///< rest frame B_c = [x y z]
+    Mat3 rest_rotation{1.0};  ///< Q_c = B_parent^T B_c (trunk: B_0)
     double length = 0.0;       ///< L_c, polyline through attach node and members
     double radius = 0.0;       ///< r_c, radius of the first member
-    double inertia = 0.0;      ///< I_c (after the stability floor)
+    double inertia = 0.0;      ///< I_c (after the frequency cap)
     double stiffness = 0.0;    ///< K_c
     double damping = 0.0;      ///< D_c
     double wind_area = 0.0;    ///< A_c
-    bool inertia_floored = false;  ///< I_c was raised to keep omega*dt <= 0.5
+    bool capped = false;       ///< the frequency cap raised I_c (docs/model.md 3.4)
 };
 
 struct Hierarchy {
     std::vector<Chain> chains;           ///< breadth-first: depth never decreases with id
     std::vector<int32_t> node_owner;     ///< chain owning each node (input order)
-    std::vector<glm::dvec3> node_local;  ///< l_n = B_c^T (p_n - p_attach(c)); root: 0
+    std::vector<Vec3> node_local;  ///< l_n = B_c^T (p_n - p_attach(c)); root: 0
     std::vector<int32_t> continuation;   ///< kappa(i), -1 for a node without children
     int32_t max_depth = 0;
     std::vector<int32_t> chains_per_depth;
-    int32_t floored_chain_count = 0;     ///< chains whose inertia the stability floor raised
+    int32_t capped_chain_count = 0;      ///< chains whose inertia the frequency cap raised
 };
 
 /// Builds the hierarchy. The tree must be valid (validate_tree); options and parameters are

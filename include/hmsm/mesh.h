@@ -12,10 +12,10 @@ namespace hmsm {
 struct MeshVertex {
     int32_t chain = 0;          ///< rigid with this chain
     int32_t fix_chain = -1;     ///< base-ring vertex of a non-trunk chain: the parent chain
-    glm::dvec3 position{0.0};   ///< in the chain's rest frame, relative to its attach node
-    glm::dvec3 normal{0.0};
-    glm::dvec3 parent_position{0.0};  ///< same rest vertex in fix_chain's frame (if any)
-    glm::dvec3 parent_normal{0.0};
+    Vec3 position{0.0};   ///< in the chain's rest frame, relative to its attach node
+    Vec3 normal{0.0};
+    Vec3 parent_position{0.0};  ///< same rest vertex in fix_chain's frame (if any)
+    Vec3 parent_normal{0.0};
 };
 
 struct MeshTemplate {

@@ -3,7 +3,7 @@
 
 #include <hmsm/status.h>
 
-#include <glm/vec3.hpp>
+#include <hmsm/types.h>
 
 #include <cstdint>
 #include <optional>
@@ -30,25 +30,34 @@ struct Parameters {
     double wind_gain = 15.0;      ///< gamma
     double max_angle = 0.8;       ///< theta_max (rad)
     double dt = 1.0 / 120.0;      ///< fixed time step (s)
+    double max_frequency = 4.0;   ///< f_cap (Hz): no chain sways faster than this
 };
 
-/// The paper's four wind profiles plus constant (Y = 1) and none (Y = 0).
-enum class WindProfile : uint32_t { none = 0, constant = 1, y1 = 2, y2 = 3, y3 = 4, y4 = 5 };
+/// The paper's four wind profiles, constant (Y = 1), none (Y = 0) and turbulent (a sum of 32
+/// modes with a von Karman-like spectrum, docs/model.md 3.5).
+enum class WindProfile : uint32_t { none = 0, constant = 1, y1 = 2, y2 = 3, y3 = 4, y4 = 5, turbulent = 6 };
 
 struct Wind {
     WindProfile profile = WindProfile::y1;
-    glm::dvec3 direction{1.0, 0.0, 0.0};  ///< normalized when used; must be non-zero
+    Vec3 direction{1.0, 0.0, 0.0};  ///< normalized when used; must be non-zero
+    /// Dynamic pressure relative to a 6 m/s breeze: a wind of U m/s is strength (U / 6)^2
+    /// (wind_strength_for_speed).
     double strength = 1.0;
-    double frequency = 0.1;    ///< f: the profile is evaluated at f*t + phase
-    double front_speed = 0.0;  ///< v > 0: a front travelling along direction; 0: none
+    double frequency = 0.1;    ///< f (Hz): the rate of the profile's clock
+    double front_speed = 0.0;  ///< v (m/s) > 0: a front travelling along direction; 0: none
+    double turbulence = 0.3;   ///< sigma in [0, 2]: relative fluctuation of the turbulent profile
+    uint64_t seed = 0;         ///< phases of the turbulent profile's modes
 };
+
+/// Wind strength of a wind speed U in m/s: (U / 6)^2.
+double wind_strength_for_speed(double speed);
 
 /// Y(x) of docs/model.md 3.5.
 double wind_profile_value(WindProfile profile, double x);
 /// w(t) for an instance at `origin` (docs/model.md 3.5).
-glm::dvec3 wind_at(const Wind& wind, const glm::dvec3& origin, double t);
+Vec3 wind_at(const Wind& wind, const Vec3& origin, double t);
 /// Phase offset phi of an instance at `origin`: -f (o.d)/v, or 0 without a front.
-double wind_phase(const Wind& wind, const glm::dvec3& origin);
+double wind_phase(const Wind& wind, const Vec3& origin);
 
 const char* to_string(Grouping grouping);
 const char* to_string(WindProfile profile);

@@ -12,8 +12,11 @@ namespace hmsm {
 /// A placed copy of a model: rotated by Ry(yaw) about its origin, then moved to origin.
 struct Instance {
     uint32_t model = 0;
-    glm::dvec3 origin{0.0};
-    double yaw = 0.0;
+    Vec3 origin{0.0};
+    double yaw = 0.0;          ///< radians, about +y
+    double wind_scale = 1.0;   ///< lambda >= 0: shelter (< 1), exposed forest edge (> 1)
+    double wind_phase = 0.0;   ///< p, added to the profile's argument (profile units)
+    bool active = true;        ///< an inactive instance is frozen (docs/model.md 3.9)
 };
 
 struct Scene {
@@ -23,7 +26,7 @@ struct Scene {
 };
 
 /// One instance of `tree` (at the origin with yaw 0 by default).
-Scene single_tree_scene(TreeModel tree, glm::dvec3 origin = glm::dvec3(0.0), double yaw = 0.0);
+Scene single_tree_scene(TreeModel tree, Vec3 origin = Vec3(0.0), double yaw = 0.0);
 
 /// `count` instances of `tree` on a square grid `spacing` apart, centred on the origin, with
 /// yaws drawn deterministically from `seed`.

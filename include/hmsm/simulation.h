@@ -9,6 +9,7 @@
 
 #include <memory>
 #include <optional>
+#include <span>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -16,9 +17,7 @@
 namespace hmsm {
 
 namespace detail {
-class Backend;
-struct Dispatch;
-struct SceneData;
+struct SimulationAccess;  // internal: src/simulation_access.h
 }  // namespace detail
 
 /// `cpu` is the serial float reference (the paper's baseline); `cpu64` the double-precision
@@ -85,17 +84,34 @@ enum class Output { node_positions, vertex_positions, vertex_normals, chain_rota
                     chain_origins, chain_angles };
 uint32_t output_components(Output output);
 
+/// A sphere that pushes branches (docs/model.md 3.9): a character, a vehicle, an explosion. It
+/// acts on every chain whose origin x lies within `radius` of `center` (world space, metres) with
+/// weight h = max(0, 1 - |x - center| / radius)^2, in the units of wind strength, and is not
+/// scaled by an instance's wind scale.
+struct ForceField {
+    enum class Kind : uint32_t { directional = 0, radial = 1 };
+    Kind kind = Kind::directional;
+    Vec3 center{0.0};
+    double radius = 1.0;        ///< > 0
+    Vec3 directional{0.0};      ///< kind directional: the force h * directional
+    double radial = 0.0;        ///< kind radial: the force h * radial * unit(x - center)
+};
+/// At most this many force fields act at once.
+inline constexpr uint32_t kMaxForceFields = 16;
+
+/// Checks a force-field list (count, finite numbers, radius > 0); the message names the field.
+Status validate_force_fields(std::span<const ForceField> fields);
+
+/// A running simulation of a scene. Threading: one Simulation may be used by one thread at a
+/// time (calls on it are not synchronized); distinct Simulations may run concurrently on any
+/// backends. const member functions, read() included, may run concurrently with each other but
+/// not with a non-const call (docs/engine.md).
 class Simulation {
 public:
     /// Validates everything, builds hierarchies and meshes, creates the backend, uploads the
     /// scene and poses it at rest (S = V = 0).
     static Result<std::unique_ptr<Simulation>> create(const Scene& scene,
                                                       const SimulationConfig& config);
-    /// The same on a backend the caller made (e.g. hmsm::vulkan::create_simulation on an
-    /// engine's device); config.backend is ignored.
-    static Result<std::unique_ptr<Simulation>> create(const Scene& scene,
-                                                      const SimulationConfig& config,
-                                                      std::unique_ptr<detail::Backend> backend);
     ~Simulation();
     Simulation(const Simulation&) = delete;
     Simulation& operator=(const Simulation&) = delete;
@@ -103,8 +119,32 @@ public:
     /// Advances `count` fixed time steps (all seven passes each). Blocks until done.
     Status step(uint32_t count = 1);
 
-    uint64_t steps_done() const { return steps_done_; }
-    double time() const { return static_cast<double>(steps_done_) * config_.parameters.dt; }
+    uint64_t steps_done() const;
+    /// Simulated seconds: steps_done() * dt.
+    double time() const;
+
+    // --- Live control (docs/model.md 3.9). Each call takes effect from the next step; the state
+    // of every instance carries over unchanged. A rejected call changes nothing.
+
+    /// Replaces the wind; its clock continues, so the change is phase-continuous.
+    Status set_wind(const Wind& wind);
+    /// The wind in force.
+    const Wind& wind() const;
+    /// Replaces the force-field list (at most kMaxForceFields; empty removes all).
+    Status set_force_fields(std::span<const ForceField> fields);
+    std::span<const ForceField> force_fields() const;
+    /// Per instance (index into the current instance list): wind scale (>= 0), wind phase (in
+    /// profile units) and the active flag. An inactive instance is frozen: its state and outputs
+    /// stay as they are until it is activated again.
+    Status set_instance_wind_scale(uint64_t instance, double wind_scale);
+    Status set_instance_wind_phase(uint64_t instance, double wind_phase);
+    Status set_instance_active(uint64_t instance, bool active);
+    /// Appends instances of the scene's models; they start at rest (S = V = 0, posed at rest).
+    Status add_instances(std::span<const Instance> instances);
+    /// Removes instances by their current indices (no repeats); the survivors keep their order.
+    Status remove_instances(std::span<const uint64_t> indices);
+    /// The current instance list (models are those of the scene given to create()).
+    std::span<const Instance> instances() const;
 
     /// Reads an output for every instance, converted to the requested precision.
     Status read(Output output, std::vector<float>& values) const;
@@ -115,42 +155,27 @@ public:
 
     BackendKind backend_kind() const;
     std::string device_name() const;
-    const SimulationConfig& config() const { return config_; }
-    const Scene& scene() const { return scene_; }
-    const Hierarchy& hierarchy(uint32_t model) const { return hierarchies_[model]; }
-    const MeshTemplate& mesh(uint32_t model) const { return meshes_[model]; }
+    const SimulationConfig& config() const;
+    /// The scene as given to create() (its instance list does not follow live changes; see
+    /// instances()).
+    const Scene& scene() const;
+    const Hierarchy& hierarchy(uint32_t model) const;
+    const MeshTemplate& mesh(uint32_t model) const;
 
     uint64_t instance_count() const;
     uint64_t chain_count() const;   ///< over all instances
     uint64_t node_count() const;    ///< over all instances
     uint64_t vertex_count() const;  ///< over all instances
     uint32_t jump_rounds() const;   ///< pointer-jumping rounds of passes 3 and 5
-    uint32_t floored_chain_count() const;  ///< over all models, once per model
-
-    /// For tests and tools inside hmsm: the backend and the per-step program.
-    detail::Backend& backend() const { return *backend_; }
-    const std::vector<detail::Dispatch>& step_program() const { return step_program_; }
-    const detail::SceneData& scene_data() const { return *data_; }
+    /// Chains whose inertia the frequency cap raised (docs/model.md 3.4), over all models, once
+    /// per model.
+    uint32_t capped_chain_count() const;
 
 private:
-    Simulation() = default;
-    Status read_elements(Output output, std::vector<double>* as_double,
-                         std::vector<float>* as_float) const;
-    Status read_packed_normals(std::vector<double>* as_double, std::vector<float>* as_float) const;
-
-    SimulationConfig config_;
-    Scene scene_;
-    std::vector<Hierarchy> hierarchies_;
-    std::vector<MeshTemplate> meshes_;
-    std::unique_ptr<detail::SceneData> data_;
-    std::unique_ptr<detail::Backend> backend_;
-    std::vector<detail::Dispatch> step_program_;
-    std::vector<double> wind_phases_;  // scratch: one entry per step of a step() call
-    // Scratch for read(): elements as the backend stores them, kept between calls so a
-    // per-frame readback neither allocates nor zero-fills.
-    mutable std::vector<float> stored_f32_;
-    mutable std::vector<double> stored_f64_;
-    uint64_t steps_done_ = 0;
+    friend struct detail::SimulationAccess;
+    struct Impl;
+    explicit Simulation(std::unique_ptr<Impl> impl);
+    std::unique_ptr<Impl> impl_;
 };
 
 }  // namespace hmsm

@@ -3,8 +3,7 @@
 
 #include <hmsm/status.h>
 
-#include <glm/vec2.hpp>
-#include <glm/vec3.hpp>
+#include <hmsm/types.h>
 
 #include <cstdint>
 #include <string>
@@ -16,17 +15,17 @@ namespace hmsm {
 /// One skeleton node: rest position (m), radius (m) and parent index (-1 for the root).
 struct TreeNode {
     int32_t parent = -1;
-    glm::dvec3 position{0.0};
+    Vec3 position{0.0};
     double radius = 0.0;
 };
 
 /// A leaf card attached to a node; it moves rigidly with the chain that owns the node.
 struct TreeLeaf {
     int32_t node = 0;
-    glm::dvec3 offset{0.0};
-    glm::dvec3 normal{0.0, 0.0, 1.0};
-    glm::dvec3 up{0.0, 1.0, 0.0};
-    glm::dvec2 size{0.1, 0.1};
+    Vec3 offset{0.0};
+    Vec3 normal{0.0, 0.0, 1.0};
+    Vec3 up{0.0, 1.0, 0.0};
+    Vec2 size{0.1, 0.1};
 };
 
 /// A validated skeleton: nodes in input order (ids are indices) plus optional leaves.

@@ -2,12 +2,13 @@
 #include <hmsm/cuda.h>
 
 #include "cuda_backend.h"
+#include "../simulation_access.h"
 
 namespace hmsm::cuda {
 namespace {
 
 Result<detail::cuda::CudaBackend*> cuda_backend_of(const Simulation& simulation) {
-    auto* backend = dynamic_cast<detail::cuda::CudaBackend*>(&simulation.backend());
+    auto* backend = dynamic_cast<detail::cuda::CudaBackend*>(&detail::SimulationAccess::backend(simulation));
     if (!backend)
         return Status{ErrorCode::invalid_argument,
                       std::string("cuda: the simulation runs on the ") +

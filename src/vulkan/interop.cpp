@@ -2,6 +2,7 @@
 #include <hmsm/vulkan.h>
 
 #include "vulkan_backend.h"
+#include "../simulation_access.h"
 
 namespace hmsm::vulkan {
 namespace {
@@ -10,7 +11,7 @@ using detail::BufferId;
 using detail::vk::VulkanBackend;
 
 Result<VulkanBackend*> vulkan_backend_of(const Simulation& simulation) {
-    auto* backend = dynamic_cast<VulkanBackend*>(&simulation.backend());
+    auto* backend = dynamic_cast<VulkanBackend*>(&detail::SimulationAccess::backend(simulation));
     if (!backend)
         return Status{ErrorCode::invalid_argument,
                       std::string("vulkan: the simulation runs on the ") +
@@ -37,7 +38,7 @@ Result<std::unique_ptr<Simulation>> create_simulation(const Scene& scene,
     if (!device) return device.status();
     auto backend = detail::vk::VulkanBackend::create(std::move(device).value());
     if (!backend) return backend.status();
-    return Simulation::create(scene, config, std::move(backend).value());
+    return detail::SimulationAccess::create(scene, config, std::move(backend).value());
 }
 
 Result<SharedBuffers> shared_buffers(const Simulation& simulation) {

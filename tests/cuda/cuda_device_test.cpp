@@ -1,6 +1,7 @@
 // The CUDA backend on a device: each pass on random states, whole simulations against the
 // double-precision CPU reference, graph replay against direct launches, profiling, interop and
 // error paths. Every test skips with the reason when there is no CUDA device.
+#include "simulation_access.h"
 #include "cuda_test_support.h"
 
 #include <hmsm/cuda.h>
@@ -29,9 +30,9 @@ std::unique_ptr<Simulation> create_or_fail(const Scene& scene, const SimulationC
 }
 
 std::vector<double> read_buffer(const Simulation& sim, BufferId id) {
-    const uint64_t count = sim.scene_data().element_count(id);
+    const uint64_t count = hmsm::detail::scene_data_of(sim).element_count(id);
     std::vector<double> values(count * detail::shape_scalars(detail::buffer_info(id).shape));
-    const Status status = sim.backend().read(id, 0, count, values.data(), Scalar::f64);
+    const Status status = hmsm::detail::backend_of(sim).read(id, 0, count, values.data(), Scalar::f64);
     EXPECT_TRUE(status.ok()) << status.message();
     return values;
 }
@@ -97,18 +98,18 @@ TEST_P(CudaPass, MatchesCpu64OnRandomStates) {
     detail::Random random(1000 + uint32_t(pass));
     for (const detail::BufferInfo& info : detail::kBufferTable) {
         if (detail::is_static(info.id)) continue;
-        const uint64_t count = reference->scene_data().element_count(info.id);
+        const uint64_t count = hmsm::detail::scene_data_of(*reference).element_count(info.id);
         const std::vector<double> values = random_state(random, info.id, count);
-        ASSERT_TRUE(reference->backend().write(info.id, 0, count, values.data(), Scalar::f64).ok());
-        ASSERT_TRUE(device->backend().write(info.id, 0, count, values.data(), Scalar::f64).ok());
+        ASSERT_TRUE(hmsm::detail::backend_of(*reference).write(info.id, 0, count, values.data(), Scalar::f64).ok());
+        ASSERT_TRUE(hmsm::detail::backend_of(*device).write(info.id, 0, count, values.data(), Scalar::f64).ok());
     }
     std::vector<detail::Dispatch> program;
-    for (const detail::Dispatch& d : reference->step_program())
+    for (const detail::Dispatch& d : hmsm::detail::step_program_of(*reference))
         if (d.pass == pass) program.push_back(d);
     ASSERT_FALSE(program.empty());
     const double wind_x[1] = {random.uniform(0.0, 2.0)};
-    ASSERT_TRUE(reference->backend().run(program, wind_x).ok());
-    const Status status = device->backend().run(program, wind_x);
+    ASSERT_TRUE(hmsm::detail::backend_of(*reference).run(program, wind_x).ok());
+    const Status status = hmsm::detail::backend_of(*device).run(program, wind_x);
     ASSERT_TRUE(status.ok()) << status.message();
 
     const double tolerance = pass == Pass::wind_force ? 1e-4 : 1e-5;
@@ -344,7 +345,7 @@ TEST(CudaErrors, RangesPastTheEndAreRejected) {
     ASSERT_TRUE(sim);
     const uint64_t nodes = sim->node_count();
     std::vector<double> values(8 * 4);
-    const Status status = sim->backend().read(BufferId::node_world, nodes - 4, 8, values.data(), Scalar::f64);
+    const Status status = hmsm::detail::backend_of(*sim).read(BufferId::node_world, nodes - 4, 8, values.data(), Scalar::f64);
     EXPECT_EQ(status.code(), ErrorCode::invalid_argument);
     EXPECT_NE(status.message().find("node_world"), std::string::npos);
 }
@@ -377,7 +378,7 @@ TEST(CudaReadback, ChunkedPinnedReadsMatchTheCpuAndEachOther) {
     const uint64_t first = 123457, count = device->vertex_count() - first - 1001;
     ASSERT_GT(count * 16, 8ull << 20);  // still two chunks
     std::vector<float> part(4 * count);
-    ASSERT_TRUE(device->backend().read(BufferId::vertex_position, first, count, part.data(), Scalar::f32).ok());
+    ASSERT_TRUE(hmsm::detail::backend_of(*device).read(BufferId::vertex_position, first, count, part.data(), Scalar::f32).ok());
     for (uint64_t i = 0; i < count; ++i)
         for (uint64_t k = 0; k < 3; ++k) ASSERT_EQ(part[4 * i + k], as_float[3 * (first + i) + k]) << i;
 }
@@ -388,9 +389,9 @@ TEST(CudaReadback, ChunkedPinnedReadsMatchTheCpuAndEachOther) {
 [[noreturn]] void fault_and_exit() {
     auto sim = Simulation::create(forest_scene(17), test_config(BackendKind::cuda, Composition::pointer_jumping, false));
     if (!sim.ok()) std::exit(2);
-    const uint64_t count = (*sim)->scene_data().element_count(BufferId::chain_jump);
+    const uint64_t count = hmsm::detail::scene_data_of(**sim).element_count(BufferId::chain_jump);
     std::vector<double> far(count, double(0x7fffff00));
-    if (!(*sim)->backend().write(BufferId::chain_jump, 0, count, far.data(), Scalar::f64).ok()) std::exit(3);
+    if (!hmsm::detail::backend_of(**sim).write(BufferId::chain_jump, 0, count, far.data(), Scalar::f64).ok()) std::exit(3);
     const Status step = (*sim)->step(1);
     if (step.code() != ErrorCode::device_error || step.message().find("cudaError") == std::string::npos) {
         std::fprintf(stderr, "step: %s\n", step.message().c_str());

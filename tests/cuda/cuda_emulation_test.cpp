@@ -2,6 +2,7 @@
 // over host images of the device buffers, against the double-precision CPU reference. Needs no
 // GPU, so CI checks the kernels' arithmetic and indexing on every machine; the tests in
 // cuda_device_test.cpp check the same on the device.
+#include "simulation_access.h"
 #include "cuda_test_support.h"
 
 #include "device_words.h"
@@ -28,7 +29,7 @@ struct HostImage {
 /// as the reference holds it now (converted to float).
 HostImage image_of(const Simulation& reference) {
     HostImage image;
-    const detail::SceneData& scene = reference.scene_data();
+    const detail::SceneData& scene = hmsm::detail::scene_data_of(reference);
     for (const detail::BufferInfo& info : detail::kBufferTable) {
         const uint64_t count = scene.element_count(info.id);
         auto& bytes = image.bytes[uint32_t(info.id)];
@@ -36,7 +37,7 @@ HostImage image_of(const Simulation& reference) {
             bytes = detail::device_image(scene, info.id);
         } else {
             std::vector<double> values(count * detail::shape_scalars(info.shape));
-            EXPECT_TRUE(reference.backend().read(info.id, 0, count, values.data(), detail::Scalar::f64).ok());
+            EXPECT_TRUE(hmsm::detail::backend_of(reference).read(info.id, 0, count, values.data(), detail::Scalar::f64).ok());
             bytes.resize(count * detail::device_element_bytes(info.id));
             detail::scalars_to_words(info.shape, values.data(), values.size(), bytes.data(),
                                            detail::Scalar::f64);
@@ -72,11 +73,11 @@ class CudaEmulation : public ::testing::TestWithParam<Composition> {};
 /// with the wind phase of each step as Simulation::step computes it (x = f t mod 2).
 void emulate_steps(const Simulation& sim, HostImage& image, uint32_t steps) {
     const double dt = sim.config().parameters.dt;
-    const double frequency = sim.scene_data().wind_frequency;
+    const double frequency = hmsm::detail::scene_data_of(sim).wind_frequency;
     for (uint32_t k = 0; k < steps; ++k) {
         const double x = frequency * (double(k) * dt);
         const float phase = float(x - 2.0 * std::floor(x / 2.0));
-        for (const detail::Dispatch& d : sim.step_program()) detail::cuda::emulate_dispatch(d, image.pointers, phase);
+        for (const detail::Dispatch& d : hmsm::detail::step_program_of(sim)) detail::cuda::emulate_dispatch(d, image.pointers, phase);
     }
 }
 
@@ -123,7 +124,7 @@ TEST(CudaEmulationPacked, ContourWritesThePositionAndTheNormalWordOnly) {
     auto reference = Simulation::create(scene, config);
     ASSERT_TRUE(reference.ok()) << reference.status().message();
     Simulation& sim = **reference;
-    ASSERT_EQ(sim.scene_data().element_count(BufferId::vertex_normal), 0u);
+    ASSERT_EQ(hmsm::detail::scene_data_of(sim).element_count(BufferId::vertex_normal), 0u);
     HostImage image = image_of(sim);
     for (BufferId id : {BufferId::node_world, BufferId::vertex_position, BufferId::vertex_normal})
         poison(image, id);

@@ -1,5 +1,6 @@
 // The Vulkan backend through Simulation and directly: profiling, chunked submission, buffer
 // round trips and the 2-D dispatch grid (the storage-buffer-range split: window_test.cpp).
+#include "simulation_access.h"
 #include "random_scene.h"
 #include "test_trees.h"
 #include "vulkan_test_support.h"
@@ -32,7 +33,7 @@ TEST_F(VulkanTest, ProfilingGivesEveryPassATime) {
     EXPECT_EQ(times.steps, 400u);
     for (Pass pass : kAllPasses) EXPECT_GT(times.seconds[uint32_t(pass)], 0.0) << pass_name(pass);
 
-    sim->backend().set_profiling(false);
+    hmsm::detail::backend_of(*sim).set_profiling(false);
     ASSERT_TRUE(sim->step(3).ok());
     EXPECT_EQ(sim->pass_times().total(), 0.0);
     EXPECT_EQ(sim->pass_times().steps, 0u);
@@ -49,7 +50,7 @@ TEST_F(VulkanTest, RoundsRunInOneDispatchForModelsOfUpTo1024Chains) {
     ASSERT_TRUE(vulkan && cpu);
     for (const auto& [sim, mode] : {std::pair{vulkan.get(), HMSM_MODE_POINTER_JUMPING_IN_DISPATCH},
                                     std::pair{cpu.get(), HMSM_MODE_POINTER_JUMPING}})
-        for (const auto& d : sim->step_program())
+        for (const auto& d : hmsm::detail::step_program_of(*sim))
             if (d.pass == Pass::compose || d.pass == Pass::root_positions) EXPECT_EQ(d.constants.mode, mode);
     ASSERT_TRUE(vulkan->step(20).ok());
     ASSERT_TRUE(cpu->step(20).ok());
@@ -65,7 +66,7 @@ TEST_F(VulkanTest, CopyBandwidthIsMeasuredOnTheDevice) {
                                          BackendKind::vulkan, skip);
     if (!skip.empty()) GTEST_SKIP() << skip;
     ASSERT_TRUE(sim);
-    auto bandwidth = sim->backend().measure_copy_bandwidth(8u << 20);
+    auto bandwidth = hmsm::detail::backend_of(*sim).measure_copy_bandwidth(8u << 20);
     ASSERT_TRUE(bandwidth.ok()) << bandwidth.status().message();
     EXPECT_GT(*bandwidth, 1e8);    // more than 0.1 GB/s on any device, lavapipe included
     EXPECT_LT(*bandwidth, 1e14);   // and less than 100 TB/s

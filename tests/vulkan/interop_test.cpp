@@ -1,5 +1,6 @@
 // hmsm/vulkan.h: a simulation on an engine's device, steps recorded into the engine's command
 // buffer, and the shared output buffers.
+#include "simulation_access.h"
 #include "test_trees.h"
 #include "vulkan_test_support.h"
 
@@ -79,7 +80,7 @@ TEST_F(VulkanTest, PackedLayoutSharesPositionsWithNormalWordsAndNoNormalBuffer) 
 
     // What the shared buffer holds: xyz as read() returns them, w the word read() decodes.
     std::vector<float> raw(4 * sim->vertex_count()), positions, normals;
-    ASSERT_TRUE(sim->backend().read(detail::BufferId::vertex_position, 0, sim->vertex_count(), raw.data(),
+    ASSERT_TRUE(hmsm::detail::backend_of(*sim).read(detail::BufferId::vertex_position, 0, sim->vertex_count(), raw.data(),
                                     detail::Scalar::f32).ok());
     ASSERT_TRUE(sim->read(Output::vertex_positions, positions).ok());
     ASSERT_TRUE(sim->read(Output::vertex_normals, normals).ok());

@@ -2,6 +2,7 @@
 // windows on small scenes must give bitwise the results of the unsplit run (the same shader
 // arithmetic) and agree with cpu64; one instance larger than a window is refused; read/write
 // cross segment boundaries; and a scene beyond lavapipe's real maxStorageBufferRange runs.
+#include "simulation_access.h"
 #include "random_scene.h"
 #include "test_trees.h"
 #include "vulkan_test_support.h"
@@ -29,7 +30,7 @@ struct ForcedWindow {
 };
 
 const detail::vk::VulkanBackend& vulkan_of(const Simulation& sim) {
-    return dynamic_cast<const detail::vk::VulkanBackend&>(sim.backend());
+    return dynamic_cast<const detail::vk::VulkanBackend&>(hmsm::detail::backend_of(sim));
 }
 
 SimulationConfig windy_config(Composition composition) {
@@ -105,7 +106,7 @@ TEST_F(VulkanTest, SplitScenesMatchTheUnsplitRunBitwise) {
             for (auto [instances, extra, alignment] :
                  {std::tuple{1, 4, uint64_t(0)}, std::tuple{2, 13, uint64_t(0)}, std::tuple{3, 101, uint64_t(0)},
                   std::tuple{1, 4, uint64_t(256)}, std::tuple{2, 29, uint64_t(256)}}) {
-                const uint64_t one = instance_bytes(whole->scene_data(), std::max(alignment, device_alignment));
+                const uint64_t one = instance_bytes(hmsm::detail::scene_data_of(*whole), std::max(alignment, device_alignment));
                 const uint64_t window = instances * one + extra;
                 SCOPED_TRACE("window " + std::to_string(window) + " alignment " + std::to_string(alignment));
                 std::unique_ptr<Simulation> split;
@@ -136,14 +137,14 @@ TEST_F(VulkanTest, SegmentsCutInstanceGroupsIntoSeveralParts) {
     if (!skip.empty()) GTEST_SKIP() << skip;
     ASSERT_TRUE(whole);
     const uint64_t alignment = vulkan_of(*whole).device().limits().min_storage_buffer_offset_alignment;
-    ForcedWindow forced(2 * instance_bytes(whole->scene_data(), alignment) + 13);
+    ForcedWindow forced(2 * instance_bytes(hmsm::detail::scene_data_of(*whole), alignment) + 13);
     auto split = create_simulation_or_skip(scene, windy_config(Composition::pointer_jumping),
                                            BackendKind::vulkan, skip);
     ASSERT_TRUE(split);
     const auto& plan = vulkan_of(*split).window_plan();
     // Some group spans several segments, and every dispatch's parts cover its threads exactly.
     bool cut = false;
-    for (const detail::Dispatch& d : split->step_program()) {
+    for (const detail::Dispatch& d : hmsm::detail::step_program_of(*split)) {
         uint64_t threads = 0;
         uint32_t parts = 0;
         plan.for_each_part(d, [&](uint32_t segment, const gpu::PassConstants& c) {
@@ -159,14 +160,14 @@ TEST_F(VulkanTest, SegmentsCutInstanceGroupsIntoSeveralParts) {
     }
     EXPECT_TRUE(cut);
     // As recorded: every dispatch ends in exactly one last part (its timestamp).
-    const auto expanded = plan.expand(split->step_program());
-    EXPECT_GT(expanded.size(), split->step_program().size());
+    const auto expanded = plan.expand(hmsm::detail::step_program_of(*split));
+    EXPECT_GT(expanded.size(), hmsm::detail::step_program_of(*split).size());
     size_t last = 0;
     for (const auto& part : expanded) last += part.last;
-    EXPECT_EQ(last, split->step_program().size());
+    EXPECT_EQ(last, hmsm::detail::step_program_of(*split).size());
 
     // Profiling a split scene: one time per dispatch, every pass timed.
-    split->backend().set_profiling(true);
+    hmsm::detail::backend_of(*split).set_profiling(true);
     ASSERT_TRUE(split->step(3).ok());
     const PassTimes times = split->pass_times();
     EXPECT_EQ(times.steps, 3u);
@@ -195,14 +196,14 @@ TEST_F(VulkanTest, ReadAndWriteCrossSegments) {
                                            BackendKind::vulkan, skip);
     if (!skip.empty()) GTEST_SKIP() << skip;
     const uint64_t alignment = vulkan_of(*probe).device().limits().min_storage_buffer_offset_alignment;
-    ForcedWindow forced(instance_bytes(probe->scene_data(), alignment) + 4);
+    ForcedWindow forced(instance_bytes(hmsm::detail::scene_data_of(*probe), alignment) + 4);
     auto sim = create_simulation_or_skip(scene, windy_config(Composition::pointer_jumping),
                                          BackendKind::vulkan, skip);
     ASSERT_TRUE(sim);
     ASSERT_GT(vulkan_of(*sim).window_plan().segments().size(), 2u);
     std::mt19937 rng(5);
     std::uniform_real_distribution<double> unit(-1.0, 1.0);
-    const auto& data = sim->scene_data();
+    const auto& data = hmsm::detail::scene_data_of(*sim);
     for (BufferId id : {BufferId::chain_rotation, BufferId::chain_origin, BufferId::chain_state,
                         BufferId::vertex_position}) {
         SCOPED_TRACE(std::string(detail::buffer_info(id).name));
@@ -210,20 +211,20 @@ TEST_F(VulkanTest, ReadAndWriteCrossSegments) {
         const uint32_t scalars = detail::shape_scalars(detail::buffer_info(id).shape);
         std::vector<float> values(count * scalars);
         for (float& v : values) v = float(unit(rng));
-        ASSERT_TRUE(sim->backend().write(id, 0, count, values.data(), detail::Scalar::f32).ok());
+        ASSERT_TRUE(hmsm::detail::backend_of(*sim).write(id, 0, count, values.data(), detail::Scalar::f32).ok());
         std::vector<float> back(count * scalars);
-        ASSERT_TRUE(sim->backend().read(id, 0, count, back.data(), detail::Scalar::f32).ok());
+        ASSERT_TRUE(hmsm::detail::backend_of(*sim).read(id, 0, count, back.data(), detail::Scalar::f32).ok());
         EXPECT_EQ(back, values);
         // A sub-range across the middle (the half boundary of the ping-pong buffers).
         const uint64_t first = count / 2 - 7, n = 19;
         std::vector<float> part(n * scalars);
         for (float& v : part) v = float(unit(rng));
-        ASSERT_TRUE(sim->backend().write(id, first, n, part.data(), detail::Scalar::f32).ok());
+        ASSERT_TRUE(hmsm::detail::backend_of(*sim).write(id, first, n, part.data(), detail::Scalar::f32).ok());
         std::copy(part.begin(), part.end(), values.begin() + first * scalars);
-        ASSERT_TRUE(sim->backend().read(id, 0, count, back.data(), detail::Scalar::f32).ok());
+        ASSERT_TRUE(hmsm::detail::backend_of(*sim).read(id, 0, count, back.data(), detail::Scalar::f32).ok());
         EXPECT_EQ(back, values);
         std::vector<float> middle(n * scalars);
-        ASSERT_TRUE(sim->backend().read(id, first, n, middle.data(), detail::Scalar::f32).ok());
+        ASSERT_TRUE(hmsm::detail::backend_of(*sim).read(id, first, n, middle.data(), detail::Scalar::f32).ok());
         EXPECT_EQ(middle, part);
     }
 }
@@ -283,7 +284,7 @@ TEST_F(VulkanTest, SplitSceneOnAnEngineDeviceRecordsStepsAndSharesWholeBuffers) 
     auto reference = create_simulation_or_skip(scene, config, BackendKind::vulkan, skip);
     ASSERT_TRUE(reference);
     const uint64_t window =
-        2 * instance_bytes(reference->scene_data(), device.limits().min_storage_buffer_offset_alignment) + 7;
+        2 * instance_bytes(hmsm::detail::scene_data_of(*reference), device.limits().min_storage_buffer_offset_alignment) + 7;
     auto created = [&] {
         ForcedWindow forced(window);
         return vulkan::create_simulation(scene, config, context);

@@ -1,4 +1,5 @@
 // hmsm bench: medians over repeated batches after warm-up, within a per-case time budget.
+#include "simulation_access.h"
 #include "bench_measure.h"
 
 #include "backend.h"
@@ -35,7 +36,7 @@ struct ProfilingOff {
 }  // namespace
 
 Result<CaseResult> measure(Simulation& sim, const Settings& settings, unsigned what) {
-    detail::Backend& backend = sim.backend();
+    detail::Backend& backend = hmsm::detail::backend_of(sim);
     ProfilingOff profiling_off{backend};
     backend.set_profiling(false);
     CaseResult r;

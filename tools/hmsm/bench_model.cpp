@@ -1,4 +1,5 @@
 // hmsm bench: bytes per step from the buffer table and the copy bandwidth to compare them with.
+#include "simulation_access.h"
 #include "bench_model.h"
 
 #include "backend.h"
@@ -49,7 +50,7 @@ bool is_state_scope(Scope s) {
 }  // namespace
 
 Traffic step_traffic(const Simulation& sim) {
-    const detail::SceneData& d = sim.scene_data();
+    const detail::SceneData& d = hmsm::detail::scene_data_of(sim);
     Traffic t;
     for (Pass p : kAllPasses) {
         const uint32_t reads = detail::pass_reads(p), writes = detail::pass_writes(p);
@@ -66,7 +67,7 @@ Traffic step_traffic(const Simulation& sim) {
 }
 
 double state_bytes_per_instance(const Simulation& sim) {
-    const detail::SceneData& d = sim.scene_data();
+    const detail::SceneData& d = hmsm::detail::scene_data_of(sim);
     double bytes = 0.0;
     for (const detail::BufferInfo& info : detail::kBufferTable)
         if (is_state_scope(info.scope)) bytes += double(d.element_count(info.id)) * element_bytes(info);
@@ -102,7 +103,7 @@ Result<CopyBandwidth> host_transfer_bandwidth(Simulation& sim, uint32_t repeats)
     const double bytes = double(count) * 16.0;
     std::vector<float> host(count * 4, 0.0f);
     std::vector<double> write_s, read_s;
-    detail::Backend& backend = sim.backend();
+    detail::Backend& backend = hmsm::detail::backend_of(sim);
     for (uint32_t r = 0; r < std::max(1u, repeats); ++r) {
         auto t0 = std::chrono::steady_clock::now();
         HMSM_TRY(backend.write(BufferId::vertex_position, 0, count, host.data(), detail::Scalar::f32));
@@ -119,7 +120,7 @@ Result<CopyBandwidth> host_transfer_bandwidth(Simulation& sim, uint32_t repeats)
 }
 
 Result<CopyBandwidth> device_copy_bandwidth(Simulation& sim, uint64_t bytes) {
-    Result<double> measured = sim.backend().measure_copy_bandwidth(bytes);
+    Result<double> measured = hmsm::detail::backend_of(sim).measure_copy_bandwidth(bytes);
     if (measured) return CopyBandwidth{*measured, "device_copy", bytes};
     const ErrorCode code = measured.status().code();
     if (code != ErrorCode::unsupported && code != ErrorCode::out_of_memory) return measured.status();

@@ -1,6 +1,7 @@
 // hmsm bench (docs/model.md 7): the paper's Table 1 per preset and backend, pointer jumping
 // vs level by level, and forest scaling against the copy-bandwidth roofline. Markdown on stdout,
 // JSON with --json (schema: docs/benchmarks/README.md).
+#include "simulation_access.h"
 #include "bench_measure.h"
 #include "bench_model.h"
 #include "bench_report.h"
@@ -214,7 +215,7 @@ public:
             put(pj, "device_effective_bandwidth", traffic.total() / r.device_seconds);
         }
         entry["pointer_jumping"] = pj;
-        const uint32_t levels = uint32_t(sim->scene_data().models[0].level_begin.size() - 1);
+        const uint32_t levels = uint32_t(hmsm::detail::scene_data_of(*sim).models[0].level_begin.size() - 1);
         const uint32_t rounds = sim->jump_rounds();
         copy_bandwidth(b, *sim);
         sim.reset();

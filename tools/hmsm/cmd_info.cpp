@@ -68,7 +68,7 @@ int run_info(CLI::App& app) {
         j["triangles"] = mesh.triangle_count();
         j["leaves"] = tree.leaves.size();
         j["height_m"] = tree_height(tree);
-        j["inertia_floored_chains"] = h.floored_chain_count;
+        j["capped_chains"] = h.capped_chain_count;
         std::printf("%s\n", j.dump(2).c_str());
     } else {
         std::printf("nodes            %zu\n", tree.nodes.size());

@@ -146,7 +146,7 @@ int run_simulate(CLI::App& app) {
         r["chains"] = sim.chain_count();
         r["mesh_vertices"] = sim.vertex_count();
         r["jump_rounds"] = sim.jump_rounds();
-        r["inertia_floored_chains"] = sim.floored_chain_count();
+        r["capped_chains"] = sim.capped_chain_count();
         r["steps"] = flags.steps;
         r["dt"] = config.parameters.dt;
         r["wall_seconds"] = wall;

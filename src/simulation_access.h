@@ -1,0 +1,35 @@
+// Internal access to a Simulation's backend, step program and flattened scene, for hmsm's own
+// interop code, tools and tests (an attorney: the public header only befriends this struct).
+#pragma once
+
+#include "simulation_impl.h"
+
+namespace hmsm::detail {
+
+struct SimulationAccess {
+    static Backend& backend(const Simulation& sim) { return *sim.impl_->backend_; }
+    static const std::vector<Dispatch>& step_program(const Simulation& sim) {
+        return sim.impl_->step_program_;
+    }
+    static const SceneData& scene_data(const Simulation& sim) { return *sim.impl_->data_; }
+    static Simulation::Impl& impl(Simulation& sim) { return *sim.impl_; }
+    /// Simulation::create on a backend the caller made (e.g. on an engine's Vulkan device);
+    /// config.backend is ignored.
+    static Result<std::unique_ptr<Simulation>> create(const Scene& scene,
+                                                      const SimulationConfig& config,
+                                                      std::unique_ptr<Backend> backend) {
+        return Simulation::Impl::create(scene, config, std::move(backend));
+    }
+};
+
+}  // namespace hmsm::detail
+
+namespace hmsm::detail {
+
+inline Backend& backend_of(const Simulation& sim) { return SimulationAccess::backend(sim); }
+inline const std::vector<Dispatch>& step_program_of(const Simulation& sim) {
+    return SimulationAccess::step_program(sim);
+}
+inline const SceneData& scene_data_of(const Simulation& sim) { return SimulationAccess::scene_data(sim); }
+
+}  // namespace hmsm::detail
