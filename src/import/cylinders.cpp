@@ -111,7 +111,8 @@ Result<ImportedTree> cylinders_to_tree(const std::vector<Cylinder>& cylinders,
     for (int64_t c = 0; c < n && root < 0; ++c)
         if (cylinders[c].parent < 0) root = c;
     if (root < 0)
-        return bad(std::string(source) + ": no cylinder without a parent (the parents form a cycle)");
+        return bad(where(source, cylinders[0].line) +
+                   "no cylinder without a parent from here on (the parents form a cycle)");
     std::vector<int64_t> parent(n);
     for (int64_t c = 0; c < n; ++c) parent[c] = c == root ? -1 : (cylinders[c].parent < 0 ? root : cylinders[c].parent);
     // Every cylinder must reach the root: walk up with marks (O(n) overall).
