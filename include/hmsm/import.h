@@ -74,9 +74,10 @@ Result<ImportedTree> import_simpleforest(const std::string& path);
 Result<ImportedTree> parse_cylinders(std::string_view text, std::string_view source = "cylinders");
 
 /// Adds `count` leaf cards, deterministic for `seed`, to the thinnest branches: the tips
-/// (nodes without children) and nodes no thicker than the thinnest tip's radius times two, in
-/// proportion to their number. Cards are `size` (w, h) metres, stand off their node along their
-/// own up axis and face the sky with some scatter. The tree must be valid.
+/// (nodes without children) and nodes no thicker than twice the thinnest tip or than the
+/// thinnest quarter of the nodes, each site equally likely. A card sits anywhere along the
+/// segment ending at its node, `width` x `height` metres (scaled 0.75-1.25), stands off the twig
+/// along its own up axis and faces the sky with some scatter. The tree must be valid.
 Status scatter_leaves(TreeModel& tree, uint64_t count, uint64_t seed, double width = 0.08,
                       double height = 0.12);
 

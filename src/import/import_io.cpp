@@ -72,10 +72,16 @@ Status scatter_leaves(TreeModel& tree, uint64_t count, uint64_t seed, double wid
     double thinnest_tip = std::numeric_limits<double>::infinity();
     for (size_t i = 0; i < n; ++i)
         if (!has_child[i] && tree.nodes[i].parent >= 0) thinnest_tip = std::min(thinnest_tip, tree.nodes[i].radius);
-    // The thinnest branches: tips and nodes at most twice as thick as the thinnest tip.
+    // The thinnest branches: tips, and nodes no thicker than twice the thinnest tip or than the
+    // thinnest quarter of all nodes (scans end in a few very thin twig cylinders).
+    std::vector<double> radii;
+    for (size_t i = 0; i < n; ++i)
+        if (tree.nodes[i].parent >= 0) radii.push_back(tree.nodes[i].radius);
+    std::nth_element(radii.begin(), radii.begin() + radii.size() / 4, radii.end());
+    const double thin = std::max(2.0 * thinnest_tip, radii[radii.size() / 4]);
     std::vector<int32_t> sites;
     for (size_t i = 0; i < n; ++i)
-        if (tree.nodes[i].parent >= 0 && (!has_child[i] || tree.nodes[i].radius <= 2.0 * thinnest_tip))
+        if (tree.nodes[i].parent >= 0 && (!has_child[i] || tree.nodes[i].radius <= thin))
             sites.push_back(int32_t(i));
     detail::Random rng(seed ^ 0x6c656166ull);  // "leaf"
     tree.leaves.reserve(tree.leaves.size() + count);
@@ -92,12 +98,14 @@ Status scatter_leaves(TreeModel& tree, uint64_t count, uint64_t seed, double wid
         const glm::dvec3 up = glm::normalize(std::cos(tilt) * d + std::sin(tilt) * radial);
         const glm::dvec3 sky(rng.uniform(-0.4, 0.4), 1.0, rng.uniform(-0.4, 0.4));
         const double scale = rng.uniform(0.75, 1.25);
+        // Anywhere along the segment that ends at the node (it moves with the node's chain).
+        const glm::dvec3 along = -rng.uniform() * (here.position - tree.nodes[size_t(here.parent)].position);
         TreeLeaf leaf;
         leaf.node = node;
         leaf.size = glm::dvec2(width * scale, height * scale);
         leaf.up = up;
         leaf.normal = perpendicular(up, sky);
-        leaf.offset = (here.radius + 0.5 * leaf.size.y) * up;
+        leaf.offset = along + (here.radius + 0.5 * leaf.size.y) * up;
         tree.leaves.push_back(leaf);
     }
     return validate_tree(tree);
