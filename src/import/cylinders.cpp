@@ -81,6 +81,15 @@ bool parse_number(std::string_view field, double& value) {
     return ec == std::errc() && end == field.data() + field.size() && std::isfinite(value);
 }
 
+std::string quote(std::string_view field) {
+    std::string out = "'";
+    for (size_t i = 0; i < field.size() && i < 32; ++i) {
+        const unsigned char c = static_cast<unsigned char>(field[i]);
+        out += c < 0x20 || c == 0x7f ? '?' : char(c);
+    }
+    return out + (field.size() > 32 ? "...'" : "'");
+}
+
 std::string where(std::string_view source, size_t line) {
     return std::string(source) + " line " + std::to_string(line) + ": ";
 }

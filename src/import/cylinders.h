@@ -35,6 +35,10 @@ std::vector<std::string_view> split_fields(std::string_view line, std::string_vi
 /// A finite double, the whole field (surrounding spaces allowed); false otherwise.
 bool parse_number(std::string_view field, double& value);
 
+/// A field as quoted in a message: control bytes shown as '?', at most 32 characters, so the
+/// message stays one printable line whatever the file holds.
+std::string quote(std::string_view field);
+
 /// "SOURCE line N: " for messages.
 std::string where(std::string_view source, size_t line);
 

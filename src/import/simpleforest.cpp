@@ -63,8 +63,8 @@ Result<ImportedTree> parse_simpleforest(std::string_view text, std::string_view 
         double v[9];
         for (size_t k = 0; k < 9; ++k)
             if (!parse_number(fields[column[k]], v[k]))
-                return bad(where(source, line.number) + "column '" + std::string(names[column[k]]) +
-                           "' value '" + std::string(fields[column[k]]) + "' is not a finite number");
+                return bad(where(source, line.number) + "column " + quote(names[column[k]]) +
+                           " value " + quote(fields[column[k]]) + " is not a finite number");
         if (!is_integer(v[0]) || !is_integer(v[1]))
             return bad(where(source, line.number) + "ID and parentID must be integers");
         if (!row_of_id.emplace(int64_t(v[0]), int64_t(cylinders.size())).second)

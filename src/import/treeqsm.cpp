@@ -65,8 +65,8 @@ Result<ImportedTree> parse_treeqsm(std::string_view text, std::string_view sourc
                        " numbers (" + to_string(format) + "), got " + std::to_string(fields.size()));
         for (size_t k = 0; k < columns; ++k)
             if (!parse_number(fields[k], v[k]))
-                return bad(where(source, line.number) + "column " + std::to_string(k + 1) + " '" +
-                           std::string(fields[k]) + "' is not a finite number");
+                return bad(where(source, line.number) + "column " + std::to_string(k + 1) + " " +
+                           quote(fields[k]) + " is not a finite number");
         Cylinder cyl;
         cyl.line = line.number;
         cyl.radius = v[0];
@@ -79,7 +79,7 @@ Result<ImportedTree> parse_treeqsm(std::string_view text, std::string_view sourc
         cyl.start = glm::dvec3(v[2], v[3], v[4]);
         cyl.end = cyl.start + v[1] * (axis / norm);
         if (v[8] != std::floor(v[8]) || v[8] < 0.0 || v[8] > double(rows))
-            return bad(where(source, line.number) + "parent " + std::string(fields[8]) +
+            return bad(where(source, line.number) + "parent " + quote(fields[8]) +
                        " is not a row number (1.." + std::to_string(rows) + ") or 0");
         if (size_t(v[8]) == i - first_row + 1)
             return bad(where(source, line.number) + "cylinder is its own parent");
