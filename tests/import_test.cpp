@@ -200,6 +200,21 @@ TEST(Import, TinyCylindersAreMergedNotRejected) {
     EXPECT_EQ(fuzz::check_imported(imported), "");
 }
 
+TEST(Import, HeaderOverV23ColumnsAndQuotedCsvFields) {
+    auto v23 = parse_treeqsm(
+        "Radius Length Start_X Start_Y Start_Z Axis_X Axis_Y Axis_Z Parent Extension Added UnmodRadius Branch BranchOrder PositionInBranch\n"
+        "0.1 1 0 0 0 0 0 1 0 2 0 0.1 1 0 1\n"
+        "0.05 1 0 0 1 0 0 1 1 0 0 0.05 1 0 2\n");
+    ASSERT_TRUE(v23.ok()) << v23.status().message();
+    EXPECT_EQ(v23->summary.format, CylinderFormat::treeqsm_v23);
+    EXPECT_EQ(v23->tree.nodes.size(), 3u);
+    auto quoted = parse_simpleforest(
+        "\"ID\", \"parentID\", \"startX\", \"startY\", \"startZ\", \"endX\", \"endY\", \"endZ\", \"radius\"\n"
+        "\"1\", \"-1\", 0, 0, 0, 0, 0, 2, 0.2\n");
+    ASSERT_TRUE(quoted.ok()) << quoted.status().message();
+    EXPECT_EQ(quoted->tree.nodes.size(), 2u);
+}
+
 TEST(Import, SeveralParentlessCylindersHangFromTheFirst) {
     auto imported = parse_treeqsm(
         "0.1 1 0 0 0 0 0 1 0 0 0 0.1 1 0 1\n"

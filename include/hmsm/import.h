@@ -61,7 +61,9 @@ struct ImportedTree {
     ImportSummary summary;
 };
 
-/// TreeQSM cylinder table, either variant (told apart by the header and the column count).
+/// TreeQSM cylinder table, either variant: a first line that is not numbers is a header (it
+/// must name radius, length and parent, in any spelling and case); the first data row's count,
+/// 17 (text export) or 15 (v2.3), is then required of every row.
 Result<ImportedTree> parse_treeqsm(std::string_view text, std::string_view source = "treeqsm");
 Result<ImportedTree> import_treeqsm(const std::string& path);
 

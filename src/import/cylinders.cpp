@@ -75,6 +75,7 @@ std::vector<std::string_view> split_fields(std::string_view line, std::string_vi
 bool parse_number(std::string_view field, double& value) {
     while (!field.empty() && (field.front() == ' ' || field.front() == '\t')) field.remove_prefix(1);
     while (!field.empty() && (field.back() == ' ' || field.back() == '\t')) field.remove_suffix(1);
+    if (field.size() >= 2 && field.front() == '"' && field.back() == '"') field = field.substr(1, field.size() - 2);
     if (!field.empty() && field.front() == '+') field.remove_prefix(1);
     if (field.empty()) return false;
     auto [end, ec] = std::from_chars(field.data(), field.data() + field.size(), value);

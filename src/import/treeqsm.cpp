@@ -48,6 +48,11 @@ Result<ImportedTree> parse_treeqsm(std::string_view text, std::string_view sourc
         columns = 17;
         format = CylinderFormat::treeqsm_text;
         if (lines.size() == 1) return bad(std::string(source) + ": no cylinder rows after the header");
+        // The v2.3 columns under a header line: the first row decides, every row must agree.
+        if (split_fields(lines[1].text, kSeparators, true).size() == 15) {
+            columns = 15;
+            format = CylinderFormat::treeqsm_v23;
+        }
     } else if (first_fields.size() == 17) {
         // The 17-column export saved without its header line.
         columns = 17;

@@ -24,6 +24,7 @@ struct AnalyzeFlags {
     double step_seconds = 30.0, spectrum_seconds = 60.0;
     bool json = false;
     std::string plot_step, plot_spectrum, plot_chains;
+    bool shared_speed = false;  // --wind-speed was registered by add_wind_flags
 } flags;
 
 double median(std::vector<double> v) {
@@ -157,8 +158,12 @@ void register_analyze_flags(CLI::App& app) {
     add_model_flags(app, flags.model);
     add_parameter_flags(app, flags.parameters);
     add_wind_flags(app, flags.wind);
-    app.add_option("--wind-speed", flags.wind_speed,
-                   "wind speed in m/s for static deflection, step response and spectrum (default 6: strength 1)");
+    // Simulate's wind flags may define --wind-speed themselves; then run_analyze reads it there.
+    if (!app.get_option_no_throw("--wind-speed"))
+        app.add_option("--wind-speed", flags.wind_speed,
+                       "wind speed in m/s for static deflection, step response and spectrum (default 6: strength 1)");
+    else
+        flags.shared_speed = true;
     app.add_option("--step-seconds", flags.step_seconds, "length of the step-response run (default 30)");
     app.add_option("--spectrum-seconds", flags.spectrum_seconds, "length of the spectrum run (default 60)");
     app.add_flag("--json", flags.json, "print JSON instead of text");
@@ -170,6 +175,7 @@ void register_analyze_flags(CLI::App& app) {
 int run_analyze(CLI::App& app) {
     if (app.count("--wind-strength"))
         return fail_input("analyze takes the wind as --wind-speed (m/s), not --wind-strength");
+    if (flags.shared_speed && app.count("--wind-speed")) flags.wind_speed = app["--wind-speed"]->as<double>();
     auto options = model_options(flags.model);
     if (!options) return fail(options.status());
     auto wind = wind_options(flags.wind);
