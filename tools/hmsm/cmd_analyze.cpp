@@ -5,7 +5,9 @@
 // Text or JSON on stdout; PNG plots with --plot-step, --plot-spectrum, --plot-chains.
 #include "analysis.h"
 #include "cli_common.h"
+#ifdef HMSM_HAVE_PLOTS
 #include "plot.h"
+#endif
 
 #include <nlohmann/json.hpp>
 
@@ -103,6 +105,7 @@ void print_text(const ModelAnalysis& m, double speed, const Wind& spectrum_wind,
     }
 }
 
+#ifdef HMSM_HAVE_PLOTS
 Status write_plots(const ModelAnalysis& m, StagedOutputs& outputs, const std::vector<std::pair<size_t, int>>& files,
                    const Wind& spectrum_wind) {
     for (auto [index, kind] : files) {
@@ -150,6 +153,11 @@ Status write_plots(const ModelAnalysis& m, StagedOutputs& outputs, const std::ve
     }
     return {};
 }
+#else
+Status write_plots(const ModelAnalysis&, StagedOutputs&, const std::vector<std::pair<size_t, int>>&, const Wind&) {
+    return {};  // no plot was staged: run_analyze refuses the flags in this build
+}
+#endif
 
 }  // namespace
 
@@ -197,6 +205,9 @@ int run_analyze(CLI::App& app) {
         {&flags.plot_step, "--plot-step"}, {&flags.plot_spectrum, "--plot-spectrum"}, {&flags.plot_chains, "--plot-chains"}};
     for (int k = 0; k < 3; ++k) {
         if (plots[k].first->empty()) continue;
+#ifndef HMSM_HAVE_PLOTS
+        return fail_input(std::string(plots[k].second) + ": this hmsm was built without libpng and stb (no plots)");
+#endif
         auto staged = outputs.stage(*plots[k].first, plots[k].second);
         if (!staged) return fail(staged.status());
         files.emplace_back(*staged, k);
