@@ -76,10 +76,14 @@ void register_generate_flags(CLI::App& app);
 void register_info_flags(CLI::App& app);
 void register_simulate_flags(CLI::App& app);
 void register_bench_flags(CLI::App& app);
+void register_import_flags(CLI::App& app);  // cmd_import.cpp
+void register_analyze_flags(CLI::App& app);  // cmd_analyze.cpp
 int run_generate(CLI::App& app);
 int run_info(CLI::App& app);
 int run_simulate(CLI::App& app);
 int run_bench(CLI::App& app);
+int run_import(CLI::App& app);
+int run_analyze(CLI::App& app);
 #ifdef HMSM_HAVE_RENDER
 void register_render_flags(CLI::App& app);  // cmd_render.cpp: needs the Vulkan renderer
 int run_render(CLI::App& app);

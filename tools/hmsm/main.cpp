@@ -13,12 +13,16 @@ int main(int argc, char** argv) {
     CLI::App* info = app.add_subcommand("info", "print the counts of a tree's hierarchy and mesh");
     CLI::App* simulate = app.add_subcommand("simulate", "run the simulation and dump its outputs");
     CLI::App* bench = app.add_subcommand("bench", "benchmark the backends: Table 1, passes, forests");
+    CLI::App* import = app.add_subcommand("import", "turn a laser-scan cylinder model into an hmsm-tree file");
+    CLI::App* analyze = app.add_subcommand("analyze", "how a tree sways: frequencies, deflection, step response, spectrum");
     int (*run)(CLI::App&) = nullptr;
     CLI::App* chosen = nullptr;
     generate->callback([&] { run = run_generate; chosen = generate; });
     info->callback([&] { run = run_info; chosen = info; });
     simulate->callback([&] { run = run_simulate; chosen = simulate; });
     bench->callback([&] { run = run_bench; chosen = bench; });
+    import->callback([&] { run = run_import; chosen = import; });
+    analyze->callback([&] { run = run_analyze; chosen = analyze; });
 #ifdef HMSM_HAVE_RENDER
     CLI::App* render = app.add_subcommand("render", "draw the animated tree offscreen to PNG frames and a GIF");
     render->callback([&] { run = run_render; chosen = render; });
@@ -29,6 +33,8 @@ int main(int argc, char** argv) {
     register_info_flags(*info);
     register_simulate_flags(*simulate);
     register_bench_flags(*bench);
+    register_import_flags(*import);
+    register_analyze_flags(*analyze);
     try {
         app.parse(argc, argv);
     } catch (const CLI::CallForHelp& e) {
