@@ -1,6 +1,7 @@
-// The agreement suite, written once and run per backend: every backend against the cpu64
-// oracle, pass by pass on random states and end to end after many steps (docs/model.md 7). A
-// backend that is not compiled in or has no device is skipped with the reason.
+// The end-to-end agreement suite, written once and run per backend: every backend against the
+// cpu64 oracle after many steps (docs/model.md 7); each pass alone on random states is
+// agreement/pass_agreement_test.cpp. A backend that is not compiled in or has no device is
+// skipped with the reason.
 #include "simulation_access.h"
 #include "test_trees.h"
 
@@ -12,7 +13,6 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <random>
 
 using namespace hmsm;
 using detail::BufferId;
@@ -191,85 +191,6 @@ TEST(AgreementOracle, PackedVertexLayoutOnCpu64) {
     std::vector<float> normals_f32;
     ASSERT_TRUE(packed->read(Output::vertex_normals, normals_f32).ok());
     EXPECT_LE(test::max_abs_difference(std::vector<double>(normals_f32.begin(), normals_f32.end()), normals), 1e-6);
-}
-
-/// Fills every state buffer of both simulations with the same random values: angles and rates
-/// in range, proper rotations for matrices, positions within a few metres.
-void randomize_state(Simulation& a, Simulation& b, uint32_t seed) {
-    std::mt19937 rng(seed);
-    std::uniform_real_distribution<double> unit(-1.0, 1.0);
-    const auto& data = hmsm::detail::scene_data_of(b);
-    auto fill = [&](BufferId id, auto make_element) {
-        uint64_t count = data.element_count(id);
-        uint32_t scalars = detail::shape_scalars(detail::buffer_info(id).shape);
-        std::vector<double> values(count * scalars);
-        for (uint64_t i = 0; i < count; ++i) make_element(&values[i * scalars]);
-        ASSERT_TRUE(hmsm::detail::backend_of(a).write(id, 0, count, values.data(), detail::Scalar::f64).ok());
-        ASSERT_TRUE(hmsm::detail::backend_of(b).write(id, 0, count, values.data(), detail::Scalar::f64).ok());
-    };
-    auto rotation = [&](double* m) {
-        glm::dvec3 axis = glm::normalize(glm::dvec3(unit(rng), unit(rng), unit(rng)) + glm::dvec3(1e-3));
-        double angle = 3.0 * unit(rng), c = std::cos(angle), s = std::sin(angle);
-        glm::dmat3 k(0.0);
-        k[1][0] = axis.z; k[2][0] = -axis.y; k[0][1] = -axis.z; k[2][1] = axis.x; k[0][2] = axis.y; k[1][2] = -axis.x;
-        glm::dmat3 r = glm::dmat3(1.0) + s * k + (1 - c) * k * k;
-        for (int col = 0; col < 3; ++col) {
-            for (int row = 0; row < 3; ++row) m[4 * col + row] = r[col][row];
-            m[4 * col + 3] = 0.0;
-        }
-    };
-    fill(BufferId::chain_state, [&](double* v) {
-        v[0] = 0.7 * unit(rng); v[1] = 0.7 * unit(rng); v[2] = 2 * unit(rng); v[3] = 2 * unit(rng);
-    });
-    fill(BufferId::chain_force, [&](double* v) { v[0] = 50 * unit(rng); v[1] = 50 * unit(rng); });
-    fill(BufferId::chain_local, rotation);
-    fill(BufferId::chain_rotation, rotation);
-    auto point = [&](double* v) { v[0] = 5 * unit(rng); v[1] = 5 * unit(rng); v[2] = 5 * unit(rng); v[3] = 0; };
-    fill(BufferId::node_relative, point);
-    fill(BufferId::chain_origin, point);
-}
-
-TEST_P(Agreement, EachPassOnRandomStates) {
-    SimulationConfig config;
-    config.wind.strength = 6.0;
-    config.wind.direction = {0.4, 0.1, 1.0};
-    config.wind.front_speed = 2.0;
-    Scene scene = *grid_scene(test::small_tree(), 3, 5.0, 3);
-    scene.models.push_back(test::deep_tree(6));
-    scene.model_names.push_back("deep");
-    scene.instances.push_back({1, {-3, 0, 2}, 0.8});
-    for (Composition composition : {Composition::pointer_jumping, Composition::pointer_jumping_per_round,
-                                    Composition::pointer_jumping_in_dispatch, Composition::level_by_level}) {
-        config.composition = composition;
-        std::string skip;
-        auto sim = test::create_simulation_or_skip(scene, config, GetParam(), skip);
-        if (!skip.empty()) GTEST_SKIP() << skip;
-        auto oracle = test::create_simulation_or_skip(scene, config, BackendKind::cpu64, skip);
-        ASSERT_TRUE(sim && oracle);
-        for (Pass pass : kAllPasses) {
-            SCOPED_TRACE(std::string(pass_name(pass)) + " " + to_string(composition));
-            randomize_state(*sim, *oracle, 1234 + uint32_t(pass));
-            std::vector<detail::Dispatch> dispatches;
-            for (const auto& d : hmsm::detail::step_program_of(*sim))
-                if (d.pass == pass) dispatches.push_back(d);
-            ASSERT_FALSE(dispatches.empty());
-            const double wind_x[1] = {0.37};
-            ASSERT_TRUE(hmsm::detail::backend_of(*sim).run(dispatches, wind_x).ok());
-            ASSERT_TRUE(hmsm::detail::backend_of(*oracle).run(dispatches, wind_x).ok());
-            uint32_t written = detail::pass_writes(pass);
-            for (const auto& info : detail::kBufferTable) {
-                if (!(written & (1u << uint32_t(info.id)))) continue;
-                uint64_t count = hmsm::detail::scene_data_of(*oracle).element_count(info.id);
-                uint32_t scalars = detail::shape_scalars(info.shape);
-                std::vector<double> a(count * scalars), b(count * scalars);
-                ASSERT_TRUE(hmsm::detail::backend_of(*sim).read(info.id, 0, count, a.data(), detail::Scalar::f64).ok());
-                ASSERT_TRUE(hmsm::detail::backend_of(*oracle).read(info.id, 0, count, b.data(), detail::Scalar::f64).ok());
-                double scale = 1.0;
-                for (double v : b) scale = std::max(scale, std::abs(v));
-                EXPECT_LE(test::max_abs_difference(a, b) / scale, 1e-4) << info.name;
-            }
-        }
-    }
 }
 
 TEST_P(Agreement, RoundsInOneDispatchMatchOneDispatchPerRound) {

@@ -48,40 +48,6 @@ static HMSM_HOST_DEVICE void compose_element(const BufferPointers& b,
     compose_jump<false>(b, pc, e.instance, e.index, pc.round, pc.src_half, pc.dst_half);
 }
 
-static __global__ void __launch_bounds__(HMSM_WORKGROUP_SIZE)
-    compose_kernel(const BufferPointers b, const gpu::PassConstants pc) {
-    begin_pass();
-    for (uint32_t i = blockIdx.x * blockDim.x + threadIdx.x; i < pc.element_count;
-         i += gridDim.x * blockDim.x)
-        compose_element(b, pc, i);
-}
-
-/// In-dispatch mode: one block per instance runs every round (run_rounds_in_block).
-static __global__ void __launch_bounds__(HMSM_MAX_ROUNDS_WORKGROUP_SIZE)
-    compose_rounds_kernel(const BufferPointers b, const gpu::PassConstants pc) {
-    begin_pass();
-    run_rounds_in_block(pc, [&](uint32_t k, uint32_t c, uint32_t round, uint32_t src, uint32_t dst) {
-        compose_jump<true>(b, pc, k, c, round, src, dst);
-    });
-}
-
-cudaError_t launch_compose(const BufferPointers& b, const gpu::PassConstants& pc,
-                           cudaStream_t stream) {
-    if (pc.element_count == 0) return cudaSuccess;
-    if (pc.mode == HMSM_MODE_POINTER_JUMPING_IN_DISPATCH)
-        return launch_pass(compose_rounds_kernel, launch_blocks_per_instance(pc),
-                           gpu::rounds_workgroup_size(pc.model_chain_count), stream, b, pc);
-    return launch_pass(compose_kernel, launch_blocks(pc.element_count), HMSM_WORKGROUP_SIZE, stream, b, pc);
-}
-
-void emulate_compose(const BufferPointers& b, const gpu::PassConstants& pc) {
-    if (pc.mode == HMSM_MODE_POINTER_JUMPING_IN_DISPATCH) {
-        emulate_rounds(pc, [&](uint32_t k, uint32_t c, uint32_t round, uint32_t src, uint32_t dst) {
-            compose_jump<false>(b, pc, k, c, round, src, dst);
-        });
-        return;
-    }
-    for (uint32_t i = 0; i < pc.element_count; ++i) compose_element(b, pc, i);
-}
+HMSM_CUDA_ROUNDS_PASS(compose)
 
 }  // namespace hmsm::detail::cuda

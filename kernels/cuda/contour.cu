@@ -44,22 +44,6 @@ static HMSM_HOST_DEVICE void contour_element(const BufferPointers& b,
     }
 }
 
-static __global__ void __launch_bounds__(HMSM_WORKGROUP_SIZE)
-    contour_kernel(const BufferPointers b, const gpu::PassConstants pc) {
-    begin_pass();
-    for (uint32_t i = blockIdx.x * blockDim.x + threadIdx.x; i < pc.element_count;
-         i += gridDim.x * blockDim.x)
-        contour_element(b, pc, i);
-}
-
-cudaError_t launch_contour(const BufferPointers& b, const gpu::PassConstants& pc,
-                           cudaStream_t stream) {
-    if (pc.element_count == 0) return cudaSuccess;
-    return launch_pass(contour_kernel, launch_blocks(pc.element_count), HMSM_WORKGROUP_SIZE, stream, b, pc);
-}
-
-void emulate_contour(const BufferPointers& b, const gpu::PassConstants& pc) {
-    for (uint32_t i = 0; i < pc.element_count; ++i) contour_element(b, pc, i);
-}
+HMSM_CUDA_PASS(contour)
 
 }  // namespace hmsm::detail::cuda

@@ -49,22 +49,6 @@ static HMSM_HOST_DEVICE void integrate_element(const BufferPointers& b,
     store_mat3(b.chain_local, chain, local);
 }
 
-static __global__ void __launch_bounds__(HMSM_WORKGROUP_SIZE)
-    integrate_kernel(const BufferPointers b, const gpu::PassConstants pc) {
-    begin_pass();
-    for (uint32_t i = blockIdx.x * blockDim.x + threadIdx.x; i < pc.element_count;
-         i += gridDim.x * blockDim.x)
-        integrate_element(b, pc, i);
-}
-
-cudaError_t launch_integrate(const BufferPointers& b, const gpu::PassConstants& pc,
-                             cudaStream_t stream) {
-    if (pc.element_count == 0) return cudaSuccess;
-    return launch_pass(integrate_kernel, launch_blocks(pc.element_count), HMSM_WORKGROUP_SIZE, stream, b, pc);
-}
-
-void emulate_integrate(const BufferPointers& b, const gpu::PassConstants& pc) {
-    for (uint32_t i = 0; i < pc.element_count; ++i) integrate_element(b, pc, i);
-}
+HMSM_CUDA_PASS(integrate)
 
 }  // namespace hmsm::detail::cuda

@@ -15,22 +15,6 @@ static HMSM_HOST_DEVICE void node_relative_element(const BufferPointers& b,
     b.node_relative[pc.node_begin + i] = with_w(rotation * local, 0.0f);
 }
 
-static __global__ void __launch_bounds__(HMSM_WORKGROUP_SIZE)
-    node_relative_kernel(const BufferPointers b, const gpu::PassConstants pc) {
-    begin_pass();
-    for (uint32_t i = blockIdx.x * blockDim.x + threadIdx.x; i < pc.element_count;
-         i += gridDim.x * blockDim.x)
-        node_relative_element(b, pc, i);
-}
-
-cudaError_t launch_node_relative(const BufferPointers& b, const gpu::PassConstants& pc,
-                                 cudaStream_t stream) {
-    if (pc.element_count == 0) return cudaSuccess;
-    return launch_pass(node_relative_kernel, launch_blocks(pc.element_count), HMSM_WORKGROUP_SIZE, stream, b, pc);
-}
-
-void emulate_node_relative(const BufferPointers& b, const gpu::PassConstants& pc) {
-    for (uint32_t i = 0; i < pc.element_count; ++i) node_relative_element(b, pc, i);
-}
+HMSM_CUDA_PASS(node_relative)
 
 }  // namespace hmsm::detail::cuda

@@ -174,4 +174,96 @@ inline unsigned launch_blocks_per_instance(const gpu::PassConstants& pc) {
     return instances < max_blocks ? instances : max_blocks;
 }
 
+/// The one kernel skeleton every pass fills. A pass is a type P with
+///   static HMSM_HOST_DEVICE void element(const BufferPointers&, const gpu::PassConstants&, uint32_t i)
+/// (the work of thread i of the dispatch) and `static constexpr bool kRounds`; where kRounds
+/// (compose, root_positions) also
+///   template <bool kWrittenInBlock> static HMSM_HOST_DEVICE void jump(b, pc, k, c, round, src_half, dst_half)
+/// (one pointer-jumping round for model chain c of group instance k; kWrittenInBlock: the src
+/// half was written by this block's previous round). HMSM_CUDA_PASS / HMSM_CUDA_ROUNDS_PASS
+/// below build P from NAME_element (and NAME_jump) and define launch_NAME and emulate_NAME.
+template <class P>
+static __global__ void __launch_bounds__(HMSM_WORKGROUP_SIZE)
+    pass_kernel(const BufferPointers b, const gpu::PassConstants pc) {
+    begin_pass();
+    for (uint32_t i = blockIdx.x * blockDim.x + threadIdx.x; i < pc.element_count;
+         i += gridDim.x * blockDim.x)
+        P::element(b, pc, i);
+}
+
+/// In-dispatch mode: one block per instance runs every round (run_rounds_in_block).
+template <class P>
+static __global__ void __launch_bounds__(HMSM_MAX_ROUNDS_WORKGROUP_SIZE)
+    rounds_kernel(const BufferPointers b, const gpu::PassConstants pc) {
+    begin_pass();
+    run_rounds_in_block(pc, [&](uint32_t k, uint32_t c, uint32_t round, uint32_t src, uint32_t dst) {
+        P::template jump<true>(b, pc, k, c, round, src, dst);
+    });
+}
+
+/// launch_NAME: an empty dispatch launches nothing; in-dispatch rounds take one block per
+/// instance of rounds_workgroup_size threads, everything else blocks of HMSM_WORKGROUP_SIZE
+/// up to the grid cap (launch_blocks).
+template <class P>
+cudaError_t launch(const BufferPointers& b, const gpu::PassConstants& pc, cudaStream_t stream) {
+    if (pc.element_count == 0) return cudaSuccess;
+    if constexpr (P::kRounds) {
+        if (pc.mode == HMSM_MODE_POINTER_JUMPING_IN_DISPATCH)
+            return launch_pass(rounds_kernel<P>, launch_blocks_per_instance(pc),
+                               gpu::rounds_workgroup_size(pc.model_chain_count), stream, b, pc);
+    }
+    return launch_pass(pass_kernel<P>, launch_blocks(pc.element_count), HMSM_WORKGROUP_SIZE, stream, b, pc);
+}
+
+/// emulate_NAME: the same element (or round) code, serially on the host.
+template <class P>
+void emulate(const BufferPointers& b, const gpu::PassConstants& pc) {
+    if constexpr (P::kRounds) {
+        if (pc.mode == HMSM_MODE_POINTER_JUMPING_IN_DISPATCH) {
+            emulate_rounds(pc, [&](uint32_t k, uint32_t c, uint32_t round, uint32_t src, uint32_t dst) {
+                P::template jump<false>(b, pc, k, c, round, src, dst);
+            });
+            return;
+        }
+    }
+    for (uint32_t i = 0; i < pc.element_count; ++i) P::element(b, pc, i);
+}
+
+#define HMSM_CUDA_PASS_ELEMENT(name)                                                             \
+    static HMSM_HOST_DEVICE void element(const BufferPointers& b, const gpu::PassConstants& pc, \
+                                         uint32_t i) {                                           \
+        name##_element(b, pc, i);                                                                \
+    }
+#define HMSM_CUDA_PASS_ENTRY_POINTS(name)                                                        \
+    cudaError_t launch_##name(const BufferPointers& b, const gpu::PassConstants& pc,             \
+                              cudaStream_t stream) {                                             \
+        return launch<name##_pass>(b, pc, stream);                                               \
+    }                                                                                            \
+    void emulate_##name(const BufferPointers& b, const gpu::PassConstants& pc) {                 \
+        emulate<name##_pass>(b, pc);                                                             \
+    }
+
+/// The last line of a pass file whose threads each handle one element: NAME_element is all
+/// the pass supplies.
+#define HMSM_CUDA_PASS(name)                   \
+    struct name##_pass {                       \
+        static constexpr bool kRounds = false; \
+        HMSM_CUDA_PASS_ELEMENT(name)           \
+    };                                         \
+    HMSM_CUDA_PASS_ENTRY_POINTS(name)
+
+/// The same for a pointer-jumping pass: NAME_element and NAME_jump<kWrittenInBlock>.
+#define HMSM_CUDA_ROUNDS_PASS(name)                                                            \
+    struct name##_pass {                                                                       \
+        static constexpr bool kRounds = true;                                                  \
+        HMSM_CUDA_PASS_ELEMENT(name)                                                           \
+        template <bool kWrittenInBlock>                                                        \
+        static HMSM_HOST_DEVICE void jump(const BufferPointers& b, const gpu::PassConstants& pc, \
+                                          uint32_t k, uint32_t c, uint32_t round,              \
+                                          uint32_t src_half, uint32_t dst_half) {              \
+            name##_jump<kWrittenInBlock>(b, pc, k, c, round, src_half, dst_half);              \
+        }                                                                                      \
+    };                                                                                         \
+    HMSM_CUDA_PASS_ENTRY_POINTS(name)
+
 }  // namespace hmsm::detail::cuda

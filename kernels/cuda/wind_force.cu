@@ -18,22 +18,6 @@ static HMSM_HOST_DEVICE void wind_force_element(const BufferPointers& b,
     b.chain_force[chain] = make_float2(area * local.z, -area * local.x);
 }
 
-static __global__ void __launch_bounds__(HMSM_WORKGROUP_SIZE)
-    wind_force_kernel(const BufferPointers b, const gpu::PassConstants pc) {
-    begin_pass();
-    for (uint32_t i = blockIdx.x * blockDim.x + threadIdx.x; i < pc.element_count;
-         i += gridDim.x * blockDim.x)
-        wind_force_element(b, pc, i);
-}
-
-cudaError_t launch_wind_force(const BufferPointers& b, const gpu::PassConstants& pc,
-                              cudaStream_t stream) {
-    if (pc.element_count == 0) return cudaSuccess;
-    return launch_pass(wind_force_kernel, launch_blocks(pc.element_count), HMSM_WORKGROUP_SIZE, stream, b, pc);
-}
-
-void emulate_wind_force(const BufferPointers& b, const gpu::PassConstants& pc) {
-    for (uint32_t i = 0; i < pc.element_count; ++i) wind_force_element(b, pc, i);
-}
+HMSM_CUDA_PASS(wind_force)
 
 }  // namespace hmsm::detail::cuda

@@ -22,31 +22,32 @@ uint32_t max_launch_blocks() {
     return blocks;
 }
 
+// The wind phase of the step reaches wind_force through its constants (Backend::run).
+static gpu::PassConstants step_constants(const Dispatch& dispatch, float wind_x) {
+    gpu::PassConstants pc = dispatch.constants;
+    if (dispatch.pass == Pass::wind_force) pc.wind.w = wind_x;
+    return pc;
+}
+
 cudaError_t launch_dispatch(const Dispatch& dispatch, const BufferPointers& buffers, float wind_x,
                             cudaStream_t stream) {
-    gpu::PassConstants pc = dispatch.constants;
+    const gpu::PassConstants pc = step_constants(dispatch, wind_x);
     switch (dispatch.pass) {
-        case Pass::wind_force: pc.wind.w = wind_x; return launch_wind_force(buffers, pc, stream);
-        case Pass::integrate: return launch_integrate(buffers, pc, stream);
-        case Pass::compose: return launch_compose(buffers, pc, stream);
-        case Pass::node_relative: return launch_node_relative(buffers, pc, stream);
-        case Pass::root_positions: return launch_root_positions(buffers, pc, stream);
-        case Pass::node_world: return launch_node_world(buffers, pc, stream);
-        case Pass::contour: return launch_contour(buffers, pc, stream);
+#define HMSM_CUDA_LAUNCH_CASE(name) \
+    case Pass::name: return launch_##name(buffers, pc, stream);
+        HMSM_PASSES(HMSM_CUDA_LAUNCH_CASE)
+#undef HMSM_CUDA_LAUNCH_CASE
     }
     return cudaErrorInvalidValue;
 }
 
 void emulate_dispatch(const Dispatch& dispatch, const BufferPointers& host_buffers, float wind_x) {
-    gpu::PassConstants pc = dispatch.constants;
+    const gpu::PassConstants pc = step_constants(dispatch, wind_x);
     switch (dispatch.pass) {
-        case Pass::wind_force: pc.wind.w = wind_x; emulate_wind_force(host_buffers, pc); return;
-        case Pass::integrate: emulate_integrate(host_buffers, pc); return;
-        case Pass::compose: emulate_compose(host_buffers, pc); return;
-        case Pass::node_relative: emulate_node_relative(host_buffers, pc); return;
-        case Pass::root_positions: emulate_root_positions(host_buffers, pc); return;
-        case Pass::node_world: emulate_node_world(host_buffers, pc); return;
-        case Pass::contour: emulate_contour(host_buffers, pc); return;
+#define HMSM_CUDA_EMULATE_CASE(name) \
+    case Pass::name: emulate_##name(host_buffers, pc); return;
+        HMSM_PASSES(HMSM_CUDA_EMULATE_CASE)
+#undef HMSM_CUDA_EMULATE_CASE
     }
 }
 

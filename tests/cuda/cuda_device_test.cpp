@@ -1,13 +1,13 @@
-// The CUDA backend on a device: each pass on random states, whole simulations against the
-// double-precision CPU reference, graph replay against direct launches, profiling, interop and
-// error paths. Every test skips with the reason when there is no CUDA device.
+// The CUDA backend on a device: whole simulations against the double-precision CPU reference,
+// graph replay against direct launches, profiling, interop and error paths (each pass on random
+// states is agreement/pass_agreement_test.cpp). Every test skips with the reason when there is
+// no CUDA device.
 #include "simulation_access.h"
 #include "cuda_test_support.h"
 
 #include <hmsm/cuda.h>
 
 #include "octahedral.h"
-#include "random.h"
 
 #include <cuda_runtime_api.h>
 #include <algorithm>
@@ -15,7 +15,6 @@
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
-#include <tuple>
 
 namespace hmsm::cuda_test {
 namespace {
@@ -27,47 +26,6 @@ std::unique_ptr<Simulation> create_or_fail(const Scene& scene, const SimulationC
     auto sim = Simulation::create(scene, config);
     EXPECT_TRUE(sim.ok()) << sim.status().message();
     return sim.ok() ? std::move(sim).value() : nullptr;
-}
-
-std::vector<double> read_buffer(const Simulation& sim, BufferId id) {
-    const uint64_t count = hmsm::detail::scene_data_of(sim).element_count(id);
-    std::vector<double> values(count * detail::shape_scalars(detail::buffer_info(id).shape));
-    const Status status = hmsm::detail::backend_of(sim).read(id, 0, count, values.data(), Scalar::f64);
-    EXPECT_TRUE(status.ok()) << status.message();
-    return values;
-}
-
-/// A uniformly random rotation as 12 scalars (three columns with w = 0), from a unit quaternion.
-void random_rotation(detail::Random& random, double* out) {
-    double q[4] = {random.normal(), random.normal(), random.normal(), random.normal()};
-    const double n = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
-    const double w = q[0] / n, x = q[1] / n, y = q[2] / n, z = q[3] / n;
-    const double m[3][3] = {{1 - 2 * (y * y + z * z), 2 * (x * y + w * z), 2 * (x * z - w * y)},
-                            {2 * (x * y - w * z), 1 - 2 * (x * x + z * z), 2 * (y * z + w * x)},
-                            {2 * (x * z + w * y), 2 * (y * z - w * x), 1 - 2 * (x * x + y * y)}};
-    for (int c = 0; c < 3; ++c) {
-        for (int r = 0; r < 3; ++r) out[4 * c + r] = m[c][r];
-        out[4 * c + 3] = 0.0;
-    }
-}
-
-/// Random values for a state buffer: rotations for matrices, angles inside the stop and
-/// rates for the chain state, metres for vectors.
-std::vector<double> random_state(detail::Random& random, BufferId id, uint64_t count) {
-    const detail::Shape shape = detail::buffer_info(id).shape;
-    const uint32_t n = detail::shape_scalars(shape);
-    std::vector<double> values(count * n);
-    for (uint64_t i = 0; i < count; ++i) {
-        double* v = &values[i * n];
-        if (shape == detail::Shape::mat3x4) random_rotation(random, v);
-        else if (id == BufferId::chain_state) {
-            v[0] = random.uniform(-0.7, 0.7), v[1] = random.uniform(-0.7, 0.7);
-            v[2] = random.uniform(-2.0, 2.0), v[3] = random.uniform(-2.0, 2.0);
-        } else {
-            for (uint32_t k = 0; k < n; ++k) v[k] = random.uniform(-2.0, 2.0);
-        }
-    }
-    return values;
 }
 
 // --- no device ---------------------------------------------------------------------------
@@ -82,55 +40,6 @@ TEST(CudaNoDevice, CreatingTheBackendReportsNoDevice) {
     ASSERT_FALSE(sim.ok());
     EXPECT_EQ(sim.status().code(), ErrorCode::no_device);
 }
-
-// --- each pass on random states ----------------------------------------------------------
-
-class CudaPass : public ::testing::TestWithParam<std::tuple<Pass, Composition>> {};
-
-TEST_P(CudaPass, MatchesCpu64OnRandomStates) {
-    HMSM_SKIP_WITHOUT_CUDA();
-    const auto [pass, composition] = GetParam();
-    const Scene scene = forest_scene(5);
-    auto reference = create_or_fail(scene, test_config(BackendKind::cpu64, composition, false));
-    auto device = create_or_fail(scene, test_config(BackendKind::cuda, composition, false));
-    ASSERT_TRUE(reference && device);
-
-    detail::Random random(1000 + uint32_t(pass));
-    for (const detail::BufferInfo& info : detail::kBufferTable) {
-        if (detail::is_static(info.id)) continue;
-        const uint64_t count = hmsm::detail::scene_data_of(*reference).element_count(info.id);
-        const std::vector<double> values = random_state(random, info.id, count);
-        ASSERT_TRUE(hmsm::detail::backend_of(*reference).write(info.id, 0, count, values.data(), Scalar::f64).ok());
-        ASSERT_TRUE(hmsm::detail::backend_of(*device).write(info.id, 0, count, values.data(), Scalar::f64).ok());
-    }
-    std::vector<detail::Dispatch> program;
-    for (const detail::Dispatch& d : hmsm::detail::step_program_of(*reference))
-        if (d.pass == pass) program.push_back(d);
-    ASSERT_FALSE(program.empty());
-    const double wind_x[1] = {random.uniform(0.0, 2.0)};
-    ASSERT_TRUE(hmsm::detail::backend_of(*reference).run(program, wind_x).ok());
-    const Status status = hmsm::detail::backend_of(*device).run(program, wind_x);
-    ASSERT_TRUE(status.ok()) << status.message();
-
-    const double tolerance = pass == Pass::wind_force ? 1e-4 : 1e-5;
-    const uint32_t writes = detail::pass_writes(pass);
-    for (const detail::BufferInfo& info : detail::kBufferTable) {
-        if (!(writes & (1u << uint32_t(info.id)))) continue;
-        const std::vector<double> expected = read_buffer(*reference, info.id);
-        const std::vector<double> actual = read_buffer(*device, info.id);
-        EXPECT_LE(max_abs_difference(actual, expected), tolerance * std::max(1.0, max_abs(expected)))
-            << "buffer " << info.name;
-    }
-}
-
-INSTANTIATE_TEST_SUITE_P(
-    AllPasses, CudaPass,
-    ::testing::Combine(::testing::ValuesIn(kAllPasses),
-                       ::testing::Values(Composition::pointer_jumping_per_round, Composition::pointer_jumping_in_dispatch,
-                                         Composition::level_by_level)),
-    [](const auto& info) {
-        return std::string(pass_name(std::get<0>(info.param))) + "_" + to_string(std::get<1>(info.param));
-    });
 
 // --- whole simulations -------------------------------------------------------------------
 

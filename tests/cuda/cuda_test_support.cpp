@@ -88,12 +88,6 @@ double max_abs_difference(const std::vector<double>& a, const std::vector<double
     return worst;
 }
 
-double max_abs(const std::vector<double>& values) {
-    double m = 0.0;
-    for (double v : values) m = std::max(m, std::abs(v));
-    return m;
-}
-
 double scene_height(const Scene& scene) {
     double height = 0.0;
     for (const TreeModel& model : scene.models) height = std::max(height, tree_height(model));

@@ -30,7 +30,6 @@ std::string no_cuda_device_reason();
 
 /// Largest |a - b| over two arrays of the same size; infinity on a NaN or a size mismatch.
 double max_abs_difference(const std::vector<double>& a, const std::vector<double>& b);
-double max_abs(const std::vector<double>& values);
 
 /// Rest-pose height of every model of the scene, the largest: docs/model.md 7's error scale.
 double scene_height(const Scene& scene);

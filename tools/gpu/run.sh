@@ -96,7 +96,9 @@ if [[ -x $CUDA_TESTS ]] && command -v compute-sanitizer >/dev/null; then
     # racecheck is far slower per launch (over 240 s for the whole suite): every kernel in both
     # compositions, the graph path and interop are enough for it (no kernel uses shared memory).
     run_step 200 "$OUT/sanitizers.log" compute-sanitizer --tool racecheck --error-exitcode 99 \
-        "$CUDA_TESTS" --gtest_filter='AllPasses/CudaPass.*:CudaInterop.*:CudaProfiling.*'
+        "$CUDA_TESTS" --gtest_filter='CudaInterop.*:CudaProfiling.*'
+    [[ -x $CORE_TESTS ]] && run_step 200 "$OUT/sanitizers.log" compute-sanitizer --tool racecheck \
+        --error-exitcode 99 "$CORE_TESTS" --gtest_filter='Backends/PassAgreement.*/cuda_*:-*cuda_emulation*'
     grep -E '^\[ +(OK|FAILED) +\]' "$OUT/sanitizers.log" | tail -30 >>"$SUMMARY"
 fi
 

@@ -1,0 +1,58 @@
+#include "pass_agreement.h"
+
+#ifdef HMSM_HAVE_CUDA
+#include "cuda_emulation_backend.h"
+#endif
+
+#include <cmath>
+#include <limits>
+
+namespace hmsm::test {
+namespace {
+
+Result<std::unique_ptr<detail::Backend>> cuda_emulation() {
+#ifdef HMSM_HAVE_CUDA
+    return create_cuda_emulation_backend();
+#else
+    return Status{ErrorCode::no_device, "cuda emulation: this build of hmsm has no CUDA kernels"};
+#endif
+}
+
+template <BackendKind kKind>
+Result<std::unique_ptr<detail::Backend>> registered() {
+    return detail::create_backend(kKind);
+}
+
+}  // namespace
+
+const std::vector<BackendUnderTest>& backends_under_test() {
+    static const std::vector<BackendUnderTest> backends = {
+        {"cpu", registered<BackendKind::cpu>},
+        {"vulkan", registered<BackendKind::vulkan>},
+        {"cuda", registered<BackendKind::cuda>},
+        {"cuda_emulation", cuda_emulation},
+    };
+    return backends;
+}
+
+double nmse(const std::vector<double>& expected, const std::vector<double>& actual) {
+    constexpr double kInfinity = std::numeric_limits<double>::infinity();
+    if (expected.size() != actual.size()) return kInfinity;
+    double error = 0.0, norm = 0.0;
+    for (size_t i = 0; i < expected.size(); ++i) {
+        if (std::isnan(expected[i]) || std::isnan(actual[i])) return kInfinity;
+        const double d = actual[i] - expected[i];
+        error += d * d;
+        norm += expected[i] * expected[i];
+    }
+    if (norm == 0.0) return error == 0.0 ? 0.0 : kInfinity;
+    return error / norm;
+}
+
+std::vector<Composition> compositions_of(Pass pass) {
+    if (pass != Pass::compose && pass != Pass::root_positions) return {Composition::pointer_jumping_per_round};
+    return {Composition::pointer_jumping_per_round, Composition::pointer_jumping_in_dispatch,
+            Composition::level_by_level};
+}
+
+}  // namespace hmsm::test
