@@ -110,7 +110,7 @@ TEST(CpuParallel, BitwiseEqualToSerialCpuInEveryCompositionAndLayout) {
             auto parallel = create_parallel(scene, config, 3, 1);
             ASSERT_TRUE(parallel);
             EXPECT_EQ(parallel->backend_kind(), BackendKind::cpu_parallel);
-            expect_bitwise_equal_runs(**serial, *parallel, 150);
+            expect_bitwise_equal_runs(**serial, *parallel, 80);
         }
     }
 }
