@@ -51,7 +51,8 @@ set(_hmsm_glsl_dir "${CMAKE_CURRENT_SOURCE_DIR}/shaders/glsl")
 set(_hmsm_spirv_dir "${CMAKE_CURRENT_BINARY_DIR}/hmsm_spirv")
 file(MAKE_DIRECTORY "${_hmsm_spirv_dir}")
 set(_hmsm_spirv_headers "")
-foreach(pass IN LISTS HMSM_VULKAN_PASSES)
+# copy_bandwidth is no pass: the device copy `hmsm bench` measures its roofline with.
+foreach(pass IN LISTS HMSM_VULKAN_PASSES ITEMS copy_bandwidth)
   set(_out "${_hmsm_spirv_dir}/${pass}.h")
   add_custom_command(
     OUTPUT "${_out}"
@@ -76,6 +77,7 @@ set(_hmsm_vulkan_sources
   src/vulkan/recorder.cpp
   src/vulkan/windows.cpp
   src/vulkan/vulkan_backend.cpp
+  src/vulkan/copy_bandwidth.cpp
   src/vulkan/interop.cpp)
 target_sources(hmsm PRIVATE ${_hmsm_vulkan_sources} $<TARGET_OBJECTS:hmsm_volk>)
 # `VkFooCreateInfo info{VK_STRUCTURE_TYPE_FOO}` (zero the rest) is the Vulkan idiom; -Wextra

@@ -74,6 +74,19 @@ public:
 /// Backend factories; the registry (backend_registry.cpp) knows which are compiled in.
 /// A factory returns no_device when it is compiled in but finds no usable device.
 Result<std::unique_ptr<Backend>> create_cpu_backend(bool double_precision);
+/// The most threads cpu-parallel takes (SimulationConfig::cpu_threads, HMSM_CPU_THREADS).
+inline constexpr uint32_t kMaxCpuThreads = 1024;
+/// Threads for cpu-parallel: `requested` when > 0, else the environment variable
+/// HMSM_CPU_THREADS when set (invalid_argument unless an integer in [1, kMaxCpuThreads]), else
+/// the hardware threads of the host.
+Result<uint32_t> cpu_thread_count(uint32_t requested);
+/// Model elements below which a dispatch is not split further: each range costs a thread
+/// wake-up of some microseconds, about what 4,096 elements of the cheapest pass take.
+inline constexpr uint32_t kCpuMinChunkElements = 4096;
+/// cpu-parallel: the float passes of create_cpu_backend(false) over `threads` threads (0:
+/// cpu_thread_count(0)); tests pass a small `min_chunk_elements` to split even tiny dispatches.
+Result<std::unique_ptr<Backend>> create_cpu_parallel_backend(uint32_t threads,
+                                                             uint32_t min_chunk_elements = kCpuMinChunkElements);
 #ifdef HMSM_HAVE_VULKAN
 Result<std::unique_ptr<Backend>> create_vulkan_backend();
 #endif
@@ -81,8 +94,10 @@ Result<std::unique_ptr<Backend>> create_vulkan_backend();
 Result<std::unique_ptr<Backend>> create_cuda_backend();
 #endif
 
-/// Creates the backend `kind`; `automatic` tries CUDA, then a Vulkan GPU, then the CPU (float).
-Result<std::unique_ptr<Backend>> create_backend(BackendKind kind);
+/// Creates the backend `kind`; `automatic` tries CUDA, then a Vulkan GPU, then cpu-parallel
+/// where the host has more than one hardware thread (cpu_thread_count(cpu_threads) > 1), else
+/// the serial CPU (float). `cpu_threads` is SimulationConfig::cpu_threads (0: default).
+Result<std::unique_ptr<Backend>> create_backend(BackendKind kind, uint32_t cpu_threads = 0);
 
 /// Buffers each pass reads and writes (bit i = BufferId i), for barrier placement.
 uint32_t pass_reads(Pass pass);

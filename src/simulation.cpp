@@ -20,6 +20,7 @@ const char* to_string(BackendKind kind) {
     switch (kind) {
         case BackendKind::cpu: return "cpu";
         case BackendKind::cpu64: return "cpu64";
+        case BackendKind::cpu_parallel: return "cpu-parallel";
         case BackendKind::vulkan: return "vulkan";
         case BackendKind::cuda: return "cuda";
         case BackendKind::automatic: return "auto";
@@ -28,8 +29,8 @@ const char* to_string(BackendKind kind) {
 }
 
 std::optional<BackendKind> parse_backend_kind(std::string_view name) {
-    for (BackendKind k : {BackendKind::cpu, BackendKind::cpu64, BackendKind::vulkan,
-                          BackendKind::cuda, BackendKind::automatic})
+    for (BackendKind k : {BackendKind::cpu, BackendKind::cpu64, BackendKind::cpu_parallel,
+                          BackendKind::vulkan, BackendKind::cuda, BackendKind::automatic})
         if (name == to_string(k)) return k;
     return std::nullopt;
 }
@@ -238,7 +239,7 @@ Result<std::unique_ptr<Simulation>> Simulation::Impl::create(const Scene& scene,
         sim->backend_ = std::move(backend);
         sim->config_.backend = sim->backend_->kind();
     } else {
-        auto created = detail::create_backend(config.backend);
+        auto created = detail::create_backend(config.backend, config.cpu_threads);
         if (!created) return created.status();
         sim->backend_ = std::move(created).value();
     }

@@ -12,6 +12,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
 using namespace hmsm;
@@ -235,11 +236,14 @@ TEST_P(Agreement, RoundsInOneDispatchMatchOneDispatchPerRound) {
 }
 
 std::string backend_name(const ::testing::TestParamInfo<BackendKind>& info) {
-    return to_string(info.param);
+    std::string name = to_string(info.param);
+    std::replace(name.begin(), name.end(), '-', '_');  // cpu_parallel
+    return name;
 }
 
 INSTANTIATE_TEST_SUITE_P(Backends, Agreement,
-                         ::testing::Values(BackendKind::cpu, BackendKind::vulkan, BackendKind::cuda),
+                         ::testing::Values(BackendKind::cpu, BackendKind::cpu_parallel, BackendKind::vulkan,
+                                           BackendKind::cuda),
                          backend_name);
 
 }  // namespace

@@ -120,6 +120,12 @@ void expect_schema(const json& d, const std::string& backend) {
     for (const char* key : {"per_call", "batched", "readback"}) {
         expect_number(p["steps_per_second"], key, "steps_per_second");
         expect_number(p["speedup_over_cpu"], key, "speedup_over_cpu");
+        expect_number(p["speedup_over_best_cpu"], key, "speedup_over_best_cpu");
+        ASSERT_TRUE(p["best_cpu"].is_object() && p["best_cpu"][key].is_string()) << p.dump();
+        const std::string best = p["best_cpu"][key];
+        EXPECT_TRUE(best == "cpu" || best == "cpu-parallel" || best == "cpu64") << best;
+        // The best CPU backend is at least as fast as cpu.
+        EXPECT_LE(p["speedup_over_best_cpu"][key].get<double>(), p["speedup_over_cpu"][key].get<double>() * (1 + 1e-12));
     }
     for (const char* key : {"state", "static", "total"}) expect_number(p["bytes_per_step"], key, "bytes_per_step");
     expect_pass_table(p["bytes_per_step"]["per_pass"], "bytes_per_step.per_pass");
@@ -160,6 +166,13 @@ void expect_schema(const json& d, const std::string& backend) {
                                     "copy_bandwidth_fraction", "device_copy_bandwidth_fraction",
                                     "steps_per_batch", "repeats"})
                 expect_number(*measured[layout], key, "forest " + std::to_string(n) + " " + layout);
+            // Speed-ups where cpu measured the same size and layout (it may be skipped by budget).
+            const json& f = *measured[layout];
+            if (f.contains("speedup_over_cpu")) {
+                expect_number(f, "speedup_over_best_cpu", "forest speed-up");
+                EXPECT_TRUE(f["best_cpu"].is_string());
+                EXPECT_LE(f["speedup_over_best_cpu"].get<double>(), f["speedup_over_cpu"].get<double>() * (1 + 1e-12));
+            }
         }
         if (measured.count("separate") && measured.count("packed")) {
             // The bytes model: the packed contour pass writes 16 bytes per vertex instead of 32.
@@ -194,6 +207,39 @@ TEST_F(BenchCli, QuickCpuWritesSchemaAndTables) {
     BenchRun rendered = run("bench --render " + (dir_ / "bench.json").string());
     EXPECT_EQ(rendered.exit_code, 0) << rendered.err;
     EXPECT_EQ(rendered.out, r.out);
+}
+
+/// cpu beside cpu-parallel: both in the schema; speed-ups over cpu and over the best CPU backend
+/// of each case, the best being the faster of the two, with ratios consistent with the rates.
+TEST_F(BenchCli, QuickCpuParallelReportsSpeedUpsOverCpuAndBestCpu) {
+    BenchRun r;
+    json d = quick("cpu,cpu-parallel", r);
+    ASSERT_TRUE(d.is_object());
+    std::map<std::string, json> by_backend;
+    for (const char* backend : {"cpu", "cpu-parallel"}) {
+        json only = d;
+        for (const char* key : {"presets", "forest", "copy_bandwidth"}) {
+            only[key] = json::array();
+            for (const json& e : d[key])
+                if (e.value("backend", "") == backend) only[key].push_back(e);
+        }
+        SCOPED_TRACE(backend);
+        expect_schema(only, backend);
+        by_backend[backend] = only["presets"][0];
+    }
+    const json& cpu = by_backend["cpu"];
+    const json& parallel = by_backend["cpu-parallel"];
+    for (const char* key : {"per_call", "batched", "readback"}) {
+        const double serial_rate = cpu["steps_per_second"][key], parallel_rate = parallel["steps_per_second"][key];
+        EXPECT_DOUBLE_EQ(cpu["speedup_over_cpu"][key].get<double>(), 1.0);
+        EXPECT_DOUBLE_EQ(parallel["speedup_over_cpu"][key].get<double>(), parallel_rate / serial_rate);
+        const std::string best = serial_rate >= parallel_rate ? "cpu" : "cpu-parallel";
+        EXPECT_EQ(parallel["best_cpu"][key], best);
+        EXPECT_DOUBLE_EQ(parallel["speedup_over_best_cpu"][key].get<double>(),
+                         parallel_rate / std::max(serial_rate, parallel_rate));
+    }
+    EXPECT_NE(r.out.find("× best CPU batched"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find(" | cpu-parallel | "), std::string::npos) << r.out;
 }
 
 TEST_F(BenchCli, QuickVulkanWritesSchema) {

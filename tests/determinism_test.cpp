@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
@@ -113,10 +114,12 @@ TEST_P(Determinism, LevelByLevelIsAlsoRepeatable) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Backends, Determinism,
-                         ::testing::Values(BackendKind::cpu, BackendKind::cpu64, BackendKind::vulkan,
-                                           BackendKind::cuda),
+                         ::testing::Values(BackendKind::cpu, BackendKind::cpu64, BackendKind::cpu_parallel,
+                                           BackendKind::vulkan, BackendKind::cuda),
                          [](const ::testing::TestParamInfo<BackendKind>& info) {
-                             return std::string(to_string(info.param));
+                             std::string name = to_string(info.param);
+                             std::replace(name.begin(), name.end(), '-', '_');  // cpu_parallel
+                             return name;
                          });
 
 namespace {
@@ -138,7 +141,7 @@ TEST(DeterminismCli, TwoRunsWriteIdenticalFiles) {
     fs::create_directories(dir);
     const std::string tree = (dir / "tree.json").string();
     ASSERT_TRUE(save_tree(test::small_tree(), tree).ok());
-    for (const char* backend : {"cpu", "cpu64"}) {
+    for (const char* backend : {"cpu", "cpu64", "cpu-parallel"}) {
         SCOPED_TRACE(backend);
         for (int run = 0; run < 2; ++run) {
             std::string tag = std::string(backend) + std::to_string(run);

@@ -21,8 +21,10 @@ struct SimulationAccess;  // internal: src/simulation_access.h
 }  // namespace detail
 
 /// `cpu` is the serial float reference (the paper's baseline); `cpu64` the double-precision
-/// oracle; `automatic` picks CUDA, then a Vulkan GPU, then the CPU.
-enum class BackendKind { cpu, cpu64, vulkan, cuda, automatic };
+/// oracle; `cpu_parallel` (named "cpu-parallel") the float passes of `cpu` split over all host
+/// threads, bitwise the results of `cpu`; `automatic` picks CUDA, then a Vulkan GPU, then
+/// cpu-parallel where the host has more than one thread, else `cpu`.
+enum class BackendKind { cpu, cpu64, vulkan, cuda, automatic, cpu_parallel };
 
 const char* to_string(BackendKind kind);
 std::optional<BackendKind> parse_backend_kind(std::string_view name);
@@ -70,6 +72,9 @@ struct SimulationConfig {
     Composition composition = Composition::pointer_jumping;
     /// The device layout of the mesh vertices; packed halves the bytes the contour pass writes.
     VertexLayout vertex_layout = VertexLayout::separate;
+    /// Threads of the cpu-parallel backend (also when `automatic` picks it); 0: the
+    /// environment variable HMSM_CPU_THREADS if set, else every hardware thread. At most 1024.
+    uint32_t cpu_threads = 0;
     /// Collect per-pass device times (pass_times()). Off by default: timers serialize GPU work
     /// and keep CUDA from replaying a step as one graph.
     bool profile_passes = false;

@@ -9,13 +9,13 @@ namespace {
 
 template <class T>
 void compose_round(State<T>& s, const gpu::PassConstants& pc, uint32_t round, uint32_t src_half,
-                   uint32_t dst_half) {
+                   uint32_t dst_half, Range r) {
     const uint64_t src = uint64_t(src_half) * s.total_chains;
     const uint64_t dst = uint64_t(dst_half) * s.total_chains;
     auto product_so_far = [&](uint64_t gc) -> const auto& {
         return round == 0 ? s.chain_local[gc] : s.chain_rotation[src + gc];
     };
-    for (uint32_t i = 0; i < pc.element_count; ++i) {
+    for (uint32_t i = r.begin; i < r.end; ++i) {
         Element e = element_of(i, pc.model_chain_count);
         uint64_t gc = state_chain(pc, e.instance, int32_t(e.index));
         int32_t ancestor =
@@ -29,10 +29,10 @@ void compose_round(State<T>& s, const gpu::PassConstants& pc, uint32_t round, ui
 }  // namespace
 
 template <class T>
-void compose(State<T>& s, const gpu::PassConstants& pc) {
+void compose(State<T>& s, const gpu::PassConstants& pc, Range r) {
     if (pc.mode == HMSM_MODE_LEVEL_BY_LEVEL) {
         const uint64_t dst = uint64_t(pc.dst_half) * s.total_chains;
-        for (uint32_t i = 0; i < pc.element_count; ++i) {
+        for (uint32_t i = r.begin; i < r.end; ++i) {
             Element e = element_of(i, pc.level_count);
             int32_t c = int32_t(pc.level_begin + e.index);
             int32_t parent = s.chain_parent[pc.model_chain_begin + c];
@@ -45,14 +45,16 @@ void compose(State<T>& s, const gpu::PassConstants& pc) {
         return;
     }
     if (pc.mode == HMSM_MODE_POINTER_JUMPING_IN_DISPATCH) {
+        // Work items are instances here: each runs all rounds over its own chains.
+        const Range chains{r.begin * pc.model_chain_count, r.end * pc.model_chain_count};
         for (uint32_t round = 0; round < pc.round; ++round)
-            compose_round(s, pc, round, (round + 1) & 1, round & 1);
+            compose_round(s, pc, round, (round + 1) & 1, round & 1, chains);
         return;
     }
-    compose_round(s, pc, pc.round, pc.src_half, pc.dst_half);
+    compose_round(s, pc, pc.round, pc.src_half, pc.dst_half, r);
 }
 
-template void compose<float>(State<float>&, const gpu::PassConstants&);
-template void compose<double>(State<double>&, const gpu::PassConstants&);
+template void compose<float>(State<float>&, const gpu::PassConstants&, Range);
+template void compose<double>(State<double>&, const gpu::PassConstants&, Range);
 
 }  // namespace hmsm::detail::cpu

@@ -11,11 +11,11 @@
 namespace hmsm::detail::cpu {
 
 template <class T>
-void contour(State<T>& s, const gpu::PassConstants& pc) {
+void contour(State<T>& s, const gpu::PassConstants& pc, Range r) {
     using vec3 = typename State<T>::vec3;
     const uint64_t pose = uint64_t(pc.src_half) * s.total_chains;
     const T beta = s.fix_weight;
-    for (uint32_t i = 0; i < pc.element_count; ++i) {
+    for (uint32_t i = r.begin; i < r.end; ++i) {
         Element e = element_of(i, pc.model_vertex_count);
         uint32_t v = pc.model_vertex_begin + e.index;
         glm::ivec2 chains = s.vertex_chain[v];
@@ -40,7 +40,7 @@ void contour(State<T>& s, const gpu::PassConstants& pc) {
     }
 }
 
-template void contour<float>(State<float>&, const gpu::PassConstants&);
-template void contour<double>(State<double>&, const gpu::PassConstants&);
+template void contour<float>(State<float>&, const gpu::PassConstants&, Range);
+template void contour<double>(State<double>&, const gpu::PassConstants&, Range);
 
 }  // namespace hmsm::detail::cpu

@@ -1,8 +1,14 @@
 // The CPU backend: plain serial loops over host vectors, float (`cpu`, the paper's baseline) or
-// double (`cpu64`, the oracle of every conformance test). Per-pass times are host wall clock.
+// double (`cpu64`, the oracle of every conformance test); and `cpu-parallel`, the same float
+// pass functions with each dispatch's work items split into contiguous ranges over a thread
+// pool (bitwise the results of `cpu`). Per-pass times are host wall clock.
 #include "cpu_state.h"
+#include "thread_pool.h"
 
+#include <algorithm>
+#include <charconv>
 #include <chrono>
+#include <cstdlib>
 #include <cstring>
 #include <new>
 #include <type_traits>
@@ -57,10 +63,18 @@ struct ScalarView {
 template <class T>
 class CpuBackend final : public Backend {
 public:
+    CpuBackend() = default;
+    /// The parallel variant: `threads` >= 1 threads (the caller's included); a dispatch is
+    /// split only into ranges of at least `min_chunk_elements` model elements.
+    CpuBackend(uint32_t threads, uint32_t min_chunk_elements)
+        : pool_(std::make_unique<ThreadPool>(threads)), min_chunk_elements_(min_chunk_elements) {}
+
     BackendKind kind() const override {
+        if (pool_) return BackendKind::cpu_parallel;
         return sizeof(T) == 8 ? BackendKind::cpu64 : BackendKind::cpu;
     }
     std::string device_name() const override {
+        if (pool_) return "host CPU (" + std::to_string(pool_->threads()) + " threads, float)";
         return sizeof(T) == 8 ? "host CPU (serial, double)" : "host CPU (serial, float)";
     }
 
@@ -164,14 +178,23 @@ private:
     }
 
     void run_pass(const Dispatch& d, double wind_x) {
+        const uint32_t items = work_items(d.pass, d.constants);
+        if (!pool_) return run_range(d, wind_x, {0, items});
+        const uint32_t per_item = std::max(1u, elements_per_item(d.pass, d.constants));
+        const uint32_t min_chunk = std::max(1u, min_chunk_elements_ / per_item);
+        pool_->parallel_for(items, min_chunk,
+                            [&](uint32_t begin, uint32_t end) { run_range(d, wind_x, {begin, end}); });
+    }
+
+    void run_range(const Dispatch& d, double wind_x, Range r) {
         switch (d.pass) {
-            case Pass::wind_force: wind_force(s_, d.constants, wind_x); break;
-            case Pass::integrate: integrate(s_, d.constants); break;
-            case Pass::compose: compose(s_, d.constants); break;
-            case Pass::node_relative: node_relative(s_, d.constants); break;
-            case Pass::root_positions: root_positions(s_, d.constants); break;
-            case Pass::node_world: node_world(s_, d.constants); break;
-            case Pass::contour: contour(s_, d.constants); break;
+            case Pass::wind_force: wind_force(s_, d.constants, wind_x, r); break;
+            case Pass::integrate: integrate(s_, d.constants, r); break;
+            case Pass::compose: compose(s_, d.constants, r); break;
+            case Pass::node_relative: node_relative(s_, d.constants, r); break;
+            case Pass::root_positions: root_positions(s_, d.constants, r); break;
+            case Pass::node_world: node_world(s_, d.constants, r); break;
+            case Pass::contour: contour(s_, d.constants, r); break;
         }
     }
 
@@ -195,6 +218,8 @@ private:
     }
 
     State<T> s_;
+    std::unique_ptr<ThreadPool> pool_;  // null: the serial backends
+    uint32_t min_chunk_elements_ = 0;
     bool profiling_ = false;
     PassTimes times_;
 };
@@ -205,6 +230,30 @@ private:
 Result<std::unique_ptr<Backend>> create_cpu_backend(bool double_precision) {
     if (double_precision) return std::unique_ptr<Backend>(new cpu::CpuBackend<double>());
     return std::unique_ptr<Backend>(new cpu::CpuBackend<float>());
+}
+
+Result<uint32_t> cpu_thread_count(uint32_t requested) {
+    if (requested > kMaxCpuThreads)
+        return Status{ErrorCode::invalid_argument, "cpu_threads " + std::to_string(requested) +
+                                                       ": expected at most " + std::to_string(kMaxCpuThreads)};
+    if (requested > 0) return requested;
+    if (const char* env = std::getenv("HMSM_CPU_THREADS"); env && *env) {
+        const std::string text = env;
+        uint32_t n = 0;
+        auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), n);
+        if (error != std::errc{} || end != text.data() + text.size() || n < 1 || n > kMaxCpuThreads)
+            return Status{ErrorCode::invalid_argument, "HMSM_CPU_THREADS='" + text +
+                                                           "': expected a thread count in [1, " +
+                                                           std::to_string(kMaxCpuThreads) + "]"};
+        return n;
+    }
+    return std::max(1u, std::thread::hardware_concurrency());
+}
+
+Result<std::unique_ptr<Backend>> create_cpu_parallel_backend(uint32_t threads, uint32_t min_chunk_elements) {
+    auto count = cpu_thread_count(threads);
+    if (!count) return count.status();
+    return std::unique_ptr<Backend>(new cpu::CpuBackend<float>(*count, std::max(1u, min_chunk_elements)));
 }
 
 }  // namespace hmsm::detail

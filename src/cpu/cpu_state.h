@@ -61,13 +61,36 @@ inline uint64_t state_node(const gpu::PassConstants& pc, uint32_t k, int32_t n) 
     return pc.node_begin + uint64_t(k) * pc.model_node_count + uint64_t(n);
 }
 
-// The seven passes; each runs every thread of one dispatch serially.
-template <class T> void wind_force(State<T>& s, const gpu::PassConstants& pc, double wind_x);
-template <class T> void integrate(State<T>& s, const gpu::PassConstants& pc);
-template <class T> void compose(State<T>& s, const gpu::PassConstants& pc);
-template <class T> void node_relative(State<T>& s, const gpu::PassConstants& pc);
-template <class T> void root_positions(State<T>& s, const gpu::PassConstants& pc);
-template <class T> void node_world(State<T>& s, const gpu::PassConstants& pc);
-template <class T> void contour(State<T>& s, const gpu::PassConstants& pc);
+/// The work items [begin, end) of one dispatch that one call of a pass runs, in order. An item
+/// is a thread of the dispatch (element i, gpu_layout.h), except in
+/// HMSM_MODE_POINTER_JUMPING_IN_DISPATCH, where it is a group instance running every round
+/// (a workgroup on a GPU). Distinct items of one dispatch write distinct elements and read
+/// only what earlier dispatches (or, in-dispatch, earlier rounds of the same instance) wrote,
+/// so disjoint ranges may run concurrently (the cpu-parallel backend) with the same float
+/// results as one serial call over all items.
+struct Range {
+    uint32_t begin = 0, end = 0;
+};
+/// Number of work items of a dispatch of `pass` (see Range).
+inline uint32_t work_items(Pass pass, const gpu::PassConstants& pc) {
+    const bool rounds_inside = (pass == Pass::compose || pass == Pass::root_positions) &&
+                               pc.mode == HMSM_MODE_POINTER_JUMPING_IN_DISPATCH;
+    return rounds_inside ? pc.element_count / pc.model_chain_count : pc.element_count;
+}
+/// Model elements (chains, nodes or vertices) one work item of `pass` touches, for chunking.
+inline uint32_t elements_per_item(Pass pass, const gpu::PassConstants& pc) {
+    const bool rounds_inside = (pass == Pass::compose || pass == Pass::root_positions) &&
+                               pc.mode == HMSM_MODE_POINTER_JUMPING_IN_DISPATCH;
+    return rounds_inside ? pc.model_chain_count * pc.round : 1;
+}
+
+// The seven passes; each runs the work items `r` of one dispatch serially.
+template <class T> void wind_force(State<T>& s, const gpu::PassConstants& pc, double wind_x, Range r);
+template <class T> void integrate(State<T>& s, const gpu::PassConstants& pc, Range r);
+template <class T> void compose(State<T>& s, const gpu::PassConstants& pc, Range r);
+template <class T> void node_relative(State<T>& s, const gpu::PassConstants& pc, Range r);
+template <class T> void root_positions(State<T>& s, const gpu::PassConstants& pc, Range r);
+template <class T> void node_world(State<T>& s, const gpu::PassConstants& pc, Range r);
+template <class T> void contour(State<T>& s, const gpu::PassConstants& pc, Range r);
 
 }  // namespace hmsm::detail::cpu

@@ -7,10 +7,10 @@
 namespace hmsm::detail::cpu {
 
 template <class T>
-void integrate(State<T>& s, const gpu::PassConstants& pc) {
+void integrate(State<T>& s, const gpu::PassConstants& pc, Range r) {
     using mat3 = typename State<T>::mat3;
     using vec3 = typename State<T>::vec3;
-    for (uint32_t i = 0; i < pc.element_count; ++i) {
+    for (uint32_t i = r.begin; i < r.end; ++i) {
         Element e = element_of(i, pc.model_chain_count);
         uint64_t c = state_chain(pc, e.instance, int32_t(e.index));
         const auto& k = s.chain_constants[pc.model_chain_begin + e.index];  // (I, K, D, A)
@@ -43,7 +43,7 @@ void integrate(State<T>& s, const gpu::PassConstants& pc) {
     }
 }
 
-template void integrate<float>(State<float>&, const gpu::PassConstants&);
-template void integrate<double>(State<double>&, const gpu::PassConstants&);
+template void integrate<float>(State<float>&, const gpu::PassConstants&, Range);
+template void integrate<double>(State<double>&, const gpu::PassConstants&, Range);
 
 }  // namespace hmsm::detail::cpu

@@ -4,9 +4,9 @@
 namespace hmsm::detail::cpu {
 
 template <class T>
-void node_relative(State<T>& s, const gpu::PassConstants& pc) {
+void node_relative(State<T>& s, const gpu::PassConstants& pc, Range r) {
     const uint64_t pose = uint64_t(pc.src_half) * s.total_chains;
-    for (uint32_t i = 0; i < pc.element_count; ++i) {
+    for (uint32_t i = r.begin; i < r.end; ++i) {
         Element e = element_of(i, pc.model_node_count);
         int32_t owner = s.node_owner[pc.model_node_begin + e.index];
         const auto& local = s.node_local[pc.model_node_begin + e.index];
@@ -16,7 +16,7 @@ void node_relative(State<T>& s, const gpu::PassConstants& pc) {
     }
 }
 
-template void node_relative<float>(State<float>&, const gpu::PassConstants&);
-template void node_relative<double>(State<double>&, const gpu::PassConstants&);
+template void node_relative<float>(State<float>&, const gpu::PassConstants&, Range);
+template void node_relative<double>(State<double>&, const gpu::PassConstants&, Range);
 
 }  // namespace hmsm::detail::cpu

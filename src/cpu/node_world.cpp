@@ -4,9 +4,9 @@
 namespace hmsm::detail::cpu {
 
 template <class T>
-void node_world(State<T>& s, const gpu::PassConstants& pc) {
+void node_world(State<T>& s, const gpu::PassConstants& pc, Range r) {
     const uint64_t pose = uint64_t(pc.src_half) * s.total_chains;
-    for (uint32_t i = 0; i < pc.element_count; ++i) {
+    for (uint32_t i = r.begin; i < r.end; ++i) {
         Element e = element_of(i, pc.model_node_count);
         int32_t owner = s.node_owner[pc.model_node_begin + e.index];
         uint64_t n = state_node(pc, e.instance, int32_t(e.index));
@@ -15,7 +15,7 @@ void node_world(State<T>& s, const gpu::PassConstants& pc) {
     }
 }
 
-template void node_world<float>(State<float>&, const gpu::PassConstants&);
-template void node_world<double>(State<double>&, const gpu::PassConstants&);
+template void node_world<float>(State<float>&, const gpu::PassConstants&, Range);
+template void node_world<double>(State<double>&, const gpu::PassConstants&, Range);
 
 }  // namespace hmsm::detail::cpu

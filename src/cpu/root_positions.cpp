@@ -21,14 +21,14 @@ typename State<T>::vec4 own_offset(const State<T>& s, const gpu::PassConstants& 
 
 template <class T>
 void root_positions_round(State<T>& s, const gpu::PassConstants& pc, uint32_t round, uint32_t src_half,
-                          uint32_t dst_half) {
+                          uint32_t dst_half, Range r) {
     using vec4 = typename State<T>::vec4;
     const uint64_t src = uint64_t(src_half) * s.total_chains;
     const uint64_t dst = uint64_t(dst_half) * s.total_chains;
     auto sum_so_far = [&](uint32_t k, int32_t c) -> vec4 {
         return round == 0 ? own_offset(s, pc, k, c) : s.chain_origin[src + state_chain(pc, k, c)];
     };
-    for (uint32_t i = 0; i < pc.element_count; ++i) {
+    for (uint32_t i = r.begin; i < r.end; ++i) {
         Element e = element_of(i, pc.model_chain_count);
         int32_t c = int32_t(e.index);
         int32_t ancestor =
@@ -42,11 +42,11 @@ void root_positions_round(State<T>& s, const gpu::PassConstants& pc, uint32_t ro
 }  // namespace
 
 template <class T>
-void root_positions(State<T>& s, const gpu::PassConstants& pc) {
+void root_positions(State<T>& s, const gpu::PassConstants& pc, Range r) {
     using vec4 = typename State<T>::vec4;
     if (pc.mode == HMSM_MODE_LEVEL_BY_LEVEL) {
         const uint64_t dst = uint64_t(pc.dst_half) * s.total_chains;
-        for (uint32_t i = 0; i < pc.element_count; ++i) {
+        for (uint32_t i = r.begin; i < r.end; ++i) {
             Element e = element_of(i, pc.level_count);
             int32_t c = int32_t(pc.level_begin + e.index);
             int32_t parent = s.chain_parent[pc.model_chain_begin + c];
@@ -57,14 +57,16 @@ void root_positions(State<T>& s, const gpu::PassConstants& pc) {
         return;
     }
     if (pc.mode == HMSM_MODE_POINTER_JUMPING_IN_DISPATCH) {
+        // Work items are instances here: each runs all rounds over its own chains.
+        const Range chains{r.begin * pc.model_chain_count, r.end * pc.model_chain_count};
         for (uint32_t round = 0; round < pc.round; ++round)
-            root_positions_round(s, pc, round, (round + 1) & 1, round & 1);
+            root_positions_round(s, pc, round, (round + 1) & 1, round & 1, chains);
         return;
     }
-    root_positions_round(s, pc, pc.round, pc.src_half, pc.dst_half);
+    root_positions_round(s, pc, pc.round, pc.src_half, pc.dst_half, r);
 }
 
-template void root_positions<float>(State<float>&, const gpu::PassConstants&);
-template void root_positions<double>(State<double>&, const gpu::PassConstants&);
+template void root_positions<float>(State<float>&, const gpu::PassConstants&, Range);
+template void root_positions<double>(State<double>&, const gpu::PassConstants&, Range);
 
 }  // namespace hmsm::detail::cpu

@@ -6,8 +6,8 @@
 namespace hmsm::detail::cpu {
 
 template <class T>
-void wind_force(State<T>& s, const gpu::PassConstants& pc, double wind_x) {
-    for (uint32_t i = 0; i < pc.element_count; ++i) {
+void wind_force(State<T>& s, const gpu::PassConstants& pc, double wind_x, Range r) {
+    for (uint32_t i = r.begin; i < r.end; ++i) {
         Element e = element_of(i, pc.model_chain_count);
         uint64_t c = state_chain(pc, e.instance, int32_t(e.index));
         const auto& origin = s.instance_origin[pc.instance_begin + e.instance];
@@ -19,7 +19,7 @@ void wind_force(State<T>& s, const gpu::PassConstants& pc, double wind_x) {
     }
 }
 
-template void wind_force<float>(State<float>&, const gpu::PassConstants&, double);
-template void wind_force<double>(State<double>&, const gpu::PassConstants&, double);
+template void wind_force<float>(State<float>&, const gpu::PassConstants&, double, Range);
+template void wind_force<double>(State<double>&, const gpu::PassConstants&, double, Range);
 
 }  // namespace hmsm::detail::cpu

@@ -292,53 +292,6 @@ Status VulkanBackend::write(BufferId id, uint64_t first, uint64_t count, const v
     return device_->take_validation_messages();
 }
 
-Result<double> VulkanBackend::measure_copy_bandwidth(uint64_t bytes) {
-    const DeviceLimits& limits = device_->limits();
-    if (limits.timestamp_period_ns <= 0.0)
-        return Status{ErrorCode::unsupported, "vulkan: the compute queue has no timestamps"};
-    bytes = std::min<uint64_t>(bytes, limits.max_memory_allocation_size);
-    const VkBufferUsageFlags usage = VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT;
-    auto src = Buffer::create(*device_, bytes, usage, MemoryUse::device_local, "copy bandwidth source");
-    if (!src) return src.status();
-    auto dst = Buffer::create(*device_, bytes, usage, MemoryUse::device_local, "copy bandwidth target");
-    if (!dst) return dst.status();
-    const VolkDeviceTable& vk = device_->vk();
-    VkQueryPoolCreateInfo info{VK_STRUCTURE_TYPE_QUERY_POOL_CREATE_INFO};
-    info.queryType = VK_QUERY_TYPE_TIMESTAMP;
-    info.queryCount = 2;
-    VkQueryPool pool = VK_NULL_HANDLE;
-    HMSM_VK_TRY(vk.vkCreateQueryPool(device_->handle(), &info, nullptr, &pool));
-    std::vector<double> seconds;
-    Status status;
-    for (int repeat = 0; repeat < 5 && status.ok(); ++repeat) {
-        status = transfer_->submit([&](VkCommandBuffer cmd) {
-            vk.vkCmdResetQueryPool(cmd, pool, 0, 2);
-            vk.vkCmdWriteTimestamp(cmd, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, pool, 0);
-            VkBufferCopy region{0, 0, bytes};
-            vk.vkCmdCopyBuffer(cmd, src->handle(), dst->handle(), 1, &region);
-            vk.vkCmdWriteTimestamp(cmd, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, pool, 1);
-        });
-        uint64_t ticks[2] = {};
-        if (status.ok()) {
-            VkResult r = vk.vkGetQueryPoolResults(device_->handle(), pool, 0, 2, sizeof ticks, ticks,
-                                                  sizeof(uint64_t),
-                                                  VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT);
-            if (r != VK_SUCCESS) status = Status{ErrorCode::device_error, "vulkan: timestamp query failed"};
-        }
-        const uint64_t mask = limits.timestamp_valid_bits >= 64
-                                  ? ~uint64_t(0)
-                                  : (uint64_t(1) << limits.timestamp_valid_bits) - 1;
-        if (status.ok()) seconds.push_back(double((ticks[1] - ticks[0]) & mask) * limits.timestamp_period_ns * 1e-9);
-    }
-    vk.vkDestroyQueryPool(device_->handle(), pool, nullptr);
-    HMSM_TRY(status);
-    HMSM_TRY(device_->take_validation_messages());
-    std::sort(seconds.begin(), seconds.end());
-    const double median = seconds[seconds.size() / 2];
-    if (!(median > 0.0)) return Status{ErrorCode::device_error, "vulkan: copy took no measurable time"};
-    return 2.0 * double(bytes) / median;
-}
-
 }  // namespace vk
 
 void vulkan_inject_fault(VulkanFault fault, uint32_t after) {

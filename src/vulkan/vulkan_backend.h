@@ -46,8 +46,9 @@ public:
     /// before the work executes); VK_NULL_HANDLE restores normal submission.
     void set_record_target(VkCommandBuffer command_buffer) { record_target_ = command_buffer; }
 
-    /// For `hmsm bench`'s roofline: median device time of vkCmdCopyBuffer between two scratch
-    /// device-local buffers, from timestamps, as (bytes read + bytes written) / seconds.
+    /// For `hmsm bench`'s roofline (copy_bandwidth.cpp): the faster of vkCmdCopyBuffer and a
+    /// compute-shader copy between two scratch device-local buffers, each the median of
+    /// timestamped runs, as (bytes read + bytes written) / seconds.
     Result<double> measure_copy_bandwidth(uint64_t bytes) override;
     bool dispatches_are_expensive() const override { return true; }
 

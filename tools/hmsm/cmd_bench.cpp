@@ -1,19 +1,13 @@
 // hmsm bench (docs/model.md 7): the paper's Table 1 per preset and backend, pointer jumping
 // vs level by level, and forest scaling against the copy-bandwidth roofline. Markdown on stdout,
 // JSON with --json (schema: docs/benchmarks/README.md).
-#include "simulation_access.h"
-#include "bench_measure.h"
-#include "bench_model.h"
 #include "bench_report.h"
+#include "bench_run.h"
 #include "cli_common.h"
-
-#include "scene_data.h"
 
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
-#include <array>
-#include <chrono>
 #include <cmath>
 #include <ctime>
 #include <filesystem>
@@ -22,7 +16,6 @@
 #include <optional>
 #include <sstream>
 #include <thread>
-#include <tuple>
 
 namespace hmsm::cli {
 namespace {
@@ -35,7 +28,7 @@ constexpr double kMiB = 1048576.0;
 struct BenchFlags {
     std::string presets = "paper-1,paper-2,paper-3,paper-4,paper-5";
     std::string tree;
-    std::string backends = "cpu,vulkan,cuda";
+    std::string backends = "cpu,cpu-parallel,vulkan,cuda";
     int64_t steps = 100, warmup = 20, repeats = 5;
     std::string instances = "1,10,100,1000,10000";
     double spacing = 25.0;
@@ -64,275 +57,6 @@ std::string utc_now() {
     return text;
 }
 
-std::string format_seconds(double s) {
-    char text[32];
-    std::snprintf(text, sizeof text, s >= 10 ? "%.0f s" : s >= 0.01 ? "%.2f s" : "%.2e s", s);
-    return text;
-}
-
-struct Model {
-    std::string name;
-    TreeModel tree;
-};
-
-struct BackendRun {
-    BackendKind kind;
-    bool available = true;
-    std::string device;
-    std::optional<CopyBandwidth> copy;
-};
-
-bool is_host_kind(BackendKind k) { return k == BackendKind::cpu || k == BackendKind::cpu64; }
-
-/// Backends whose "device" memory is host memory: the CPU ones and Vulkan CPU drivers.
-bool uses_host_memory(const BackendRun& b) {
-    if (is_host_kind(b.kind)) return true;
-    for (const char* cpu_driver : {"llvmpipe", "lavapipe", "SwiftShader"})
-        if (b.device.find(cpu_driver) != std::string::npos) return true;
-    return false;
-}
-
-/// Statuses that mean "this case does not fit here", reported as skips rather than failures.
-bool is_skip(const Status& s) {
-    return s.code() == ErrorCode::out_of_memory || s.code() == ErrorCode::unsupported;
-}
-
-json pass_seconds_json(const CaseResult& r) {
-    json seconds = json::object();
-    for (Pass p : kAllPasses) seconds[std::string(pass_name(p))] = r.pass_seconds[uint32_t(p)];
-    return seconds;
-}
-
-/// Keeps only positive, finite figures (the schema's promise).
-void put(json& j, const char* key, double value) {
-    if (std::isfinite(value) && value > 0.0) j[key] = value;
-}
-
-constexpr std::array<VertexLayout, 2> kVertexLayouts = {VertexLayout::separate, VertexLayout::packed};
-
-class BenchRun {
-public:
-    BenchRun(const Settings& settings, uint64_t device_copy_bytes, uint64_t host_copy_bytes,
-             Progress& progress)
-        : settings_(settings), device_copy_bytes_(device_copy_bytes),
-          host_copy_bytes_(host_copy_bytes), progress_(progress) {}
-
-    std::vector<BackendRun> backends;
-    json presets = json::array(), forest = json::array(), skipped = json::array();
-    int failures = 0;
-
-    /// Creates a simulation; on failure records why (a skip, an unavailable backend or a
-    /// failure) under `where` and returns null.
-    std::unique_ptr<Simulation> create(const Scene& scene, BackendRun& b, Composition composition,
-                                       json where, VertexLayout layout = VertexLayout::separate) {
-        SimulationConfig config;
-        config.backend = b.kind;
-        config.composition = composition;
-        config.vertex_layout = layout;
-        config.profile_passes = false;
-        auto sim = Simulation::create(scene, config);
-        if (sim) {
-            b.device = (*sim)->device_name();
-            return std::move(sim).value();
-        }
-        const Status& s = sim.status();
-        if (s.code() == ErrorCode::no_device) {
-            b.available = false;
-            skipped.push_back({{"section", "backend"}, {"backend", to_string(b.kind)},
-                               {"reason", "not available: " + s.message()}});
-            progress_.note(std::string(to_string(b.kind)) + " not available: " + s.message());
-            return nullptr;
-        }
-        record_failure(where, s);
-        return nullptr;
-    }
-
-    void record_failure(json where, const Status& s) {
-        const bool skip = is_skip(s);
-        where["reason"] = (skip ? "" : "failed: ") + s.message();
-        if (!skip) ++failures;
-        progress_.note((skip ? "skipped " : "FAILED ") + where.dump() );
-        skipped.push_back(std::move(where));
-    }
-
-    void copy_bandwidth(BackendRun& b, Simulation& sim) {
-        if (b.copy && b.copy->method != "host_transfer_estimate") return;
-        if (b.copy && double(sim.vertex_count()) * 16.0 <= double(b.copy->bytes)) return;
-        if (b.copy && double(sim.vertex_count()) * 16.0 > 2048.0 * kMiB) return;
-        // A CPU Vulkan driver's device memory is host memory: its roofline is the host memcpy.
-        // Measured once and shared, so host-memory backends are compared against the same figure.
-        if (uses_host_memory(b) && !host_copy_) {
-            Result<CopyBandwidth> host = host_memcpy_bandwidth(host_copy_bytes_, 5);
-            if (host) host_copy_ = *host;
-        }
-        Result<CopyBandwidth> bw = uses_host_memory(b)
-                                       ? (host_copy_ ? Result<CopyBandwidth>(*host_copy_)
-                                                     : Status{ErrorCode::out_of_memory, "host memcpy failed"})
-                                       : device_copy_bandwidth(sim, device_copy_bytes_);
-        if (bw) b.copy = *bw;
-        else progress_.note(std::string(to_string(b.kind)) + ": copy bandwidth: " + bw.status().message());
-    }
-
-    void preset_case(const Model& m, BackendRun& b) {
-        const std::string backend = to_string(b.kind);
-        const Scene scene = single_tree_scene(m.tree);
-        json entry = {{"preset", m.name}, {"backend", backend}, {"instances", 1}};
-
-        progress_.begin(m.name + " on " + backend + ", pointer jumping");
-        auto sim = create(scene, b, Composition::pointer_jumping,
-                          {{"section", "presets"}, {"preset", m.name}, {"backend", backend},
-                           {"composition", "pointer_jumping"}});
-        if (!sim) return;
-        auto measured = measure(*sim, settings_, kBatched | kPerCall | kReadback | kPasses);
-        if (!measured) return record_failure({{"section", "presets"}, {"preset", m.name}, {"backend", backend},
-                                              {"composition", "pointer_jumping"}}, measured.status());
-        const CaseResult& r = *measured;
-        const Traffic traffic = step_traffic(*sim);
-        entry["device"] = sim->device_name();
-        entry["nodes"] = sim->node_count();
-        entry["chains"] = sim->chain_count();
-        entry["mesh_vertices"] = sim->vertex_count();
-        entry["steps_per_batch"] = r.steps;
-        entry["repeats"] = r.repeats;
-        entry["budget_reduced"] = r.reduced;
-        json rate = json::object();
-        put(rate, "per_call", r.per_call);
-        put(rate, "batched", r.batched);
-        put(rate, "readback", r.readback);
-        entry["steps_per_second"] = rate;
-        json bytes = {{"state", traffic.state_bytes}, {"static", traffic.static_bytes}, {"total", traffic.total()}};
-        json per_pass = json::object();
-        for (Pass p : kAllPasses) per_pass[std::string(pass_name(p))] = traffic.pass_bytes[uint32_t(p)];
-        bytes["per_pass"] = per_pass;
-        entry["bytes_per_step"] = bytes;
-        put(entry, "effective_bandwidth", traffic.total() * r.batched);
-        json pj = {{"rounds", sim->jump_rounds()}};
-        put(pj, "steps_per_second_batched", r.batched);
-        put(pj, "steps_per_second_profiled", r.profiled);
-        if (r.has_passes) {
-            pj["pass_seconds_per_step"] = pass_seconds_json(r);
-            put(pj, "device_seconds_per_step", r.device_seconds);
-            put(pj, "device_effective_bandwidth", traffic.total() / r.device_seconds);
-        }
-        entry["pointer_jumping"] = pj;
-        const uint32_t levels = uint32_t(hmsm::detail::scene_data_of(*sim).models[0].level_begin.size() - 1);
-        const uint32_t rounds = sim->jump_rounds();
-        copy_bandwidth(b, *sim);
-        sim.reset();
-
-        for (auto [composition, count_key, count] :
-             {std::tuple{Composition::pointer_jumping_in_dispatch, "rounds", rounds},
-              std::tuple{Composition::level_by_level, "levels", levels}}) {
-            const std::string name = to_string(composition);
-            progress_.begin(m.name + " on " + backend + ", " + name);
-            json where = {{"section", "presets"}, {"preset", m.name}, {"backend", backend}, {"composition", name}};
-            auto other = create(scene, b, composition, where);
-            if (!other) continue;
-            auto measured_other = measure(*other, settings_, kBatched | kPasses);
-            if (!measured_other) {
-                record_failure(where, measured_other.status());
-                continue;
-            }
-            json c = {{count_key, count}};
-            put(c, "steps_per_second_batched", measured_other->batched);
-            put(c, "steps_per_second_profiled", measured_other->profiled);
-            if (measured_other->has_passes) {
-                c["pass_seconds_per_step"] = pass_seconds_json(*measured_other);
-                put(c, "device_seconds_per_step", measured_other->device_seconds);
-                put(c, "device_effective_bandwidth", traffic.total() / measured_other->device_seconds);
-            }
-            entry[name] = c;
-            entry["budget_reduced"] = entry["budget_reduced"].get<bool>() || measured_other->reduced;
-        }
-        presets.push_back(entry);
-    }
-
-    /// Each forest size in both vertex layouts, side by side: the contour pass writes 32 bytes
-    /// per vertex in the separate layout and 16 in the packed one.
-    void forest_cases(const Model& model, BackendRun& b, const std::vector<uint32_t>& counts,
-                      double spacing, double state_per_instance) {
-        const std::string backend = to_string(b.kind);
-        double last_per_step = 0.0;
-        uint32_t last_count = 0;
-        for (uint32_t n : counts) {
-            if (!b.available) return;
-            auto skip_size = [&](const std::string& reason) {
-                for (VertexLayout layout : kVertexLayouts)
-                    skipped.push_back({{"section", "forest"}, {"backend", backend}, {"instances", n},
-                                       {"layout", to_string(layout)}, {"reason", reason}});
-                progress_.note("skipped " + std::to_string(n) + " x " + model.name + " on " + backend + ": " + reason);
-            };
-            const double available = host_available_memory();
-            const double needed = state_per_instance * n * (is_host_kind(b.kind) ? 1.0 : 2.0);
-            if (uses_host_memory(b) && available > 0.0 && needed > 0.8 * available) {
-                char reason[160];
-                std::snprintf(reason, sizeof reason, "needs about %.1f GB of host memory, %.1f GB available",
-                              needed * 1e-9, available * 1e-9);
-                skip_size(reason);
-                continue;
-            }
-            if (last_count > 0) {
-                // Linear extrapolation from the slowest layout of the last size; the least a
-                // case runs is 1 warm-up + 3 x (batched + timed), once per layout.
-                const double estimate = last_per_step * double(n) / double(last_count);
-                if (estimate * 7.0 * double(kVertexLayouts.size()) > settings_.case_budget) {
-                    skip_size("about " + format_seconds(estimate) + " per step (extrapolated from " +
-                              std::to_string(last_count) + " instances), over the " +
-                              format_seconds(settings_.case_budget) + " case budget (--case-budget)");
-                    continue;
-                }
-            }
-            auto scene = grid_scene(model.tree, n, spacing, 1);
-            double slowest = 0.0;
-            for (VertexLayout layout : kVertexLayouts) {
-                if (!b.available) return;
-                const std::string layout_name = to_string(layout);
-                progress_.begin(std::to_string(n) + " x " + model.name + " on " + backend + ", " + layout_name);
-                json where = {{"section", "forest"}, {"backend", backend}, {"instances", n}, {"layout", layout_name}};
-                if (!scene) {
-                    record_failure(where, scene.status());
-                    continue;
-                }
-                auto sim = create(*scene, b, Composition::pointer_jumping, where, layout);
-                if (!sim) continue;
-                auto measured = measure(*sim, settings_, kBatched | kPasses);
-                if (!measured) {
-                    record_failure(where, measured.status());
-                    continue;
-                }
-                const CaseResult& r = *measured;
-                slowest = std::max(slowest, r.warmup_seconds_per_step);
-                const Traffic traffic = step_traffic(*sim);
-                json f = {{"backend", backend}, {"device", sim->device_name()}, {"instances", n},
-                          {"layout", layout_name}, {"mesh_vertices", sim->vertex_count()},
-                          {"steps_per_batch", r.steps}, {"repeats", r.repeats}, {"budget_reduced", r.reduced},
-                          {"bytes_per_step", traffic.total()}, {"state_bytes_per_step", traffic.state_bytes}};
-                put(f, "steps_per_second", r.batched);
-                put(f, "seconds_per_step", 1.0 / r.batched);
-                put(f, "vertices_per_second", double(sim->vertex_count()) * r.batched);
-                put(f, "effective_bandwidth", traffic.total() * r.batched);
-                put(f, "steps_per_second_profiled", r.profiled);
-                if (r.has_passes) {
-                    put(f, "device_seconds_per_step", r.device_seconds);
-                    put(f, "device_effective_bandwidth", traffic.total() / r.device_seconds);
-                }
-                copy_bandwidth(b, *sim);
-                forest.push_back(f);
-            }
-            if (slowest > 0.0) {
-                last_per_step = slowest;
-                last_count = n;
-            }
-        }
-    }
-
-private:
-    Settings settings_;
-    uint64_t device_copy_bytes_, host_copy_bytes_;
-    std::optional<CopyBandwidth> host_copy_;
-    Progress& progress_;
-};
-
 int render(const std::string& path) {
     std::ifstream in(path);
     if (!in) return fail_input("--render '" + path + "': cannot read the file");
@@ -349,7 +73,7 @@ void register_bench_flags(CLI::App& app) {
     app.add_option("--presets", flags.presets, "comma-separated presets (default paper-1,...,paper-5; none: forest only)");
     app.add_option("--tree", flags.tree, "benchmark this hmsm-tree file instead of the presets "
                                          "(also the forest model)");
-    app.add_option("--backends", flags.backends, "comma-separated backends (default cpu,vulkan,cuda; "
+    app.add_option("--backends", flags.backends, "comma-separated backends (default cpu,cpu-parallel,vulkan,cuda; "
                                                  "unavailable ones are skipped with a note)");
     app.add_option("--steps", flags.steps, "steps per timed batch (default 100)");
     app.add_option("--warmup", flags.warmup, "warm-up steps before timing (default 20)");
@@ -395,7 +119,7 @@ int run_bench(CLI::App& app) {
     for (const std::string& name : split_list(flags.backends)) {
         auto kind = parse_backend_kind(name);
         if (!kind || *kind == BackendKind::automatic)
-            return fail_input("--backends '" + name + "': expected cpu, cpu64, vulkan or cuda");
+            return fail_input("--backends '" + name + "': expected cpu, cpu-parallel, cpu64, vulkan or cuda");
         bool duplicate = false;
         for (const auto& b : backends) duplicate |= b.kind == *kind;
         if (duplicate) continue;
@@ -476,19 +200,7 @@ int run_bench(CLI::App& app) {
     }
     progress.finish();
 
-    // Speed-ups over cpu, preset by preset, from this run.
-    std::map<std::string, json> cpu_rates;
-    for (const json& p : run.presets)
-        if (p["backend"] == "cpu") cpu_rates[p["preset"].get<std::string>()] = p["steps_per_second"];
-    for (json& p : run.presets) {
-        auto cpu = cpu_rates.find(p["preset"].get<std::string>());
-        if (cpu == cpu_rates.end()) continue;
-        json up = json::object();
-        for (const char* key : {"per_call", "batched", "readback"})
-            if (p["steps_per_second"].contains(key) && cpu->second.contains(key))
-                put(up, key, p["steps_per_second"][key].get<double>() / cpu->second[key].get<double>());
-        p["speedup_over_cpu"] = up;
-    }
+    add_speedups(run.presets, run.forest);
 
     json copy = json::array();
     std::map<std::string, double> copy_by_backend;
@@ -520,6 +232,9 @@ int run_bench(CLI::App& app) {
     notes.push_back("cpu is the serial float reference on one thread (the paper's baseline): its pass "
                     "times are host clocks and its forest sizes stop where the extrapolated time per "
                     "case passes --case-budget.");
+    notes.push_back("cpu-parallel runs the same float passes on every hardware thread of the host "
+                    "(HMSM_CPU_THREADS overrides); speed-ups are given over cpu and over the best "
+                    "CPU backend (cpu, cpu-parallel, cpu64) of the same case in this run.");
     notes.push_back("Bytes per step count what the seven passes must move (each buffer a pass "
                     "touches, once); see docs/benchmarks/README.md.");
     if (estimated_copy)

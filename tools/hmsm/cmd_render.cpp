@@ -131,7 +131,7 @@ void register_render_flags(CLI::App& app) {
     add_wind_flags(app, flags.wind);
     app.add_option("--backend", flags.backend,
                    "auto (default) or vulkan: simulate on the rendering device and draw from its "
-                   "buffers; cpu, cpu64, cuda: read back and upload each frame");
+                   "buffers; cpu, cpu-parallel, cpu64, cuda: read back and upload each frame");
     app.add_option("--frames", flags.frames, "frames to render (default 60)");
     app.add_option("--fps", flags.fps, "frames per second of simulated time (default 30)");
     app.add_option("--warmup", flags.warmup, "seconds simulated before the first frame (default 0)");
@@ -163,7 +163,7 @@ int run_render(CLI::App& app) {
     config.profile_passes = false;
     auto backend = parse_backend_kind(flags.backend);
     if (!backend)
-        return fail_input("--backend '" + flags.backend + "': expected cpu, cpu64, vulkan, cuda or auto");
+        return fail_input("--backend '" + flags.backend + "': expected cpu, cpu-parallel, cpu64, vulkan, cuda or auto");
     config.backend = *backend;
     if (flags.frames < 1 || flags.frames > 100000)
         return fail_input("--frames " + std::to_string(flags.frames) + ": must be within 1..100000");

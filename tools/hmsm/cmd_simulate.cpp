@@ -44,7 +44,7 @@ void register_simulate_flags(CLI::App& app) {
     add_model_flags(app, flags.model);
     add_parameter_flags(app, flags.parameters);
     add_wind_flags(app, flags.wind);
-    app.add_option("--backend", flags.backend, "cpu, cpu64, vulkan, cuda or auto (default)");
+    app.add_option("--backend", flags.backend, "cpu, cpu-parallel, cpu64, vulkan, cuda or auto (default)");
     app.add_option("--composition", flags.composition,
                    "passes 3 and 5: pointer-jumping (default: the paper's rounds, per round or in one "
                    "dispatch by scene size), pointer-jumping-per-round, pointer-jumping-in-dispatch "
@@ -62,7 +62,7 @@ int run_simulate(CLI::App& app) {
     SimulationConfig config;
     auto backend = parse_backend_kind(flags.backend);
     if (!backend)
-        return fail_input("--backend '" + flags.backend + "': expected cpu, cpu64, vulkan, cuda or auto");
+        return fail_input("--backend '" + flags.backend + "': expected cpu, cpu-parallel, cpu64, vulkan, cuda or auto");
     config.backend = *backend;
     config.profile_passes = !flags.report.empty();  // per-pass times only feed the report
     std::string composition = flags.composition;

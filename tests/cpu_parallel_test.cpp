@@ -1,0 +1,250 @@
+// cpu-parallel: the float passes of `cpu` split over a thread pool must give bitwise the
+// serial results (same float math per element), in every composition and vertex layout, with
+// dispatches really split (a chunk of one element) and with the default chunking on a forest
+// big enough to split. Also the pool's fork-join contract, the thread-count settings and
+// `automatic`'s choice. Agreement with cpu64 and run-to-run determinism are in
+// agreement_test.cpp and determinism_test.cpp.
+#include "simulation_access.h"
+#include "test_trees.h"
+
+#include "backend.h"
+#include "cpu/thread_pool.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+using namespace hmsm;
+
+namespace {
+
+constexpr Output kOutputs[] = {Output::node_positions, Output::vertex_positions, Output::vertex_normals,
+                               Output::chain_rotations, Output::chain_origins, Output::chain_angles};
+
+/// A forest of two models (one deep) in several groups, with yaws and a travelling front.
+Scene mixed_forest(uint32_t copies) {
+    Scene scene;
+    scene.models = {test::small_tree(), test::deep_tree(5)};
+    scene.model_names = {"small", "deep"};
+    for (uint32_t k = 0; k < copies; ++k) {
+        const double x = 8.0 * k;
+        scene.instances.push_back({0, {x, 0, 0}, 0.3 * k});
+        scene.instances.push_back({1, {x, 0, 9}, 1.1 - 0.2 * k});
+    }
+    return scene;
+}
+
+SimulationConfig windy(Composition composition, VertexLayout layout) {
+    SimulationConfig config;
+    config.profile_passes = false;
+    config.composition = composition;
+    config.vertex_layout = layout;
+    config.wind.profile = WindProfile::y4;
+    config.wind.strength = 12.0;
+    config.wind.direction = {1.0, 0.2, 0.6};
+    config.wind.frequency = 0.7;
+    config.wind.front_speed = 6.0;
+    return config;
+}
+
+std::unique_ptr<Simulation> create_parallel(const Scene& scene, const SimulationConfig& config,
+                                            uint32_t threads, uint32_t min_chunk) {
+    auto backend = detail::create_cpu_parallel_backend(threads, min_chunk);
+    EXPECT_TRUE(backend.ok()) << backend.status().message();
+    if (!backend) return nullptr;
+    auto sim = detail::SimulationAccess::create(scene, config, std::move(backend).value());
+    EXPECT_TRUE(sim.ok()) << sim.status().message();
+    return sim ? std::move(sim).value() : nullptr;
+}
+
+/// Steps both simulations in the same pieces and expects every output bit for bit equal.
+void expect_bitwise_equal_runs(Simulation& serial, Simulation& parallel, uint32_t steps) {
+    for (uint32_t chunk : {1u, steps - 1}) {
+        ASSERT_TRUE(serial.step(chunk).ok());
+        ASSERT_TRUE(parallel.step(chunk).ok());
+    }
+    for (Output o : kOutputs) {
+        std::vector<float> a, b;
+        ASSERT_TRUE(serial.read(o, a).ok());
+        ASSERT_TRUE(parallel.read(o, b).ok());
+        ASSERT_EQ(a.size(), b.size());
+        ASSERT_FALSE(a.empty());
+        EXPECT_EQ(std::memcmp(a.data(), b.data(), a.size() * sizeof(float)), 0) << "output " << int(o);
+    }
+    // The scene really moved, so equality is not that of two rest poses.
+    std::vector<double> angles;
+    ASSERT_TRUE(parallel.read(Output::chain_angles, angles).ok());
+    double largest = 0.0;
+    for (double a : angles) largest = std::max(largest, std::abs(a));
+    EXPECT_GT(largest, 1e-3);
+}
+
+uint32_t process_threads() {
+    std::ifstream in("/proc/self/status");
+    std::string line;
+    while (std::getline(in, line))
+        if (line.rfind("Threads:", 0) == 0) return uint32_t(std::stoul(line.substr(8)));
+    return 0;
+}
+
+}  // namespace
+
+TEST(CpuParallel, BitwiseEqualToSerialCpuInEveryCompositionAndLayout) {
+    const Scene scene = mixed_forest(3);
+    for (Composition composition : {Composition::pointer_jumping, Composition::pointer_jumping_per_round,
+                                    Composition::pointer_jumping_in_dispatch, Composition::level_by_level}) {
+        for (VertexLayout layout : {VertexLayout::separate, VertexLayout::packed}) {
+            SCOPED_TRACE(std::string(to_string(composition)) + ", " + to_string(layout));
+            SimulationConfig config = windy(composition, layout);
+            config.backend = BackendKind::cpu;
+            auto serial = Simulation::create(scene, config);
+            ASSERT_TRUE(serial.ok()) << serial.status().message();
+            // A chunk of one element: every dispatch of more than one item is split over 3 threads.
+            auto parallel = create_parallel(scene, config, 3, 1);
+            ASSERT_TRUE(parallel);
+            EXPECT_EQ(parallel->backend_kind(), BackendKind::cpu_parallel);
+            expect_bitwise_equal_runs(**serial, *parallel, 80);
+        }
+    }
+}
+
+TEST(CpuParallel, BitwiseEqualToSerialCpuWithDefaultChunksOnAForest) {
+    // Enough instances that the default chunking splits every kind of dispatch.
+    auto scene = grid_scene(test::small_tree(), 120, 6.0, 5);
+    ASSERT_TRUE(scene.ok());
+    SimulationConfig config = windy(Composition::pointer_jumping, VertexLayout::separate);
+    config.backend = BackendKind::cpu;
+    auto serial = Simulation::create(*scene, config);
+    ASSERT_TRUE(serial.ok());
+    auto parallel = create_parallel(*scene, config, 4, detail::kCpuMinChunkElements);
+    ASSERT_TRUE(parallel);
+    ASSERT_GT(uint64_t((*serial)->vertex_count()), 2ull * detail::kCpuMinChunkElements);
+    expect_bitwise_equal_runs(**serial, *parallel, 60);
+}
+
+TEST(CpuParallel, ThreadPoolCoversEveryItemOnceInContiguousRanges) {
+    detail::cpu::ThreadPool pool(4);
+    for (uint32_t count : {0u, 1u, 3u, 4u, 5u, 97u, 1000u, 4099u}) {
+        for (uint32_t min_chunk : {1u, 2u, 50u, 5000u}) {
+            SCOPED_TRACE("count " + std::to_string(count) + ", min_chunk " + std::to_string(min_chunk));
+            std::vector<std::atomic<uint32_t>> hits(count);
+            std::atomic<uint32_t> calls{0};
+            pool.parallel_for(count, min_chunk, [&](uint32_t begin, uint32_t end) {
+                EXPECT_LT(begin, end);
+                EXPECT_LE(end, count);
+                for (uint32_t i = begin; i < end; ++i) hits[i].fetch_add(1);
+                calls.fetch_add(1);
+            });
+            for (uint32_t i = 0; i < count; ++i) ASSERT_EQ(hits[i].load(), 1u) << "item " << i;
+            const uint32_t expected = count == 0 ? 0 : pool.range_count(count, min_chunk);
+            EXPECT_EQ(calls.load(), expected);
+            EXPECT_LE(expected, 4u);
+            if (count >= 4 * min_chunk) EXPECT_EQ(expected, 4u);
+        }
+    }
+    // Many short jobs back to back, each seeing the writes of the one before: the count
+    // alternates, so the ranges shift and an item moves between threads from job to job.
+    std::vector<uint32_t> values(64, 0);
+    for (uint32_t job = 0; job < 2000; ++job)
+        pool.parallel_for(64 - job % 2, 1, [&](uint32_t begin, uint32_t end) {
+            for (uint32_t i = begin; i < end; ++i) ++values[i];
+        });
+    for (uint32_t i = 0; i < 63; ++i) EXPECT_EQ(values[i], 2000u) << i;
+    EXPECT_EQ(values[63], 1000u);
+}
+
+TEST(CpuParallel, StartsNoThreadUntilADispatchIsSplit) {
+    const uint32_t before = process_threads();
+    if (before == 0) GTEST_SKIP() << "no /proc/self/status on this system";
+    SimulationConfig config = windy(Composition::pointer_jumping, VertexLayout::separate);
+    config.backend = BackendKind::cpu;
+    auto serial = Simulation::create(mixed_forest(1), config);
+    ASSERT_TRUE(serial.ok());
+    ASSERT_TRUE((*serial)->step(5).ok());
+    EXPECT_EQ(process_threads(), before) << "the serial backend started threads";
+    // cpu-parallel on a scene far below one chunk runs every dispatch on the caller.
+    auto small = create_parallel(mixed_forest(1), config, 4, detail::kCpuMinChunkElements);
+    ASSERT_TRUE(small && small->step(5).ok());
+    EXPECT_EQ(process_threads(), before);
+    auto split = create_parallel(mixed_forest(1), config, 4, 1);
+    ASSERT_TRUE(split && split->step(1).ok());
+    EXPECT_EQ(process_threads(), before + 3);
+    split.reset();
+    EXPECT_EQ(process_threads(), before) << "the pool's threads outlive the simulation";
+}
+
+TEST(CpuParallel, ThreadCountFromConfigEnvironmentOrHardware) {
+    SimulationConfig config = windy(Composition::pointer_jumping, VertexLayout::separate);
+    config.backend = BackendKind::cpu_parallel;
+    const Scene scene = mixed_forest(1);
+    ::unsetenv("HMSM_CPU_THREADS");
+    config.cpu_threads = 3;
+    auto three = Simulation::create(scene, config);
+    ASSERT_TRUE(three.ok());
+    EXPECT_EQ((*three)->device_name(), "host CPU (3 threads, float)");
+
+    ::setenv("HMSM_CPU_THREADS", "2", 1);
+    config.cpu_threads = 0;
+    auto from_env = Simulation::create(scene, config);
+    ASSERT_TRUE(from_env.ok());
+    EXPECT_EQ((*from_env)->device_name(), "host CPU (2 threads, float)");
+    config.cpu_threads = 5;  // the config wins over the environment
+    auto config_wins = Simulation::create(scene, config);
+    ASSERT_TRUE(config_wins.ok());
+    EXPECT_EQ((*config_wins)->device_name(), "host CPU (5 threads, float)");
+
+    for (const char* bad : {"0", "-1", "two", "4x", "100000"}) {
+        ::setenv("HMSM_CPU_THREADS", bad, 1);
+        config.cpu_threads = 0;
+        auto rejected = Simulation::create(scene, config);
+        ASSERT_FALSE(rejected.ok()) << bad;
+        EXPECT_EQ(rejected.status().code(), ErrorCode::invalid_argument);
+        EXPECT_NE(rejected.status().message().find("HMSM_CPU_THREADS='" + std::string(bad) + "'"),
+                  std::string::npos)
+            << rejected.status().message();
+    }
+    ::unsetenv("HMSM_CPU_THREADS");
+    config.cpu_threads = detail::kMaxCpuThreads + 1;
+    auto too_many = Simulation::create(scene, config);
+    ASSERT_FALSE(too_many.ok());
+    EXPECT_EQ(too_many.status().code(), ErrorCode::invalid_argument);
+    EXPECT_NE(too_many.status().message().find("cpu_threads 1025"), std::string::npos);
+
+    config.cpu_threads = 0;
+    auto hardware = Simulation::create(scene, config);
+    ASSERT_TRUE(hardware.ok());
+    const uint32_t host = std::max(1u, std::thread::hardware_concurrency());
+    EXPECT_EQ((*hardware)->device_name(), "host CPU (" + std::to_string(host) + " threads, float)");
+}
+
+TEST(CpuParallel, AutomaticPicksItWithoutAGpuAndMoreThanOneThread) {
+    ::unsetenv("HMSM_CPU_THREADS");
+    SimulationConfig config = windy(Composition::pointer_jumping, VertexLayout::separate);
+    config.backend = BackendKind::automatic;
+    config.cpu_threads = 2;
+    auto two = Simulation::create(mixed_forest(1), config);
+    ASSERT_TRUE(two.ok()) << two.status().message();
+    const BackendKind picked = (*two)->backend_kind();
+    if (picked == BackendKind::cuda || picked == BackendKind::vulkan)
+        GTEST_SKIP() << "auto picked the GPU backend " << to_string(picked) << " (" << (*two)->device_name() << ")";
+    EXPECT_EQ(picked, BackendKind::cpu_parallel);
+    config.cpu_threads = 1;
+    auto one = Simulation::create(mixed_forest(1), config);
+    ASSERT_TRUE(one.ok());
+    EXPECT_EQ((*one)->backend_kind(), BackendKind::cpu);
+}
+
+TEST(CpuParallel, NameRoundTripsAndIsCompiledIn) {
+    EXPECT_STREQ(to_string(BackendKind::cpu_parallel), "cpu-parallel");
+    EXPECT_EQ(parse_backend_kind("cpu-parallel"), BackendKind::cpu_parallel);
+    const auto compiled = compiled_backends();
+    EXPECT_NE(std::find(compiled.begin(), compiled.end(), BackendKind::cpu_parallel), compiled.end());
+}
