@@ -294,9 +294,10 @@ Result<std::unique_ptr<WindowSets>> WindowSets::create(const Device& device, VkD
         for (uint32_t b = 0; b < kBufferCount; ++b) {
             const Buffer& buffer = buffers[b];
             WindowPlan::Range range = plan.window(BufferId(b), s);
-            if (!plan.split() || range.bytes == 0) {
-                // Static model buffers, the unsplit scene, and a scope the segment has no
-                // element of: the whole buffer, or its first element when that is too large.
+            if (!plan.split() || range.bytes == 0 || buffer.size() == 0) {
+                // Static model buffers, the unsplit scene, a scope the segment has no element
+                // of, and a buffer without elements (an output the simulation does not
+                // produce): the whole buffer, or its first element when that is too large.
                 const bool whole = buffer.size() <= device.limits().max_storage_buffer_range;
                 infos[b] = {buffer.handle(), 0, whole ? VK_WHOLE_SIZE : VkDeviceSize(16)};
             } else {
