@@ -3,6 +3,7 @@
 // any --outputs; dumps of outputs not produced are bad input (exit 2, no file).
 #include "test_trees.h"
 
+#include <nlohmann/json.hpp>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -101,6 +102,37 @@ TEST_F(JointsCli, DumpsOfOutputsNotProducedAreBadInput) {
         EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
         EXPECT_FALSE(fs::exists(path("out.file")));
     }
+}
+
+/// hmsm bench's joints-only forest rows: one per size, passes 1-5 only, 48 bytes per joint.
+TEST_F(JointsCli, BenchWritesJointsOnlyForestRows) {
+    std::string err;
+    ASSERT_EQ(run("bench --quick --no-progress --backends cpu --presets none --instances none "
+                  "--joint-instances 1,3 --json " + path("bench.json") + " --commit test", &err),
+              0) << err;
+    std::ifstream in(path("bench.json"));
+    const nlohmann::json d = nlohmann::json::parse(in, nullptr, false);
+    ASSERT_TRUE(d.is_object());
+    ASSERT_TRUE(d["forest_joints"].is_array());
+    ASSERT_EQ(d["forest_joints"].size(), 2u) << d["skipped"].dump();
+    auto paper = generate_preset("paper-1");
+    ASSERT_TRUE(paper.ok());
+    SimulationConfig config;
+    config.backend = BackendKind::cpu;
+    auto one = Simulation::create(single_tree_scene(*paper), config);
+    ASSERT_TRUE(one.ok());
+    for (const auto& row : d["forest_joints"]) {
+        const uint64_t n = row.value("instances", 0ull);
+        EXPECT_EQ(row.value("outputs", ""), "joints");
+        EXPECT_EQ(row.value("chains", 0ull), n * (*one)->chain_count());
+        EXPECT_EQ(row.value("joint_bytes", 0ull), 48 * n * (*one)->chain_count());
+        EXPECT_GT(row.value("seconds_per_step", 0.0), 0.0);
+        EXPECT_GT(row.value("bytes_per_step", 0.0), 0.0);
+    }
+    std::ifstream out(path("stdout.txt"));
+    std::stringstream text;
+    text << out.rdbuf();
+    EXPECT_NE(text.str().find("### Forest scaling, joints only"), std::string::npos) << text.str();
 }
 
 }  // namespace
