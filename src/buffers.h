@@ -62,7 +62,8 @@ enum class Scope : uint32_t {
     X(chain_origin, HMSM_BINDING_CHAIN_ORIGIN, f32x4, chain_halves)                 \
     X(node_world, HMSM_BINDING_NODE_WORLD, f32x4, node)                             \
     X(vertex_position, HMSM_BINDING_VERTEX_POSITION, f32x4, vertex)                 \
-    X(vertex_normal, HMSM_BINDING_VERTEX_NORMAL, f32x4, vertex)
+    X(vertex_normal, HMSM_BINDING_VERTEX_NORMAL, f32x4, vertex)                     \
+    X(joint_matrix, HMSM_BINDING_JOINT_MATRIX, mat3x4, chain)
 
 enum class BufferId : uint32_t {
 #define HMSM_BUFFER_ENUM(name, binding, shape, scope) name = binding,

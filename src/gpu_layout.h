@@ -41,7 +41,10 @@
 #define HMSM_BINDING_NODE_WORLD 20           // vec4 per node: W_n
 #define HMSM_BINDING_VERTEX_POSITION 21      // vec4 per vertex: (x, y, z, 1), packed: (x, y, z, normal word)
 #define HMSM_BINDING_VERTEX_NORMAL 22        // vec4 per vertex: (nx, ny, nz, 0); packed: no elements
-#define HMSM_BINDING_COUNT 23
+// Joint matrix M_c = [R_c | O_c] per chain (docs/formats.md "Joint matrices"): three vec4 ROWS
+// (R_c row i, O_c.i), 48 bytes, written by root_positions where it writes the final O_c.
+#define HMSM_BINDING_JOINT_MATRIX 23         // mat3x4 per chain: rows (R row 0, O.x), (R row 1, O.y), (R row 2, O.z)
+#define HMSM_BINDING_COUNT 24
 
 /// composition modes (PassConstants.mode)
 #define HMSM_MODE_POINTER_JUMPING 0u

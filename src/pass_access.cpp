@@ -22,7 +22,8 @@ uint32_t pass_reads(Pass pass) {
             return bit(B::chain_rotation) | bit(B::node_owner) | bit(B::node_local);
         case Pass::root_positions:
             return bit(B::node_relative) | bit(B::chain_origin) | bit(B::chain_jump) |
-                   bit(B::chain_parent) | bit(B::chain_attach) | bit(B::instance_origin);
+                   bit(B::chain_parent) | bit(B::chain_attach) | bit(B::instance_origin) |
+                   bit(B::chain_rotation);
         case Pass::node_world:
             return bit(B::chain_origin) | bit(B::node_relative) | bit(B::node_owner);
         case Pass::contour:
@@ -40,7 +41,8 @@ uint32_t pass_writes(Pass pass) {
         case Pass::integrate: return bit(B::chain_state) | bit(B::chain_local);
         case Pass::compose: return bit(B::chain_rotation);
         case Pass::node_relative: return bit(B::node_relative);
-        case Pass::root_positions: return bit(B::chain_origin);
+        // With the final O_c it writes the joint matrix [R_c | O_c] (R_c from compose).
+        case Pass::root_positions: return bit(B::chain_origin) | bit(B::joint_matrix);
         case Pass::node_world: return bit(B::node_world);
         // In the packed vertex layout vertex_normal has no elements and is not written.
         case Pass::contour: return bit(B::vertex_position) | bit(B::vertex_normal);
@@ -57,8 +59,9 @@ uint64_t SceneData::element_count(BufferId id) const {
         case Scope::instance: return instance_origin.size();
         case Scope::chain: return total_chains;
         case Scope::chain_halves: return 2 * total_chains;
-        case Scope::node: return total_nodes;
+        case Scope::node: return id == BufferId::node_world && !produces_nodes() ? 0 : total_nodes;
         case Scope::vertex:
+            if (!produces_vertices()) return 0;
             return id == BufferId::vertex_normal && packed_vertices() ? 0 : total_vertices;
     }
     return 0;

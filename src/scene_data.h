@@ -72,6 +72,11 @@ struct SceneData {
     /// The contour pass's output layout; packed leaves vertex_normal without elements.
     VertexLayout vertex_layout = VertexLayout::separate;
     bool packed_vertices() const { return vertex_layout == VertexLayout::packed; }
+    /// What a step produces: without nodes node_world has no elements, without vertices the
+    /// vertex-scope state buffers have none.
+    Outputs outputs = Outputs::all;
+    bool produces_nodes() const { return outputs != Outputs::joints; }
+    bool produces_vertices() const { return outputs == Outputs::all; }
 
     /// Elements of buffer `id` (vec4/mat/int elements, not scalars).
     uint64_t element_count(BufferId id) const;

@@ -58,8 +58,24 @@ std::optional<Pass> parse_pass(std::string_view name) {
     return std::nullopt;
 }
 
+const char* to_string(Outputs outputs) {
+    switch (outputs) {
+        case Outputs::joints: return "joints";
+        case Outputs::joints_and_nodes: return "nodes";
+        case Outputs::all: return "all";
+    }
+    return "?";
+}
+
+std::optional<Outputs> parse_outputs(std::string_view name) {
+    for (Outputs o : {Outputs::joints, Outputs::joints_and_nodes, Outputs::all})
+        if (name == to_string(o)) return o;
+    return std::nullopt;
+}
+
 uint32_t output_components(Output output) {
     switch (output) {
+        case Output::joint_matrices: return 12;
         case Output::chain_rotations: return 9;
         case Output::chain_angles: return 4;
         default: return 3;
@@ -166,9 +182,13 @@ void append_pass(std::vector<Dispatch>& program, const SceneData& d, Pass pass,
 std::vector<Dispatch> build_program(const SceneData& d, Composition composition,
                                     bool dispatches_are_expensive, Pass first) {
     std::vector<Dispatch> program;
-    for (Pass pass : kAllPasses)
-        if (uint32_t(pass) >= uint32_t(first))
-            append_pass(program, d, pass, composition, dispatches_are_expensive);
+    for (Pass pass : kAllPasses) {
+        if (uint32_t(pass) < uint32_t(first)) continue;
+        // Outputs on demand: passes whose outputs the step does not produce are not dispatched.
+        if (pass == Pass::node_world && !d.produces_nodes()) continue;
+        if (pass == Pass::contour && !d.produces_vertices()) continue;
+        append_pass(program, d, pass, composition, dispatches_are_expensive);
+    }
     return program;
 }
 
@@ -234,6 +254,7 @@ Result<std::unique_ptr<Simulation>> Simulation::Impl::create(const Scene& scene,
         detail::flatten_scene(scene, sim->hierarchies_, sim->meshes_, config.parameters,
                               config.model, config.wind));
     sim->data_->vertex_layout = config.vertex_layout;
+    sim->data_->outputs = config.outputs;
 
     if (backend) {
         sim->backend_ = std::move(backend);
@@ -301,6 +322,15 @@ std::span<const Instance> Simulation::instances() const { return impl_->scene_.i
 Status Simulation::Impl::read_elements(Output output, std::vector<double>* as_double,
                                  std::vector<float>* as_float) const {
     using detail::BufferId;
+    const bool vertex_output = output == Output::vertex_positions || output == Output::vertex_normals;
+    if ((vertex_output && !data_->produces_vertices()) ||
+        (output == Output::node_positions && !data_->produces_nodes()))
+        return Status{ErrorCode::invalid_argument,
+                      std::string("read: output ") +
+                          (vertex_output ? (output == Output::vertex_positions ? "vertex_positions" : "vertex_normals")
+                                         : "node_positions") +
+                          " is not produced by this simulation (SimulationConfig::outputs = " +
+                          to_string(config_.outputs) + ")"};
     if (output == Output::vertex_normals && data_->packed_vertices())
         return read_packed_normals(as_double, as_float);
     const uint32_t final_half = (data_->jump_rounds - 1) & 1;
@@ -317,6 +347,7 @@ Status Simulation::Impl::read_elements(Output output, std::vector<double>* as_do
             id = BufferId::chain_origin; first = final_half * data_->total_chains;
             count = data_->total_chains; break;
         case Output::chain_angles: id = BufferId::chain_state; count = data_->total_chains; break;
+        case Output::joint_matrices: id = BufferId::joint_matrix; count = data_->total_chains; break;
     }
     const uint32_t stored = detail::shape_scalars(detail::buffer_info(id).shape);
     const uint32_t wanted = output_components(output);
@@ -333,7 +364,7 @@ Status Simulation::Impl::read_elements(Output output, std::vector<double>* as_do
         }
         for (uint64_t i = 0; i < count; ++i)
             for (uint32_t k = 0; k < wanted; ++k)
-                out[i * wanted + k] = raw[i * stored + (stored == 12 ? (k / 3) * 4 + k % 3 : k)];
+                out[i * wanted + k] = raw[i * stored + (stored == 12 && wanted == 9 ? (k / 3) * 4 + k % 3 : k)];
     };
     if (as_double) {
         stored_f64_.resize(count * stored);

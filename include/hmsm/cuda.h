@@ -14,7 +14,8 @@ struct CUstream_st;
 namespace hmsm::cuda {
 
 /// Device pointers of a simulation's outputs, valid until the Simulation is destroyed and
-/// current after each step() returns. Every element is 4 floats (a CUDA float4, 16-byte
+/// current after each step() returns; nullptr (count 0) for outputs the simulation does not
+/// produce (SimulationConfig::outputs). Every element is 4 floats (a CUDA float4, 16-byte
 /// aligned), instance-major, in the order of Simulation::read.
 struct DeviceOutputs {
     int device = 0;                           ///< CUDA device ordinal that holds the buffers
@@ -27,6 +28,10 @@ struct DeviceOutputs {
     uint64_t node_count = 0;
     uint64_t vertex_count = 0;
     VertexLayout vertex_layout = VertexLayout::separate;  ///< the simulation's config().vertex_layout
+    /// chain_count x 12 floats: the joint matrix M_c = [R_c | O_c] as three float4 rows
+    /// (R row i, O_i), 48 bytes per chain (docs/cuda.md); always produced.
+    const float* joint_matrices = nullptr;
+    uint64_t chain_count = 0;
 };
 
 #ifdef HMSM_HAVE_CUDA

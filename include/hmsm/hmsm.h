@@ -10,5 +10,6 @@
 #include <hmsm/pass.h>
 #include <hmsm/scene.h>
 #include <hmsm/simulation.h>
+#include <hmsm/skin.h>
 #include <hmsm/status.h>
 #include <hmsm/tree.h>

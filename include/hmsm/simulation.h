@@ -64,6 +64,17 @@ enum class VertexLayout { separate, packed };
 const char* to_string(VertexLayout layout);
 std::optional<VertexLayout> parse_vertex_layout(std::string_view name);
 
+/// What a step produces (docs/model.md 3.10). An engine that skins its own mesh needs only the
+/// joint matrices: passes 1-5. `joints_and_nodes` adds pass 6 (node positions), `all` pass 7
+/// (mesh vertices and normals). Passes a step does not need are not dispatched at all and the
+/// buffers of outputs not produced are not allocated; Simulation::read() of such an output
+/// fails with invalid_argument. Chain rotations, origins, angles and joint matrices are always
+/// produced.
+enum class Outputs { joints, joints_and_nodes, all };
+const char* to_string(Outputs outputs);
+/// "joints", "nodes" (joints_and_nodes) or "all".
+std::optional<Outputs> parse_outputs(std::string_view name);
+
 struct SimulationConfig {
     BackendKind backend = BackendKind::automatic;
     ModelOptions model;
@@ -78,15 +89,19 @@ struct SimulationConfig {
     /// Collect per-pass device times (pass_times()). Off by default: timers serialize GPU work
     /// and keep CUDA from replaying a step as one graph.
     bool profile_passes = false;
+    /// What each step produces; skipped passes cost nothing.
+    Outputs outputs = Outputs::all;
 };
 
 /// What a caller can read back. Components per element: positions and normals 3 (x, y, z),
 /// chain rotations 9 (column-major), chain origins 3, chain angles 4 (theta_x, theta_z and
-/// their rates). Elements are instance-major; nodes in input order, chains in chain order.
-/// vertex_normals are unit normals in both vertex layouts (decoded from the positions' w when
-/// packed); vertex_positions are x, y, z in both.
+/// their rates), joint matrices 12: M_c = [R_c | O_c] row by row, (r00, r01, r02, ox, r10, r11,
+/// r12, oy, r20, r21, r22, oz) with rIJ = row I, column J of R_c (docs/formats.md "Joint
+/// matrices"; the GPU buffers store the same 12 floats per chain). Elements are instance-major;
+/// nodes in input order, chains in chain order. vertex_normals are unit normals in both vertex
+/// layouts (decoded from the positions' w when packed); vertex_positions are x, y, z in both.
 enum class Output { node_positions, vertex_positions, vertex_normals, chain_rotations,
-                    chain_origins, chain_angles };
+                    chain_origins, chain_angles, joint_matrices };
 uint32_t output_components(Output output);
 
 /// A sphere that pushes branches (docs/model.md 3.9): a character, a vehicle, an explosion. It
@@ -121,7 +136,7 @@ public:
     Simulation(const Simulation&) = delete;
     Simulation& operator=(const Simulation&) = delete;
 
-    /// Advances `count` fixed time steps (all seven passes each). Blocks until done.
+    /// Advances `count` fixed time steps (the passes config().outputs needs). Blocks until done.
     Status step(uint32_t count = 1);
 
     uint64_t steps_done() const;

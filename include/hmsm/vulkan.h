@@ -55,7 +55,8 @@ struct BufferRange {
 };
 
 /// The device buffers an engine can draw from. Valid for the simulation's lifetime; their
-/// contents change in every step.
+/// contents change in every step. Outputs the simulation does not produce
+/// (SimulationConfig::outputs) are empty ranges.
 struct SharedBuffers {
     BufferRange vertex_positions;  ///< branch-mesh and leaf vertices (docs/model.md 3.8)
     /// Empty (VK_NULL_HANDLE, count 0) in VertexLayout::packed: the normals are in
@@ -63,6 +64,12 @@ struct SharedBuffers {
     BufferRange vertex_normals;
     BufferRange node_positions;    ///< skeleton nodes in input order
     VertexLayout vertex_layout = VertexLayout::separate;  ///< the simulation's config().vertex_layout
+    /// Joint matrices M_c = [R_c | O_c], one per chain (chain_count() in all, instance-major,
+    /// chains in chain order), stride 48: three vec4 rows (R row i, O_i), i.e. a GLSL
+    /// `mat3x4` whose columns are the rows (p' = vec4(p, 1) * M) or an HLSL row-major float3x4
+    /// (p' = mul(M, float4(p, 1))). Written by root_positions, so present for every
+    /// SimulationConfig::outputs; bind it as a storage buffer (bone palette, docs/skinning.md).
+    BufferRange joint_matrices;
 };
 
 /// Fails with invalid_argument when `simulation` does not run on the Vulkan backend.

@@ -52,6 +52,8 @@ layout(set = 0, binding = HMSM_BINDING_CHAIN_ORIGIN, std430) HMSM_POSE_COHERENCE
 layout(set = 0, binding = HMSM_BINDING_NODE_WORLD, std430) buffer NodeWorld { vec4 node_world[]; };
 layout(set = 0, binding = HMSM_BINDING_VERTEX_POSITION, std430) buffer VertexPosition { vec4 vertex_position[]; };
 layout(set = 0, binding = HMSM_BINDING_VERTEX_NORMAL, std430) buffer VertexNormal { vec4 vertex_normal[]; };
+// Joint matrices [R_c | O_c] as three vec4 rows (R row i, O_i); a mat3x4 whose "columns" are rows.
+layout(set = 0, binding = HMSM_BINDING_JOINT_MATRIX, std430) buffer JointMatrix { mat3x4 joint_matrix[]; };
 
 /// Global thread index. The host spreads large dispatches over a 2-D grid of workgroups
 /// (maxComputeWorkGroupCount[0] may be as low as 65535), so the index is linearized here.

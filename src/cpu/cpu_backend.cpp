@@ -44,6 +44,14 @@ struct ScalarView {
             out[c * 4 + 3] = 0.0;
         }
     }
+    static void get(const std::vector<glm::mat<3, 4, T>>& b, uint64_t i, double* out) {
+        for (int r = 0; r < 3; ++r)
+            for (int k = 0; k < 4; ++k) out[r * 4 + k] = double(b[i][r][k]);
+    }
+    static void set(std::vector<glm::mat<3, 4, T>>& b, uint64_t i, const double* in) {
+        for (int r = 0; r < 3; ++r)
+            for (int k = 0; k < 4; ++k) b[i][r][k] = T(in[r * 4 + k]);
+    }
     static void set(std::vector<int32_t>& b, uint64_t i, const double* in) { b[i] = int32_t(in[0]); }
     static void set(std::vector<glm::ivec2>& b, uint64_t i, const double* in) {
         b[i] = glm::ivec2(int32_t(in[0]), int32_t(in[1]));
@@ -166,9 +174,10 @@ private:
         s_.chain_rotation.assign(2 * d.total_chains, typename State<T>::mat3(0));
         s_.node_relative.assign(d.total_nodes, vec4(0));
         s_.chain_origin.assign(2 * d.total_chains, vec4(0));
-        s_.node_world.assign(d.total_nodes, vec4(0));
-        s_.vertex_position.assign(d.total_vertices, vec4(0));
+        s_.node_world.assign(d.element_count(BufferId::node_world), vec4(0));  // 0 if not produced
+        s_.vertex_position.assign(d.element_count(BufferId::vertex_position), vec4(0));
         s_.vertex_normal.assign(d.element_count(BufferId::vertex_normal), vec4(0));  // 0 if packed
+        s_.joint_matrix.assign(d.total_chains, typename State<T>::joint(0));
         s_.dt = T(d.dt);
         s_.max_angle = T(d.max_angle);
         s_.fix_weight = T(d.fix_weight);

@@ -20,6 +20,8 @@ struct State {
     using vec3 = glm::vec<3, T>;
     using vec4 = glm::vec<4, T>;
     using mat3 = glm::mat<3, 3, T>;
+    /// A joint matrix as stored: three vec4 rows (R row i, O_i), gpu_layout.h.
+    using joint = glm::mat<3, 4, T>;
 
     // Model and instance scope (uploaded once).
     std::vector<int32_t> chain_parent, chain_jump, chain_attach, node_owner;
@@ -38,6 +40,7 @@ struct State {
     std::vector<vec4> chain_origin;    // two halves
     std::vector<vec4> node_world;
     std::vector<vec4> vertex_position, vertex_normal;
+    std::vector<joint> joint_matrix;   // [R_c | O_c] by rows
     // Uniforms.
     T dt{}, max_angle{}, fix_weight{};
     uint32_t profile = 0;
@@ -59,6 +62,14 @@ inline uint64_t state_chain(const gpu::PassConstants& pc, uint32_t k, int32_t c)
 }
 inline uint64_t state_node(const gpu::PassConstants& pc, uint32_t k, int32_t n) {
     return pc.node_begin + uint64_t(k) * pc.model_node_count + uint64_t(n);
+}
+
+/// Stores the joint matrix [R | O] of state chain `chain` as three rows (R row i, O_i).
+template <class T>
+void store_joint(State<T>& s, uint64_t chain, const typename State<T>::mat3& r,
+                 const typename State<T>::vec4& o) {
+    auto& m = s.joint_matrix[chain];
+    for (int i = 0; i < 3; ++i) m[i] = typename State<T>::vec4(r[0][i], r[1][i], r[2][i], o[i]);
 }
 
 /// The work items [begin, end) of one dispatch that one call of a pass runs, in order. An item

@@ -1,7 +1,10 @@
 // Pass 5: chain origins O_c = O_parent + u_attach(c), O_trunk = instance origin. Pointer jumping
 // adds the partial sum held by the 2^r-th ancestor (round 0 starts from u at the attach node);
 // in-dispatch mode runs every round in turn. Level by level: one depth per dispatch, in place
-// in the pose half.
+// in the pose half. Wherever a dispatch writes O_c it also writes the joint matrix [R_c | O_c]
+// (R_c from the same half, which compose left final): level by level and the in-dispatch last
+// round write final values once; per-round dispatches write in every round and the last round,
+// whose half is the final one, leaves the final matrices.
 #include "cpu_state.h"
 
 namespace hmsm::detail::cpu {
@@ -21,7 +24,7 @@ typename State<T>::vec4 own_offset(const State<T>& s, const gpu::PassConstants& 
 
 template <class T>
 void root_positions_round(State<T>& s, const gpu::PassConstants& pc, uint32_t round, uint32_t src_half,
-                          uint32_t dst_half, Range r) {
+                          uint32_t dst_half, Range r, bool write_joints) {
     using vec4 = typename State<T>::vec4;
     const uint64_t src = uint64_t(src_half) * s.total_chains;
     const uint64_t dst = uint64_t(dst_half) * s.total_chains;
@@ -35,7 +38,9 @@ void root_positions_round(State<T>& s, const gpu::PassConstants& pc, uint32_t ro
             s.chain_jump[uint64_t(round) * pc.total_model_chains + pc.model_chain_begin + c];
         vec4 origin = sum_so_far(e.instance, c);
         if (ancestor >= 0) origin += sum_so_far(e.instance, ancestor);
-        s.chain_origin[dst + state_chain(pc, e.instance, c)] = origin;
+        const uint64_t chain = state_chain(pc, e.instance, c);
+        s.chain_origin[dst + chain] = origin;
+        if (write_joints) store_joint(s, chain, s.chain_rotation[dst + chain], origin);
     }
 }
 
@@ -52,7 +57,9 @@ void root_positions(State<T>& s, const gpu::PassConstants& pc, Range r) {
             int32_t parent = s.chain_parent[pc.model_chain_begin + c];
             vec4 origin = own_offset(s, pc, e.instance, c);
             if (parent >= 0) origin += s.chain_origin[dst + state_chain(pc, e.instance, parent)];
-            s.chain_origin[dst + state_chain(pc, e.instance, c)] = origin;
+            const uint64_t chain = state_chain(pc, e.instance, c);
+            s.chain_origin[dst + chain] = origin;
+            store_joint(s, chain, s.chain_rotation[dst + chain], origin);
         }
         return;
     }
@@ -60,10 +67,10 @@ void root_positions(State<T>& s, const gpu::PassConstants& pc, Range r) {
         // Work items are instances here: each runs all rounds over its own chains.
         const Range chains{r.begin * pc.model_chain_count, r.end * pc.model_chain_count};
         for (uint32_t round = 0; round < pc.round; ++round)
-            root_positions_round(s, pc, round, (round + 1) & 1, round & 1, chains);
+            root_positions_round(s, pc, round, (round + 1) & 1, round & 1, chains, round + 1 == pc.round);
         return;
     }
-    root_positions_round(s, pc, pc.round, pc.src_half, pc.dst_half, r);
+    root_positions_round(s, pc, pc.round, pc.src_half, pc.dst_half, r, true);
 }
 
 template void root_positions<float>(State<float>&, const gpu::PassConstants&, Range);

@@ -31,6 +31,16 @@ Result<DeviceOutputs> device_outputs(const Simulation& simulation) {
     outputs.vertex_count = simulation.vertex_count();
     outputs.vertex_layout = simulation.config().vertex_layout;
     if (outputs.vertex_layout == VertexLayout::packed) outputs.vertex_normals = nullptr;
+    outputs.joint_matrices = reinterpret_cast<const float*>(p.joint_matrix);
+    outputs.chain_count = simulation.chain_count();
+    if (simulation.config().outputs != Outputs::all) {
+        outputs.vertex_positions = outputs.vertex_normals = nullptr;
+        outputs.vertex_count = 0;
+    }
+    if (simulation.config().outputs == Outputs::joints) {
+        outputs.node_positions = nullptr;
+        outputs.node_count = 0;
+    }
     return outputs;
 }
 

@@ -46,7 +46,8 @@ Result<SharedBuffers> shared_buffers(const Simulation& simulation) {
     if (!backend) return backend.status();
     const VulkanBackend& b = *backend.value();
     return SharedBuffers{range_of(b, BufferId::vertex_position), range_of(b, BufferId::vertex_normal),
-                         range_of(b, BufferId::node_world), simulation.config().vertex_layout};
+                         range_of(b, BufferId::node_world), simulation.config().vertex_layout,
+                         range_of(b, BufferId::joint_matrix)};
 }
 
 Result<DeviceHandles> device_handles(const Simulation& simulation) {

@@ -40,12 +40,13 @@ struct ScopeRule {
     std::string_view widest;
 };
 
-ScopeRule scope_rule(Scope scope, uint64_t alignment, bool halves_only = false) {
+/// Buffers without elements (outputs the simulation does not produce) take no part.
+ScopeRule scope_rule(const SceneData& scene, Scope scope, uint64_t alignment, bool halves_only = false) {
     ScopeRule rule;
     for (const BufferInfo& info : kBufferTable) {
         Scope s = info.scope;
         bool member = halves_only ? s == Scope::chain_halves : begin_scope(s) == scope;
-        if (!member) continue;
+        if (!member || scene.element_count(info.id) == 0) continue;
         const uint64_t eb = element_bytes(info.id);
         rule.quantum = std::lcm(rule.quantum, alignment / std::gcd(alignment, eb));
         if (eb > rule.max_bytes) {
@@ -88,11 +89,11 @@ Result<WindowPlan> WindowPlan::build(const SceneData& scene, uint64_t window_byt
         return plan;
     }
 
-    const ScopeRule instance_rule = scope_rule(Scope::instance, alignment);
-    const ScopeRule chain_rule = scope_rule(Scope::chain, alignment);
-    const ScopeRule halves_rule = scope_rule(Scope::chain, alignment, true);
-    const ScopeRule node_rule = scope_rule(Scope::node, alignment);
-    const ScopeRule vertex_rule = scope_rule(Scope::vertex, alignment);
+    const ScopeRule instance_rule = scope_rule(scene, Scope::instance, alignment);
+    const ScopeRule chain_rule = scope_rule(scene, Scope::chain, alignment);
+    const ScopeRule halves_rule = scope_rule(scene, Scope::chain, alignment, true);
+    const ScopeRule node_rule = scope_rule(scene, Scope::node, alignment);
+    const ScopeRule vertex_rule = scope_rule(scene, Scope::vertex, alignment);
 
     // Bytes the windows of `s` need per scope, and the first that does not fit (or empty).
     auto overflow = [&](const Segment& s, uint64_t& needed) -> std::string_view {
@@ -294,9 +295,10 @@ Result<std::unique_ptr<WindowSets>> WindowSets::create(const Device& device, VkD
         for (uint32_t b = 0; b < kBufferCount; ++b) {
             const Buffer& buffer = buffers[b];
             WindowPlan::Range range = plan.window(BufferId(b), s);
-            if (!plan.split() || range.bytes == 0) {
-                // Static model buffers, the unsplit scene, and a scope the segment has no
-                // element of: the whole buffer, or its first element when that is too large.
+            if (!plan.split() || range.bytes == 0 || buffer.size() == 0) {
+                // Static model buffers, the unsplit scene, a scope the segment has no element
+                // of, and a buffer without elements (an output the simulation does not
+                // produce): the whole buffer, or its first element when that is too large.
                 const bool whole = buffer.size() <= device.limits().max_storage_buffer_range;
                 infos[b] = {buffer.handle(), 0, whole ? VK_WHOLE_SIZE : VkDeviceSize(16)};
             } else {

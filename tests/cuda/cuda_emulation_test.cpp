@@ -87,7 +87,8 @@ TEST_P(CudaEmulation, KernelBodiesFollowCpu64OverManySteps) {
     ASSERT_TRUE(reference.ok()) << reference.status().message();
     Simulation& sim = **reference;
     HostImage image = image_of(sim);
-    for (BufferId id : {BufferId::node_world, BufferId::vertex_position, BufferId::vertex_normal})
+    for (BufferId id : {BufferId::node_world, BufferId::vertex_position, BufferId::vertex_normal,
+                        BufferId::joint_matrix})
         poison(image, id);
 
     const uint32_t steps = 240;
@@ -108,6 +109,15 @@ TEST_P(CudaEmulation, KernelBodiesFollowCpu64OverManySteps) {
         const double error = max_abs_difference(xyz_of(image, check.buffer), expected) / check.scale;
         EXPECT_LE(error, 1e-4) << "output " << int(check.output);
     }
+    // Joint matrices: the 12 floats per chain as stored are Output::joint_matrices (rows of
+    // [R | O]), written by the root_positions kernel in this composition.
+    std::vector<double> joints;
+    ASSERT_TRUE(sim.read(Output::joint_matrices, joints).ok());
+    const auto& joint_bytes = image.bytes[uint32_t(BufferId::joint_matrix)];
+    ASSERT_GE(joint_bytes.size(), joints.size() * sizeof(float));
+    const auto* joint_words = reinterpret_cast<const float*>(joint_bytes.data());
+    const std::vector<double> emulated(joint_words, joint_words + joints.size());
+    EXPECT_LE(max_abs_difference(emulated, joints) / std::max(1.0, height), 1e-4);
     // The wind must have moved the trees, or the comparison above proves little.
     std::vector<double> rest, now;
     auto at_rest = Simulation::create(scene, test_config(BackendKind::cpu64, GetParam(), false));

@@ -80,7 +80,8 @@ std::vector<double> read_f64(const Simulation& sim, Output output) {
 }
 
 constexpr Output kOutputs[] = {Output::node_positions, Output::vertex_positions, Output::vertex_normals,
-                               Output::chain_rotations, Output::chain_origins, Output::chain_angles};
+                               Output::chain_rotations, Output::chain_origins, Output::chain_angles,
+                               Output::joint_matrices};
 
 TEST_F(VulkanTest, SplitScenesMatchTheUnsplitRunBitwise) {
     const Scene scenes[] = {two_model_scene(), *grid_scene(small_tree(), 11, 5.0, 3)};
@@ -271,6 +272,39 @@ TEST_F(VulkanTest, SceneBeyondTheStorageBufferRangeRuns) {
     }
 }
 
+/// Outputs on demand in a split scene: joints only (no node or vertex buffers, no passes 6 and
+/// 7) gives the joint matrices of the unsplit scene producing everything, bit for bit.
+TEST_F(VulkanTest, SplitJointsOnlySceneMatchesTheUnsplitJoints) {
+    const Scene scene = two_model_scene();
+    SimulationConfig config = windy_config(Composition::pointer_jumping);
+    std::string skip;
+    auto whole = create_simulation_or_skip(scene, config, BackendKind::vulkan, skip);
+    if (!skip.empty()) GTEST_SKIP() << skip;
+    ASSERT_TRUE(whole && whole->step(40).ok());
+    // Without vertex buffers an instance needs only its chain and node windows.
+    const uint64_t alignment = vulkan_of(*whole).device().limits().min_storage_buffer_offset_alignment;
+    const uint64_t slack = alignment / 8 + 1;
+    uint64_t one = 0;
+    for (const detail::ModelRange& m : hmsm::detail::scene_data_of(*whole).models)
+        one = std::max<uint64_t>({one, (m.node_count + slack) * 16, 2 * (m.chain_count + 2 * slack) * 48});
+    one += 2 * alignment;
+    config.outputs = Outputs::joints;
+    std::unique_ptr<Simulation> split;
+    {
+        ForcedWindow forced(2 * one + 13);
+        split = create_simulation_or_skip(scene, config, BackendKind::vulkan, skip);
+    }
+    ASSERT_TRUE(split);
+    EXPECT_GT(vulkan_of(*split).window_plan().segments().size(), 1u);
+    ASSERT_TRUE(split->step(40).ok());
+    EXPECT_EQ(read_f32(*split, Output::joint_matrices), read_f32(*whole, Output::joint_matrices));
+    auto buffers = vulkan::shared_buffers(*split);
+    ASSERT_TRUE(buffers.ok());
+    EXPECT_EQ(buffers->vertex_positions.buffer, VK_NULL_HANDLE);
+    EXPECT_EQ(buffers->node_positions.count, 0u);
+    EXPECT_EQ(buffers->joint_matrices.count, split->chain_count());
+}
+
 TEST_F(VulkanTest, SplitSceneOnAnEngineDeviceRecordsStepsAndSharesWholeBuffers) {
     auto engine = detail::vk::Device::create();
     if (!engine.ok() && engine.status().code() == ErrorCode::no_device) GTEST_SKIP() << engine.status().message();
@@ -310,6 +344,10 @@ TEST_F(VulkanTest, SplitSceneOnAnEngineDeviceRecordsStepsAndSharesWholeBuffers) 
     EXPECT_GT(buffers->vertex_positions.size, window);
     EXPECT_EQ(buffers->vertex_normals.size, sim.vertex_count() * 16);
     EXPECT_EQ(buffers->node_positions.size, sim.node_count() * 16);
+    EXPECT_EQ(buffers->joint_matrices.offset, 0u);
+    EXPECT_EQ(buffers->joint_matrices.stride, 48u);
+    EXPECT_EQ(buffers->joint_matrices.count, sim.chain_count());
+    EXPECT_EQ(buffers->joint_matrices.size, sim.chain_count() * 48);
     created.value().reset();  // before the engine's device goes away
 }
 

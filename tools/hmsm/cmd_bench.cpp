@@ -1,6 +1,7 @@
 // hmsm bench (docs/model.md 7): the paper's Table 1 per preset and backend, pointer jumping
 // vs level by level, and forest scaling against the copy-bandwidth roofline. Markdown on stdout,
 // JSON with --json (schema: docs/benchmarks/README.md).
+#include "bench_joints.h"
 #include "bench_report.h"
 #include "bench_run.h"
 #include "cli_common.h"
@@ -31,6 +32,7 @@ struct BenchFlags {
     std::string backends = "cpu,cpu-parallel,vulkan,cuda";
     int64_t steps = 100, warmup = 20, repeats = 5;
     std::string instances = "1,10,100,1000,10000";
+    std::string joint_instances = "1,10,100,1000,10000";  // joints-only forest (bench_joints.h)
     double spacing = 25.0;
     double case_budget = 20.0;
     bool quick = false, no_progress = false;
@@ -64,6 +66,7 @@ int render(const std::string& path) {
     if (document.is_discarded() || !document.is_object() || document.value("format", "") != "hmsm-bench")
         return fail_input("--render '" + path + "': not an hmsm-bench JSON document");
     std::fputs(render_markdown(document).c_str(), stdout);
+    std::fputs(bench::render_joint_forest(document.value("forest_joints", json::array())).c_str(), stdout);
     return kExitOk;
 }
 
@@ -80,6 +83,9 @@ void register_bench_flags(CLI::App& app) {
     app.add_option("--repeats", flags.repeats, "timed batches per figure; medians are reported (default 5)");
     app.add_option("--instances", flags.instances,
                    "forest sizes of paper-1, comma-separated (default 1,10,100,1000,10000; none: no forest)");
+    app.add_option("--joint-instances", flags.joint_instances,
+                   "joints-only forest sizes of paper-1 (outputs joints, passes 1-5), comma-separated "
+                   "(default 1,10,100,1000,10000, plus 100000 x paper-5 unless --quick; none: no rows)");
     app.add_option("--spacing", flags.spacing, "forest grid spacing in metres (default 25)");
     app.add_option("--case-budget", flags.case_budget,
                    "seconds one case may take: slower cases run fewer steps, forest sizes "
@@ -99,6 +105,7 @@ int run_bench(CLI::App& app) {
         if (!app.count("--warmup")) flags.warmup = 2;
         if (!app.count("--repeats")) flags.repeats = 3;
         if (!app.count("--instances")) flags.instances = "1,10";
+        if (!app.count("--joint-instances")) flags.joint_instances = "1,10";
         if (!app.count("--case-budget")) flags.case_budget = 5.0;
     }
     if (flags.steps < 1 || flags.steps > 1000000)
@@ -142,6 +149,17 @@ int run_bench(CLI::App& app) {
         }
     }
 
+    std::vector<uint32_t> joint_counts;
+    if (flags.joint_instances != "none") {
+        for (const std::string& item : split_list(flags.joint_instances)) {
+            char* end = nullptr;
+            const long long n = std::strtoll(item.c_str(), &end, 10);
+            if (item.empty() || *end != '\0' || n < 1 || n > 1000000)
+                return fail_input("--joint-instances '" + item + "': expected counts in [1, 1000000] or none");
+            joint_counts.push_back(uint32_t(n));
+        }
+    }
+
     // Models: the presets (or --tree), and the forest model (paper-1 or --tree).
     std::vector<Model> models;
     Model forest_model;
@@ -174,7 +192,26 @@ int run_bench(CLI::App& app) {
     Settings settings{uint32_t(flags.steps), uint32_t(flags.warmup), uint32_t(flags.repeats), flags.case_budget};
     const uint64_t device_copy_bytes = uint64_t((flags.quick ? 64.0 : 1024.0) * kMiB);
     const uint64_t host_copy_bytes = uint64_t((flags.quick ? 32.0 : 256.0) * kMiB);
-    Progress progress(backends.size() * (2 * models.size() + counts.size()), !flags.no_progress);
+    // Joints-only forest cases: the forest model (paper-1 or --tree) at each size, and a
+    // large forest of a small preset (paper-5) as memory and the case budget allow.
+    std::vector<bench::JointForestCase> joint_cases;
+    if (!joint_counts.empty()) {
+        Model joint_model = forest_model;
+        if (joint_model.name.empty()) {
+            auto tree = flags.tree.empty() ? generate_preset("paper-1") : load_tree(flags.tree);
+            if (!tree) return fail(tree.status());
+            joint_model = {flags.tree.empty() ? "paper-1" : std::filesystem::path(flags.tree).stem().string(),
+                           std::move(tree).value()};
+        }
+        for (uint32_t n : joint_counts) joint_cases.push_back({joint_model.name, joint_model.tree, n});
+        if (!flags.quick && flags.tree.empty()) {
+            auto small = generate_preset("paper-5");
+            if (!small) return fail(small.status());
+            joint_cases.push_back({"paper-5", std::move(small).value(), 100000});
+        }
+    }
+    Progress progress(backends.size() * (2 * models.size() + counts.size() + joint_cases.size()),
+                      !flags.no_progress);
     BenchRun run(settings, device_copy_bytes, host_copy_bytes, progress);
     run.backends = backends;
     for (const json& s : skipped_backends) {
@@ -198,6 +235,11 @@ int run_bench(CLI::App& app) {
         for (BackendRun& b : run.backends)
             if (b.available) run.forest_cases(forest_model, b, counts, flags.spacing, state_per_instance);
     }
+    json forest_joints = json::array();
+    for (BackendRun& b : run.backends)
+        if (b.available && !joint_cases.empty())
+            run.failures += bench::joint_forest_cases(b.kind, joint_cases, flags.spacing, settings, progress,
+                                                      forest_joints, run.skipped);
     progress.finish();
 
     add_speedups(run.presets, run.forest);
@@ -256,6 +298,7 @@ int run_bench(CLI::App& app) {
         {"backends", backends_json},
         {"presets", run.presets},
         {"forest", run.forest},
+        {"forest_joints", forest_joints},
         {"copy_bandwidth", copy},
         {"skipped", run.skipped},
         {"notes", notes},
@@ -266,6 +309,7 @@ int run_bench(CLI::App& app) {
     }
 
     std::fputs(render_markdown(document).c_str(), stdout);
+    std::fputs(bench::render_joint_forest(forest_joints).c_str(), stdout);
     std::fflush(stdout);
     if (json_file) {
         std::string text = document.dump(2) + "\n";

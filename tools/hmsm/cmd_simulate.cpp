@@ -1,4 +1,4 @@
-// hmsm simulate: runs the seven passes for --steps steps and writes the requested dumps.
+// hmsm simulate: runs the passes --outputs needs (all seven by default) for --steps steps and writes the requested dumps.
 #include "cli_common.h"
 
 #include <nlohmann/json.hpp>
@@ -19,7 +19,33 @@ struct SimulateFlags {
     std::string vertex_layout = "separate";
     int64_t steps = 120;
     std::string dump_nodes, dump_vertices, report;
+    std::string outputs = "all";
+    std::string dump_chains;
 } flags;
+
+/// --dump-chains: instance,chain,ox,oy,oz,r00,r10,r20,r01,r11,r21,r02,r12,r22 (O_c, then R_c
+/// column by column; rIJ = row I, column J), every instance's chains in chain order, %.17g.
+Result<std::string> chain_csv(const Simulation& sim) {
+    std::vector<double> joints;
+    HMSM_TRY(sim.read(Output::joint_matrices, joints));
+    std::string csv = "instance,chain,ox,oy,oz,r00,r10,r20,r01,r11,r21,r02,r12,r22\n";
+    char line[512];
+    uint64_t element = 0;
+    const auto instances = sim.instances();
+    for (size_t i = 0; i < instances.size(); ++i) {
+        const size_t chains = sim.hierarchy(instances[i].model).chains.size();
+        for (size_t c = 0; c < chains; ++c, ++element) {
+            const double* m = &joints[12 * element];  // rows (R row r, O_r)
+            int n = std::snprintf(line, sizeof line, "%zu,%zu,%.17g,%.17g,%.17g", i, c, m[3], m[7], m[11]);
+            for (int col = 0; col < 3; ++col)
+                for (int row = 0; row < 3; ++row)
+                    n += std::snprintf(line + n, sizeof line - size_t(n), ",%.17g", m[4 * row + col]);
+            csv.append(line, size_t(n));
+            csv += '\n';
+        }
+    }
+    return csv;
+}
 
 std::string node_csv(const Simulation& sim, const std::vector<double>& xyz) {
     std::string csv = "instance,node,x,y,z\n";
@@ -55,6 +81,11 @@ void register_simulate_flags(CLI::App& app) {
     app.add_option("--steps", flags.steps, "time steps to run (default 120)");
     app.add_option("--dump-nodes", flags.dump_nodes, "CSV instance,node,x,y,z after the last step");
     app.add_option("--dump-vertices", flags.dump_vertices, "float32 xyz per mesh vertex");
+    app.add_option("--dump-chains", flags.dump_chains,
+                   "CSV instance,chain,ox,oy,oz,r00,r10,r20,r01,r11,r21,r02,r12,r22 after the last step");
+    app.add_option("--outputs", flags.outputs,
+                   "what each step produces: joints (passes 1-5: joint matrices), nodes (1-6: plus "
+                   "node positions) or all (default; 1-7: plus mesh vertices)");
     app.add_option("--report", flags.report, "JSON report: backend, device, counts, times");
 }
 
@@ -75,6 +106,13 @@ int run_simulate(CLI::App& app) {
     if (!vertex_layout)
         return fail_input("--vertex-layout '" + flags.vertex_layout + "': expected separate or packed");
     config.vertex_layout = *vertex_layout;
+    auto produced = parse_outputs(flags.outputs);
+    if (!produced) return fail_input("--outputs '" + flags.outputs + "': expected joints, nodes or all");
+    config.outputs = *produced;
+    if (!flags.dump_nodes.empty() && config.outputs == Outputs::joints)
+        return fail_input("--dump-nodes needs node positions: --outputs nodes or all, not joints");
+    if (!flags.dump_vertices.empty() && config.outputs != Outputs::all)
+        return fail_input("--dump-vertices needs mesh vertices: --outputs all, not " + flags.outputs);
     if (flags.steps < 0) return fail_input("--steps " + std::to_string(flags.steps) + ": must be >= 0");
     auto options = model_options(flags.model);
     if (!options) return fail(options.status());
@@ -89,8 +127,9 @@ int run_simulate(CLI::App& app) {
     if (!scene) return fail(scene.status());
 
     StagedOutputs outputs;
-    std::optional<size_t> nodes_file, vertices_file, report_file;
+    std::optional<size_t> nodes_file, vertices_file, report_file, chains_file;
     for (auto [path, flag, slot] : {std::tuple{&flags.dump_nodes, "--dump-nodes", &nodes_file},
+                                    std::tuple{&flags.dump_chains, "--dump-chains", &chains_file},
                                     std::tuple{&flags.dump_vertices, "--dump-vertices", &vertices_file},
                                     std::tuple{&flags.report, "--report", &report_file}}) {
         if (path->empty()) continue;
@@ -127,6 +166,12 @@ int run_simulate(CLI::App& app) {
         Status written = outputs.write(*nodes_file, csv.data(), csv.size());
         if (!written) return fail(written);
     }
+    if (chains_file) {
+        auto csv = chain_csv(sim);
+        if (!csv) return fail(csv.status());
+        Status written = outputs.write(*chains_file, csv->data(), csv->size());
+        if (!written) return fail(written);
+    }
     if (vertices_file) {
         std::vector<float> xyz;
         Status read = sim.read(Output::vertex_positions, xyz);
@@ -140,6 +185,7 @@ int run_simulate(CLI::App& app) {
         r["device"] = sim.device_name();
         r["composition"] = flags.composition;
         r["vertex_layout"] = to_string(config.vertex_layout);
+        r["outputs"] = to_string(config.outputs);
         r["instances"] = sim.instance_count();
         r["models"] = sim.scene().models.size();
         r["nodes"] = sim.node_count();

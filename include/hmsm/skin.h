@@ -1,0 +1,45 @@
+// Skin data (docs/model.md 3.10): everything an engine needs to build its skinned vertex buffer
+// once and draw the tree from the joint matrices alone (Output::joint_matrices, or the GPU
+// buffers of hmsm/vulkan.h and hmsm/cuda.h), without passes 6 and 7.
+#pragma once
+
+#include <hmsm/hierarchy.h>
+#include <hmsm/mesh.h>
+#include <hmsm/options.h>
+#include <hmsm/tree.h>
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+namespace hmsm {
+
+/// One vertex of the bind pose, skinned to at most two joints (chains).
+struct SkinVertex {
+    /// Rest position of an instance at the origin with yaw 0: p̄_attach(c) + B_c v_local, with
+    /// p̄ = p - p_root.
+    Vec3 position{0.0};
+    Vec3 normal{0.0};  ///< rest normal B_c n_local (unit)
+    /// Joints (chain ids); joints[1] = -1 (weight 0) for a vertex with one joint. A base-ring
+    /// vertex of a non-trunk chain has (own chain, 1 - β) and (parent chain, β), β = fix_weight;
+    /// β = 0 or 1 leaves only the joint with weight 1. Every other vertex: (own chain, 1).
+    std::array<int32_t, 2> joints{0, -1};
+    std::array<double, 2> weights{1.0, 0.0};
+};
+
+/// The skin of a model's mesh (same vertex order and triangles as its MeshTemplate).
+struct SkinTemplate {
+    std::vector<SkinVertex> vertices;
+    /// Per chain, the inverse bind matrix [B_cᵀ | -B_cᵀ p̄_attach(c)] as 12 numbers row by row
+    /// (the layout of Output::joint_matrices), so that
+    /// v = Σ_j w_j M_j (inverse_bind_j · (v_bind, 1)) equals pass 7's vertex.
+    std::vector<std::array<double, 12>> inverse_bind;
+    /// Per chain, the bind (rest) joint matrix [B_c | p̄_attach(c)], row by row.
+    std::vector<std::array<double, 12>> bind;
+};
+
+/// Builds the skin of `mesh` (build_mesh(tree, hierarchy, options)).
+SkinTemplate build_skin(const TreeModel& tree, const Hierarchy& hierarchy, const MeshTemplate& mesh,
+                        const ModelOptions& options);
+
+}  // namespace hmsm
