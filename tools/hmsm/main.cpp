@@ -1,6 +1,7 @@
 // hmsm: the command-line tool (docs/model.md 5). Exit 0 on success, 2 on bad input or arguments,
 // 1 on an internal or device error.
 #include "cli_common.h"
+#include "export_gltf.h"
 
 #include <exception>
 
@@ -13,12 +14,14 @@ int main(int argc, char** argv) {
     CLI::App* info = app.add_subcommand("info", "print the counts of a tree's hierarchy and mesh");
     CLI::App* simulate = app.add_subcommand("simulate", "run the simulation and dump its outputs");
     CLI::App* bench = app.add_subcommand("bench", "benchmark the backends: Table 1, passes, forests");
+    CLI::App* export_ = app.add_subcommand("export", "write the animation as a skinned glTF 2.0 clip");
     int (*run)(CLI::App&) = nullptr;
     CLI::App* chosen = nullptr;
     generate->callback([&] { run = run_generate; chosen = generate; });
     info->callback([&] { run = run_info; chosen = info; });
     simulate->callback([&] { run = run_simulate; chosen = simulate; });
     bench->callback([&] { run = run_bench; chosen = bench; });
+    export_->callback([&] { run = run_export; chosen = export_; });
 #ifdef HMSM_HAVE_RENDER
     CLI::App* render = app.add_subcommand("render", "draw the animated tree offscreen to PNG frames and a GIF");
     render->callback([&] { run = run_render; chosen = render; });
@@ -29,6 +32,7 @@ int main(int argc, char** argv) {
     register_info_flags(*info);
     register_simulate_flags(*simulate);
     register_bench_flags(*bench);
+    register_export_flags(*export_);
     try {
         app.parse(argc, argv);
     } catch (const CLI::CallForHelp& e) {
