@@ -198,11 +198,17 @@ TEST_F(Export, Paper1ClipReproducesSimulation) {
 }
 
 TEST_F(Export, OddTreeWithOriginYawAndFixWeight) {
+    // The model's root away from the origin (the bind pose puts it there), cut chains, an odd
+    // ring, origin and yaw in the trunk joint, a fix weight other than 0.5, a frame rate that is
+    // not a whole number of steps per frame.
     Case c;
     c.tree = test::small_tree();
+    for (TreeNode& n : c.tree.nodes) n.position += Vec3(2.0, 1.0, -3.0);
+    ASSERT_TRUE(save_tree(c.tree, path("shifted.json")).ok());
     c.config.backend = BackendKind::cpu64;
     c.config.model.ring_sides = 5;
     c.config.model.fix_weight = 0.3;
+    c.config.model.max_chain_segments = 2;
     c.config.parameters.dt = 0.01;
     c.config.wind.profile = WindProfile::y1;
     c.config.wind.strength = 30.0;
@@ -210,13 +216,29 @@ TEST_F(Export, OddTreeWithOriginYawAndFixWeight) {
     c.config.wind.frequency = 0.7;
     c.origin = glm::dvec3(1.5, 0.25, -2.0);
     c.yaw = 0.7;
-    c.seconds = 1.3;  // frames 0 ... 9 at 7 fps: steps round(k / 0.07), not a whole number per frame
+    c.seconds = 1.3;  // frames 0 ... 9 at 7 fps: steps round(k / 0.07)
     c.fps = 7.0;
-    auto r = hmsm("export --tree " + path("small.json") + " --gltf " + path("small.glb") +
-                  " --ring-sides 5 --fix-weight 0.3 --dt 0.01 --wind y1 --wind-strength 30 --wind-dir 1,0,1"
-                  " --wind-frequency 0.7 --origin 1.5,0.25,-2 --yaw 0.7 --seconds 1.3 --fps 7");
+    auto r = hmsm("export --tree " + path("shifted.json") + " --gltf " + path("small.glb") +
+                  " --ring-sides 5 --fix-weight 0.3 --max-chain-segments 2 --dt 0.01 --wind y1 --wind-strength 30"
+                  " --wind-dir 1,0,1 --wind-frequency 0.7 --origin 1.5,0.25,-2 --yaw 0.7 --seconds 1.3 --fps 7");
     ASSERT_EQ(r.exit_code, 0) << r.out;
-    expect_clip_reproduces_simulation(c, load_glb(path("small.glb")));
+    const tinygltf::Model m = load_glb(path("small.glb"));
+    expect_clip_reproduces_simulation(c, m);
+
+    // The bind pose is the rest pose of the model as an instance at the origin with yaw 0 (its
+    // root at the origin), whatever the instance's placement.
+    SimulationConfig at_rest = c.config;
+    auto rest = Simulation::create(single_tree_scene(c.tree), at_rest);
+    ASSERT_TRUE(rest);
+    std::vector<double> expected;
+    ASSERT_TRUE((*rest)->read(Output::vertex_positions, expected).ok());
+    std::vector<float> bind;
+    for (const auto& p : m.meshes.at(0).primitives) {
+        auto pos = read_accessor<float>(m, p.attributes.at("POSITION"), 3, TINYGLTF_COMPONENT_TYPE_FLOAT);
+        bind.insert(bind.end(), pos.begin(), pos.end());
+    }
+    ASSERT_EQ(bind.size(), expected.size());
+    for (size_t i = 0; i < bind.size(); ++i) EXPECT_NEAR(bind[i], expected[i], 1e-5 * 6.0) << i;
 }
 
 TEST_F(Export, FileFollowsTheGltfMapping) {
@@ -349,12 +371,14 @@ TEST_F(Export, KhronosValidatorFindsNoError) {
     const std::string tools = HMSM_GLTF_TOOLS;
     ASSERT_TRUE(fs::exists(tools + "/node_modules/gltf-validator/package.json"))
         << "the glTF validator is missing: run tools/install_deps.sh (npm ci in tools/gltf)";
+    ASSERT_TRUE(save_tree(test::rod(), path("rod.json")).ok());  // one chain, no leaves
     struct Export_ { std::string file, args; };
     for (const Export_& e : {Export_{"p1.glb", "--preset paper-1 --seconds 0.5 --fps 12"},
                              Export_{"small.glb", "--tree " + path("small.json") +
                                                       " --seconds 1.3 --fps 7 --ring-sides 3 --fix-weight 0.2 "
                                                       "--origin 4,0,1 --yaw -2 --wind constant --wind-strength 25"},
-                             Export_{"still.glb", "--tree " + path("small.json") + " --seconds 0 --fps 30"}}) {
+                             Export_{"still.glb", "--tree " + path("small.json") + " --seconds 0 --fps 30"},
+                             Export_{"rod.glb", "--tree " + path("rod.json") + " --seconds 0.5 --fps 24"}}) {
         SCOPED_TRACE(e.args);
         auto r = hmsm("export --gltf " + path(e.file) + " " + e.args);
         ASSERT_EQ(r.exit_code, 0) << r.out;
