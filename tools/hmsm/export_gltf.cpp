@@ -19,7 +19,7 @@ Result<SkinTemplate> derive_skin(const TreeModel& tree, const Hierarchy& h, cons
                                  double fix_weight) {
     const size_t chains = h.chains.size();
     if (chains > size_t(std::numeric_limits<uint16_t>::max()) + 1)
-        return Status{ErrorCode::unsupported,
+        return Status{ErrorCode::invalid_argument,
                       "the tree has " + std::to_string(chains) +
                           " chains; a glTF skin here names at most 65536 joints"};
     // p̄ = p − p_root: the bind pose is the rest pose with the root at the origin.

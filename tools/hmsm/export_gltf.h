@@ -35,7 +35,7 @@ struct SkinTemplate {
     uint32_t leaf_index_count = 0;   ///< the last indices: 6 per leaf card
 };
 
-/// Derives the skin from the hierarchy and mesh template of a model. Fails (unsupported) with
+/// Derives the skin from the hierarchy and mesh template of a model. Fails (invalid_argument) with
 /// more chains than a glTF JOINTS_0 accessor of unsigned shorts can name.
 Result<SkinTemplate> derive_skin(const TreeModel& tree, const Hierarchy& hierarchy,
                                  const MeshTemplate& mesh, double fix_weight);
