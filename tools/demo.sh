@@ -2,7 +2,9 @@
 # The README's first command: installs what is missing, builds, generates the paper-1 tree,
 # simulates 10 s of Y1 wind on the best available backend, compares the backends this machine
 # has (a Table 1-style table), and renders the swaying tree: out/paper-1.gif and a strip of four
-# frames, out/paper-1-strip.png. Sized for a 2-core machine without a GPU (Vulkan on lavapipe).
+# frames, out/paper-1-strip.png; then exports the same 10 s as a skinned glTF clip,
+# out/paper-1.glb (docs/export.md), and checks it with the Khronos glTF validator. Sized for a
+# 2-core machine without a GPU (Vulkan on lavapipe).
 #
 # Environment: HMSM_BUILD_DIR (default build), HMSM_DEMO_OUT (default out), HMSM_DEMO_PRESET
 # (default paper-1), HMSM_DEMO_FRAMES (48), HMSM_DEMO_FPS (12), HMSM_DEMO_SIZE (320x240).
@@ -66,6 +68,12 @@ section "rendering $frames frames at $fps fps, ${size} (Vulkan offscreen)"
 "$hmsm" render --tree "$out/$preset.json" --backend auto --wind y1 \
   --frames "$frames" --fps "$fps" --width "${size%x*}" --height "${size#*x}" \
   --out "$out/frames" --gif "$out/$preset.gif" --strip "$out/$preset-strip.png"
+
+section "exporting 10 s at 24 fps as a skinned glTF 2.0 clip (docs/export.md)"
+"$hmsm" export --tree "$out/$preset.json" --gltf "$out/$preset.glb" --seconds 10 --fps 24 --wind y1
+if command -v node >/dev/null 2>&1 && [ -d "$root/tools/gltf/node_modules/gltf-validator" ]; then
+  node "$root/tools/gltf/validate.mjs" "$out/$preset.glb"
+fi
 
 section "done in $((SECONDS - start)) s (after the build); outputs in $out"
 ls -l "$out"

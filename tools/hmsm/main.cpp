@@ -1,6 +1,7 @@
 // hmsm: the command-line tool (docs/model.md 5). Exit 0 on success, 2 on bad input or arguments,
 // 1 on an internal or device error.
 #include "cli_common.h"
+#include "export_gltf.h"
 
 #include <exception>
 
@@ -15,6 +16,7 @@ int main(int argc, char** argv) {
     CLI::App* bench = app.add_subcommand("bench", "benchmark the backends: Table 1, passes, forests");
     CLI::App* import = app.add_subcommand("import", "turn a laser-scan cylinder model into an hmsm-tree file");
     CLI::App* analyze = app.add_subcommand("analyze", "how a tree sways: frequencies, deflection, step response, spectrum");
+    CLI::App* export_ = app.add_subcommand("export", "write the animation as a skinned glTF 2.0 clip");
     int (*run)(CLI::App&) = nullptr;
     CLI::App* chosen = nullptr;
     generate->callback([&] { run = run_generate; chosen = generate; });
@@ -23,6 +25,7 @@ int main(int argc, char** argv) {
     bench->callback([&] { run = run_bench; chosen = bench; });
     import->callback([&] { run = run_import; chosen = import; });
     analyze->callback([&] { run = run_analyze; chosen = analyze; });
+    export_->callback([&] { run = run_export; chosen = export_; });
 #ifdef HMSM_HAVE_RENDER
     CLI::App* render = app.add_subcommand("render", "draw the animated tree offscreen to PNG frames and a GIF");
     render->callback([&] { run = run_render; chosen = render; });
@@ -35,6 +38,7 @@ int main(int argc, char** argv) {
     register_bench_flags(*bench);
     register_import_flags(*import);
     register_analyze_flags(*analyze);
+    register_export_flags(*export_);
     try {
         app.parse(argc, argv);
     } catch (const CLI::CallForHelp& e) {
