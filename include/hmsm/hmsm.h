@@ -8,6 +8,7 @@
 #include <hmsm/options.h>
 #include <hmsm/pass.h>
 #include <hmsm/scene.h>
+#include <hmsm/schedule.h>
 #include <hmsm/simulation.h>
 #include <hmsm/status.h>
 #include <hmsm/tree.h>

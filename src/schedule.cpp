@@ -1,0 +1,165 @@
+// Schedules against a run (docs/model.md 4, 3.9): validation before any step, and application of
+// one step's events in the order wind, forces, instances, remove, add.
+#include <hmsm/schedule.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+
+namespace hmsm {
+
+Wind WindChange::applied_to(const Wind& wind) const {
+    Wind out = wind;
+    if (profile) out.profile = *profile;
+    if (direction) out.direction = *direction;
+    if (strength) out.strength = *strength;
+    if (speed) out.strength = wind_strength_for_speed(*speed);
+    if (frequency) out.frequency = *frequency;
+    if (front_speed) out.front_speed = *front_speed;
+    if (turbulence) out.turbulence = *turbulence;
+    if (seed) out.seed = *seed;
+    return out;
+}
+
+namespace {
+
+Status bad(size_t event, const ScheduleEvent& e, const std::string& what) {
+    return {ErrorCode::invalid_argument,
+            "schedule: events[" + std::to_string(event) + "] (step " + std::to_string(e.step) + "): " + what};
+}
+
+bool finite(const Vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
+
+std::string model_list(std::span<const std::string> names) {
+    std::string list;
+    for (size_t m = 0; m < names.size(); ++m) list += (m ? ", " : "") + ("\"" + names[m] + "\"");
+    return list;
+}
+
+}  // namespace
+
+Status validate_schedule(const Schedule& schedule, std::span<const std::string> model_names,
+                         uint64_t instance_count, const Wind& initial_wind) {
+    Wind wind = initial_wind;
+    uint64_t count = instance_count;
+    for (size_t i = 0; i < schedule.events.size(); ++i) {
+        const ScheduleEvent& e = schedule.events[i];
+        if (e.step < 1) return bad(i, e, "step must be >= 1");
+        if (i > 0 && e.step < schedule.events[i - 1].step)
+            return bad(i, e, "events must be in non-decreasing step order");
+        if (e.wind) {
+            if (e.wind->strength && e.wind->speed) return bad(i, e, "wind: give strength or speed, not both");
+            if (e.wind->speed && !(*e.wind->speed >= 0.0 && std::isfinite(*e.wind->speed)))
+                return bad(i, e, "wind.speed must be finite and >= 0 m/s");
+            wind = e.wind->applied_to(wind);
+            Status valid = validate(wind);
+            if (!valid) return bad(i, e, "wind: " + valid.message());
+            if (!(wind.turbulence >= 0.0 && wind.turbulence <= 2.0))
+                return bad(i, e, "wind.turbulence must be within [0, 2]");
+            if (wind.front_speed > 0.0 && wind.front_speed < 0.01)
+                return bad(i, e, "wind.front_speed must be 0 or >= 0.01 m/s");
+        }
+        if (e.forces) {
+            Status valid = validate_force_fields(*e.forces);
+            if (!valid) return bad(i, e, "forces: " + valid.message());
+        }
+        std::map<uint64_t, bool> named;
+        for (const InstanceChange& c : e.instances) {
+            if (c.instance >= count)
+                return bad(i, e, "instances: instance " + std::to_string(c.instance) + " does not exist (" +
+                                     std::to_string(count) + " instance(s) before this event)");
+            if (!named.emplace(c.instance, true).second)
+                return bad(i, e, "instances: instance " + std::to_string(c.instance) + " is named twice");
+            if (c.wind_scale && !(std::isfinite(*c.wind_scale) && *c.wind_scale >= 0.0))
+                return bad(i, e, "instances: wind_scale of instance " + std::to_string(c.instance) +
+                                     " must be finite and >= 0");
+            if (c.wind_phase && !std::isfinite(*c.wind_phase))
+                return bad(i, e, "instances: wind_phase of instance " + std::to_string(c.instance) +
+                                     " must be finite");
+        }
+        std::map<uint64_t, bool> removed;
+        for (uint64_t r : e.remove) {
+            if (r >= count)
+                return bad(i, e, "remove: instance " + std::to_string(r) + " does not exist (" +
+                                     std::to_string(count) + " instance(s) before this event)");
+            if (!removed.emplace(r, true).second)
+                return bad(i, e, "remove: instance " + std::to_string(r) + " is removed twice");
+        }
+        count -= e.remove.size();
+        for (size_t k = 0; k < e.add.size(); ++k) {
+            const ScheduledInstance& a = e.add[k];
+            const std::string at = "add[" + std::to_string(k) + "]: ";
+            if (std::find(model_names.begin(), model_names.end(), a.model) == model_names.end())
+                return bad(i, e, at + "model \"" + a.model + "\" is not one of the run's models (" +
+                                     model_list(model_names) + ")");
+            if (!finite(a.origin) || !std::isfinite(a.yaw) || !std::isfinite(a.wind_phase))
+                return bad(i, e, at + "origin, yaw and wind_phase must be finite");
+            if (!(std::isfinite(a.wind_scale) && a.wind_scale >= 0.0))
+                return bad(i, e, at + "wind_scale must be finite and >= 0");
+        }
+        count += e.add.size();
+    }
+    return {};
+}
+
+Status apply_schedule_events(const Schedule& schedule, uint64_t step, Simulation& sim) {
+    for (const ScheduleEvent& e : schedule.events) {
+        if (e.step != step) continue;
+        const std::string where = "schedule step " + std::to_string(e.step) + ": ";
+        auto fail = [&](const Status& s) { return Status{s.code(), where + s.message()}; };
+        if (e.wind) {
+            Status s = sim.set_wind(e.wind->applied_to(sim.wind()));
+            if (!s) return fail(s);
+        }
+        if (e.forces) {
+            Status s = sim.set_force_fields(*e.forces);
+            if (!s) return fail(s);
+        }
+        for (const InstanceChange& c : e.instances) {
+            if (c.wind_scale) {
+                Status s = sim.set_instance_wind_scale(c.instance, *c.wind_scale);
+                if (!s) return fail(s);
+            }
+            if (c.wind_phase) {
+                Status s = sim.set_instance_wind_phase(c.instance, *c.wind_phase);
+                if (!s) return fail(s);
+            }
+            if (c.active) {
+                Status s = sim.set_instance_active(c.instance, *c.active);
+                if (!s) return fail(s);
+            }
+        }
+        if (!e.remove.empty()) {
+            Status s = sim.remove_instances(e.remove);
+            if (!s) return fail(s);
+        }
+        if (!e.add.empty()) {
+            const std::vector<std::string>& names = sim.scene().model_names;
+            std::vector<Instance> added;
+            for (const ScheduledInstance& a : e.add) {
+                auto found = std::find(names.begin(), names.end(), a.model);
+                if (found == names.end())
+                    return {ErrorCode::invalid_argument, where + "model \"" + a.model + "\" is not one of the run's models"};
+                Instance inst;
+                inst.model = uint32_t(found - names.begin());
+                inst.origin = a.origin;
+                inst.yaw = a.yaw;
+                inst.wind_scale = a.wind_scale;
+                inst.wind_phase = a.wind_phase;
+                inst.active = a.active;
+                added.push_back(inst);
+            }
+            Status s = sim.add_instances(added);
+            if (!s) return fail(s);
+        }
+    }
+    return {};
+}
+
+std::optional<uint64_t> next_schedule_step(const Schedule& schedule, uint64_t after) {
+    for (const ScheduleEvent& e : schedule.events)
+        if (e.step > after) return e.step;
+    return std::nullopt;
+}
+
+}  // namespace hmsm
