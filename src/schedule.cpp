@@ -1,5 +1,5 @@
-// Schedules against a run (docs/model.md 4, 3.9): validation before any step, and application of
-// one step's events in the order wind, forces, instances, remove, add.
+// Schedules against a run (docs/model.md 4, 3.9): validation before any step runs (application:
+// schedule_apply.cpp).
 #include <hmsm/schedule.h>
 
 #include <algorithm>
@@ -60,8 +60,20 @@ Status validate_schedule(const Schedule& schedule, std::span<const std::string> 
                 return bad(i, e, "wind.front_speed must be 0 or >= 0.01 m/s");
         }
         if (e.forces) {
-            Status valid = validate_force_fields(*e.forces);
-            if (!valid) return bad(i, e, "forces: " + valid.message());
+            // validate_force_fields' checks, here so that the parsers link without a simulation.
+            if (e.forces->size() > kMaxForceFields)
+                return bad(i, e, "forces: " + std::to_string(e.forces->size()) + " force fields, at most " +
+                                     std::to_string(kMaxForceFields) + " may act at once");
+            for (size_t k = 0; k < e.forces->size(); ++k) {
+                const ForceField& f = (*e.forces)[k];
+                const std::string at = "forces[" + std::to_string(k) + "]: ";
+                if (f.kind != ForceField::Kind::directional && f.kind != ForceField::Kind::radial)
+                    return bad(i, e, at + "kind must be directional or radial");
+                if (!finite(f.center) || !finite(f.directional) || !std::isfinite(f.radial))
+                    return bad(i, e, at + "center, directional and radial must be finite");
+                if (!(std::isfinite(f.radius) && f.radius > 0.0))
+                    return bad(i, e, at + "radius must be finite and > 0");
+            }
         }
         std::map<uint64_t, bool> named;
         for (const InstanceChange& c : e.instances) {
@@ -98,60 +110,6 @@ Status validate_schedule(const Schedule& schedule, std::span<const std::string> 
                 return bad(i, e, at + "wind_scale must be finite and >= 0");
         }
         count += e.add.size();
-    }
-    return {};
-}
-
-Status apply_schedule_events(const Schedule& schedule, uint64_t step, Simulation& sim) {
-    for (const ScheduleEvent& e : schedule.events) {
-        if (e.step != step) continue;
-        const std::string where = "schedule step " + std::to_string(e.step) + ": ";
-        auto fail = [&](const Status& s) { return Status{s.code(), where + s.message()}; };
-        if (e.wind) {
-            Status s = sim.set_wind(e.wind->applied_to(sim.wind()));
-            if (!s) return fail(s);
-        }
-        if (e.forces) {
-            Status s = sim.set_force_fields(*e.forces);
-            if (!s) return fail(s);
-        }
-        for (const InstanceChange& c : e.instances) {
-            if (c.wind_scale) {
-                Status s = sim.set_instance_wind_scale(c.instance, *c.wind_scale);
-                if (!s) return fail(s);
-            }
-            if (c.wind_phase) {
-                Status s = sim.set_instance_wind_phase(c.instance, *c.wind_phase);
-                if (!s) return fail(s);
-            }
-            if (c.active) {
-                Status s = sim.set_instance_active(c.instance, *c.active);
-                if (!s) return fail(s);
-            }
-        }
-        if (!e.remove.empty()) {
-            Status s = sim.remove_instances(e.remove);
-            if (!s) return fail(s);
-        }
-        if (!e.add.empty()) {
-            const std::vector<std::string>& names = sim.scene().model_names;
-            std::vector<Instance> added;
-            for (const ScheduledInstance& a : e.add) {
-                auto found = std::find(names.begin(), names.end(), a.model);
-                if (found == names.end())
-                    return {ErrorCode::invalid_argument, where + "model \"" + a.model + "\" is not one of the run's models"};
-                Instance inst;
-                inst.model = uint32_t(found - names.begin());
-                inst.origin = a.origin;
-                inst.yaw = a.yaw;
-                inst.wind_scale = a.wind_scale;
-                inst.wind_phase = a.wind_phase;
-                inst.active = a.active;
-                added.push_back(inst);
-            }
-            Status s = sim.add_instances(added);
-            if (!s) return fail(s);
-        }
     }
     return {};
 }

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Builds the libFuzzer targets (tests/fuzz, clang, -fsanitize=fuzzer,address,undefined) and runs
-# each for a bounded time on the seed corpus (valid trees and forests plus the bad-input
+# each for a bounded time on the seed corpus (valid trees, forests and schedules plus the bad-input
 # catalog). Exit 0 when nothing was found; otherwise the crashing input is under
 # $build/artifacts/ and the script fails.
 #   HMSM_FUZZ_BUILD_DIR  build folder (default build-fuzz)
@@ -17,7 +17,7 @@ cmake --build "$build" -j "$(nproc 2>/dev/null || echo 2)"
 
 mkdir -p "$build/artifacts"
 status=0
-for target in tree forest; do
+for target in tree forest schedule; do
   work="$build/corpus-$target"  # new inputs land here; the seed folders stay untouched
   mkdir -p "$work"
   seeds=("$root/tests/fuzz/corpus/$target" "$root/tests/fuzz/regressions/$target"
