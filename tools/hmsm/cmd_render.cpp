@@ -132,16 +132,16 @@ void register_render_flags(CLI::App& app) {
     app.add_option("--backend", flags.backend,
                    "auto (default) or vulkan: simulate on the rendering device and draw from its "
                    "buffers; cpu, cpu64, cuda: read back and upload each frame");
-    app.add_option("--frames", flags.frames, "frames to render (default 60)");
+    add_integer_option(app, "--frames", flags.frames, "frames to render (default 60)");
     app.add_option("--fps", flags.fps, "frames per second of simulated time (default 30)");
     app.add_option("--warmup", flags.warmup, "seconds simulated before the first frame (default 0)");
-    app.add_option("--width", flags.width, "picture width in pixels (default 640)");
-    app.add_option("--height", flags.height, "picture height in pixels (default 480)");
-    app.add_option("--msaa", flags.msaa, "samples per pixel: 1, 2, 4 (default) or 8");
+    add_integer_option(app, "--width", flags.width, "picture width in pixels (default 640)");
+    add_integer_option(app, "--height", flags.height, "picture height in pixels (default 480)");
+    add_integer_option(app, "--msaa", flags.msaa, "samples per pixel: 1, 2, 4 (default) or 8");
     app.add_option("--out", flags.out, "folder for frame_0000.png, frame_0001.png, ...")->required();
     app.add_option("--gif", flags.gif, "also write an animated GIF of all frames");
     app.add_option("--strip", flags.strip, "also write one PNG with frames side by side");
-    app.add_option("--strip-frames", flags.strip_frames, "frames in the strip, evenly spaced (default 4)");
+    add_integer_option(app, "--strip-frames", flags.strip_frames, "frames in the strip, evenly spaced (default 4)");
     app.add_option("--camera-distance", flags.camera_distance,
                    "metres from the look-at point (default: frame the trees)");
     app.add_option("--camera-yaw", flags.camera_yaw,
