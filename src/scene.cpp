@@ -25,9 +25,9 @@ Result<Scene> grid_scene(TreeModel tree, uint32_t count, double spacing, uint64_
     // flattened buffers hold at most 2^32 - 1 of them.
     const uint64_t min_vertices = 3 * uint64_t(tree.nodes.size()) * uint64_t(count);
     if (count > kMaxGridInstances || min_vertices >= uint64_t(UINT32_MAX))
-        return Status{ErrorCode::invalid_argument,
-                      "instances " + std::to_string(count) + ": too many for one scene (at most " +
-                          std::to_string(kMaxGridInstances) + ", and 2^32 - 2 mesh vertices; " +
+        return Status{ErrorCode::unsupported,
+                      "scene too large: " + std::to_string(count) + " instances (at most " +
+                          std::to_string(kMaxGridInstances) + ", and at most 2^32 - 1 mesh vertices; " +
                           std::to_string(tree.nodes.size()) + " nodes per instance)"};
     Scene scene;
     scene.models.push_back(std::move(tree));

@@ -80,11 +80,12 @@ Result<Scene> load_scene(const SourceFlags& f, CLI::App& app, const ModelOptions
             if (!hierarchy) return hierarchy.status();
             const uint64_t per_instance = build_mesh(*tree, *hierarchy, *options).vertices.size();
             const uint64_t limit = std::numeric_limits<uint32_t>::max();
+            // The same limit and class as Simulation::create's (a limit of this build: exit 1).
             if (per_instance * uint64_t(f.instances) >= limit)
-                return Status{ErrorCode::invalid_argument,
-                              "--instances " + std::to_string(f.instances) + ": the scene would have " +
+                return Status{ErrorCode::unsupported,
+                              "scene too large: --instances " + std::to_string(f.instances) + " would have " +
                                   std::to_string(per_instance * uint64_t(f.instances)) + " mesh vertices (" +
-                                  std::to_string(per_instance) + " per instance); at most 2^32 - 2 are supported"};
+                                  std::to_string(per_instance) + " per instance; at most 2^32 - 1 are supported)"};
         }
         return grid_scene(std::move(tree).value(), f.instances, f.spacing, f.seed);
     }
