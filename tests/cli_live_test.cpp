@@ -324,3 +324,29 @@ TEST_F(CliLive, ProgressOnlyOnATerminal) {
     ASSERT_EQ(run(simulate("--steps 5 --no-progress")), 0) << err_;
     EXPECT_EQ(std::count(err_.begin(), err_.end(), '\n'), 1) << err_;
 }
+
+// Needs wind_scale and active in the backends. A forest's wind_scale 0 and active false keep an
+// instance in its rest pose (to the bit: no force, or no pass touches it); the others sway.
+TEST_F(CliLive, ForestWindScaleAndActiveReachTheSimulation) {
+    write("forest.json", R"({"format": "hmsm-forest", "version": 1, "models": {"t": "small.json"},
+        "instances": [{"model": "t"}, {"model": "t", "origin": [6, 0, 0], "wind_scale": 0},
+                      {"model": "t", "origin": [12, 0, 0], "active": false},
+                      {"model": "t", "origin": [18, 0, 0], "wind_scale": 2, "wind_phase": 0.5}]})");
+    const std::string forest = "simulate --forest " + path("forest.json") + " --backend cpu64 --wind constant ";
+    ASSERT_EQ(run(forest + "--steps 0 --dump-nodes " + path("rest.csv")), 0) << err_;
+    ASSERT_EQ(run(forest + "--steps 40 --dump-nodes " + path("moved.csv")), 0) << err_;
+    std::string header;
+    Rows rest = csv(path("rest.csv"), header), moved = csv(path("moved.csv"), header);
+    const size_t n = test::small_tree().nodes.size();
+    ASSERT_EQ(rest.size(), 4 * n);
+    ASSERT_EQ(moved.size(), 4 * n);
+    auto same = [&](size_t instance) {
+        for (size_t k = instance * n; k < (instance + 1) * n; ++k)
+            if (rest[k] != moved[k]) return false;
+        return true;
+    };
+    EXPECT_FALSE(same(0));
+    EXPECT_TRUE(same(1)) << "wind_scale 0: no wind";
+    EXPECT_TRUE(same(2)) << "inactive: frozen";
+    EXPECT_FALSE(same(3));
+}
