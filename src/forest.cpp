@@ -59,8 +59,18 @@ Result<Scene> parse_forest(std::string_view text, const std::string& base_direct
             return r.error(where, "model", "\"" + name + "\" is not one of the forest's models");
         Instance inst;
         inst.model = found->second;
-        HMSM_TRY(r.vec3_field(item, where, "origin", inst.origin));
+        if (item.contains("origin")) HMSM_TRY(r.vec3_field(item, where, "origin", inst.origin));
         if (item.contains("yaw")) HMSM_TRY(r.number_field(item, where, "yaw", inst.yaw));
+        if (item.contains("wind_scale")) {
+            HMSM_TRY(r.number_field(item, where, "wind_scale", inst.wind_scale));
+            if (inst.wind_scale < 0.0) return r.error(where, "wind_scale", "must be >= 0");
+        }
+        if (item.contains("wind_phase")) HMSM_TRY(r.number_field(item, where, "wind_phase", inst.wind_phase));
+        if (item.contains("active")) {
+            if (!item["active"].is_boolean())
+                return r.error(where, "active", "expected true or false, got " + item["active"].dump());
+            inst.active = item["active"].get<bool>();
+        }
         scene.instances.push_back(inst);
     }
     return scene;

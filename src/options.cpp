@@ -106,6 +106,8 @@ Status validate(const Parameters& p) {
         return bad("wind_gain", p.wind_gain, "must be finite and >= 0");
     if (!std::isfinite(p.max_angle) || p.max_angle <= 0.0 || p.max_angle > std::numbers::pi / 2)
         return bad("max_angle", p.max_angle, "must be in (0, pi/2]");
+    if (!std::isfinite(p.max_frequency) || p.max_frequency <= 0.0)
+        return bad("max_frequency", p.max_frequency, "must be finite and > 0");
     return {};
 }
 

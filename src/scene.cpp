@@ -3,6 +3,7 @@
 #include "random.h"
 
 #include <cmath>
+#include <cstdint>
 #include <numbers>
 
 namespace hmsm {
@@ -19,6 +20,15 @@ Result<Scene> grid_scene(TreeModel tree, uint32_t count, double spacing, uint64_
     if (count == 0) return Status{ErrorCode::invalid_argument, "instances must be >= 1"};
     if (!std::isfinite(spacing) || spacing < 0.0)
         return Status{ErrorCode::invalid_argument, "spacing must be finite and >= 0"};
+    // Refuse absurd counts before the instance list is allocated: every node lies on at least
+    // one ring of >= 3 vertices, so an instance has at least 3 * nodes mesh vertices, and the
+    // flattened buffers hold at most 2^32 - 1 of them.
+    const uint64_t min_vertices = 3 * uint64_t(tree.nodes.size()) * uint64_t(count);
+    if (count > kMaxGridInstances || min_vertices >= uint64_t(UINT32_MAX))
+        return Status{ErrorCode::unsupported,
+                      "scene too large: " + std::to_string(count) + " instances (at most " +
+                          std::to_string(kMaxGridInstances) + ", and at most 2^32 - 1 mesh vertices; " +
+                          std::to_string(tree.nodes.size()) + " nodes per instance)"};
     Scene scene;
     scene.models.push_back(std::move(tree));
     scene.model_names.push_back("tree");
@@ -47,6 +57,10 @@ Status validate_scene(const Scene& scene) {
             !std::isfinite(inst.origin.z))
             return {ErrorCode::invalid_argument, where + "origin is not finite"};
         if (!std::isfinite(inst.yaw)) return {ErrorCode::invalid_argument, where + "yaw is not finite"};
+        if (!std::isfinite(inst.wind_scale) || inst.wind_scale < 0.0)
+            return {ErrorCode::invalid_argument, where + "wind_scale must be finite and >= 0"};
+        if (!std::isfinite(inst.wind_phase))
+            return {ErrorCode::invalid_argument, where + "wind_phase is not finite"};
     }
     for (size_t m = 0; m < scene.models.size(); ++m) {
         Status valid = validate_tree(scene.models[m]);

@@ -250,6 +250,12 @@ void BadInput::expect_api_rejects_args(const json& api) {
         if (key == "preset") return expect_api_rejects(generate_preset(v.get<std::string>()).status());
         if (key == "load_tree") return expect_api_rejects(load_tree(expand(v.get<std::string>())).status());
         if (key == "load_forest") return expect_api_rejects(load_forest(expand(v.get<std::string>())).status());
+        if (key == "schedule") {  // parsed, then checked against one instance of the model "tree"
+            auto schedule = load_schedule(expand(v.get<std::string>()));
+            if (!schedule) return expect_api_rejects(schedule.status());
+            const std::vector<std::string> names = {"tree"};
+            return expect_api_rejects(validate_schedule(*schedule, names, 1, Wind{}));
+        }
         if (key == "instances") {
             double spacing = api.contains("spacing") ? number(api["spacing"]) : 25.0;
             return expect_api_rejects(grid_scene(tree, v.get<uint32_t>(), spacing, 1).status());
@@ -264,6 +270,7 @@ void BadInput::expect_api_rejects_args(const json& api) {
                 else if (f.key() == "damping_ratio") p.damping_ratio = x;
                 else if (f.key() == "wind_gain") p.wind_gain = x;
                 else if (f.key() == "max_angle") p.max_angle = x;
+                else if (f.key() == "max_frequency") p.max_frequency = x;
                 else ADD_FAILURE() << "catalog: unknown parameter " << f.key();
             }
         } else if (key == "wind") {

@@ -2,9 +2,10 @@
 # The README's first command: installs what is missing, builds, generates the paper-1 tree,
 # simulates 10 s of Y1 wind on the best available backend, compares the backends this machine
 # has (a Table 1-style table), and renders the swaying tree: out/paper-1.gif and a strip of four
-# frames, out/paper-1-strip.png; then exports the same 10 s as a skinned glTF clip,
-# out/paper-1.glb (docs/export.md), and checks it with the Khronos glTF validator. Sized for a
-# 2-core machine without a GPU (Vulkan on lavapipe).
+# frames, out/paper-1-strip.png, then a gust and a blast through a small forest driven by a
+# schedule file (out/forest-gust.gif); then exports the paper-1 animation as a skinned glTF
+# clip, out/paper-1.glb (docs/export.md), and checks it with the Khronos glTF validator. Sized
+# for a 2-core machine without a GPU (Vulkan on lavapipe).
 #
 # Environment: HMSM_BUILD_DIR (default build), HMSM_DEMO_OUT (default out), HMSM_DEMO_PRESET
 # (default paper-1), HMSM_DEMO_FRAMES (48), HMSM_DEMO_FPS (12), HMSM_DEMO_SIZE (320x240).
@@ -68,6 +69,27 @@ section "rendering $frames frames at $fps fps, ${size} (Vulkan offscreen)"
 "$hmsm" render --tree "$out/$preset.json" --backend auto --wind y1 \
   --frames "$frames" --fps "$fps" --width "${size%x*}" --height "${size#*x}" \
   --out "$out/frames" --gif "$out/$preset.gif" --strip "$out/$preset-strip.png"
+
+# Live control from a file: a gust (a strength ramp to 14 m/s and back) and then a radial blast
+# sweep through a grove of five paper-5 trees in turbulent wind (examples/forest). The wind gain
+# is given explicitly so the picture does not depend on the default.
+forest="$root/examples/forest/grove.json"
+schedule="$root/examples/forest/gust_and_blast.json"
+live=(--wind turbulent --wind-speed 4 --turbulence 0.4 --front-speed 4 --wind-gain 1.5)
+section "a gust and a blast through a small forest ($frames frames, --wind-schedule)"
+printf '{"format": "hmsm-schedule", "version": 1, "events": [{"step": 1, "wind": {"speed": 4}}]}\n' \
+  >"$out/probe-schedule.json"
+if "$hmsm" simulate --forest "$forest" --backend cpu --steps 1 --wind-schedule "$out/probe-schedule.json" \
+     2>"$out/probe.log"; then
+  "$hmsm" render --forest "$forest" --backend auto "${live[@]}" --wind-schedule "$schedule" \
+    --frames "$frames" --fps "$fps" --width "${size%x*}" --height "${size#*x}" \
+    --out "$out/forest-frames" --gif "$out/forest-gust.gif" --strip "$out/forest-gust-strip.png"
+else
+  echo "(live control is not available in this build: $(tail -n 1 "$out/probe.log"); the grove without the schedule)"
+  "$hmsm" render --forest "$forest" --backend auto "${live[@]}" \
+    --frames "$frames" --fps "$fps" --width "${size%x*}" --height "${size#*x}" \
+    --out "$out/forest-frames" --gif "$out/forest-gust.gif" --strip "$out/forest-gust-strip.png"
+fi
 
 section "exporting 10 s at 24 fps as a skinned glTF 2.0 clip (docs/export.md)"
 "$hmsm" export --tree "$out/$preset.json" --gltf "$out/$preset.glb" --seconds 10 --fps 24 --wind y1

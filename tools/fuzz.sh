@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Builds the libFuzzer targets (tests/fuzz, clang, -fsanitize=fuzzer,address,undefined) and runs
-# each for a bounded time on the seed corpus (valid trees, forests and cylinder models plus the bad-input
+# each for a bounded time on the seed corpus (valid trees, forests, schedules and cylinder models plus the bad-input
 # catalog). Exit 0 when nothing was found; otherwise the crashing input is under
 # $build/artifacts/ and the script fails.
 #   HMSM_FUZZ_BUILD_DIR  build folder (default build-fuzz)
@@ -17,7 +17,7 @@ cmake --build "$build" -j "$(nproc 2>/dev/null || echo 2)"
 
 mkdir -p "$build/artifacts"
 status=0
-for target in tree forest treeqsm simpleforest; do
+for target in tree forest schedule treeqsm simpleforest; do
   work="$build/corpus-$target"  # new inputs land here; the seed folders stay untouched
   mkdir -p "$work"
   seeds=("$root/tests/fuzz/corpus/$target" "$root/tests/fuzz/regressions/$target"
@@ -26,7 +26,7 @@ for target in tree forest treeqsm simpleforest; do
   # -max_len bounds an input (the deep-nesting seeds are larger and get truncated to it);
   # -timeout flags any input that takes more than 10 s as a hang.
   dict=()  # the JSON dictionary helps the JSON parsers only
-  case $target in tree|forest) dict=(-dict="$root/tests/fuzz/json.dict") ;; esac
+  case $target in tree|forest|schedule) dict=(-dict="$root/tests/fuzz/json.dict") ;; esac
   if ! "$build/fuzz_$target" "$work" "${seeds[@]}" \
       "${dict[@]}" -max_total_time="$seconds" -max_len=16384 \
       -timeout=10 -rss_limit_mb=2048 -print_final_stats=1 \

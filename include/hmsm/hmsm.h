@@ -9,6 +9,7 @@
 #include <hmsm/options.h>
 #include <hmsm/pass.h>
 #include <hmsm/scene.h>
+#include <hmsm/schedule.h>
 #include <hmsm/simulation.h>
 #include <hmsm/skin.h>
 #include <hmsm/status.h>

@@ -28,8 +28,13 @@ struct Scene {
 /// One instance of `tree` (at the origin with yaw 0 by default).
 Scene single_tree_scene(TreeModel tree, Vec3 origin = Vec3(0.0), double yaw = 0.0);
 
+/// Most instances grid_scene places (2^24).
+inline constexpr uint32_t kMaxGridInstances = uint32_t(1) << 24;
+
 /// `count` instances of `tree` on a square grid `spacing` apart, centred on the origin, with
-/// yaws drawn deterministically from `seed`.
+/// yaws drawn deterministically from `seed`. Counts above kMaxGridInstances, or with more than
+/// 2^32 - 2 mesh vertices for certain (3 per node per instance at least), are refused as
+/// `unsupported` ("scene too large", as Simulation::create) before anything is allocated.
 Result<Scene> grid_scene(TreeModel tree, uint32_t count, double spacing, uint64_t seed);
 
 /// Reads an hmsm-forest JSON v1 file; model paths are relative to the file, "preset:NAME"

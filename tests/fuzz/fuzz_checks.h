@@ -1,4 +1,4 @@
-// Properties the tree and forest parsers must have for ANY input, shared by the
+// Properties the tree, forest and schedule parsers must have for ANY input, shared by the
 // libFuzzer targets (fuzz_tree.cpp, fuzz_forest.cpp) and the corpus replay in the normal test
 // suite (fuzz_replay_test.cpp). Each check returns "" or a description of the violation.
 //
@@ -11,6 +11,7 @@
 #pragma once
 
 #include <hmsm/scene.h>
+#include <hmsm/schedule.h>
 #include <hmsm/tree.h>
 
 #include <cmath>
@@ -74,6 +75,34 @@ inline std::string check_forest(const uint8_t* data, size_t size, const std::str
     if (s.model_names.size() != s.models.size()) return "model names and models differ in length";
     Status valid = validate_scene(s);
     if (!valid.ok()) return "parse_forest accepted a scene validate_scene rejects: " + valid.message();
+    return "";
+}
+
+/// A schedule either fails to parse with a one-line input error, or parses into events in
+/// non-decreasing step order (>= 1) with at most 16 valid force fields each, and then either
+/// validates against a run of models "tree" and "oak" with 3 instances or fails with a one-line
+/// input error.
+inline std::string check_schedule(const uint8_t* data, size_t size) {
+    std::string_view text(reinterpret_cast<const char*>(data), size);
+    Result<Schedule> schedule = parse_schedule(text, "fuzz-schedule.json");
+    if (!schedule.ok()) return check_error(schedule.status());
+    uint64_t previous = 1;
+    for (const ScheduleEvent& e : schedule->events) {
+        if (e.step < previous) return "accepted a step < 1 or out of order: " + std::to_string(e.step);
+        previous = e.step;
+        if (e.wind && e.wind->speed && e.wind->strength) return "accepted both speed and strength";
+        if (e.forces) {
+            if (e.forces->size() > kMaxForceFields) return "accepted more than 16 force fields";
+            for (const ForceField& f : *e.forces)
+                if (!(f.radius > 0.0) || !std::isfinite(f.radius) || !std::isfinite(f.radial) ||
+                    !std::isfinite(f.center.x + f.center.y + f.center.z) ||
+                    !std::isfinite(f.directional.x + f.directional.y + f.directional.z))
+                    return "accepted a force field with a bad number";
+        }
+    }
+    const std::string names[] = {"tree", "oak"};
+    Status valid = validate_schedule(*schedule, names, 3, Wind{});
+    if (!valid.ok()) return check_error(valid);
     return "";
 }
 

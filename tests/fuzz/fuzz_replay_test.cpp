@@ -16,7 +16,9 @@ namespace {
 const fs::path kFuzzDir = HMSM_FUZZ_DIR;
 const fs::path kBadDir = fs::path(HMSM_TEST_DATA) / "bad";
 
-int replay(const std::vector<fs::path>& folders, bool forest) {
+enum class Kind { tree, forest, schedule };
+
+int replay(const std::vector<fs::path>& folders, Kind kind) {
     int files = 0;
     for (const fs::path& folder : folders) {
         if (!fs::is_directory(folder)) continue;
@@ -27,7 +29,9 @@ int replay(const std::vector<fs::path>& folders, bool forest) {
             s << in.rdbuf();
             const std::string bytes = s.str();
             const auto* data = reinterpret_cast<const uint8_t*>(bytes.data());
-            std::string failure = forest ? hmsm::fuzz::check_forest(data, bytes.size(), (kFuzzDir / "models").string())
+            std::string failure =
+                kind == Kind::forest     ? hmsm::fuzz::check_forest(data, bytes.size(), (kFuzzDir / "models").string())
+                : kind == Kind::schedule ? hmsm::fuzz::check_schedule(data, bytes.size())
                                          : hmsm::fuzz::check_tree(data, bytes.size());
             EXPECT_EQ(failure, "") << entry.path();
             ++files;
@@ -39,11 +43,17 @@ int replay(const std::vector<fs::path>& folders, bool forest) {
 }  // namespace
 
 TEST(FuzzReplay, TreeCorpusRegressionsAndCatalog) {
-    int files = replay({kFuzzDir / "corpus" / "tree", kFuzzDir / "regressions" / "tree", kBadDir / "trees"}, false);
+    int files = replay({kFuzzDir / "corpus" / "tree", kFuzzDir / "regressions" / "tree", kBadDir / "trees"}, Kind::tree);
     EXPECT_GE(files, 30);
 }
 
 TEST(FuzzReplay, ForestCorpusRegressionsAndCatalog) {
-    int files = replay({kFuzzDir / "corpus" / "forest", kFuzzDir / "regressions" / "forest", kBadDir / "forests"}, true);
+    int files = replay({kFuzzDir / "corpus" / "forest", kFuzzDir / "regressions" / "forest", kBadDir / "forests"}, Kind::forest);
     EXPECT_GE(files, 10);
+}
+
+TEST(FuzzReplay, ScheduleCorpusRegressionsAndCatalog) {
+    int files = replay({kFuzzDir / "corpus" / "schedule", kFuzzDir / "regressions" / "schedule", kBadDir / "schedules"},
+                       Kind::schedule);
+    EXPECT_GE(files, 30);
 }

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <limits>
 
 namespace hmsm::cli {
 
@@ -28,10 +29,10 @@ void add_source_flags(CLI::App& app, SourceFlags& f, bool with_forest_and_instan
     auto* forest = app.add_option("--forest", f.forest, "hmsm-forest JSON file");
     forest->excludes(tree)->excludes(preset);
     auto* instances =
-        app.add_option("--instances", f.instances, "N instances of the tree on a square grid");
+        add_integer_option(app, "--instances", f.instances, "N instances of the tree on a square grid");
     instances->excludes(forest);
     app.add_option("--spacing", f.spacing, "grid spacing in metres (default 25)");
-    app.add_option("--seed", f.seed, "seed of the grid's random yaws (default 1)");
+    add_integer_option(app, "--seed", f.seed, "seed of the grid's random yaws (default 1)");
     app.add_option("--origin", f.origin, "single instance origin X,Y,Z");
     app.add_option("--yaw", f.yaw, "single instance yaw in radians");
 }
@@ -59,7 +60,7 @@ Result<glm::dvec3> parse_vec3(const std::string& text, const char* flag) {
     return v;
 }
 
-Result<Scene> load_scene(const SourceFlags& f, CLI::App& app) {
+Result<Scene> load_scene(const SourceFlags& f, CLI::App& app, const ModelOptions* options) {
     if (!f.forest.empty()) return load_forest(f.forest);
     if (f.tree.empty() && f.preset.empty())
         return Status{ErrorCode::invalid_argument,
@@ -72,6 +73,20 @@ Result<Scene> load_scene(const SourceFlags& f, CLI::App& app) {
         if (app.count("--origin") || app.count("--yaw"))
             return Status{ErrorCode::invalid_argument,
                           "--origin and --yaw place a single instance; they cannot be used with --instances"};
+        if (options) {
+            // The flattened buffers hold at most 2^32 - 1 mesh vertices: size the scene from one
+            // model's counts before the instance list (or anything else) is allocated.
+            auto hierarchy = build_hierarchy(*tree, *options);
+            if (!hierarchy) return hierarchy.status();
+            const uint64_t per_instance = build_mesh(*tree, *hierarchy, *options).vertices.size();
+            const uint64_t limit = std::numeric_limits<uint32_t>::max();
+            // The same limit and class as Simulation::create's (a limit of this build: exit 1).
+            if (per_instance * uint64_t(f.instances) >= limit)
+                return Status{ErrorCode::unsupported,
+                              "scene too large: --instances " + std::to_string(f.instances) + " would have " +
+                                  std::to_string(per_instance * uint64_t(f.instances)) + " mesh vertices (" +
+                                  std::to_string(per_instance) + " per instance; at most 2^32 - 1 are supported)"};
+        }
         return grid_scene(std::move(tree).value(), f.instances, f.spacing, f.seed);
     }
     auto origin = parse_vec3(f.origin, "--origin");
@@ -82,9 +97,9 @@ Result<Scene> load_scene(const SourceFlags& f, CLI::App& app) {
 
 void add_model_flags(CLI::App& app, ModelFlags& f) {
     app.add_option("--grouping", f.grouping, "chain grouping: direction (default) or width");
-    app.add_option("--max-chain-segments", f.options.max_chain_segments,
-                   "cut chains after K nodes (0 = never, default)");
-    app.add_option("--ring-sides", f.options.ring_sides, "vertices per branch ring (default 8)");
+    add_integer_option(app, "--max-chain-segments", f.options.max_chain_segments,
+                       "cut chains after K nodes (0 = never, default)");
+    add_integer_option(app, "--ring-sides", f.options.ring_sides, "vertices per branch ring (default 8)");
     app.add_option("--fix-weight", f.options.fix_weight, "contour fix-up weight in [0,1] (default 0.5)");
 }
 
@@ -106,29 +121,61 @@ void add_parameter_flags(CLI::App& app, Parameters& p) {
     app.add_option("--damping-ratio", p.damping_ratio, "damping ratio zeta (default 0.1)");
     app.add_option("--wind-gain", p.wind_gain, "wind gain gamma (default 15)");
     app.add_option("--max-angle", p.max_angle, "max joint angle in radians (default 0.8)");
+    app.add_option("--max-frequency", p.max_frequency,
+                   "frequency cap f_cap in Hz: no chain sways faster (default 4)");
 }
 
 void add_wind_flags(CLI::App& app, WindFlags& f) {
-    app.add_option("--wind", f.profile, "wind profile: none, constant, y1, y2, y3, y4 (default y1)");
+    app.add_option("--wind", f.profile,
+                   "wind profile: none, constant, y1, y2, y3, y4, turbulent (default y1)");
     app.add_option("--wind-dir", f.direction, "wind direction X,Y,Z (default 1,0,0)");
-    app.add_option("--wind-strength", f.wind.strength, "wind strength (default 1)");
+    f.strength_option = app.add_option("--wind-strength", f.wind.strength,
+                                       "wind strength: dynamic pressure relative to a 6 m/s breeze (default 1)");
+    app.add_option("--wind-speed", f.speed, "wind speed U in m/s instead of --wind-strength: strength (U/6)^2");
     app.add_option("--wind-frequency", f.wind.frequency, "profile frequency f (default 0.1)");
     app.add_option("--front-speed", f.wind.front_speed, "travelling front speed v (default 0: none)");
+    app.add_option("--turbulence", f.wind.turbulence,
+                   "turbulent profile: relative fluctuation sigma in [0, 2] (default 0.3)");
+    add_integer_option(app, "--wind-seed", f.wind.seed,
+                       "turbulent profile: seed of the modes' phases, 0..2^64-1 (default 0)");
+    app.add_option("--wind-schedule", f.schedule,
+                   "hmsm-schedule JSON file: wind, force fields and instances changed before given steps");
 }
 
 Result<Wind> wind_options(const WindFlags& f) {
     auto profile = parse_wind_profile(f.profile);
     if (!profile)
         return Status{ErrorCode::invalid_argument,
-                      "--wind '" + f.profile + "': expected none, constant, y1, y2, y3 or y4"};
+                      "--wind '" + f.profile + "': expected none, constant, y1, y2, y3, y4 or turbulent"};
     auto direction = parse_vec3(f.direction, "--wind-dir");
     if (!direction) return direction.status();
     Wind wind = f.wind;
     wind.profile = *profile;
     wind.direction = *direction;
+    if (f.speed) {
+        if (f.strength_option && f.strength_option->count() > 0)
+            return Status{ErrorCode::invalid_argument,
+                          "--wind-strength and --wind-speed both set the wind's strength: give one"};
+        if (!std::isfinite(*f.speed) || *f.speed < 0.0)
+            return Status{ErrorCode::invalid_argument, "--wind-speed must be finite and >= 0 m/s"};
+        wind.strength = wind_strength_for_speed(*f.speed);
+    }
+    if (!std::isfinite(wind.turbulence) || wind.turbulence < 0.0 || wind.turbulence > 2.0)
+        return Status{ErrorCode::invalid_argument, "--turbulence must be within [0, 2]"};
+    if (wind.front_speed > 0.0 && wind.front_speed < 0.01)
+        return Status{ErrorCode::invalid_argument, "--front-speed must be 0 or >= 0.01 m/s"};
     Status valid = validate(wind);
     if (!valid) return valid;
     return wind;
+}
+
+Result<std::optional<Schedule>> schedule_option(const WindFlags& f, const Scene& scene, const Wind& wind) {
+    if (f.schedule.empty()) return std::optional<Schedule>();
+    auto schedule = load_schedule(f.schedule);
+    if (!schedule) return schedule.status();
+    Status valid = validate_schedule(*schedule, scene.model_names, scene.instances.size(), wind);
+    if (!valid) return Status{valid.code(), f.schedule + ": " + valid.message()};
+    return std::optional<Schedule>(std::move(schedule).value());
 }
 
 StagedOutputs::~StagedOutputs() {

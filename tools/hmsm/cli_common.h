@@ -6,8 +6,12 @@
 
 #include <CLI/CLI.hpp>
 
+#include <charconv>
+#include <limits>
 #include <memory>
+#include <optional>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 namespace hmsm::cli {
@@ -20,6 +24,36 @@ inline constexpr int kExitBadInput = 2;
 int fail(const Status& status);
 int fail_input(const std::string& message);
 
+/// Parses a whole decimal integer of type T; anything else (a sign T cannot hold, a fraction,
+/// trailing text, a value beyond T's range) is an error naming `flag`.
+template <class T>
+Result<T> parse_integer(const std::string& text, const std::string& flag) {
+    T value{};
+    const char* end = text.data() + text.size();
+    auto [next, ec] = std::from_chars(text.data(), end, value);
+    if (text.empty() || ec != std::errc() || next != end)
+        return Status{ErrorCode::invalid_argument,
+                      flag + " '" + text + "': expected an integer within " +
+                          std::to_string(std::numeric_limits<T>::min()) + ".." +
+                          std::to_string(std::numeric_limits<T>::max())};
+    return value;
+}
+
+/// An integer flag checked against its type's range (CLI11 alone lets some overflowing values
+/// through): a bad value is a parse error, exit 2.
+template <class T>
+CLI::Option* add_integer_option(CLI::App& app, const std::string& name, T& target, const std::string& help) {
+    static_assert(std::is_integral_v<T>);
+    return app.add_option_function<std::string>(
+        name,
+        [&target, name](const std::string& text) {
+            Result<T> parsed = parse_integer<T>(text, name);
+            if (!parsed) throw CLI::ValidationError(parsed.status().message());
+            target = *parsed;
+        },
+        help);
+}
+
 /// Where the trees come from: one of --tree, --preset, --forest; plus a grid of instances.
 struct SourceFlags {
     std::string tree, preset, forest;
@@ -30,7 +64,9 @@ struct SourceFlags {
     double yaw = 0.0;
 };
 void add_source_flags(CLI::App& app, SourceFlags& flags, bool with_forest_and_instances);
-Result<Scene> load_scene(const SourceFlags& flags, CLI::App& app);
+/// Loads the scene. With `options`, a grid of --instances is first sized from the model's counts
+/// (mesh vertices per instance) and refused before anything scene-sized is allocated.
+Result<Scene> load_scene(const SourceFlags& flags, CLI::App& app, const ModelOptions* options = nullptr);
 
 /// Model options, parameters and wind as flags.
 struct ModelFlags {
@@ -44,10 +80,17 @@ struct WindFlags {
     std::string profile = "y1";
     std::string direction = "1,0,0";
     Wind wind;
+    std::optional<double> speed;  ///< --wind-speed U (m/s): strength (U / 6)^2
+    std::string schedule;         ///< --wind-schedule FILE
+    CLI::Option* strength_option = nullptr;
 };
 void add_parameter_flags(CLI::App& app, Parameters& parameters);
 void add_wind_flags(CLI::App& app, WindFlags& flags);
+/// The wind of the flags (--wind-strength and --wind-speed together are bad input).
 Result<Wind> wind_options(const WindFlags& flags);
+/// The --wind-schedule file, parsed and validated against the scene and the flags' wind; none
+/// when the flag is not given.
+Result<std::optional<Schedule>> schedule_option(const WindFlags& flags, const Scene& scene, const Wind& wind);
 
 /// Parses "X,Y,Z" strictly (three finite numbers).
 Result<glm::dvec3> parse_vec3(const std::string& text, const char* flag);

@@ -78,9 +78,9 @@ void register_bench_flags(CLI::App& app) {
                                          "(also the forest model)");
     app.add_option("--backends", flags.backends, "comma-separated backends (default cpu,cpu-parallel,vulkan,cuda; "
                                                  "unavailable ones are skipped with a note)");
-    app.add_option("--steps", flags.steps, "steps per timed batch (default 100)");
-    app.add_option("--warmup", flags.warmup, "warm-up steps before timing (default 20)");
-    app.add_option("--repeats", flags.repeats, "timed batches per figure; medians are reported (default 5)");
+    add_integer_option(app, "--steps", flags.steps, "steps per timed batch (default 100)");
+    add_integer_option(app, "--warmup", flags.warmup, "warm-up steps before timing (default 20)");
+    add_integer_option(app, "--repeats", flags.repeats, "timed batches per figure; medians are reported (default 5)");
     app.add_option("--instances", flags.instances,
                    "forest sizes of paper-1, comma-separated (default 1,10,100,1000,10000; none: no forest)");
     app.add_option("--joint-instances", flags.joint_instances,

@@ -11,7 +11,7 @@ struct GenerateFlags {
 
 void register_generate_flags(CLI::App& app) {
     app.add_option("--preset", flags.preset, "preset: paper-1 ... paper-5")->required();
-    app.add_option("--seed", flags.seed, "seed (default 0: the preset's own)");
+    add_integer_option(app, "--seed", flags.seed, "seed (default 0: the preset's own)");
     app.add_option("--out", flags.out, "output hmsm-tree JSON file")->required();
 }
 

@@ -1,5 +1,5 @@
 // hmsm info (--tree FILE | --preset NAME) [--grouping ...] [--max-chain-segments K] [--json]
-//           [--chains FILE.csv]
+//           [--chains FILE.csv] with simulate's parameter flags (they decide the capped chains)
 #include "cli_common.h"
 
 #include <nlohmann/json.hpp>
@@ -9,6 +9,7 @@ namespace {
 struct InfoFlags {
     SourceFlags source;
     ModelFlags model;
+    Parameters parameters;
     bool json = false;
     std::string chains_csv;
 } flags;
@@ -17,9 +18,11 @@ struct InfoFlags {
 void register_info_flags(CLI::App& app) {
     add_source_flags(app, flags.source, false);
     app.add_option("--grouping", flags.model.grouping, "chain grouping: direction or width");
-    app.add_option("--max-chain-segments", flags.model.options.max_chain_segments,
-                   "cut chains after K nodes (0 = never)");
-    app.add_option("--ring-sides", flags.model.options.ring_sides, "vertices per ring (default 8)");
+    add_integer_option(app, "--max-chain-segments", flags.model.options.max_chain_segments,
+                       "cut chains after K nodes (0 = never)");
+    add_integer_option(app, "--ring-sides", flags.model.options.ring_sides, "vertices per ring (default 8)");
+    // The parameters decide which chains the frequency cap raises ("capped chains").
+    add_parameter_flags(app, flags.parameters);
     app.add_flag("--json", flags.json, "print JSON instead of text");
     app.add_option("--chains", flags.chains_csv, "write chain,parent,depth,attach_node,nodes CSV");
 }
@@ -27,6 +30,8 @@ void register_info_flags(CLI::App& app) {
 int run_info(CLI::App& app) {
     auto options = model_options(flags.model);
     if (!options) return fail(options.status());
+    Status parameters_ok = validate(flags.parameters);
+    if (!parameters_ok) return fail(parameters_ok);
     auto scene = load_scene(flags.source, app);
     if (!scene) return fail(scene.status());
     const TreeModel& tree = scene->models[0];
@@ -37,7 +42,7 @@ int run_info(CLI::App& app) {
         if (!staged) return fail(staged.status());
         chains_file = *staged;
     }
-    auto hierarchy = build_hierarchy(tree, *options);
+    auto hierarchy = build_hierarchy(tree, *options, flags.parameters);
     if (!hierarchy) return fail(hierarchy.status());
     MeshTemplate mesh = build_mesh(tree, *hierarchy, *options);
 
@@ -80,6 +85,7 @@ int run_info(CLI::App& app) {
         std::printf("triangles        %u\n", mesh.triangle_count());
         std::printf("leaves           %zu\n", tree.leaves.size());
         std::printf("height           %.3f m\n", tree_height(tree));
+        std::printf("capped chains    %d\n", h.capped_chain_count);
     }
     return kExitOk;
 }

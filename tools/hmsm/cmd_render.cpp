@@ -132,16 +132,16 @@ void register_render_flags(CLI::App& app) {
     app.add_option("--backend", flags.backend,
                    "auto (default) or vulkan: simulate on the rendering device and draw from its "
                    "buffers; cpu, cpu-parallel, cpu64, cuda: read back and upload each frame");
-    app.add_option("--frames", flags.frames, "frames to render (default 60)");
+    add_integer_option(app, "--frames", flags.frames, "frames to render (default 60)");
     app.add_option("--fps", flags.fps, "frames per second of simulated time (default 30)");
     app.add_option("--warmup", flags.warmup, "seconds simulated before the first frame (default 0)");
-    app.add_option("--width", flags.width, "picture width in pixels (default 640)");
-    app.add_option("--height", flags.height, "picture height in pixels (default 480)");
-    app.add_option("--msaa", flags.msaa, "samples per pixel: 1, 2, 4 (default) or 8");
+    add_integer_option(app, "--width", flags.width, "picture width in pixels (default 640)");
+    add_integer_option(app, "--height", flags.height, "picture height in pixels (default 480)");
+    add_integer_option(app, "--msaa", flags.msaa, "samples per pixel: 1, 2, 4 (default) or 8");
     app.add_option("--out", flags.out, "folder for frame_0000.png, frame_0001.png, ...")->required();
     app.add_option("--gif", flags.gif, "also write an animated GIF of all frames");
     app.add_option("--strip", flags.strip, "also write one PNG with frames side by side");
-    app.add_option("--strip-frames", flags.strip_frames, "frames in the strip, evenly spaced (default 4)");
+    add_integer_option(app, "--strip-frames", flags.strip_frames, "frames in the strip, evenly spaced (default 4)");
     app.add_option("--camera-distance", flags.camera_distance,
                    "metres from the look-at point (default: frame the trees)");
     app.add_option("--camera-yaw", flags.camera_yaw,
@@ -221,8 +221,16 @@ int run_render(CLI::App& app) {
         return fail(Status{ErrorCode::io, "--out " + out.string() + ": folder " + parent.string() +
                                               " does not exist"});
 
-    auto scene = load_scene(flags.source, app);
+    auto scene = load_scene(flags.source, app, &config.model);
     if (!scene) return fail(scene.status());
+    auto schedule = schedule_option(flags.wind, *scene, config.wind);
+    if (!schedule) return fail(schedule.status());
+    if (*schedule)
+        for (const ScheduleEvent& e : (*schedule)->events)
+            if (!e.remove.empty() || !e.add.empty())
+                return fail_input("--wind-schedule " + flags.wind.schedule + ": step " + std::to_string(e.step) +
+                                  ": render draws a fixed instance list; a schedule may change the wind, forces "
+                                  "and instance settings, not add or remove instances");
 
     StagedOutputs outputs;
     std::optional<size_t> gif_file, strip_file;
@@ -273,12 +281,21 @@ int run_render(CLI::App& app) {
     int64_t steps_done = 0;
     for (int64_t k = 0; k < flags.frames; ++k) {
         int64_t steps = step_of(k) - steps_done;
-        // Long warm-ups in chunks (a frame's steps fit one call).
-        while (steps > 100000) {
-            Status stepped = sim.step(100000);
+        // Long warm-ups in chunks (a frame's steps fit one call); schedule events apply before
+        // their step, so the steps up to the frame's last event run here.
+        for (;;) {
+            uint64_t chunk = uint64_t(std::min<int64_t>(steps, 100000));
+            if (*schedule && steps > 0) {
+                Status applied = apply_schedule_events(**schedule, uint64_t(steps_done) + 1, sim);
+                if (!applied) return fail(applied);
+                if (auto next = next_schedule_step(**schedule, uint64_t(steps_done) + 1))
+                    if (*next <= uint64_t(steps_done + steps)) chunk = *next - uint64_t(steps_done) - 1;
+            }
+            if (chunk == uint64_t(steps) && steps <= 100000) break;  // the renderer runs the rest
+            Status stepped = sim.step(uint32_t(chunk));
             if (!stepped) return fail(stepped);
-            steps -= 100000;
-            steps_done += 100000;
+            steps -= int64_t(chunk);
+            steps_done += int64_t(chunk);
         }
         Status drawn = renderer.render(uint32_t(steps), image);
         if (!drawn) return fail(drawn);

@@ -1,4 +1,5 @@
-// hmsm simulate: runs the passes --outputs needs (all seven by default) for --steps steps and writes the requested dumps.
+// hmsm simulate: runs the seven passes for --steps steps, driven by the wind flags and an optional
+// schedule, and writes the requested dumps and trace (docs/model.md 5).
 #include "cli_common.h"
 
 #include <nlohmann/json.hpp>
@@ -6,6 +7,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cinttypes>
+#include <cstdio>
+#include <unistd.h>
 
 namespace hmsm::cli {
 namespace {
@@ -18,50 +21,147 @@ struct SimulateFlags {
     std::string composition = "pointer-jumping";
     std::string vertex_layout = "separate";
     int64_t steps = 120;
-    std::string dump_nodes, dump_vertices, report;
+    std::string dump_nodes, dump_chains, dump_vertices, report, trace, trace_nodes;
     std::string outputs = "all";
-    std::string dump_chains;
+    bool no_progress = false;
 } flags;
 
-/// --dump-chains: instance,chain,ox,oy,oz,r00,r10,r20,r01,r11,r21,r02,r12,r22 (O_c, then R_c
-/// column by column; rIJ = row I, column J), every instance's chains in chain order, %.17g.
-Result<std::string> chain_csv(const Simulation& sim) {
-    std::vector<double> joints;
-    HMSM_TRY(sim.read(Output::joint_matrices, joints));
-    std::string csv = "instance,chain,ox,oy,oz,r00,r10,r20,r01,r11,r21,r02,r12,r22\n";
+/// Element offset of each instance of the current list in an instance-major node or chain
+/// output (`per_model`: count per model).
+std::vector<uint64_t> offsets(const Simulation& sim, const std::vector<uint64_t>& per_model) {
+    std::vector<uint64_t> first;
+    uint64_t at = 0;
+    for (const Instance& inst : sim.instances()) {
+        first.push_back(at);
+        at += per_model[inst.model];
+    }
+    return first;
+}
+
+std::vector<uint64_t> node_counts(const Simulation& sim) {
+    std::vector<uint64_t> counts;
+    for (const TreeModel& m : sim.scene().models) counts.push_back(m.nodes.size());
+    return counts;
+}
+
+void append(std::string& csv, const char* format, auto... values) {
     char line[512];
+    int n = std::snprintf(line, sizeof line, format, values...);
+    csv.append(line, size_t(n));
+}
+
+/// instance,node,x,y,z for every node of every instance (current list, input order).
+std::string node_csv(const Simulation& sim, const std::vector<double>& xyz) {
+    std::string csv = "instance,node,x,y,z\n";
+    const std::vector<uint64_t> counts = node_counts(sim);
+    uint64_t element = 0;
+    const auto instances = sim.instances();
+    for (size_t i = 0; i < instances.size(); ++i)
+        for (uint64_t n = 0; n < counts[instances[i].model]; ++n, ++element)
+            append(csv, "%zu,%" PRIu64 ",%.17g,%.17g,%.17g\n", i, n, xyz[3 * element], xyz[3 * element + 1],
+                   xyz[3 * element + 2]);
+    return csv;
+}
+
+/// instance,chain,ox,oy,oz,r00,r10,r20,r01,r11,r21,r02,r12,r22: O_c, then R_c column by column.
+Result<std::string> chain_csv(const Simulation& sim) {
+    std::vector<double> origins, rotations;
+    HMSM_TRY(sim.read(Output::chain_origins, origins));
+    HMSM_TRY(sim.read(Output::chain_rotations, rotations));  // column-major: r00 r10 r20 r01 ...
+    std::string csv = "instance,chain,ox,oy,oz,r00,r10,r20,r01,r11,r21,r02,r12,r22\n";
     uint64_t element = 0;
     const auto instances = sim.instances();
     for (size_t i = 0; i < instances.size(); ++i) {
         const size_t chains = sim.hierarchy(instances[i].model).chains.size();
         for (size_t c = 0; c < chains; ++c, ++element) {
-            const double* m = &joints[12 * element];  // rows (R row r, O_r)
-            int n = std::snprintf(line, sizeof line, "%zu,%zu,%.17g,%.17g,%.17g", i, c, m[3], m[7], m[11]);
-            for (int col = 0; col < 3; ++col)
-                for (int row = 0; row < 3; ++row)
-                    n += std::snprintf(line + n, sizeof line - size_t(n), ",%.17g", m[4 * row + col]);
-            csv.append(line, size_t(n));
-            csv += '\n';
+            const double* o = &origins[3 * element];
+            const double* r = &rotations[9 * element];
+            append(csv, "%zu,%zu,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g\n", i, c,
+                   o[0], o[1], o[2], r[0], r[1], r[2], r[3], r[4], r[5], r[6], r[7], r[8]);
         }
     }
     return csv;
 }
 
-std::string node_csv(const Simulation& sim, const std::vector<double>& xyz) {
-    std::string csv = "instance,node,x,y,z\n";
-    char line[160];
-    uint64_t element = 0;
-    const Scene& scene = sim.scene();
-    for (size_t i = 0; i < scene.instances.size(); ++i) {
-        size_t nodes = scene.models[scene.instances[i].model].nodes.size();
-        for (size_t n = 0; n < nodes; ++n, ++element) {
-            std::snprintf(line, sizeof line, "%zu,%zu,%.9g,%.9g,%.9g\n", i, n, xyz[3 * element],
-                          xyz[3 * element + 1], xyz[3 * element + 2]);
-            csv += line;
+/// The nodes --trace-nodes names, per model: `top` (the highest rest y, lowest index on ties)
+/// or I,J,... (distinct indices that exist in every model).
+Result<std::vector<std::vector<uint32_t>>> trace_nodes(const std::string& text, const Scene& scene) {
+    std::vector<std::vector<uint32_t>> per_model(scene.models.size());
+    if (text == "top") {
+        for (size_t m = 0; m < scene.models.size(); ++m) {
+            const auto& nodes = scene.models[m].nodes;
+            uint32_t top = 0;
+            for (uint32_t n = 1; n < nodes.size(); ++n)
+                if (nodes[n].position.y > nodes[top].position.y) top = n;
+            per_model[m].push_back(top);
         }
+        return per_model;
     }
-    return csv;
+    std::vector<uint32_t> list;
+    size_t at = 0;
+    while (true) {
+        const size_t comma = text.find(',', at);
+        const std::string item = text.substr(at, comma == std::string::npos ? std::string::npos : comma - at);
+        auto index = parse_integer<uint32_t>(item, "--trace-nodes");
+        if (!index)
+            return Status{ErrorCode::invalid_argument,
+                          "--trace-nodes '" + text + "': expected top or node indices I,J,... (" +
+                              (item.empty() ? std::string("empty item") : "'" + item + "' is not an index") + ")"};
+        if (std::find(list.begin(), list.end(), *index) != list.end())
+            return Status{ErrorCode::invalid_argument,
+                          "--trace-nodes '" + text + "': node " + item + " is listed twice"};
+        for (size_t m = 0; m < scene.models.size(); ++m)
+            if (*index >= scene.models[m].nodes.size())
+                return Status{ErrorCode::invalid_argument,
+                              "--trace-nodes: node " + item + " does not exist in model '" + scene.model_names[m] +
+                                  "' (" + std::to_string(scene.models[m].nodes.size()) + " nodes)"};
+        list.push_back(*index);
+        if (comma == std::string::npos) break;
+        at = comma + 1;
+    }
+    per_model.assign(scene.models.size(), list);
+    return per_model;
 }
+
+/// step,instance,node,x,y,z rows of one step for the traced nodes of every instance.
+void append_trace(std::string& csv, uint64_t step, const Simulation& sim, const std::vector<double>& xyz,
+                  const std::vector<std::vector<uint32_t>>& nodes) {
+    const std::vector<uint64_t> first = offsets(sim, node_counts(sim));
+    const auto instances = sim.instances();
+    for (size_t i = 0; i < instances.size(); ++i)
+        for (uint32_t n : nodes[instances[i].model]) {
+            const double* p = &xyz[3 * (first[i] + n)];
+            append(csv, "%" PRIu64 ",%zu,%u,%.17g,%.17g,%.17g\n", step, i, n, p[0], p[1], p[2]);
+        }
+}
+
+/// Steps done / total on stderr, once a run has taken more than a few seconds, on a terminal.
+class Progress {
+public:
+    Progress(uint64_t total, bool enabled) : total_(total), enabled_(enabled && isatty(2)) {}
+    void update(uint64_t done) {
+        if (!enabled_) return;
+        const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+        if (seconds < 3.0 || seconds - shown_ < 0.25) return;
+        shown_ = seconds;
+        const double rate = double(done) / seconds;
+        std::fprintf(stderr, "\rhmsm: step %" PRIu64 "/%" PRIu64 "  %.0f steps/s  eta %.0f s   ", done, total_,
+                     rate, rate > 0.0 ? double(total_ - done) / rate : 0.0);
+        std::fflush(stderr);
+        drawn_ = true;
+    }
+    void finish() {
+        if (drawn_) std::fputc('\n', stderr);
+        drawn_ = false;
+    }
+
+private:
+    uint64_t total_;
+    bool enabled_;
+    bool drawn_ = false;
+    double shown_ = 0.0;
+    std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
+};
 
 }  // namespace
 
@@ -78,15 +178,20 @@ void register_simulate_flags(CLI::App& app) {
     app.add_option("--vertex-layout", flags.vertex_layout,
                    "device layout of the mesh vertices: separate (default; position and normal "
                    "vec4) or packed (the normal octahedral-encoded in the position's w)");
-    app.add_option("--steps", flags.steps, "time steps to run (default 120)");
+    add_integer_option(app, "--steps", flags.steps, "time steps to run (default 120)");
     app.add_option("--dump-nodes", flags.dump_nodes, "CSV instance,node,x,y,z after the last step");
-    app.add_option("--dump-vertices", flags.dump_vertices, "float32 xyz per mesh vertex");
     app.add_option("--dump-chains", flags.dump_chains,
-                   "CSV instance,chain,ox,oy,oz,r00,r10,r20,r01,r11,r21,r02,r12,r22 after the last step");
+                   "CSV instance,chain,ox,oy,oz,r00,r10,r20,r01,r11,r21,r02,r12,r22 (joint matrices) after "
+                   "the last step");
+    app.add_option("--trace", flags.trace, "CSV step,instance,node,x,y,z after every step (with --trace-nodes)");
+    app.add_option("--trace-nodes", flags.trace_nodes,
+                   "nodes --trace follows in every instance: top (per model the highest) or I,J,...");
+    app.add_option("--dump-vertices", flags.dump_vertices, "float32 xyz per mesh vertex");
     app.add_option("--outputs", flags.outputs,
                    "what each step produces: joints (passes 1-5: joint matrices), nodes (1-6: plus "
                    "node positions) or all (default; 1-7: plus mesh vertices)");
     app.add_option("--report", flags.report, "JSON report: backend, device, counts, times");
+    app.add_flag("--no-progress", flags.no_progress, "no progress on stderr");
 }
 
 int run_simulate(CLI::App& app) {
@@ -111,6 +216,8 @@ int run_simulate(CLI::App& app) {
     config.outputs = *produced;
     if (!flags.dump_nodes.empty() && config.outputs == Outputs::joints)
         return fail_input("--dump-nodes needs node positions: --outputs nodes or all, not joints");
+    if (!flags.trace.empty() && config.outputs == Outputs::joints)
+        return fail_input("--trace needs node positions: --outputs nodes or all, not joints");
     if (!flags.dump_vertices.empty() && config.outputs != Outputs::all)
         return fail_input("--dump-vertices needs mesh vertices: --outputs all, not " + flags.outputs);
     if (flags.steps < 0) return fail_input("--steps " + std::to_string(flags.steps) + ": must be >= 0");
@@ -123,13 +230,24 @@ int run_simulate(CLI::App& app) {
     auto wind = wind_options(flags.wind);
     if (!wind) return fail(wind.status());
     config.wind = *wind;
-    auto scene = load_scene(flags.source, app);
+    auto scene = load_scene(flags.source, app, &config.model);
     if (!scene) return fail(scene.status());
+    auto schedule = schedule_option(flags.wind, *scene, config.wind);
+    if (!schedule) return fail(schedule.status());
+    if (flags.trace.empty() != flags.trace_nodes.empty())
+        return fail_input("--trace FILE and --trace-nodes top|I,J,... go together");
+    std::vector<std::vector<uint32_t>> traced;
+    if (!flags.trace.empty()) {
+        auto nodes = trace_nodes(flags.trace_nodes, *scene);
+        if (!nodes) return fail(nodes.status());
+        traced = std::move(nodes).value();
+    }
 
     StagedOutputs outputs;
-    std::optional<size_t> nodes_file, vertices_file, report_file, chains_file;
+    std::optional<size_t> nodes_file, chains_file, trace_file, vertices_file, report_file;
     for (auto [path, flag, slot] : {std::tuple{&flags.dump_nodes, "--dump-nodes", &nodes_file},
                                     std::tuple{&flags.dump_chains, "--dump-chains", &chains_file},
+                                    std::tuple{&flags.trace, "--trace", &trace_file},
                                     std::tuple{&flags.dump_vertices, "--dump-vertices", &vertices_file},
                                     std::tuple{&flags.report, "--report", &report_file}}) {
         if (path->empty()) continue;
@@ -145,17 +263,41 @@ int run_simulate(CLI::App& app) {
         std::fprintf(stderr, "hmsm: backend auto picked %s (%s)\n", to_string(sim.backend_kind()),
                      sim.device_name().c_str());
 
+    // Schedule events apply before their step; the steps between events (and between traced
+    // rows) run as one batch.
+    const uint64_t steps = uint64_t(flags.steps);
     PassTimes total;
+    Progress progress(steps, !flags.no_progress);
+    std::string trace_csv = trace_file ? "step,instance,node,x,y,z\n" : "";
+    std::vector<double> xyz;
     const auto start = std::chrono::steady_clock::now();
-    for (int64_t done = 0; done < flags.steps;) {
-        uint32_t chunk = uint32_t(std::min<int64_t>(flags.steps - done, 240));
-        Status stepped = sim.step(chunk);
+    for (uint64_t done = 0; done < steps;) {
+        uint64_t chunk = std::min<uint64_t>(steps - done, 240);
+        if (*schedule) {
+            Status applied = apply_schedule_events(**schedule, done + 1, sim);
+            if (!applied) return fail(applied);
+            if (auto next = next_schedule_step(**schedule, done + 1)) chunk = std::min(chunk, *next - (done + 1));
+        }
+        if (trace_file) chunk = 1;
+        Status stepped = sim.step(uint32_t(chunk));
         if (!stepped) return fail(stepped);
         PassTimes t = sim.pass_times();
         for (uint32_t p = 0; p < kPassCount; ++p) total.seconds[p] += t.seconds[p];
         total.steps += t.steps;
         done += chunk;
+        if (trace_file) {
+            Status read = sim.read(Output::node_positions, xyz);
+            if (!read) return fail(read);
+            append_trace(trace_csv, done, sim, xyz, traced);
+            if (trace_csv.size() > (1u << 20)) {  // flush the rows in pieces
+                Status written = outputs.write(*trace_file, trace_csv.data(), trace_csv.size());
+                if (!written) return fail(written);
+                trace_csv.clear();
+            }
+        }
+        progress.update(done);
     }
+    progress.finish();
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
     if (nodes_file) {
@@ -170,6 +312,10 @@ int run_simulate(CLI::App& app) {
         auto csv = chain_csv(sim);
         if (!csv) return fail(csv.status());
         Status written = outputs.write(*chains_file, csv->data(), csv->size());
+        if (!written) return fail(written);
+    }
+    if (trace_file) {
+        Status written = outputs.write(*trace_file, trace_csv.data(), trace_csv.size());
         if (!written) return fail(written);
     }
     if (vertices_file) {

@@ -1,0 +1,63 @@
+// Applies one step's schedule events to a running simulation (docs/model.md 4, 3.9) in the order
+// wind, forces, instances, remove, add, through the live-control calls of Simulation.
+#include <hmsm/schedule.h>
+
+#include <algorithm>
+
+namespace hmsm {
+
+Status apply_schedule_events(const Schedule& schedule, uint64_t step, Simulation& sim) {
+    for (const ScheduleEvent& e : schedule.events) {
+        if (e.step != step) continue;
+        const std::string where = "schedule step " + std::to_string(e.step) + ": ";
+        auto fail = [&](const Status& s) { return Status{s.code(), where + s.message()}; };
+        if (e.wind) {
+            Status s = sim.set_wind(e.wind->applied_to(sim.wind()));
+            if (!s) return fail(s);
+        }
+        if (e.forces) {
+            Status s = sim.set_force_fields(*e.forces);
+            if (!s) return fail(s);
+        }
+        for (const InstanceChange& c : e.instances) {
+            if (c.wind_scale) {
+                Status s = sim.set_instance_wind_scale(c.instance, *c.wind_scale);
+                if (!s) return fail(s);
+            }
+            if (c.wind_phase) {
+                Status s = sim.set_instance_wind_phase(c.instance, *c.wind_phase);
+                if (!s) return fail(s);
+            }
+            if (c.active) {
+                Status s = sim.set_instance_active(c.instance, *c.active);
+                if (!s) return fail(s);
+            }
+        }
+        if (!e.remove.empty()) {
+            Status s = sim.remove_instances(e.remove);
+            if (!s) return fail(s);
+        }
+        if (!e.add.empty()) {
+            const std::vector<std::string>& names = sim.scene().model_names;
+            std::vector<Instance> added;
+            for (const ScheduledInstance& a : e.add) {
+                auto found = std::find(names.begin(), names.end(), a.model);
+                if (found == names.end())
+                    return {ErrorCode::invalid_argument, where + "model \"" + a.model + "\" is not one of the run's models"};
+                Instance inst;
+                inst.model = uint32_t(found - names.begin());
+                inst.origin = a.origin;
+                inst.yaw = a.yaw;
+                inst.wind_scale = a.wind_scale;
+                inst.wind_phase = a.wind_phase;
+                inst.active = a.active;
+                added.push_back(inst);
+            }
+            Status s = sim.add_instances(added);
+            if (!s) return fail(s);
+        }
+    }
+    return {};
+}
+
+}  // namespace hmsm
