@@ -299,6 +299,7 @@ std::span<const Instance> Simulation::instances() const { return impl_->scene_.i
 
 Status Simulation::Impl::read_elements(Output output, std::vector<double>* as_double,
                                  std::vector<float>* as_float) const {
+    std::lock_guard lock(read_mutex_);
     using detail::BufferId;
     if (output == Output::vertex_normals && data_->packed_vertices())
         return read_packed_normals(as_double, as_float);

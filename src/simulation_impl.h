@@ -8,6 +8,7 @@
 #include "scene_data.h"
 
 #include <memory>
+#include <mutex>
 #include <vector>
 
 namespace hmsm {
@@ -35,6 +36,10 @@ struct Simulation::Impl {
     // per-frame readback neither allocates nor zero-fills.
     mutable std::vector<float> stored_f32_;
     mutable std::vector<double> stored_f64_;
+    // Serializes read(): the scratch above and the backends' readback paths (a staging buffer
+    // and a queue submission on Vulkan, pinned memory on CUDA) are shared, and const calls may
+    // run concurrently (the threading contract in include/hmsm/simulation.h).
+    mutable std::mutex read_mutex_;
     uint64_t steps_done_ = 0;
 };
 
