@@ -18,10 +18,6 @@
 
 namespace hmsm {
 
-namespace detail {
-struct SimulationAccess;  // internal: src/simulation_access.h
-}  // namespace detail
-
 /// `cpu` is the serial float reference (the paper's baseline); `cpu64` the double-precision
 /// oracle; `automatic` picks CUDA, then a Vulkan GPU, then the CPU.
 enum class BackendKind { cpu, cpu64, vulkan, cuda, automatic };
@@ -106,8 +102,9 @@ HMSM_API Status validate_force_fields(std::span<const ForceField> fields);
 
 /// A running simulation of a scene. Threading: one Simulation may be used by one thread at a
 /// time (calls on it are not synchronized); distinct Simulations may run concurrently on any
-/// backends. const member functions, read() included, may run concurrently with each other but
-/// not with a non-const call (docs/engine.md).
+/// backends, and may be created and destroyed from several threads at once. const member
+/// functions, read() included, may run concurrently with each other but not with a non-const
+/// call; concurrent read()s are serialized inside (docs/engine.md).
 class HMSM_API Simulation {
 public:
     /// Validates everything, builds hierarchies and meshes, creates the backend, uploads the
@@ -173,8 +170,11 @@ public:
     /// per model.
     uint32_t capped_chain_count() const;
 
+    /// Defined only inside the library (src/simulation_access.h), for hmsm's own interop code,
+    /// tools and tests; incomplete everywhere else.
+    struct Access;
+
 private:
-    friend struct detail::SimulationAccess;
     struct Impl;
     explicit Simulation(std::unique_ptr<Impl> impl);
     std::unique_ptr<Impl> impl_;
