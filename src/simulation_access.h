@@ -5,7 +5,7 @@
 
 #include "simulation_impl.h"
 
-struct hmsm::Simulation::Access {
+struct __attribute__((visibility("hidden"))) hmsm::Simulation::Access {
     static detail::Backend& backend(const Simulation& sim) { return *sim.impl_->backend_; }
     static const std::vector<detail::Dispatch>& step_program(const Simulation& sim) {
         return sim.impl_->step_program_;

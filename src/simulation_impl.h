@@ -13,7 +13,8 @@
 
 namespace hmsm {
 
-struct Simulation::Impl {
+// Hidden: a nested class of the exported Simulation would otherwise be exported from libhmsm.so.
+struct __attribute__((visibility("hidden"))) Simulation::Impl {
     static Result<std::unique_ptr<Simulation>> create(const Scene& scene,
                                                       const SimulationConfig& config,
                                                       std::unique_ptr<detail::Backend> backend);

@@ -3,7 +3,8 @@
 # - Static library: no vk*/volk* symbol at all, and every strong global definition (nm types
 #   T, D, B, R) is hmsm's own (namespace hmsm or the C ABI's hmsm_*). Weak definitions (W, V, u)
 #   are inline functions and template instantiations, which the linker merges by name.
-# - Shared library: every exported definition (nm -D) is hmsm's own.
+# - Shared library: every exported definition (nm -D) is hmsm's own public API (no detail::,
+#   Simulation::Impl or Simulation::Access member).
 # Usage: check_symbols.sh libhmsm.a libhmsm.so
 set -euo pipefail
 static_lib="$1"; shared_lib="$2"
@@ -27,6 +28,10 @@ dynamic=$(nm -D --defined-only "$shared_lib" | awk 'NF == 3 {print $3}')
 count=$(echo "$dynamic" | wc -l)
 if (( count < 50 )); then
     echo "$shared_lib exports only $count symbols: the API is missing"; status=1
+fi
+internal=$(echo "$dynamic" | c++filt | grep -E 'detail::|::Impl::|::Access::' || true)
+if [[ -n "$internal" ]]; then
+    echo "$shared_lib exports internals:"; echo "$internal" | head -20; status=1
 fi
 for needed in hmsm_simulation_create _ZN4hmsm10Simulation6createERKNS_5SceneERKNS_16SimulationConfigE; do
     if ! grep -qx "$needed" <<<"$dynamic"; then
