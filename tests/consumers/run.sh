@@ -1,11 +1,12 @@
 #!/usr/bin/env bash
 # Installs the built hmsm into a temporary prefix, builds tests/consumers against it and runs
 # every program: an engine linking the Vulkan loader (both link orders) and one with its own
-# volk. With a third argument the programs link that target (e.g. hmsm::hmsm_shared) and the
-# installed libhmsm.so's exported symbols are checked too.
-# Usage: run.sh BUILD_DIR CONSUMERS_SOURCE_DIR [TARGET]
+# volk. FLAVOUR static or shared says which library TARGET (an installed hmsm target name) is;
+# for shared, the programs must load libhmsm.so and the installed libraries' symbols are
+# checked too.
+# Usage: run.sh BUILD_DIR CONSUMERS_SOURCE_DIR [FLAVOUR TARGET]
 set -euo pipefail
-build="$1"; source_dir="$2"; target="${3:-hmsm::hmsm}"
+build="$1"; source_dir="$2"; flavour="${3:-static}"; target="${4:-hmsm::hmsm}"
 work="$(mktemp -d)"
 trap 'rm -rf "$work"' EXIT
 cmake --install "$build" --prefix "$work/prefix" >/dev/null
@@ -15,11 +16,11 @@ cmake --build "$work/consumers" >/dev/null
 for program in loader_then_hmsm hmsm_then_loader own_volk; do
     echo "--- $program"
     "$work/consumers/$program"
-    if [[ "$target" == hmsm::hmsm_shared ]]; then
+    if [[ "$flavour" == shared ]]; then
         deps="$(ldd "$work/consumers/$program")"
         grep -q "libhmsm.so" <<<"$deps" || { echo "$program does not use libhmsm.so"; exit 1; }
     fi
 done
-if [[ "$target" == hmsm::hmsm_shared ]]; then
+if [[ "$flavour" == shared ]]; then
     "$(dirname "$0")/../boundary/check_symbols.sh" "$work"/prefix/lib*/libhmsm.a "$work"/prefix/lib*/libhmsm.so
 fi
