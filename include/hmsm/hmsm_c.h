@@ -8,7 +8,7 @@
  * - Every fallible function returns an hmsm_status: 0 (HMSM_OK) or one of the codes below, which
  *   are those of hmsm::ErrorCode. hmsm_status_message() returns the message of the last call
  *   made on the calling thread ("" after a success): it names the offending argument or item.
- *   A failed call changes nothing and writes no output.
+ *   A failed call changes nothing and writes no output (but the size, see below).
  * - Nothing crosses this boundary as an exception; nothing exits or aborts.
  * - Outputs are written to caller-owned arrays with an explicit capacity (in elements). Passing
  *   values = NULL and capacity = 0 only queries the size; a capacity that is too small fails
