@@ -41,6 +41,6 @@ struct Hierarchy {
 /// Builds the hierarchy. The tree must be valid (validate_tree); options and parameters are
 /// validated here.
 HMSM_API Result<Hierarchy> build_hierarchy(const TreeModel& tree, const ModelOptions& options,
-                                  const Parameters& parameters = {});
+                                           const Parameters& parameters = {});
 
 }  // namespace hmsm

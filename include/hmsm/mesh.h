@@ -31,9 +31,9 @@ struct MeshTemplate {
 
 /// Vertex count of docs/model.md 3.8: sum over chains of (members+1)*ring_sides + tips + 4*leaves.
 HMSM_API uint64_t mesh_vertex_count(const TreeModel& tree, const Hierarchy& hierarchy,
-                           const ModelOptions& options);
+                                    const ModelOptions& options);
 
 HMSM_API MeshTemplate build_mesh(const TreeModel& tree, const Hierarchy& hierarchy,
-                        const ModelOptions& options);
+                                 const ModelOptions& options);
 
 }  // namespace hmsm

@@ -38,7 +38,7 @@ HMSM_API Result<Scene> grid_scene(TreeModel tree, uint32_t count, double spacing
 /// generates a preset.
 HMSM_API Result<Scene> load_forest(const std::string& path);
 HMSM_API Result<Scene> parse_forest(std::string_view json, const std::string& base_directory,
-                           std::string_view source = "forest");
+                                    std::string_view source = "forest");
 
 /// Checks that every instance names a model and every number is finite.
 HMSM_API Status validate_scene(const Scene& scene);

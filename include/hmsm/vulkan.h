@@ -76,8 +76,8 @@ struct DeviceHandles {
 
 /// Simulation::create() on the engine's device: `config.backend` is ignored (always Vulkan).
 HMSM_API Result<std::unique_ptr<Simulation>> create_simulation(const Scene& scene,
-                                                      const SimulationConfig& config,
-                                                      const ExternalContext& context);
+                                                               const SimulationConfig& config,
+                                                               const ExternalContext& context);
 
 /// Fails with invalid_argument when `simulation` does not run on the Vulkan backend.
 HMSM_API Result<SharedBuffers> shared_buffers(const Simulation& simulation);
@@ -94,7 +94,8 @@ HMSM_API Result<DeviceHandles> device_handles(const Simulation& simulation);
 /// The engine submits the command buffer; the recorded steps must complete before the next
 /// Simulation::step(), read() or record_steps() of this simulation is called. Per-pass times are
 /// not collected for recorded steps.
-HMSM_API Status record_steps(Simulation& simulation, VkCommandBuffer command_buffer, uint32_t count = 1);
+HMSM_API Status record_steps(Simulation& simulation, VkCommandBuffer command_buffer,
+                             uint32_t count = 1);
 
 #else
 

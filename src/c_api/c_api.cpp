@@ -107,7 +107,8 @@ Status to_cpp(const hmsm_config& in, SimulationConfig& out) {
     if (in.composition < HMSM_COMPOSITION_POINTER_JUMPING ||
         in.composition > HMSM_COMPOSITION_LEVEL_BY_LEVEL)
         return bad("config.composition: unknown value " + std::to_string(in.composition));
-    if (in.vertex_layout != HMSM_VERTEX_LAYOUT_SEPARATE && in.vertex_layout != HMSM_VERTEX_LAYOUT_PACKED)
+    if (in.vertex_layout != HMSM_VERTEX_LAYOUT_SEPARATE &&
+        in.vertex_layout != HMSM_VERTEX_LAYOUT_PACKED)
         return bad("config.vertex_layout: unknown value " + std::to_string(in.vertex_layout));
     if (in.profile_passes != 0 && in.profile_passes != 1)
         return bad("config.profile_passes must be 0 or 1");

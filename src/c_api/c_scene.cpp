@@ -48,7 +48,8 @@ hmsm_status hmsm_scene_add_instance(hmsm_scene* scene, const hmsm_instance* inst
         Instance converted;
         HMSM_TRY(to_cpp(*instance, converted, "hmsm_scene_add_instance: instance"));
         if (converted.model >= scene->scene.models.size())
-            return bad("hmsm_scene_add_instance: instance.model " + std::to_string(converted.model) +
+            return bad("hmsm_scene_add_instance: instance.model " +
+                       std::to_string(converted.model) +
                        " names no model (the scene has " +
                        std::to_string(scene->scene.models.size()) + ")");
         scene->scene.instances.push_back(converted);

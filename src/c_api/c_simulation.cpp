@@ -17,7 +17,8 @@ Status copy_out(const char* fn, const std::vector<T>& source, T* values, size_t 
     if (!count) return bad(std::string(fn) + ": count is NULL");
     *count = source.size();
     if (!values && capacity == 0) return {};
-    if (!values) return bad(std::string(fn) + ": values is NULL with capacity " + std::to_string(capacity));
+    if (!values)
+        return bad(std::string(fn) + ": values is NULL with capacity " + std::to_string(capacity));
     if (capacity < source.size())
         return bad(std::string(fn) + ": capacity " + std::to_string(capacity) + " is too small, " +
                    std::to_string(source.size()) + " needed");
@@ -208,7 +209,8 @@ hmsm_status hmsm_simulation_add_instances(hmsm_simulation* simulation,
     return guarded([&]() -> Status {
         const char* fn = "hmsm_simulation_add_instances";
         if (!simulation) return bad(std::string(fn) + ": simulation is NULL");
-        if (!instances && count > 0) return bad(std::string(fn) + ": instances is NULL with count > 0");
+        if (!instances && count > 0)
+            return bad(std::string(fn) + ": instances is NULL with count > 0");
         std::vector<Instance> converted(count);
         for (size_t i = 0; i < count; ++i) {
             const std::string what = std::string(fn) + ": instance " + std::to_string(i);

@@ -14,8 +14,8 @@ int main() {
     hmsm::TreeModel tree;
     tree.nodes = {{-1, {0, 0, 0}, 0.2}, {0, {0, 2, 0}, 0.15}, {1, {0.3, 4, 0}, 0.1},
                   {1, {-0.8, 3, 0.2}, 0.05}, {3, {-1.2, 3.6, 0.3}, 0.03}};
-    const std::filesystem::path file =
-        std::filesystem::temp_directory_path() / ("hmsm-readme-oak-" + std::to_string(::getpid()) + ".json");
+    const std::filesystem::path file = std::filesystem::temp_directory_path() /
+                                       ("hmsm-readme-oak-" + std::to_string(::getpid()) + ".json");
     if (!hmsm::save_tree(tree, file.string())) return 1;
     animate_tree(file.string());  // reports any failure on stderr as "hmsm: ..."
     std::filesystem::remove(file);
