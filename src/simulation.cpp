@@ -317,6 +317,9 @@ Status Simulation::Impl::read_elements(Output output, std::vector<double>* as_do
             id = BufferId::chain_origin; first = final_half * data_->total_chains;
             count = data_->total_chains; break;
         case Output::chain_angles: id = BufferId::chain_state; count = data_->total_chains; break;
+        default:  // a value cast from an integer (the C ABI checks its own)
+            return {ErrorCode::invalid_argument,
+                    "read: unknown output " + std::to_string(static_cast<int>(output))};
     }
     const uint32_t stored = detail::shape_scalars(detail::buffer_info(id).shape);
     const uint32_t wanted = output_components(output);

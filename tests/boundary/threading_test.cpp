@@ -1,7 +1,8 @@
 // The threading contract of include/hmsm/simulation.h, exercised so that ThreadSanitizer
 // (tools/tsan.sh) can check it: distinct simulations run concurrently, const calls (read()
 // included) on one simulation run concurrently with each other, Vulkan simulations are created
-// and destroyed from several threads at once, and the C ABI's last message is per thread.
+// and destroyed from several threads at once, and the C ABI's last message is per thread. Also
+// read()'s own argument check (PublicApi), on the same small scene.
 #include <hmsm/hmsm.h>
 #include <hmsm/hmsm_c.h>
 
@@ -143,6 +144,24 @@ TEST(Threading, CApiLastMessageIsPerThread) {
     b.join();
     EXPECT_NE(seen[0].find("no-such-preset"), std::string::npos) << seen[0];
     EXPECT_NE(seen[1].find("hmsm_scene_create"), std::string::npos) << seen[1];
+}
+
+}  // namespace
+
+namespace {
+
+TEST(PublicApi, ReadRejectsAnUnknownOutputAndWritesNothing) {
+    auto sim = hmsm::Simulation::create(small_scene(), config_for(hmsm::BackendKind::cpu));
+    ASSERT_TRUE(sim) << sim.status().message();
+    std::vector<float> values{42.0f};
+    std::vector<double> values64{42.0};
+    const hmsm::Status status = (*sim)->read(static_cast<hmsm::Output>(99), values);
+    EXPECT_EQ(status.code(), hmsm::ErrorCode::invalid_argument);
+    EXPECT_NE(status.message().find("99"), std::string::npos) << status.message();
+    EXPECT_EQ((*sim)->read(static_cast<hmsm::Output>(-1), values64).code(),
+              hmsm::ErrorCode::invalid_argument);
+    EXPECT_EQ(values, std::vector<float>{42.0f});
+    EXPECT_EQ(values64, std::vector<double>{42.0});
 }
 
 }  // namespace
