@@ -321,6 +321,7 @@ std::span<const Instance> Simulation::instances() const { return impl_->scene_.i
 
 Status Simulation::Impl::read_elements(Output output, std::vector<double>* as_double,
                                  std::vector<float>* as_float) const {
+    std::lock_guard lock(read_mutex_);
     using detail::BufferId;
     const bool vertex_output = output == Output::vertex_positions || output == Output::vertex_normals;
     if ((vertex_output && !data_->produces_vertices()) ||
@@ -348,6 +349,9 @@ Status Simulation::Impl::read_elements(Output output, std::vector<double>* as_do
             count = data_->total_chains; break;
         case Output::chain_angles: id = BufferId::chain_state; count = data_->total_chains; break;
         case Output::joint_matrices: id = BufferId::joint_matrix; count = data_->total_chains; break;
+        default:  // a value cast from an integer (the C ABI checks its own)
+            return {ErrorCode::invalid_argument,
+                    "read: unknown output " + std::to_string(static_cast<int>(output))};
     }
     const uint32_t stored = detail::shape_scalars(detail::buffer_info(id).shape);
     const uint32_t wanted = output_components(output);

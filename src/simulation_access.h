@@ -1,30 +1,29 @@
 // Internal access to a Simulation's backend, step program and flattened scene, for hmsm's own
-// interop code, tools and tests (an attorney: the public header only befriends this struct).
+// interop code, tools and tests (an attorney: the public header declares Simulation::Access,
+// a nested type and so a friend, and only this header defines it).
 #pragma once
 
 #include "simulation_impl.h"
 
-namespace hmsm::detail {
-
-struct SimulationAccess {
-    static Backend& backend(const Simulation& sim) { return *sim.impl_->backend_; }
-    static const std::vector<Dispatch>& step_program(const Simulation& sim) {
+struct __attribute__((visibility("hidden"))) hmsm::Simulation::Access {
+    static detail::Backend& backend(const Simulation& sim) { return *sim.impl_->backend_; }
+    static const std::vector<detail::Dispatch>& step_program(const Simulation& sim) {
         return sim.impl_->step_program_;
     }
-    static const SceneData& scene_data(const Simulation& sim) { return *sim.impl_->data_; }
+    static const detail::SceneData& scene_data(const Simulation& sim) { return *sim.impl_->data_; }
     static Simulation::Impl& impl(Simulation& sim) { return *sim.impl_; }
     /// Simulation::create on a backend the caller made (e.g. on an engine's Vulkan device);
     /// config.backend is ignored.
     static Result<std::unique_ptr<Simulation>> create(const Scene& scene,
                                                       const SimulationConfig& config,
-                                                      std::unique_ptr<Backend> backend) {
+                                                      std::unique_ptr<detail::Backend> backend) {
         return Simulation::Impl::create(scene, config, std::move(backend));
     }
 };
 
-}  // namespace hmsm::detail
-
 namespace hmsm::detail {
+
+using SimulationAccess = Simulation::Access;
 
 inline Backend& backend_of(const Simulation& sim) { return SimulationAccess::backend(sim); }
 inline const std::vector<Dispatch>& step_program_of(const Simulation& sim) {

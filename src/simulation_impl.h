@@ -8,11 +8,13 @@
 #include "scene_data.h"
 
 #include <memory>
+#include <mutex>
 #include <vector>
 
 namespace hmsm {
 
-struct Simulation::Impl {
+// Hidden: a nested class of the exported Simulation would otherwise be exported from libhmsm.so.
+struct __attribute__((visibility("hidden"))) Simulation::Impl {
     static Result<std::unique_ptr<Simulation>> create(const Scene& scene,
                                                       const SimulationConfig& config,
                                                       std::unique_ptr<detail::Backend> backend);
@@ -35,6 +37,10 @@ struct Simulation::Impl {
     // per-frame readback neither allocates nor zero-fills.
     mutable std::vector<float> stored_f32_;
     mutable std::vector<double> stored_f64_;
+    // Serializes read(): the scratch above and the backends' readback paths (a staging buffer
+    // and a queue submission on Vulkan, pinned memory on CUDA) are shared, and const calls may
+    // run concurrently (the threading contract in include/hmsm/simulation.h).
+    mutable std::mutex read_mutex_;
     uint64_t steps_done_ = 0;
 };
 

@@ -7,6 +7,7 @@ packages=(cmake ninja-build g++ pkg-config
   libglm-dev libvulkan-volk-dev libgtest-dev libgmock-dev libbenchmark-dev
   nlohmann-json3-dev libcli11-dev
   libpng-dev libgif-dev libstb-dev  # libpng, giflib: hmsm render; stb_image: its tests
+  python3  # examples/python, the C ABI example CTest runs
   clang libclang-rt-14-dev  # clang + compiler-rt: libFuzzer (tools/fuzz.sh)
   libtinygltf-dev nodejs)  # hmsm export --gltf; node: the Khronos glTF validator (tools/gltf)
 # Node's npm: Debian's package, unless a Node.js distribution that bundles it is installed.

@@ -7,9 +7,11 @@ root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 build="${HMSM_BUILD_DIR:-$root/build}"
 cd "$build"
 ctest --output-on-failure -j "$(nproc 2>/dev/null || echo 2)"
-# Hard to break: the whole suite under ASan + UBSan (Debug, in build-asan), then each
-# libFuzzer target on the parsers for HMSM_FUZZ_SECONDS (default 60). HMSM_HARDENING=0 skips both.
+# Hard to break: the whole suite under ASan + UBSan (Debug, in build-asan), the threading
+# contract under ThreadSanitizer (build-tsan, the library and one test executable), then each
+# libFuzzer target on the parsers for HMSM_FUZZ_SECONDS (default 60). HMSM_HARDENING=0 skips them.
 if [ "${HMSM_HARDENING:-1}" != 0 ]; then
   "$root/tools/sanitize.sh"
+  "$root/tools/tsan.sh"
   "$root/tools/fuzz.sh"
 fi

@@ -4,6 +4,8 @@
 // (which is what cudaStream_t and CUstream are).
 #pragma once
 
+#include <hmsm/export.h>
+
 #include <hmsm/simulation.h>
 #include <hmsm/status.h>
 
@@ -37,11 +39,11 @@ struct DeviceOutputs {
 #ifdef HMSM_HAVE_CUDA
 
 /// The outputs on the device; invalid_argument when `simulation` does not run on CUDA.
-Result<DeviceOutputs> device_outputs(const Simulation& simulation);
+HMSM_API Result<DeviceOutputs> device_outputs(const Simulation& simulation);
 
 /// Runs later steps of `simulation` on `stream` (nullptr: hmsm's own stream). step() still
 /// returns when the step is complete, so the outputs are ready for work enqueued after it.
-Status set_stream(Simulation& simulation, CUstream_st* stream);
+HMSM_API Status set_stream(Simulation& simulation, CUstream_st* stream);
 
 #else
 

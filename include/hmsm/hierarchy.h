@@ -2,6 +2,8 @@
 // function of a validated tree, the model options and the parameters.
 #pragma once
 
+#include <hmsm/export.h>
+
 #include <hmsm/options.h>
 #include <hmsm/tree.h>
 #include <hmsm/types.h>
@@ -38,7 +40,7 @@ struct Hierarchy {
 
 /// Builds the hierarchy. The tree must be valid (validate_tree); options and parameters are
 /// validated here.
-Result<Hierarchy> build_hierarchy(const TreeModel& tree, const ModelOptions& options,
-                                  const Parameters& parameters = {});
+HMSM_API Result<Hierarchy> build_hierarchy(const TreeModel& tree, const ModelOptions& options,
+                                           const Parameters& parameters = {});
 
 }  // namespace hmsm

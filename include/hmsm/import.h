@@ -26,6 +26,7 @@
 // not a row, a cycle of parents, no cylinder without a parent.
 #pragma once
 
+#include <hmsm/export.h>
 #include <hmsm/status.h>
 #include <hmsm/tree.h>
 
@@ -45,7 +46,7 @@ enum class CylinderFormat {
     treeqsm_v23,   ///< TreeQSM v2.3 text: no header, 15 numbers a row
     simpleforest,  ///< SimpleForest CSV: header with ID, parentID, start/end points, radius
 };
-const char* to_string(CylinderFormat format);
+HMSM_API const char* to_string(CylinderFormat format);
 
 /// What an import read, for the CLI's summary line.
 struct ImportSummary {
@@ -64,23 +65,23 @@ struct ImportedTree {
 /// TreeQSM cylinder table, either variant: a first line that is not numbers is a header (it
 /// must name radius, length and parent, in any spelling and case); the first data row's count,
 /// 17 (text export) or 15 (v2.3), is then required of every row.
-Result<ImportedTree> parse_treeqsm(std::string_view text, std::string_view source = "treeqsm");
-Result<ImportedTree> import_treeqsm(const std::string& path);
+HMSM_API Result<ImportedTree> parse_treeqsm(std::string_view text, std::string_view source = "treeqsm");
+HMSM_API Result<ImportedTree> import_treeqsm(const std::string& path);
 
 /// SimpleForest QSM CSV.
-Result<ImportedTree> parse_simpleforest(std::string_view text, std::string_view source = "simpleforest");
-Result<ImportedTree> import_simpleforest(const std::string& path);
+HMSM_API Result<ImportedTree> parse_simpleforest(std::string_view text, std::string_view source = "simpleforest");
+HMSM_API Result<ImportedTree> import_simpleforest(const std::string& path);
 
 /// Either format, detected by content: a header naming `parentID` is SimpleForest, another
 /// header line is the TreeQSM text export, none is TreeQSM v2.3.
-Result<ImportedTree> parse_cylinders(std::string_view text, std::string_view source = "cylinders");
+HMSM_API Result<ImportedTree> parse_cylinders(std::string_view text, std::string_view source = "cylinders");
 
 /// Adds `count` leaf cards, deterministic for `seed`, to the thinnest branches: the tips
 /// (nodes without children) and nodes no thicker than twice the thinnest tip or than the
 /// thinnest quarter of the nodes, each site equally likely. A card sits anywhere along the
 /// segment ending at its node, `width` x `height` metres (scaled 0.75-1.25), stands off the twig
 /// along its own up axis and faces the sky with some scatter. The tree must be valid.
-Status scatter_leaves(TreeModel& tree, uint64_t count, uint64_t seed, double width = 0.08,
+HMSM_API Status scatter_leaves(TreeModel& tree, uint64_t count, uint64_t seed, double width = 0.08,
                       double height = 0.12);
 
 }  // namespace hmsm

@@ -2,6 +2,8 @@
 // coordinates; the contour pass makes it world-space each step.
 #pragma once
 
+#include <hmsm/export.h>
+
 #include <hmsm/hierarchy.h>
 
 #include <cstdint>
@@ -28,10 +30,10 @@ struct MeshTemplate {
 };
 
 /// Vertex count of docs/model.md 3.8: sum over chains of (members+1)*ring_sides + tips + 4*leaves.
-uint64_t mesh_vertex_count(const TreeModel& tree, const Hierarchy& hierarchy,
-                           const ModelOptions& options);
+HMSM_API uint64_t mesh_vertex_count(const TreeModel& tree, const Hierarchy& hierarchy,
+                                    const ModelOptions& options);
 
-MeshTemplate build_mesh(const TreeModel& tree, const Hierarchy& hierarchy,
-                        const ModelOptions& options);
+HMSM_API MeshTemplate build_mesh(const TreeModel& tree, const Hierarchy& hierarchy,
+                                 const ModelOptions& options);
 
 }  // namespace hmsm

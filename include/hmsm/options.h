@@ -1,6 +1,8 @@
 // Model options, physical parameters and wind (docs/model.md 3.2, 3.4, 3.5, 3.8).
 #pragma once
 
+#include <hmsm/export.h>
+
 #include <hmsm/status.h>
 
 #include <hmsm/types.h>
@@ -50,23 +52,23 @@ struct Wind {
 };
 
 /// Wind strength of a wind speed U in m/s: (U / 6)^2.
-double wind_strength_for_speed(double speed);
+HMSM_API double wind_strength_for_speed(double speed);
 
 /// Y(x) of docs/model.md 3.5.
-double wind_profile_value(WindProfile profile, double x);
+HMSM_API double wind_profile_value(WindProfile profile, double x);
 /// w(t) for an instance at `origin` (docs/model.md 3.5).
-Vec3 wind_at(const Wind& wind, const Vec3& origin, double t);
+HMSM_API Vec3 wind_at(const Wind& wind, const Vec3& origin, double t);
 /// Phase offset phi of an instance at `origin`: -f (o.d)/v, or 0 without a front.
-double wind_phase(const Wind& wind, const Vec3& origin);
+HMSM_API double wind_phase(const Wind& wind, const Vec3& origin);
 
-const char* to_string(Grouping grouping);
-const char* to_string(WindProfile profile);
-std::optional<Grouping> parse_grouping(std::string_view name);
-std::optional<WindProfile> parse_wind_profile(std::string_view name);
+HMSM_API const char* to_string(Grouping grouping);
+HMSM_API const char* to_string(WindProfile profile);
+HMSM_API std::optional<Grouping> parse_grouping(std::string_view name);
+HMSM_API std::optional<WindProfile> parse_wind_profile(std::string_view name);
 
 /// Valid ranges of docs/model.md 3.4; messages name the option.
-Status validate(const ModelOptions& options);
-Status validate(const Parameters& parameters);
-Status validate(const Wind& wind);
+HMSM_API Status validate(const ModelOptions& options);
+HMSM_API Status validate(const Parameters& parameters);
+HMSM_API Status validate(const Wind& wind);
 
 }  // namespace hmsm

@@ -2,6 +2,8 @@
 // (src/cpu/NAME.cpp), the shaders (shaders/glsl/NAME.comp) and the kernels (kernels/cuda/NAME.cu).
 #pragma once
 
+#include <hmsm/export.h>
+
 #include <array>
 #include <cstdint>
 #include <optional>
@@ -46,7 +48,7 @@ constexpr std::string_view pass_name(Pass pass) {
     return names[static_cast<uint32_t>(pass)];
 }
 
-std::optional<Pass> parse_pass(std::string_view name);
+HMSM_API std::optional<Pass> parse_pass(std::string_view name);
 
 /// Device time per pass (seconds, summed over every step of the last Simulation::step call) and
 /// the number of steps it covers. All zero when the backend was not asked to profile.

@@ -1,6 +1,8 @@
 // Instances of one or many tree models (docs/model.md 3.6) and the forest file (docs/model.md 4).
 #pragma once
 
+#include <hmsm/export.h>
+
 #include <hmsm/tree.h>
 
 #include <cstdint>
@@ -26,7 +28,7 @@ struct Scene {
 };
 
 /// One instance of `tree` (at the origin with yaw 0 by default).
-Scene single_tree_scene(TreeModel tree, Vec3 origin = Vec3(0.0), double yaw = 0.0);
+HMSM_API Scene single_tree_scene(TreeModel tree, Vec3 origin = Vec3(0.0), double yaw = 0.0);
 
 /// Most instances grid_scene places (2^24).
 inline constexpr uint32_t kMaxGridInstances = uint32_t(1) << 24;
@@ -35,15 +37,15 @@ inline constexpr uint32_t kMaxGridInstances = uint32_t(1) << 24;
 /// yaws drawn deterministically from `seed`. Counts above kMaxGridInstances, or with more than
 /// 2^32 - 2 mesh vertices for certain (3 per node per instance at least), are refused as
 /// `unsupported` ("scene too large", as Simulation::create) before anything is allocated.
-Result<Scene> grid_scene(TreeModel tree, uint32_t count, double spacing, uint64_t seed);
+HMSM_API Result<Scene> grid_scene(TreeModel tree, uint32_t count, double spacing, uint64_t seed);
 
 /// Reads an hmsm-forest JSON v1 file; model paths are relative to the file, "preset:NAME"
 /// generates a preset.
-Result<Scene> load_forest(const std::string& path);
-Result<Scene> parse_forest(std::string_view json, const std::string& base_directory,
-                           std::string_view source = "forest");
+HMSM_API Result<Scene> load_forest(const std::string& path);
+HMSM_API Result<Scene> parse_forest(std::string_view json, const std::string& base_directory,
+                                    std::string_view source = "forest");
 
 /// Checks that every instance names a model and every number is finite.
-Status validate_scene(const Scene& scene);
+HMSM_API Status validate_scene(const Scene& scene);
 
 }  // namespace hmsm

@@ -7,6 +7,7 @@
 // events at a time (apply_schedule_events), so that nothing invalid is found after a step ran.
 #pragma once
 
+#include <hmsm/export.h>
 #include <hmsm/options.h>
 #include <hmsm/scene.h>
 #include <hmsm/simulation.h>
@@ -77,9 +78,9 @@ struct Schedule {
 /// `strength`, a `seed` that is not an integer literal in [0, 2^64 - 1] (read exactly from the
 /// JSON token, never through a double), more than kMaxForceFields forces, a force with both or
 /// neither of `directional` and `radial`, a radius <= 0, repeated instance indices in one event.
-Result<Schedule> parse_schedule(std::string_view json, std::string_view source = "schedule");
+HMSM_API Result<Schedule> parse_schedule(std::string_view json, std::string_view source = "schedule");
 /// Reads and parses a schedule file (I/O errors are ErrorCode::io).
-Result<Schedule> load_schedule(const std::string& path);
+HMSM_API Result<Schedule> load_schedule(const std::string& path);
 
 /// Checks a parsed schedule against the run it will drive: `model_names` (Scene::model_names),
 /// the instance count and the wind in force at step 1. Tracks the instance count through every
@@ -87,16 +88,16 @@ Result<Schedule> load_schedule(const std::string& path);
 /// validates the wind after every change (validate(const Wind&)), every force list, every
 /// instance setting and every added instance. Events after `last_step` (when given) are checked
 /// too: a file is valid or not whatever the run's length.
-Status validate_schedule(const Schedule& schedule, std::span<const std::string> model_names,
+HMSM_API Status validate_schedule(const Schedule& schedule, std::span<const std::string> model_names,
                          uint64_t instance_count, const Wind& initial_wind);
 
 /// Applies, in file order, every event whose step is `step` (call it before running step `step`,
 /// for step = steps_done() + 1). Model names resolve through simulation.scene().model_names.
 /// Validate the schedule first: an error here is a rejected live-control call, reported as is.
-Status apply_schedule_events(const Schedule& schedule, uint64_t step, Simulation& simulation);
+HMSM_API Status apply_schedule_events(const Schedule& schedule, uint64_t step, Simulation& simulation);
 
 /// The first step > `after` at which some event applies, if any (to run the steps in between
 /// as one batch).
-std::optional<uint64_t> next_schedule_step(const Schedule& schedule, uint64_t after);
+HMSM_API std::optional<uint64_t> next_schedule_step(const Schedule& schedule, uint64_t after);
 
 }  // namespace hmsm

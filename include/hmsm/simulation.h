@@ -1,6 +1,8 @@
 // The simulation: owns the state, the seven-pass sequence (written once, here) and a backend.
 #pragma once
 
+#include <hmsm/export.h>
+
 #include <hmsm/hierarchy.h>
 #include <hmsm/mesh.h>
 #include <hmsm/options.h>
@@ -16,20 +18,16 @@
 
 namespace hmsm {
 
-namespace detail {
-struct SimulationAccess;  // internal: src/simulation_access.h
-}  // namespace detail
-
 /// `cpu` is the serial float reference (the paper's baseline); `cpu64` the double-precision
 /// oracle; `cpu_parallel` (named "cpu-parallel") the float passes of `cpu` split over all host
 /// threads, bitwise the results of `cpu`; `automatic` picks CUDA, then a Vulkan GPU, then
 /// cpu-parallel where the host has more than one thread, else `cpu`.
 enum class BackendKind { cpu, cpu64, vulkan, cuda, automatic, cpu_parallel };
 
-const char* to_string(BackendKind kind);
-std::optional<BackendKind> parse_backend_kind(std::string_view name);
+HMSM_API const char* to_string(BackendKind kind);
+HMSM_API std::optional<BackendKind> parse_backend_kind(std::string_view name);
 /// Backends compiled into this build (never `automatic`).
-std::vector<BackendKind> compiled_backends();
+HMSM_API std::vector<BackendKind> compiled_backends();
 
 /// How passes 3 and 5 accumulate down the hierarchy. All three give the same poses.
 enum class Composition {
@@ -47,8 +45,8 @@ enum class Composition {
     /// One dispatch per depth level, D+1 in all (for comparison).
     level_by_level,
 };
-const char* to_string(Composition composition);
-std::optional<Composition> parse_composition(std::string_view name);
+HMSM_API const char* to_string(Composition composition);
+HMSM_API std::optional<Composition> parse_composition(std::string_view name);
 
 /// How the contour pass stores the mesh vertices on the device (docs/formats.md, "Vertex
 /// layouts"). Both give the same positions and Simulation::read() returns the same outputs.
@@ -61,8 +59,8 @@ std::optional<Composition> parse_composition(std::string_view name);
 ///   elements and is never written; hmsm::vulkan::SharedBuffers and
 ///   hmsm::cuda::DeviceOutputs report the layout.
 enum class VertexLayout { separate, packed };
-const char* to_string(VertexLayout layout);
-std::optional<VertexLayout> parse_vertex_layout(std::string_view name);
+HMSM_API const char* to_string(VertexLayout layout);
+HMSM_API std::optional<VertexLayout> parse_vertex_layout(std::string_view name);
 
 /// What a step produces (docs/model.md 3.10). An engine that skins its own mesh needs only the
 /// joint matrices: passes 1-5. `joints_and_nodes` adds pass 6 (node positions), `all` pass 7
@@ -71,9 +69,9 @@ std::optional<VertexLayout> parse_vertex_layout(std::string_view name);
 /// fails with invalid_argument. Chain rotations, origins, angles and joint matrices are always
 /// produced.
 enum class Outputs { joints, joints_and_nodes, all };
-const char* to_string(Outputs outputs);
+HMSM_API const char* to_string(Outputs outputs);
 /// "joints", "nodes" (joints_and_nodes) or "all".
-std::optional<Outputs> parse_outputs(std::string_view name);
+HMSM_API std::optional<Outputs> parse_outputs(std::string_view name);
 
 struct SimulationConfig {
     BackendKind backend = BackendKind::automatic;
@@ -102,7 +100,7 @@ struct SimulationConfig {
 /// layouts (decoded from the positions' w when packed); vertex_positions are x, y, z in both.
 enum class Output { node_positions, vertex_positions, vertex_normals, chain_rotations,
                     chain_origins, chain_angles, joint_matrices };
-uint32_t output_components(Output output);
+HMSM_API uint32_t output_components(Output output);
 
 /// A sphere that pushes branches (docs/model.md 3.9): a character, a vehicle, an explosion. It
 /// acts on every chain whose origin x lies within `radius` of `center` (world space, metres) with
@@ -120,13 +118,14 @@ struct ForceField {
 inline constexpr uint32_t kMaxForceFields = 16;
 
 /// Checks a force-field list (count, finite numbers, radius > 0); the message names the field.
-Status validate_force_fields(std::span<const ForceField> fields);
+HMSM_API Status validate_force_fields(std::span<const ForceField> fields);
 
 /// A running simulation of a scene. Threading: one Simulation may be used by one thread at a
 /// time (calls on it are not synchronized); distinct Simulations may run concurrently on any
-/// backends. const member functions, read() included, may run concurrently with each other but
-/// not with a non-const call (docs/engine.md).
-class Simulation {
+/// backends, and may be created and destroyed from several threads at once. const member
+/// functions, read() included, may run concurrently with each other but not with a non-const
+/// call; concurrent read()s are serialized inside (docs/engine.md).
+class HMSM_API Simulation {
 public:
     /// Validates everything, builds hierarchies and meshes, creates the backend, uploads the
     /// scene and poses it at rest (S = V = 0).
@@ -191,8 +190,11 @@ public:
     /// per model.
     uint32_t capped_chain_count() const;
 
+    /// Defined only inside the library (src/simulation_access.h), for hmsm's own interop code,
+    /// tools and tests; incomplete everywhere else.
+    struct Access;
+
 private:
-    friend struct detail::SimulationAccess;
     struct Impl;
     explicit Simulation(std::unique_ptr<Impl> impl);
     std::unique_ptr<Impl> impl_;

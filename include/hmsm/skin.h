@@ -3,6 +3,7 @@
 // buffers of hmsm/vulkan.h and hmsm/cuda.h), without passes 6 and 7.
 #pragma once
 
+#include <hmsm/export.h>
 #include <hmsm/hierarchy.h>
 #include <hmsm/mesh.h>
 #include <hmsm/options.h>
@@ -39,7 +40,7 @@ struct SkinTemplate {
 };
 
 /// Builds the skin of `mesh` (build_mesh(tree, hierarchy, options)).
-SkinTemplate build_skin(const TreeModel& tree, const Hierarchy& hierarchy, const MeshTemplate& mesh,
+HMSM_API SkinTemplate build_skin(const TreeModel& tree, const Hierarchy& hierarchy, const MeshTemplate& mesh,
                         const ModelOptions& options);
 
 }  // namespace hmsm

@@ -2,6 +2,8 @@
 // the offending input. Nothing in hmsm throws across the API or terminates the process.
 #pragma once
 
+#include <hmsm/export.h>
+
 #include <string>
 #include <utility>
 #include <variant>
@@ -28,7 +30,7 @@ constexpr bool is_input_error(ErrorCode code) {
            code == ErrorCode::io;
 }
 
-const char* to_string(ErrorCode code);
+HMSM_API const char* to_string(ErrorCode code);
 
 class [[nodiscard]] Status {
 public:

@@ -1,6 +1,8 @@
 // The tree skeleton (docs/model.md 3.1) and its file formats (docs/model.md 4).
 #pragma once
 
+#include <hmsm/export.h>
+
 #include <hmsm/status.h>
 
 #include <hmsm/types.h>
@@ -35,18 +37,18 @@ struct TreeModel {
 };
 
 /// Checks every rule of docs/model.md 3.1 plus the leaf fields; the message names node or leaf.
-Status validate_tree(const TreeModel& tree);
+HMSM_API Status validate_tree(const TreeModel& tree);
 
 /// Parses hmsm-tree JSON v1 and validates it. `source` names the input in error messages.
-Result<TreeModel> parse_tree(std::string_view json, std::string_view source = "tree");
+HMSM_API Result<TreeModel> parse_tree(std::string_view json, std::string_view source = "tree");
 /// Reads and parses a tree file.
-Result<TreeModel> load_tree(const std::string& path);
+HMSM_API Result<TreeModel> load_tree(const std::string& path);
 /// Serializes to hmsm-tree JSON v1 (round-trips exactly: numbers are written with 17 digits).
-std::string tree_to_json(const TreeModel& tree);
+HMSM_API std::string tree_to_json(const TreeModel& tree);
 /// Writes a tree file; on failure no file is left behind.
-Status save_tree(const TreeModel& tree, const std::string& path);
+HMSM_API Status save_tree(const TreeModel& tree, const std::string& path);
 
 /// Rest-pose height of a tree: max minus min node y (the conformance error scale, docs/model.md 7).
-double tree_height(const TreeModel& tree);
+HMSM_API double tree_height(const TreeModel& tree);
 
 }  // namespace hmsm

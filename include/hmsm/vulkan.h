@@ -2,9 +2,13 @@
 // device and queue, optionally record the steps into the engine's command buffer, and use the
 // simulation's output buffers directly (vertex buffers, storage buffers) without a readback.
 //
-// Only available when the build has the Vulkan backend (HMSM_HAVE_VULKAN is defined by the
-// hmsm target); the engine brings its own Vulkan headers.
+// The engine brings its own Vulkan headers (vulkan/vulkan_core.h, for the handle types) in every
+// build. In a build of hmsm without the Vulkan backend (HMSM_HAVE_VULKAN, defined by the hmsm
+// target, is absent) the header still compiles and every function fails with no_device, as
+// hmsm/cuda.h does without CUDA.
 #pragma once
+
+#include <hmsm/export.h>
 
 #include <hmsm/simulation.h>
 #include <hmsm/status.h>
@@ -31,11 +35,6 @@ struct ExternalContext {
     /// The engine's loader entry point; null means the system Vulkan loader (libvulkan.so.1).
     PFN_vkGetInstanceProcAddr get_instance_proc_addr = nullptr;
 };
-
-/// Simulation::create() on the engine's device: `config.backend` is ignored (always Vulkan).
-Result<std::unique_ptr<Simulation>> create_simulation(const Scene& scene,
-                                                      const SimulationConfig& config,
-                                                      const ExternalContext& context);
 
 /// One output as a range of a device buffer: `count` elements of `stride` bytes starting at
 /// `offset`. Positions are vec4 (x, y, z, 1) and normals vec4 (x, y, z, 0), float32,
@@ -72,9 +71,6 @@ struct SharedBuffers {
     BufferRange joint_matrices;
 };
 
-/// Fails with invalid_argument when `simulation` does not run on the Vulkan backend.
-Result<SharedBuffers> shared_buffers(const Simulation& simulation);
-
 /// The device a Vulkan simulation runs on (its own or the engine's).
 struct DeviceHandles {
     VkPhysicalDevice physical_device = VK_NULL_HANDLE;
@@ -82,7 +78,18 @@ struct DeviceHandles {
     VkQueue queue = VK_NULL_HANDLE;
     uint32_t queue_family_index = 0;
 };
-Result<DeviceHandles> device_handles(const Simulation& simulation);
+
+#ifdef HMSM_HAVE_VULKAN
+
+/// Simulation::create() on the engine's device: `config.backend` is ignored (always Vulkan).
+HMSM_API Result<std::unique_ptr<Simulation>> create_simulation(const Scene& scene,
+                                                               const SimulationConfig& config,
+                                                               const ExternalContext& context);
+
+/// Fails with invalid_argument when `simulation` does not run on the Vulkan backend.
+HMSM_API Result<SharedBuffers> shared_buffers(const Simulation& simulation);
+
+HMSM_API Result<DeviceHandles> device_handles(const Simulation& simulation);
 
 /// Records `count` steps into `command_buffer` (recording state, outside a render pass, from a
 /// pool of a compute-capable queue family of the simulation's device) instead of submitting
@@ -94,6 +101,25 @@ Result<DeviceHandles> device_handles(const Simulation& simulation);
 /// The engine submits the command buffer; the recorded steps must complete before the next
 /// Simulation::step(), read() or record_steps() of this simulation is called. Per-pass times are
 /// not collected for recorded steps.
-Status record_steps(Simulation& simulation, VkCommandBuffer command_buffer, uint32_t count = 1);
+HMSM_API Status record_steps(Simulation& simulation, VkCommandBuffer command_buffer,
+                             uint32_t count = 1);
+
+#else
+
+inline Result<std::unique_ptr<Simulation>> create_simulation(const Scene&, const SimulationConfig&,
+                                                             const ExternalContext&) {
+    return Status{ErrorCode::no_device, "vulkan: this build of hmsm has no Vulkan backend"};
+}
+inline Result<SharedBuffers> shared_buffers(const Simulation&) {
+    return Status{ErrorCode::no_device, "vulkan: this build of hmsm has no Vulkan backend"};
+}
+inline Result<DeviceHandles> device_handles(const Simulation&) {
+    return Status{ErrorCode::no_device, "vulkan: this build of hmsm has no Vulkan backend"};
+}
+inline Status record_steps(Simulation&, VkCommandBuffer, uint32_t = 1) {
+    return {ErrorCode::no_device, "vulkan: this build of hmsm has no Vulkan backend"};
+}
+
+#endif
 
 }  // namespace hmsm::vulkan

@@ -33,14 +33,21 @@ bool validation_requested() {
 
 constexpr const char* kValidationLayer = "VK_LAYER_KHRONOS_validation";
 
+/// Guards volk's global (instance-level) function pointers, hmsm's private copies
+/// (src/vulkan/volk_private.h).
+std::mutex& loader_mutex() {
+    static std::mutex mutex;
+    return mutex;
+}
+bool system_loader_loaded = false;     // volkInitialize() done (and not replaced by a custom one)
+bool system_instance_loaded = false;   // instance-level pointers loaded through the system loader
+
 /// Loads the Vulkan loader (or the engine's entry point) into volk's global function pointers.
 Status load_loader(PFN_vkGetInstanceProcAddr custom) {
-    static std::mutex mutex;
-    static bool system_loader_loaded = false;
-    std::lock_guard lock(mutex);
+    std::lock_guard lock(loader_mutex());
     if (custom) {
         volkInitializeCustom(custom);
-        system_loader_loaded = false;
+        system_loader_loaded = system_instance_loaded = false;
         return {};
     }
     if (system_loader_loaded) return {};
@@ -48,6 +55,18 @@ Status load_loader(PFN_vkGetInstanceProcAddr custom) {
         return {ErrorCode::no_device, "vulkan: no Vulkan loader (libvulkan.so.1) on this system"};
     system_loader_loaded = true;
     return {};
+}
+
+/// Loads volk's instance-level pointers from `instance`. Through the system loader they are
+/// the loader's trampolines, the same for every instance, so they are loaded once and never
+/// rewritten while other threads call through them: simulations may be created and destroyed
+/// from several threads at once. An engine's own entry point
+/// (ExternalContext::get_instance_proc_addr) reloads them for each adopted device.
+void load_instance_functions(VkInstance instance, bool custom) {
+    std::lock_guard lock(loader_mutex());
+    if (!custom && system_instance_loaded) return;
+    volkLoadInstanceOnly(instance);
+    system_instance_loaded = !custom;
 }
 
 bool layer_present(const char* name) {
@@ -130,7 +149,7 @@ Result<std::shared_ptr<Device>> Device::adopt(const hmsm::vulkan::ExternalContex
         return Status{ErrorCode::invalid_argument,
                       "vulkan: ExternalContext needs instance, physical_device, device and queue"};
     HMSM_TRY(load_loader(context.get_instance_proc_addr));
-    volkLoadInstanceOnly(context.instance);
+    load_instance_functions(context.instance, context.get_instance_proc_addr != nullptr);
     std::shared_ptr<Device> device(new Device());
     device->owned_ = false;
     device->instance_ = context.instance;
@@ -210,7 +229,7 @@ Status Device::create_instance() {
         info.pNext = &messenger;  // also reports during vkCreateInstance / vkDestroyInstance
     }
     HMSM_VK_TRY(vkCreateInstance(&info, nullptr, &instance_));
-    volkLoadInstanceOnly(instance_);
+    load_instance_functions(instance_, false);
     if (validate) {
         // Extension entry points are fetched per instance: the loader returns them only for an
         // instance that enabled the extension.

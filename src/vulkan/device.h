@@ -7,7 +7,7 @@
 #include <hmsm/status.h>
 #include <hmsm/vulkan.h>
 
-#include <volk.h>
+#include "volk_private.h"
 
 #include <memory>
 #include <mutex>

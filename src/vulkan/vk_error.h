@@ -4,7 +4,7 @@
 
 #include <hmsm/status.h>
 
-#include <volk.h>
+#include "volk_private.h"
 
 namespace hmsm::detail::vk {
 

@@ -1,0 +1,256 @@
+/* The C ABI of hmsm (C99): for engines and languages that cannot use the C++ API (C#, Rust,
+ * Python through ctypes, Godot, ...). docs/engine.md describes it with examples.
+ *
+ * Conventions:
+ * - Objects are opaque handles created by hmsm_*_create/load/... and released by the matching
+ *   hmsm_*_destroy (which accepts NULL). A simulation keeps its own copy of the scene, so trees
+ *   and scenes may be destroyed once a simulation has been created from them.
+ * - Every fallible function returns an hmsm_status: 0 (HMSM_OK) or one of the codes below, which
+ *   are those of hmsm::ErrorCode. hmsm_status_message() returns the message of the last call
+ *   made on the calling thread ("" after a success): it names the offending argument or item.
+ *   A failed call changes nothing and writes no output (but the size, see below).
+ * - Nothing crosses this boundary as an exception; nothing exits or aborts.
+ * - Outputs are written to caller-owned arrays with an explicit capacity (in elements). Passing
+ *   values = NULL and capacity = 0 only queries the size; a capacity that is too small fails
+ *   with HMSM_INVALID_ARGUMENT. In both cases *count receives the number of elements needed.
+ * - Enumerations are int32_t values; an unknown value fails with HMSM_INVALID_ARGUMENT. Booleans
+ *   are int32_t, 0 or 1.
+ * - Threading: as in C++ (include/hmsm/simulation.h): one thread at a time per simulation;
+ *   functions taking a const handle may run concurrently with each other; distinct handles
+ *   concurrently. The last-status message is per thread.
+ * - The structs below change only together with HMSM_C_ABI_VERSION; fill them with the
+ *   hmsm_*_init functions, which set hmsm's defaults, then change what you need.
+ */
+#ifndef HMSM_HMSM_C_H
+#define HMSM_HMSM_C_H
+
+#include <hmsm/export.h>
+
+#include <stddef.h>
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/** Bumped whenever a struct or a signature below changes incompatibly. */
+#define HMSM_C_ABI_VERSION 1
+
+typedef int32_t hmsm_status;
+enum {
+    HMSM_OK = 0,
+    HMSM_INVALID_ARGUMENT = 1, /* an argument out of its valid range (caller's fault) */
+    HMSM_INVALID_TREE = 2,     /* a tree or forest violating docs/model.md 3.1 or 4 */
+    HMSM_IO = 3,               /* a file could not be read */
+    HMSM_NO_DEVICE = 4,        /* the requested backend has no usable device here */
+    HMSM_DEVICE_ERROR = 5,     /* a device call failed */
+    HMSM_OUT_OF_MEMORY = 6,
+    HMSM_UNSUPPORTED = 7,      /* a limit of this build or device was exceeded */
+    HMSM_INTERNAL = 8          /* a bug in hmsm */
+};
+
+enum { /* hmsm_config.backend */
+    HMSM_BACKEND_CPU = 0,
+    HMSM_BACKEND_CPU64 = 1,
+    HMSM_BACKEND_VULKAN = 2,
+    HMSM_BACKEND_CUDA = 3,
+    HMSM_BACKEND_AUTOMATIC = 4,
+    HMSM_BACKEND_CPU_PARALLEL = 5  /* the float passes over every host thread */
+};
+enum { /* hmsm_config.composition */
+    HMSM_COMPOSITION_POINTER_JUMPING = 0,
+    HMSM_COMPOSITION_POINTER_JUMPING_PER_ROUND = 1,
+    HMSM_COMPOSITION_POINTER_JUMPING_IN_DISPATCH = 2,
+    HMSM_COMPOSITION_LEVEL_BY_LEVEL = 3
+};
+enum { HMSM_VERTEX_LAYOUT_SEPARATE = 0, HMSM_VERTEX_LAYOUT_PACKED = 1 };
+enum { HMSM_GROUPING_DIRECTION = 0, HMSM_GROUPING_WIDTH = 1 };
+enum { /* hmsm_wind.profile (docs/model.md 3.5) */
+    HMSM_WIND_NONE = 0,
+    HMSM_WIND_CONSTANT = 1,
+    HMSM_WIND_Y1 = 2,
+    HMSM_WIND_Y2 = 3,
+    HMSM_WIND_Y3 = 4,
+    HMSM_WIND_Y4 = 5,
+    HMSM_WIND_TURBULENT = 6
+};
+/* What hmsm_simulation_read_* returns, components per element in brackets (as hmsm::Output):
+ * node positions [3], vertex positions [3], vertex normals [3], chain rotations [9,
+ * column-major], chain origins [3], chain angles [4: theta_x, theta_z and their rates], joint
+ * matrices [12: [R | O] row by row, r00 r01 r02 ox r10 ... oz].
+ * Instance-major. HMSM_OUTPUT_COUNT is one past the last value. */
+enum {
+    HMSM_OUTPUT_NODE_POSITIONS = 0,
+    HMSM_OUTPUT_VERTEX_POSITIONS = 1,
+    HMSM_OUTPUT_VERTEX_NORMALS = 2,
+    HMSM_OUTPUT_CHAIN_ROTATIONS = 3,
+    HMSM_OUTPUT_CHAIN_ORIGINS = 4,
+    HMSM_OUTPUT_CHAIN_ANGLES = 5,
+    HMSM_OUTPUT_JOINT_MATRICES = 6,
+    HMSM_OUTPUT_COUNT = 7
+};
+enum { HMSM_FORCE_FIELD_DIRECTIONAL = 0, HMSM_FORCE_FIELD_RADIAL = 1 };
+/* hmsm::Outputs: joints only (passes 1-5), plus node positions (6), plus mesh vertices (7). */
+enum { HMSM_OUTPUTS_JOINTS = 0, HMSM_OUTPUTS_JOINTS_AND_NODES = 1, HMSM_OUTPUTS_ALL = 2 };
+
+typedef struct hmsm_tree hmsm_tree;             /* a validated tree model */
+typedef struct hmsm_scene hmsm_scene;           /* models and their instances */
+typedef struct hmsm_simulation hmsm_simulation; /* a running simulation */
+
+/* hmsm::ModelOptions */
+typedef struct hmsm_model_options {
+    int32_t grouping;
+    int32_t max_chain_segments;
+    int32_t ring_sides;
+    double fix_weight;
+} hmsm_model_options;
+
+/* hmsm::Parameters (docs/model.md 3.4) */
+typedef struct hmsm_parameters {
+    double density;
+    double stiffness;
+    double damping_ratio;
+    double wind_gain;
+    double max_angle;
+    double dt;
+    double max_frequency;
+} hmsm_parameters;
+
+/* hmsm::Wind (docs/model.md 3.5) */
+typedef struct hmsm_wind {
+    int32_t profile;
+    double direction[3];
+    double strength;
+    double frequency;
+    double front_speed;
+    double turbulence;
+    uint64_t seed;
+} hmsm_wind;
+
+/* hmsm::SimulationConfig */
+typedef struct hmsm_config {
+    int32_t backend;
+    int32_t composition;
+    int32_t vertex_layout;
+    int32_t profile_passes;
+    int32_t outputs; /* HMSM_OUTPUTS_*: what a step produces */
+    hmsm_model_options model;
+    hmsm_parameters parameters;
+    hmsm_wind wind;
+} hmsm_config;
+
+/* hmsm::Instance: a placed copy of model `model` (docs/model.md 3.6, 3.9) */
+typedef struct hmsm_instance {
+    uint32_t model;
+    double origin[3];
+    double yaw;
+    double wind_scale;
+    double wind_phase;
+    int32_t active;
+} hmsm_instance;
+
+/* hmsm::ForceField (docs/model.md 3.9) */
+typedef struct hmsm_force_field {
+    int32_t kind;
+    double center[3];
+    double radius;
+    double directional[3];
+    double radial;
+} hmsm_force_field;
+
+/* Sizes of a simulation, over all instances. */
+typedef struct hmsm_counts {
+    uint64_t instances;
+    uint64_t chains;
+    uint64_t nodes;
+    uint64_t vertices;
+    uint64_t steps_done;
+    double time; /* simulated seconds */
+} hmsm_counts;
+
+/* --- status and defaults ------------------------------------------------------------------ */
+HMSM_API uint32_t hmsm_abi_version(void);
+/* The message of the calling thread's last call; valid until its next call. Never NULL. */
+HMSM_API const char* hmsm_status_message(void);
+/* "ok", "invalid_argument", ...; "unknown" for other values. */
+HMSM_API const char* hmsm_status_name(hmsm_status status);
+HMSM_API void hmsm_config_init(hmsm_config* config);
+HMSM_API void hmsm_wind_init(hmsm_wind* wind);
+HMSM_API void hmsm_instance_init(hmsm_instance* instance);
+HMSM_API void hmsm_force_field_init(hmsm_force_field* field);
+HMSM_API hmsm_status hmsm_output_components(int32_t output, uint32_t* components);
+
+/* --- trees -------------------------------------------------------------------------------- */
+HMSM_API hmsm_status hmsm_tree_load(const char* path, hmsm_tree** tree);
+/* hmsm-tree JSON v1 text of `length` bytes. */
+HMSM_API hmsm_status hmsm_tree_parse(const char* json, size_t length, hmsm_tree** tree);
+/* A preset (paper-1 ... paper-5); seed 0 = the preset's own. */
+HMSM_API hmsm_status hmsm_tree_preset(const char* name, uint64_t seed, hmsm_tree** tree);
+/* From arrays of `count` nodes: parent index (-1 for the root), position (x, y, z) and radius. */
+HMSM_API hmsm_status hmsm_tree_from_nodes(const int32_t* parents, const double* positions,
+                                          const double* radii, size_t count, hmsm_tree** tree);
+HMSM_API hmsm_status hmsm_tree_node_count(const hmsm_tree* tree, uint64_t* count);
+HMSM_API void hmsm_tree_destroy(hmsm_tree* tree);
+
+/* --- scenes ------------------------------------------------------------------------------- */
+HMSM_API hmsm_status hmsm_scene_create(hmsm_scene** scene);
+/* An hmsm-forest JSON v1 file (docs/model.md 4). */
+HMSM_API hmsm_status hmsm_scene_load_forest(const char* path, hmsm_scene** scene);
+/* Copies `tree` into the scene as a new model; *model receives its index (may be NULL). */
+HMSM_API hmsm_status hmsm_scene_add_model(hmsm_scene* scene, const hmsm_tree* tree,
+                                          const char* name, uint32_t* model);
+HMSM_API hmsm_status hmsm_scene_add_instance(hmsm_scene* scene, const hmsm_instance* instance);
+HMSM_API hmsm_status hmsm_scene_model_count(const hmsm_scene* scene, uint32_t* count);
+HMSM_API hmsm_status hmsm_scene_instance_count(const hmsm_scene* scene, uint64_t* count);
+HMSM_API void hmsm_scene_destroy(hmsm_scene* scene);
+
+/* --- simulations -------------------------------------------------------------------------- */
+HMSM_API hmsm_status hmsm_simulation_create(const hmsm_scene* scene, const hmsm_config* config,
+                                            hmsm_simulation** simulation);
+HMSM_API void hmsm_simulation_destroy(hmsm_simulation* simulation);
+HMSM_API hmsm_status hmsm_simulation_step(hmsm_simulation* simulation, uint32_t count);
+/* Reads output `output` (HMSM_OUTPUT_*) into values[capacity]; *count = elements x components. */
+HMSM_API hmsm_status hmsm_simulation_read_f32(const hmsm_simulation* simulation, int32_t output,
+                                              float* values, size_t capacity, size_t* count);
+HMSM_API hmsm_status hmsm_simulation_read_f64(const hmsm_simulation* simulation, int32_t output,
+                                              double* values, size_t capacity, size_t* count);
+HMSM_API hmsm_status hmsm_simulation_counts(const hmsm_simulation* simulation, hmsm_counts* counts);
+/* The backend it runs on (HMSM_BACKEND_*, never AUTOMATIC). */
+HMSM_API hmsm_status hmsm_simulation_backend(const hmsm_simulation* simulation, int32_t* backend);
+/* The device name as a NUL-terminated string in name[capacity]; *length = bytes needed with
+ * the NUL. */
+HMSM_API hmsm_status hmsm_simulation_device_name(const hmsm_simulation* simulation, char* name,
+                                                 size_t capacity, size_t* length);
+/* Triangles (3 indices each, counter-clockwise from outside) of model `model`'s mesh, indexing
+ * that model's vertices; instance i of the model uses its vertices at its own offset in
+ * HMSM_OUTPUT_VERTEX_POSITIONS. */
+HMSM_API hmsm_status hmsm_simulation_mesh_indices(const hmsm_simulation* simulation,
+                                                  uint32_t model, uint32_t* indices,
+                                                  size_t capacity, size_t* count);
+
+/* --- live control (docs/model.md 3.9): from the next step on; a rejected call changes nothing */
+HMSM_API hmsm_status hmsm_simulation_set_wind(hmsm_simulation* simulation, const hmsm_wind* wind);
+HMSM_API hmsm_status hmsm_simulation_get_wind(const hmsm_simulation* simulation, hmsm_wind* wind);
+/* Replaces every force field (count 0 removes them; fields may then be NULL). */
+HMSM_API hmsm_status hmsm_simulation_set_force_fields(hmsm_simulation* simulation,
+                                                      const hmsm_force_field* fields, size_t count);
+HMSM_API hmsm_status hmsm_simulation_set_instance_wind_scale(hmsm_simulation* simulation,
+                                                             uint64_t instance, double wind_scale);
+HMSM_API hmsm_status hmsm_simulation_set_instance_wind_phase(hmsm_simulation* simulation,
+                                                             uint64_t instance, double wind_phase);
+HMSM_API hmsm_status hmsm_simulation_set_instance_active(hmsm_simulation* simulation,
+                                                         uint64_t instance, int32_t active);
+HMSM_API hmsm_status hmsm_simulation_add_instances(hmsm_simulation* simulation,
+                                                   const hmsm_instance* instances, size_t count);
+HMSM_API hmsm_status hmsm_simulation_remove_instances(hmsm_simulation* simulation,
+                                                      const uint64_t* indices, size_t count);
+/* The current instance list into instances[capacity]; *count = the number of instances. */
+HMSM_API hmsm_status hmsm_simulation_instances(const hmsm_simulation* simulation,
+                                               hmsm_instance* instances, size_t capacity,
+                                               size_t* count);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* HMSM_HMSM_C_H */

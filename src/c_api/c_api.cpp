@@ -1,0 +1,276 @@
+// The C ABI's status reporting, defaults, enumerations and struct conversions, and trees.
+#include "c_api_internal.h"
+
+#include <array>
+#include <cstring>
+#include <string_view>
+
+namespace hmsm::c_api {
+namespace {
+
+/// The message of the calling thread's last C call (hmsm_status_message).
+thread_local std::string last_message;
+
+/// hmsm::Output for each HMSM_OUTPUT_* value: adding an output is one line here and one in the
+/// header's enum.
+constexpr std::array<Output, HMSM_OUTPUT_COUNT> kOutputs = {
+    Output::node_positions, Output::vertex_positions, Output::vertex_normals,
+    Output::chain_rotations, Output::chain_origins, Output::chain_angles, Output::joint_matrices};
+
+}  // namespace
+
+hmsm_status report(const Status& status) {
+    try {
+        last_message = status.message();
+    } catch (...) {
+        last_message.clear();  // keep the code; the message could not be stored
+    }
+    return static_cast<hmsm_status>(status.code());
+}
+
+Status to_output(int32_t output, Output& out) {
+    if (output < 0 || output >= HMSM_OUTPUT_COUNT)
+        return bad("output: unknown value " + std::to_string(output));
+    out = kOutputs[static_cast<size_t>(output)];
+    return {};
+}
+
+Status to_cpp(const hmsm_wind& in, Wind& out) {
+    if (in.profile < 0 || in.profile > HMSM_WIND_TURBULENT)
+        return bad("wind.profile: unknown value " + std::to_string(in.profile));
+    if (!std::isfinite(in.turbulence) || in.turbulence < 0.0 || in.turbulence > 2.0)
+        return bad("wind.turbulence must be finite and in [0, 2]");
+    Wind wind;
+    wind.profile = static_cast<WindProfile>(in.profile);
+    wind.direction = Vec3(in.direction[0], in.direction[1], in.direction[2]);
+    wind.strength = in.strength;
+    wind.frequency = in.frequency;
+    wind.front_speed = in.front_speed;
+    wind.turbulence = in.turbulence;
+    wind.seed = in.seed;
+    HMSM_TRY(validate(wind));  // finite values and ranges; the message names the field
+    out = wind;
+    return {};
+}
+
+void to_c(const Wind& in, hmsm_wind& out) {
+    out.profile = static_cast<int32_t>(in.profile);
+    for (int i = 0; i < 3; ++i) out.direction[i] = in.direction[i];
+    out.strength = in.strength;
+    out.frequency = in.frequency;
+    out.front_speed = in.front_speed;
+    out.turbulence = in.turbulence;
+    out.seed = in.seed;
+}
+
+Status to_cpp(const hmsm_instance& in, Instance& out, const char* what) {
+    if (!finite3(in.origin) || !std::isfinite(in.yaw))
+        return bad(std::string(what) + ": origin and yaw must be finite");
+    if (!std::isfinite(in.wind_scale) || in.wind_scale < 0.0)
+        return bad(std::string(what) + ": wind_scale must be finite and >= 0");
+    if (!std::isfinite(in.wind_phase))
+        return bad(std::string(what) + ": wind_phase must be finite");
+    if (in.active != 0 && in.active != 1) return bad(std::string(what) + ": active must be 0 or 1");
+    out.model = in.model;
+    out.origin = Vec3(in.origin[0], in.origin[1], in.origin[2]);
+    out.yaw = in.yaw;
+    out.wind_scale = in.wind_scale;
+    out.wind_phase = in.wind_phase;
+    out.active = in.active == 1;
+    return {};
+}
+
+void to_c(const Instance& in, hmsm_instance& out) {
+    out.model = in.model;
+    for (int i = 0; i < 3; ++i) out.origin[i] = in.origin[i];
+    out.yaw = in.yaw;
+    out.wind_scale = in.wind_scale;
+    out.wind_phase = in.wind_phase;
+    out.active = in.active ? 1 : 0;
+}
+
+Status to_cpp(const hmsm_force_field& in, ForceField& out, const char* what) {
+    if (in.kind != HMSM_FORCE_FIELD_DIRECTIONAL && in.kind != HMSM_FORCE_FIELD_RADIAL)
+        return bad(std::string(what) + ": unknown kind " + std::to_string(in.kind));
+    out.kind = static_cast<ForceField::Kind>(in.kind);
+    out.center = Vec3(in.center[0], in.center[1], in.center[2]);
+    out.radius = in.radius;
+    out.directional = Vec3(in.directional[0], in.directional[1], in.directional[2]);
+    out.radial = in.radial;
+    return {};  // numbers are checked by validate_force_fields
+}
+
+Status to_cpp(const hmsm_config& in, SimulationConfig& out) {
+    SimulationConfig config;
+    if (in.backend < HMSM_BACKEND_CPU || in.backend > HMSM_BACKEND_CPU_PARALLEL)
+        return bad("config.backend: unknown value " + std::to_string(in.backend));
+    if (in.composition < HMSM_COMPOSITION_POINTER_JUMPING ||
+        in.composition > HMSM_COMPOSITION_LEVEL_BY_LEVEL)
+        return bad("config.composition: unknown value " + std::to_string(in.composition));
+    if (in.vertex_layout != HMSM_VERTEX_LAYOUT_SEPARATE &&
+        in.vertex_layout != HMSM_VERTEX_LAYOUT_PACKED)
+        return bad("config.vertex_layout: unknown value " + std::to_string(in.vertex_layout));
+    if (in.outputs < HMSM_OUTPUTS_JOINTS || in.outputs > HMSM_OUTPUTS_ALL)
+        return bad("config.outputs: unknown value " + std::to_string(in.outputs));
+    if (in.profile_passes != 0 && in.profile_passes != 1)
+        return bad("config.profile_passes must be 0 or 1");
+    if (in.model.grouping != HMSM_GROUPING_DIRECTION && in.model.grouping != HMSM_GROUPING_WIDTH)
+        return bad("config.model.grouping: unknown value " + std::to_string(in.model.grouping));
+    config.backend = static_cast<BackendKind>(in.backend);
+    config.composition = static_cast<Composition>(in.composition);
+    config.vertex_layout = static_cast<VertexLayout>(in.vertex_layout);
+    config.profile_passes = in.profile_passes == 1;
+    config.outputs = static_cast<Outputs>(in.outputs);
+    config.model.grouping = static_cast<Grouping>(in.model.grouping);
+    config.model.max_chain_segments = in.model.max_chain_segments;
+    config.model.ring_sides = in.model.ring_sides;
+    config.model.fix_weight = in.model.fix_weight;
+    const hmsm_parameters& p = in.parameters;
+    config.parameters = {p.density, p.stiffness, p.damping_ratio, p.wind_gain,
+                         p.max_angle, p.dt, p.max_frequency};
+    Status wind = to_cpp(in.wind, config.wind);
+    if (!wind) return {wind.code(), "config." + wind.message()};
+    // Options and parameters are validated (ranges, finite numbers) by Simulation::create.
+    out = config;
+    return {};
+}
+
+}  // namespace hmsm::c_api
+
+using namespace hmsm;
+using namespace hmsm::c_api;
+
+namespace {
+Status hand_out(Result<TreeModel> tree, hmsm_tree** out) {
+    if (!tree) return tree.status();
+    *out = new hmsm_tree{std::move(*tree)};
+    return {};
+}
+}  // namespace
+
+extern "C" {
+
+uint32_t hmsm_abi_version(void) { return HMSM_C_ABI_VERSION; }
+
+const char* hmsm_status_message(void) { return last_message.c_str(); }
+
+const char* hmsm_status_name(hmsm_status status) {
+    switch (status) {
+        case HMSM_OK: return "ok";
+        case HMSM_INVALID_ARGUMENT: return "invalid_argument";
+        case HMSM_INVALID_TREE: return "invalid_tree";
+        case HMSM_IO: return "io";
+        case HMSM_NO_DEVICE: return "no_device";
+        case HMSM_DEVICE_ERROR: return "device_error";
+        case HMSM_OUT_OF_MEMORY: return "out_of_memory";
+        case HMSM_UNSUPPORTED: return "unsupported";
+        case HMSM_INTERNAL: return "internal";
+        default: return "unknown";
+    }
+}
+
+void hmsm_wind_init(hmsm_wind* wind) {
+    if (wind) to_c(Wind{}, *wind);
+}
+
+void hmsm_config_init(hmsm_config* config) {
+    if (!config) return;
+    const SimulationConfig defaults;
+    std::memset(config, 0, sizeof *config);
+    config->backend = static_cast<int32_t>(defaults.backend);
+    config->composition = static_cast<int32_t>(defaults.composition);
+    config->vertex_layout = static_cast<int32_t>(defaults.vertex_layout);
+    config->profile_passes = defaults.profile_passes ? 1 : 0;
+    config->outputs = static_cast<int32_t>(defaults.outputs);
+    config->model.grouping = static_cast<int32_t>(defaults.model.grouping);
+    config->model.max_chain_segments = defaults.model.max_chain_segments;
+    config->model.ring_sides = defaults.model.ring_sides;
+    config->model.fix_weight = defaults.model.fix_weight;
+    const Parameters& p = defaults.parameters;
+    config->parameters = {p.density, p.stiffness, p.damping_ratio, p.wind_gain,
+                          p.max_angle, p.dt, p.max_frequency};
+    to_c(defaults.wind, config->wind);
+}
+
+void hmsm_instance_init(hmsm_instance* instance) {
+    if (instance) to_c(Instance{}, *instance);
+}
+
+void hmsm_force_field_init(hmsm_force_field* field) {
+    if (!field) return;
+    const ForceField defaults;
+    field->kind = static_cast<int32_t>(defaults.kind);
+    for (int i = 0; i < 3; ++i) {
+        field->center[i] = defaults.center[i];
+        field->directional[i] = defaults.directional[i];
+    }
+    field->radius = defaults.radius;
+    field->radial = defaults.radial;
+}
+
+hmsm_status hmsm_output_components(int32_t output, uint32_t* components) {
+    return guarded([&]() -> Status {
+        if (!components) return bad("hmsm_output_components: components is NULL");
+        Output out;
+        HMSM_TRY(to_output(output, out));
+        *components = hmsm::output_components(out);
+        return {};
+    });
+}
+
+// --- trees ---------------------------------------------------------------------------------
+
+hmsm_status hmsm_tree_load(const char* path, hmsm_tree** tree) {
+    return guarded([&]() -> Status {
+        if (!path) return bad("hmsm_tree_load: path is NULL");
+        if (!tree) return bad("hmsm_tree_load: tree is NULL");
+        return hand_out(load_tree(path), tree);
+    });
+}
+
+hmsm_status hmsm_tree_parse(const char* json, size_t length, hmsm_tree** tree) {
+    return guarded([&]() -> Status {
+        if (!json) return bad("hmsm_tree_parse: json is NULL");
+        if (!tree) return bad("hmsm_tree_parse: tree is NULL");
+        return hand_out(parse_tree(std::string_view(json, length)), tree);
+    });
+}
+
+hmsm_status hmsm_tree_preset(const char* name, uint64_t seed, hmsm_tree** tree) {
+    return guarded([&]() -> Status {
+        if (!name) return bad("hmsm_tree_preset: name is NULL");
+        if (!tree) return bad("hmsm_tree_preset: tree is NULL");
+        return hand_out(generate_preset(name, seed), tree);
+    });
+}
+
+hmsm_status hmsm_tree_from_nodes(const int32_t* parents, const double* positions,
+                                 const double* radii, size_t count, hmsm_tree** tree) {
+    return guarded([&]() -> Status {
+        if (!parents || !positions || !radii)
+            return bad("hmsm_tree_from_nodes: parents, positions and radii must not be NULL");
+        if (!tree) return bad("hmsm_tree_from_nodes: tree is NULL");
+        TreeModel model;
+        model.nodes.resize(count);
+        for (size_t i = 0; i < count; ++i)
+            model.nodes[i] = {parents[i],
+                              Vec3(positions[3 * i], positions[3 * i + 1], positions[3 * i + 2]),
+                              radii[i]};
+        HMSM_TRY(validate_tree(model));  // names the offending node (NaN included)
+        *tree = new hmsm_tree{std::move(model)};
+        return {};
+    });
+}
+
+hmsm_status hmsm_tree_node_count(const hmsm_tree* tree, uint64_t* count) {
+    return guarded([&]() -> Status {
+        if (!tree) return bad("hmsm_tree_node_count: tree is NULL");
+        if (!count) return bad("hmsm_tree_node_count: count is NULL");
+        *count = tree->model.nodes.size();
+        return {};
+    });
+}
+
+void hmsm_tree_destroy(hmsm_tree* tree) { delete tree; }
+
+}  // extern "C"

@@ -1,0 +1,55 @@
+// Shared by the C ABI's sources (include/hmsm/hmsm_c.h): the handle types, conversions between
+// the C structs and the C++ ones, and the guard that turns every outcome into a status code and
+// the calling thread's last message.
+#pragma once
+
+#include <hmsm/hmsm.h>
+#include <hmsm/hmsm_c.h>
+
+#include <cmath>
+#include <memory>
+#include <new>
+#include <string>
+
+struct hmsm_tree {
+    hmsm::TreeModel model;
+};
+struct hmsm_scene {
+    hmsm::Scene scene;
+};
+struct hmsm_simulation {
+    std::unique_ptr<hmsm::Simulation> simulation;
+};
+
+namespace hmsm::c_api {
+
+/// Records `status` as the calling thread's last status and returns its code.
+hmsm_status report(const Status& status);
+
+inline Status bad(std::string message) { return {ErrorCode::invalid_argument, std::move(message)}; }
+
+/// Runs `body` (returning a Status) so that no exception leaves it.
+template <class Body>
+hmsm_status guarded(Body&& body) noexcept {
+    try {
+        return report(body());
+    } catch (const std::bad_alloc&) {
+        return report({ErrorCode::out_of_memory, "out of host memory"});
+    } catch (...) {
+        return report({ErrorCode::internal, "unexpected exception inside hmsm"});
+    }
+}
+
+inline bool finite3(const double v[3]) {
+    return std::isfinite(v[0]) && std::isfinite(v[1]) && std::isfinite(v[2]);
+}
+
+Status to_cpp(const hmsm_wind& in, Wind& out);
+void to_c(const Wind& in, hmsm_wind& out);
+Status to_cpp(const hmsm_instance& in, Instance& out, const char* what);
+void to_c(const Instance& in, hmsm_instance& out);
+Status to_cpp(const hmsm_force_field& in, ForceField& out, const char* what);
+Status to_cpp(const hmsm_config& in, SimulationConfig& out);
+Status to_output(int32_t output, Output& out);
+
+}  // namespace hmsm::c_api

@@ -1,0 +1,246 @@
+// The C ABI's simulations: create, step, read into caller buffers, live control, destroy.
+#include "c_api_internal.h"
+
+#include <cstring>
+#include <vector>
+
+using namespace hmsm;
+using namespace hmsm::c_api;
+
+namespace {
+
+/// The common shape of a read into a caller buffer: `*count` always receives the size needed;
+/// values == NULL with capacity 0 is a size query.
+template <class T>
+Status copy_out(const char* fn, const std::vector<T>& source, T* values, size_t capacity,
+                size_t* count) {
+    if (!count) return bad(std::string(fn) + ": count is NULL");
+    *count = source.size();
+    if (!values && capacity == 0) return {};
+    if (!values)
+        return bad(std::string(fn) + ": values is NULL with capacity " + std::to_string(capacity));
+    if (capacity < source.size())
+        return bad(std::string(fn) + ": capacity " + std::to_string(capacity) + " is too small, " +
+                   std::to_string(source.size()) + " needed");
+    if (!source.empty()) std::memcpy(values, source.data(), source.size() * sizeof(T));
+    return {};
+}
+
+template <class T>
+hmsm_status read_output(const char* fn, const hmsm_simulation* simulation, int32_t output,
+                        T* values, size_t capacity, size_t* count) {
+    return guarded([&]() -> Status {
+        if (!simulation) return bad(std::string(fn) + ": simulation is NULL");
+        if (!count) return bad(std::string(fn) + ": count is NULL");
+        Output which;
+        HMSM_TRY(to_output(output, which));
+        std::vector<T> data;
+        HMSM_TRY(simulation->simulation->read(which, data));
+        return copy_out(fn, data, values, capacity, count);
+    });
+}
+
+Status check_instance(const char* fn, const hmsm_simulation* simulation, uint64_t instance) {
+    if (!simulation) return bad(std::string(fn) + ": simulation is NULL");
+    const uint64_t n = simulation->simulation->instance_count();
+    if (instance >= n)
+        return bad(std::string(fn) + ": instance " + std::to_string(instance) +
+                   " does not exist (" + std::to_string(n) + " instances)");
+    return {};
+}
+
+}  // namespace
+
+extern "C" {
+
+hmsm_status hmsm_simulation_create(const hmsm_scene* scene, const hmsm_config* config,
+                                   hmsm_simulation** simulation) {
+    return guarded([&]() -> Status {
+        if (!scene) return bad("hmsm_simulation_create: scene is NULL");
+        if (!config) return bad("hmsm_simulation_create: config is NULL");
+        if (!simulation) return bad("hmsm_simulation_create: simulation is NULL");
+        SimulationConfig converted;
+        HMSM_TRY(to_cpp(*config, converted));
+        auto created = Simulation::create(scene->scene, converted);
+        if (!created) return created.status();
+        *simulation = new hmsm_simulation{std::move(*created)};
+        return {};
+    });
+}
+
+void hmsm_simulation_destroy(hmsm_simulation* simulation) { delete simulation; }
+
+hmsm_status hmsm_simulation_step(hmsm_simulation* simulation, uint32_t count) {
+    return guarded([&]() -> Status {
+        if (!simulation) return bad("hmsm_simulation_step: simulation is NULL");
+        return simulation->simulation->step(count);
+    });
+}
+
+hmsm_status hmsm_simulation_read_f32(const hmsm_simulation* simulation, int32_t output,
+                                     float* values, size_t capacity, size_t* count) {
+    return read_output("hmsm_simulation_read_f32", simulation, output, values, capacity, count);
+}
+
+hmsm_status hmsm_simulation_read_f64(const hmsm_simulation* simulation, int32_t output,
+                                     double* values, size_t capacity, size_t* count) {
+    return read_output("hmsm_simulation_read_f64", simulation, output, values, capacity, count);
+}
+
+hmsm_status hmsm_simulation_counts(const hmsm_simulation* simulation, hmsm_counts* counts) {
+    return guarded([&]() -> Status {
+        if (!simulation) return bad("hmsm_simulation_counts: simulation is NULL");
+        if (!counts) return bad("hmsm_simulation_counts: counts is NULL");
+        const Simulation& sim = *simulation->simulation;
+        *counts = {sim.instance_count(), sim.chain_count(), sim.node_count(),
+                   sim.vertex_count(), sim.steps_done(), sim.time()};
+        return {};
+    });
+}
+
+hmsm_status hmsm_simulation_backend(const hmsm_simulation* simulation, int32_t* backend) {
+    return guarded([&]() -> Status {
+        if (!simulation) return bad("hmsm_simulation_backend: simulation is NULL");
+        if (!backend) return bad("hmsm_simulation_backend: backend is NULL");
+        *backend = static_cast<int32_t>(simulation->simulation->backend_kind());
+        return {};
+    });
+}
+
+hmsm_status hmsm_simulation_device_name(const hmsm_simulation* simulation, char* name,
+                                        size_t capacity, size_t* length) {
+    return guarded([&]() -> Status {
+        const char* fn = "hmsm_simulation_device_name";
+        if (!simulation) return bad(std::string(fn) + ": simulation is NULL");
+        const std::string device = simulation->simulation->device_name();
+        std::vector<char> text(device.begin(), device.end());
+        text.push_back('\0');
+        return copy_out(fn, text, name, capacity, length);
+    });
+}
+
+hmsm_status hmsm_simulation_mesh_indices(const hmsm_simulation* simulation, uint32_t model,
+                                         uint32_t* indices, size_t capacity, size_t* count) {
+    return guarded([&]() -> Status {
+        const char* fn = "hmsm_simulation_mesh_indices";
+        if (!simulation) return bad(std::string(fn) + ": simulation is NULL");
+        const Simulation& sim = *simulation->simulation;
+        if (model >= sim.scene().models.size())
+            return bad(std::string(fn) + ": model " + std::to_string(model) + " does not exist (" +
+                       std::to_string(sim.scene().models.size()) + " models)");
+        return copy_out(fn, sim.mesh(model).indices, indices, capacity, count);
+    });
+}
+
+// --- live control: argument checks here, the rules themselves in hmsm::Simulation -------------
+
+hmsm_status hmsm_simulation_set_wind(hmsm_simulation* simulation, const hmsm_wind* wind) {
+    return guarded([&]() -> Status {
+        if (!simulation) return bad("hmsm_simulation_set_wind: simulation is NULL");
+        if (!wind) return bad("hmsm_simulation_set_wind: wind is NULL");
+        Wind converted;
+        HMSM_TRY(to_cpp(*wind, converted));
+        return simulation->simulation->set_wind(converted);
+    });
+}
+
+hmsm_status hmsm_simulation_get_wind(const hmsm_simulation* simulation, hmsm_wind* wind) {
+    return guarded([&]() -> Status {
+        if (!simulation) return bad("hmsm_simulation_get_wind: simulation is NULL");
+        if (!wind) return bad("hmsm_simulation_get_wind: wind is NULL");
+        to_c(simulation->simulation->wind(), *wind);
+        return {};
+    });
+}
+
+hmsm_status hmsm_simulation_set_force_fields(hmsm_simulation* simulation,
+                                             const hmsm_force_field* fields, size_t count) {
+    return guarded([&]() -> Status {
+        const char* fn = "hmsm_simulation_set_force_fields";
+        if (!simulation) return bad(std::string(fn) + ": simulation is NULL");
+        if (!fields && count > 0) return bad(std::string(fn) + ": fields is NULL with count > 0");
+        if (count > kMaxForceFields)
+            return bad(std::string(fn) + ": " + std::to_string(count) + " fields, at most " +
+                       std::to_string(kMaxForceFields));
+        std::vector<ForceField> converted(count);
+        for (size_t i = 0; i < count; ++i) {
+            const std::string what = std::string(fn) + ": field " + std::to_string(i);
+            HMSM_TRY(to_cpp(fields[i], converted[i], what.c_str()));
+        }
+        HMSM_TRY(validate_force_fields(converted));
+        return simulation->simulation->set_force_fields(converted);
+    });
+}
+
+
+hmsm_status hmsm_simulation_set_instance_wind_scale(hmsm_simulation* simulation,
+                                                    uint64_t instance, double wind_scale) {
+    return guarded([&]() -> Status {
+        const char* fn = "hmsm_simulation_set_instance_wind_scale";
+        HMSM_TRY(check_instance(fn, simulation, instance));
+        if (!std::isfinite(wind_scale) || wind_scale < 0.0)
+            return bad(std::string(fn) + ": wind_scale must be finite and >= 0");
+        return simulation->simulation->set_instance_wind_scale(instance, wind_scale);
+    });
+}
+
+hmsm_status hmsm_simulation_set_instance_wind_phase(hmsm_simulation* simulation,
+                                                    uint64_t instance, double wind_phase) {
+    return guarded([&]() -> Status {
+        const char* fn = "hmsm_simulation_set_instance_wind_phase";
+        HMSM_TRY(check_instance(fn, simulation, instance));
+        if (!std::isfinite(wind_phase)) return bad(std::string(fn) + ": wind_phase must be finite");
+        return simulation->simulation->set_instance_wind_phase(instance, wind_phase);
+    });
+}
+
+hmsm_status hmsm_simulation_set_instance_active(hmsm_simulation* simulation, uint64_t instance,
+                                                int32_t active) {
+    return guarded([&]() -> Status {
+        const char* fn = "hmsm_simulation_set_instance_active";
+        HMSM_TRY(check_instance(fn, simulation, instance));
+        if (active != 0 && active != 1) return bad(std::string(fn) + ": active must be 0 or 1");
+        return simulation->simulation->set_instance_active(instance, active == 1);
+    });
+}
+
+hmsm_status hmsm_simulation_add_instances(hmsm_simulation* simulation,
+                                          const hmsm_instance* instances, size_t count) {
+    return guarded([&]() -> Status {
+        const char* fn = "hmsm_simulation_add_instances";
+        if (!simulation) return bad(std::string(fn) + ": simulation is NULL");
+        if (!instances && count > 0)
+            return bad(std::string(fn) + ": instances is NULL with count > 0");
+        std::vector<Instance> converted(count);
+        for (size_t i = 0; i < count; ++i) {
+            const std::string what = std::string(fn) + ": instance " + std::to_string(i);
+            HMSM_TRY(to_cpp(instances[i], converted[i], what.c_str()));
+        }
+        return simulation->simulation->add_instances(converted);
+    });
+}
+
+hmsm_status hmsm_simulation_remove_instances(hmsm_simulation* simulation, const uint64_t* indices,
+                                             size_t count) {
+    return guarded([&]() -> Status {
+        const char* fn = "hmsm_simulation_remove_instances";
+        if (!simulation) return bad(std::string(fn) + ": simulation is NULL");
+        if (!indices && count > 0) return bad(std::string(fn) + ": indices is NULL with count > 0");
+        std::vector<uint64_t> copied(indices, indices + count);
+        return simulation->simulation->remove_instances(copied);
+    });
+}
+
+hmsm_status hmsm_simulation_instances(const hmsm_simulation* simulation, hmsm_instance* instances,
+                                      size_t capacity, size_t* count) {
+    return guarded([&]() -> Status {
+        const char* fn = "hmsm_simulation_instances";
+        if (!simulation) return bad(std::string(fn) + ": simulation is NULL");
+        const auto list = simulation->simulation->instances();
+        std::vector<hmsm_instance> converted(list.size());
+        for (size_t i = 0; i < list.size(); ++i) to_c(list[i], converted[i]);
+        return copy_out(fn, converted, instances, capacity, count);
+    });
+}
+
+}  // extern "C"

@@ -1,0 +1,12 @@
+# Writes the first ```cpp block of README.md, verbatim, to OUTPUT (tests/boundary/CMakeLists.txt).
+file(READ "${README}" text)
+string(FIND "${text}" "```cpp\n" start)
+if(start LESS 0)
+  message(FATAL_ERROR "${README} has no ```cpp block")
+endif()
+math(EXPR start "${start} + 7")
+string(SUBSTRING "${text}" ${start} -1 rest)
+string(FIND "${rest}" "```" end)
+string(SUBSTRING "${rest}" 0 ${end} block)
+file(WRITE "${OUTPUT}.tmp" "${block}")
+file(COPY_FILE "${OUTPUT}.tmp" "${OUTPUT}" ONLY_IF_DIFFERENT)

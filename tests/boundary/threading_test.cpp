@@ -1,0 +1,167 @@
+// The threading contract of include/hmsm/simulation.h, exercised so that ThreadSanitizer
+// (tools/tsan.sh) can check it: distinct simulations run concurrently, const calls (read()
+// included) on one simulation run concurrently with each other, Vulkan simulations are created
+// and destroyed from several threads at once, and the C ABI's last message is per thread. Also
+// read()'s own argument check (PublicApi), on the same small scene.
+#include <hmsm/hmsm.h>
+#include <hmsm/hmsm_c.h>
+
+#include <gtest/gtest.h>
+
+#include <string>
+#include <thread>
+#include <vector>
+
+namespace {
+
+hmsm::Scene small_scene() {
+    hmsm::TreeModel tree;
+    tree.nodes = {{-1, {0, 0, 0}, 0.2}, {0, {0, 2, 0}, 0.15}, {1, {0.3, 4, 0}, 0.1},
+                  {1, {-0.8, 3, 0.2}, 0.05}, {3, {-1.2, 3.6, 0.3}, 0.03}};
+    hmsm::Scene scene = hmsm::single_tree_scene(tree);
+    scene.instances.push_back({0, {6, 0, 0}, 0.7});
+    return scene;
+}
+
+hmsm::SimulationConfig config_for(hmsm::BackendKind backend) {
+    hmsm::SimulationConfig config;
+    config.backend = backend;
+    config.wind.profile = hmsm::WindProfile::y2;
+    return config;
+}
+
+/// Creates, steps `steps` times and reads node and vertex positions; the error when any fails.
+struct Outcome {
+    hmsm::Status status;
+    std::vector<float> nodes, vertices;
+};
+Outcome run(hmsm::BackendKind backend, uint32_t steps) {
+    Outcome r;
+    auto sim = hmsm::Simulation::create(small_scene(), config_for(backend));
+    if (!sim) return {sim.status(), {}, {}};
+    r.status = (*sim)->step(steps);
+    if (r.status) r.status = (*sim)->read(hmsm::Output::node_positions, r.nodes);
+    if (r.status) r.status = (*sim)->read(hmsm::Output::vertex_positions, r.vertices);
+    return r;
+}
+
+bool vulkan_available() {
+    auto sim = hmsm::Simulation::create(small_scene(), config_for(hmsm::BackendKind::vulkan));
+    return sim.ok();
+}
+
+TEST(Threading, DistinctSimulationsStepConcurrently) {
+    const Outcome reference = run(hmsm::BackendKind::cpu, 40);
+    ASSERT_TRUE(reference.status) << reference.status.message();
+    std::vector<Outcome> results(4);
+    std::vector<std::thread> threads;
+    for (size_t t = 0; t < results.size(); ++t)
+        threads.emplace_back([&results, t] { results[t] = run(hmsm::BackendKind::cpu, 40); });
+    for (auto& thread : threads) thread.join();
+    for (const Outcome& r : results) {
+        ASSERT_TRUE(r.status) << r.status.message();
+        EXPECT_EQ(r.nodes, reference.nodes);  // the CPU backend is deterministic
+        EXPECT_EQ(r.vertices, reference.vertices);
+    }
+}
+
+/// Reads every output from `threads` threads at once, `rounds` times each, and compares with
+/// reads made alone.
+void concurrent_reads(const hmsm::Simulation& sim, int threads_count, int rounds) {
+    const hmsm::Output outputs[] = {hmsm::Output::node_positions, hmsm::Output::vertex_positions,
+                                    hmsm::Output::vertex_normals, hmsm::Output::chain_angles};
+    std::vector<std::vector<float>> reference(4);
+    for (int i = 0; i < 4; ++i) ASSERT_TRUE(sim.read(outputs[i], reference[i]));
+    std::vector<int> mismatches(threads_count, 0);
+    std::vector<std::thread> threads;
+    for (int t = 0; t < threads_count; ++t)
+        threads.emplace_back([&, t] {
+            std::vector<float> values;
+            std::vector<double> values64;
+            for (int round = 0; round < rounds; ++round) {
+                const int i = (t + round) % 4;
+                if (!sim.read(outputs[i], values) || values != reference[i]) ++mismatches[t];
+                if (!sim.read(outputs[i], values64) || values64.size() != reference[i].size())
+                    ++mismatches[t];
+                if (sim.node_count() != reference[0].size() / 3 || sim.steps_done() != 30)
+                    ++mismatches[t];
+            }
+        });
+    for (auto& thread : threads) thread.join();
+    for (int t = 0; t < threads_count; ++t) EXPECT_EQ(mismatches[t], 0) << "thread " << t;
+}
+
+TEST(Threading, ConcurrentReadsOnOneCpuSimulation) {
+    auto sim = hmsm::Simulation::create(small_scene(), config_for(hmsm::BackendKind::cpu));
+    ASSERT_TRUE(sim) << sim.status().message();
+    ASSERT_TRUE((*sim)->step(30));
+    concurrent_reads(**sim, 4, 50);
+}
+
+TEST(Threading, ConcurrentReadsOnOneVulkanSimulation) {
+    auto sim = hmsm::Simulation::create(small_scene(), config_for(hmsm::BackendKind::vulkan));
+    if (!sim && sim.status().code() == hmsm::ErrorCode::no_device)
+        GTEST_SKIP() << sim.status().message();
+    ASSERT_TRUE(sim) << sim.status().message();
+    ASSERT_TRUE((*sim)->step(30));
+    concurrent_reads(**sim, 3, 10);
+}
+
+TEST(Threading, VulkanSimulationsCreatedFromTwoThreadsAtOnce) {
+    if (!vulkan_available()) GTEST_SKIP() << "no Vulkan device";
+    const Outcome reference = run(hmsm::BackendKind::cpu, 20);
+    std::vector<Outcome> results(2);
+    std::vector<std::thread> threads;
+    for (size_t t = 0; t < results.size(); ++t)
+        threads.emplace_back([&results, t] {
+            for (int again = 0; again < 2; ++again) results[t] = run(hmsm::BackendKind::vulkan, 20);
+        });
+    for (auto& thread : threads) thread.join();
+    for (const Outcome& r : results) {
+        ASSERT_TRUE(r.status) << r.status.message();
+        ASSERT_EQ(r.nodes.size(), reference.nodes.size());
+        for (size_t i = 0; i < r.nodes.size(); ++i)
+            EXPECT_NEAR(r.nodes[i], reference.nodes[i], 1e-4) << "node scalar " << i;
+    }
+}
+
+TEST(Threading, CApiLastMessageIsPerThread) {
+    std::vector<std::string> seen(2);
+    std::thread a([&] {
+        for (int i = 0; i < 100; ++i) {
+            hmsm_tree* tree = nullptr;
+            if (hmsm_tree_preset("no-such-preset", 0, &tree) == HMSM_OK) return;
+            seen[0] = hmsm_status_message();
+        }
+    });
+    std::thread b([&] {
+        for (int i = 0; i < 100; ++i) {
+            if (hmsm_scene_create(nullptr) == HMSM_OK) return;
+            seen[1] = hmsm_status_message();
+        }
+    });
+    a.join();
+    b.join();
+    EXPECT_NE(seen[0].find("no-such-preset"), std::string::npos) << seen[0];
+    EXPECT_NE(seen[1].find("hmsm_scene_create"), std::string::npos) << seen[1];
+}
+
+}  // namespace
+
+namespace {
+
+TEST(PublicApi, ReadRejectsAnUnknownOutputAndWritesNothing) {
+    auto sim = hmsm::Simulation::create(small_scene(), config_for(hmsm::BackendKind::cpu));
+    ASSERT_TRUE(sim) << sim.status().message();
+    std::vector<float> values{42.0f};
+    std::vector<double> values64{42.0};
+    const hmsm::Status status = (*sim)->read(static_cast<hmsm::Output>(99), values);
+    EXPECT_EQ(status.code(), hmsm::ErrorCode::invalid_argument);
+    EXPECT_NE(status.message().find("99"), std::string::npos) << status.message();
+    EXPECT_EQ((*sim)->read(static_cast<hmsm::Output>(-1), values64).code(),
+              hmsm::ErrorCode::invalid_argument);
+    EXPECT_EQ(values, std::vector<float>{42.0f});
+    EXPECT_EQ(values64, std::vector<double>{42.0});
+}
+
+}  // namespace
