@@ -47,6 +47,10 @@ Status validate_scene(const Scene& scene) {
             !std::isfinite(inst.origin.z))
             return {ErrorCode::invalid_argument, where + "origin is not finite"};
         if (!std::isfinite(inst.yaw)) return {ErrorCode::invalid_argument, where + "yaw is not finite"};
+        if (!std::isfinite(inst.wind_scale) || inst.wind_scale < 0.0)
+            return {ErrorCode::invalid_argument, where + "wind scale must be finite and >= 0"};
+        if (!std::isfinite(inst.wind_phase))
+            return {ErrorCode::invalid_argument, where + "wind phase is not finite"};
     }
     for (size_t m = 0; m < scene.models.size(); ++m) {
         Status valid = validate_tree(scene.models[m]);

@@ -5,6 +5,7 @@
 #include "bench_measure.h"
 #include "bench_model.h"
 #include "bench_report.h"
+#include "bench_live.h"
 #include "cli_common.h"
 
 #include "scene_data.h"
@@ -474,6 +475,12 @@ int run_bench(CLI::App& app) {
         for (BackendRun& b : run.backends)
             if (b.available) run.forest_cases(forest_model, b, counts, flags.spacing, state_per_instance);
     }
+    std::vector<BackendKind> live_backends;
+    for (const BackendRun& b : run.backends)
+        if (b.available) live_backends.push_back(b.kind);
+    const json live_control = counts.empty() ? json::array()
+                                             : measure_live_control(forest_model.tree, live_backends,
+                                                                    flags.quick ? 20u : 1000u, flags.spacing);
     progress.finish();
 
     // Speed-ups over cpu, preset by preset, from this run.
@@ -541,6 +548,7 @@ int run_bench(CLI::App& app) {
         {"backends", backends_json},
         {"presets", run.presets},
         {"forest", run.forest},
+        {"live_control", live_control},
         {"copy_bandwidth", copy},
         {"skipped", run.skipped},
         {"notes", notes},
