@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <numbers>
+#include <string>
 
 namespace hmsm {
 
@@ -17,6 +18,10 @@ Scene single_tree_scene(TreeModel tree, glm::dvec3 origin, double yaw) {
 
 Result<Scene> grid_scene(TreeModel tree, uint32_t count, double spacing, uint64_t seed) {
     if (count == 0) return Status{ErrorCode::invalid_argument, "instances must be >= 1"};
+    // Checked before the instance list is allocated: a simulation holds at most 2^24 instances.
+    if (count > (1u << 24))
+        return Status{ErrorCode::invalid_argument, "instances = " + std::to_string(count) +
+                                                       " is too many: at most 16777216 are supported"};
     if (!std::isfinite(spacing) || spacing < 0.0)
         return Status{ErrorCode::invalid_argument, "spacing must be finite and >= 0"};
     Scene scene;

@@ -283,6 +283,7 @@ Status Simulation::Impl::step(uint32_t count) {
     const Wind& wind = config_.wind;
     const double dt = config_.parameters.dt;
     uint32_t done = 0;
+    times_ = {};
     while (done < count) {
         // One wind-table slot per step of the run: tau mod 2 and the turbulent mode phases,
         // reduced on the host in double.
@@ -290,7 +291,7 @@ Status Simulation::Impl::step(uint32_t count) {
         wind_scratch_.resize(size_t(steps) * detail::kWindStepScalars);
         wind_phases_.resize(steps);
         for (uint32_t k = 0; k < steps; ++k) {
-            const uint64_t n = steps_done_ + done + k + 1;
+            const uint64_t n = steps_done_ + k + 1;  // steps_done_ counts the earlier chunks
             const double tau = clock_.tau(wind.frequency, dt, n);
             if (!std::isfinite(tau))  // f * t overflowed: no phase, and the profile would be NaN
                 return Status{ErrorCode::invalid_argument,
@@ -303,6 +304,9 @@ Status Simulation::Impl::step(uint32_t count) {
                                  uint64_t(steps) * HMSM_WIND_STEP_VEC4S, wind_scratch_.data(),
                                  detail::Scalar::f64));
         HMSM_TRY(backend_->run(step_program_, wind_phases_));
+        const PassTimes chunk = backend_->pass_times();
+        for (size_t p = 0; p < chunk.seconds.size(); ++p) times_.seconds[p] += chunk.seconds[p];
+        times_.steps += chunk.steps;
         done += steps;
         steps_done_ += steps;
     }
@@ -312,7 +316,7 @@ Status Simulation::Impl::step(uint32_t count) {
 Status Simulation::step(uint32_t count) { return impl_->step(count); }
 uint64_t Simulation::steps_done() const { return impl_->steps_done_; }
 double Simulation::time() const { return double(impl_->steps_done_) * impl_->config_.parameters.dt; }
-PassTimes Simulation::pass_times() const { return impl_->backend_->pass_times(); }
+PassTimes Simulation::pass_times() const { return impl_->times_; }
 BackendKind Simulation::backend_kind() const { return impl_->backend_->kind(); }
 std::string Simulation::device_name() const { return impl_->backend_->device_name(); }
 const SimulationConfig& Simulation::config() const { return impl_->config_; }

@@ -56,6 +56,7 @@ struct Simulation::Impl {
     // per-frame readback neither allocates nor zero-fills.
     mutable std::vector<float> stored_f32_;
     mutable std::vector<double> stored_f64_;
+    PassTimes times_;  // over the chunks of the last step() call
     uint64_t steps_done_ = 0;
 };
 

@@ -97,7 +97,9 @@ TEST_P(CudaPass, MatchesCpu64OnRandomStates) {
 
     detail::Random random(1000 + uint32_t(pass));
     for (const detail::BufferInfo& info : detail::kBufferTable) {
-        if (detail::is_static(info.id)) continue;
+        // The wind table keeps what the simulation wrote (random words there would be a field
+        // count of billions).
+        if (detail::is_static(info.id) || info.id == BufferId::wind_table) continue;
         const uint64_t count = hmsm::detail::scene_data_of(*reference).element_count(info.id);
         const std::vector<double> values = random_state(random, info.id, count);
         ASSERT_TRUE(hmsm::detail::backend_of(*reference).write(info.id, 0, count, values.data(), Scalar::f64).ok());
