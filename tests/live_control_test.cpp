@@ -2,6 +2,8 @@
 // everything; no change moves a tree by itself; rejected calls change nothing.
 #include "test_trees.h"
 
+#include "simulation_access.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -237,6 +239,21 @@ TEST_P(LiveControl, InactiveInstancesAreFrozen) {
     EXPECT_FALSE(std::equal(after.begin() + 2 * nodes, after.begin() + 3 * nodes, resumed.begin() + 2 * nodes));
     // Instance 1 never stepped: its pose is the rest pose.
     for (size_t k = nodes; k < 2 * nodes; ++k) EXPECT_EQ(resumed[k], before[k]);
+}
+
+TEST_P(LiveControl, InactiveInstancesGetNoThreads) {
+    std::string skip;
+    auto sim = test::create_simulation_or_skip(mixed_scene(), SimulationConfig{}, GetParam(), skip);
+    if (!skip.empty()) GTEST_SKIP() << skip;
+    ASSERT_TRUE(sim->set_instance_active(3, false).ok());
+    ASSERT_TRUE(sim->step().ok());
+    uint64_t threads = 0, active_chains = 0;
+    for (const detail::Dispatch& d : detail::step_program_of(*sim))
+        if (d.pass == Pass::wind_force) threads += d.constants.element_count;
+    for (const Instance& inst : sim->instances())
+        if (inst.active) active_chains += sim->hierarchy(inst.model).chains.size();
+    EXPECT_EQ(threads, active_chains);
+    EXPECT_LT(active_chains, sim->chain_count());
 }
 
 TEST_P(LiveControl, RejectedCallsChangeNothing) {
