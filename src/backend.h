@@ -18,8 +18,9 @@ namespace hmsm::detail {
 
 /// One dispatch of the step program: a pass over one instance group. The integer fields of
 /// `constants` are final; `constants.wind.w` is replaced per step by the backend (see run()).
-/// A CPU backend takes dt, max_angle, fix_weight and the wind vector from SceneData (double),
-/// a GPU backend from the float copies in `constants`.
+/// A CPU backend takes dt, max_angle and fix_weight from SceneData (double), a GPU backend from
+/// the float copies in `constants`; every backend takes the wind from the wind table and
+/// instance_wind buffers (gpu_layout.h), which the simulation writes.
 struct Dispatch {
     Pass pass;
     gpu::PassConstants constants;
@@ -36,12 +37,15 @@ public:
     virtual std::string device_name() const = 0;
 
     /// Allocates every buffer of kBufferTable sized by scene.element_count(), uploads the static
-    /// buffers and zero-fills the state buffers. Called exactly once, before anything below.
-    /// Fails (never aborts) with out_of_memory or unsupported when the scene does not fit.
+    /// buffers and zero-fills the others. Called once before anything below, and again when
+    /// instances are added or removed (earlier buffers and their contents are released; the
+    /// simulation writes the carried-over state back). Fails (never aborts) with out_of_memory or
+    /// unsupported when the scene does not fit.
     virtual Status upload(const SceneData& scene) = 0;
 
     /// Runs `program` wind_x.size() times, in order, one step each; step k runs every
-    /// wind_force dispatch with constants.wind.w = wind_x[k] (= f*t mod 2 of that step).
+    /// wind_force dispatch with constants.wind.w = wind_x[k]: the wind-table slot (a small
+    /// integer < HMSM_WIND_STEP_SLOTS) holding that step's reduced wind clock.
     /// Dispatches see the writes of all earlier dispatches. Returns when all work is complete.
     virtual Status run(std::span<const Dispatch> program, std::span<const double> wind_x) = 0;
 

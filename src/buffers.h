@@ -11,7 +11,8 @@
 namespace hmsm::detail {
 
 /// Element shape: scalars per element as stored (a mat3x4 is 12).
-enum class Shape : uint32_t { i32 = 1, i32x2 = 2, f32x2 = 102, f32x4 = 104, mat3x4 = 112 };
+enum class Shape : uint32_t { i32 = 1, i32x2 = 2, f32x2 = 102, f32x4 = 104, mat3x4 = 112,
+                              f32x36 = 136 };
 
 constexpr uint32_t shape_scalars(Shape s) {
     switch (s) {
@@ -20,6 +21,7 @@ constexpr uint32_t shape_scalars(Shape s) {
         case Shape::f32x2: return 2;
         case Shape::f32x4: return 4;
         case Shape::mat3x4: return 12;
+        case Shape::f32x36: return 36;
     }
     return 0;
 }
@@ -36,6 +38,7 @@ enum class Scope : uint32_t {
     chain_halves,     ///< 2 x state chains (ping-pong)
     node,
     vertex,
+    wind,             ///< HMSM_WIND_TABLE_ELEMENTS: the wind table
 };
 
 /// X(name, binding, shape, scope)
@@ -63,6 +66,8 @@ enum class Scope : uint32_t {
     X(node_world, HMSM_BINDING_NODE_WORLD, f32x4, node)                             \
     X(vertex_position, HMSM_BINDING_VERTEX_POSITION, f32x4, vertex)                 \
     X(vertex_normal, HMSM_BINDING_VERTEX_NORMAL, f32x4, vertex)                     \
+    X(instance_wind, HMSM_BINDING_INSTANCE_WIND, f32x36, instance)                  \
+    X(wind_table, HMSM_BINDING_WIND_TABLE, f32x4, wind)                             \
     X(joint_matrix, HMSM_BINDING_JOINT_MATRIX, mat3x4, chain)
 
 enum class BufferId : uint32_t {
@@ -87,11 +92,20 @@ inline constexpr std::array<BufferInfo, kBufferCount> kBufferTable = {{
 
 constexpr const BufferInfo& buffer_info(BufferId id) { return kBufferTable[static_cast<uint32_t>(id)]; }
 
-/// True for the buffers uploaded once (model and instance scope).
+/// True for the buffers uploaded from SceneData (model and instance scope). instance_wind is
+/// uploaded too and rewritten by live control; wind_table starts zeroed and is written before
+/// every run.
 constexpr bool is_static(BufferId id) {
     Scope s = buffer_info(id).scope;
     return s == Scope::model_chain || s == Scope::model_chain_jump || s == Scope::model_node ||
            s == Scope::model_vertex || s == Scope::instance;
+}
+
+/// True for the buffers that hold an instance's simulated state and outputs (carried over when
+/// instances are added or removed).
+constexpr bool is_state(BufferId id) {
+    Scope s = buffer_info(id).scope;
+    return s == Scope::chain || s == Scope::chain_halves || s == Scope::node || s == Scope::vertex;
 }
 
 }  // namespace hmsm::detail

@@ -46,6 +46,10 @@ std::vector<std::byte> device_image(const SceneData& d, BufferId id) {
         case BufferId::vertex_parent_normal: return float4_image(d.vertex_parent_normal);
         case BufferId::instance_origin: return float4_image(d.instance_origin);
         case BufferId::instance_yaw: return float4_image(d.instance_yaw);
+        case BufferId::instance_wind: {
+            std::vector<float> words(d.instance_wind.begin(), d.instance_wind.end());
+            return raw_bytes(words);
+        }
         default: return {};  // state buffers start zeroed on the device
     }
 }

@@ -29,7 +29,7 @@
 #define HMSM_BINDING_VERTEX_PARENT_POSITION 10  // vec4: fix-up vertex in the parent chain's frame
 #define HMSM_BINDING_VERTEX_PARENT_NORMAL 11    // vec4
 // Instance scope:
-#define HMSM_BINDING_INSTANCE_ORIGIN 12      // vec4 per instance: (origin xyz, wind phase phi mod 2)
+#define HMSM_BINDING_INSTANCE_ORIGIN 12      // vec4 per instance: (origin xyz, 0)
 #define HMSM_BINDING_INSTANCE_YAW 13         // vec4 per instance: (cos yaw, sin yaw, 0, 0)
 // State, one element per chain/node/vertex of every instance:
 #define HMSM_BINDING_CHAIN_STATE 14          // vec4 per chain: (theta_x, theta_z, v_x, v_z)
@@ -41,10 +41,41 @@
 #define HMSM_BINDING_NODE_WORLD 20           // vec4 per node: W_n
 #define HMSM_BINDING_VERTEX_POSITION 21      // vec4 per vertex: (x, y, z, 1), packed: (x, y, z, normal word)
 #define HMSM_BINDING_VERTEX_NORMAL 22        // vec4 per vertex: (nx, ny, nz, 0); packed: no elements
+// Live control (docs/model.md 3.5, 3.9), written by the host between steps:
+#define HMSM_BINDING_INSTANCE_WIND 23        // 9 vec4 per instance: HMSM_INSTANCE_WIND_* below
+#define HMSM_BINDING_WIND_TABLE 24           // HMSM_WIND_TABLE_ELEMENTS vec4: HMSM_WIND_* below
 // Joint matrix M_c = [R_c | O_c] per chain (docs/formats.md "Joint matrices"): three vec4 ROWS
 // (R_c row i, O_c.i), 48 bytes, written by root_positions where it writes the final O_c.
-#define HMSM_BINDING_JOINT_MATRIX 23         // mat3x4 per chain: rows (R row 0, O.x), (R row 1, O.y), (R row 2, O.z)
-#define HMSM_BINDING_COUNT 24
+#define HMSM_BINDING_JOINT_MATRIX 25         // mat3x4 per chain: rows (R row 0, O.x), (R row 1, O.y), (R row 2, O.z)
+#define HMSM_BINDING_COUNT 26
+
+/// The wind of docs/model.md 3.5 on the device. Float backends never see the clock tau or a
+/// phase beyond a few units: the host reduces tau mod 2 and the turbulent mode phases mod 1 in
+/// double and hands over only those.
+///
+/// instance_wind, 9 vec4 per instance i (element 9 i + j):
+///   j = 0: (lambda_i, phi_i mod 2, 0, 0)  wind scale; wind phase phi_i = p_i - f (o_i.d)/v
+///   j = 1..8: frac(m_k phi_i) for the turbulent modes k = 4 (j - 1) .. 4 (j - 1) + 3
+/// wind_table, vec4 elements:
+///   [HMSM_WIND_AMPLITUDES, +8): turbulent amplitudes a_k (k = 4 e + component)
+///   HMSM_WIND_VECTOR: (s d, number of force fields): strength times unit direction
+///   [HMSM_WIND_FIELDS, +2 per field): (centre xyz, radius), (F xyz, kind) with kind 0 =
+///       directional (force h F), 1 = radial (force h F.x unit(x - centre))
+///   [HMSM_WIND_STEPS + 9 s, +9): step slot s: (tau mod 2, 0, 0, 0), then frac(m_k tau + u_k)
+///       as instance_wind's elements 1..8. A wind_force dispatch reads slot uint(pc.wind.w).
+#define HMSM_WIND_MODES 32
+#define HMSM_WIND_MODE_VEC4S 8
+#define HMSM_INSTANCE_WIND_VEC4S 9
+#define HMSM_MAX_FORCE_FIELDS 16
+#define HMSM_WIND_AMPLITUDES 0
+#define HMSM_WIND_VECTOR 8
+#define HMSM_WIND_FIELDS 9
+#define HMSM_WIND_STEPS (HMSM_WIND_FIELDS + 2 * HMSM_MAX_FORCE_FIELDS)
+#define HMSM_WIND_STEP_VEC4S 9
+/// Steps one Backend::run may take (one slot each); Simulation::step runs longer calls in chunks.
+#define HMSM_WIND_STEP_SLOTS 256
+#define HMSM_WIND_TABLE_ELEMENTS (HMSM_WIND_STEPS + HMSM_WIND_STEP_VEC4S * HMSM_WIND_STEP_SLOTS)
+#define HMSM_WIND_PROFILE_TURBULENT 6u
 
 /// composition modes (PassConstants.mode)
 #define HMSM_MODE_POINTER_JUMPING 0u
@@ -101,7 +132,7 @@ struct PassConstants {
     uint total_model_chains;  // static chains of the scene: stride between chain_jump rounds
     uint src_half;            // ping-pong: half read (pose readers: the half holding R and O)
     uint dst_half;            // ping-pong: half written
-    vec4 wind;                // (strength * direction, x0 = f*t mod 2) for wind_force
+    vec4 wind;                // (strength * direction, wind-table step slot) for wind_force
     vec4 params;              // (dt, max_angle, fix_weight, 0)
 };
 

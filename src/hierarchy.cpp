@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <numbers>
 
 namespace hmsm {
 
@@ -118,16 +119,14 @@ Result<Hierarchy> build_hierarchy(const TreeModel& tree, const ModelOptions& opt
     // Frames, local coordinates and constants.
     h.node_local.assign(n, glm::dvec3(0.0));
     const double dt = parameters.dt;
-    // Stability floor (docs/model.md 3.4). Symplectic Euler on I S'' = -K S - D S' with
-    // x = omega dt (omega = sqrt(K/I)) and D dt / I = 2 zeta x is stable only while
-    // x^2 + 4 zeta x < 4. The design's floor x <= 0.5 covers zeta <= 1.875 only; for heavy
-    // damping the velocity update itself overshoots (D dt / I > 1) and then diverges (> 2),
-    // bounded only by the angle clamp, so the joints chatter between +-theta_max. We therefore
-    // also require D dt / I <= 1, i.e. x <= 1/(2 zeta) (which binds only for zeta > 1 and so
-    // leaves the default parameters and the golden hashes unchanged), and count such chains
-    // with the floored ones (Hierarchy::capped_chain_count, `--report` capped_chains).
+    // Frequency cap (docs/model.md 3.4): no chain sways faster than f_max, so a twig moves the
+    // same at every dt small enough. The 1/(4 pi dt max(1, zeta)) bound keeps symplectic Euler
+    // stable at larger dt: with x = omega dt, x <= 0.5 and D dt / I = 2 zeta x <= 1 (for heavy
+    // damping the velocity update itself would otherwise overshoot and then diverge).
     const double zeta = parameters.damping_ratio;
-    const double max_omega_dt = zeta > 1.0 ? 1.0 / (2.0 * zeta) : 0.5;
+    const double f_max = std::min(parameters.max_frequency,
+                                  1.0 / (4.0 * std::numbers::pi * dt * std::max(1.0, zeta)));
+    const double omega_max = 2.0 * std::numbers::pi * f_max;
     for (size_t c = 0; c < h.chains.size(); ++c) {
         Chain& chain = h.chains[c];
         const glm::dvec3 attach = nodes[chain.attach_node].position;
@@ -146,7 +145,7 @@ Result<Hierarchy> build_hierarchy(const TreeModel& tree, const ModelOptions& opt
         const double r = chain.radius, L = chain.length;
         chain.inertia = parameters.density * r * r * L * L * L;
         chain.stiffness = parameters.stiffness * r * r * r * r / L;
-        const double floor = chain.stiffness * (dt / max_omega_dt) * (dt / max_omega_dt);
+        const double floor = chain.stiffness / (omega_max * omega_max);
         if (chain.inertia < floor) {
             chain.inertia = floor;
             chain.capped = true;

@@ -4,7 +4,11 @@
 
 #include "simulation_impl.h"
 
+#include <glm/geometric.hpp>
+
+#include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <string>
 
 namespace hmsm {
@@ -35,17 +39,289 @@ Status validate_force_fields(std::span<const ForceField> fields) {
 }
 
 namespace {
-Status not_yet(const char* what) {
-    return {ErrorCode::unsupported, std::string(what) + " is not implemented yet"};
+
+std::string instance_name(uint64_t instance) { return "instance " + std::to_string(instance); }
+
+/// The runs of consecutive active instances of each group: the step program's groups, so an
+/// inactive instance costs no thread of any pass.
+std::vector<detail::InstanceGroup> active_groups(const detail::SceneData& d,
+                                                 const std::vector<Instance>& instances) {
+    std::vector<detail::InstanceGroup> runs;
+    for (const detail::InstanceGroup& g : d.groups) {
+        const detail::ModelRange& m = d.models[g.model];
+        for (uint32_t k = 0; k < g.instance_count;) {
+            if (!instances[g.instance_begin + k].active) {
+                ++k;
+                continue;
+            }
+            detail::InstanceGroup run = g;
+            run.instance_begin = g.instance_begin + k;
+            run.chain_begin = g.chain_begin + k * m.chain_count;
+            run.node_begin = g.node_begin + k * m.node_count;
+            run.vertex_begin = g.vertex_begin + k * m.vertex_count;
+            run.instance_count = 0;
+            while (k < g.instance_count && instances[g.instance_begin + k].active) {
+                ++run.instance_count;
+                ++k;
+            }
+            runs.push_back(run);
+        }
+    }
+    return runs;
+}
+
+/// The groups covering instances [first, end) of `d`.
+std::vector<detail::InstanceGroup> groups_from(const detail::SceneData& d, uint32_t first) {
+    std::vector<detail::InstanceGroup> out;
+    for (const detail::InstanceGroup& g : d.groups) {
+        if (g.instance_begin + g.instance_count <= first) continue;
+        detail::InstanceGroup part = g;
+        if (g.instance_begin < first) {
+            const uint32_t k = first - g.instance_begin;
+            const detail::ModelRange& m = d.models[g.model];
+            part.instance_begin = first;
+            part.instance_count = g.instance_count - k;
+            part.chain_begin += k * m.chain_count;
+            part.node_begin += k * m.node_count;
+            part.vertex_begin += k * m.vertex_count;
+        }
+        out.push_back(part);
+    }
+    return out;
+}
+
+uint32_t pass_bit(Pass pass) { return 1u << uint32_t(pass); }
+
+}  // namespace
+
+Status Simulation::Impl::apply_pending() {
+    using detail::BufferId;
+    if (header_dirty_) {
+        wind_scratch_.assign(detail::kWindHeaderScalars, 0.0);
+        detail::fill_wind_header(config_.wind, modes_, force_fields_, wind_scratch_.data());
+        HMSM_TRY(backend_->write(BufferId::wind_table, 0, HMSM_WIND_STEPS, wind_scratch_.data(),
+                                 detail::Scalar::f64));
+        header_dirty_ = false;
+    }
+    if (instance_wind_dirty_) {
+        wind_scratch_.resize(instances_.size() * detail::kInstanceWindScalars);
+        for (size_t i = 0; i < instances_.size(); ++i)
+            detail::fill_instance_wind(config_.wind, modes_, instances_[i],
+                                       &wind_scratch_[i * detail::kInstanceWindScalars]);
+        HMSM_TRY(backend_->write(BufferId::instance_wind, 0, instances_.size(), wind_scratch_.data(),
+                                 detail::Scalar::f64));
+        instance_wind_dirty_ = false;
+        dirty_instances_.clear();
+    }
+    if (!dirty_instances_.empty()) {
+        std::sort(dirty_instances_.begin(), dirty_instances_.end());
+        dirty_instances_.erase(std::unique(dirty_instances_.begin(), dirty_instances_.end()),
+                               dirty_instances_.end());
+        wind_scratch_.resize(detail::kInstanceWindScalars);
+        for (uint32_t i : dirty_instances_) {
+            detail::fill_instance_wind(config_.wind, modes_, instances_[i], wind_scratch_.data());
+            HMSM_TRY(backend_->write(BufferId::instance_wind, i, 1, wind_scratch_.data(), detail::Scalar::f64));
+        }
+        dirty_instances_.clear();
+    }
+    if (program_dirty_) {
+        step_program_ = program_for(active_groups(*data_, instances_), Pass::wind_force);
+        program_dirty_ = false;
+    }
+    return {};
+}
+
+Status Simulation::Impl::reshape(const std::vector<uint32_t>& survivors, std::span<const Instance> added) {
+    using detail::BufferId;
+    std::vector<Instance> next;
+    next.reserve(survivors.size() + added.size());
+    for (uint32_t i : survivors) next.push_back(instances_[i]);
+    next.insert(next.end(), added.begin(), added.end());
+    HMSM_TRY(check_size(next));
+
+    // Per old instance: first state chain (chains carry the state; nodes and vertices are
+    // recomputed from R and O below).
+    const detail::SceneData& old = *data_;
+    std::vector<uint64_t> old_chain(instances_.size() + 1, 0);
+    for (size_t i = 0; i < instances_.size(); ++i)
+        old_chain[i + 1] = old_chain[i] + old.models[instances_[i].model].chain_count;
+
+    // The chain-scope state (S, V, g, T and both halves of R and O), read in the precision the
+    // backend stores it in so that it carries over bit for bit.
+    const detail::Scalar scalar = backend_->kind() == BackendKind::cpu64 ? detail::Scalar::f64 : detail::Scalar::f32;
+    const BufferId carried[] = {BufferId::chain_state, BufferId::chain_force, BufferId::chain_local,
+                                BufferId::chain_rotation, BufferId::chain_origin};
+    struct Saved {
+        std::vector<double> f64;
+        std::vector<float> f32;
+    };
+    std::vector<Saved> saved(std::size(carried));
+    for (size_t b = 0; b < std::size(carried); ++b) {
+        const uint64_t count = old.element_count(carried[b]);
+        const uint64_t scalars = count * detail::shape_scalars(detail::buffer_info(carried[b]).shape);
+        void* dst;
+        if (scalar == detail::Scalar::f64) dst = (saved[b].f64.resize(scalars), saved[b].f64.data());
+        else dst = (saved[b].f32.resize(scalars), saved[b].f32.data());
+        HMSM_TRY(backend_->read(carried[b], 0, count, dst, scalar));
+    }
+
+    Scene layout;  // flatten_scene reads only the instances; models come from the hierarchies
+    layout.instances = next;
+    auto data = std::make_unique<detail::SceneData>(detail::flatten_scene(
+        layout, hierarchies_, meshes_, config_.parameters, config_.model, config_.wind));
+    data->vertex_layout = config_.vertex_layout;
+    HMSM_TRY(backend_->upload(*data));
+    std::unique_ptr<detail::SceneData> previous = std::move(data_);
+    data_ = std::move(data);
+    instances_ = std::move(next);
+    header_dirty_ = instance_wind_dirty_ = program_dirty_ = true;
+
+    for (size_t b = 0; b < std::size(carried); ++b) {
+        const uint32_t per = detail::shape_scalars(detail::buffer_info(carried[b]).shape);
+        const bool halves = detail::buffer_info(carried[b]).scope == detail::Scope::chain_halves;
+        auto carry = [&](auto& values) {
+            using V = typename std::decay_t<decltype(values)>::value_type;
+            std::vector<V> out(data_->element_count(carried[b]) * per, V(0));
+            for (uint32_t h = 0; h < (halves ? 2u : 1u); ++h) {
+                uint64_t at = h * data_->total_chains;
+                for (uint32_t i : survivors) {
+                    const uint64_t from = h * previous->total_chains + old_chain[i];
+                    const uint64_t n = old_chain[i + 1] - old_chain[i];
+                    std::copy_n(values.begin() + from * per, n * per, out.begin() + at * per);
+                    at += n;
+                }
+            }
+            return out;
+        };
+        if (scalar == detail::Scalar::f64) {
+            auto out = carry(saved[b].f64);
+            HMSM_TRY(backend_->write(carried[b], 0, out.size() / per, out.data(), scalar));
+        } else {
+            auto out = carry(saved[b].f32);
+            HMSM_TRY(backend_->write(carried[b], 0, out.size() / per, out.data(), scalar));
+        }
+    }
+    // Survivors: node positions and vertices are a pure function of the carried R and O
+    // (passes 4, 6, 7 map elements one to one), so recomputing them restores them exactly.
+    const double no_wind[1] = {0.0};
+    std::vector<detail::InstanceGroup> survivor_groups = groups_from(*data_, 0);
+    const uint32_t first_added = uint32_t(survivors.size());
+    std::vector<detail::InstanceGroup> kept;
+    for (detail::InstanceGroup g : survivor_groups) {
+        if (g.instance_begin >= first_added) continue;
+        g.instance_count = std::min(g.instance_count, first_added - g.instance_begin);
+        kept.push_back(g);
+    }
+    const uint32_t outputs = pass_bit(Pass::node_relative) | pass_bit(Pass::node_world) | pass_bit(Pass::contour);
+    HMSM_TRY(backend_->run(program_for(kept, Pass::node_relative, outputs), no_wind));
+    // Added instances start at rest (S = V = 0 and g = 0 from the zero fill).
+    if (!added.empty())
+        HMSM_TRY(backend_->run(program_for(groups_from(*data_, first_added), Pass::integrate), no_wind));
+    return apply_pending();
+}
+
+Status Simulation::set_wind(const Wind& wind) {
+    Impl& s = *impl_;
+    HMSM_TRY(s.check_wind(wind, s.instances_));
+    // tau continues: tau_b is tau at the next step under the wind in force so far.
+    const uint64_t next = s.steps_done_ + 1;
+    s.clock_.base_tau = s.clock_.tau(s.config_.wind.frequency, s.config_.parameters.dt, next);
+    s.clock_.base_step = next;
+    s.config_.wind = wind;
+    s.data_->profile = wind.profile;
+    s.data_->wind_vector = wind.strength * glm::normalize(wind.direction);
+    s.data_->wind_frequency = wind.frequency;
+    s.modes_ = turbulent_modes(wind.turbulence, wind.seed);
+    s.header_dirty_ = s.instance_wind_dirty_ = s.program_dirty_ = true;
+    return {};
+}
+
+Status Simulation::set_force_fields(std::span<const ForceField> fields) {
+    HMSM_TRY(validate_force_fields(fields));
+    impl_->force_fields_.assign(fields.begin(), fields.end());
+    impl_->header_dirty_ = true;
+    return {};
+}
+
+namespace {
+Status check_instance(uint64_t instance, size_t count) {
+    if (instance >= count)
+        return {ErrorCode::invalid_argument, instance_name(instance) + " does not exist (the simulation has " +
+                                                 std::to_string(count) + " instances)"};
+    return {};
 }
 }  // namespace
 
-Status Simulation::set_wind(const Wind&) { return not_yet("set_wind"); }
-Status Simulation::set_force_fields(std::span<const ForceField>) { return not_yet("set_force_fields"); }
-Status Simulation::set_instance_wind_scale(uint64_t, double) { return not_yet("set_instance_wind_scale"); }
-Status Simulation::set_instance_wind_phase(uint64_t, double) { return not_yet("set_instance_wind_phase"); }
-Status Simulation::set_instance_active(uint64_t, bool) { return not_yet("set_instance_active"); }
-Status Simulation::add_instances(std::span<const Instance>) { return not_yet("add_instances"); }
-Status Simulation::remove_instances(std::span<const uint64_t>) { return not_yet("remove_instances"); }
+Status Simulation::set_instance_wind_scale(uint64_t instance, double wind_scale) {
+    HMSM_TRY(check_instance(instance, impl_->instances_.size()));
+    if (!std::isfinite(wind_scale) || wind_scale < 0.0)
+        return {ErrorCode::invalid_argument, instance_name(instance) + ": wind scale must be finite and >= 0"};
+    impl_->instances_[instance].wind_scale = wind_scale;
+    impl_->dirty_instances_.push_back(uint32_t(instance));
+    return {};
+}
+
+Status Simulation::set_instance_wind_phase(uint64_t instance, double wind_phase) {
+    HMSM_TRY(check_instance(instance, impl_->instances_.size()));
+    Instance changed = impl_->instances_[instance];
+    changed.wind_phase = wind_phase;
+    if (!std::isfinite(wind_phase) || !std::isfinite(detail::instance_wind_phase(impl_->config_.wind, changed)))
+        return {ErrorCode::invalid_argument, instance_name(instance) + ": wind phase is not finite"};
+    impl_->instances_[instance] = changed;
+    impl_->dirty_instances_.push_back(uint32_t(instance));
+    return {};
+}
+
+Status Simulation::set_instance_active(uint64_t instance, bool active) {
+    HMSM_TRY(check_instance(instance, impl_->instances_.size()));
+    if (impl_->instances_[instance].active != active) {
+        impl_->instances_[instance].active = active;
+        impl_->program_dirty_ = true;
+    }
+    return {};
+}
+
+Status Simulation::add_instances(std::span<const Instance> instances) {
+    if (instances.empty()) return {};
+    Impl& s = *impl_;
+    for (size_t i = 0; i < instances.size(); ++i) {
+        const Instance& inst = instances[i];
+        const std::string where = "added instance " + std::to_string(i) + ": ";
+        if (inst.model >= s.scene_.models.size())
+            return {ErrorCode::invalid_argument, where + "model index " + std::to_string(inst.model) +
+                                                     " does not exist (the scene has " +
+                                                     std::to_string(s.scene_.models.size()) + " models)"};
+        if (!std::isfinite(inst.origin.x) || !std::isfinite(inst.origin.y) || !std::isfinite(inst.origin.z))
+            return {ErrorCode::invalid_argument, where + "origin is not finite"};
+        if (!std::isfinite(inst.yaw)) return {ErrorCode::invalid_argument, where + "yaw is not finite"};
+        if (!std::isfinite(inst.wind_scale) || inst.wind_scale < 0.0)
+            return {ErrorCode::invalid_argument, where + "wind scale must be finite and >= 0"};
+        if (!std::isfinite(inst.wind_phase) ||
+            !std::isfinite(detail::instance_wind_phase(s.config_.wind, inst)))
+            return {ErrorCode::invalid_argument, where + "wind phase is not finite"};
+    }
+    std::vector<uint32_t> survivors(s.instances_.size());
+    for (uint32_t i = 0; i < survivors.size(); ++i) survivors[i] = i;
+    return s.reshape(survivors, instances);
+}
+
+Status Simulation::remove_instances(std::span<const uint64_t> indices) {
+    if (indices.empty()) return {};
+    Impl& s = *impl_;
+    std::vector<bool> removed(s.instances_.size(), false);
+    for (uint64_t i : indices) {
+        HMSM_TRY(check_instance(i, s.instances_.size()));
+        if (removed[i])
+            return {ErrorCode::invalid_argument, instance_name(i) + " is listed twice for removal"};
+        removed[i] = true;
+    }
+    if (indices.size() == s.instances_.size())
+        return {ErrorCode::invalid_argument,
+                "cannot remove every instance: a simulation keeps at least one (deactivate it instead)"};
+    std::vector<uint32_t> survivors;
+    for (uint32_t i = 0; i < s.instances_.size(); ++i)
+        if (!removed[i]) survivors.push_back(i);
+    return s.reshape(survivors, {});
+}
 
 }  // namespace hmsm

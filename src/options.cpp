@@ -16,6 +16,46 @@ double wind_profile_value(WindProfile profile, double x) {
     return detail::wind_profile_y<double>(static_cast<unsigned>(profile), x);
 }
 
+uint64_t splitmix64(uint64_t x) {
+    uint64_t z = x + 0x9E3779B97F4A7C15ull;
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    return z ^ (z >> 31);
+}
+
+TurbulentModes turbulent_modes(double turbulence, uint64_t seed) {
+    // A von Karman-like spectrum sampled at 32 octave quarters from 0.25 to 54 times f: b_k is
+    // the amplitude density sqrt(m S(m)) with S ~ (1 + m)^(-5/3); normalized so that the
+    // fluctuation sum_k a_k cos(...) has variance sigma^2 (each cosine contributes a_k^2 / 2).
+    TurbulentModes modes{};
+    double norm = 0.0;
+    double b[kTurbulentModes];
+    for (uint32_t k = 0; k < kTurbulentModes; ++k) {
+        const double m = std::pow(2.0, (double(k) - 8.0) / 4.0);
+        modes.multiple[k] = m;
+        b[k] = std::sqrt(m) * std::pow(1.0 + m, -5.0 / 6.0);
+        norm += b[k] * b[k];
+        modes.phase[k] = double(splitmix64(seed + k) >> 11) * 0x1.0p-53;
+    }
+    for (uint32_t k = 0; k < kTurbulentModes; ++k)
+        modes.amplitude[k] = turbulence * std::sqrt(2.0) * b[k] / std::sqrt(norm);
+    return modes;
+}
+
+double wind_value(const Wind& wind, double x) {
+    if (wind.profile != WindProfile::turbulent) {
+        return wind_profile_value(wind.profile, x - 2.0 * std::floor(x / 2.0));
+    }
+    const TurbulentModes modes = turbulent_modes(wind.turbulence, wind.seed);
+    double y = 1.0;
+    for (uint32_t k = 0; k < kTurbulentModes; ++k) {
+        double phase = modes.multiple[k] * x + modes.phase[k];
+        phase -= std::floor(phase);
+        y += modes.amplitude[k] * std::cos(2.0 * std::numbers::pi * phase);
+    }
+    return y;
+}
+
 double wind_phase(const Wind& wind, const glm::dvec3& origin) {
     if (wind.front_speed <= 0.0) return 0.0;
     return -wind.frequency * glm::dot(origin, glm::normalize(wind.direction)) / wind.front_speed;
@@ -23,9 +63,10 @@ double wind_phase(const Wind& wind, const glm::dvec3& origin) {
 
 double wind_strength_for_speed(double speed) { return (speed / 6.0) * (speed / 6.0); }
 
-glm::dvec3 wind_at(const Wind& wind, const glm::dvec3& origin, double t) {
-    double y = wind_profile_value(wind.profile, wind.frequency * t + wind_phase(wind, origin));
-    return wind.strength * y * glm::normalize(wind.direction);
+glm::dvec3 wind_at(const Wind& wind, const glm::dvec3& origin, double t, double instance_phase,
+                   double instance_scale) {
+    double y = wind_value(wind, wind.frequency * t + instance_phase + wind_phase(wind, origin));
+    return instance_scale * wind.strength * y * glm::normalize(wind.direction);
 }
 
 const char* to_string(Grouping grouping) {
@@ -117,6 +158,13 @@ Status validate(const Wind& w) {
         return bad("wind frequency", w.frequency, "must be finite and >= 0");
     if (!std::isfinite(w.front_speed) || w.front_speed < 0.0)
         return bad("front speed", w.front_speed, "must be finite and >= 0");
+    if (w.front_speed > 0.0 && w.front_speed < 0.01)
+        return bad("front speed", w.front_speed, "must be 0 (no front) or >= 0.01 m/s");
+    if (!std::isfinite(w.turbulence) || w.turbulence < 0.0 || w.turbulence > 2.0)
+        return bad("turbulence", w.turbulence, "must be in [0, 2]");
+    if (static_cast<uint32_t>(w.profile) > static_cast<uint32_t>(WindProfile::turbulent))
+        return {ErrorCode::invalid_argument, "wind profile " + std::to_string(static_cast<uint32_t>(w.profile)) +
+                                                 " does not exist"};
     for (int i = 0; i < 3; ++i)
         if (!std::isfinite(w.direction[i]))
             return bad("wind direction component", w.direction[i], "must be finite");

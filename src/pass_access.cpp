@@ -11,7 +11,8 @@ uint32_t pass_reads(Pass pass) {
     using B = BufferId;
     switch (pass) {
         case Pass::wind_force:
-            return bit(B::chain_rotation) | bit(B::chain_constants) | bit(B::instance_origin);
+            return bit(B::chain_rotation) | bit(B::chain_origin) | bit(B::chain_constants) |
+                   bit(B::instance_wind) | bit(B::wind_table);
         case Pass::integrate:
             return bit(B::chain_force) | bit(B::chain_state) | bit(B::chain_constants) |
                    bit(B::chain_rest_rotation) | bit(B::chain_parent) | bit(B::instance_yaw);
@@ -63,6 +64,7 @@ uint64_t SceneData::element_count(BufferId id) const {
         case Scope::vertex:
             if (!produces_vertices()) return 0;
             return id == BufferId::vertex_normal && packed_vertices() ? 0 : total_vertices;
+        case Scope::wind: return HMSM_WIND_TABLE_ELEMENTS;
     }
     return 0;
 }

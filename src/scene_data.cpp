@@ -13,9 +13,6 @@ uint32_t jump_rounds_for_depth(int32_t max_depth) {
 
 namespace {
 
-/// x mod 2 in [0, 2): every wind profile has period 2.
-double reduce_phase(double x) { return x - 2.0 * std::floor(x / 2.0); }
-
 glm::dvec4 point(const glm::dvec3& p) { return {p, 0.0}; }
 
 }  // namespace
@@ -107,7 +104,7 @@ SceneData flatten_scene(const Scene& scene, const std::vector<Hierarchy>& hierar
     for (size_t i = 0; i < scene.instances.size(); ++i) {
         const Instance& inst = scene.instances[i];
         const ModelRange& range = d.models[inst.model];
-        d.instance_origin.push_back({inst.origin, reduce_phase(wind_phase(wind, inst.origin))});
+        d.instance_origin.push_back({inst.origin, 0.0});
         d.instance_yaw.push_back({std::cos(inst.yaw), std::sin(inst.yaw), 0.0, 0.0});
         uint64_t per_instance = std::max({range.chain_count, range.node_count, range.vertex_count});
         InstanceGroup* group = d.groups.empty() ? nullptr : &d.groups.back();
@@ -127,6 +124,7 @@ SceneData flatten_scene(const Scene& scene, const std::vector<Hierarchy>& hierar
         d.total_nodes += range.node_count;
         d.total_vertices += range.vertex_count;
     }
+    d.instance_wind.assign(size_t(HMSM_INSTANCE_WIND_VEC4S) * 4 * d.instance_origin.size(), 0.0);
 
     d.dt = parameters.dt;
     d.max_angle = parameters.max_angle;

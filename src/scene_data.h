@@ -51,8 +51,11 @@ struct SceneData {
     std::vector<glm::dvec4> vertex_parent_position;
     std::vector<glm::dvec4> vertex_parent_normal;
     // Instance-scope arrays.
-    std::vector<glm::dvec4> instance_origin;  // (origin, wind phase mod 2)
+    std::vector<glm::dvec4> instance_origin;  // (origin, 0)
     std::vector<glm::dvec4> instance_yaw;     // (cos, sin, 0, 0)
+    /// 36 scalars per instance (gpu_layout.h HMSM_BINDING_INSTANCE_WIND), filled by the
+    /// simulation's wind (live_wind.h); zero from flatten_scene.
+    std::vector<double> instance_wind;
 
     std::vector<ModelRange> models;
     std::vector<InstanceGroup> groups;

@@ -6,6 +6,7 @@
 #include "scene_data.h"
 #include "simulation_impl.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -110,12 +111,13 @@ bool rounds_in_dispatch_pay(uint32_t instances, uint32_t chains, bool dispatches
 /// hierarchy: in pointer jumping, round r reads half (r-1)&1 and writes half r&1 (round 0
 /// starts from T, resp. u), so the last round leaves the pose in final_half; level by level
 /// writes final_half in place, one depth per dispatch.
-void append_pass(std::vector<Dispatch>& program, const SceneData& d, Pass pass,
+void append_pass(std::vector<Dispatch>& program, const SceneData& d,
+                 const std::vector<detail::InstanceGroup>& groups, Pass pass,
                  Composition composition, bool dispatches_are_expensive) {
     const uint32_t final_half = (d.jump_rounds - 1) & 1;
     const bool hierarchical = pass == Pass::compose || pass == Pass::root_positions;
     if (!hierarchical) {
-        for (const auto& g : d.groups) {
+        for (const auto& g : groups) {
             Dispatch dispatch{pass, detail::group_constants(d, g, final_half)};
             const auto& m = d.models[g.model];
             uint32_t per_instance = pass == Pass::node_relative || pass == Pass::node_world
@@ -139,7 +141,7 @@ void append_pass(std::vector<Dispatch>& program, const SceneData& d, Pass pass,
                    (composition == Composition::pointer_jumping &&
                     rounds_in_dispatch_pay(g.instance_count, chains, dispatches_are_expensive));
         };
-        for (const auto& g : d.groups) {
+        for (const auto& g : groups) {
             if (!in_dispatch(g)) continue;
             Dispatch dispatch{pass, detail::group_constants(d, g, final_half)};
             dispatch.constants.element_count = g.instance_count * d.models[g.model].chain_count;
@@ -148,7 +150,7 @@ void append_pass(std::vector<Dispatch>& program, const SceneData& d, Pass pass,
             if (dispatch.constants.element_count > 0) program.push_back(dispatch);
         }
         for (uint32_t r = 0; r < d.jump_rounds; ++r) {
-            for (const auto& g : d.groups) {
+            for (const auto& g : groups) {
                 if (in_dispatch(g)) continue;
                 Dispatch dispatch{pass, detail::group_constants(d, g, final_half)};
                 dispatch.constants.element_count = g.instance_count * d.models[g.model].chain_count;
@@ -163,7 +165,7 @@ void append_pass(std::vector<Dispatch>& program, const SceneData& d, Pass pass,
     size_t levels = 0;
     for (const auto& m : d.models) levels = std::max(levels, m.level_begin.size() - 1);
     for (size_t level = 0; level < levels; ++level) {
-        for (const auto& g : d.groups) {
+        for (const auto& g : groups) {
             const auto& m = d.models[g.model];
             if (level + 1 >= m.level_begin.size()) continue;
             uint32_t count = m.level_begin[level + 1] - m.level_begin[level];
@@ -179,15 +181,16 @@ void append_pass(std::vector<Dispatch>& program, const SceneData& d, Pass pass,
     }
 }
 
-std::vector<Dispatch> build_program(const SceneData& d, Composition composition,
-                                    bool dispatches_are_expensive, Pass first) {
+std::vector<Dispatch> build_program(const SceneData& d, const std::vector<detail::InstanceGroup>& groups,
+                                    Composition composition, bool dispatches_are_expensive, Pass first,
+                                    uint32_t passes) {
     std::vector<Dispatch> program;
     for (Pass pass : kAllPasses) {
-        if (uint32_t(pass) < uint32_t(first)) continue;
+        if (uint32_t(pass) < uint32_t(first) || !(passes >> uint32_t(pass) & 1u)) continue;
         // Outputs on demand: passes whose outputs the step does not produce are not dispatched.
         if (pass == Pass::node_world && !d.produces_nodes()) continue;
         if (pass == Pass::contour && !d.produces_vertices()) continue;
-        append_pass(program, d, pass, composition, dispatches_are_expensive);
+        append_pass(program, d, groups, pass, composition, dispatches_are_expensive);
     }
     return program;
 }
@@ -200,6 +203,48 @@ Result<std::unique_ptr<Simulation>> Simulation::create(const Scene& scene,
 }
 
 Simulation::Simulation(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+
+std::vector<Dispatch> Simulation::Impl::program_for(const std::vector<detail::InstanceGroup>& groups,
+                                                    Pass first, uint32_t passes) const {
+    return build_program(*data_, groups, config_.composition, backend_->dispatches_are_expensive(), first,
+                         passes);
+}
+
+Status Simulation::Impl::check_size(std::span<const Instance> instances) const {
+    uint64_t vertices = 0, chains = 0, nodes = 0;
+    for (const Instance& inst : instances) {
+        vertices += meshes_[inst.model].vertices.size();
+        chains += 2 * hierarchies_[inst.model].chains.size();
+        nodes += hierarchies_[inst.model].node_owner.size();
+    }
+    if (vertices >= std::numeric_limits<uint32_t>::max() || chains >= std::numeric_limits<uint32_t>::max() ||
+        nodes >= std::numeric_limits<uint32_t>::max() || instances.size() >= (uint64_t(1) << 24))
+        return Status{ErrorCode::unsupported,
+                      "scene too large: " + std::to_string(instances.size()) + " instances with " +
+                          std::to_string(vertices) + " mesh vertices and " + std::to_string(chains / 2) +
+                          " chains over all instances (at most 2^32 - 1 elements and 2^24 instances are supported)"};
+    return {};
+}
+
+Status Simulation::Impl::check_wind(const Wind& wind, std::span<const Instance> instances) const {
+    HMSM_TRY(validate(wind));
+    // The wind force A s must stay in the range the float backends compute in (see the
+    // constants check in build_hierarchy); a front so slow that -f (o.d)/v overflows would make
+    // the phase, and every force, NaN.
+    const double strength = std::abs(wind.strength);
+    for (size_t m = 0; m < hierarchies_.size(); ++m)
+        for (const Chain& chain : hierarchies_[m].chains)
+            if (strength > 1e30 || chain.wind_area * strength > 1e30)
+                return Status{ErrorCode::invalid_argument,
+                              "wind strength " + number(wind.strength) + " is too strong for model '" +
+                                  scene_.model_names[m] + "': wind force A*s above 1e30, beyond the computable range"};
+    for (size_t i = 0; i < instances.size(); ++i)
+        if (!std::isfinite(detail::instance_wind_phase(wind, instances[i])))
+            return Status{ErrorCode::invalid_argument,
+                          "instance " + std::to_string(i) + ": wind phase p - f (o.d)/v is not finite (front speed " +
+                              number(wind.front_speed) + " too small for its origin)"};
+    return {};
+}
 
 Result<std::unique_ptr<Simulation>> Simulation::Impl::create(const Scene& scene,
                                                              const SimulationConfig& config,
@@ -223,32 +268,10 @@ Result<std::unique_ptr<Simulation>> Simulation::Impl::create(const Scene& scene,
         sim->hierarchies_.push_back(std::move(hierarchy).value());
     }
 
-    // The wind force A s must stay in the range the float backends compute in (see the
-    // constants check in build_hierarchy); a front so slow that -f (o.d)/v overflows would make
-    // the phase, and every force, NaN.
-    const double strength = std::abs(config.wind.strength);
-    for (size_t m = 0; m < sim->hierarchies_.size(); ++m)
-        for (const Chain& chain : sim->hierarchies_[m].chains)
-            if (strength > 1e30 || chain.wind_area * strength > 1e30)
-                return Status{ErrorCode::invalid_argument,
-                              "wind strength " + number(config.wind.strength) + " is too strong for model '" +
-                                  scene.model_names[m] + "': wind force A*s above 1e30, beyond the computable range"};
-    for (size_t i = 0; i < scene.instances.size(); ++i)
-        if (!std::isfinite(wind_phase(config.wind, scene.instances[i].origin)))
-            return Status{ErrorCode::invalid_argument,
-                          "instance " + std::to_string(i) + ": wind phase -f (o.d)/v is not finite (front speed " +
-                              number(config.wind.front_speed) + " too small for its origin)"};
-
-    uint64_t vertices = 0, chains = 0;
-    for (const Instance& inst : scene.instances) {
-        vertices += sim->meshes_[inst.model].vertices.size();
-        chains += 2 * sim->hierarchies_[inst.model].chains.size();
-    }
-    if (vertices >= std::numeric_limits<uint32_t>::max() ||
-        chains >= std::numeric_limits<uint32_t>::max())
-        return Status{ErrorCode::unsupported,
-                      "scene too large: " + std::to_string(vertices) +
-                          " mesh vertices over all instances (at most 2^32 - 1 are supported)"};
+    sim->instances_ = scene.instances;
+    HMSM_TRY(sim->check_wind(config.wind, scene.instances));
+    HMSM_TRY(sim->check_size(scene.instances));
+    sim->modes_ = turbulent_modes(config.wind.turbulence, config.wind.seed);
 
     sim->data_ = std::make_unique<SceneData>(
         detail::flatten_scene(scene, sim->hierarchies_, sim->meshes_, config.parameters,
@@ -267,45 +290,62 @@ Result<std::unique_ptr<Simulation>> Simulation::Impl::create(const Scene& scene,
     sim->backend_->set_profiling(config.profile_passes);
     HMSM_TRY(sim->backend_->upload(*sim->data_));
 
-    const bool expensive = sim->backend_->dispatches_are_expensive();
-    sim->step_program_ = build_program(*sim->data_, config.composition, expensive, Pass::wind_force);
-    // Pose at rest: with g = 0, integrate keeps S = V = 0 and writes the rest transforms; the
-    // remaining passes then fill R, O, node positions and the mesh.
+    // Pose at rest (every instance, active or not): with g = 0, integrate keeps S = V = 0 and
+    // writes the rest transforms; the remaining passes then fill R, O, node positions and the mesh.
     const double no_wind[1] = {0.0};
-    HMSM_TRY(sim->backend_->run(build_program(*sim->data_, config.composition, expensive, Pass::integrate),
-                                no_wind));
+    HMSM_TRY(sim->backend_->run(sim->program_for(sim->data_->groups, Pass::integrate), no_wind));
+    HMSM_TRY(sim->apply_pending());
     return created;
 }
 
 Simulation::~Simulation() = default;
 
 Status Simulation::Impl::step(uint32_t count) {
-    wind_phases_.resize(count);
-    for (uint32_t k = 0; k < count; ++k) {
-        double t = double(steps_done_ + k) * config_.parameters.dt;  // t = (n - 1) dt
-        double x = data_->wind_frequency * t;
-        if (!std::isfinite(x))  // f * t overflowed: no phase, and the profile would be NaN
-            return Status{ErrorCode::invalid_argument,
-                          "wind frequency " + number(data_->wind_frequency) + " times time " +
-                              number(t) + " s overflows: the wind phase is not finite"};
-        wind_phases_[k] = x - 2.0 * std::floor(x / 2.0);
+    HMSM_TRY(apply_pending());
+    const Wind& wind = config_.wind;
+    const double dt = config_.parameters.dt;
+    uint32_t done = 0;
+    times_ = {};
+    while (done < count) {
+        // One wind-table slot per step of the run: tau mod 2 and the turbulent mode phases,
+        // reduced on the host in double.
+        const uint32_t steps = std::min<uint32_t>(count - done, HMSM_WIND_STEP_SLOTS);
+        wind_scratch_.resize(size_t(steps) * detail::kWindStepScalars);
+        wind_phases_.resize(steps);
+        for (uint32_t k = 0; k < steps; ++k) {
+            const uint64_t n = steps_done_ + k + 1;  // steps_done_ counts the earlier chunks
+            const double tau = clock_.tau(wind.frequency, dt, n);
+            if (!std::isfinite(tau))  // f * t overflowed: no phase, and the profile would be NaN
+                return Status{ErrorCode::invalid_argument,
+                              "wind frequency " + number(wind.frequency) + " times time " +
+                                  number(double(n - 1) * dt) + " s overflows: the wind phase is not finite"};
+            detail::fill_wind_step(wind, modes_, tau, &wind_scratch_[size_t(k) * detail::kWindStepScalars]);
+            wind_phases_[k] = double(k);
+        }
+        HMSM_TRY(backend_->write(detail::BufferId::wind_table, HMSM_WIND_STEPS,
+                                 uint64_t(steps) * HMSM_WIND_STEP_VEC4S, wind_scratch_.data(),
+                                 detail::Scalar::f64));
+        HMSM_TRY(backend_->run(step_program_, wind_phases_));
+        const PassTimes chunk = backend_->pass_times();
+        for (size_t p = 0; p < chunk.seconds.size(); ++p) times_.seconds[p] += chunk.seconds[p];
+        times_.steps += chunk.steps;
+        done += steps;
+        steps_done_ += steps;
     }
-    HMSM_TRY(backend_->run(step_program_, wind_phases_));
-    steps_done_ += count;
     return {};
 }
 
 Status Simulation::step(uint32_t count) { return impl_->step(count); }
 uint64_t Simulation::steps_done() const { return impl_->steps_done_; }
 double Simulation::time() const { return double(impl_->steps_done_) * impl_->config_.parameters.dt; }
-PassTimes Simulation::pass_times() const { return impl_->backend_->pass_times(); }
+PassTimes Simulation::pass_times() const { return impl_->times_; }
 BackendKind Simulation::backend_kind() const { return impl_->backend_->kind(); }
 std::string Simulation::device_name() const { return impl_->backend_->device_name(); }
 const SimulationConfig& Simulation::config() const { return impl_->config_; }
 const Scene& Simulation::scene() const { return impl_->scene_; }
 const Hierarchy& Simulation::hierarchy(uint32_t model) const { return impl_->hierarchies_[model]; }
 const MeshTemplate& Simulation::mesh(uint32_t model) const { return impl_->meshes_[model]; }
-uint64_t Simulation::instance_count() const { return impl_->scene_.instances.size(); }
+uint64_t Simulation::instance_count() const { return impl_->instances_.size(); }
 uint64_t Simulation::chain_count() const { return impl_->data_->total_chains; }
 uint64_t Simulation::node_count() const { return impl_->data_->total_nodes; }
 uint64_t Simulation::vertex_count() const { return impl_->data_->total_vertices; }
@@ -317,7 +357,7 @@ uint32_t Simulation::capped_chain_count() const {
 }
 const Wind& Simulation::wind() const { return impl_->config_.wind; }
 std::span<const ForceField> Simulation::force_fields() const { return impl_->force_fields_; }
-std::span<const Instance> Simulation::instances() const { return impl_->scene_.instances; }
+std::span<const Instance> Simulation::instances() const { return impl_->instances_; }
 
 Status Simulation::Impl::read_elements(Output output, std::vector<double>* as_double,
                                  std::vector<float>* as_float) const {

@@ -5,6 +5,7 @@
 #include <hmsm/simulation.h>
 
 #include "backend.h"
+#include "live_wind.h"
 #include "scene_data.h"
 
 #include <memory>
@@ -20,6 +21,20 @@ struct __attribute__((visibility("hidden"))) Simulation::Impl {
                                                       std::unique_ptr<detail::Backend> backend);
 
     Status step(uint32_t count);
+    /// Uploads what live control changed (wind table header, instance winds) and rebuilds the
+    /// step program over the runs of active instances (live_control.cpp).
+    Status apply_pending();
+    /// The step program over `groups` from pass `first` on (only the passes in `passes`, a bit
+    /// per Pass).
+    std::vector<detail::Dispatch> program_for(const std::vector<detail::InstanceGroup>& groups,
+                                              Pass first, uint32_t passes = ~0u) const;
+    /// Replaces the instance list: survivors (old indices, in order) then `added`; carries the
+    /// survivors' state over and poses the added instances at rest (live_control.cpp).
+    Status reshape(const std::vector<uint32_t>& survivors, std::span<const Instance> added);
+    /// Checks that `instances` fit the 32-bit element counts of the device layout.
+    Status check_size(std::span<const Instance> instances) const;
+    /// Checks that the wind keeps every force and phase finite for `instances`.
+    Status check_wind(const Wind& wind, std::span<const Instance> instances) const;
     Status read_elements(Output output, std::vector<double>* as_double,
                          std::vector<float>* as_float) const;
     Status read_packed_normals(std::vector<double>* as_double, std::vector<float>* as_float) const;
@@ -32,7 +47,13 @@ struct __attribute__((visibility("hidden"))) Simulation::Impl {
     std::unique_ptr<detail::Backend> backend_;
     std::vector<detail::Dispatch> step_program_;
     std::vector<ForceField> force_fields_;
-    std::vector<double> wind_phases_;  // scratch: one entry per step of a step() call
+    std::vector<Instance> instances_;  // the current instance list (live control)
+    detail::WindClock clock_;
+    TurbulentModes modes_{};
+    bool program_dirty_ = true, header_dirty_ = true, instance_wind_dirty_ = true;
+    std::vector<uint32_t> dirty_instances_;  // instance_wind elements to rewrite
+    std::vector<double> wind_phases_;  // scratch: the wind-table slot of each step of a run
+    std::vector<double> wind_scratch_;
     // Scratch for read(): elements as the backend stores them, kept between calls so a
     // per-frame readback neither allocates nor zero-fills.
     mutable std::vector<float> stored_f32_;
@@ -41,6 +62,7 @@ struct __attribute__((visibility("hidden"))) Simulation::Impl {
     // and a queue submission on Vulkan, pinned memory on CUDA) are shared, and const calls may
     // run concurrently (the threading contract in include/hmsm/simulation.h).
     mutable std::mutex read_mutex_;
+    PassTimes times_;  // over the chunks of the last step() call
     uint64_t steps_done_ = 0;
 };
 

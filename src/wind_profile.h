@@ -30,4 +30,19 @@ HMSM_HOST_DEVICE T wind_profile_y(unsigned profile, T x) {
     }
 }
 
+/// Yt of docs/model.md 3.5 from the reduced phases of one step and one instance (gpu_layout.h):
+/// 1 + sum_k a_k cos(2 pi (step_k + instance_k)) with step_k = frac(m_k tau + u_k) and
+/// instance_k = frac(m_k phi); their sum is reduced to [0, 1) before the cosine.
+template <class T>
+HMSM_HOST_DEVICE T turbulent_y(const T* amplitude, const T* step_phase, const T* instance_phase) {
+    const T two_pi = T(6.28318530717958647692);
+    T y = T(1);
+    for (int k = 0; k < 32; ++k) {
+        T phase = step_phase[k] + instance_phase[k];
+        phase -= floor(phase);
+        y += amplitude[k] * cos(two_pi * phase);
+    }
+    return y;
+}
+
 }  // namespace hmsm::detail

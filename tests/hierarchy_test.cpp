@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <numbers>
 
 using namespace hmsm;
 using hmsm::test::make_tree;
@@ -157,8 +158,8 @@ TEST(Hierarchy, ConstantsFollowTheFormulas) {
     EXPECT_EQ(h->capped_chain_count, 0);
 }
 
-TEST(Hierarchy, StabilityFloorRaisesInertiaAndCountsIt) {
-    // A short stiff chain: omega * dt would exceed 0.5 without the floor.
+TEST(Hierarchy, FrequencyCapRaisesInertiaAndCountsIt) {
+    // A short stiff chain: it would sway far faster than f_cap = 4 Hz.
     auto tree = make_tree({{-1, 0, 0, 0, 0.3}, {0, 0, 0.2, 0, 0.3}});
     Parameters p;
     auto h = build_hierarchy(tree, {}, p);
@@ -166,5 +167,11 @@ TEST(Hierarchy, StabilityFloorRaisesInertiaAndCountsIt) {
     const Chain& c = h->chains[0];
     EXPECT_TRUE(c.capped);
     EXPECT_EQ(h->capped_chain_count, 1);
-    EXPECT_NEAR(std::sqrt(c.stiffness / c.inertia) * p.dt, 0.5, 1e-12);
+    EXPECT_NEAR(std::sqrt(c.stiffness / c.inertia), 2.0 * std::numbers::pi * 4.0, 1e-9);
+    // With a high cap the stability bound 1 / (4 pi dt max(1, zeta)) binds: omega dt = 0.5.
+    p.max_frequency = 1000.0;
+    auto fast = build_hierarchy(tree, {}, p);
+    ASSERT_TRUE(fast.ok());
+    const Chain& f = fast->chains[0];
+    EXPECT_NEAR(std::sqrt(f.stiffness / f.inertia) * p.dt, 0.5, 1e-12);
 }

@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include <cmath>
+#include <numbers>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -172,9 +173,10 @@ int32_t expected_floored(const TreeModel& tree, const Parameters& p) {
     int32_t count = 0;
     for (const Chain& c : h->chains) {
         double free_inertia = p.density * c.radius * c.radius * c.length * c.length * c.length;
-        double omega_dt = std::sqrt(c.stiffness / free_inertia) * p.dt;
-        double limit = std::min(0.5, p.damping_ratio > 0.0 ? 1.0 / (2.0 * p.damping_ratio) : 0.5);
-        count += omega_dt > limit * (1.0 + 1e-12);
+        // docs/model.md 3.4: f_max = min(f_cap, 1 / (4 pi dt max(1, zeta))).
+        double f_max = std::min(p.max_frequency, 1.0 / (4.0 * std::numbers::pi * p.dt * std::max(1.0, p.damping_ratio)));
+        double frequency = std::sqrt(c.stiffness / free_inertia) / (2.0 * std::numbers::pi);
+        count += frequency > f_max * (1.0 + 1e-12);
     }
     return count;
 }

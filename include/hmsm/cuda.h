@@ -15,9 +15,10 @@ struct CUstream_st;
 
 namespace hmsm::cuda {
 
-/// Device pointers of a simulation's outputs, valid until the Simulation is destroyed and
-/// current after each step() returns; nullptr (count 0) for outputs the simulation does not
-/// produce (SimulationConfig::outputs). Every element is 4 floats (a CUDA float4, 16-byte
+/// Device pointers of a simulation's outputs, valid until the Simulation is destroyed or its
+/// instances are added or removed (which reallocates them), and current after each step()
+/// returns; nullptr (count 0) for outputs the simulation does not produce
+/// (SimulationConfig::outputs). Every element is 4 floats (a CUDA float4, 16-byte
 /// aligned), instance-major, in the order of Simulation::read.
 struct DeviceOutputs {
     int device = 0;                           ///< CUDA device ordinal that holds the buffers

@@ -29,7 +29,7 @@ struct Parameters {
     double density = 1.0;         ///< rho
     double stiffness = 1.0e7;     ///< k
     double damping_ratio = 0.1;   ///< zeta
-    double wind_gain = 15.0;      ///< gamma
+    double wind_gain = 0.2;       ///< gamma: strength 1 is a moderate breeze (docs/model.md 3.4)
     double max_angle = 0.8;       ///< theta_max (rad)
     double dt = 1.0 / 120.0;      ///< fixed time step (s)
     double max_frequency = 4.0;   ///< f_cap (Hz): no chain sways faster than this
@@ -54,11 +54,32 @@ struct Wind {
 /// Wind strength of a wind speed U in m/s: (U / 6)^2.
 HMSM_API double wind_strength_for_speed(double speed);
 
-/// Y(x) of docs/model.md 3.5.
+/// Modes of the turbulent profile (docs/model.md 3.5).
+inline constexpr uint32_t kTurbulentModes = 32;
+
+/// The constants of the turbulent profile for one wind setting, in double: mode k contributes
+/// a_k cos(2 pi (m_k x + u_k)) to Yt(x) = 1 + sum_k.
+struct TurbulentModes {
+    double multiple[kTurbulentModes];   ///< m_k = 2^((k - 8) / 4)
+    double amplitude[kTurbulentModes];  ///< a_k = sigma sqrt(2) b_k / sqrt(sum b_j^2)
+    double phase[kTurbulentModes];      ///< u_k = (splitmix64(seed + k) >> 11) 2^-53
+};
+HMSM_API TurbulentModes turbulent_modes(double turbulence, uint64_t seed);
+
+/// SplitMix64's output function (all arithmetic mod 2^64), as docs/model.md 3.5 uses it.
+HMSM_API uint64_t splitmix64(uint64_t x);
+
+/// Y(x) of docs/model.md 3.5 for the periodic profiles (none, constant, Y1-Y4; period 2);
+/// `turbulent` needs the wind's modes: use wind_value.
 HMSM_API double wind_profile_value(WindProfile profile, double x);
-/// w(t) for an instance at `origin` (docs/model.md 3.5).
-HMSM_API Vec3 wind_at(const Wind& wind, const Vec3& origin, double t);
-/// Phase offset phi of an instance at `origin`: -f (o.d)/v, or 0 without a front.
+/// Y(x) of the wind's profile, the turbulent one included.
+HMSM_API double wind_value(const Wind& wind, double x);
+/// w for an instance at `origin` with the wind fixed since the start: s Y(f t + phi) d, with
+/// the instance's wind phase p and wind scale lambda (docs/model.md 3.5).
+HMSM_API Vec3 wind_at(const Wind& wind, const Vec3& origin, double t, double instance_phase = 0.0,
+             double instance_scale = 1.0);
+/// Front phase of an instance at `origin`: -f (o.d)/v with d normalized, or 0 without a front
+/// (the instance's own wind phase p is added to it).
 HMSM_API double wind_phase(const Wind& wind, const Vec3& origin);
 
 HMSM_API const char* to_string(Grouping grouping);

@@ -53,7 +53,8 @@ struct BufferRange {
     uint64_t count = 0;
 };
 
-/// The device buffers an engine can draw from. Valid for the simulation's lifetime; their
+/// The device buffers an engine can draw from. Valid until the simulation is destroyed or its
+/// instances are added or removed (which reallocates them: call shared_buffers() again); their
 /// contents change in every step. Outputs the simulation does not produce
 /// (SimulationConfig::outputs) are empty ranges.
 struct SharedBuffers {
@@ -91,7 +92,7 @@ HMSM_API Result<SharedBuffers> shared_buffers(const Simulation& simulation);
 
 HMSM_API Result<DeviceHandles> device_handles(const Simulation& simulation);
 
-/// Records `count` steps into `command_buffer` (recording state, outside a render pass, from a
+/// Records `count` (at most 256) steps into `command_buffer` (recording state, outside a render pass, from a
 /// pool of a compute-capable queue family of the simulation's device) instead of submitting
 /// them, and advances the simulation's clock as Simulation::step() would. hmsm binds its own
 /// compute pipeline, descriptor set and push constants (rebind yours afterwards) and starts
@@ -100,7 +101,11 @@ HMSM_API Result<DeviceHandles> device_handles(const Simulation& simulation);
 /// VK_ACCESS_SHADER_WRITE_BIT to its own stage (e.g. VERTEX_INPUT / VERTEX_ATTRIBUTE_READ).
 /// The engine submits the command buffer; the recorded steps must complete before the next
 /// Simulation::step(), read() or record_steps() of this simulation is called. Per-pass times are
-/// not collected for recorded steps.
+/// not collected for recorded steps. Live changes made since the last step (wind, force fields,
+/// instance settings) take effect in the recorded steps: record_steps uploads them, and the
+/// steps' wind clock, with small transfers it submits to the queue and waits for before it
+/// records. add_instances() and remove_instances() reallocate the simulation's buffers:
+/// SharedBuffers and any command buffer recorded before them are invalid afterwards.
 HMSM_API Status record_steps(Simulation& simulation, VkCommandBuffer command_buffer,
                              uint32_t count = 1);
 

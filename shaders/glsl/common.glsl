@@ -55,6 +55,11 @@ layout(set = 0, binding = HMSM_BINDING_VERTEX_NORMAL, std430) buffer VertexNorma
 // Joint matrices [R_c | O_c] as three vec4 rows (R row i, O_i); a mat3x4 whose "columns" are rows.
 layout(set = 0, binding = HMSM_BINDING_JOINT_MATRIX, std430) buffer JointMatrix { mat3x4 joint_matrix[]; };
 
+// Live control, written by the host between steps (gpu_layout.h): 9 vec4 per instance, and the
+// wind table (turbulent amplitudes, wind vector, force fields, per-step slots).
+layout(set = 0, binding = HMSM_BINDING_INSTANCE_WIND, std430) readonly buffer InstanceWind { vec4 instance_wind[]; };
+layout(set = 0, binding = HMSM_BINDING_WIND_TABLE, std430) readonly buffer WindTable { vec4 wind_table[]; };
+
 /// Global thread index. The host spreads large dispatches over a 2-D grid of workgroups
 /// (maxComputeWorkGroupCount[0] may be as low as 65535), so the index is linearized here.
 uint workgroup_index() { return gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x; }

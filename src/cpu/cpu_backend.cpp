@@ -52,6 +52,12 @@ struct ScalarView {
         for (int r = 0; r < 3; ++r)
             for (int k = 0; k < 4; ++k) b[i][r][k] = T(in[r * 4 + k]);
     }
+    static void get(const std::vector<std::array<T, 36>>& b, uint64_t i, double* out) {
+        for (int k = 0; k < 36; ++k) out[k] = double(b[i][k]);
+    }
+    static void set(std::vector<std::array<T, 36>>& b, uint64_t i, const double* in) {
+        for (int k = 0; k < 36; ++k) b[i][k] = T(in[k]);
+    }
     static void set(std::vector<int32_t>& b, uint64_t i, const double* in) { b[i] = int32_t(in[0]); }
     static void set(std::vector<glm::ivec2>& b, uint64_t i, const double* in) {
         b[i] = glm::ivec2(int32_t(in[0]), int32_t(in[1]));
@@ -124,7 +130,7 @@ public:
                 }
             }
             const uint32_t n = shape_scalars(buffer_info(id).shape);
-            double tmp[12];
+            double tmp[36];
             for (uint64_t i = 0; i < count; ++i) {
                 ScalarView<T>::get(buffer, first + i, tmp);
                 for (uint32_t k = 0; k < n; ++k) {
@@ -138,7 +144,7 @@ public:
     Status write(BufferId id, uint64_t first, uint64_t count, const void* src, Scalar as) override {
         return visit(s_, id, first, count, [&](auto& buffer) {
             const uint32_t n = shape_scalars(buffer_info(id).shape);
-            double tmp[12];
+            double tmp[36];
             for (uint64_t i = 0; i < count; ++i) {
                 for (uint32_t k = 0; k < n; ++k)
                     tmp[k] = as == Scalar::f64 ? static_cast<const double*>(src)[i * n + k]
@@ -168,6 +174,10 @@ private:
         s_.vertex_parent_normal = convert_vec4<T, vec4>(d.vertex_parent_normal);
         s_.instance_origin = convert_vec4<T, vec4>(d.instance_origin);
         s_.instance_yaw = convert_vec4<T, vec4>(d.instance_yaw);
+        s_.instance_wind.assign(d.instance_count(), {});
+        for (size_t i = 0; i < s_.instance_wind.size(); ++i)
+            for (size_t k = 0; k < 36; ++k) s_.instance_wind[i][k] = T(d.instance_wind[36 * i + k]);
+        s_.wind_table.assign(HMSM_WIND_TABLE_ELEMENTS, vec4(0));
         s_.chain_state.assign(d.total_chains, vec4(0));
         s_.chain_force.assign(d.total_chains, typename State<T>::vec2(0));
         s_.chain_local.assign(d.total_chains, typename State<T>::mat3(0));

@@ -10,6 +10,7 @@
 #include <glm/vec3.hpp>
 #include <glm/vec4.hpp>
 
+#include <array>
 #include <vector>
 
 namespace hmsm::detail::cpu {
@@ -31,6 +32,9 @@ struct State {
     std::vector<vec4> vertex_rest_position, vertex_rest_normal;
     std::vector<vec4> vertex_parent_position, vertex_parent_normal;
     std::vector<vec4> instance_origin, instance_yaw;
+    // Live control: the wind per instance and the wind table (gpu_layout.h).
+    std::vector<std::array<T, 4 * HMSM_INSTANCE_WIND_VEC4S>> instance_wind;
+    std::vector<vec4> wind_table;
     // Per-instance state.
     std::vector<vec4> chain_state;
     std::vector<vec2> chain_force;

@@ -1,19 +1,47 @@
-// Pass 1: generalized wind force per chain, from the wind in the chain's previous-step frame.
+// Pass 1: generalized wind force per chain, from the wind in the chain's previous-step frame:
+// w = lambda_i s Y(tau + phi_i) d + the force fields at the chain's previous origin
+// (docs/model.md 3.5, 3.7, 3.9; the wind table layout is in gpu_layout.h).
 #include "cpu_state.h"
 
 #include "../wind_profile.h"
+
+#include <algorithm>
+#include <cmath>
 
 namespace hmsm::detail::cpu {
 
 template <class T>
 void wind_force(State<T>& s, const gpu::PassConstants& pc, double wind_x, Range r) {
+    using vec3 = typename State<T>::vec3;
+    const uint32_t slot = uint32_t(wind_x);  // the step's slot of the wind table
+    const auto* table = s.wind_table.data();
+    const auto& step = table[HMSM_WIND_STEPS + HMSM_WIND_STEP_VEC4S * slot];
+    const vec3 strength_direction(table[HMSM_WIND_VECTOR]);
+    const uint32_t fields = uint32_t(table[HMSM_WIND_VECTOR].w);
     for (uint32_t i = r.begin; i < r.end; ++i) {
         Element e = element_of(i, pc.model_chain_count);
         uint64_t c = state_chain(pc, e.instance, int32_t(e.index));
-        const auto& origin = s.instance_origin[pc.instance_begin + e.instance];
-        T x = T(wind_x) + origin.w;  // f*t + phi, both reduced mod 2
-        auto w = s.wind_vector * wind_profile_y<T>(s.profile, x);
-        auto w_local = glm::transpose(s.chain_rotation[pc.src_half * s.total_chains + c]) * w;
+        const auto& instance = s.instance_wind[pc.instance_begin + e.instance];
+        T y;
+        if (pc.profile == HMSM_WIND_PROFILE_TURBULENT)
+            y = turbulent_y<T>(&table[HMSM_WIND_AMPLITUDES].x, &table[HMSM_WIND_STEPS + HMSM_WIND_STEP_VEC4S * slot + 1].x,
+                               &instance[4]);
+        else
+            y = wind_profile_y<T>(pc.profile, step.x + instance[1]);  // tau + phi, both mod 2
+        vec3 w = instance[0] * y * strength_direction;
+        const uint64_t pose = pc.src_half * s.total_chains + c;
+        const vec3 x = vec3(s.chain_origin[pose]);
+        for (uint32_t f = 0; f < fields; ++f) {
+            const auto& sphere = table[HMSM_WIND_FIELDS + 2 * f];
+            const auto& force = table[HMSM_WIND_FIELDS + 2 * f + 1];
+            const vec3 offset = x - vec3(sphere);
+            const T distance = std::sqrt(offset.x * offset.x + offset.y * offset.y + offset.z * offset.z);
+            const T reach = std::max(T(0), T(1) - distance / sphere.w);
+            const T h = reach * reach;
+            if (force.w == T(0)) w += h * vec3(force);
+            else if (distance >= T(1e-9)) w += (h * force.x / distance) * offset;
+        }
+        auto w_local = glm::transpose(s.chain_rotation[pose]) * w;
         T area = s.chain_constants[pc.model_chain_begin + e.index].w;
         s.chain_force[c] = typename State<T>::vec2(area * w_local.z, -area * w_local.x);
     }

@@ -1,8 +1,8 @@
 // One step of a program as an instantiated CUDA graph, replayed once per step.
 //
 // The program is captured once from the stream (every dispatch in order, on one stream, so the
-// graph is a chain and ordering replaces barriers). Between replays only the wind phase
-// x0 = f t mod 2 changes: it lives in the wind_force dispatches' constants (pc.wind.w), so before
+// graph is a chain and ordering replaces barriers). Between replays only the step's wind-table
+// slot (gpu_layout.h) changes: it lives in the wind_force dispatches' constants (pc.wind.w), so before
 // each replay every wind_force kernel node gets new parameters through
 // cudaGraphExecKernelNodeSetParams. That is possible generically because every pass kernel
 // takes (BufferPointers, PassConstants) by value (launchers.h). Launches already enqueued keep
@@ -29,7 +29,7 @@ public:
     /// Captures `program` from `stream` and instantiates it (replacing any earlier graph).
     Status capture(std::span<const Dispatch> program, const BufferPointers& buffers,
                    cudaStream_t stream);
-    /// Enqueues one step with wind phase `wind_x` on `stream`.
+    /// Enqueues one step reading wind-table slot `wind_x` on `stream`.
     Status replay(float wind_x, cudaStream_t stream);
 
 private:

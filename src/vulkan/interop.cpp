@@ -61,6 +61,12 @@ Result<DeviceHandles> device_handles(const Simulation& simulation) {
 Status record_steps(Simulation& simulation, VkCommandBuffer command_buffer, uint32_t count) {
     auto backend = vulkan_backend_of(simulation);
     if (!backend) return backend.status();
+    // Every recorded step reads its own slot of the wind table, which the engine's submission
+    // must still find intact: one recording covers at most one table's worth of steps.
+    if (count > HMSM_WIND_STEP_SLOTS)
+        return {ErrorCode::invalid_argument, "vulkan: record_steps records at most " +
+                                                 std::to_string(HMSM_WIND_STEP_SLOTS) + " steps at once (asked for " +
+                                                 std::to_string(count) + ")"};
     if (!command_buffer)
         return {ErrorCode::invalid_argument, "vulkan: record_steps needs a command buffer"};
     // Simulation::step() computes the wind phases, runs the program through the backend and

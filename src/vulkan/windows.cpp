@@ -218,8 +218,8 @@ WindowPlan::Range WindowPlan::window(BufferId id, uint32_t index) const {
 
 uint32_t WindowPlan::dispatch_instances(const Dispatch& d) const {
     const gpu::PassConstants& c = d.constants;
-    if (auto it = group_instances_.find(c.instance_begin); it != group_instances_.end()) return it->second;
-    // A dispatch over part of a group (tests): threads per instance by pass and mode.
+    // Threads per instance by pass and mode. A dispatch may cover part of a group (the runs of
+    // active instances, tests), so the group's own count holds only where the threads match it.
     uint32_t per = c.model_chain_count;
     if ((d.pass == Pass::compose || d.pass == Pass::root_positions) && c.mode == HMSM_MODE_LEVEL_BY_LEVEL)
         per = c.level_count;
@@ -227,6 +227,9 @@ uint32_t WindowPlan::dispatch_instances(const Dispatch& d) const {
         per = c.model_node_count;
     else if (d.pass == Pass::contour)
         per = c.model_vertex_count;
+    if (auto it = group_instances_.find(c.instance_begin);
+        it != group_instances_.end() && uint64_t(it->second) * per == c.element_count)
+        return it->second;
     return per ? c.element_count / per : 0;
 }
 

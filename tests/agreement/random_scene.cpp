@@ -114,6 +114,12 @@ detail::SceneData random_scene_data(std::mt19937& rng, const std::vector<ModelSh
                                      uniform(rng, 0, 2)});
         double yaw = uniform(rng, -3, 3);
         d.instance_yaw.push_back({std::cos(yaw), std::sin(yaw), 0, 0});
+        // instance_wind: (lambda, phi mod 2, 0, 0), then 32 reduced mode phases in [0, 1).
+        d.instance_wind.push_back(uniform(rng, 0, 2));
+        d.instance_wind.push_back(uniform(rng, 0, 2));
+        d.instance_wind.push_back(0.0);
+        d.instance_wind.push_back(0.0);
+        for (int k = 0; k < 32; ++k) d.instance_wind.push_back(uniform(rng, 0, 1));
         detail::InstanceGroup* group = d.groups.empty() ? nullptr : &d.groups.back();
         if (!group || group->model != instance_models[i] || group->instance_count == max_group_instances) {
             d.groups.push_back({instance_models[i], i, 0, uint32_t(d.total_chains),
@@ -128,7 +134,7 @@ detail::SceneData random_scene_data(std::mt19937& rng, const std::vector<ModelSh
     d.dt = 1.0 / 120.0;
     d.max_angle = 0.8;
     d.fix_weight = 0.4;
-    d.profile = WindProfile::y1;
+    d.profile = uniform(rng, 0, 1) < 0.5 ? WindProfile::y1 : WindProfile::turbulent;
     d.wind_vector = {3.0, 0.5, -2.0};
     d.wind_frequency = 0.1;
     return d;
@@ -206,7 +212,9 @@ std::vector<std::vector<detail::Dispatch>> pass_variants(const detail::SceneData
     return variants;
 }
 
-double uniform_wind_phase(std::mt19937& rng) { return uniform(rng, 0.0, 2.0); }
+double uniform_wind_phase(std::mt19937& rng) {
+    return std::floor(uniform(rng, 0.0, double(HMSM_WIND_STEP_SLOTS) - 1e-9));  // a wind-table slot
+}
 
 void randomize_state(const detail::SceneData& d, detail::Backend& a, detail::Backend& b,
                      std::mt19937& rng) {
@@ -242,6 +250,26 @@ void randomize_state(const detail::SceneData& d, detail::Backend& a, detail::Bac
     fill(BufferId::node_world, point);
     fill(BufferId::vertex_position, point);
     fill(BufferId::vertex_normal, point);
+    // The wind table (gpu_layout.h): amplitudes, wind vector with three force fields of both
+    // kinds, and every step slot with tau mod 2 and mode phases in [0, 1).
+    std::vector<double> table(4 * HMSM_WIND_TABLE_ELEMENTS, 0.0);
+    for (int k = 0; k < 32; ++k) table[4 * HMSM_WIND_AMPLITUDES + k] = uniform(rng, 0, 0.2);
+    double* vector = &table[4 * HMSM_WIND_VECTOR];
+    vector[0] = uniform(rng, -4, 4); vector[1] = uniform(rng, -1, 1); vector[2] = uniform(rng, -4, 4); vector[3] = 3;
+    for (int f = 0; f < 3; ++f) {
+        double* sphere = &table[4 * (HMSM_WIND_FIELDS + 2 * f)];
+        for (int k = 0; k < 3; ++k) sphere[k] = uniform(rng, -5, 5);
+        sphere[3] = uniform(rng, 3, 9);
+        for (int k = 0; k < 3; ++k) sphere[4 + k] = uniform(rng, -6, 6);
+        sphere[7] = f % 2;
+    }
+    for (int slot = 0; slot < HMSM_WIND_STEP_SLOTS; ++slot) {
+        double* step = &table[4 * (HMSM_WIND_STEPS + HMSM_WIND_STEP_VEC4S * slot)];
+        step[0] = uniform(rng, 0, 2);
+        for (int k = 0; k < 32; ++k) step[4 + k] = uniform(rng, 0, 1);
+    }
+    ASSERT_TRUE(a.write(BufferId::wind_table, 0, HMSM_WIND_TABLE_ELEMENTS, table.data(), detail::Scalar::f64).ok());
+    ASSERT_TRUE(b.write(BufferId::wind_table, 0, HMSM_WIND_TABLE_ELEMENTS, table.data(), detail::Scalar::f64).ok());
 }
 
 }  // namespace hmsm::test

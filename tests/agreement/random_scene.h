@@ -29,6 +29,7 @@ std::vector<std::vector<detail::Dispatch>> pass_variants(const detail::SceneData
                                                          Composition composition, std::mt19937& rng);
 
 /// A wind phase f*t mod 2 in [0, 2).
+/// A random wind-table step slot (Backend::run's per-step argument).
 double uniform_wind_phase(std::mt19937& rng);
 
 /// Writes the same random state (angles in range, rotations, positions) to both backends.

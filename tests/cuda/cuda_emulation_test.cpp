@@ -6,6 +6,7 @@
 #include "cuda_test_support.h"
 
 #include "device_words.h"
+#include "live_wind.h"
 #include "cuda/launch_dispatch.h"
 #include "octahedral.h"
 
@@ -33,7 +34,8 @@ HostImage image_of(const Simulation& reference) {
     for (const detail::BufferInfo& info : detail::kBufferTable) {
         const uint64_t count = scene.element_count(info.id);
         auto& bytes = image.bytes[uint32_t(info.id)];
-        if (detail::is_static(info.id)) {
+        // instance_wind is written by the simulation (live_wind.h), so it is read back like state.
+        if (detail::is_static(info.id) && info.id != BufferId::instance_wind) {
             bytes = detail::device_image(scene, info.id);
         } else {
             std::vector<double> values(count * detail::shape_scalars(info.shape));
@@ -70,14 +72,18 @@ void poison(HostImage& image, BufferId id) {
 class CudaEmulation : public ::testing::TestWithParam<Composition> {};
 
 /// Runs the first `steps` steps of `sim`'s step program through the kernel bodies on the host,
-/// with the wind phase of each step as Simulation::step computes it (x = f t mod 2).
+/// with the wind clock of each step as Simulation::step computes it (tau = f t, reduced on the
+/// host into wind-table slot 0).
 void emulate_steps(const Simulation& sim, HostImage& image, uint32_t steps) {
     const double dt = sim.config().parameters.dt;
-    const double frequency = hmsm::detail::scene_data_of(sim).wind_frequency;
+    const Wind& wind = sim.wind();
+    const TurbulentModes modes = turbulent_modes(wind.turbulence, wind.seed);
+    auto* table = reinterpret_cast<float*>(image.bytes[uint32_t(BufferId::wind_table)].data());
+    double slot[detail::kWindStepScalars];
     for (uint32_t k = 0; k < steps; ++k) {
-        const double x = frequency * (double(k) * dt);
-        const float phase = float(x - 2.0 * std::floor(x / 2.0));
-        for (const detail::Dispatch& d : hmsm::detail::step_program_of(sim)) detail::cuda::emulate_dispatch(d, image.pointers, phase);
+        detail::fill_wind_step(wind, modes, (wind.frequency * dt) * double(k), slot);
+        for (uint32_t i = 0; i < detail::kWindStepScalars; ++i) table[4 * HMSM_WIND_STEPS + i] = float(slot[i]);
+        for (const detail::Dispatch& d : hmsm::detail::step_program_of(sim)) detail::cuda::emulate_dispatch(d, image.pointers, 0.0f);
     }
 }
 
@@ -125,6 +131,44 @@ TEST_P(CudaEmulation, KernelBodiesFollowCpu64OverManySteps) {
     ASSERT_TRUE((*at_rest)->read(Output::node_positions, rest).ok());
     ASSERT_TRUE(sim.read(Output::node_positions, now).ok());
     EXPECT_GT(max_abs_difference(rest, now) / height, 1e-3);
+}
+
+TEST(CudaEmulationLive, TurbulentWindAndForceFieldsFollowCpu64) {
+    // The wind_force kernel with the turbulent profile, a front, per-instance wind scale and
+    // phase, and force fields of both kinds (docs/model.md 3.5, 3.9).
+    Scene scene = forest_scene(7);
+    scene.instances[1].wind_scale = 0.4;
+    scene.instances[2].wind_phase = 0.8;
+    SimulationConfig config = test_config(BackendKind::cpu64, Composition::pointer_jumping, false);
+    config.wind.profile = WindProfile::turbulent;
+    config.wind.turbulence = 0.9;
+    config.wind.seed = 99;
+    config.wind.front_speed = 3.0;
+    auto reference = Simulation::create(scene, config);
+    ASSERT_TRUE(reference.ok()) << reference.status().message();
+    Simulation& sim = **reference;
+    ForceField fields[2];
+    fields[0].center = {0, 3, 0};
+    fields[0].radius = 20.0;
+    fields[0].directional = {0, 0, 6};
+    fields[1].kind = ForceField::Kind::radial;
+    fields[1].center = {5, 2, 5};
+    fields[1].radius = 15.0;
+    fields[1].radial = 8.0;
+    ASSERT_TRUE(sim.set_force_fields(fields).ok());
+    ASSERT_TRUE(sim.step(0).ok());  // uploads the pending wind table
+    HostImage image = image_of(sim);
+    const uint32_t steps = 200;
+    emulate_steps(sim, image, steps);
+    ASSERT_TRUE(sim.step(steps).ok());
+    std::vector<double> expected, rest;
+    ASSERT_TRUE(sim.read(Output::node_positions, expected).ok());
+    const double height = scene_height(scene);
+    EXPECT_LE(max_abs_difference(xyz_of(image, BufferId::node_world), expected) / height, 1e-4);
+    auto at_rest = Simulation::create(scene, config);
+    ASSERT_TRUE(at_rest.ok());
+    ASSERT_TRUE((*at_rest)->read(Output::node_positions, rest).ok());
+    EXPECT_GT(max_abs_difference(rest, expected) / height, 1e-3);
 }
 
 TEST(CudaEmulationPacked, ContourWritesThePositionAndTheNormalWordOnly) {

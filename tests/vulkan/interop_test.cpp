@@ -12,6 +12,52 @@
 namespace hmsm::test {
 namespace {
 
+TEST_F(VulkanTest, RecordedStepsApplyLiveChanges) {
+    // Live changes made before record_steps take effect in the recorded steps, as in step().
+    auto engine = detail::vk::Device::create();
+    if (!engine.ok() && engine.status().code() == ErrorCode::no_device) GTEST_SKIP() << engine.status().message();
+    ASSERT_TRUE(engine.ok()) << engine.status().message();
+    const detail::vk::Device& device = *engine.value();
+    SimulationConfig config;
+    config.wind.strength = 6.0;
+    Scene scene = *grid_scene(small_tree(), 4, 5.0, 4);
+    auto shared = vulkan::create_simulation(scene, config, engine_context(device));
+    ASSERT_TRUE(shared.ok()) << shared.status().message();
+    Simulation& sim = *shared.value();
+    std::string skip;
+    auto reference = create_simulation_or_skip(scene, config, BackendKind::vulkan, skip);
+    ASSERT_TRUE(reference);
+    auto change = [](Simulation& s) {
+        Wind wind = s.wind();
+        wind.profile = WindProfile::turbulent;
+        wind.frequency = 0.5;
+        ASSERT_TRUE(s.set_wind(wind).ok());
+        ForceField field;
+        field.kind = ForceField::Kind::radial;
+        field.center = {0, 2, 0};
+        field.radius = 8.0;
+        field.radial = 20.0;
+        ASSERT_TRUE(s.set_force_fields({&field, 1}).ok());
+        ASSERT_TRUE(s.set_instance_wind_scale(1, 2.0).ok());
+        ASSERT_TRUE(s.set_instance_active(2, false).ok());
+        const uint64_t gone[] = {3};
+        ASSERT_TRUE(s.remove_instances(gone).ok());
+    };
+    ASSERT_TRUE(sim.step(10).ok());
+    ASSERT_TRUE(reference->step(10).ok());
+    change(sim);
+    change(*reference);
+    record_steps_on_engine_queue(device, sim, 25);
+    if (HasFatalFailure()) return;
+    ASSERT_TRUE(reference->step(25).ok());
+    std::vector<float> a, b;
+    ASSERT_TRUE(sim.read(Output::node_positions, a).ok());
+    ASSERT_TRUE(reference->read(Output::node_positions, b).ok());
+    EXPECT_EQ(a, b);
+    EXPECT_NE(vulkan::record_steps(sim, VkCommandBuffer(VK_NULL_HANDLE), 257).message().find("at most 256"), std::string::npos);
+    shared.value().reset();
+}
+
 TEST_F(VulkanTest, EngineDeviceWithRecordedStepsMatchesOwnDevice) {
     // The "engine": a device hmsm did not create for this simulation.
     auto engine = detail::vk::Device::create();

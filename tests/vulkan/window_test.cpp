@@ -130,6 +130,48 @@ TEST_F(VulkanTest, SplitScenesMatchTheUnsplitRunBitwise) {
     }
 }
 
+TEST_F(VulkanTest, SplitScenesFollowLiveChangesBitwise) {
+    // Live changes on a scene cut into windows: instance_wind windows, active runs split across
+    // segments, and instances removed and added (a new window plan) give the unsplit result.
+    const Scene scene = *grid_scene(small_tree(), 9, 5.0, 3);
+    const SimulationConfig config = windy_config(Composition::pointer_jumping);
+    std::string skip;
+    auto whole = create_simulation_or_skip(scene, config, BackendKind::vulkan, skip);
+    if (!skip.empty()) GTEST_SKIP() << skip;
+    ASSERT_TRUE(whole);
+    const uint64_t one = instance_bytes(hmsm::detail::scene_data_of(*whole),
+                                        vulkan_of(*whole).device().limits().min_storage_buffer_offset_alignment);
+    std::unique_ptr<Simulation> split;
+    {
+        ForcedWindow forced(2 * one + 13);
+        split = create_simulation_or_skip(scene, config, BackendKind::vulkan, skip);
+    }
+    ASSERT_TRUE(split);
+    ASSERT_GT(vulkan_of(*split).window_plan().segments().size(), 2u);
+    auto change = [](Simulation& sim) {
+        Wind wind = sim.wind();
+        wind.profile = WindProfile::turbulent;
+        wind.front_speed = 2.0;
+        ASSERT_TRUE(sim.set_wind(wind).ok());
+        ASSERT_TRUE(sim.set_instance_wind_scale(4, 1.7).ok());
+        ASSERT_TRUE(sim.set_instance_active(2, false).ok());
+        ASSERT_TRUE(sim.set_instance_active(5, false).ok());
+        const uint64_t gone[] = {0, 6};
+        ASSERT_TRUE(sim.remove_instances(gone).ok());
+        const Instance added[] = {{0, {20, 0, 20}, 0.3}, {0, {-20, 0, 20}, 1.3, 0.5, 0.5}};
+        ASSERT_TRUE(sim.add_instances(added).ok());
+    };
+    ASSERT_TRUE(whole->step(20).ok());
+    ASSERT_TRUE(split->step(20).ok());
+    for (Output o : kOutputs) EXPECT_EQ(read_f32(*split, o), read_f32(*whole, o)) << "before " << int(o);
+    change(*whole);
+    change(*split);
+    ASSERT_TRUE(whole->step(30).ok());
+    ASSERT_TRUE(split->step(30).ok());
+    EXPECT_GT(vulkan_of(*split).window_plan().segments().size(), 2u);
+    for (Output o : kOutputs) EXPECT_EQ(read_f32(*split, o), read_f32(*whole, o)) << int(o);
+}
+
 TEST_F(VulkanTest, SegmentsCutInstanceGroupsIntoSeveralParts) {
     std::string skip;
     Scene scene = two_model_scene();

@@ -119,7 +119,7 @@ void add_parameter_flags(CLI::App& app, Parameters& p) {
     app.add_option("--density", p.density, "density rho (default 1)");
     app.add_option("--stiffness", p.stiffness, "stiffness k (default 1e7)");
     app.add_option("--damping-ratio", p.damping_ratio, "damping ratio zeta (default 0.1)");
-    app.add_option("--wind-gain", p.wind_gain, "wind gain gamma (default 15)");
+    app.add_option("--wind-gain", p.wind_gain, "wind gain gamma (default 0.2)");
     app.add_option("--max-angle", p.max_angle, "max joint angle in radians (default 0.8)");
     app.add_option("--max-frequency", p.max_frequency,
                    "frequency cap f_cap in Hz: no chain sways faster (default 4)");

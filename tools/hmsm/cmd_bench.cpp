@@ -4,6 +4,7 @@
 #include "bench_joints.h"
 #include "bench_report.h"
 #include "bench_run.h"
+#include "bench_live.h"
 #include "cli_common.h"
 
 #include <nlohmann/json.hpp>
@@ -240,6 +241,12 @@ int run_bench(CLI::App& app) {
         if (b.available && !joint_cases.empty())
             run.failures += bench::joint_forest_cases(b.kind, joint_cases, flags.spacing, settings, progress,
                                                       forest_joints, run.skipped);
+    std::vector<BackendKind> live_backends;
+    for (const BackendRun& b : run.backends)
+        if (b.available) live_backends.push_back(b.kind);
+    const json live_control = counts.empty() ? json::array()
+                                             : measure_live_control(forest_model.tree, live_backends,
+                                                                    flags.quick ? 20u : 1000u, flags.spacing);
     progress.finish();
 
     add_speedups(run.presets, run.forest);
@@ -299,6 +306,7 @@ int run_bench(CLI::App& app) {
         {"presets", run.presets},
         {"forest", run.forest},
         {"forest_joints", forest_joints},
+        {"live_control", live_control},
         {"copy_bandwidth", copy},
         {"skipped", run.skipped},
         {"notes", notes},

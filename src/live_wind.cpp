@@ -1,0 +1,70 @@
+#include "live_wind.h"
+
+#include <glm/geometric.hpp>
+
+#include <cmath>
+
+namespace hmsm::detail {
+namespace {
+
+double mod2(double x) { return x - 2.0 * std::floor(x / 2.0); }
+double frac(double x) { return x - std::floor(x); }
+
+}  // namespace
+
+double instance_wind_phase(const Wind& wind, const Instance& instance) {
+    return instance.wind_phase + wind_phase(wind, instance.origin);
+}
+
+void fill_instance_wind(const Wind& wind, const TurbulentModes& modes, const Instance& instance,
+                        double* out) {
+    const double phi = instance_wind_phase(wind, instance);
+    out[0] = instance.wind_scale;
+    out[1] = mod2(phi);
+    out[2] = out[3] = 0.0;
+    for (uint32_t k = 0; k < kTurbulentModes; ++k)
+        out[4 + k] = wind.profile == WindProfile::turbulent ? frac(modes.multiple[k] * phi) : 0.0;
+}
+
+void fill_wind_header(const Wind& wind, const TurbulentModes& modes,
+                      std::span<const ForceField> fields, double* out) {
+    for (uint32_t i = 0; i < kWindHeaderScalars; ++i) out[i] = 0.0;
+    for (uint32_t k = 0; k < kTurbulentModes; ++k)
+        out[4 * HMSM_WIND_AMPLITUDES + k] = modes.amplitude[k];
+    const Vec3 w = wind.strength * glm::normalize(wind.direction);
+    double* vector = out + 4 * HMSM_WIND_VECTOR;
+    vector[0] = w.x;
+    vector[1] = w.y;
+    vector[2] = w.z;
+    vector[3] = double(fields.size());
+    for (size_t f = 0; f < fields.size(); ++f) {
+        double* sphere = out + 4 * (HMSM_WIND_FIELDS + 2 * f);
+        double* force = sphere + 4;
+        const ForceField& field = fields[f];
+        sphere[0] = field.center.x;
+        sphere[1] = field.center.y;
+        sphere[2] = field.center.z;
+        sphere[3] = field.radius;
+        if (field.kind == ForceField::Kind::directional) {
+            force[0] = field.directional.x;
+            force[1] = field.directional.y;
+            force[2] = field.directional.z;
+            force[3] = 0.0;
+        } else {
+            force[0] = field.radial;
+            force[1] = force[2] = 0.0;
+            force[3] = 1.0;
+        }
+    }
+}
+
+void fill_wind_step(const Wind& wind, const TurbulentModes& modes, double tau, double* out) {
+    out[0] = mod2(tau);
+    out[1] = out[2] = out[3] = 0.0;
+    for (uint32_t k = 0; k < kTurbulentModes; ++k)
+        out[4 + k] = wind.profile == WindProfile::turbulent
+                         ? frac(modes.multiple[k] * tau + modes.phase[k])
+                         : 0.0;
+}
+
+}  // namespace hmsm::detail

@@ -1,0 +1,45 @@
+// The wind as the device sees it (docs/model.md 3.5, 3.9; layout in gpu_layout.h): the host
+// keeps the clock tau in double and hands every backend only phases reduced mod 2 (periodic
+// profiles) or mod 1 (turbulent modes), per step and per instance.
+#pragma once
+
+#include <hmsm/options.h>
+#include <hmsm/scene.h>
+#include <hmsm/simulation.h>
+
+#include "gpu_layout.h"
+
+#include <cstdint>
+#include <span>
+
+namespace hmsm::detail {
+
+/// Scalars of one instance's element of instance_wind, of the wind table's header (amplitudes,
+/// wind vector, force fields) and of one step slot.
+inline constexpr uint32_t kInstanceWindScalars = 4 * HMSM_INSTANCE_WIND_VEC4S;
+inline constexpr uint32_t kWindHeaderScalars = 4 * HMSM_WIND_STEPS;
+inline constexpr uint32_t kWindStepScalars = 4 * HMSM_WIND_STEP_VEC4S;
+
+/// The wind clock: tau_n = tau_b + (f dt) (n - n_b), with (n_b, tau_b) moved to the step before
+/// which the wind was last set, so tau stays continuous when f changes.
+struct WindClock {
+    uint64_t base_step = 1;  ///< n_b
+    double base_tau = 0.0;   ///< tau_b
+    double tau(double frequency, double dt, uint64_t step) const {
+        return base_tau + (frequency * dt) * double(step - base_step);
+    }
+};
+
+/// The instance's wind phase phi = p + (v > 0 ? -f (o.d)/v : 0), d normalized.
+double instance_wind_phase(const Wind& wind, const Instance& instance);
+
+/// instance_wind element of `instance`: (lambda, phi mod 2, 0, 0), then frac(m_k phi).
+void fill_instance_wind(const Wind& wind, const TurbulentModes& modes, const Instance& instance,
+                        double* out);
+/// Wind table header: amplitudes a_k, (s d, field count), the force fields.
+void fill_wind_header(const Wind& wind, const TurbulentModes& modes,
+                      std::span<const ForceField> fields, double* out);
+/// One step slot: (tau mod 2, 0, 0, 0), then frac(m_k tau + u_k).
+void fill_wind_step(const Wind& wind, const TurbulentModes& modes, double tau, double* out);
+
+}  // namespace hmsm::detail

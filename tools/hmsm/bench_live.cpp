@@ -1,0 +1,81 @@
+// Add/remove costs: removing instances reallocates the device scene for the survivors and
+// carries their chain state over (src/live_control.cpp); this measures what that costs.
+#include "bench_live.h"
+
+#include <algorithm>
+#include <chrono>
+#include <numeric>
+
+namespace hmsm::cli::bench {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point start) {
+    return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+}  // namespace
+
+nlohmann::json measure_live_control(const TreeModel& model, const std::vector<BackendKind>& backends,
+                                    uint32_t forest, double spacing) {
+    nlohmann::json results = nlohmann::json::array();
+    auto scene = grid_scene(model, forest, spacing, 1);
+    if (!scene) return results;
+    for (BackendKind kind : backends) {
+        SimulationConfig config;
+        config.backend = kind;
+        config.parameters = Parameters{};
+        auto sim = Simulation::create(*scene, config);
+        if (!sim) {
+            results.push_back({{"backend", to_string(kind)}, {"instances", forest},
+                               {"skipped", sim.status().message()}});
+            continue;
+        }
+        Simulation& s = **sim;
+        (void)s.step(2);
+        for (uint32_t count : {1u, 100u}) {
+            if (count >= forest) continue;
+            // Remove `count` instances spread over the forest, then add them back at the end.
+            std::vector<uint64_t> indices(count);
+            std::vector<Instance> removed;
+            for (uint32_t k = 0; k < count; ++k) indices[k] = uint64_t(k) * (forest / count);
+            for (uint64_t i : indices) removed.push_back(s.instances()[i]);
+            auto start = Clock::now();
+            Status status = s.remove_instances(indices);
+            const double remove_seconds = seconds_since(start);
+            start = Clock::now();
+            if (status) status = s.add_instances(removed);
+            const double add_seconds = seconds_since(start);
+            start = Clock::now();
+            if (status) status = s.step();
+            const double first_step_seconds = seconds_since(start);
+            nlohmann::json entry = {{"backend", to_string(kind)}, {"device", s.device_name()},
+                                    {"instances", forest}, {"changed", count}};
+            if (!status) {
+                entry["failed"] = status.message();
+            } else {
+                entry["remove_seconds"] = remove_seconds;
+                entry["add_seconds"] = add_seconds;
+                entry["first_step_seconds"] = first_step_seconds;
+            }
+            results.push_back(entry);
+        }
+        // A wind change between two steps against a plain step.
+        auto start = Clock::now();
+        (void)s.step();
+        const double plain = seconds_since(start);
+        Wind wind = s.wind();
+        wind.profile = WindProfile::turbulent;
+        start = Clock::now();
+        Status status = s.set_wind(wind);
+        if (status) status = s.step();
+        const double changed = seconds_since(start);
+        if (status)
+            results.push_back({{"backend", to_string(kind)}, {"instances", forest}, {"set_wind_step_seconds", changed},
+                               {"plain_step_seconds", plain}});
+    }
+    return results;
+}
+
+}  // namespace hmsm::cli::bench

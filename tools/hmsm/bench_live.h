@@ -1,0 +1,18 @@
+// hmsm bench: the cost of live control (docs/model.md 3.9) on a forest.
+#pragma once
+
+#include <hmsm/hmsm.h>
+
+#include <nlohmann/json.hpp>
+
+#include <vector>
+
+namespace hmsm::cli::bench {
+
+/// Per available backend: seconds to remove and to add back 1 and 100 instances of a forest of
+/// `forest` trees of `model`, and of one set_wind + step against a plain step. One JSON object
+/// per backend and count; a backend that cannot hold the forest is reported as skipped.
+nlohmann::json measure_live_control(const TreeModel& model, const std::vector<BackendKind>& backends,
+                                    uint32_t forest, double spacing);
+
+}  // namespace hmsm::cli::bench
