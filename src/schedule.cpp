@@ -110,6 +110,8 @@ Status validate_schedule(const Schedule& schedule, std::span<const std::string> 
                 return bad(i, e, at + "wind_scale must be finite and >= 0");
         }
         count += e.add.size();
+        if (count == 0)
+            return bad(i, e, "removes every instance: a simulation keeps at least one (deactivate it instead)");
     }
     return {};
 }

@@ -1,5 +1,6 @@
 // Applies one step's schedule events to a running simulation (docs/model.md 4, 3.9) in the order
-// wind, forces, instances, remove, add, through the live-control calls of Simulation.
+// wind, forces, instances, remove, add (removal is applied after addition, which gives the same
+// list: see below), through the live-control calls of Simulation.
 #include <hmsm/schedule.h>
 
 #include <algorithm>
@@ -33,10 +34,6 @@ Status apply_schedule_events(const Schedule& schedule, uint64_t step, Simulation
                 if (!s) return fail(s);
             }
         }
-        if (!e.remove.empty()) {
-            Status s = sim.remove_instances(e.remove);
-            if (!s) return fail(s);
-        }
         if (!e.add.empty()) {
             const std::vector<std::string>& names = sim.scene().model_names;
             std::vector<Instance> added;
@@ -54,6 +51,14 @@ Status apply_schedule_events(const Schedule& schedule, uint64_t step, Simulation
                 added.push_back(inst);
             }
             Status s = sim.add_instances(added);
+            if (!s) return fail(s);
+        }
+        // Removal after addition: the indices name instances of the list before the event, which
+        // are all still in front of the added ones, so the outcome is the survivors in their order
+        // followed by the added instances, as if removal came first; and a simulation is never
+        // left without instances in between (remove_instances keeps at least one).
+        if (!e.remove.empty()) {
+            Status s = sim.remove_instances(e.remove);
             if (!s) return fail(s);
         }
     }

@@ -99,6 +99,17 @@ TEST(Analyze, CapFlagFollowsTheSpecFormula) {
     Parameters coarse;
     coarse.dt = 0.5;
     EXPECT_TRUE(cli::chain_capped(trunk, coarse));
+    // The library's own flag (what analyze reports) agrees with the formula on every chain.
+    auto tree = generate_preset("paper-5");
+    ASSERT_TRUE(tree.ok());
+    auto hierarchy = build_hierarchy(*tree, ModelOptions{}, Parameters{});
+    ASSERT_TRUE(hierarchy.ok());
+    int capped = 0;
+    for (const Chain& c : hierarchy->chains) {
+        EXPECT_EQ(c.capped, cli::chain_capped(c, Parameters{}));
+        capped += c.capped;
+    }
+    EXPECT_GT(capped, 0);
 }
 
 // --- the command lines ------------------------------------------------------------------------

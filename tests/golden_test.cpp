@@ -75,8 +75,8 @@ struct GoldenCase {
 constexpr GoldenCase kGolden[] = {
     {"small_tree_cpu64", GoldenScene::small_tree, BackendKind::cpu64, 0xb07353ecedc7bb75ull},
     {"paper5_cpu64", GoldenScene::paper5, BackendKind::cpu64, 0xe23d6eb1baf1092bull},
-    {"small_tree_cpu", GoldenScene::small_tree, BackendKind::cpu, 0xcd383ebd4f19193full},
-    {"paper5_cpu", GoldenScene::paper5, BackendKind::cpu, 0xfda5c11ee3852629ull},
+    {"small_tree_cpu", GoldenScene::small_tree, BackendKind::cpu, 0x22a8dcdc4746c3c3ull},
+    {"paper5_cpu", GoldenScene::paper5, BackendKind::cpu, 0x41ff1a2a68f11132ull},
 };
 
 void PrintTo(const GoldenCase& c, std::ostream* os) { *os << c.name; }

@@ -192,12 +192,22 @@ TEST(Schedule, InstanceIndicesFollowRemovesAndAdds) {
                         {"step": 5, "instances": [{"instance": 1}]}])");
     ASSERT_TRUE(ok.ok()) << ok.status().message();
     EXPECT_TRUE(validate_schedule(*ok, names, 2, Wind{}).ok());
-    // Remove indices are those before the event: [0, 1] of one instance fails.
-    auto gone = parse(R"([{"step": 3, "remove": [0]}, {"step": 3, "instances": [{"instance": 0}]}])");
+    // Remove indices are those before the event: after removing 0 of two, index 1 is gone.
+    auto gone = parse(R"([{"step": 3, "remove": [0]}, {"step": 3, "instances": [{"instance": 1}]}])");
     ASSERT_TRUE(gone.ok());
-    Status s = validate_schedule(*gone, names, 1, Wind{});
+    Status s = validate_schedule(*gone, names, 2, Wind{});
     EXPECT_FALSE(s.ok());
     EXPECT_NE(s.message().find("events[1]"), std::string::npos) << s.message();
+    // An event that leaves no instance is refused (a simulation keeps at least one); removing
+    // the only instance while adding one in the same event is fine.
+    auto empty = parse(R"([{"step": 3, "remove": [0]}])");
+    ASSERT_TRUE(empty.ok());
+    s = validate_schedule(*empty, names, 1, Wind{});
+    EXPECT_FALSE(s.ok());
+    EXPECT_NE(s.message().find("removes every instance"), std::string::npos) << s.message();
+    auto swap = parse(R"([{"step": 3, "remove": [0], "add": [{"model": "tree"}]}])");
+    ASSERT_TRUE(swap.ok());
+    EXPECT_TRUE(validate_schedule(*swap, names, 1, Wind{}).ok());
     // Within one event, instances use the indices before the event (applied before remove).
     auto same_event = parse(R"([{"step": 3, "instances": [{"instance": 1, "active": false}], "remove": [1]}])");
     ASSERT_TRUE(same_event.ok());

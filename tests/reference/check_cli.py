@@ -159,20 +159,22 @@ def run_case(cli, backend, rng, work, case):
     schedule = random_schedule(rng, steps, len(instances), names)
     with open(os.path.join(work, "schedule.json"), "w") as f:
         json.dump(schedule, f)
-    flags = ["--steps", str(steps), "--wind", rng.choice(["y1", "y2", "turbulent", "constant"]),
-             "--wind-dir", "%r,%r,%r" % (rng.uniform(-1, 1), 0.1, rng.uniform(-1, 1)),
-             "--wind-strength", repr(rng.uniform(0, 4)), "--wind-frequency", repr(rng.uniform(0, 0.5)),
-             "--turbulence", repr(rng.uniform(0, 1)), "--wind-seed", str(rng.randrange(0, 2 ** 64)),
-             "--dt", repr(rng.choice([1 / 60, 1 / 120, 1 / 240])),
-             "--max-frequency", repr(rng.choice([4.0, 2.0, 8.0])),
-             "--damping-ratio", repr(rng.choice([0.1, 0.3, 1.5])),
-             "--wind-gain", repr(rng.choice([0.2, 1.0, 5.0])),
-             "--forest", os.path.join(work, "forest.json"),
-             "--wind-schedule", os.path.join(work, "schedule.json")]
+    options = [("--steps", str(steps)), ("--wind", rng.choice(["y1", "y2", "turbulent", "constant"])),
+               ("--wind-dir", "%r,%r,%r" % (rng.uniform(-1, 1), 0.1, rng.uniform(-1, 1))),
+               ("--wind-strength", repr(rng.uniform(0, 4))), ("--wind-frequency", repr(rng.uniform(0, 0.5))),
+               ("--turbulence", repr(rng.uniform(0, 1))), ("--wind-seed", str(rng.randrange(0, 2 ** 64))),
+               ("--dt", repr(rng.choice([1 / 60, 1 / 120, 1 / 240]))),
+               ("--max-frequency", repr(rng.choice([4.0, 2.0, 8.0]))),
+               ("--damping-ratio", repr(rng.choice([0.1, 0.3, 1.5]))),
+               ("--wind-gain", repr(rng.choice([0.2, 1.0, 5.0]))),
+               ("--forest", os.path.join(work, "forest.json")),
+               ("--wind-schedule", os.path.join(work, "schedule.json"))]
     if rng.random() < 0.3:
-        flags += ["--max-chain-segments", str(rng.randint(1, 4))]
+        options.append(("--max-chain-segments", str(rng.randint(1, 4))))
     if rng.random() < 0.3:
-        flags += ["--grouping", "width"]
+        options.append(("--grouping", "width"))
+    # --flag=value: values such as "-0.5,0.1,0.3" must not read as flags.
+    flags = ["%s=%s" % kv for kv in options]
     with open(os.path.join(work, "flags.txt"), "w") as f:
         f.write(" ".join(flags) + "\n")
     out = {k: os.path.join(work, k + ".csv") for k in ("nodes_cli", "chains_cli", "nodes_ref", "chains_ref")}

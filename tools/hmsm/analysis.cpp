@@ -68,7 +68,7 @@ Result<std::vector<double>> trace_top(const TreeModel& tree, int32_t top, const 
 
 bool chain_capped(const Chain& chain, const Parameters& p) {
     const double raw_inertia = p.density * chain.radius * chain.radius * std::pow(chain.length, 3);
-    const double f_max = std::min(kFrequencyCapHz, 1.0 / (2.0 * kTwoPi * p.dt * std::max(1.0, p.damping_ratio)));
+    const double f_max = std::min(p.max_frequency, 1.0 / (2.0 * kTwoPi * p.dt * std::max(1.0, p.damping_ratio)));
     return raw_inertia < chain.stiffness / ((kTwoPi * f_max) * (kTwoPi * f_max));
 }
 
@@ -131,7 +131,7 @@ Result<ModelAnalysis> analyze_model(const TreeModel& tree, const std::string& na
         a.length = chain.length, a.radius = chain.radius;
         a.frequency_hz = std::sqrt(chain.stiffness / chain.inertia) / kTwoPi;
         a.damping_ratio = chain.damping / (2.0 * std::sqrt(chain.stiffness * chain.inertia));
-        a.capped = chain_capped(chain, p);
+        a.capped = chain.capped;  // the library's flag (docs/model.md 3.4)
         a.static_angle = std::min(p.max_angle, chain.wind_area * out.wind_strength / chain.stiffness);
         a.static_tip_m = chain.length * std::sin(a.static_angle);
         out.chains.push_back(a);

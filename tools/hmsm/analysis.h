@@ -54,11 +54,9 @@ struct ModelAnalysis {
     Spectrum spectrum;
 };
 
-/// Frequency cap of docs/model.md 3.4 (f_cap, Hz) used by chain_capped().
-inline constexpr double kFrequencyCapHz = 4.0;
-
-/// Whether the cap raises chain `c`'s inertia, evaluated from the spec's formula with the raw
-/// I = rho r^2 L^3. (Once hmsm::Chain carries its own `capped` flag, use that instead.)
+/// Whether the cap raises chain `c`'s inertia, evaluated from docs/model.md 3.4's formula with
+/// the raw I = rho r^2 L^3: an independent check of hmsm::Chain::capped (the analysis reports
+/// the library's flag).
 bool chain_capped(const Chain& chain, const Parameters& parameters);
 
 /// Wind strength of a speed: s = (U / 6 m/s)^2 (docs/model.md 3.5).

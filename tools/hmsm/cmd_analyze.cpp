@@ -69,8 +69,8 @@ void print_text(const ModelAnalysis& m, double speed, const Wind& spectrum_wind,
     std::printf("model %s: %zu nodes, %zu chains, height %.3f m\n", m.name.c_str(), m.nodes, m.chains.size(), m.height);
     std::printf("trunk natural frequency   %.4f Hz (damping ratio %.3f, length %.3f m, radius %.4f m)\n",
                 trunk.frequency_hz, trunk.damping_ratio, trunk.length, trunk.radius);
-    std::printf("capped chains             %td of %zu (cap %.1f Hz; from the raw inertia rho r^2 L^3)\n", capped,
-                m.chains.size(), kFrequencyCapHz);
+    std::printf("capped chains             %td of %zu (f_cap %.3g Hz, docs/model.md 3.4)\n", capped,
+                m.chains.size(), flags.parameters.max_frequency);
     std::printf("wind                      %.2f m/s = strength %.4f\n", speed, m.wind_strength);
     std::printf("trunk static angle        %.6f rad (A s / K)\n", trunk.static_angle);
     std::printf("top node %-6d deflection %.6f m (simulated: constant wind to steady state)\n", m.top_node,

@@ -60,6 +60,15 @@ int run_export(CLI::App& app) {
     config.wind = *wind;
     auto scene = load_scene(flags.source, app);
     if (!scene) return fail(scene.status());
+    // A schedule may change the wind and the force fields; the clip covers one fixed instance.
+    auto schedule = schedule_option(flags.wind, *scene, config.wind);
+    if (!schedule) return fail(schedule.status());
+    if (*schedule)
+        for (const ScheduleEvent& e : (*schedule)->events)
+            if (!e.instances.empty() || !e.remove.empty() || !e.add.empty())
+                return fail_input("--wind-schedule: the event at step " + std::to_string(e.step) +
+                                  " changes instances; an export covers one fixed instance (wind and forces only)");
+    config.outputs = Outputs::joints;  // the clip needs the joint rotations alone (passes 1-5)
 
     StagedOutputs outputs;
     auto file = outputs.stage(flags.gltf, "--gltf");
@@ -88,8 +97,13 @@ int run_export(CLI::App& app) {
     for (uint64_t k = 0; k < frames; ++k) {
         const uint64_t target = export_frame_steps(k, flags.fps, config.parameters.dt);
         while (done < target) {
-            const uint32_t chunk = uint32_t(std::min<uint64_t>(target - done, 240));
-            Status stepped = sim.step(chunk);
+            uint64_t chunk = std::min<uint64_t>(target - done, 240);
+            if (*schedule) {  // events apply before their step (docs/model.md 4)
+                Status applied = apply_schedule_events(**schedule, done + 1, sim);
+                if (!applied) return fail(applied);
+                if (auto next = next_schedule_step(**schedule, done + 1)) chunk = std::min(chunk, *next - (done + 1));
+            }
+            Status stepped = sim.step(uint32_t(chunk));
             if (!stepped) return fail(stepped);
             done += chunk;
         }
