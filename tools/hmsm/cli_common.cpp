@@ -169,6 +169,19 @@ Result<Wind> wind_options(const WindFlags& f) {
     return wind;
 }
 
+Status apply_shared_options(SimulationConfig& config, const ModelFlags& model, const Parameters& parameters,
+                            const WindFlags& wind) {
+    auto options = model_options(model);
+    if (!options) return options.status();
+    HMSM_TRY(validate(parameters));
+    auto parsed_wind = wind_options(wind);
+    if (!parsed_wind) return parsed_wind.status();
+    config.model = *options;
+    config.parameters = parameters;
+    config.wind = *parsed_wind;
+    return {};
+}
+
 Result<std::optional<Schedule>> schedule_option(const WindFlags& f, const Scene& scene, const Wind& wind) {
     if (f.schedule.empty()) return std::optional<Schedule>();
     auto schedule = load_schedule(f.schedule);

@@ -88,6 +88,10 @@ void add_parameter_flags(CLI::App& app, Parameters& parameters);
 void add_wind_flags(CLI::App& app, WindFlags& flags);
 /// The wind of the flags (--wind-strength and --wind-speed together are bad input).
 Result<Wind> wind_options(const WindFlags& flags);
+/// The model options, parameters and wind of the shared flags, each validated, set on `config`
+/// (what every simulating subcommand starts from).
+Status apply_shared_options(SimulationConfig& config, const ModelFlags& model, const Parameters& parameters,
+                            const WindFlags& wind);
 /// The --wind-schedule file, parsed and validated against the scene and the flags' wind; none
 /// when the flag is not given.
 Result<std::optional<Schedule>> schedule_option(const WindFlags& flags, const Scene& scene, const Wind& wind);

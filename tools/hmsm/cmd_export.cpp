@@ -33,14 +33,14 @@ void register_export_flags(CLI::App& app) {
     add_wind_flags(app, flags.wind);
     app.add_option("--seconds", flags.seconds, "clip length T in seconds")->required();
     app.add_option("--fps", flags.fps, "key frames per second F (frame k = 0 ... T*F)")->required();
-    app.add_option("--backend", flags.backend, "cpu, cpu64 (default), vulkan, cuda or auto");
+    app.add_option("--backend", flags.backend, "cpu, cpu-parallel, cpu64 (default), vulkan, cuda or auto");
 }
 
 int run_export(CLI::App& app) {
     SimulationConfig config;
     auto backend = parse_backend_kind(flags.backend);
     if (!backend)
-        return fail_input("--backend '" + flags.backend + "': expected cpu, cpu64, vulkan, cuda or auto");
+        return fail_input("--backend '" + flags.backend + "': expected cpu, cpu-parallel, cpu64, vulkan, cuda or auto");
     config.backend = *backend;
     if (!std::isfinite(flags.seconds) || flags.seconds < 0.0)
         return fail_input("--seconds " + std::to_string(flags.seconds) + ": must be finite and >= 0");
@@ -49,15 +49,8 @@ int run_export(CLI::App& app) {
     if (flags.seconds * flags.fps > 1e7)
         return fail_input("--seconds " + std::to_string(flags.seconds) + " at --fps " + std::to_string(flags.fps) +
                           ": more than 10 million frames");
-    auto options = model_options(flags.model);
-    if (!options) return fail(options.status());
-    config.model = *options;
-    config.parameters = flags.parameters;
-    Status parameters_ok = validate(config.parameters);
-    if (!parameters_ok) return fail(parameters_ok);
-    auto wind = wind_options(flags.wind);
-    if (!wind) return fail(wind.status());
-    config.wind = *wind;
+    Status shared = apply_shared_options(config, flags.model, flags.parameters, flags.wind);
+    if (!shared) return fail(shared);
     auto scene = load_scene(flags.source, app);
     if (!scene) return fail(scene.status());
     // A schedule may change the wind and the force fields; the clip covers one fixed instance.

@@ -221,15 +221,8 @@ int run_simulate(CLI::App& app) {
     if (!flags.dump_vertices.empty() && config.outputs != Outputs::all)
         return fail_input("--dump-vertices needs mesh vertices: --outputs all, not " + flags.outputs);
     if (flags.steps < 0) return fail_input("--steps " + std::to_string(flags.steps) + ": must be >= 0");
-    auto options = model_options(flags.model);
-    if (!options) return fail(options.status());
-    config.model = *options;
-    config.parameters = flags.parameters;
-    Status parameters_ok = validate(config.parameters);
-    if (!parameters_ok) return fail(parameters_ok);
-    auto wind = wind_options(flags.wind);
-    if (!wind) return fail(wind.status());
-    config.wind = *wind;
+    Status shared = apply_shared_options(config, flags.model, flags.parameters, flags.wind);
+    if (!shared) return fail(shared);
     auto scene = load_scene(flags.source, app, &config.model);
     if (!scene) return fail(scene.status());
     auto schedule = schedule_option(flags.wind, *scene, config.wind);
