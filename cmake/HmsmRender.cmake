@@ -1,4 +1,4 @@
-# The offscreen renderer (src/render/, `hmsm render`), include()d at the end of HmsmVulkan.cmake
+# The offscreen renderer (tools/render/, `hmsm render`; not part of the library), include()d at the end of HmsmVulkan.cmake
 # once the Vulkan backend is enabled. It draws with a Vulkan graphics pipeline on the backend's
 # device; shaders/glsl/render/ are compiled to embedded SPIR-V like the compute passes. Needs
 # libpng (frames) and giflib (animated GIF); without them the renderer is skipped with a message.
@@ -32,14 +32,17 @@ add_custom_target(hmsm_render_spirv DEPENDS ${_hmsm_render_spirv_headers})
 
 # Not installed: a tool-side library for `hmsm render` and its tests.
 set(_hmsm_render_sources
-  src/render/camera.cpp
-  src/render/image_io.cpp
-  src/render/renderer.cpp)
+  tools/render/camera.cpp
+  tools/render/image_io.cpp
+  tools/render/renderer.cpp
+  tools/render/resources.cpp
+  tools/render/vertex_sources.cpp
+  tools/render/frame.cpp)
 add_library(hmsm_render STATIC ${_hmsm_render_sources})
 set_source_files_properties(${_hmsm_render_sources} PROPERTIES
   COMPILE_OPTIONS -Wno-missing-field-initializers)
 add_dependencies(hmsm_render hmsm_render_spirv)
-target_include_directories(hmsm_render PUBLIC "${CMAKE_CURRENT_SOURCE_DIR}/src"
+target_include_directories(hmsm_render PUBLIC "${CMAKE_CURRENT_SOURCE_DIR}/tools"
                            PRIVATE "${CMAKE_CURRENT_BINARY_DIR}" "${HMSM_GIF_INCLUDE_DIR}")
 target_link_libraries(hmsm_render PUBLIC hmsm_vulkan_internal PRIVATE PNG::PNG ${HMSM_GIF_LIBRARY})
 target_compile_options(hmsm_render PRIVATE -Wall -Wextra)

@@ -1,4 +1,4 @@
-// Shared by the offscreen renderer's shaders (src/render/renderer.cpp mirrors these layouts).
+// Shared by the offscreen renderer's shaders (tools/render/renderer_state.h mirrors these layouts).
 // Colours are linear; the colour attachment is sRGB, so the hardware encodes on store.
 
 // The camera and scene constants: one uniform buffer for the whole render (std140).
