@@ -14,7 +14,7 @@ set(_hmsm_render_glsl_dir "${CMAKE_CURRENT_SOURCE_DIR}/shaders/glsl/render")
 set(_hmsm_render_spirv_dir "${CMAKE_CURRENT_BINARY_DIR}/hmsm_spirv/render")
 file(MAKE_DIRECTORY "${_hmsm_render_spirv_dir}")
 set(_hmsm_render_spirv_headers "")
-foreach(shader mesh.vert mesh.frag backdrop.vert backdrop.frag)
+foreach(shader mesh.vert mesh.frag skinned.vert backdrop.vert backdrop.frag)
   string(REPLACE "." "_" _name "${shader}")
   set(_out "${_hmsm_render_spirv_dir}/${_name}.h")
   add_custom_command(
@@ -24,6 +24,7 @@ foreach(shader mesh.vert mesh.frag backdrop.vert backdrop.frag)
             -o "${_out}" "${_hmsm_render_glsl_dir}/${shader}"
     DEPENDS "${_hmsm_render_glsl_dir}/${shader}" "${_hmsm_render_glsl_dir}/render_common.glsl"
             "${CMAKE_CURRENT_SOURCE_DIR}/shaders/glsl/octahedral.glsl"
+            "${CMAKE_CURRENT_SOURCE_DIR}/shaders/glsl/skinning.glsl"
     COMMENT "hmsm: compiling shaders/glsl/render/${shader} to SPIR-V"
     VERBATIM)
   list(APPEND _hmsm_render_spirv_headers "${_out}")
@@ -37,7 +38,8 @@ set(_hmsm_render_sources
   tools/render/renderer.cpp
   tools/render/resources.cpp
   tools/render/vertex_sources.cpp
-  tools/render/frame.cpp)
+  tools/render/frame.cpp
+  tools/render/skinned.cpp)
 add_library(hmsm_render STATIC ${_hmsm_render_sources})
 set_source_files_properties(${_hmsm_render_sources} PROPERTIES
   COMPILE_OPTIONS -Wno-missing-field-initializers)

@@ -14,9 +14,11 @@ void Renderer::State::record_draws(VkCommandBuffer cmd) {
     t.vkCmdDraw(cmd, 3, 1, 0, 0);
     if (!settings.draw_trees || instances.empty()) return;
 
-    VkBuffer buffers[2] = {positions, normals};
-    VkDeviceSize offsets[2] = {positions_offset, normals_offset};
-    t.vkCmdBindVertexBuffers(cmd, 0, 2, buffers, offsets);
+    if (!skinned) {  // skinned.vert reads its bind vertices from a storage buffer instead
+        VkBuffer buffers[2] = {positions, normals};
+        VkDeviceSize offsets[2] = {positions_offset, normals_offset};
+        t.vkCmdBindVertexBuffers(cmd, 0, 2, buffers, offsets);
+    }
     t.vkCmdBindIndexBuffer(cmd, indices.handle(), 0, VK_INDEX_TYPE_UINT32);
     const int32_t flags = (samples != VK_SAMPLE_COUNT_1_BIT ? kFlagAlphaToCoverage : 0) |
                           (packed_normals ? kFlagPackedNormals : 0);
@@ -24,7 +26,9 @@ void Renderer::State::record_draws(VkCommandBuffer cmd) {
         for (size_t i = 0; i < instances.size(); ++i) {
             const ModelDraw& m = models[instances[i].first];
             const int32_t first_vertex = int32_t(instances[i].second);
-            DrawConstants c{bark_mode, first_vertex + int32_t(m.vertices - m.leaf_vertices), int32_t(i), flags};
+            DrawConstants c{bark_mode, first_vertex + int32_t(m.vertices - m.leaf_vertices), int32_t(i), flags,
+                            skinned ? instance_chain_base[i] : 0,
+                            skinned ? model_bind_base[instances[i].first] : 0, {0, 0}};
             if (bark_mode >= 0 && m.bark_indices) {
                 t.vkCmdPushConstants(cmd, pipeline_layout, VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT,
                                      0, sizeof c, &c);
@@ -53,7 +57,7 @@ Status Renderer::render(uint32_t steps, Image& image) {
     const VolkDeviceTable& t = s.vk();
     if (s.source == VertexSource::host_upload) {
         if (steps) HMSM_TRY(s.simulation->step(steps));
-        HMSM_TRY(s.upload_vertices());
+        HMSM_TRY(s.skinned ? s.upload_joints() : s.upload_vertices());
     }
     VkCommandBuffer cmd = s.command_buffer;
     HMSM_VK_TRY(t.vkResetCommandBuffer(cmd, 0));

@@ -12,6 +12,14 @@ const char* to_string(VertexSource source) {
                                                   : "host upload (readback each frame)";
 }
 
+const char* to_string(DrawMode mode) { return mode == DrawMode::skinned ? "skinned" : "vertices"; }
+
+std::optional<DrawMode> parse_draw_mode(std::string_view name) {
+    if (name == "vertices") return DrawMode::vertices;
+    if (name == "skinned") return DrawMode::skinned;
+    return std::nullopt;
+}
+
 Status validate(const RenderSettings& s) {
     if (s.width < 16 || s.height < 16 || s.width > 8192 || s.height > 8192)
         return {ErrorCode::invalid_argument, "--width and --height must be within 16..8192 pixels"};
@@ -37,6 +45,7 @@ Renderer::Renderer(std::unique_ptr<State> state) : state_(std::move(state)) {}
 Renderer::~Renderer() = default;
 
 VertexSource Renderer::vertex_source() const { return state_->source; }
+DrawMode Renderer::draw_mode() const { return state_->settings.draw; }
 const Camera& Renderer::camera() const { return state_->camera; }
 uint32_t Renderer::samples() const { return uint32_t(state_->samples); }
 bool Renderer::shadows() const { return state_->shadows; }
@@ -77,6 +86,7 @@ Result<std::unique_ptr<Renderer>> Renderer::create(std::shared_ptr<Device> devic
 Result<std::unique_ptr<Session>> open_session(const Scene& scene, SimulationConfig config,
                                               const RenderSettings& settings) {
     HMSM_TRY(validate(settings));
+    if (settings.draw == DrawMode::skinned) config.outputs = Outputs::joints;
     auto session = std::make_unique<Session>();
     auto device = Device::create();
     if (!device) return device.status();

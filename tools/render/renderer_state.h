@@ -2,6 +2,7 @@
 // - resources.cpp: targets, render pass, descriptors, pipelines, command buffer;
 // - vertex_sources.cpp: index buffer, where the vertices come from, camera framing;
 // - frame.cpp: recording the draws, submitting a frame and reading the picture back;
+// - skinned.cpp: the bind-mesh and joint-matrix buffers of DrawMode::skinned;
 // - renderer.cpp: settings validation, Renderer's construction and open_session.
 #pragma once
 
@@ -11,6 +12,7 @@
 #include "vulkan/device_buffer.h"
 #include "vulkan/vk_error.h"
 
+#include <hmsm/skin.h>
 #include <hmsm/vulkan.h>
 
 #include <cstdint>
@@ -42,6 +44,9 @@ struct DrawConstants {
     int32_t leaf_first;
     int32_t instance;
     int32_t flags;
+    int32_t chain_base;  // skinned: the instance's first chain in the joint buffer
+    int32_t bind_base;   // skinned: the model's first chain in the inverse-bind buffer
+    int32_t pad[2];
 };
 constexpr int32_t kModeBark = 0, kModeLeaf = 1, kModeShadowBark = 2, kModeShadowLeaf = 3;
 constexpr int32_t kFlagAlphaToCoverage = 1;
@@ -102,6 +107,16 @@ struct Renderer::State {
 
     std::vector<float> host_xyz;  // host_upload scratch
 
+    // DrawMode::skinned (skinned.cpp): per model its skin; the bind vertices and inverse binds
+    // of all models (storage bindings 2 and 3) and the joint palette (binding 4: the
+    // simulation's own buffer, or upload_joints with host_upload).
+    bool skinned = false;
+    std::vector<SkinTemplate> skins;
+    std::vector<int32_t> model_bind_base, instance_chain_base;
+    Buffer skin_vertices, inverse_binds, upload_joint_buffer;
+    VkBuffer joints = VK_NULL_HANDLE;
+    VkDeviceSize joints_offset = 0, joints_size = 0;
+
     ~State();
     const VolkDeviceTable& vk() const { return device->vk(); }
     VkDevice dev() const { return device->handle(); }
@@ -118,6 +133,9 @@ struct Renderer::State {
     Status create_commands();
     Status frame_scene();
     Status upload_vertices();
+    Status create_skin_sources();  // skinned.cpp
+    Status upload_joints();        // skinned.cpp
+    Status skinned_positions(std::vector<float>& xyz);  // skinned.cpp: host skinning
     void record_draws(VkCommandBuffer cmd);
 };
 

@@ -5,6 +5,7 @@
 #include "hmsm_spirv/render/backdrop_vert.h"
 #include "hmsm_spirv/render/mesh_frag.h"
 #include "hmsm_spirv/render/mesh_vert.h"
+#include "hmsm_spirv/render/skinned_vert.h"
 
 #include <span>
 
@@ -240,23 +241,29 @@ Status Renderer::State::create_descriptors() {
     if (!buffer) return buffer.status();
     uniforms = std::move(buffer).value();
 
-    // 0: the frame constants; 1: the vertex positions again, as a storage buffer (leaf scale).
-    VkDescriptorSetLayoutBinding bindings[2] = {};
+    // 0: the frame constants; 1: the vertex positions again, as a storage buffer (leaf scale);
+    // skinned instead of 1: 2 the bind vertices, 3 the inverse binds, 4 the joints (skinned.cpp).
+    std::vector<VkDescriptorSetLayoutBinding> bindings(1);
     bindings[0].binding = 0;
     bindings[0].descriptorType = VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER;
     bindings[0].descriptorCount = 1;
     bindings[0].stageFlags = VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT;
-    bindings[1].binding = 1;
-    bindings[1].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
-    bindings[1].descriptorCount = 1;
-    bindings[1].stageFlags = VK_SHADER_STAGE_VERTEX_BIT;
+    skinned = settings.draw == DrawMode::skinned;
+    for (uint32_t b : skinned ? std::vector<uint32_t>{2, 3, 4} : std::vector<uint32_t>{1}) {
+        VkDescriptorSetLayoutBinding storage{};
+        storage.binding = b;
+        storage.descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+        storage.descriptorCount = 1;
+        storage.stageFlags = VK_SHADER_STAGE_VERTEX_BIT;
+        bindings.push_back(storage);
+    }
     VkDescriptorSetLayoutCreateInfo layout{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
-    layout.bindingCount = 2;
-    layout.pBindings = bindings;
+    layout.bindingCount = uint32_t(bindings.size());
+    layout.pBindings = bindings.data();
     HMSM_VK_TRY(vk().vkCreateDescriptorSetLayout(dev(), &layout, nullptr, &set_layout));
 
     VkDescriptorPoolSize sizes[2] = {{VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1},
-                                     {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1}};
+                                     {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, uint32_t(bindings.size() - 1)}};
     VkDescriptorPoolCreateInfo pool{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
     pool.maxSets = 1;
     pool.poolSizeCount = 2;
@@ -267,7 +274,7 @@ Status Renderer::State::create_descriptors() {
     allocate.descriptorSetCount = 1;
     allocate.pSetLayouts = &set_layout;
     HMSM_VK_TRY(vk().vkAllocateDescriptorSets(dev(), &allocate, &descriptor_set));
-    // The storage binding (1) is written by create_geometry() once the vertex buffers exist.
+    // The storage bindings are written by create_geometry() once the vertex buffers exist.
     VkDescriptorBufferInfo info{uniforms.handle(), 0, sizeof(FrameUniforms)};
     VkWriteDescriptorSet write{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
     write.dstSet = descriptor_set;
@@ -290,7 +297,9 @@ Status Renderer::State::create_descriptors() {
 
 Status Renderer::State::create_pipelines() {
     const std::span<const uint32_t> code[4] = {hmsm_spirv_render_backdrop_vert, hmsm_spirv_render_backdrop_frag,
-                                               hmsm_spirv_render_mesh_vert, hmsm_spirv_render_mesh_frag};
+                                               skinned ? std::span<const uint32_t>(hmsm_spirv_render_skinned_vert)
+                                                       : std::span<const uint32_t>(hmsm_spirv_render_mesh_vert),
+                                               hmsm_spirv_render_mesh_frag};
     for (int i = 0; i < 4; ++i) {
         VkShaderModuleCreateInfo info{VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};
         info.codeSize = code[i].size_bytes();
@@ -315,7 +324,7 @@ Status Renderer::State::create_pipelines() {
         VkVertexInputAttributeDescription attributes[2] = {{0, 0, VK_FORMAT_R32G32B32A32_SFLOAT, 0},
                                                            {1, 1, VK_FORMAT_R32G32B32A32_SFLOAT, 0}};
         VkPipelineVertexInputStateCreateInfo input{VK_STRUCTURE_TYPE_PIPELINE_VERTEX_INPUT_STATE_CREATE_INFO};
-        if (mesh) {
+        if (mesh && !skinned) {  // skinned.vert reads its bind vertices from a storage buffer
             input.vertexBindingDescriptionCount = 2;
             input.pVertexBindingDescriptions = bindings;
             input.vertexAttributeDescriptionCount = 2;

@@ -57,6 +57,7 @@ Status Renderer::State::create_geometry() {
                                           std::memcpy(dst, reinterpret_cast<const uint8_t*>(all_indices.data()) + first, bytes);
                                       }));
 
+    if (skinned) return create_skin_sources();  // the bind mesh and the joints (skinned.cpp)
     if (simulation->backend_kind() == BackendKind::vulkan) {
         auto handles = hmsm::vulkan::device_handles(*simulation);
         if (!handles) return handles.status();
@@ -111,8 +112,10 @@ Status Renderer::State::create_geometry() {
 
 // Frames the camera on the current pose (padded for sway) and fills the uniform buffer.
 Status Renderer::State::frame_scene() {
+    // Skinned draws have no pass 7 to read (Outputs::joints): skin the bind mesh on the host.
     std::vector<float> xyz;
-    HMSM_TRY(simulation->read(Output::vertex_positions, xyz));
+    if (skinned) HMSM_TRY(skinned_positions(xyz));
+    else HMSM_TRY(simulation->read(Output::vertex_positions, xyz));
     Bounds bounds;
     bounds.min = glm::dvec3(std::numeric_limits<double>::infinity());
     bounds.max = -bounds.min;

@@ -18,6 +18,8 @@ layout(push_constant) uniform Draw {
     int leaf_first;  // first leaf-card vertex of this instance
     int instance;    // instance index (colour variation)
     int flags;       // FLAG_*
+    int chain_base;  // skinned.vert: the instance's first chain in the joint buffer
+    int bind_base;   // skinned.vert: the model's first chain in the inverse-bind buffer
 } draw;
 
 #define MODE_BARK 0
