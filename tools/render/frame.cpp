@@ -65,7 +65,8 @@ Status Renderer::render(uint32_t steps, Image& image) {
     begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
     HMSM_VK_TRY(t.vkBeginCommandBuffer(cmd, &begin));
     if (s.source == VertexSource::device_buffers) {
-        // The previous frame's vertex fetches finish before the steps overwrite the buffers...
+        // The previous frame's vertex fetches (skinned: the vertex shader's reads of the joint
+        // buffer) finish before the steps overwrite the buffers...
         VkMemoryBarrier before{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
         before.srcAccessMask = VK_ACCESS_VERTEX_ATTRIBUTE_READ_BIT | VK_ACCESS_SHADER_READ_BIT;
         before.dstAccessMask = VK_ACCESS_SHADER_WRITE_BIT | VK_ACCESS_SHADER_READ_BIT;
@@ -79,7 +80,8 @@ Status Renderer::render(uint32_t steps, Image& image) {
                 return recorded;
             }
         }
-        // ...and the vertex fetches of this frame see what the steps (or earlier work) wrote.
+        // ...and the vertex fetches (or joint reads) of this frame see what the steps (or
+        // earlier work) wrote.
         VkMemoryBarrier after{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
         after.srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT | VK_ACCESS_TRANSFER_WRITE_BIT;
         after.dstAccessMask = VK_ACCESS_VERTEX_ATTRIBUTE_READ_BIT | VK_ACCESS_SHADER_READ_BIT;
