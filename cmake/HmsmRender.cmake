@@ -1,4 +1,4 @@
-# The offscreen renderer (src/render/, `hmsm render`), include()d at the end of HmsmVulkan.cmake
+# The offscreen renderer (tools/render/, `hmsm render`; not part of the library), include()d at the end of HmsmVulkan.cmake
 # once the Vulkan backend is enabled. It draws with a Vulkan graphics pipeline on the backend's
 # device; shaders/glsl/render/ are compiled to embedded SPIR-V like the compute passes. Needs
 # libpng (frames) and giflib (animated GIF); without them the renderer is skipped with a message.
@@ -14,7 +14,7 @@ set(_hmsm_render_glsl_dir "${CMAKE_CURRENT_SOURCE_DIR}/shaders/glsl/render")
 set(_hmsm_render_spirv_dir "${CMAKE_CURRENT_BINARY_DIR}/hmsm_spirv/render")
 file(MAKE_DIRECTORY "${_hmsm_render_spirv_dir}")
 set(_hmsm_render_spirv_headers "")
-foreach(shader mesh.vert mesh.frag backdrop.vert backdrop.frag)
+foreach(shader mesh.vert mesh.frag skinned.vert backdrop.vert backdrop.frag)
   string(REPLACE "." "_" _name "${shader}")
   set(_out "${_hmsm_render_spirv_dir}/${_name}.h")
   add_custom_command(
@@ -24,6 +24,7 @@ foreach(shader mesh.vert mesh.frag backdrop.vert backdrop.frag)
             -o "${_out}" "${_hmsm_render_glsl_dir}/${shader}"
     DEPENDS "${_hmsm_render_glsl_dir}/${shader}" "${_hmsm_render_glsl_dir}/render_common.glsl"
             "${CMAKE_CURRENT_SOURCE_DIR}/shaders/glsl/octahedral.glsl"
+            "${CMAKE_CURRENT_SOURCE_DIR}/shaders/glsl/skinning.glsl"
     COMMENT "hmsm: compiling shaders/glsl/render/${shader} to SPIR-V"
     VERBATIM)
   list(APPEND _hmsm_render_spirv_headers "${_out}")
@@ -32,14 +33,18 @@ add_custom_target(hmsm_render_spirv DEPENDS ${_hmsm_render_spirv_headers})
 
 # Not installed: a tool-side library for `hmsm render` and its tests.
 set(_hmsm_render_sources
-  src/render/camera.cpp
-  src/render/image_io.cpp
-  src/render/renderer.cpp)
+  tools/render/camera.cpp
+  tools/render/image_io.cpp
+  tools/render/renderer.cpp
+  tools/render/resources.cpp
+  tools/render/vertex_sources.cpp
+  tools/render/frame.cpp
+  tools/render/skinned.cpp)
 add_library(hmsm_render STATIC ${_hmsm_render_sources})
 set_source_files_properties(${_hmsm_render_sources} PROPERTIES
   COMPILE_OPTIONS -Wno-missing-field-initializers)
 add_dependencies(hmsm_render hmsm_render_spirv)
-target_include_directories(hmsm_render PUBLIC "${CMAKE_CURRENT_SOURCE_DIR}/src"
+target_include_directories(hmsm_render PUBLIC "${CMAKE_CURRENT_SOURCE_DIR}/tools"
                            PRIVATE "${CMAKE_CURRENT_BINARY_DIR}" "${HMSM_GIF_INCLUDE_DIR}")
 target_link_libraries(hmsm_render PUBLIC hmsm_vulkan_internal PRIVATE PNG::PNG ${HMSM_GIF_LIBRARY})
 target_compile_options(hmsm_render PRIVATE -Wall -Wextra)

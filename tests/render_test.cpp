@@ -2,6 +2,7 @@
 // under wind and none without it, a silent validation layer, and the CLI's all-or-nothing
 // outputs. Without a Vulkan device the device tests skip with the reason.
 #include "render/renderer.h"
+#include "render/skinned.h"
 #include "vulkan/validation.h"
 
 #include "test_trees.h"
@@ -310,6 +311,62 @@ TEST_F(RenderTest, ValidationLayerIsSilentForAForestWithoutAndWithMsaa) {
     EXPECT_TRUE(g_messages.enabled);
 }
 
+// --- --draw skinned -----------------------------------------------------------------------------
+
+/// A tree with leaves and a forest of four with yaws.
+std::vector<std::pair<const char*, Scene>> skinning_scenes() {
+    return {{"tree", test_scene()}, {"forest", *grid_scene(*generate_preset("paper-5"), 4, 8.0, 3)}};
+}
+
+TEST(RenderSkin, HostSkinningOfTheBindMeshEqualsPass7) {
+    for (auto& [name, scene] : skinning_scenes()) {
+        SimulationConfig config;
+        config.backend = BackendKind::cpu;
+        config.wind.strength = 2.0;
+        auto simulation = Simulation::create(scene, config);
+        ASSERT_TRUE(simulation.ok()) << simulation.status().message();
+        Simulation& sim = *simulation.value();
+        ASSERT_TRUE(sim.step(25).ok());
+        std::vector<float> joints, pass7, skinned;
+        ASSERT_TRUE(sim.read(Output::joint_matrices, joints).ok());
+        ASSERT_TRUE(sim.read(Output::vertex_positions, pass7).ok());
+        const auto skins = render::build_skins(sim);
+        ASSERT_TRUE(render::skin_on_host(sim, skins, joints, skinned).ok());
+        ASSERT_EQ(skinned.size(), pass7.size()) << name;
+        float low = 1e30f, high = -1e30f, worst = 0.0f;
+        for (size_t i = 0; i < pass7.size(); ++i) {
+            if (i % 3 == 1) low = std::min(low, pass7[i]), high = std::max(high, pass7[i]);
+            worst = std::max(worst, std::abs(skinned[i] - pass7[i]));
+        }
+        EXPECT_LE(worst, 1e-5f * (high - low)) << name << ": tree height " << high - low;
+        EXPECT_FALSE(render::skin_on_host(sim, skins, std::span(joints).first(12), skinned).ok());
+    }
+}
+
+TEST_F(RenderTest, SkinnedDrawsWhatTheVerticesDraw) {
+    for (auto& [name, scene] : skinning_scenes()) {
+        ASSERT_GT(scene.models[0].leaves.size(), 0u);
+        // The simulation's own joint buffer (vulkan) and the uploaded Output::joint_matrices.
+        for (BackendKind backend : {BackendKind::vulkan, BackendKind::cpu}) {
+            SimulationConfig config;
+            config.backend = backend;
+            config.wind.strength = 2.0;
+            render::RenderSettings settings = small_settings();
+            OPEN_OR_SKIP(vertices, scene, config, settings);
+            settings.draw = render::DrawMode::skinned;
+            OPEN_OR_SKIP(skinned, scene, config, settings);
+            EXPECT_EQ(skinned->renderer->draw_mode(), render::DrawMode::skinned);
+            EXPECT_EQ(skinned->simulation->config().outputs, Outputs::joints);
+            EXPECT_EQ(skinned->renderer->vertex_source(), vertices->renderer->vertex_source());
+            auto a = render_frames(*vertices, 2, 20);
+            auto b = render_frames(*skinned, 2, 20);
+            EXPECT_NE(a[0].rgba, a[1].rgba) << name << ": the wind moves the tree";
+            for (int f = 0; f < 2; ++f)
+                EXPECT_LT(differing_share(a[f], b[f]), 0.005) << name << " " << to_string(backend) << " frame " << f;
+        }
+    }
+}
+
 // --- hmsm render ------------------------------------------------------------------------------
 
 struct CliRun {
@@ -354,7 +411,8 @@ TEST_F(RenderCli, BadArgumentsExitTwoWithOneLineAndNoOutput) {
                                    "--preset paper-5 --width 2", "--preset paper-5 --msaa 3",
                                    "--preset paper-5 --camera-pitch 95", "--preset nope",
                                    "--preset paper-5 --wind gale", "--preset paper-5 --look-at 1,2",
-                                   "--preset paper-5 --leaf-scale big", "--frames 2"}) {
+                                   "--preset paper-5 --leaf-scale big", "--preset paper-5 --draw bones",
+                                   "--frames 2"}) {
         CliRun run = run_cli(args + outs);
         EXPECT_EQ(run.exit_code, 2) << args << ": " << run.stderr_text;
         EXPECT_EQ(std::count(run.stderr_text.begin(), run.stderr_text.end(), '\n'), 1) << run.stderr_text;
@@ -374,6 +432,25 @@ TEST_F(RenderCli, DeviceErrorExitsOneWithoutOutput) {
                       "HMSM_VULKAN_DEVICE=no-such-device-anywhere");
     EXPECT_EQ(run.exit_code, 1) << run.stderr_text;
     EXPECT_TRUE(leftovers().empty());
+}
+
+TEST_F(RenderCli, DrawSkinnedWritesWhatDrawVerticesWrites) {
+    render::Image images[2];
+    for (int i = 0; i < 2; ++i) {
+        const std::string out = path(i ? "skinned" : "vertices");
+        CliRun run = run_cli("--preset paper-5 --wind turbulent --width 64 --height 48 --frames 2 --no-progress --draw " +
+                             std::string(i ? "skinned" : "vertices") + " --out " + out);
+        if (run.exit_code == 1 && run.stderr_text.find("vulkan") != std::string::npos)
+            GTEST_SKIP() << run.stderr_text;
+        ASSERT_EQ(run.exit_code, 0) << run.stderr_text;
+        EXPECT_NE(run.stderr_text.find(i ? "skinned draw" : "vertices draw"), std::string::npos) << run.stderr_text;
+        int w = 0, h = 0, n = 0;
+        stbi_uc* pixels = stbi_load((out + "/frame_0001.png").c_str(), &w, &h, &n, 4);
+        ASSERT_NE(pixels, nullptr);
+        images[i] = {uint32_t(w), uint32_t(h), std::vector<uint8_t>(pixels, pixels + size_t(w) * h * 4)};
+        stbi_image_free(pixels);
+    }
+    EXPECT_LT(differing_share(images[0], images[1]), 0.005);
 }
 
 TEST_F(RenderCli, WritesFramesGifAndStripAndReplacesAnEarlierRender) {

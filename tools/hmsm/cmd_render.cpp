@@ -33,6 +33,7 @@ struct RenderFlags {
     std::string out, gif, strip;
     uint32_t strip_frames = 4;
     std::string leaf_scale = "auto";
+    std::string draw = "vertices";
     std::optional<double> camera_distance, camera_pitch;
     double camera_yaw = 0.0, fov = 35.0;
     std::string look_at;
@@ -153,6 +154,10 @@ void register_render_flags(CLI::App& app) {
     app.add_option("--leaf-scale", flags.leaf_scale,
                    "draw leaf cards this many times their size, or auto (default): large enough to "
                    "see at the picture's scale; 1 = true size");
+    app.add_option("--draw", flags.draw,
+                   "vertices (default): draw pass 7's mesh vertices; skinned: skin each model's bind "
+                   "mesh from the joint matrices in the vertex shader (the simulation then produces "
+                   "only the joints)");
     app.add_flag("--no-shadows", flags.no_shadows, "no shadows on the ground");
     app.add_flag("--no-progress", flags.no_progress, "no progress bar on stderr");
 }
@@ -188,6 +193,9 @@ int run_render(CLI::App& app) {
     settings.height = flags.height;
     settings.msaa = flags.msaa;
     settings.shadows = !flags.no_shadows;
+    auto draw = render::parse_draw_mode(flags.draw);
+    if (!draw) return fail_input("--draw '" + flags.draw + "': expected vertices or skinned");
+    settings.draw = *draw;
     if (flags.leaf_scale == "auto") {
         settings.leaf_scale = 0.0;
     } else {
@@ -335,10 +343,10 @@ int run_render(CLI::App& app) {
 
     std::fprintf(stderr,
                  "hmsm: %" PRId64 " frames %ux%u (%ux MSAA) of %" PRIu64 " instance(s), %s on %s, "
-                 "leaf scale %.2g, vertices from %s, in %.2f s -> %s\n",
+                 "leaf scale %.2g, %s draw from %s, in %.2f s -> %s\n",
                  flags.frames, settings.width, settings.height, renderer.samples(), sim.instance_count(),
                  to_string(sim.backend_kind()), sim.device_name().c_str(), renderer.leaf_scale(),
-                 render::to_string(renderer.vertex_source()), wall, out.string().c_str());
+                 render::to_string(renderer.draw_mode()), render::to_string(renderer.vertex_source()), wall, out.string().c_str());
     return kExitOk;
 }
 

@@ -1,4 +1,4 @@
-// Shared by the offscreen renderer's shaders (src/render/renderer.cpp mirrors these layouts).
+// Shared by the offscreen renderer's shaders (tools/render/renderer_state.h mirrors these layouts).
 // Colours are linear; the colour attachment is sRGB, so the hardware encodes on store.
 
 // The camera and scene constants: one uniform buffer for the whole render (std140).
@@ -18,6 +18,8 @@ layout(push_constant) uniform Draw {
     int leaf_first;  // first leaf-card vertex of this instance
     int instance;    // instance index (colour variation)
     int flags;       // FLAG_*
+    int chain_base;  // skinned.vert: the instance's first chain in the joint buffer
+    int bind_base;   // skinned.vert: the model's first chain in the inverse-bind buffer
 } draw;
 
 #define MODE_BARK 0

@@ -8,6 +8,10 @@
 //   are bound directly as vertex buffers; nothing crosses to the host but the picture;
 // - any other backend (cpu, cpu64, cuda): Simulation::read() to the host and an upload into
 //   host-visible vertex buffers every frame.
+//
+// What is drawn (RenderSettings::draw): `vertices` draws pass 7's mesh vertices as above;
+// `skinned` draws each model's bind-pose mesh skinned in the vertex shader from the joint
+// matrices (tools/render/skinned.cpp), and the simulation only produces Outputs::joints.
 #pragma once
 
 #include "render/camera.h"
@@ -17,12 +21,20 @@
 #include <hmsm/status.h>
 
 #include <memory>
+#include <optional>
+#include <string_view>
 
 namespace hmsm::detail::vk {
 class Device;
 }
 
 namespace hmsm::render {
+
+/// `vertices`: pass 7's vertex buffers; `skinned`: the bind mesh skinned from the joint buffer.
+enum class DrawMode { vertices, skinned };
+const char* to_string(DrawMode mode);
+/// "vertices" or "skinned".
+std::optional<DrawMode> parse_draw_mode(std::string_view name);
 
 struct RenderSettings {
     uint32_t width = 640, height = 480;
@@ -34,6 +46,7 @@ struct RenderSettings {
     /// real leaf is smaller than a pixel when a whole tree fills a small picture. 0 = auto:
     /// a leaf's side becomes at least 1.1% of the view's height (scale 1..6).
     double leaf_scale = 0.0;
+    DrawMode draw = DrawMode::vertices;
 };
 
 enum class VertexSource { device_buffers, host_upload };
@@ -58,6 +71,7 @@ public:
     Status render(uint32_t steps, Image& image);
 
     VertexSource vertex_source() const;
+    DrawMode draw_mode() const;
     const Camera& camera() const;
     uint32_t samples() const;
     bool shadows() const;
@@ -80,6 +94,7 @@ struct Session {
 /// Creates hmsm's Vulkan device (HMSM_VULKAN_DEVICE picks one, as for the backend), the
 /// simulation and the renderer. `config.backend` automatic or vulkan simulates on that device
 /// and draws from its buffers; cpu, cpu64 and cuda simulate there and upload each frame.
+/// `settings.draw` skinned sets `config.outputs` to Outputs::joints (nothing else is drawn from).
 Result<std::unique_ptr<Session>> open_session(const Scene& scene, SimulationConfig config,
                                               const RenderSettings& settings);
 
