@@ -75,6 +75,13 @@
 /// Steps one Backend::run may take (one slot each); Simulation::step runs longer calls in chunks.
 #define HMSM_WIND_STEP_SLOTS 256
 #define HMSM_WIND_TABLE_ELEMENTS (HMSM_WIND_STEPS + HMSM_WIND_STEP_VEC4S * HMSM_WIND_STEP_SLOTS)
+/// wind profiles (PassConstants.profile; hmsm::WindProfile values, checked in options.cpp)
+#define HMSM_WIND_PROFILE_NONE 0u
+#define HMSM_WIND_PROFILE_CONSTANT 1u
+#define HMSM_WIND_PROFILE_Y1 2u
+#define HMSM_WIND_PROFILE_Y2 3u
+#define HMSM_WIND_PROFILE_Y3 4u
+#define HMSM_WIND_PROFILE_Y4 5u
 #define HMSM_WIND_PROFILE_TURBULENT 6u
 
 /// composition modes (PassConstants.mode)

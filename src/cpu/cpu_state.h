@@ -88,14 +88,12 @@ struct Range {
 };
 /// Number of work items of a dispatch of `pass` (see Range).
 inline uint32_t work_items(Pass pass, const gpu::PassConstants& pc) {
-    const bool rounds_inside = (pass == Pass::compose || pass == Pass::root_positions) &&
-                               pc.mode == HMSM_MODE_POINTER_JUMPING_IN_DISPATCH;
+    const bool rounds_inside = is_hierarchical(pass) && pc.mode == HMSM_MODE_POINTER_JUMPING_IN_DISPATCH;
     return rounds_inside ? pc.element_count / pc.model_chain_count : pc.element_count;
 }
 /// Model elements (chains, nodes or vertices) one work item of `pass` touches, for chunking.
 inline uint32_t elements_per_item(Pass pass, const gpu::PassConstants& pc) {
-    const bool rounds_inside = (pass == Pass::compose || pass == Pass::root_positions) &&
-                               pc.mode == HMSM_MODE_POINTER_JUMPING_IN_DISPATCH;
+    const bool rounds_inside = is_hierarchical(pass) && pc.mode == HMSM_MODE_POINTER_JUMPING_IN_DISPATCH;
     return rounds_inside ? pc.model_chain_count * pc.round : 1;
 }
 
