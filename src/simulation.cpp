@@ -272,7 +272,7 @@ Status Simulation::Impl::read_elements(Output output, std::vector<double>* as_do
                           to_string(config_.outputs) + ")"};
     if (output == Output::vertex_normals && data_->packed_vertices())
         return read_packed_normals(as_double, as_float);
-    const uint32_t final_half = (data_->jump_rounds - 1) & 1;
+    const uint32_t final_half = HMSM_FINAL_HALF(data_->jump_rounds);
     BufferId id = BufferId::node_world;
     uint64_t first = 0, count = data_->total_nodes;
     switch (output) {

@@ -33,7 +33,7 @@ bool rounds_in_dispatch_pay(uint32_t instances, uint32_t chains, bool dispatches
 void append_pass(std::vector<Dispatch>& program, const SceneData& d,
                  const std::vector<InstanceGroup>& groups, Pass pass,
                  Composition composition, bool dispatches_are_expensive) {
-    const uint32_t final_half = (d.jump_rounds - 1) & 1;
+    const uint32_t final_half = HMSM_FINAL_HALF(d.jump_rounds);
     if (!is_hierarchical(pass)) {
         for (const auto& g : groups) {
             Dispatch dispatch{pass, group_constants(d, g, final_half)};
@@ -72,8 +72,8 @@ void append_pass(std::vector<Dispatch>& program, const SceneData& d,
                 Dispatch dispatch{pass, group_constants(d, g, final_half)};
                 dispatch.constants.element_count = g.instance_count * d.models[g.model].chain_count;
                 dispatch.constants.round = r;
-                dispatch.constants.src_half = (r + 1) & 1;  // unused in round 0
-                dispatch.constants.dst_half = r & 1;
+                dispatch.constants.src_half = HMSM_HALF_READ(r);  // unused in round 0
+                dispatch.constants.dst_half = HMSM_HALF_WRITTEN(r);
                 program.push_back(dispatch);
             }
         }

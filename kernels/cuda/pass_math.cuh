@@ -151,7 +151,7 @@ __device__ void run_rounds_in_block(const gpu::PassConstants& pc, Jump jump) {
     for (uint32_t k = blockIdx.x; k < dispatch_instances(pc); k += gridDim.x) {
         for (uint32_t round = 0; round < pc.round; ++round) {
             for (uint32_t c = threadIdx.x; c < pc.model_chain_count; c += blockDim.x)
-                jump(k, c, round, (round + 1) & 1, round & 1);
+                jump(k, c, round, HMSM_HALF_READ(round), HMSM_HALF_WRITTEN(round));
             __syncthreads();
         }
     }
@@ -163,7 +163,7 @@ void emulate_rounds(const gpu::PassConstants& pc, Jump jump) {
     for (uint32_t round = 0; round < pc.round; ++round)
         for (uint32_t i = 0; i < pc.element_count; ++i) {
             const Element e = element_of(i, pc.model_chain_count);
-            jump(e.instance, e.index, round, (round + 1) & 1, round & 1);
+            jump(e.instance, e.index, round, HMSM_HALF_READ(round), HMSM_HALF_WRITTEN(round));
         }
 }
 

@@ -48,7 +48,7 @@ void compose(State<T>& s, const gpu::PassConstants& pc, Range r) {
         // Work items are instances here: each runs all rounds over its own chains.
         const Range chains{r.begin * pc.model_chain_count, r.end * pc.model_chain_count};
         for (uint32_t round = 0; round < pc.round; ++round)
-            compose_round(s, pc, round, (round + 1) & 1, round & 1, chains);
+            compose_round(s, pc, round, HMSM_HALF_READ(round), HMSM_HALF_WRITTEN(round), chains);
         return;
     }
     compose_round(s, pc, pc.round, pc.src_half, pc.dst_half, r);
