@@ -4,14 +4,10 @@
 # statically, so binaries need nothing from the toolkit where they run.
 find_package(CUDAToolkit REQUIRED)
 
+# One kernel per pass of HMSM_PASSES (top CMakeLists); a missing one stops the configure.
+hmsm_pass_sources(_hmsm_pass_kernels kernels/cuda cu)
 target_sources(hmsm PRIVATE
-  kernels/cuda/wind_force.cu
-  kernels/cuda/integrate.cu
-  kernels/cuda/compose.cu
-  kernels/cuda/node_relative.cu
-  kernels/cuda/root_positions.cu
-  kernels/cuda/node_world.cu
-  kernels/cuda/contour.cu
+  ${_hmsm_pass_kernels}
   src/cuda/cuda_backend.cpp
   src/cuda/cuda_error.cpp
   src/cuda/device_buffers.cpp

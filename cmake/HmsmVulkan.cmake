@@ -71,13 +71,14 @@ set_target_properties(hmsm_volk PROPERTIES POSITION_INDEPENDENT_CODE ON C_VISIBI
 
 # --- shaders: one SPIR-V header of uint32_t words per pass, generated in the build folder and
 # compiled into the library (never committed, never read from disk at run time).
-set(HMSM_VULKAN_PASSES wind_force integrate compose node_relative root_positions node_world contour)
+# One shader per pass of HMSM_PASSES (top CMakeLists); a missing one stops the configure.
+hmsm_pass_sources(_hmsm_pass_shaders shaders/glsl comp)
 set(_hmsm_glsl_dir "${CMAKE_CURRENT_SOURCE_DIR}/shaders/glsl")
 set(_hmsm_spirv_dir "${CMAKE_CURRENT_BINARY_DIR}/hmsm_spirv")
 file(MAKE_DIRECTORY "${_hmsm_spirv_dir}")
 set(_hmsm_spirv_headers "")
 # copy_bandwidth is no pass: the device copy `hmsm bench` measures its roofline with.
-foreach(pass IN LISTS HMSM_VULKAN_PASSES ITEMS copy_bandwidth)
+foreach(pass IN LISTS HMSM_PASSES ITEMS copy_bandwidth)
   set(_out "${_hmsm_spirv_dir}/${pass}.h")
   add_custom_command(
     OUTPUT "${_out}"

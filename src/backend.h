@@ -3,6 +3,7 @@
 #pragma once
 
 #include "buffers.h"
+#include "pass_table.h"
 #include "scene_data.h"
 
 #include <hmsm/pass.h>
@@ -118,8 +119,7 @@ struct LaunchShape {
     uint32_t workgroup_size = HMSM_WORKGROUP_SIZE;
 };
 inline bool runs_rounds_in_dispatch(const Dispatch& d) {
-    return (d.pass == Pass::compose || d.pass == Pass::root_positions) &&
-           d.constants.mode == HMSM_MODE_POINTER_JUMPING_IN_DISPATCH;
+    return is_hierarchical(d.pass) && d.constants.mode == HMSM_MODE_POINTER_JUMPING_IN_DISPATCH;
 }
 inline LaunchShape launch_shape(const Dispatch& d) {
     const uint32_t threads = dispatch_thread_count(d);

@@ -75,7 +75,21 @@
 /// Steps one Backend::run may take (one slot each); Simulation::step runs longer calls in chunks.
 #define HMSM_WIND_STEP_SLOTS 256
 #define HMSM_WIND_TABLE_ELEMENTS (HMSM_WIND_STEPS + HMSM_WIND_STEP_VEC4S * HMSM_WIND_STEP_SLOTS)
+/// wind profiles (PassConstants.profile; hmsm::WindProfile values, checked in options.cpp)
+#define HMSM_WIND_PROFILE_NONE 0u
+#define HMSM_WIND_PROFILE_CONSTANT 1u
+#define HMSM_WIND_PROFILE_Y1 2u
+#define HMSM_WIND_PROFILE_Y2 3u
+#define HMSM_WIND_PROFILE_Y3 4u
+#define HMSM_WIND_PROFILE_Y4 5u
 #define HMSM_WIND_PROFILE_TURBULENT 6u
+
+/// The ping-pong halves of chain_rotation and chain_origin: pointer-jumping round r reads half
+/// HMSM_HALF_READ(r) (unused in round 0) and writes half HMSM_HALF_WRITTEN(r), so after `rounds`
+/// rounds the pose is in half HMSM_FINAL_HALF(rounds), which level by level writes in place.
+#define HMSM_HALF_READ(round) (((round) + 1u) & 1u)
+#define HMSM_HALF_WRITTEN(round) ((round) & 1u)
+#define HMSM_FINAL_HALF(rounds) (((rounds) - 1u) & 1u)
 
 /// composition modes (PassConstants.mode)
 #define HMSM_MODE_POINTER_JUMPING 0u

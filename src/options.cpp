@@ -10,6 +10,14 @@
 #include <numbers>
 #include <string>
 
+static_assert(uint32_t(hmsm::WindProfile::none) == HMSM_WIND_PROFILE_NONE);
+static_assert(uint32_t(hmsm::WindProfile::constant) == HMSM_WIND_PROFILE_CONSTANT);
+static_assert(uint32_t(hmsm::WindProfile::y1) == HMSM_WIND_PROFILE_Y1);
+static_assert(uint32_t(hmsm::WindProfile::y2) == HMSM_WIND_PROFILE_Y2);
+static_assert(uint32_t(hmsm::WindProfile::y3) == HMSM_WIND_PROFILE_Y3);
+static_assert(uint32_t(hmsm::WindProfile::y4) == HMSM_WIND_PROFILE_Y4);
+static_assert(uint32_t(hmsm::WindProfile::turbulent) == HMSM_WIND_PROFILE_TURBULENT);
+
 namespace hmsm {
 
 double wind_profile_value(WindProfile profile, double x) {

@@ -1,10 +1,12 @@
-// The pass sequence, written once. Every backend runs the same program of dispatches built here.
+// The Simulation façade: scene flattening, the backend, wind and outputs; the step program it
+// runs is built in step_program.cpp.
 #include <hmsm/simulation.h>
 
 #include "backend.h"
 #include "octahedral.h"
 #include "scene_data.h"
 #include "simulation_impl.h"
+#include "step_program.h"
 
 #include <algorithm>
 #include <cmath>
@@ -89,110 +91,6 @@ std::string number(double v) {
     char buf[32];
     std::snprintf(buf, sizeof buf, "%.6g", v);
     return buf;
-}
-
-/// Models of more than this many chains (16 per thread of the largest workgroup) always take
-/// one dispatch per round.
-constexpr uint32_t kMaxChainsForRoundsInDispatch = 16 * HMSM_MAX_ROUNDS_WORKGROUP_SIZE;
-
-/// Whether Composition::pointer_jumping runs a group's rounds in one dispatch (one workgroup per
-/// instance, round after round) rather than one dispatch per round over every chain. Measured on
-/// the H100 (docs/benchmarks): in one dispatch wins for forests (64+ instances: 3-6% from 100
-/// paper-1 trees up), and for single trees whose chains one workgroup covers in one go (paper-5,
-/// 393 chains: +16% on CUDA, +61% on Vulkan); it loses where a few workgroups each loop over
-/// many chains while the GPU idles (one paper-1 tree, 2,345 chains: 31,000 vs 55,000 steps/s on
-/// CUDA). Between 512 and 1,024 chains it pays only where dispatches are expensive (Vulkan:
-/// +10-39% for paper-2/3/4; CUDA -4 to -13%).
-bool rounds_in_dispatch_pay(uint32_t instances, uint32_t chains, bool dispatches_are_expensive) {
-    return instances >= 64 || chains <= 512 || (dispatches_are_expensive && chains <= 1024);
-}
-
-/// Appends the dispatches of `pass` for every group. Passes 3 and 5 accumulate down the
-/// hierarchy: in pointer jumping, round r reads half (r-1)&1 and writes half r&1 (round 0
-/// starts from T, resp. u), so the last round leaves the pose in final_half; level by level
-/// writes final_half in place, one depth per dispatch.
-void append_pass(std::vector<Dispatch>& program, const SceneData& d,
-                 const std::vector<detail::InstanceGroup>& groups, Pass pass,
-                 Composition composition, bool dispatches_are_expensive) {
-    const uint32_t final_half = (d.jump_rounds - 1) & 1;
-    const bool hierarchical = pass == Pass::compose || pass == Pass::root_positions;
-    if (!hierarchical) {
-        for (const auto& g : groups) {
-            Dispatch dispatch{pass, detail::group_constants(d, g, final_half)};
-            const auto& m = d.models[g.model];
-            uint32_t per_instance = pass == Pass::node_relative || pass == Pass::node_world
-                                        ? m.node_count
-                                        : pass == Pass::contour ? m.vertex_count : m.chain_count;
-            dispatch.constants.element_count = g.instance_count * per_instance;
-            if (pass == Pass::contour)
-                dispatch.constants.mode = d.packed_vertices() ? HMSM_VERTEX_LAYOUT_PACKED
-                                                              : HMSM_VERTEX_LAYOUT_SEPARATE;
-            if (dispatch.constants.element_count > 0) program.push_back(dispatch);
-        }
-        return;
-    }
-    if (composition != Composition::level_by_level) {
-        // Groups whose rounds run in one dispatch per pass come first; the others take one
-        // dispatch per round.
-        auto in_dispatch = [&](const detail::InstanceGroup& g) {
-            const uint32_t chains = d.models[g.model].chain_count;
-            if (chains > kMaxChainsForRoundsInDispatch) return false;
-            return composition == Composition::pointer_jumping_in_dispatch ||
-                   (composition == Composition::pointer_jumping &&
-                    rounds_in_dispatch_pay(g.instance_count, chains, dispatches_are_expensive));
-        };
-        for (const auto& g : groups) {
-            if (!in_dispatch(g)) continue;
-            Dispatch dispatch{pass, detail::group_constants(d, g, final_half)};
-            dispatch.constants.element_count = g.instance_count * d.models[g.model].chain_count;
-            dispatch.constants.mode = HMSM_MODE_POINTER_JUMPING_IN_DISPATCH;
-            dispatch.constants.round = d.jump_rounds;
-            if (dispatch.constants.element_count > 0) program.push_back(dispatch);
-        }
-        for (uint32_t r = 0; r < d.jump_rounds; ++r) {
-            for (const auto& g : groups) {
-                if (in_dispatch(g)) continue;
-                Dispatch dispatch{pass, detail::group_constants(d, g, final_half)};
-                dispatch.constants.element_count = g.instance_count * d.models[g.model].chain_count;
-                dispatch.constants.round = r;
-                dispatch.constants.src_half = (r + 1) & 1;  // unused in round 0
-                dispatch.constants.dst_half = r & 1;
-                program.push_back(dispatch);
-            }
-        }
-        return;
-    }
-    size_t levels = 0;
-    for (const auto& m : d.models) levels = std::max(levels, m.level_begin.size() - 1);
-    for (size_t level = 0; level < levels; ++level) {
-        for (const auto& g : groups) {
-            const auto& m = d.models[g.model];
-            if (level + 1 >= m.level_begin.size()) continue;
-            uint32_t count = m.level_begin[level + 1] - m.level_begin[level];
-            if (count == 0) continue;
-            Dispatch dispatch{pass, detail::group_constants(d, g, final_half)};
-            dispatch.constants.mode = HMSM_MODE_LEVEL_BY_LEVEL;
-            dispatch.constants.round = uint32_t(level);
-            dispatch.constants.level_begin = m.level_begin[level];
-            dispatch.constants.level_count = count;
-            dispatch.constants.element_count = g.instance_count * count;
-            program.push_back(dispatch);
-        }
-    }
-}
-
-std::vector<Dispatch> build_program(const SceneData& d, const std::vector<detail::InstanceGroup>& groups,
-                                    Composition composition, bool dispatches_are_expensive, Pass first,
-                                    uint32_t passes) {
-    std::vector<Dispatch> program;
-    for (Pass pass : kAllPasses) {
-        if (uint32_t(pass) < uint32_t(first) || !(passes >> uint32_t(pass) & 1u)) continue;
-        // Outputs on demand: passes whose outputs the step does not produce are not dispatched.
-        if (pass == Pass::node_world && !d.produces_nodes()) continue;
-        if (pass == Pass::contour && !d.produces_vertices()) continue;
-        append_pass(program, d, groups, pass, composition, dispatches_are_expensive);
-    }
-    return program;
 }
 
 }  // namespace
@@ -374,7 +272,7 @@ Status Simulation::Impl::read_elements(Output output, std::vector<double>* as_do
                           to_string(config_.outputs) + ")"};
     if (output == Output::vertex_normals && data_->packed_vertices())
         return read_packed_normals(as_double, as_float);
-    const uint32_t final_half = (data_->jump_rounds - 1) & 1;
+    const uint32_t final_half = HMSM_FINAL_HALF(data_->jump_rounds);
     BufferId id = BufferId::node_world;
     uint64_t first = 0, count = data_->total_nodes;
     switch (output) {

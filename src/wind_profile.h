@@ -2,6 +2,7 @@
 // twin is shaders/glsl/common.glsl). All profiles have period 2 in x, so callers pass x mod 2.
 #pragma once
 
+#include "gpu_layout.h"
 #include "host_device.h"
 
 #include <cmath>
@@ -12,17 +13,17 @@ template <class T>
 HMSM_HOST_DEVICE T wind_profile_y(unsigned profile, T x) {
     const T pi = T(3.14159265358979323846);
     switch (profile) {
-        case 1: return T(1);  // constant
-        case 2:               // Y1
+        case HMSM_WIND_PROFILE_CONSTANT: return T(1);
+        case HMSM_WIND_PROFILE_Y1:
             return cos(pi * x) * cos(3 * pi * x) * cos(5 * pi * x) * cos(7 * pi * x) -
                    T(0.1) * sin(25 * pi * x);
-        case 3:  // Y2
+        case HMSM_WIND_PROFILE_Y2:
             return (sin(pi * x) + sin(3 * pi * x) + sin(5 * pi * x) + sin(7 * pi * x)) / T(4);
-        case 4: {  // Y3
+        case HMSM_WIND_PROFILE_Y3: {
             T c = cos(pi * x);
             return c * c * cos(3 * pi * x) * cos(5 * pi * x) - T(0.02) * sin(25 * pi * x);
         }
-        case 5: {  // Y4
+        case HMSM_WIND_PROFILE_Y4: {
             T c = cos(pi * x);
             return c * c * cos(3 * pi * x) * cos(5 * pi * x) - T(0.1) * sin(25 * pi * x);
         }

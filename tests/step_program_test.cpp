@@ -1,4 +1,4 @@
-// The step program (src/simulation.cpp): which dispatches one step issues for each way of
+// The step program (src/step_program.cpp): which dispatches one step issues for each way of
 // composing passes 3 and 5.
 #include "simulation_access.h"
 #include "test_trees.h"

@@ -33,15 +33,11 @@ static HMSM_HOST_DEVICE void compose_jump(const BufferPointers& b, const gpu::Pa
 static HMSM_HOST_DEVICE void compose_element(const BufferPointers& b,
                                              const gpu::PassConstants& pc, uint32_t i) {
     if (pc.mode == HMSM_MODE_LEVEL_BY_LEVEL) {
-        const uint64_t dst = half_begin(pc, pc.dst_half);
-        const Element e = element_of(i, pc.level_count);
-        const int32_t c = int32_t(pc.level_begin + e.index);
-        const int32_t parent = load(b.chain_parent + pc.model_chain_begin + c);
-        const uint64_t chain = state_chain(pc, e.instance, c);
-        Mat3 rotation = load_mat3(b.chain_local, chain);
-        if (parent >= 0)
-            rotation = load_mat3(b.chain_rotation, dst + state_chain(pc, e.instance, parent)) * rotation;
-        store_mat3(b.chain_rotation, dst + chain, rotation);
+        const LevelChain l = level_chain(b, pc, i);
+        Mat3 rotation = load_mat3(b.chain_local, l.chain);
+        if (l.parent >= 0)
+            rotation = load_mat3(b.chain_rotation, l.dst + state_chain(pc, l.instance, l.parent)) * rotation;
+        store_mat3(b.chain_rotation, l.dst + l.chain, rotation);
         return;
     }
     const Element e = element_of(i, pc.model_chain_count);

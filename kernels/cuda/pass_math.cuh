@@ -85,6 +85,22 @@ HMSM_HOST_DEVICE uint64_t state_node(const gpu::PassConstants& pc, uint32_t k, i
 HMSM_HOST_DEVICE uint64_t half_begin(const gpu::PassConstants& pc, uint32_t half) {
     return uint64_t(half) * pc.total_chains;
 }
+/// The chain thread i of a level-by-level dispatch (compose, root_positions) handles: group
+/// instance, model chain of the dispatch's level, its parent (-1 for a root) and its state
+/// index; the pass writes it in place in the pose half dst (an element offset).
+struct LevelChain {
+    uint32_t instance;
+    int32_t c;
+    int32_t parent;
+    uint64_t chain;
+    uint64_t dst;
+};
+HMSM_HOST_DEVICE LevelChain level_chain(const BufferPointers& b, const gpu::PassConstants& pc, uint32_t i) {
+    const Element e = element_of(i, pc.level_count);
+    const int32_t c = int32_t(pc.level_begin + e.index);
+    return {e.instance, c, load(b.chain_parent + pc.model_chain_begin + c), state_chain(pc, e.instance, c),
+            half_begin(pc, pc.dst_half)};
+}
 
 /// Programmatic dependent launch (compute capability 9.0 and later): every pass kernel starts
 /// with this. It lets the next pass's blocks be scheduled as soon as all of this pass's blocks
@@ -151,7 +167,7 @@ __device__ void run_rounds_in_block(const gpu::PassConstants& pc, Jump jump) {
     for (uint32_t k = blockIdx.x; k < dispatch_instances(pc); k += gridDim.x) {
         for (uint32_t round = 0; round < pc.round; ++round) {
             for (uint32_t c = threadIdx.x; c < pc.model_chain_count; c += blockDim.x)
-                jump(k, c, round, (round + 1) & 1, round & 1);
+                jump(k, c, round, HMSM_HALF_READ(round), HMSM_HALF_WRITTEN(round));
             __syncthreads();
         }
     }
@@ -163,7 +179,7 @@ void emulate_rounds(const gpu::PassConstants& pc, Jump jump) {
     for (uint32_t round = 0; round < pc.round; ++round)
         for (uint32_t i = 0; i < pc.element_count; ++i) {
             const Element e = element_of(i, pc.model_chain_count);
-            jump(e.instance, e.index, round, (round + 1) & 1, round & 1);
+            jump(e.instance, e.index, round, HMSM_HALF_READ(round), HMSM_HALF_WRITTEN(round));
         }
 }
 

@@ -59,14 +59,11 @@ static HMSM_HOST_DEVICE void root_positions_jump(const BufferPointers& b,
 static HMSM_HOST_DEVICE void root_positions_element(const BufferPointers& b,
                                                     const gpu::PassConstants& pc, uint32_t i) {
     if (pc.mode == HMSM_MODE_LEVEL_BY_LEVEL) {
-        const uint64_t dst = half_begin(pc, pc.dst_half);
-        const Element e = element_of(i, pc.level_count);
-        const int32_t c = int32_t(pc.level_begin + e.index);
-        const int32_t parent = load(b.chain_parent + pc.model_chain_begin + c);
-        float4 origin = own_offset(b, pc, e.instance, c);
-        if (parent >= 0) origin = origin + load(b.chain_origin + dst + state_chain(pc, e.instance, parent));
-        b.chain_origin[dst + state_chain(pc, e.instance, c)] = origin;
-        store_joint(b, pc, state_chain(pc, e.instance, c), pc.dst_half, origin);
+        const LevelChain l = level_chain(b, pc, i);
+        float4 origin = own_offset(b, pc, l.instance, l.c);
+        if (l.parent >= 0) origin = origin + load(b.chain_origin + l.dst + state_chain(pc, l.instance, l.parent));
+        b.chain_origin[l.dst + l.chain] = origin;
+        store_joint(b, pc, l.chain, pc.dst_half, origin);
         return;
     }
     const Element e = element_of(i, pc.model_chain_count);

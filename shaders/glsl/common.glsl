@@ -87,16 +87,16 @@ float cospi(float x) { return cos(HMSM_PI * (x - 2.0 * floor(0.5 * x + 0.5))); }
 /// Y(x) of docs/model.md 3.5 (src/wind_profile.h); profile = hmsm::WindProfile value.
 float wind_profile_y(uint profile, float x) {
     switch (profile) {
-        case 1u: return 1.0;  // constant
-        case 2u:              // Y1
+        case HMSM_WIND_PROFILE_CONSTANT: return 1.0;
+        case HMSM_WIND_PROFILE_Y1:
             return cospi(x) * cospi(3.0 * x) * cospi(5.0 * x) * cospi(7.0 * x) - 0.1 * sinpi(25.0 * x);
-        case 3u:  // Y2
+        case HMSM_WIND_PROFILE_Y2:
             return (sinpi(x) + sinpi(3.0 * x) + sinpi(5.0 * x) + sinpi(7.0 * x)) / 4.0;
-        case 4u: {  // Y3
+        case HMSM_WIND_PROFILE_Y3: {
             float c = cospi(x);
             return c * c * cospi(3.0 * x) * cospi(5.0 * x) - 0.02 * sinpi(25.0 * x);
         }
-        case 5u: {  // Y4
+        case HMSM_WIND_PROFILE_Y4: {
             float c = cospi(x);
             return c * c * cospi(3.0 * x) * cospi(5.0 * x) - 0.1 * sinpi(25.0 * x);
         }

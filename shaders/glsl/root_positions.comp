@@ -48,7 +48,7 @@ void main() {
         if (k >= pc.element_count / pc.model_chain_count) return;  // uniform per workgroup
         for (uint round = 0u; round < pc.round; ++round) {
             for (uint c = gl_LocalInvocationID.x; c < pc.model_chain_count; c += gl_WorkGroupSize.x)
-                jump(k, c, round, (round + 1u) & 1u, round & 1u, round + 1u == pc.round);
+                jump(k, c, round, HMSM_HALF_READ(round), HMSM_HALF_WRITTEN(round), round + 1u == pc.round);
             memoryBarrierBuffer();
             barrier();
         }

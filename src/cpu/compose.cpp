@@ -30,28 +30,17 @@ void compose_round(State<T>& s, const gpu::PassConstants& pc, uint32_t round, ui
 
 template <class T>
 void compose(State<T>& s, const gpu::PassConstants& pc, Range r) {
-    if (pc.mode == HMSM_MODE_LEVEL_BY_LEVEL) {
-        const uint64_t dst = uint64_t(pc.dst_half) * s.total_chains;
-        for (uint32_t i = r.begin; i < r.end; ++i) {
-            Element e = element_of(i, pc.level_count);
-            int32_t c = int32_t(pc.level_begin + e.index);
-            int32_t parent = s.chain_parent[pc.model_chain_begin + c];
-            uint64_t gc = state_chain(pc, e.instance, c);
-            s.chain_rotation[dst + gc] =
-                parent < 0 ? s.chain_local[gc]
-                           : s.chain_rotation[dst + state_chain(pc, e.instance, parent)] *
-                                 s.chain_local[gc];
-        }
-        return;
-    }
-    if (pc.mode == HMSM_MODE_POINTER_JUMPING_IN_DISPATCH) {
-        // Work items are instances here: each runs all rounds over its own chains.
-        const Range chains{r.begin * pc.model_chain_count, r.end * pc.model_chain_count};
-        for (uint32_t round = 0; round < pc.round; ++round)
-            compose_round(s, pc, round, (round + 1) & 1, round & 1, chains);
-        return;
-    }
-    compose_round(s, pc, pc.round, pc.src_half, pc.dst_half, r);
+    // Level by level: R = R_parent T in place in the pose half.
+    auto level = [&](uint64_t dst, uint32_t k, int32_t c, int32_t parent) {
+        const uint64_t gc = state_chain(pc, k, c);
+        s.chain_rotation[dst + gc] =
+            parent < 0 ? s.chain_local[gc]
+                       : s.chain_rotation[dst + state_chain(pc, k, parent)] * s.chain_local[gc];
+    };
+    auto round = [&](uint32_t rd, uint32_t src_half, uint32_t dst_half, Range chains, bool) {
+        compose_round(s, pc, rd, src_half, dst_half, chains);
+    };
+    run_hierarchical(s, pc, r, level, round);
 }
 
 template void compose<float>(State<float>&, const gpu::PassConstants&, Range);

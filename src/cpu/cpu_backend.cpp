@@ -205,15 +205,21 @@ private:
                             [&](uint32_t begin, uint32_t end) { run_range(d, wind_x, {begin, end}); });
     }
 
+    /// Runs pass function `f` (src/cpu/NAME.cpp); only wind_force takes the step's wind.
+    template <class F>
+    void call_pass(F f, const Dispatch& d, double wind_x, Range r) {
+        if constexpr (std::is_invocable_v<F, State<T>&, const gpu::PassConstants&, double, Range>)
+            f(s_, d.constants, wind_x, r);
+        else
+            f(s_, d.constants, r);
+    }
+
     void run_range(const Dispatch& d, double wind_x, Range r) {
         switch (d.pass) {
-            case Pass::wind_force: wind_force(s_, d.constants, wind_x, r); break;
-            case Pass::integrate: integrate(s_, d.constants, r); break;
-            case Pass::compose: compose(s_, d.constants, r); break;
-            case Pass::node_relative: node_relative(s_, d.constants, r); break;
-            case Pass::root_positions: root_positions(s_, d.constants, r); break;
-            case Pass::node_world: node_world(s_, d.constants, r); break;
-            case Pass::contour: contour(s_, d.constants, r); break;
+#define HMSM_CPU_PASS_CASE(name) \
+    case Pass::name: return call_pass(name<T>, d, wind_x, r);
+            HMSM_PASSES(HMSM_CPU_PASS_CASE)
+#undef HMSM_CPU_PASS_CASE
         }
     }
 

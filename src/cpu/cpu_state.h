@@ -88,15 +88,38 @@ struct Range {
 };
 /// Number of work items of a dispatch of `pass` (see Range).
 inline uint32_t work_items(Pass pass, const gpu::PassConstants& pc) {
-    const bool rounds_inside = (pass == Pass::compose || pass == Pass::root_positions) &&
-                               pc.mode == HMSM_MODE_POINTER_JUMPING_IN_DISPATCH;
+    const bool rounds_inside = is_hierarchical(pass) && pc.mode == HMSM_MODE_POINTER_JUMPING_IN_DISPATCH;
     return rounds_inside ? pc.element_count / pc.model_chain_count : pc.element_count;
 }
 /// Model elements (chains, nodes or vertices) one work item of `pass` touches, for chunking.
 inline uint32_t elements_per_item(Pass pass, const gpu::PassConstants& pc) {
-    const bool rounds_inside = (pass == Pass::compose || pass == Pass::root_positions) &&
-                               pc.mode == HMSM_MODE_POINTER_JUMPING_IN_DISPATCH;
+    const bool rounds_inside = is_hierarchical(pass) && pc.mode == HMSM_MODE_POINTER_JUMPING_IN_DISPATCH;
     return rounds_inside ? pc.model_chain_count * pc.round : 1;
+}
+
+/// The three ways a hierarchical pass (compose, root_positions) runs the work items `r` of one
+/// dispatch. Level by level: level(dst, instance, chain, parent) for each chain of one level, in
+/// place in half dst (an element offset). Every round in the dispatch: the work items are
+/// instances, and round(round, src_half, dst_half, chains, last) runs over all their chains,
+/// round after round. One pointer-jumping round: round(...) over `r` itself (last is true).
+template <class T, class Level, class Round>
+void run_hierarchical(const State<T>& s, const gpu::PassConstants& pc, Range r, Level level, Round round) {
+    if (pc.mode == HMSM_MODE_LEVEL_BY_LEVEL) {
+        const uint64_t dst = uint64_t(pc.dst_half) * s.total_chains;
+        for (uint32_t i = r.begin; i < r.end; ++i) {
+            const Element e = element_of(i, pc.level_count);
+            const int32_t c = int32_t(pc.level_begin + e.index);
+            level(dst, e.instance, c, s.chain_parent[pc.model_chain_begin + c]);
+        }
+        return;
+    }
+    if (pc.mode == HMSM_MODE_POINTER_JUMPING_IN_DISPATCH) {
+        const Range chains{r.begin * pc.model_chain_count, r.end * pc.model_chain_count};
+        for (uint32_t k = 0; k < pc.round; ++k)
+            round(k, HMSM_HALF_READ(k), HMSM_HALF_WRITTEN(k), chains, k + 1 == pc.round);
+        return;
+    }
+    round(pc.round, pc.src_half, pc.dst_half, r, true);
 }
 
 // The seven passes; each runs the work items `r` of one dispatch serially.

@@ -49,28 +49,19 @@ void root_positions_round(State<T>& s, const gpu::PassConstants& pc, uint32_t ro
 template <class T>
 void root_positions(State<T>& s, const gpu::PassConstants& pc, Range r) {
     using vec4 = typename State<T>::vec4;
-    if (pc.mode == HMSM_MODE_LEVEL_BY_LEVEL) {
-        const uint64_t dst = uint64_t(pc.dst_half) * s.total_chains;
-        for (uint32_t i = r.begin; i < r.end; ++i) {
-            Element e = element_of(i, pc.level_count);
-            int32_t c = int32_t(pc.level_begin + e.index);
-            int32_t parent = s.chain_parent[pc.model_chain_begin + c];
-            vec4 origin = own_offset(s, pc, e.instance, c);
-            if (parent >= 0) origin += s.chain_origin[dst + state_chain(pc, e.instance, parent)];
-            const uint64_t chain = state_chain(pc, e.instance, c);
-            s.chain_origin[dst + chain] = origin;
-            store_joint(s, chain, s.chain_rotation[dst + chain], origin);
-        }
-        return;
-    }
-    if (pc.mode == HMSM_MODE_POINTER_JUMPING_IN_DISPATCH) {
-        // Work items are instances here: each runs all rounds over its own chains.
-        const Range chains{r.begin * pc.model_chain_count, r.end * pc.model_chain_count};
-        for (uint32_t round = 0; round < pc.round; ++round)
-            root_positions_round(s, pc, round, (round + 1) & 1, round & 1, chains, round + 1 == pc.round);
-        return;
-    }
-    root_positions_round(s, pc, pc.round, pc.src_half, pc.dst_half, r, true);
+    // Level by level: O_c = O_parent + own offset in place in the pose half, with the joint.
+    auto level = [&](uint64_t dst, uint32_t k, int32_t c, int32_t parent) {
+        vec4 origin = own_offset(s, pc, k, c);
+        if (parent >= 0) origin += s.chain_origin[dst + state_chain(pc, k, parent)];
+        const uint64_t chain = state_chain(pc, k, c);
+        s.chain_origin[dst + chain] = origin;
+        store_joint(s, chain, s.chain_rotation[dst + chain], origin);
+    };
+    // In one dispatch only the last round writes the joint matrices.
+    auto round = [&](uint32_t rd, uint32_t src_half, uint32_t dst_half, Range chains, bool last) {
+        root_positions_round(s, pc, rd, src_half, dst_half, chains, last);
+    };
+    run_hierarchical(s, pc, r, level, round);
 }
 
 template void root_positions<float>(State<float>&, const gpu::PassConstants&, Range);

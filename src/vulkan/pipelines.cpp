@@ -78,10 +78,9 @@ Result<std::unique_ptr<Pipelines>> Pipelines::create(const Device& device) {
 
 namespace {
 
-/// compose and root_positions take their workgroup size as specialization constant 0.
-bool has_specialized_workgroup_size(Pass pass) {
-    return pass == Pass::compose || pass == Pass::root_positions;
-}
+/// The hierarchical passes (compose, root_positions) take their workgroup size as
+/// specialization constant 0.
+bool has_specialized_workgroup_size(Pass pass) { return is_hierarchical(pass); }
 
 uint32_t rounds_slot(Pass pass) { return pass == Pass::compose ? 0 : 1; }
 

@@ -1,0 +1,86 @@
+// Every fact about a pass in one table (docs/model.md 3.7): the domain its threads run over,
+// whether it accumulates down the hierarchy (pointer jumping / level by level), and the buffers
+// it reads and writes. Step programs, window plans, access masks, pipeline lists and the
+// dispatch switches of every backend derive from this table and from nothing else.
+#pragma once
+
+#include "buffers.h"
+
+#include <hmsm/pass.h>
+
+#include <array>
+#include <cstdint>
+
+namespace hmsm::detail {
+
+/// What one thread of a non-hierarchical dispatch covers; hierarchical passes run per chain
+/// (or per chain of one level).
+enum class PassDomain : uint32_t { chain, node, vertex };
+
+constexpr uint32_t buffer_bit(BufferId id) { return 1u << static_cast<uint32_t>(id); }
+
+// Shorthand for the access columns below: one bit per buffer (bit i = BufferId i).
+#define HMSM_B(name) buffer_bit(BufferId::name)
+
+/// X(name, domain, hierarchical, reads, writes), in execution order (the same order as
+/// HMSM_PASSES in <hmsm/pass.h>; a static_assert below keeps them equal).
+/// root_positions writes, with the final O_c, the joint matrix [R_c | O_c] (R_c from compose).
+/// In the packed vertex layout contour's vertex_normal has no elements and is not written.
+#define HMSM_PASS_TABLE(X)                                                                       \
+    X(wind_force, chain, false,                                                                  \
+      (HMSM_B(chain_rotation) | HMSM_B(chain_origin) | HMSM_B(chain_constants) |                 \
+       HMSM_B(instance_wind) | HMSM_B(wind_table)),                                              \
+      (HMSM_B(chain_force)))                                                                     \
+    X(integrate, chain, false,                                                                   \
+      (HMSM_B(chain_force) | HMSM_B(chain_state) | HMSM_B(chain_constants) |                     \
+       HMSM_B(chain_rest_rotation) | HMSM_B(chain_parent) | HMSM_B(instance_yaw)),               \
+      (HMSM_B(chain_state) | HMSM_B(chain_local)))                                               \
+    X(compose, chain, true,                                                                      \
+      (HMSM_B(chain_local) | HMSM_B(chain_rotation) | HMSM_B(chain_jump) |                       \
+       HMSM_B(chain_parent)),                                                                    \
+      (HMSM_B(chain_rotation)))                                                                  \
+    X(node_relative, node, false,                                                                \
+      (HMSM_B(chain_rotation) | HMSM_B(node_owner) | HMSM_B(node_local)),                        \
+      (HMSM_B(node_relative)))                                                                   \
+    X(root_positions, chain, true,                                                               \
+      (HMSM_B(node_relative) | HMSM_B(chain_origin) | HMSM_B(chain_jump) |                       \
+       HMSM_B(chain_parent) | HMSM_B(chain_attach) | HMSM_B(instance_origin) |                   \
+       HMSM_B(chain_rotation)),                                                                  \
+      (HMSM_B(chain_origin) | HMSM_B(joint_matrix)))                                             \
+    X(node_world, node, false,                                                                   \
+      (HMSM_B(chain_origin) | HMSM_B(node_relative) | HMSM_B(node_owner)),                       \
+      (HMSM_B(node_world)))                                                                      \
+    X(contour, vertex, false,                                                                    \
+      (HMSM_B(chain_rotation) | HMSM_B(chain_origin) | HMSM_B(vertex_chain) |                    \
+       HMSM_B(vertex_rest_position) | HMSM_B(vertex_rest_normal) |                               \
+       HMSM_B(vertex_parent_position) | HMSM_B(vertex_parent_normal)),                           \
+      (HMSM_B(vertex_position) | HMSM_B(vertex_normal)))
+
+struct PassInfo {
+    Pass pass;
+    PassDomain domain;
+    bool hierarchical;
+    uint32_t reads;
+    uint32_t writes;
+};
+
+inline constexpr std::array<PassInfo, kPassCount> kPassTable = {{
+#define HMSM_PASS_INFO(name, domain, hierarchical, reads, writes) \
+    {Pass::name, PassDomain::domain, hierarchical, reads, writes},
+    HMSM_PASS_TABLE(HMSM_PASS_INFO)
+#undef HMSM_PASS_INFO
+}};
+#undef HMSM_B
+
+constexpr bool pass_table_in_order() {
+    for (uint32_t i = 0; i < kPassCount; ++i)
+        if (kPassTable[i].pass != kAllPasses[i]) return false;
+    return true;
+}
+static_assert(pass_table_in_order(), "HMSM_PASS_TABLE must list HMSM_PASSES in order");
+
+constexpr const PassInfo& pass_info(Pass pass) { return kPassTable[static_cast<uint32_t>(pass)]; }
+constexpr bool is_hierarchical(Pass pass) { return pass_info(pass).hierarchical; }
+constexpr PassDomain pass_domain(Pass pass) { return pass_info(pass).domain; }
+
+}  // namespace hmsm::detail
