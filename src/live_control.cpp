@@ -227,12 +227,24 @@ Status Simulation::set_wind(const Wind& wind) {
     const uint64_t next = s.steps_done_ + 1;
     s.clock_.base_tau = s.clock_.tau(s.config_.wind.frequency, s.config_.parameters.dt, next);
     s.clock_.base_step = next;
+    // Only what the change touches is rebuilt: an engine ramping the strength every frame (a
+    // gust) rewrites the small wind header, not every instance's wind data or the step program.
+    const Wind& old = s.config_.wind;
+    const bool turbulence_changed = wind.turbulence != old.turbulence || wind.seed != old.seed;
+    // Per-instance data: the phase phi_i (frequency, direction, front) and whether the modes'
+    // phases are used at all (turbulent or not).
+    const bool phases_changed = wind.frequency != old.frequency || wind.direction != old.direction ||
+                                wind.front_speed != old.front_speed ||
+                                (wind.profile == WindProfile::turbulent) != (old.profile == WindProfile::turbulent);
+    const bool profile_changed = wind.profile != old.profile;  // PassConstants.profile of the program
     s.config_.wind = wind;
     s.data_->profile = wind.profile;
     s.data_->wind_vector = wind.strength * glm::normalize(wind.direction);
     s.data_->wind_frequency = wind.frequency;
-    s.modes_ = turbulent_modes(wind.turbulence, wind.seed);
-    s.header_dirty_ = s.instance_wind_dirty_ = s.program_dirty_ = true;
+    if (turbulence_changed) s.modes_ = turbulent_modes(wind.turbulence, wind.seed);
+    s.header_dirty_ = true;
+    s.instance_wind_dirty_ = s.instance_wind_dirty_ || phases_changed;
+    s.program_dirty_ = s.program_dirty_ || profile_changed;
     return {};
 }
 
