@@ -83,11 +83,11 @@ foreach(pass IN LISTS HMSM_PASSES ITEMS copy_bandwidth)
   add_custom_command(
     OUTPUT "${_out}"
     COMMAND "${HMSM_GLSLANG_VALIDATOR}" -V --target-env vulkan1.1 --quiet
-            "-I${CMAKE_CURRENT_SOURCE_DIR}/src" "-I${_hmsm_glsl_dir}"
+            "-I${CMAKE_CURRENT_SOURCE_DIR}/src/common" "-I${_hmsm_glsl_dir}"
             --vn "hmsm_spirv_${pass}" -o "${_out}" "${_hmsm_glsl_dir}/${pass}.comp"
     DEPENDS "${_hmsm_glsl_dir}/${pass}.comp" "${_hmsm_glsl_dir}/common.glsl"
             "${_hmsm_glsl_dir}/octahedral.glsl"
-            "${CMAKE_CURRENT_SOURCE_DIR}/src/gpu_layout.h"
+            "${CMAKE_CURRENT_SOURCE_DIR}/src/common/gpu_layout.h"
     COMMENT "hmsm: compiling shaders/glsl/${pass}.comp to SPIR-V"
     VERBATIM)
   list(APPEND _hmsm_spirv_headers "${_out}")

@@ -2,7 +2,7 @@
 // allocate from it, the CPU passes index it, and the read/write test hooks name buffers by it.
 #pragma once
 
-#include "gpu_layout.h"
+#include "common/gpu_layout.h"
 
 #include <array>
 #include <cstdint>

@@ -7,7 +7,7 @@
 #include <hmsm/scene.h>
 #include <hmsm/simulation.h>
 
-#include "gpu_layout.h"
+#include "common/gpu_layout.h"
 
 #include <cstdint>
 #include <span>

@@ -7,6 +7,7 @@
 #include "buffers.h"
 
 #include <hmsm/pass.h>
+#include <hmsm/simulation.h>
 
 #include <array>
 #include <cstdint>
@@ -22,35 +23,37 @@ constexpr uint32_t buffer_bit(BufferId id) { return 1u << static_cast<uint32_t>(
 // Shorthand for the access columns below: one bit per buffer (bit i = BufferId i).
 #define HMSM_B(name) buffer_bit(BufferId::name)
 
-/// X(name, domain, hierarchical, reads, writes), in execution order (the same order as
+/// X(name, domain, hierarchical, needed_for, reads, writes), in execution order (the same order as
 /// HMSM_PASSES in <hmsm/pass.h>; a static_assert below keeps them equal).
 /// root_positions writes, with the final O_c, the joint matrix [R_c | O_c] (R_c from compose).
-/// In the packed vertex layout contour's vertex_normal has no elements and is not written.
+/// needed_for: the least SimulationConfig::outputs for which a step runs the pass (outputs on
+/// demand: joint matrices need passes 1-5 only). A vertex-domain pass takes the vertex layout
+/// as its mode; in the packed layout contour's vertex_normal has no elements and is not written.
 #define HMSM_PASS_TABLE(X)                                                                       \
-    X(wind_force, chain, false,                                                                  \
+    X(wind_force, chain, false, joints,                                                          \
       (HMSM_B(chain_rotation) | HMSM_B(chain_origin) | HMSM_B(chain_constants) |                 \
        HMSM_B(instance_wind) | HMSM_B(wind_table)),                                              \
       (HMSM_B(chain_force)))                                                                     \
-    X(integrate, chain, false,                                                                   \
+    X(integrate, chain, false, joints,                                                           \
       (HMSM_B(chain_force) | HMSM_B(chain_state) | HMSM_B(chain_constants) |                     \
        HMSM_B(chain_rest_rotation) | HMSM_B(chain_parent) | HMSM_B(instance_yaw)),               \
       (HMSM_B(chain_state) | HMSM_B(chain_local)))                                               \
-    X(compose, chain, true,                                                                      \
+    X(compose, chain, true, joints,                                                              \
       (HMSM_B(chain_local) | HMSM_B(chain_rotation) | HMSM_B(chain_jump) |                       \
        HMSM_B(chain_parent)),                                                                    \
       (HMSM_B(chain_rotation)))                                                                  \
-    X(node_relative, node, false,                                                                \
+    X(node_relative, node, false, joints,                                                        \
       (HMSM_B(chain_rotation) | HMSM_B(node_owner) | HMSM_B(node_local)),                        \
       (HMSM_B(node_relative)))                                                                   \
-    X(root_positions, chain, true,                                                               \
+    X(root_positions, chain, true, joints,                                                       \
       (HMSM_B(node_relative) | HMSM_B(chain_origin) | HMSM_B(chain_jump) |                       \
        HMSM_B(chain_parent) | HMSM_B(chain_attach) | HMSM_B(instance_origin) |                   \
        HMSM_B(chain_rotation)),                                                                  \
       (HMSM_B(chain_origin) | HMSM_B(joint_matrix)))                                             \
-    X(node_world, node, false,                                                                   \
+    X(node_world, node, false, joints_and_nodes,                                                 \
       (HMSM_B(chain_origin) | HMSM_B(node_relative) | HMSM_B(node_owner)),                       \
       (HMSM_B(node_world)))                                                                      \
-    X(contour, vertex, false,                                                                    \
+    X(contour, vertex, false, all,                                                               \
       (HMSM_B(chain_rotation) | HMSM_B(chain_origin) | HMSM_B(vertex_chain) |                    \
        HMSM_B(vertex_rest_position) | HMSM_B(vertex_rest_normal) |                               \
        HMSM_B(vertex_parent_position) | HMSM_B(vertex_parent_normal)),                           \
@@ -60,13 +63,14 @@ struct PassInfo {
     Pass pass;
     PassDomain domain;
     bool hierarchical;
+    Outputs needed_for;
     uint32_t reads;
     uint32_t writes;
 };
 
 inline constexpr std::array<PassInfo, kPassCount> kPassTable = {{
-#define HMSM_PASS_INFO(name, domain, hierarchical, reads, writes) \
-    {Pass::name, PassDomain::domain, hierarchical, reads, writes},
+#define HMSM_PASS_INFO(name, domain, hierarchical, needed_for, reads, writes) \
+    {Pass::name, PassDomain::domain, hierarchical, Outputs::needed_for, reads, writes},
     HMSM_PASS_TABLE(HMSM_PASS_INFO)
 #undef HMSM_PASS_INFO
 }};
@@ -82,5 +86,10 @@ static_assert(pass_table_in_order(), "HMSM_PASS_TABLE must list HMSM_PASSES in o
 constexpr const PassInfo& pass_info(Pass pass) { return kPassTable[static_cast<uint32_t>(pass)]; }
 constexpr bool is_hierarchical(Pass pass) { return pass_info(pass).hierarchical; }
 constexpr PassDomain pass_domain(Pass pass) { return pass_info(pass).domain; }
+/// Whether a step that produces `outputs` runs `pass` (Outputs are ordered joints <
+/// joints_and_nodes < all).
+constexpr bool pass_runs_for(Pass pass, Outputs outputs) {
+    return uint32_t(pass_info(pass).needed_for) <= uint32_t(outputs);
+}
 
 }  // namespace hmsm::detail

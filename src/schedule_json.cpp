@@ -3,7 +3,7 @@
 // validate_schedule (schedule.cpp).
 #include <hmsm/schedule.h>
 
-#include "json_util.h"
+#include "model/json_util.h"
 
 #include <cmath>
 #include <initializer_list>

@@ -3,7 +3,7 @@
 #include <hmsm/simulation.h>
 
 #include "backend.h"
-#include "octahedral.h"
+#include "common/octahedral.h"
 #include "scene_data.h"
 #include "simulation_impl.h"
 #include "step_program.h"
@@ -73,6 +73,16 @@ const char* to_string(Outputs outputs) {
 std::optional<Outputs> parse_outputs(std::string_view name) {
     for (Outputs o : {Outputs::joints, Outputs::joints_and_nodes, Outputs::all})
         if (name == to_string(o)) return o;
+    return std::nullopt;
+}
+
+const char* to_string(VertexLayout layout) {
+    return layout == VertexLayout::packed ? "packed" : "separate";
+}
+
+std::optional<VertexLayout> parse_vertex_layout(std::string_view name) {
+    if (name == "separate") return VertexLayout::separate;
+    if (name == "packed") return VertexLayout::packed;
     return std::nullopt;
 }
 

@@ -41,7 +41,7 @@ void append_pass(std::vector<Dispatch>& program, const SceneData& d,
             const uint32_t per_domain[] = {m.chain_count, m.node_count, m.vertex_count};
             const uint32_t per_instance = per_domain[uint32_t(pass_domain(pass))];
             dispatch.constants.element_count = g.instance_count * per_instance;
-            if (pass == Pass::contour)
+            if (pass_domain(pass) == PassDomain::vertex)
                 dispatch.constants.mode = d.packed_vertices() ? HMSM_VERTEX_LAYOUT_PACKED
                                                               : HMSM_VERTEX_LAYOUT_SEPARATE;
             if (dispatch.constants.element_count > 0) program.push_back(dispatch);
@@ -105,8 +105,7 @@ std::vector<Dispatch> build_program(const SceneData& d, const std::vector<Instan
     for (Pass pass : kAllPasses) {
         if (uint32_t(pass) < uint32_t(first) || !(passes >> uint32_t(pass) & 1u)) continue;
         // Outputs on demand: passes whose outputs the step does not produce are not dispatched.
-        if (pass == Pass::node_world && !d.produces_nodes()) continue;
-        if (pass == Pass::contour && !d.produces_vertices()) continue;
+        if (!pass_runs_for(pass, d.outputs)) continue;
         append_pass(program, d, groups, pass, composition, dispatches_are_expensive);
     }
     return program;

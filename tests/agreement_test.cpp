@@ -6,7 +6,7 @@
 #include "test_trees.h"
 
 #include "backend.h"
-#include "octahedral.h"
+#include "common/octahedral.h"
 
 #include <hmsm/generator.h>
 

@@ -4,7 +4,7 @@
 #include <hmsm/hierarchy.h>
 #include <hmsm/mesh.h>
 
-#include "generator/presets.h"
+#include "model/generator/presets.h"
 
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>

@@ -1,7 +1,7 @@
-// src/octahedral.h: the packed vertex layout's normal word (VertexLayout::packed). Known words,
+// src/common/octahedral.h: the packed vertex layout's normal word (VertexLayout::packed). Known words,
 // the decoding error over many directions (poles, axes, the lower-hemisphere fold seams) and the
 // word surviving its trip through a float's bits.
-#include "octahedral.h"
+#include "common/octahedral.h"
 
 #include <gtest/gtest.h>
 

@@ -77,4 +77,31 @@ TEST(PassTable, StepProgramCountsFollowTheDomainColumn) {
     EXPECT_EQ(seen, (1u << kPassCount) - 1) << "every pass is dispatched with Outputs::all";
 }
 
+// Outputs on demand: a step dispatches exactly the passes whose needed_for column its outputs
+// reach, and the joint matrices need no pass after root_positions.
+TEST(PassTable, StepProgramFollowsTheNeededForColumn) {
+    Scene scene;
+    scene.models.push_back(test::small_tree());
+    scene.model_names.push_back("small");
+    scene.instances.push_back(Instance{0, {0.0, 0.0, 0.0}});
+    for (Outputs outputs : {Outputs::joints, Outputs::joints_and_nodes, Outputs::all}) {
+        SimulationConfig config;
+        config.backend = BackendKind::cpu;
+        config.outputs = outputs;
+        auto sim = Simulation::create(scene, config);
+        ASSERT_TRUE(sim.ok()) << sim.status().message();
+        uint32_t seen = 0;
+        for (const Dispatch& d : step_program_of(*sim.value())) seen |= 1u << uint32_t(d.pass);
+        for (Pass pass : kAllPasses)
+            EXPECT_EQ((seen >> uint32_t(pass)) & 1u, pass_runs_for(pass, outputs) ? 1u : 0u)
+                << pass_name(pass) << " with outputs " << to_string(outputs);
+    }
+    for (Pass pass : kAllPasses)
+        if (uint32_t(pass) <= uint32_t(Pass::root_positions))
+            EXPECT_TRUE(pass_runs_for(pass, Outputs::joints)) << pass_name(pass);
+    EXPECT_FALSE(pass_runs_for(Pass::node_world, Outputs::joints));
+    EXPECT_TRUE(pass_runs_for(Pass::node_world, Outputs::joints_and_nodes));
+    EXPECT_FALSE(pass_runs_for(Pass::contour, Outputs::joints_and_nodes));
+}
+
 }  // namespace

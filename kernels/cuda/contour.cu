@@ -5,10 +5,10 @@
 // per vertex of every instance): the model-scope inputs are shared by all instances and stay in
 // L2, the outputs are written once, coalesced: 32 bytes per thread (position and normal), or 16
 // in the packed vertex layout (pc.mode, gpu_layout.h), where the position's w carries the
-// octahedral normal word (src/octahedral.h) and vertex_normal is not written.
+// octahedral normal word (src/common/octahedral.h) and vertex_normal is not written.
 #include "pass_math.cuh"
 
-#include "../../src/octahedral.h"
+#include "../../src/common/octahedral.h"
 
 #include <cmath>
 

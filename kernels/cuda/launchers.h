@@ -13,7 +13,7 @@
 #pragma once
 
 #include "../../src/buffers.h"
-#include "../../src/gpu_layout.h"
+#include "../../src/common/gpu_layout.h"
 
 #include <hmsm/pass.h>
 

@@ -10,7 +10,7 @@
 
 #include "launchers.h"
 
-#include "../../src/wind_profile.h"  // HMSM_HOST_DEVICE, wind_profile_y
+#include "../../src/common/wind_profile.h"  // HMSM_HOST_DEVICE, wind_profile_y
 
 #include <cstdint>
 

@@ -1,6 +1,6 @@
 // Shared by the seven passes: the layout header, push constants, every storage buffer of
 // gpu_layout.h (binding = BufferId), the thread -> element mapping and the wind profiles.
-// Every function here mirrors the CPU reference (src/cpu/cpu_state.h, src/wind_profile.h).
+// Every function here mirrors the CPU reference (src/cpu/cpu_state.h, src/common/wind_profile.h).
 // Each .comp enables GL_GOOGLE_include_directive before including this file.
 #ifndef HMSM_COMMON_GLSL
 #define HMSM_COMMON_GLSL
@@ -84,7 +84,7 @@ const float HMSM_PI = 3.14159265358979323846;
 float sinpi(float x) { return sin(HMSM_PI * (x - 2.0 * floor(0.5 * x + 0.5))); }
 float cospi(float x) { return cos(HMSM_PI * (x - 2.0 * floor(0.5 * x + 0.5))); }
 
-/// Y(x) of docs/model.md 3.5 (src/wind_profile.h); profile = hmsm::WindProfile value.
+/// Y(x) of docs/model.md 3.5 (src/common/wind_profile.h); profile = hmsm::WindProfile value.
 float wind_profile_y(uint profile, float x) {
     switch (profile) {
         case HMSM_WIND_PROFILE_CONSTANT: return 1.0;

@@ -1,4 +1,4 @@
-// Octahedral unit vectors (Cigolle et al. 2014): the GLSL twin of src/octahedral.h, same names,
+// Octahedral unit vectors (Cigolle et al. 2014): the GLSL twin of src/common/octahedral.h, same names,
 // same operations in the same order. VertexLayout::packed stores a vertex normal n in the w of
 // its position as uintBitsToFloat(packSnorm2x16(oct_encode(n))); a reader decodes it with
 // oct_decode(unpackSnorm2x16(floatBitsToUint(position.w))). Included by common.glsl (the

@@ -1,10 +1,10 @@
 // Pass 7: branch-mesh and leaf vertices rigid with their chain, v = O_c + R_c v_local; base-ring
 // vertices of child chains blend with the parent chain (the paper's contour fix-up) so joints
 // stay closed while the child swings. pc.mode is the vertex layout (gpu_layout.h): packed stores
-// the octahedral normal word in the position's w (src/octahedral.h) and no vertex_normal.
+// the octahedral normal word in the position's w (src/common/octahedral.h) and no vertex_normal.
 #include "cpu_state.h"
 
-#include "../octahedral.h"
+#include "../common/octahedral.h"
 
 #include <glm/geometric.hpp>
 

@@ -122,7 +122,7 @@ public:
             using Element = typename std::decay_t<decltype(buffer)>::value_type;
             if constexpr (std::is_same_v<Element, glm::vec4>) {
                 // Float vec4 as float: copied bit for bit, since in the packed vertex layout a
-                // position's w is a normal word (src/octahedral.h) that may read as a
+                // position's w is a normal word (src/common/octahedral.h) that may read as a
                 // signalling NaN, which a round trip through double would quiet.
                 if (as == Scalar::f32) {
                     if (count > 0) std::memcpy(dst, buffer.data() + first, count * sizeof(Element));

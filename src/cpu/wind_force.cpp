@@ -3,7 +3,7 @@
 // (docs/model.md 3.5, 3.7, 3.9; the wind table layout is in gpu_layout.h).
 #include "cpu_state.h"
 
-#include "../wind_profile.h"
+#include "../common/wind_profile.h"
 
 #include <algorithm>
 #include <cmath>

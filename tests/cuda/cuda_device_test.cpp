@@ -7,7 +7,7 @@
 
 #include <hmsm/cuda.h>
 
-#include "octahedral.h"
+#include "common/octahedral.h"
 
 #include <cuda_runtime_api.h>
 #include <algorithm>

@@ -8,7 +8,7 @@
 #include "device_words.h"
 #include "live_wind.h"
 #include "cuda/launch_dispatch.h"
-#include "octahedral.h"
+#include "common/octahedral.h"
 
 #include <array>
 #include <cmath>
@@ -191,7 +191,7 @@ TEST(CudaEmulationPacked, ContourWritesThePositionAndTheNormalWordOnly) {
     ASSERT_TRUE(sim.read(Output::vertex_positions, positions).ok());
     ASSERT_TRUE(sim.read(Output::vertex_normals, normals).ok());
     EXPECT_LE(max_abs_difference(xyz_of(image, BufferId::vertex_position), positions) / scene_height(scene), 1e-4);
-    // Each w is the octahedral word of the vertex normal (src/octahedral.h).
+    // Each w is the octahedral word of the vertex normal (src/common/octahedral.h).
     const auto* words = reinterpret_cast<const float*>(image.bytes[uint32_t(BufferId::vertex_position)].data());
     std::vector<double> decoded;
     for (uint64_t v = 0; v < sim.vertex_count(); ++v) {

@@ -1,6 +1,6 @@
 #include "cuda_test_support.h"
 
-#include "random.h"
+#include "model/random.h"
 
 #include <algorithm>
 #include <cmath>

@@ -4,7 +4,7 @@
 #include "test_trees.h"
 #include "vulkan_test_support.h"
 
-#include "octahedral.h"
+#include "common/octahedral.h"
 #include "vulkan/device.h"
 
 #include <hmsm/vulkan.h>

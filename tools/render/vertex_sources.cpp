@@ -29,7 +29,7 @@ Status Renderer::State::create_geometry() {
         const MeshTemplate& mesh = simulation->mesh(m);
         ModelDraw& draw = models[m];
         draw.first_index = uint32_t(all_indices.size());
-        draw.leaf_indices = 6 * mesh.leaf_count;  // leaf cards come last (src/mesh.cpp)
+        draw.leaf_indices = 6 * mesh.leaf_count;  // leaf cards come last (src/model/mesh.cpp)
         draw.bark_indices = uint32_t(mesh.indices.size()) - draw.leaf_indices;
         draw.vertices = uint32_t(mesh.vertices.size());
         draw.leaf_vertices = 4 * mesh.leaf_count;

@@ -23,7 +23,7 @@ void main() {
     v_card = vec2(0.0);
     v_tint = hash01(uint(draw.instance) * 2654435761u + 17u);
     if (leaf) {
-        // Corners are written (-r,-u), (+r,-u), (+r,+u), (-r,+u) per card (src/mesh.cpp).
+        // Corners are written (-r,-u), (+r,-u), (+r,+u), (-r,+u) per card (src/model/mesh.cpp).
         int k = gl_VertexIndex - draw.leaf_first;
         int corner = k & 3;
         v_card = vec2((corner == 1 || corner == 2) ? 1.0 : -1.0, corner >= 2 ? 1.0 : -1.0);

@@ -1,5 +1,5 @@
 // HMSM_HOST_DEVICE: marks the small functions shared by the C++ model, the CPU passes and the
-// CUDA kernels (src/wind_profile.h, src/octahedral.h) so that nvcc compiles them for both sides.
+// CUDA kernels (src/common/wind_profile.h, src/common/octahedral.h) so that nvcc compiles them for both sides.
 #pragma once
 
 #ifdef __CUDACC__

@@ -1,9 +1,9 @@
 // Leaf cards on the leaf-bearing twig nodes (docs/model.md 3.8 cards, 4 vertices each).
 #pragma once
 
-#include "generator/params.h"
-#include "generator/skeleton.h"
-#include "random.h"
+#include "params.h"
+#include "skeleton.h"
+#include "../random.h"
 
 #include <hmsm/tree.h>
 

@@ -104,7 +104,7 @@
 
 /// vertex layouts (PassConstants.mode of a contour dispatch; hmsm::VertexLayout values):
 /// separate writes vertex_position (x, y, z, 1) and vertex_normal (nx, ny, nz, 0); packed writes
-/// only vertex_position, its w the bits of the octahedral normal word (src/octahedral.h).
+/// only vertex_position, its w the bits of the octahedral normal word (src/common/octahedral.h).
 #define HMSM_VERTEX_LAYOUT_SEPARATE 0u
 #define HMSM_VERTEX_LAYOUT_PACKED 1u
 

@@ -8,8 +8,8 @@
 // chain and its depth is known while growing, which caps the hierarchy at kTwigDepth.
 #pragma once
 
-#include "generator/params.h"
-#include "random.h"
+#include "params.h"
+#include "../random.h"
 
 #include <hmsm/tree.h>
 

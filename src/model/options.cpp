@@ -1,8 +1,7 @@
 // Wind profiles (docs/model.md 3.5), option names and the valid ranges of options and parameters (docs/model.md 3.4).
 #include <hmsm/options.h>
-#include <hmsm/simulation.h>
 
-#include "wind_profile.h"
+#include "../common/wind_profile.h"
 
 #include <glm/geometric.hpp>
 
@@ -105,16 +104,6 @@ std::optional<WindProfile> parse_wind_profile(std::string_view name) {
                           WindProfile::y2, WindProfile::y3, WindProfile::y4,
                           WindProfile::turbulent})
         if (name == to_string(p)) return p;
-    return std::nullopt;
-}
-
-const char* to_string(VertexLayout layout) {
-    return layout == VertexLayout::packed ? "packed" : "separate";
-}
-
-std::optional<VertexLayout> parse_vertex_layout(std::string_view name) {
-    if (name == "separate") return VertexLayout::separate;
-    if (name == "packed") return VertexLayout::packed;
     return std::nullopt;
 }
 

@@ -3,7 +3,7 @@
 // that the leaves which fill the rest of the Table 1 vertex budget are a plausible number.
 #pragma once
 
-#include "generator/params.h"
+#include "params.h"
 
 #include <array>
 #include <string_view>
