@@ -80,7 +80,7 @@ int run_export(CLI::App& app) {
                           ": " + std::to_string(frames) + " frames of " + std::to_string(hierarchy.chains.size()) +
                           " joints need more than 1 GiB of keys");
 
-    auto skin = derive_skin(scene->models[0], hierarchy, mesh, config.model.fix_weight);
+    auto skin = derive_skin(scene->models[0], hierarchy, mesh, config.model);
     if (!skin) return fail(skin.status());
 
     JointClip clip;

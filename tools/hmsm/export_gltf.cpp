@@ -16,54 +16,51 @@
 namespace hmsm::cli {
 
 Result<SkinTemplate> derive_skin(const TreeModel& tree, const Hierarchy& h, const MeshTemplate& mesh,
-                                 double fix_weight) {
+                                 const ModelOptions& options) {
     const size_t chains = h.chains.size();
     if (chains > size_t(std::numeric_limits<uint16_t>::max()) + 1)
         return Status{ErrorCode::invalid_argument,
                       "the tree has " + std::to_string(chains) +
                           " chains; a glTF skin here names at most 65536 joints"};
-    // p̄ = p − p_root: the bind pose is the rest pose with the root at the origin.
-    const glm::dvec3 root = tree.nodes[h.chains[0].attach_node].position;
-    auto attach = [&](size_t c) { return glm::dvec3(tree.nodes[h.chains[c].attach_node].position) - root; };
-
+    // The library's skin (bind pose, joints and weights, inverse bind matrices), in glTF's terms.
+    const hmsm::SkinTemplate bind = build_skin(tree, h, mesh, options);
     SkinTemplate skin;
     skin.inverse_bind.resize(chains);
     skin.joint_translation.resize(chains, glm::dvec3(0.0));
     for (size_t c = 0; c < chains; ++c) {
-        const glm::dmat3 b = h.chains[c].frame;
-        const glm::dmat3 bt = glm::transpose(b);
-        glm::dmat4 inverse(bt);
-        inverse[3] = glm::dvec4(-(bt * attach(c)), 1.0);
+        // Row-major 3x4 [B_cᵀ | −B_cᵀ p̄_attach(c)] to a column-major glm matrix.
+        const auto& rows = bind.inverse_bind[c];
+        glm::dmat4 inverse(1.0);
+        for (int r = 0; r < 3; ++r)
+            for (int col = 0; col < 4; ++col) inverse[col][r] = rows[size_t(r * 4 + col)];
         skin.inverse_bind[c] = inverse;
+        // The bind joint matrix [B_c | p̄_attach(c)] gives the constant translation relative to
+        // the parent joint, B_parentᵀ (p̄_attach(c) − p̄_attach(parent)).
         const int32_t parent = h.chains[c].parent;
-        if (parent >= 0)
-            skin.joint_translation[c] =
-                glm::transpose(glm::dmat3(h.chains[parent].frame)) * (attach(c) - attach(size_t(parent)));
+        if (parent >= 0) {
+            const auto& own = bind.bind[c];
+            const auto& up = bind.bind[size_t(parent)];
+            const glm::dvec3 offset(own[3] - up[3], own[7] - up[7], own[11] - up[11]);
+            skin.joint_translation[c] = glm::transpose(glm::dmat3(h.chains[size_t(parent)].frame)) * offset;
+        }
     }
-
-    const size_t count = mesh.vertices.size();
+    const size_t count = bind.vertices.size();
     skin.positions.resize(count);
     skin.normals.resize(count);
     skin.joints.resize(count);
     skin.weights.resize(count);
     for (size_t i = 0; i < count; ++i) {
-        const MeshVertex& v = mesh.vertices[i];
-        const glm::dmat3 b = h.chains[v.chain].frame;
-        skin.positions[i] = attach(size_t(v.chain)) + b * glm::dvec3(v.position);
-        skin.normals[i] = glm::normalize(b * glm::dvec3(v.normal));
-        // Rigid vertices follow their chain alone; a non-trunk chain's base ring blends its chain
-        // (1 − β) with the parent chain (β). Only joints of non-zero weight are listed.
+        const SkinVertex& v = bind.vertices[i];
+        skin.positions[i] = glm::dvec3(v.position);
+        skin.normals[i] = glm::dvec3(v.normal);
+        // Only joints of non-zero weight are listed (a glTF vertex names no joint of weight 0).
         std::array<uint16_t, 4> joints{0, 0, 0, 0};
         std::array<double, 4> weights{0.0, 0.0, 0.0, 0.0};
         int slot = 0;
-        const double own = v.fix_chain >= 0 ? 1.0 - fix_weight : 1.0;
-        if (own != 0.0) {
-            joints[slot] = uint16_t(v.chain);
-            weights[slot++] = own;
-        }
-        if (v.fix_chain >= 0 && fix_weight != 0.0) {
-            joints[slot] = uint16_t(v.fix_chain);
-            weights[slot++] = fix_weight;
+        for (size_t j = 0; j < v.joints.size(); ++j) {
+            if (v.joints[j] < 0 || v.weights[j] == 0.0) continue;
+            joints[size_t(slot)] = uint16_t(v.joints[j]);
+            weights[size_t(slot++)] = v.weights[j];
         }
         skin.joints[i] = joints;
         skin.weights[i] = weights;

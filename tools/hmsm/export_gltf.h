@@ -35,10 +35,10 @@ struct SkinTemplate {
     uint32_t leaf_index_count = 0;   ///< the last indices: 6 per leaf card
 };
 
-/// Derives the skin from the hierarchy and mesh template of a model. Fails (invalid_argument) with
-/// more chains than a glTF JOINTS_0 accessor of unsigned shorts can name.
+/// The skin of a model in glTF's terms, from the library's build_skin. Fails (invalid_argument)
+/// with more chains than a glTF JOINTS_0 accessor of unsigned shorts can name.
 Result<SkinTemplate> derive_skin(const TreeModel& tree, const Hierarchy& hierarchy,
-                                 const MeshTemplate& mesh, double fix_weight);
+                                 const MeshTemplate& mesh, const ModelOptions& options);
 
 /// Frames of a clip of `seconds` at `fps`: k = 0 … ⌊seconds·fps + 1e-9⌋.
 uint64_t export_frame_count(double seconds, double fps);
