@@ -3,6 +3,7 @@
 # - Static library: no vk*/volk* symbol at all, and every strong global definition (nm types
 #   T, D, B, R) is hmsm's own (namespace hmsm or the C ABI's hmsm_*). Weak definitions (W, V, u)
 #   are inline functions and template instantiations, which the linker merges by name.
+# - Neither library defines a visible CUDA runtime symbol (the runtime is folded in privately).
 # - Shared library: every exported definition (nm -D) is hmsm's own public API (no detail::,
 #   Simulation::Impl or Simulation::Access member).
 # Usage: check_symbols.sh libhmsm.a libhmsm.so
@@ -15,6 +16,13 @@ is_own() { grep -Ev '^(_ZN4hmsm|_ZNK4hmsm|_ZZN4hmsm|_ZZNK4hmsm|_ZTVN4hmsm|_ZTIN4
 vk=$(nm -g --defined-only "$static_lib" 2>/dev/null | awk 'NF == 3 {print $3}' | grep -E '^_?(vk|volk)' || true)
 if [[ -n "$vk" ]]; then
     echo "$static_lib defines Vulkan/volk symbols:"; echo "$vk" | head -20; status=1
+fi
+# The CUDA runtime folded into a CUDA build (cmake/fold_cudart.sh) stays private: no definition
+# of it, weak ones included, is global in either library.
+cudart=$( (nm -g --defined-only "$static_lib" 2>/dev/null; nm -D --defined-only "$shared_lib") |
+    awk 'NF == 3 {print $3}' | grep -E '^(cuda|__cuda|libcudart|cudart)' || true)
+if [[ -n "$cudart" ]]; then
+    echo "CUDA runtime symbols are visible:"; echo "$cudart" | head -20; status=1
 fi
 foreign=$(nm -g --defined-only "$static_lib" 2>/dev/null | awk 'NF == 3 && $2 ~ /^[TDBR]$/ {print $3}' | is_own || true)
 if [[ -n "$foreign" ]]; then
