@@ -29,6 +29,11 @@ struct Dispatch {
 
 enum class Scalar { f32, f64 };
 
+/// Elements [src, src + count) of a buffer go to [dst, dst + count) of the same buffer.
+struct ElementMove {
+    uint64_t src = 0, dst = 0, count = 0;
+};
+
 class Backend {
 public:
     virtual ~Backend() = default;
@@ -39,9 +44,10 @@ public:
 
     /// Allocates every buffer of kBufferTable sized by scene.element_count(), uploads the static
     /// buffers and zero-fills the others. Called once before anything below, and again when
-    /// instances are added or removed (earlier buffers and their contents are released; the
-    /// simulation writes the carried-over state back). Fails (never aborts) with out_of_memory or
-    /// unsupported when the scene does not fit.
+    /// added instances outgrow the scene's capacities or the backend cannot reshape in place
+    /// (earlier buffers and their contents are released; the simulation writes the carried-over
+    /// state back). Fails (never aborts) with out_of_memory or unsupported when the scene does
+    /// not fit.
     virtual Status upload(const SceneData& scene) = 0;
 
     /// Runs `program` wind_x.size() times, in order, one step each; step k runs every
@@ -56,6 +62,15 @@ public:
     /// The inverse of read(); for tests that set random states before running one pass.
     virtual Status write(BufferId id, uint64_t first, uint64_t count, const void* src,
                          Scalar as) = 0;
+
+    /// Moves element ranges of buffer `id` on the device, in order, each as if through a
+    /// temporary (source and destination may overlap): the state of surviving instances when
+    /// others are removed (live_control.cpp). Nothing goes through the host.
+    virtual Status move_elements(BufferId id, std::span<const ElementMove> moves) = 0;
+    /// Whether instances may be added and removed in place: buffers keep their allocation and
+    /// layout, state moves with move_elements and instance buffers are rewritten with write().
+    /// False (a Vulkan scene split into windows) makes the simulation upload the scene anew.
+    virtual bool reshapes_in_place() const { return true; }
 
     /// Turns per-pass device timing on or off (off: pass_times() returns zeros).
     virtual void set_profiling(bool enabled) = 0;

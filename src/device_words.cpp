@@ -29,6 +29,13 @@ std::vector<std::byte> mat3x4_image(const std::vector<glm::dmat3>& values) {
 
 }  // namespace
 
+namespace {
+std::vector<std::byte> padded(std::vector<std::byte> image, const SceneData& d, BufferId id) {
+    image.resize(d.element_count(id) * device_element_bytes(id), std::byte{0});
+    return image;
+}
+}  // namespace
+
 std::vector<std::byte> device_image(const SceneData& d, BufferId id) {
     static_assert(sizeof(glm::ivec2) == 8, "ivec2 must be two packed int32");
     switch (id) {
@@ -44,11 +51,12 @@ std::vector<std::byte> device_image(const SceneData& d, BufferId id) {
         case BufferId::vertex_rest_normal: return float4_image(d.vertex_rest_normal);
         case BufferId::vertex_parent_position: return float4_image(d.vertex_parent_position);
         case BufferId::vertex_parent_normal: return float4_image(d.vertex_parent_normal);
-        case BufferId::instance_origin: return float4_image(d.instance_origin);
-        case BufferId::instance_yaw: return float4_image(d.instance_yaw);
+        // Instance buffers: the live instances, then zeros up to the capacity.
+        case BufferId::instance_origin: return padded(float4_image(d.instance_origin), d, id);
+        case BufferId::instance_yaw: return padded(float4_image(d.instance_yaw), d, id);
         case BufferId::instance_wind: {
             std::vector<float> words(d.instance_wind.begin(), d.instance_wind.end());
-            return raw_bytes(words);
+            return padded(raw_bytes(words), d, id);
         }
         default: return {};  // state buffers start zeroed on the device
     }

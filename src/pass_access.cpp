@@ -13,13 +13,13 @@ uint64_t SceneData::element_count(BufferId id) const {
         case Scope::model_chain_jump: return chain_jump.size();
         case Scope::model_node: return node_owner.size();
         case Scope::model_vertex: return vertex_chain.size();
-        case Scope::instance: return instance_origin.size();
-        case Scope::chain: return total_chains;
-        case Scope::chain_halves: return 2 * total_chains;
-        case Scope::node: return id == BufferId::node_world && !produces_nodes() ? 0 : total_nodes;
+        case Scope::instance: return instance_capacity;
+        case Scope::chain: return chain_capacity;
+        case Scope::chain_halves: return 2 * chain_capacity;
+        case Scope::node: return id == BufferId::node_world && !produces_nodes() ? 0 : node_capacity;
         case Scope::vertex:
             if (!produces_vertices()) return 0;
-            return id == BufferId::vertex_normal && packed_vertices() ? 0 : total_vertices;
+            return id == BufferId::vertex_normal && packed_vertices() ? 0 : vertex_capacity;
         case Scope::wind: return HMSM_WIND_TABLE_ELEMENTS;
     }
     return 0;

@@ -32,7 +32,7 @@ gpu::PassConstants group_constants(const SceneData& d, const InstanceGroup& g, u
     pc.model_vertex_count = m.vertex_count;
     pc.mode = HMSM_MODE_POINTER_JUMPING;
     pc.profile = uint32_t(d.profile);
-    pc.total_chains = uint32_t(d.total_chains);
+    pc.total_chains = uint32_t(d.chain_capacity);  // the stride between ping-pong halves
     pc.total_model_chains = d.total_model_chains();
     pc.src_half = final_half;
     pc.dst_half = final_half;
@@ -125,6 +125,7 @@ SceneData flatten_scene(const Scene& scene, const std::vector<Hierarchy>& hierar
         d.total_vertices += range.vertex_count;
     }
     d.instance_wind.assign(size_t(HMSM_INSTANCE_WIND_VEC4S) * 4 * d.instance_origin.size(), 0.0);
+    d.fit_capacity();
 
     d.dt = parameters.dt;
     d.max_angle = parameters.max_angle;

@@ -62,6 +62,23 @@ struct SceneData {
 
     uint32_t jump_rounds = 1;
     uint64_t total_chains = 0, total_nodes = 0, total_vertices = 0;  // state element counts
+    /// Allocated state (>= the live counts above; flatten_scene makes them equal): instances
+    /// may be added up to these without reallocating (live_control.cpp). The two ping-pong
+    /// halves of chain_rotation and chain_origin lie chain_capacity elements apart.
+    uint64_t chain_capacity = 0, node_capacity = 0, vertex_capacity = 0;
+    uint32_t instance_capacity = 0;
+    /// Capacities equal to the live counts (flatten_scene; tests that build a SceneData).
+    void fit_capacity() {
+        chain_capacity = total_chains;
+        node_capacity = total_nodes;
+        vertex_capacity = total_vertices;
+        instance_capacity = instance_count();
+    }
+    /// Whether `live` counts fit in this scene's capacities.
+    bool holds(const SceneData& live) const {
+        return live.total_chains <= chain_capacity && live.total_nodes <= node_capacity &&
+               live.total_vertices <= vertex_capacity && live.instance_count() <= instance_capacity;
+    }
     uint32_t instance_count() const { return static_cast<uint32_t>(instance_origin.size()); }
     uint32_t total_model_chains() const { return static_cast<uint32_t>(chain_parent.size()); }
 
@@ -81,7 +98,8 @@ struct SceneData {
     bool produces_nodes() const { return outputs != Outputs::joints; }
     bool produces_vertices() const { return outputs == Outputs::all; }
 
-    /// Elements of buffer `id` (vec4/mat/int elements, not scalars).
+    /// Elements allocated for buffer `id` (vec4/mat/int elements, not scalars): state and
+    /// instance buffers are sized by the capacities.
     uint64_t element_count(BufferId id) const;
 };
 

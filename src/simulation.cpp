@@ -290,10 +290,10 @@ Status Simulation::Impl::read_elements(Output output, std::vector<double>* as_do
         case Output::vertex_positions: id = BufferId::vertex_position; count = data_->total_vertices; break;
         case Output::vertex_normals: id = BufferId::vertex_normal; count = data_->total_vertices; break;
         case Output::chain_rotations:
-            id = BufferId::chain_rotation; first = final_half * data_->total_chains;
+            id = BufferId::chain_rotation; first = final_half * data_->chain_capacity;
             count = data_->total_chains; break;
         case Output::chain_origins:
-            id = BufferId::chain_origin; first = final_half * data_->total_chains;
+            id = BufferId::chain_origin; first = final_half * data_->chain_capacity;
             count = data_->total_chains; break;
         case Output::chain_angles: id = BufferId::chain_state; count = data_->total_chains; break;
         case Output::joint_matrices: id = BufferId::joint_matrix; count = data_->total_chains; break;

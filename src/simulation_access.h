@@ -30,5 +30,7 @@ inline const std::vector<Dispatch>& step_program_of(const Simulation& sim) {
     return SimulationAccess::step_program(sim);
 }
 inline const SceneData& scene_data_of(const Simulation& sim) { return SimulationAccess::scene_data(sim); }
+/// How often adding or removing instances re-uploaded the whole scene (live_control.cpp).
+inline uint64_t full_uploads_of(Simulation& sim) { return SimulationAccess::impl(sim).full_uploads_; }
 
 }  // namespace hmsm::detail

@@ -64,6 +64,9 @@ struct __attribute__((visibility("hidden"))) Simulation::Impl {
     mutable std::mutex read_mutex_;
     PassTimes times_;  // over the chunks of the last step() call
     uint64_t steps_done_ = 0;
+    /// Times add/remove re-uploaded the whole scene (capacity outgrown, or a backend that
+    /// cannot reshape in place); tests check that in-place changes leave it alone.
+    uint64_t full_uploads_ = 0;
 };
 
 }  // namespace hmsm

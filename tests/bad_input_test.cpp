@@ -440,6 +440,10 @@ public:
         if (lost_) return {ErrorCode::device_error, "failing test device: device lost (injected)"};
         return inner_->write(id, first, count, src, as);
     }
+    Status move_elements(detail::BufferId id, std::span<const detail::ElementMove> moves) override {
+        if (lost_) return {ErrorCode::device_error, "failing test device: device lost (injected)"};
+        return inner_->move_elements(id, moves);
+    }
     void set_profiling(bool enabled) override { inner_->set_profiling(enabled); }
     PassTimes pass_times() const override { return inner_->pass_times(); }
 

@@ -161,9 +161,9 @@ void expect_forces(Simulation& sim, double tau, std::span<const ForceField> fiel
     const uint32_t half = (data.jump_rounds - 1) & 1;
     std::vector<double> rot(data.total_chains * 12), org(data.total_chains * 4), force(data.total_chains * 2);
     auto& backend = detail::backend_of(sim);
-    ASSERT_TRUE(backend.read(BufferId::chain_rotation, half * data.total_chains, data.total_chains, rot.data(),
+    ASSERT_TRUE(backend.read(BufferId::chain_rotation, half * data.chain_capacity, data.total_chains, rot.data(),
                              detail::Scalar::f64).ok());
-    ASSERT_TRUE(backend.read(BufferId::chain_origin, half * data.total_chains, data.total_chains, org.data(),
+    ASSERT_TRUE(backend.read(BufferId::chain_origin, half * data.chain_capacity, data.total_chains, org.data(),
                              detail::Scalar::f64).ok());
     ASSERT_TRUE(sim.step().ok());
     ASSERT_TRUE(backend.read(BufferId::chain_force, 0, data.total_chains, force.data(), detail::Scalar::f64).ok());

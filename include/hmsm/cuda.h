@@ -16,7 +16,7 @@ struct CUstream_st;
 namespace hmsm::cuda {
 
 /// Device pointers of a simulation's outputs, valid until the Simulation is destroyed or its
-/// instances are added or removed (which reallocates them), and current after each step()
+/// instances are added or removed (which moves state and may reallocate), and current after each step()
 /// returns; nullptr (count 0) for outputs the simulation does not produce
 /// (SimulationConfig::outputs). Every element is 4 floats (a CUDA float4, 16-byte
 /// aligned), instance-major, in the order of Simulation::read.

@@ -159,8 +159,12 @@ public:
     Status set_instance_wind_phase(uint64_t instance, double wind_phase);
     Status set_instance_active(uint64_t instance, bool active);
     /// Appends instances of the scene's models; they start at rest (S = V = 0, posed at rest).
+    /// Within the capacity the device buffers have (spare after removals or an earlier growth)
+    /// this costs what the added instances cost; past it, the scene is uploaded anew once with
+    /// 1.5 times the capacity (docs/driving.md).
     Status add_instances(std::span<const Instance> instances);
-    /// Removes instances by their current indices (no repeats); the survivors keep their order.
+    /// Removes instances by their current indices (no repeats); the survivors keep their order
+    /// and their state, moved on the device (docs/driving.md).
     Status remove_instances(std::span<const uint64_t> indices);
     /// The current instance list (models are those of the scene given to create()).
     std::span<const Instance> instances() const;

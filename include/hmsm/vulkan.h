@@ -104,8 +104,9 @@ HMSM_API Result<DeviceHandles> device_handles(const Simulation& simulation);
 /// not collected for recorded steps. Live changes made since the last step (wind, force fields,
 /// instance settings) take effect in the recorded steps: record_steps uploads them, and the
 /// steps' wind clock, with small transfers it submits to the queue and waits for before it
-/// records. add_instances() and remove_instances() reallocate the simulation's buffers:
-/// SharedBuffers and any command buffer recorded before them are invalid afterwards.
+/// records. add_instances() and remove_instances() move state within the simulation's buffers
+/// and may reallocate them: SharedBuffers and any command buffer recorded before them are
+/// invalid afterwards.
 HMSM_API Status record_steps(Simulation& simulation, VkCommandBuffer command_buffer,
                              uint32_t count = 1);
 

@@ -142,7 +142,7 @@ struct PassConstants {
     uint round;               // pointer jumping: round r reads the 2^r-th ancestor (chain_jump); in-dispatch mode: number of rounds
     uint mode;                // HMSM_MODE_* (compose, root_positions); HMSM_VERTEX_LAYOUT_* (contour)
     uint profile;             // hmsm::WindProfile value
-    uint total_chains;        // state chains of the scene: stride between ping-pong halves
+    uint total_chains;        // allocated state chains: the stride between ping-pong halves
     uint total_model_chains;  // static chains of the scene: stride between chain_jump rounds
     uint src_half;            // ping-pong: half read (pose readers: the half holding R and O)
     uint dst_half;            // ping-pong: half written

@@ -172,28 +172,31 @@ private:
         s_.vertex_rest_normal = convert_vec4<T, vec4>(d.vertex_rest_normal);
         s_.vertex_parent_position = convert_vec4<T, vec4>(d.vertex_parent_position);
         s_.vertex_parent_normal = convert_vec4<T, vec4>(d.vertex_parent_normal);
+        // Instance and state buffers are allocated to the capacities (zeros past the live ones).
         s_.instance_origin = convert_vec4<T, vec4>(d.instance_origin);
+        s_.instance_origin.resize(d.element_count(BufferId::instance_origin), vec4(0));
         s_.instance_yaw = convert_vec4<T, vec4>(d.instance_yaw);
-        s_.instance_wind.assign(d.instance_count(), {});
-        for (size_t i = 0; i < s_.instance_wind.size(); ++i)
+        s_.instance_yaw.resize(d.element_count(BufferId::instance_yaw), vec4(0));
+        s_.instance_wind.assign(d.element_count(BufferId::instance_wind), {});
+        for (size_t i = 0; i < d.instance_count(); ++i)
             for (size_t k = 0; k < 36; ++k) s_.instance_wind[i][k] = T(d.instance_wind[36 * i + k]);
         s_.wind_table.assign(HMSM_WIND_TABLE_ELEMENTS, vec4(0));
-        s_.chain_state.assign(d.total_chains, vec4(0));
-        s_.chain_force.assign(d.total_chains, typename State<T>::vec2(0));
-        s_.chain_local.assign(d.total_chains, typename State<T>::mat3(0));
-        s_.chain_rotation.assign(2 * d.total_chains, typename State<T>::mat3(0));
-        s_.node_relative.assign(d.total_nodes, vec4(0));
-        s_.chain_origin.assign(2 * d.total_chains, vec4(0));
+        s_.chain_state.assign(d.element_count(BufferId::chain_state), vec4(0));
+        s_.chain_force.assign(d.element_count(BufferId::chain_force), typename State<T>::vec2(0));
+        s_.chain_local.assign(d.element_count(BufferId::chain_local), typename State<T>::mat3(0));
+        s_.chain_rotation.assign(d.element_count(BufferId::chain_rotation), typename State<T>::mat3(0));
+        s_.node_relative.assign(d.element_count(BufferId::node_relative), vec4(0));
+        s_.chain_origin.assign(d.element_count(BufferId::chain_origin), vec4(0));
         s_.node_world.assign(d.element_count(BufferId::node_world), vec4(0));  // 0 if not produced
         s_.vertex_position.assign(d.element_count(BufferId::vertex_position), vec4(0));
         s_.vertex_normal.assign(d.element_count(BufferId::vertex_normal), vec4(0));  // 0 if packed
-        s_.joint_matrix.assign(d.total_chains, typename State<T>::joint(0));
+        s_.joint_matrix.assign(d.element_count(BufferId::joint_matrix), typename State<T>::joint(0));
         s_.dt = T(d.dt);
         s_.max_angle = T(d.max_angle);
         s_.fix_weight = T(d.fix_weight);
         s_.profile = uint32_t(d.profile);
         s_.wind_vector = typename State<T>::vec3(d.wind_vector);
-        s_.total_chains = d.total_chains;
+        s_.total_chains = d.chain_capacity;  // the stride between ping-pong halves
     }
 
     void run_pass(const Dispatch& d, double wind_x) {
@@ -223,6 +226,20 @@ private:
         }
     }
 
+public:
+    Status move_elements(BufferId id, std::span<const ElementMove> moves) override {
+        for (const ElementMove& m : moves) {
+            HMSM_TRY(visit(s_, id, std::max(m.src, m.dst), m.count, [&](auto& buffer) {
+                const auto from = buffer.begin() + std::ptrdiff_t(m.src);
+                const auto to = buffer.begin() + std::ptrdiff_t(m.dst);
+                if (m.dst < m.src) std::copy(from, from + std::ptrdiff_t(m.count), to);
+                else std::copy_backward(from, from + std::ptrdiff_t(m.count), to + std::ptrdiff_t(m.count));
+            }));
+        }
+        return {};
+    }
+
+private:
     /// Calls f(buffer) for the host vector behind `id` after a range check.
     template <class F>
     static Status visit(State<T>& s, BufferId id, uint64_t first, uint64_t count, F&& f) {

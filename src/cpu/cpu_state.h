@@ -39,7 +39,7 @@ struct State {
     std::vector<vec4> chain_state;
     std::vector<vec2> chain_force;
     std::vector<mat3> chain_local;
-    std::vector<mat3> chain_rotation;  // two halves of total_chains
+    std::vector<mat3> chain_rotation;  // two halves of total_chains (the allocated chains)
     std::vector<vec4> node_relative;
     std::vector<vec4> chain_origin;    // two halves
     std::vector<vec4> node_world;

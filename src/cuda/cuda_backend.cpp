@@ -64,6 +64,11 @@ Status CudaBackend::write(BufferId id, uint64_t first, uint64_t count, const voi
     return buffers_.write(id, first, count, src, as, stream_);
 }
 
+Status CudaBackend::move_elements(BufferId id, std::span<const ElementMove> moves) {
+    HMSM_TRY(make_current());
+    return buffers_.move(id, moves, stream_);
+}
+
 Result<double> CudaBackend::measure_copy_bandwidth(uint64_t bytes) {
     HMSM_TRY(make_current());
     void* source = nullptr;

@@ -27,6 +27,7 @@ public:
     Status run(std::span<const Dispatch> program, std::span<const double> wind_x) override;
     Status read(BufferId id, uint64_t first, uint64_t count, void* dst, Scalar as) const override;
     Status write(BufferId id, uint64_t first, uint64_t count, const void* src, Scalar as) override;
+    Status move_elements(BufferId id, std::span<const ElementMove> moves) override;
     void set_profiling(bool enabled) override { profiling_ = enabled; }
     PassTimes pass_times() const override { return times_; }
 

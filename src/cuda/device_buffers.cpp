@@ -36,6 +36,9 @@ void DeviceBuffers::release() {
     }
     if (pinned_) (void)cudaFreeHost(pinned_);
     pinned_ = nullptr;
+    if (move_scratch_) (void)cudaFree(move_scratch_);
+    move_scratch_ = nullptr;
+    move_scratch_bytes_ = 0;
     counts_ = {};
     pointers_ = {};
 }
@@ -87,6 +90,33 @@ Status DeviceBuffers::upload(const SceneData& scene, cudaStream_t stream) {
         } else {
             CUDA_TRY(cudaMemsetAsync(bases_[b], 0, bytes, stream));
         }
+    }
+    CUDA_TRY(cudaStreamSynchronize(stream));
+    return {};
+}
+
+Status DeviceBuffers::move(BufferId id, std::span<const ElementMove> moves, cudaStream_t stream) {
+    const uint64_t element_bytes = device_element_bytes(id);
+    uint64_t largest = 0;
+    for (const ElementMove& m : moves) {
+        HMSM_TRY(check_range(id, m.src, m.count));
+        HMSM_TRY(check_range(id, m.dst, m.count));
+        if (m.src != m.dst) largest = std::max(largest, m.count * element_bytes);
+    }
+    if (largest == 0) return {};
+    if (move_scratch_bytes_ < largest) {
+        if (move_scratch_) CUDA_TRY(cudaFree(move_scratch_));
+        move_scratch_ = nullptr;
+        move_scratch_bytes_ = 0;
+        CUDA_TRY(cudaMalloc(&move_scratch_, largest));
+        move_scratch_bytes_ = largest;
+    }
+    auto* base = static_cast<std::byte*>(bases_[uint32_t(id)]);
+    for (const ElementMove& m : moves) {
+        if (m.src == m.dst || m.count == 0) continue;
+        const uint64_t bytes = m.count * element_bytes;
+        CUDA_TRY(cudaMemcpyAsync(move_scratch_, base + m.src * element_bytes, bytes, cudaMemcpyDeviceToDevice, stream));
+        CUDA_TRY(cudaMemcpyAsync(base + m.dst * element_bytes, move_scratch_, bytes, cudaMemcpyDeviceToDevice, stream));
     }
     CUDA_TRY(cudaStreamSynchronize(stream));
     return {};

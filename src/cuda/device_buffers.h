@@ -31,6 +31,10 @@ public:
     Status write(BufferId id, uint64_t first, uint64_t count, const void* src, Scalar as,
                  cudaStream_t stream);
 
+    /// Backend::move_elements: each move device-to-device through a scratch buffer (the ranges
+    /// may overlap), in stream order; complete on return.
+    Status move(BufferId id, std::span<const ElementMove> moves, cudaStream_t stream);
+
     const BufferPointers& pointers() const { return pointers_; }
     uint64_t element_count(BufferId id) const { return counts_[uint32_t(id)]; }
     /// Device memory held, in bytes.
@@ -45,6 +49,8 @@ private:
     std::byte* pinned_staging() const;
 
     std::array<void*, kBufferCount> bases_{};
+    void* move_scratch_ = nullptr;  // move(), grown on demand
+    uint64_t move_scratch_bytes_ = 0;
     mutable std::byte* pinned_ = nullptr;
     mutable bool pinned_refused_ = false;
     std::array<uint64_t, kBufferCount> counts_{};

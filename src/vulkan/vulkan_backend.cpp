@@ -155,6 +155,44 @@ Status VulkanBackend::upload(const SceneData& scene) {
     return device_->take_validation_messages();
 }
 
+Status VulkanBackend::move_elements(BufferId id, std::span<const ElementMove> moves) {
+    HMSM_TRY(check_device_lost());
+    if (!reshapes_in_place())
+        return {ErrorCode::unsupported, "vulkan: a scene split into windows cannot move state in place"};
+    const uint64_t element_bytes = device_element_bytes(id);
+    uint64_t largest = 0;
+    for (const ElementMove& m : moves) {
+        HMSM_TRY(check_range(id, m.src, m.count));
+        HMSM_TRY(check_range(id, m.dst, m.count));
+        if (m.src != m.dst) largest = std::max(largest, m.count * element_bytes);
+    }
+    if (largest == 0) return {};
+    if (move_scratch_.size() < largest) {
+        move_scratch_ = Buffer{};
+        auto scratch = Buffer::create(*device_, largest,
+                                      VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                                      MemoryUse::device_local, "state move scratch");
+        if (!scratch) return scratch.status();
+        move_scratch_ = std::move(scratch).value();
+    }
+    const VkBuffer buffer = buffers_[uint32_t(id)].handle();
+    HMSM_TRY(transfer_->submit([&](VkCommandBuffer cmd) {
+        const VolkDeviceTable& vk = device_->vk();
+        for (const ElementMove& m : moves) {
+            if (m.src == m.dst || m.count == 0) continue;
+            const VkBufferCopy out{m.src * element_bytes, 0, m.count * element_bytes};
+            vk.vkCmdCopyBuffer(cmd, buffer, move_scratch_.handle(), 1, &out);
+            barrier_after_all_writes(*device_, cmd, VK_PIPELINE_STAGE_TRANSFER_BIT,
+                                     VK_ACCESS_TRANSFER_READ_BIT | VK_ACCESS_TRANSFER_WRITE_BIT);
+            const VkBufferCopy back{0, m.dst * element_bytes, m.count * element_bytes};
+            vk.vkCmdCopyBuffer(cmd, move_scratch_.handle(), buffer, 1, &back);
+            barrier_after_all_writes(*device_, cmd, VK_PIPELINE_STAGE_TRANSFER_BIT,
+                                     VK_ACCESS_TRANSFER_READ_BIT | VK_ACCESS_TRANSFER_WRITE_BIT);
+        }
+    }));
+    return device_->take_validation_messages();
+}
+
 Status VulkanBackend::upload_static(BufferId id, const SceneData& scene) {
     const std::vector<std::byte> image = device_image(scene, id);
     return transfer_->upload(buffers_[uint32_t(id)], 0, image.size(),

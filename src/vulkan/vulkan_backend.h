@@ -30,6 +30,11 @@ public:
     Status run(std::span<const Dispatch> program, std::span<const double> wind_x) override;
     Status read(BufferId id, uint64_t first, uint64_t count, void* dst, Scalar as) const override;
     Status write(BufferId id, uint64_t first, uint64_t count, const void* src, Scalar as) override;
+    /// Each move copies through a device-local scratch buffer (vkCmdCopyBuffer forbids
+    /// overlapping regions), all in one submission.
+    Status move_elements(BufferId id, std::span<const ElementMove> moves) override;
+    /// Not for a scene split into windows: its ping-pong buffers are segment-major.
+    bool reshapes_in_place() const override { return plan_ && !plan_->split(); }
     void set_profiling(bool enabled) override { profiling_ = enabled; }
     PassTimes pass_times() const override { return times_; }
 
@@ -81,6 +86,7 @@ private:
     std::unique_ptr<Transfer> transfer_;
     std::array<Buffer, kBufferCount> buffers_;
     std::array<uint64_t, kBufferCount> element_counts_{};  // logical (read/write) counts
+    Buffer move_scratch_;  // move_elements(), grown on demand
     uint64_t window_bytes_ = 0;  // vulkan_set_window_bytes() when the backend was made; 0: none
     uint64_t window_alignment_ = 0;
     std::unique_ptr<WindowPlan> plan_;

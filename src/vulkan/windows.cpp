@@ -65,7 +65,7 @@ Result<WindowPlan> WindowPlan::build(const SceneData& scene, uint64_t window_byt
                                      const std::string& device_name) {
     WindowPlan plan;
     plan.window_bytes_ = window_bytes;
-    plan.total_chains_ = scene.total_chains;
+    plan.total_chains_ = scene.chain_capacity;  // logical half h starts at h * chain_capacity
     for (const InstanceGroup& g : scene.groups) plan.group_instances_[g.instance_begin] = g.instance_count;
     alignment = std::max<uint64_t>(alignment, 1);
 
@@ -77,15 +77,16 @@ Result<WindowPlan> WindowPlan::build(const SceneData& scene, uint64_t window_byt
     if (fits) {
         Segment s;
         s.instance_begin = 0;
+        // The window covers the allocated capacity (instances added later fit in it).
         s.instance_end = scene.instance_count();
-        s.instance = {0, 0, scene.instance_count()};
-        s.chain = {0, 0, scene.total_chains};
-        s.node = {0, 0, scene.total_nodes};
-        s.vertex = {0, 0, scene.total_vertices};
+        s.instance = {0, 0, scene.instance_capacity};
+        s.chain = {0, 0, scene.chain_capacity};
+        s.node = {0, 0, scene.node_capacity};
+        s.vertex = {0, 0, scene.vertex_capacity};
         s.halves_base = 0;
-        s.halves_stride = scene.total_chains;
+        s.halves_stride = scene.chain_capacity;
         plan.segments_.push_back(s);
-        plan.physical_halves_ = 2 * scene.total_chains;
+        plan.physical_halves_ = 2 * scene.chain_capacity;
         return plan;
     }
 

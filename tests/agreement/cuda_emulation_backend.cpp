@@ -3,6 +3,7 @@
 #include "cuda/launch_dispatch.h"
 #include "device_words.h"
 
+#include <cstring>
 #include <array>
 #include <string>
 #include <vector>
@@ -54,6 +55,17 @@ public:
         const detail::Shape shape = detail::buffer_info(id).shape;
         detail::scalars_to_words(shape, src, count * detail::shape_scalars(shape),
                                  bytes_[uint32_t(id)].data() + first * detail::device_element_bytes(id), as);
+        return {};
+    }
+
+    Status move_elements(BufferId id, std::span<const detail::ElementMove> moves) override {
+        const uint64_t element_bytes = detail::device_element_bytes(id);
+        for (const detail::ElementMove& m : moves) {
+            HMSM_TRY(check_range(id, m.src, m.count));
+            HMSM_TRY(check_range(id, m.dst, m.count));
+            std::byte* base = bytes_[uint32_t(id)].data();
+            std::memmove(base + m.dst * element_bytes, base + m.src * element_bytes, m.count * element_bytes);
+        }
         return {};
     }
 

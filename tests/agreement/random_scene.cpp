@@ -131,6 +131,7 @@ detail::SceneData random_scene_data(std::mt19937& rng, const std::vector<ModelSh
         d.total_nodes += range.node_count;
         d.total_vertices += range.vertex_count;
     }
+    d.fit_capacity();
     d.dt = 1.0 / 120.0;
     d.max_angle = 0.8;
     d.fix_weight = 0.4;

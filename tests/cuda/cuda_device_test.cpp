@@ -236,7 +236,7 @@ TEST(CudaErrors, OutOfMemoryNamesTheBufferAndKeepsTheDeviceUsable) {
     size_t free_bytes = 0, total_bytes = 0;
     ASSERT_EQ(cudaMemGetInfo(&free_bytes, &total_bytes), cudaSuccess);
     detail::SceneData huge;  // a "forest" whose vertex positions alone exceed device memory
-    huge.total_vertices = total_bytes / 16 + (1ull << 24);
+    huge.total_vertices = huge.vertex_capacity = total_bytes / 16 + (1ull << 24);
     const Status status = (*backend)->upload(huge);
     EXPECT_EQ(status.code(), ErrorCode::out_of_memory) << status.message();
     EXPECT_NE(status.message().find("vertex_position"), std::string::npos) << status.message();

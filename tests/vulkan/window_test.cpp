@@ -405,7 +405,7 @@ TEST_F(VulkanTest, BufferBeyondItsMemoryHeapIsRefusedBeforeAllocating) {
     std::mt19937 rng(3);
     detail::SceneData data = random_scene_data(rng, {{2, 3, 4}}, {0}, 1);
     // Only the element count matters: the heap is checked before anything is allocated.
-    data.total_vertices = largest_heap / 16 + 1;
+    data.total_vertices = data.vertex_capacity = largest_heap / 16 + 1;
     Status s = vulkan->upload(data);
     EXPECT_EQ(s.code(), ErrorCode::out_of_memory);
     EXPECT_NE(s.message().find("vertex_position"), std::string::npos) << s.message();

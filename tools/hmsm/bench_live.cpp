@@ -1,6 +1,9 @@
-// Add/remove costs: removing instances reallocates the device scene for the survivors and
-// carries their chain state over (src/live_control.cpp); this measures what that costs.
+// Live-control costs (src/live_control.cpp): removing instances moves the survivors' state on
+// the device, adding them back within the capacity writes only the added ones, adding past the
+// capacity re-uploads the scene once with room to grow; and a wind change between two steps.
 #include "bench_live.h"
+
+#include "simulation_access.h"
 
 #include <algorithm>
 #include <chrono>
@@ -41,6 +44,7 @@ nlohmann::json measure_live_control(const TreeModel& model, const std::vector<Ba
             std::vector<Instance> removed;
             for (uint32_t k = 0; k < count; ++k) indices[k] = uint64_t(k) * (forest / count);
             for (uint64_t i : indices) removed.push_back(s.instances()[i]);
+            const uint64_t uploads = detail::full_uploads_of(s);
             auto start = Clock::now();
             Status status = s.remove_instances(indices);
             const double remove_seconds = seconds_since(start);
@@ -57,6 +61,8 @@ nlohmann::json measure_live_control(const TreeModel& model, const std::vector<Ba
             } else {
                 entry["remove_seconds"] = remove_seconds;
                 entry["add_seconds"] = add_seconds;
+                // 0 when both happened in place (no scene upload).
+                entry["scene_uploads"] = detail::full_uploads_of(s) - uploads;
                 entry["first_step_seconds"] = first_step_seconds;
             }
             results.push_back(entry);
@@ -74,6 +80,20 @@ nlohmann::json measure_live_control(const TreeModel& model, const std::vector<Ba
         if (status)
             results.push_back({{"backend", to_string(kind)}, {"instances", forest}, {"set_wind_step_seconds", changed},
                                {"plain_step_seconds", plain}});
+        // Adding past the capacity (one re-upload, the capacity grows by half), then as many
+        // again, which now fit.
+        const std::vector<Instance> more(std::max(1u, forest / 10), s.instances()[0]);
+        const uint64_t uploads = detail::full_uploads_of(s);
+        start = Clock::now();
+        status = s.add_instances(more);
+        const double grow = seconds_since(start);
+        start = Clock::now();
+        if (status) status = s.add_instances(more);
+        const double fit = seconds_since(start);
+        if (status)
+            results.push_back({{"backend", to_string(kind)}, {"instances", forest}, {"added", more.size()},
+                               {"add_past_capacity_seconds", grow}, {"add_within_capacity_seconds", fit},
+                               {"scene_uploads", detail::full_uploads_of(s) - uploads}});
     }
     return results;
 }

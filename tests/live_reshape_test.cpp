@@ -1,0 +1,231 @@
+// Adding and removing instances in place (docs/driving.md): within the allocated capacity no
+// add or remove re-uploads the scene; survivors keep their state bit for bit; the result equals
+// the path that uploads the scene anew; added instances beyond the capacity grow it once.
+#include "test_trees.h"
+
+#include "backend.h"
+#include "simulation_access.h"
+
+#include <gtest/gtest.h>
+
+namespace hmsm {
+namespace {
+
+using detail::full_uploads_of;
+using detail::scene_data_of;
+
+/// Every output of `sim` in the precision its backend stores, one vector per output.
+std::vector<std::vector<float>> outputs_of(const Simulation& sim) {
+    std::vector<std::vector<float>> out;
+    for (Output o : {Output::node_positions, Output::vertex_positions, Output::vertex_normals,
+                     Output::chain_rotations, Output::chain_origins, Output::chain_angles,
+                     Output::joint_matrices}) {
+        out.emplace_back();
+        EXPECT_TRUE(sim.read(o, out.back()).ok()) << int(o);
+    }
+    return out;
+}
+
+/// The elements of instance `i` of output `values` (per-instance element counts in `sizes`).
+std::vector<float> instance_slice(const std::vector<float>& values, const std::vector<uint64_t>& sizes,
+                                  size_t i) {
+    uint64_t first = 0;
+    for (size_t k = 0; k < i; ++k) first += sizes[k];
+    return {values.begin() + std::ptrdiff_t(first), values.begin() + std::ptrdiff_t(first + sizes[i])};
+}
+
+/// Scalars per instance of every output of outputs_of (nodes, vertices x2, rotations, origins,
+/// angles, joints).
+std::vector<std::vector<uint64_t>> instance_sizes(const Simulation& sim) {
+    std::vector<std::vector<uint64_t>> sizes(7);
+    for (const Instance& inst : sim.instances()) {
+        const uint64_t chains = sim.hierarchy(inst.model).chains.size();
+        const uint64_t nodes = sim.hierarchy(inst.model).node_owner.size();
+        const uint64_t vertices = sim.mesh(inst.model).vertices.size();
+        const uint64_t per[] = {3 * nodes, 3 * vertices, 3 * vertices, 9 * chains, 3 * chains, 4 * chains, 12 * chains};
+        for (size_t o = 0; o < 7; ++o) sizes[o].push_back(per[o]);
+    }
+    return sizes;
+}
+
+Scene two_model_forest() {
+    Scene scene = *grid_scene(test::small_tree(), 7, 5.0, 11);
+    scene.models.push_back(test::deep_tree(4));
+    scene.model_names.push_back("deep");
+    scene.instances.insert(scene.instances.begin() + 3, Instance{1, {-6, 0, 8}, 0.4});
+    scene.instances.push_back({1, {9, 0, -3}, 1.9, 0.7, 0.3});
+    scene.instances[5].active = false;
+    return scene;
+}
+
+SimulationConfig windy() {
+    SimulationConfig config;
+    config.wind.profile = WindProfile::y4;
+    config.wind.strength = 12.0;
+    config.wind.direction = {1.0, 0.2, 0.6};
+    config.wind.frequency = 0.7;
+    return config;
+}
+
+/// A backend that cannot reshape in place: every add and remove takes the upload path.
+class UploadsAnew final : public detail::Backend {
+public:
+    explicit UploadsAnew(std::unique_ptr<detail::Backend> inner) : inner_(std::move(inner)) {}
+    BackendKind kind() const override { return inner_->kind(); }
+    std::string device_name() const override { return inner_->device_name(); }
+    Status upload(const detail::SceneData& scene) override { return inner_->upload(scene); }
+    Status run(std::span<const detail::Dispatch> program, std::span<const double> wind_x) override {
+        return inner_->run(program, wind_x);
+    }
+    Status read(detail::BufferId id, uint64_t first, uint64_t count, void* dst, detail::Scalar as) const override {
+        return inner_->read(id, first, count, dst, as);
+    }
+    Status write(detail::BufferId id, uint64_t first, uint64_t count, const void* src, detail::Scalar as) override {
+        return inner_->write(id, first, count, src, as);
+    }
+    Status move_elements(detail::BufferId, std::span<const detail::ElementMove>) override {
+        return {ErrorCode::internal, "UploadsAnew moves nothing"};
+    }
+    bool reshapes_in_place() const override { return false; }
+    void set_profiling(bool enabled) override { inner_->set_profiling(enabled); }
+    PassTimes pass_times() const override { return inner_->pass_times(); }
+    bool dispatches_are_expensive() const override { return inner_->dispatches_are_expensive(); }
+
+private:
+    std::unique_ptr<detail::Backend> inner_;
+};
+
+class LiveReshape : public ::testing::TestWithParam<BackendKind> {
+protected:
+    std::unique_ptr<Simulation> create(const Scene& scene, bool in_place, std::string& skip) {
+        auto sim = test::create_simulation_or_skip(scene, windy(), GetParam(), skip);
+        if (!sim || in_place) return sim;
+        // The same backend kind behind a wrapper that refuses to reshape in place.
+        auto backend = detail::create_backend(GetParam());
+        if (!backend) return nullptr;
+        auto anew = detail::SimulationAccess::create(
+            scene, windy(), std::make_unique<UploadsAnew>(std::move(backend).value()));
+        EXPECT_TRUE(anew.ok()) << anew.status().message();
+        return anew ? std::move(anew).value() : nullptr;
+    }
+};
+
+// Removal moves the survivors' state on the device: no upload, every survivor's outputs bit for
+// bit what they were, inactive ones included.
+TEST_P(LiveReshape, RemovalKeepsSurvivorsBitwiseWithoutUpload) {
+    std::string skip;
+    auto sim = create(two_model_forest(), true, skip);
+    if (!skip.empty()) GTEST_SKIP() << skip;
+    ASSERT_TRUE(sim);
+    ASSERT_TRUE(sim->step(25).ok());
+    const auto before = outputs_of(*sim);
+    const auto before_sizes = instance_sizes(*sim);
+    const uint64_t gone[] = {0, 4, 6};
+    ASSERT_TRUE(sim->remove_instances(gone).ok());
+    EXPECT_EQ(full_uploads_of(*sim), 0u);
+    const auto after = outputs_of(*sim);
+    const auto after_sizes = instance_sizes(*sim);
+    const size_t survivors[] = {1, 2, 3, 5, 7, 8};
+    ASSERT_EQ(sim->instance_count(), std::size(survivors));
+    for (size_t o = 0; o < after.size(); ++o)
+        for (size_t k = 0; k < std::size(survivors); ++k)
+            EXPECT_EQ(instance_slice(after[o], after_sizes[o], k),
+                      instance_slice(before[o], before_sizes[o], survivors[k]))
+                << "output " << o << ", survivor " << survivors[k];
+}
+
+// Removing and adding in place gives bitwise what uploading the scene anew gives, through
+// further steps, several changes and both models.
+TEST_P(LiveReshape, InPlaceEqualsUploadingAnew) {
+    std::string skip;
+    auto in_place = create(two_model_forest(), true, skip);
+    if (!skip.empty()) GTEST_SKIP() << skip;
+    auto anew = create(two_model_forest(), false, skip);
+    ASSERT_TRUE(in_place && anew);
+    auto change = [](Simulation& sim, int round) {
+        const uint64_t gone[] = {uint64_t(round), 3};
+        ASSERT_TRUE(sim.remove_instances(gone).ok());
+        const Instance added[] = {{1, {12, 0, double(round)}, 0.2 * round}, {0, {-9, 0, 4}, 1.0, 0.5, 0.1}};
+        ASSERT_TRUE(sim.add_instances(added).ok());
+        ASSERT_TRUE(sim.set_instance_active(2, round % 2 == 0).ok());
+    };
+    for (int round = 0; round < 3; ++round) {
+        ASSERT_TRUE(in_place->step(15).ok());
+        ASSERT_TRUE(anew->step(15).ok());
+        change(*in_place, round);
+        change(*anew, round);
+        EXPECT_EQ(outputs_of(*in_place), outputs_of(*anew)) << "right after round " << round;
+    }
+    ASSERT_TRUE(in_place->step(20).ok());
+    ASSERT_TRUE(anew->step(20).ok());
+    EXPECT_EQ(outputs_of(*in_place), outputs_of(*anew));
+    EXPECT_EQ(full_uploads_of(*in_place), 0u) << "every change fitted the capacity";
+    EXPECT_EQ(full_uploads_of(*anew), 6u);
+}
+
+// Adding past the capacity uploads once and grows the capacity by half, so that the next adds
+// fit; removing never gives memory back.
+TEST_P(LiveReshape, AddingPastTheCapacityGrowsItOnce) {
+    std::string skip;
+    auto sim = create(two_model_forest(), true, skip);
+    if (!skip.empty()) GTEST_SKIP() << skip;
+    ASSERT_TRUE(sim);
+    ASSERT_TRUE(sim->step(5).ok());
+    const uint64_t chains = scene_data_of(*sim).chain_capacity;
+    const Instance one[] = {{0, {30, 0, 0}, 0.5}};
+    ASSERT_TRUE(sim->add_instances(one).ok());
+    EXPECT_EQ(full_uploads_of(*sim), 1u);
+    EXPECT_GE(scene_data_of(*sim).chain_capacity, chains + chains / 2);
+    ASSERT_TRUE(sim->step(5).ok());
+    for (int k = 0; k < 3; ++k) ASSERT_TRUE(sim->add_instances(one).ok());
+    EXPECT_EQ(full_uploads_of(*sim), 1u) << "the grown capacity holds three more";
+    const uint64_t gone[] = {0, 1, 2, 3, 4};
+    ASSERT_TRUE(sim->remove_instances(gone).ok());
+    EXPECT_EQ(full_uploads_of(*sim), 1u);
+    ASSERT_TRUE(sim->step(10).ok());
+    std::vector<float> nodes;
+    ASSERT_TRUE(sim->read(Output::node_positions, nodes).ok());
+    EXPECT_TRUE(test::all_finite(std::vector<double>(nodes.begin(), nodes.end())));
+}
+
+// Added instances start at rest wherever they land, also in space a removed instance left.
+TEST_P(LiveReshape, AddedInstancesStartAtRest) {
+    std::string skip;
+    auto sim = create(two_model_forest(), true, skip);
+    if (!skip.empty()) GTEST_SKIP() << skip;
+    ASSERT_TRUE(sim);
+    ASSERT_TRUE(sim->step(30).ok());
+    const uint64_t gone[] = {1, 2};
+    ASSERT_TRUE(sim->remove_instances(gone).ok());
+    const Instance added[] = {{0, {0, 0, 0}, 0.0}};
+    ASSERT_TRUE(sim->add_instances(added).ok());
+    EXPECT_EQ(full_uploads_of(*sim), 0u);
+    std::vector<float> angles;
+    ASSERT_TRUE(sim->read(Output::chain_angles, angles).ok());
+    const auto sizes = instance_sizes(*sim);
+    const auto last = instance_slice(angles, sizes[5], sim->instance_count() - 1);
+    for (float a : last) EXPECT_EQ(a, 0.0f);
+    // Its nodes are the model's rest pose at the origin.
+    std::vector<float> nodes;
+    ASSERT_TRUE(sim->read(Output::node_positions, nodes).ok());
+    const auto rest = instance_slice(nodes, sizes[0], sim->instance_count() - 1);
+    const TreeModel& model = sim->scene().models[0];
+    size_t root = 0;
+    while (model.nodes[root].parent >= 0) ++root;
+    for (size_t n = 0; n < model.nodes.size(); ++n)
+        for (int c = 0; c < 3; ++c)
+            EXPECT_NEAR(rest[3 * n + size_t(c)], model.nodes[n].position[c] - model.nodes[root].position[c], 1e-5);
+}
+
+INSTANTIATE_TEST_SUITE_P(Backends, LiveReshape,
+                         ::testing::Values(BackendKind::cpu64, BackendKind::cpu, BackendKind::cpu_parallel,
+                                           BackendKind::vulkan, BackendKind::cuda),
+                         [](const auto& info) {
+                             std::string name = to_string(info.param);
+                             for (char& c : name)
+                                 if (c == '-') c = '_';
+                             return name;
+                         });
+
+}  // namespace
+}  // namespace hmsm
