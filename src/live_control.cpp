@@ -1,5 +1,5 @@
 // Live control between steps (docs/model.md 3.9): wind, force fields, per-instance settings,
-// adding and removing instances.
+// adding and removing instances (their reshaping of the device scene: live_reshape.cpp).
 #include <hmsm/simulation.h>
 
 #include "simulation_impl.h"
@@ -8,8 +8,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <iterator>
-#include <limits>
 #include <string>
 
 namespace hmsm {
@@ -71,27 +69,6 @@ std::vector<detail::InstanceGroup> active_groups(const detail::SceneData& d,
     return runs;
 }
 
-/// The groups covering instances [first, end) of `d`.
-std::vector<detail::InstanceGroup> groups_from(const detail::SceneData& d, uint32_t first) {
-    std::vector<detail::InstanceGroup> out;
-    for (const detail::InstanceGroup& g : d.groups) {
-        if (g.instance_begin + g.instance_count <= first) continue;
-        detail::InstanceGroup part = g;
-        if (g.instance_begin < first) {
-            const uint32_t k = first - g.instance_begin;
-            const detail::ModelRange& m = d.models[g.model];
-            part.instance_begin = first;
-            part.instance_count = g.instance_count - k;
-            part.chain_begin += k * m.chain_count;
-            part.node_begin += k * m.node_count;
-            part.vertex_begin += k * m.vertex_count;
-        }
-        out.push_back(part);
-    }
-    return out;
-}
-
-uint32_t pass_bit(Pass pass) { return 1u << uint32_t(pass); }
 
 }  // namespace
 
@@ -130,176 +107,6 @@ Status Simulation::Impl::apply_pending() {
         program_dirty_ = false;
     }
     return {};
-}
-
-namespace {
-
-/// Capacity after growing to hold `needed`: 1.5 times the current one, so that adding
-/// instances one at a time reallocates O(log n) times; never past `limit`.
-uint64_t grown(uint64_t current, uint64_t needed, uint64_t limit) {
-    if (needed <= current) return current;
-    return std::max(needed, std::min(limit, current + current / 2));
-}
-
-}  // namespace
-
-Status Simulation::Impl::reshape(const std::vector<uint32_t>& survivors, std::span<const Instance> added) {
-    using detail::BufferId;
-    std::vector<Instance> next;
-    next.reserve(survivors.size() + added.size());
-    for (uint32_t i : survivors) next.push_back(instances_[i]);
-    next.insert(next.end(), added.begin(), added.end());
-    HMSM_TRY(check_size(next));
-
-    Scene layout;  // flatten_scene reads only the instances; models come from the hierarchies
-    layout.instances = next;
-    auto data = std::make_unique<detail::SceneData>(detail::flatten_scene(
-        layout, hierarchies_, meshes_, config_.parameters, config_.model, config_.wind));
-    data->vertex_layout = config_.vertex_layout;
-    data->outputs = config_.outputs;
-    const detail::SceneData& old = *data_;
-
-    // Per old instance: first state chain (chains carry the state; nodes and vertices are
-    // recomputed from R and O below).
-    std::vector<uint64_t> old_chain(instances_.size() + 1, 0);
-    for (size_t i = 0; i < instances_.size(); ++i)
-        old_chain[i + 1] = old_chain[i] + old.models[instances_[i].model].chain_count;
-    // The chain-scope state: S, V, g, T, the joint matrices and both halves of R and O.
-    const BufferId carried[] = {BufferId::chain_state, BufferId::chain_force, BufferId::chain_local,
-                                BufferId::joint_matrix, BufferId::chain_rotation, BufferId::chain_origin};
-    // First new instance whose state is not where it was (its outputs are recomputed).
-    uint32_t first_moved = uint32_t(survivors.size());
-    for (uint32_t k = 0; k < survivors.size(); ++k)
-        if (survivors[k] != k) {
-            first_moved = k;
-            break;
-        }
-
-    if (backend_->reshapes_in_place() && old.holds(*data)) {
-        // In place: the buffers keep their allocation and static data; survivors' state moves
-        // down on the device, the instance buffers and the added instances' state are written.
-        data->chain_capacity = old.chain_capacity;
-        data->node_capacity = old.node_capacity;
-        data->vertex_capacity = old.vertex_capacity;
-        data->instance_capacity = old.instance_capacity;
-        std::vector<detail::ElementMove> moves;  // in chains, ascending: sources never overwritten early
-        uint64_t at = 0;
-        for (uint32_t k = 0; k < survivors.size(); ++k) {
-            const uint64_t from = old_chain[survivors[k]], n = old_chain[survivors[k] + 1] - from;
-            if (from != at) {
-                if (!moves.empty() && moves.back().src + moves.back().count == from &&
-                    moves.back().dst + moves.back().count == at)
-                    moves.back().count += n;
-                else
-                    moves.push_back({from, at, n});
-            }
-            at += n;
-        }
-        for (BufferId id : carried) {
-            const bool halves = detail::buffer_info(id).scope == detail::Scope::chain_halves;
-            std::vector<detail::ElementMove> in_buffer;
-            for (uint64_t h = 0; h < (halves ? 2u : 1u); ++h)
-                for (detail::ElementMove m : moves) {
-                    m.src += h * data->chain_capacity;
-                    m.dst += h * data->chain_capacity;
-                    in_buffer.push_back(m);
-                }
-            HMSM_TRY(backend_->move_elements(id, in_buffer));
-        }
-        // Added instances start at rest: S = V = 0 and g = 0 (the rest is computed below).
-        const uint64_t added_chains = data->total_chains - at;
-        if (added_chains > 0) {
-            const std::vector<double> zeros(added_chains * 4, 0.0);
-            HMSM_TRY(backend_->write(BufferId::chain_state, at, added_chains, zeros.data(), detail::Scalar::f64));
-            HMSM_TRY(backend_->write(BufferId::chain_force, at, added_chains, zeros.data(), detail::Scalar::f64));
-        }
-        // Origins and yaws from the first instance that changed place.
-        const uint32_t first_changed = first_moved;
-        const uint64_t changed = data->instance_count() - first_changed;
-        if (changed > 0) {
-            std::vector<double> values(changed * 4);
-            for (BufferId id : {BufferId::instance_origin, BufferId::instance_yaw}) {
-                const auto& source = id == BufferId::instance_origin ? data->instance_origin : data->instance_yaw;
-                for (uint64_t i = 0; i < changed; ++i)
-                    for (int c = 0; c < 4; ++c) values[4 * i + c] = source[first_changed + i][c];
-                HMSM_TRY(backend_->write(id, first_changed, changed, values.data(), detail::Scalar::f64));
-            }
-        }
-        data_ = std::move(data);
-    } else {
-        // Anew: read the state back in the precision the backend stores it in (so that it
-        // carries over bit for bit), allocate with room to grow, upload, write the state back.
-        const uint64_t limit = std::numeric_limits<uint32_t>::max() / 2;
-        data->chain_capacity = grown(old.chain_capacity, data->total_chains, limit);
-        data->node_capacity = grown(old.node_capacity, data->total_nodes, limit);
-        data->vertex_capacity = grown(old.vertex_capacity, data->total_vertices, limit);
-        data->instance_capacity = uint32_t(grown(old.instance_capacity, data->instance_count(), 1u << 24));
-        const detail::Scalar scalar = backend_->kind() == BackendKind::cpu64 ? detail::Scalar::f64 : detail::Scalar::f32;
-        struct Saved {
-            std::vector<double> f64;
-            std::vector<float> f32;
-        };
-        std::vector<Saved> saved(std::size(carried));
-        // Per buffer, the live chains of each half, halves back to back (a scene split into
-        // windows maps no element past the live ones).
-        const uint64_t live = old.total_chains;
-        for (size_t b = 0; b < std::size(carried); ++b) {
-            const uint32_t per = detail::shape_scalars(detail::buffer_info(carried[b]).shape);
-            const uint32_t halves = detail::buffer_info(carried[b]).scope == detail::Scope::chain_halves ? 2 : 1;
-            if (scalar == detail::Scalar::f64) saved[b].f64.resize(halves * live * per);
-            else saved[b].f32.resize(halves * live * per);
-            for (uint32_t h = 0; h < halves; ++h) {
-                void* dst = scalar == detail::Scalar::f64 ? static_cast<void*>(saved[b].f64.data() + h * live * per)
-                                                          : static_cast<void*>(saved[b].f32.data() + h * live * per);
-                HMSM_TRY(backend_->read(carried[b], h * old.chain_capacity, live, dst, scalar));
-            }
-        }
-        HMSM_TRY(backend_->upload(*data));
-        data_ = std::move(data);
-        // Per buffer and half, the survivors' chains in their new order (the live chains only:
-        // a scene split into windows maps no element past them).
-        for (size_t b = 0; b < std::size(carried); ++b) {
-            const uint32_t per = detail::shape_scalars(detail::buffer_info(carried[b]).shape);
-            const bool halves = detail::buffer_info(carried[b]).scope == detail::Scope::chain_halves;
-            auto carry = [&](auto& values) -> Status {
-                using V = typename std::decay_t<decltype(values)>::value_type;
-                std::vector<V> out(old_chain[instances_.size()] * per);
-                for (uint32_t h = 0; h < (halves ? 2u : 1u); ++h) {
-                    uint64_t at = 0;
-                    for (uint32_t i : survivors) {
-                        const uint64_t from = h * live + old_chain[i];
-                        const uint64_t n = old_chain[i + 1] - old_chain[i];
-                        std::copy_n(values.begin() + from * per, n * per, out.begin() + at * per);
-                        at += n;
-                    }
-                    HMSM_TRY(backend_->write(carried[b], h * data_->chain_capacity, at, out.data(), scalar));
-                }
-                return {};
-            };
-            HMSM_TRY(scalar == detail::Scalar::f64 ? carry(saved[b].f64) : carry(saved[b].f32));
-        }
-        first_moved = 0;  // every output buffer is new
-        ++full_uploads_;
-    }
-    instances_ = std::move(next);
-    header_dirty_ = instance_wind_dirty_ = program_dirty_ = true;
-
-    // Survivors whose state moved: node positions and vertices are a pure function of the
-    // carried R and O (passes 4, 6, 7 map elements one to one), so recomputing them restores
-    // them exactly. Added instances are posed at rest from S = V = 0.
-    const double no_wind[1] = {0.0};
-    const uint32_t first_added = uint32_t(survivors.size());
-    std::vector<detail::InstanceGroup> moved;
-    for (detail::InstanceGroup g : groups_from(*data_, first_moved)) {
-        if (g.instance_begin >= first_added) continue;
-        g.instance_count = std::min(g.instance_count, first_added - g.instance_begin);
-        moved.push_back(g);
-    }
-    const uint32_t outputs = pass_bit(Pass::node_relative) | pass_bit(Pass::node_world) | pass_bit(Pass::contour);
-    if (!moved.empty()) HMSM_TRY(backend_->run(program_for(moved, Pass::node_relative, outputs), no_wind));
-    if (!added.empty())
-        HMSM_TRY(backend_->run(program_for(groups_from(*data_, first_added), Pass::integrate), no_wind));
-    return apply_pending();
 }
 
 Status Simulation::set_wind(const Wind& wind) {

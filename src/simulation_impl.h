@@ -31,6 +31,13 @@ struct __attribute__((visibility("hidden"))) Simulation::Impl {
     /// Replaces the instance list: survivors (old indices, in order) then `added`; carries the
     /// survivors' state over and poses the added instances at rest (live_control.cpp).
     Status reshape(const std::vector<uint32_t>& survivors, std::span<const Instance> added);
+    /// reshape() within the capacity: moves state on the device, writes the added instances.
+    Status reshape_in_place(std::unique_ptr<detail::SceneData> next, const std::vector<uint32_t>& survivors,
+                            const std::vector<uint64_t>& old_chain, uint32_t first_moved);
+    /// reshape() past the capacity: reads the state back, uploads `next` with room to grow,
+    /// writes the state back.
+    Status reshape_anew(std::unique_ptr<detail::SceneData> next, const std::vector<uint32_t>& survivors,
+                        const std::vector<uint64_t>& old_chain);
     /// Checks that `instances` fit the 32-bit element counts of the device layout.
     Status check_size(std::span<const Instance> instances) const;
     /// Checks that the wind keeps every force and phase finite for `instances`.

@@ -1,0 +1,217 @@
+// Adding and removing instances (docs/model.md 3.9, docs/driving.md): the instance list is
+// replaced by the survivors followed by the added instances, every survivor keeps its state bit
+// for bit, and the device scene is kept where the capacity allows (in place) or uploaded anew
+// with room to grow.
+#include "simulation_impl.h"
+
+#include <algorithm>
+#include <limits>
+
+namespace hmsm {
+
+namespace {
+
+using detail::BufferId;
+
+/// The chain-scope state an instance carries: S, V, g, T, the joint matrices and both halves
+/// of R and O. Nodes and vertices are recomputed from R and O.
+constexpr BufferId kCarried[] = {BufferId::chain_state, BufferId::chain_force, BufferId::chain_local,
+                                 BufferId::joint_matrix, BufferId::chain_rotation, BufferId::chain_origin};
+
+uint32_t halves_of(BufferId id) {
+    return detail::buffer_info(id).scope == detail::Scope::chain_halves ? 2u : 1u;
+}
+
+/// Capacity after growing to hold `needed`: 1.5 times the current one, so that adding
+/// instances one at a time re-uploads O(log n) times; never past `limit`.
+uint64_t grown(uint64_t current, uint64_t needed, uint64_t limit) {
+    if (needed <= current) return current;
+    return std::max(needed, std::min(limit, current + current / 2));
+}
+
+/// The groups covering instances [first, end) of `d`.
+std::vector<detail::InstanceGroup> groups_from(const detail::SceneData& d, uint32_t first) {
+    std::vector<detail::InstanceGroup> out;
+    for (const detail::InstanceGroup& g : d.groups) {
+        if (g.instance_begin + g.instance_count <= first) continue;
+        detail::InstanceGroup part = g;
+        if (g.instance_begin < first) {
+            const uint32_t k = first - g.instance_begin;
+            const detail::ModelRange& m = d.models[g.model];
+            part.instance_begin = first;
+            part.instance_count = g.instance_count - k;
+            part.chain_begin += k * m.chain_count;
+            part.node_begin += k * m.node_count;
+            part.vertex_begin += k * m.vertex_count;
+        }
+        out.push_back(part);
+    }
+    return out;
+}
+
+
+}  // namespace
+
+Status Simulation::Impl::reshape(const std::vector<uint32_t>& survivors, std::span<const Instance> added) {
+    std::vector<Instance> next;
+    next.reserve(survivors.size() + added.size());
+    for (uint32_t i : survivors) next.push_back(instances_[i]);
+    next.insert(next.end(), added.begin(), added.end());
+    HMSM_TRY(check_size(next));
+
+    Scene layout;  // flatten_scene reads only the instances; models come from the hierarchies
+    layout.instances = next;
+    auto data = std::make_unique<detail::SceneData>(detail::flatten_scene(
+        layout, hierarchies_, meshes_, config_.parameters, config_.model, config_.wind));
+    data->vertex_layout = config_.vertex_layout;
+    data->outputs = config_.outputs;
+
+    // Per old instance: its first state chain.
+    std::vector<uint64_t> old_chain(instances_.size() + 1, 0);
+    for (size_t i = 0; i < instances_.size(); ++i)
+        old_chain[i + 1] = old_chain[i] + data_->models[instances_[i].model].chain_count;
+    // The first new instance whose state is not where it was.
+    uint32_t first_moved = uint32_t(survivors.size());
+    for (uint32_t k = 0; k < survivors.size(); ++k)
+        if (survivors[k] != k) {
+            first_moved = k;
+            break;
+        }
+
+    if (backend_->reshapes_in_place() && data_->holds(*data)) {
+        HMSM_TRY(reshape_in_place(std::move(data), survivors, old_chain, first_moved));
+    } else {
+        HMSM_TRY(reshape_anew(std::move(data), survivors, old_chain));
+        first_moved = 0;  // every output buffer is new
+    }
+    instances_ = std::move(next);
+    header_dirty_ = instance_wind_dirty_ = program_dirty_ = true;
+
+    // Survivors whose state moved: node positions and vertices are a pure function of the
+    // carried R and O (passes 4, 6, 7 map elements one to one), so recomputing them restores
+    // them exactly. Added instances are posed at rest from S = V = 0.
+    const double no_wind[1] = {0.0};
+    const uint32_t first_added = uint32_t(survivors.size());
+    std::vector<detail::InstanceGroup> moved;
+    for (detail::InstanceGroup g : groups_from(*data_, first_moved)) {
+        if (g.instance_begin >= first_added) continue;
+        g.instance_count = std::min(g.instance_count, first_added - g.instance_begin);
+        moved.push_back(g);
+    }
+    const uint32_t outputs = (1u << uint32_t(Pass::node_relative)) | (1u << uint32_t(Pass::node_world)) |
+                             (1u << uint32_t(Pass::contour));
+    if (!moved.empty()) HMSM_TRY(backend_->run(program_for(moved, Pass::node_relative, outputs), no_wind));
+    if (!added.empty())
+        HMSM_TRY(backend_->run(program_for(groups_from(*data_, first_added), Pass::integrate), no_wind));
+    return apply_pending();
+}
+
+Status Simulation::Impl::reshape_in_place(std::unique_ptr<detail::SceneData> next,
+                                          const std::vector<uint32_t>& survivors,
+                                          const std::vector<uint64_t>& old_chain, uint32_t first_moved) {
+    // The buffers keep their allocation and static data: survivors' state moves down on the
+    // device, the instance buffers and the added instances' state are written.
+    next->chain_capacity = data_->chain_capacity;
+    next->node_capacity = data_->node_capacity;
+    next->vertex_capacity = data_->vertex_capacity;
+    next->instance_capacity = data_->instance_capacity;
+    std::vector<detail::ElementMove> moves;  // in chains, ascending: no source is overwritten early
+    uint64_t at = 0;
+    for (uint32_t k = 0; k < survivors.size(); ++k) {
+        const uint64_t from = old_chain[survivors[k]], n = old_chain[survivors[k] + 1] - from;
+        if (from != at) {
+            if (!moves.empty() && moves.back().src + moves.back().count == from &&
+                moves.back().dst + moves.back().count == at)
+                moves.back().count += n;
+            else
+                moves.push_back({from, at, n});
+        }
+        at += n;
+    }
+    for (BufferId id : kCarried) {
+        std::vector<detail::ElementMove> in_buffer;
+        for (uint64_t h = 0; h < halves_of(id); ++h)
+            for (detail::ElementMove m : moves) {
+                m.src += h * next->chain_capacity;
+                m.dst += h * next->chain_capacity;
+                in_buffer.push_back(m);
+            }
+        HMSM_TRY(backend_->move_elements(id, in_buffer));
+    }
+    // Added instances start at rest: S = V = 0 and g = 0 (T, R, O are computed from them).
+    const uint64_t added_chains = next->total_chains - at;
+    if (added_chains > 0) {
+        const std::vector<double> zeros(added_chains * 4, 0.0);
+        HMSM_TRY(backend_->write(BufferId::chain_state, at, added_chains, zeros.data(), detail::Scalar::f64));
+        HMSM_TRY(backend_->write(BufferId::chain_force, at, added_chains, zeros.data(), detail::Scalar::f64));
+    }
+    // Origins and yaws from the first instance that changed place on.
+    const uint64_t changed = next->instance_count() - first_moved;
+    if (changed > 0) {
+        std::vector<double> values(changed * 4);
+        for (BufferId id : {BufferId::instance_origin, BufferId::instance_yaw}) {
+            const auto& source = id == BufferId::instance_origin ? next->instance_origin : next->instance_yaw;
+            for (uint64_t i = 0; i < changed; ++i)
+                for (int c = 0; c < 4; ++c) values[4 * i + c] = source[first_moved + i][c];
+            HMSM_TRY(backend_->write(id, first_moved, changed, values.data(), detail::Scalar::f64));
+        }
+    }
+    data_ = std::move(next);
+    return {};
+}
+
+Status Simulation::Impl::reshape_anew(std::unique_ptr<detail::SceneData> next,
+                                      const std::vector<uint32_t>& survivors,
+                                      const std::vector<uint64_t>& old_chain) {
+    // Read the state back in the precision the backend stores it in (so that it carries over
+    // bit for bit), allocate with room to grow, upload, write the state back. Only live chains
+    // are read and written: a scene split into windows maps no element past them.
+    const uint64_t limit = std::numeric_limits<uint32_t>::max() / 2;
+    next->chain_capacity = grown(data_->chain_capacity, next->total_chains, limit);
+    next->node_capacity = grown(data_->node_capacity, next->total_nodes, limit);
+    next->vertex_capacity = grown(data_->vertex_capacity, next->total_vertices, limit);
+    next->instance_capacity = uint32_t(grown(data_->instance_capacity, next->instance_count(), 1u << 24));
+    const detail::Scalar scalar = backend_->kind() == BackendKind::cpu64 ? detail::Scalar::f64 : detail::Scalar::f32;
+    struct Saved {
+        std::vector<double> f64;
+        std::vector<float> f32;
+    };
+    std::vector<Saved> saved(std::size(kCarried));  // per buffer, the halves back to back
+    const uint64_t live = data_->total_chains;
+    for (size_t b = 0; b < std::size(kCarried); ++b) {
+        const uint32_t per = detail::shape_scalars(detail::buffer_info(kCarried[b]).shape);
+        const uint64_t scalars = halves_of(kCarried[b]) * live * per;
+        if (scalar == detail::Scalar::f64) saved[b].f64.resize(scalars);
+        else saved[b].f32.resize(scalars);
+        for (uint32_t h = 0; h < halves_of(kCarried[b]); ++h) {
+            void* dst = scalar == detail::Scalar::f64 ? static_cast<void*>(saved[b].f64.data() + h * live * per)
+                                                      : static_cast<void*>(saved[b].f32.data() + h * live * per);
+            HMSM_TRY(backend_->read(kCarried[b], h * data_->chain_capacity, live, dst, scalar));
+        }
+    }
+    HMSM_TRY(backend_->upload(*next));
+    data_ = std::move(next);
+    ++full_uploads_;
+    for (size_t b = 0; b < std::size(kCarried); ++b) {
+        const uint32_t per = detail::shape_scalars(detail::buffer_info(kCarried[b]).shape);
+        auto carry = [&](auto& values) -> Status {
+            using V = typename std::decay_t<decltype(values)>::value_type;
+            std::vector<V> out(live * per);
+            for (uint32_t h = 0; h < halves_of(kCarried[b]); ++h) {
+                uint64_t at = 0;
+                for (uint32_t i : survivors) {
+                    const uint64_t from = h * live + old_chain[i];
+                    const uint64_t n = old_chain[i + 1] - old_chain[i];
+                    std::copy_n(values.begin() + from * per, n * per, out.begin() + at * per);
+                    at += n;
+                }
+                HMSM_TRY(backend_->write(kCarried[b], h * data_->chain_capacity, at, out.data(), scalar));
+            }
+            return {};
+        };
+        HMSM_TRY(scalar == detail::Scalar::f64 ? carry(saved[b].f64) : carry(saved[b].f32));
+    }
+    return {};
+}
+
+}  // namespace hmsm
