@@ -34,6 +34,21 @@ struct ElementMove {
     uint64_t src = 0, dst = 0, count = 0;
 };
 
+/// The bytes of the largest move in `moves` that changes anything (0: none does), after
+/// `check_range(first, count)` accepted both ends of every move: what a device backend sizes
+/// its scratch buffer by.
+template <class CheckRange>
+Result<uint64_t> largest_move_bytes(std::span<const ElementMove> moves, uint64_t element_bytes,
+                                    CheckRange&& check_range) {
+    uint64_t largest = 0;
+    for (const ElementMove& m : moves) {
+        HMSM_TRY(check_range(m.src, m.count));
+        HMSM_TRY(check_range(m.dst, m.count));
+        if (m.src != m.dst && m.count * element_bytes > largest) largest = m.count * element_bytes;
+    }
+    return largest;
+}
+
 class Backend {
 public:
     virtual ~Backend() = default;

@@ -97,12 +97,10 @@ Status DeviceBuffers::upload(const SceneData& scene, cudaStream_t stream) {
 
 Status DeviceBuffers::move(BufferId id, std::span<const ElementMove> moves, cudaStream_t stream) {
     const uint64_t element_bytes = device_element_bytes(id);
-    uint64_t largest = 0;
-    for (const ElementMove& m : moves) {
-        HMSM_TRY(check_range(id, m.src, m.count));
-        HMSM_TRY(check_range(id, m.dst, m.count));
-        if (m.src != m.dst) largest = std::max(largest, m.count * element_bytes);
-    }
+    auto checked = largest_move_bytes(moves, element_bytes,
+                                      [&](uint64_t first, uint64_t count) { return check_range(id, first, count); });
+    if (!checked) return checked.status();
+    const uint64_t largest = *checked;
     if (largest == 0) return {};
     if (move_scratch_bytes_ < largest) {
         if (move_scratch_) CUDA_TRY(cudaFree(move_scratch_));

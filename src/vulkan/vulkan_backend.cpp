@@ -160,12 +160,10 @@ Status VulkanBackend::move_elements(BufferId id, std::span<const ElementMove> mo
     if (!reshapes_in_place())
         return {ErrorCode::unsupported, "vulkan: a scene split into windows cannot move state in place"};
     const uint64_t element_bytes = device_element_bytes(id);
-    uint64_t largest = 0;
-    for (const ElementMove& m : moves) {
-        HMSM_TRY(check_range(id, m.src, m.count));
-        HMSM_TRY(check_range(id, m.dst, m.count));
-        if (m.src != m.dst) largest = std::max(largest, m.count * element_bytes);
-    }
+    auto checked = largest_move_bytes(moves, element_bytes,
+                                      [&](uint64_t first, uint64_t count) { return check_range(id, first, count); });
+    if (!checked) return checked.status();
+    const uint64_t largest = *checked;
     if (largest == 0) return {};
     if (move_scratch_.size() < largest) {
         move_scratch_ = Buffer{};
