@@ -203,6 +203,26 @@ TEST_F(BenchCli, QuickCpuWritesSchemaAndTables) {
     EXPECT_NE(r.out.find("| preset | vertices | backend |"), std::string::npos) << r.out;
     EXPECT_NE(r.out.find("### Forest scaling"), std::string::npos) << r.out;
     EXPECT_NE(r.out.find("| backend | instances | layout |"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("| cpu | 20 | remove 1 |"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("| cpu | 20 | pause 2 |"), std::string::npos) << r.out;
+    // Live control: removal and adding back within the capacity happen in place (no upload),
+    // adding past the capacity uploads the scene once; pausing is timed.
+    bool removal = false, growth = false, pause = false;
+    for (const json& e : d["live_control"]) {
+        if (e.contains("remove_seconds")) {
+            removal = true;
+            EXPECT_EQ(e.value("scene_uploads", 99), 0) << e.dump();
+        }
+        if (e.contains("add_past_capacity_seconds")) {
+            growth = true;
+            EXPECT_EQ(e.value("scene_uploads", 99), 1) << e.dump();
+        }
+        if (e.contains("pause_seconds")) {
+            pause = true;
+            EXPECT_GE(e.value("paused_step_seconds", -1.0), 0.0) << e.dump();
+        }
+    }
+    EXPECT_TRUE(removal && growth && pause) << d["live_control"].dump();
     // --render prints the same tables from the JSON.
     BenchRun rendered = run("bench --render " + (dir_ / "bench.json").string());
     EXPECT_EQ(rendered.exit_code, 0) << rendered.err;

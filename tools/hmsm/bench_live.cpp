@@ -1,11 +1,13 @@
 // Live-control costs (src/live_control.cpp): removing instances moves the survivors' state on
 // the device, adding them back within the capacity writes only the added ones, adding past the
-// capacity re-uploads the scene once with room to grow; and a wind change between two steps.
+// capacity re-uploads the scene once with room to grow; a wind change between two steps; and
+// pausing and resuming a tenth of the forest.
 #include "bench_live.h"
 
 #include "simulation_access.h"
 
 #include <algorithm>
+#include <cstdio>
 #include <chrono>
 #include <numeric>
 
@@ -80,6 +82,24 @@ nlohmann::json measure_live_control(const TreeModel& model, const std::vector<Ba
         if (status)
             results.push_back({{"backend", to_string(kind)}, {"instances", forest}, {"set_wind_step_seconds", changed},
                                {"plain_step_seconds", plain}});
+        // Pausing a tenth of the forest (the step program is rebuilt over the active runs),
+        // the next step, and resuming them.
+        {
+            const uint64_t paused = std::max<uint64_t>(1, s.instances().size() / 10);
+            start = Clock::now();
+            for (uint64_t i = 0; status && i < paused; ++i) status = s.set_instance_active(i * 10 % s.instances().size(), false);
+            const double pause = seconds_since(start);
+            start = Clock::now();
+            if (status) status = s.step();
+            const double paused_step = seconds_since(start);
+            start = Clock::now();
+            for (uint64_t i = 0; status && i < paused; ++i) status = s.set_instance_active(i * 10 % s.instances().size(), true);
+            const double resume = seconds_since(start);
+            if (status)
+                results.push_back({{"backend", to_string(kind)}, {"instances", forest}, {"paused", paused},
+                                   {"pause_seconds", pause}, {"paused_step_seconds", paused_step},
+                                   {"resume_seconds", resume}});
+        }
         // Adding past the capacity (one re-upload, the capacity grows by half), then as many
         // again, which now fit.
         const std::vector<Instance> more(std::max(1u, forest / 10), s.instances()[0]);
@@ -96,6 +116,48 @@ nlohmann::json measure_live_control(const TreeModel& model, const std::vector<Ba
                                {"scene_uploads", detail::full_uploads_of(s) - uploads}});
     }
     return results;
+}
+
+std::string render_live_control(const nlohmann::json& rows) {
+    if (!rows.is_array() || rows.empty()) return "";
+    std::string out =
+        "\n### Live control on a forest (ms of wall time per call)\n\n"
+        "| backend | instances | change | ms | scene uploads |\n"
+        "|---|--:|---|--:|--:|\n";
+    auto ms = [](const nlohmann::json& r, const char* key) {
+        char cell[32];
+        std::snprintf(cell, sizeof cell, "%.3f", r.value(key, 0.0) * 1e3);
+        return std::string(cell);
+    };
+    for (const nlohmann::json& r : rows) {
+        const std::string head = "| " + r.value("backend", std::string()) + " | " +
+                                 std::to_string(r.value("instances", 0ull)) + " | ";
+        const std::string uploads = r.contains("scene_uploads") ? std::to_string(r["scene_uploads"].get<uint64_t>()) : "";
+        auto line = [&](const std::string& change, const std::string& cell, const std::string& up) {
+            out += head + change + " | " + cell + " | " + up + " |\n";
+        };
+        if (r.contains("skipped") || r.contains("failed")) {
+            line("–", r.value("skipped", r.value("failed", std::string())), "");
+        } else if (r.contains("remove_seconds")) {
+            const std::string n = std::to_string(r.value("changed", 0ull));
+            line("remove " + n, ms(r, "remove_seconds"), uploads);
+            line("add " + n + " back", ms(r, "add_seconds"), "");
+            line("first step after", ms(r, "first_step_seconds"), "");
+        } else if (r.contains("set_wind_step_seconds")) {
+            line("set_wind + step", ms(r, "set_wind_step_seconds"), "");
+            line("plain step", ms(r, "plain_step_seconds"), "");
+        } else if (r.contains("pause_seconds")) {
+            const std::string n = std::to_string(r.value("paused", 0ull));
+            line("pause " + n, ms(r, "pause_seconds"), "");
+            line("step with " + n + " paused", ms(r, "paused_step_seconds"), "");
+            line("resume " + n, ms(r, "resume_seconds"), "");
+        } else if (r.contains("add_past_capacity_seconds")) {
+            const std::string n = std::to_string(r.value("added", 0ull));
+            line("add " + n + " past the capacity, then " + n + " within",
+                 ms(r, "add_past_capacity_seconds") + ", " + ms(r, "add_within_capacity_seconds"), uploads);
+        }
+    }
+    return out;
 }
 
 }  // namespace hmsm::cli::bench

@@ -68,6 +68,7 @@ int render(const std::string& path) {
         return fail_input("--render '" + path + "': not an hmsm-bench JSON document");
     std::fputs(render_markdown(document).c_str(), stdout);
     std::fputs(bench::render_joint_forest(document.value("forest_joints", json::array())).c_str(), stdout);
+    std::fputs(bench::render_live_control(document.value("live_control", json::array())).c_str(), stdout);
     return kExitOk;
 }
 
@@ -318,6 +319,7 @@ int run_bench(CLI::App& app) {
 
     std::fputs(render_markdown(document).c_str(), stdout);
     std::fputs(bench::render_joint_forest(forest_joints).c_str(), stdout);
+    std::fputs(bench::render_live_control(live_control).c_str(), stdout);
     std::fflush(stdout);
     if (json_file) {
         std::string text = document.dump(2) + "\n";
