@@ -4,6 +4,8 @@
 #
 #   bash tools/bench_gpu.sh [BUILD_DIR] [COMMIT]      (default build-gpu, unknown)
 #
+# HMSM_BENCH_ARGS adds `hmsm bench` flags (e.g. "--presets paper-1,paper-5 --repeats 3").
+#
 # Writes $OUT/bench.json (the result), $OUT/bench.md (its tables), $OUT/bench.err (progress,
 # skips) and $OUT/gpu.txt. Back on the development machine:
 #   tools/bench_doc.sh <fetched>/bench.json nvidia-h100
@@ -24,7 +26,7 @@ ICD=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
 nvidia-smi --query-gpu=name,driver_version,memory.total,clocks.sm,clocks.max.sm --format=csv >"$OUT/gpu.txt" 2>&1
 # The device tool stops a command at 600 s; the case budget keeps the serial CPU baseline's
 # forest to a few minutes (sizes it cannot finish are skipped with the estimate).
-timeout --kill-after=5 ${HMSM_BENCH_LIMIT:-560} "$BUILD/hmsm" bench --backends cpu,cuda,vulkan \
+timeout --kill-after=5 ${HMSM_BENCH_LIMIT:-560} "$BUILD/hmsm" bench --backends cpu,cpu-parallel,cuda,vulkan ${HMSM_BENCH_ARGS:-} \
     --case-budget ${HMSM_BENCH_BUDGET:-15} --json "$OUT/bench.json" --commit "$COMMIT" \
     >"$OUT/bench.md" 2>"$OUT/bench.err"
 rc=$?
