@@ -1,6 +1,7 @@
-// Fork-join over a fixed set of threads. The passes of one step follow each other within
-// microseconds, so a worker spins briefly on the job counter before it sleeps on the condition
-// variable; a caller likewise spins briefly before it sleeps waiting for the last range.
+// Fork-join over a fixed set of threads. Jobs follow each other within microseconds (the steps
+// of a stepping loop, the dispatches of a profiled step), so a worker spins briefly on the job
+// counter before it sleeps on the condition variable; a caller likewise spins briefly before it
+// sleeps waiting for the last body.
 #include "thread_pool.h"
 
 #include <algorithm>
@@ -9,8 +10,8 @@
 namespace hmsm::detail::cpu {
 namespace {
 
-/// How long a thread polls before it blocks: long enough to bridge the gap between two
-/// dispatches of a step, short enough not to steal a core from others while idle.
+/// How long a thread polls before it blocks: long enough to bridge the gap between two jobs,
+/// short enough not to steal a core from others while idle.
 constexpr std::chrono::microseconds kSpin{50};
 
 template <class Done>
@@ -53,7 +54,7 @@ void ThreadPool::run(uint32_t participants, Trampoline call, void* body) {
         call_ = call;
         body_ = body;
         participants_ = participants;
-        // Every worker acknowledges every job, those without a range too: then none can still
+        // Every worker acknowledges every job, those without a body too: then none can still
         // be reading this job's fields when the next one is written.
         pending_.store(uint32_t(workers_.size()), std::memory_order_relaxed);
         generation_.fetch_add(1, std::memory_order_release);
