@@ -207,6 +207,23 @@ TEST(CpuParallel, ThreadPoolCoversEveryItemOnceInContiguousRanges) {
     EXPECT_EQ(values[63], 1000u);
 }
 
+TEST(CpuParallel, ThreadPoolRunsOneBodyPerThreadConcurrently) {
+    detail::cpu::ThreadPool pool(4);
+    for (uint32_t participants : {1u, 3u, 4u, 9u}) {
+        const uint32_t expected = std::min(participants, 4u);
+        std::vector<std::atomic<uint32_t>> calls(expected);
+        std::atomic<uint32_t> arrived{0};
+        pool.run_on_all(participants, [&](uint32_t k) {
+            ASSERT_LT(k, expected);
+            calls[k].fetch_add(1);
+            // Every body waits for all the others: they must run at the same time.
+            arrived.fetch_add(1);
+            while (arrived.load() < expected) std::this_thread::yield();
+        });
+        for (uint32_t k = 0; k < expected; ++k) EXPECT_EQ(calls[k].load(), 1u) << participants << " " << k;
+    }
+}
+
 TEST(CpuParallel, StartsNoThreadUntilADispatchIsSplit) {
     const uint32_t before = process_threads();
     if (before == 0) GTEST_SKIP() << "no /proc/self/status on this system";
