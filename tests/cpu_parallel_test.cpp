@@ -119,17 +119,22 @@ TEST(CpuParallel, BitwiseEqualToSerialCpuInEveryCompositionAndLayout) {
 }
 
 TEST(CpuParallel, BitwiseEqualToSerialCpuWithDefaultChunksOnAForest) {
-    // Enough instances that the default chunking splits every kind of dispatch.
+    // Enough instances that the default chunking splits every kind of dispatch, on instance
+    // boundaries (at least four instances per chunk).
     auto scene = grid_scene(test::small_tree(), 120, 6.0, 5);
     ASSERT_TRUE(scene.ok());
-    SimulationConfig config = windy(Composition::pointer_jumping, VertexLayout::separate);
-    config.backend = BackendKind::cpu;
-    auto serial = Simulation::create(*scene, config);
-    ASSERT_TRUE(serial.ok());
-    auto parallel = create_parallel(*scene, config, 4, detail::kCpuMinChunkElements);
-    ASSERT_TRUE(parallel);
-    ASSERT_GT(uint64_t((*serial)->vertex_count()), 2ull * detail::kCpuMinChunkElements);
-    expect_bitwise_equal_runs(**serial, *parallel, 60);
+    for (Composition composition : {Composition::pointer_jumping, Composition::pointer_jumping_per_round,
+                                    Composition::level_by_level}) {
+        SCOPED_TRACE(to_string(composition));
+        SimulationConfig config = windy(composition, VertexLayout::separate);
+        config.backend = BackendKind::cpu;
+        auto serial = Simulation::create(*scene, config);
+        ASSERT_TRUE(serial.ok());
+        auto parallel = create_parallel(*scene, config, 4, detail::kCpuMinChunkElements);
+        ASSERT_TRUE(parallel);
+        ASSERT_GT(uint64_t((*serial)->vertex_count()), 2ull * detail::kCpuMinChunkElements);
+        expect_bitwise_equal_runs(**serial, *parallel, 60);
+    }
 }
 
 TEST(CpuParallel, StepPlanWaitsOnlyWhereAChunkReadsAnotherThreadsWrites) {
