@@ -96,15 +96,15 @@ inline void cpu_relax() {
 }  // namespace
 
 double pass_cost_weight(Pass pass) {
-    // Serial float times per element on a Xeon host for paper-1 (2,345 chains, 78,565
-    // vertices), relative to one chain of one compose round (about 13 ns).
+    // Serial float times per element on a Xeon host for paper-1 (2,345 chains, 4,291 nodes,
+    // 78,565 vertices, 3 rounds), relative to one chain of one compose round (about 13 ns).
     switch (pass) {
     case Pass::wind_force: return 8.0;
     case Pass::integrate: return 4.6;
     case Pass::compose: return 1.0;
-    case Pass::node_relative: return 1.0;
+    case Pass::node_relative: return 0.6;
     case Pass::root_positions: return 1.1;
-    case Pass::node_world: return 0.6;
+    case Pass::node_world: return 0.4;
     case Pass::contour: return 1.6;
     }
     return 1.0;
