@@ -115,9 +115,10 @@ inline constexpr uint32_t kMaxCpuThreads = 1024;
 /// HMSM_CPU_THREADS when set (invalid_argument unless an integer in [1, kMaxCpuThreads]), else
 /// the hardware threads of the host.
 Result<uint32_t> cpu_thread_count(uint32_t requested);
-/// Model elements below which a dispatch is not split further: each range costs a thread
-/// wake-up of some microseconds, about what 4,096 elements of the cheapest pass take.
-inline constexpr uint32_t kCpuMinChunkElements = 4096;
+/// Cost units (about one chain of one compose round each, src/cpu/step_plan.h) below which a
+/// dispatch of cpu-parallel is not split further: a chunk of a few microseconds, long against
+/// the wait on another thread's chunk (a cache line passed between cores).
+inline constexpr uint32_t kCpuMinChunkElements = 256;
 /// cpu-parallel: the float passes of create_cpu_backend(false) over `threads` threads (0:
 /// cpu_thread_count(0)); tests pass a small `min_chunk_elements` to split even tiny dispatches.
 Result<std::unique_ptr<Backend>> create_cpu_parallel_backend(uint32_t threads,

@@ -49,7 +49,7 @@ Result<std::unique_ptr<Backend>> create_backend(BackendKind kind, uint32_t cpu_t
                 return vulkan;
 #endif
             // Without a GPU: all cores where there is more than one (bitwise the serial
-            // results; a fork-join per dispatch that pays from a few thousand elements on).
+            // results; a scene too small to split runs on the caller alone).
             auto threads = cpu_thread_count(cpu_threads);
             if (!threads) return threads.status();
             if (*threads > 1) return create_cpu_parallel_backend(*threads);

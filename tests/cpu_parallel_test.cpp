@@ -1,14 +1,16 @@
 // cpu-parallel: the float passes of `cpu` split over a thread pool must give bitwise the
 // serial results (same float math per element), in every composition and vertex layout, with
 // dispatches really split (a chunk of one element) and with the default chunking on a forest
-// big enough to split. Also the pool's fork-join contract, the thread-count settings and
+// big enough to split. Also the step plan's waits, the pool's contract, the thread-count settings and
 // `automatic`'s choice. Agreement with cpu64 and run-to-run determinism are in
 // agreement_test.cpp and determinism_test.cpp.
 #include "simulation_access.h"
 #include "test_trees.h"
 
 #include "backend.h"
+#include "cpu/step_plan.h"
 #include "cpu/thread_pool.h"
+#include "pass_table.h"
 
 #include <gtest/gtest.h>
 
@@ -130,17 +132,66 @@ TEST(CpuParallel, BitwiseEqualToSerialCpuInEveryCompositionAndLayout) {
 }
 
 TEST(CpuParallel, BitwiseEqualToSerialCpuWithDefaultChunksOnAForest) {
-    // Enough instances that the default chunking splits every kind of dispatch.
+    // Enough instances that the default chunking splits every kind of dispatch, on instance
+    // boundaries (at least four instances per chunk).
     auto scene = grid_scene(test::small_tree(), 120, 6.0, 5);
     ASSERT_TRUE(scene.ok());
-    SimulationConfig config = windy(Composition::pointer_jumping, VertexLayout::separate);
+    for (Composition composition : {Composition::pointer_jumping, Composition::pointer_jumping_per_round,
+                                    Composition::level_by_level}) {
+        SCOPED_TRACE(to_string(composition));
+        SimulationConfig config = windy(composition, VertexLayout::separate);
+        config.backend = BackendKind::cpu;
+        auto serial = Simulation::create(*scene, config);
+        ASSERT_TRUE(serial.ok());
+        auto parallel = create_parallel(*scene, config, 4, detail::kCpuMinChunkElements);
+        ASSERT_TRUE(parallel);
+        ASSERT_GT(uint64_t((*serial)->vertex_count()), 2ull * detail::kCpuMinChunkElements);
+        expect_bitwise_equal_runs(**serial, *parallel, 60);
+    }
+}
+
+TEST(CpuParallel, StepPlanWaitsOnlyWhereAChunkReadsAnotherThreadsWrites) {
+    using detail::cpu::StepPlan;
+    SimulationConfig config = windy(Composition::pointer_jumping_per_round, VertexLayout::separate);
     config.backend = BackendKind::cpu;
-    auto serial = Simulation::create(*scene, config);
-    ASSERT_TRUE(serial.ok());
-    auto parallel = create_parallel(*scene, config, 4, detail::kCpuMinChunkElements);
-    ASSERT_TRUE(parallel);
-    ASSERT_GT(uint64_t((*serial)->vertex_count()), 2ull * detail::kCpuMinChunkElements);
-    expect_bitwise_equal_runs(**serial, *parallel, 60);
+    Scene tree;
+    tree.models = {test::deep_tree(5)};
+    tree.model_names = {"deep"};
+    tree.instances = {{0, {0, 0, 0}, 0.0}};
+    auto single = Simulation::create(tree, config);
+    ASSERT_TRUE(single.ok()) << single.status().message();
+    const auto& program = detail::step_program_of(**single);
+    const StepPlan plan(program, 4, 1);
+    EXPECT_TRUE(plan.matches(program));
+    ASSERT_EQ(plan.threads(), 4u);
+    uint32_t hierarchical_waits = 0;
+    for (uint32_t t = 0; t < plan.threads(); ++t) {
+        for (const StepPlan::Task& task : plan.tasks(t)) {
+            const Pass pass = program[task.dispatch].pass;
+            // integrate reads the forces wind_force wrote for the same chains on this thread.
+            if (pass == Pass::integrate) EXPECT_TRUE(plan.waits(task).empty()) << "thread " << t;
+            if (detail::is_hierarchical(pass)) hierarchical_waits += uint32_t(plan.waits(task).size());
+            for (const StepPlan::Wait& w : plan.waits(task)) {
+                EXPECT_NE(w.thread, t);
+                EXPECT_LE(w.done, int32_t(plan.tasks(w.thread).size()));
+                EXPECT_GT(w.done, -int32_t(plan.tasks(w.thread).size()));
+            }
+        }
+    }
+    // Rounds read ancestors anywhere in the tree: each waits for the round before on others.
+    EXPECT_GT(hierarchical_waits, 0u);
+
+    // A forest split on instance boundaries: no thread ever waits for another.
+    auto scene = grid_scene(test::small_tree(), 120, 6.0, 5);
+    ASSERT_TRUE(scene.ok());
+    config.composition = Composition::pointer_jumping;
+    auto forest = Simulation::create(*scene, config);
+    ASSERT_TRUE(forest.ok());
+    const StepPlan split(detail::step_program_of(**forest), 4, detail::kCpuMinChunkElements);
+    ASSERT_EQ(split.threads(), 4u);
+    for (uint32_t t = 0; t < split.threads(); ++t)
+        for (const StepPlan::Task& task : split.tasks(t)) EXPECT_TRUE(split.waits(task).empty());
+    EXPECT_FALSE(split.matches(program));
 }
 
 TEST(CpuParallel, ThreadPoolCoversEveryItemOnceInContiguousRanges) {
@@ -172,6 +223,23 @@ TEST(CpuParallel, ThreadPoolCoversEveryItemOnceInContiguousRanges) {
         });
     for (uint32_t i = 0; i < 63; ++i) EXPECT_EQ(values[i], 2000u) << i;
     EXPECT_EQ(values[63], 1000u);
+}
+
+TEST(CpuParallel, ThreadPoolRunsOneBodyPerThreadConcurrently) {
+    detail::cpu::ThreadPool pool(4);
+    for (uint32_t participants : {1u, 3u, 4u, 9u}) {
+        const uint32_t expected = std::min(participants, 4u);
+        std::vector<std::atomic<uint32_t>> calls(expected);
+        std::atomic<uint32_t> arrived{0};
+        pool.run_on_all(participants, [&](uint32_t k) {
+            ASSERT_LT(k, expected);
+            calls[k].fetch_add(1);
+            // Every body waits for all the others: they must run at the same time.
+            arrived.fetch_add(1);
+            while (arrived.load() < expected) std::this_thread::yield();
+        });
+        for (uint32_t k = 0; k < expected; ++k) EXPECT_EQ(calls[k].load(), 1u) << participants << " " << k;
+    }
 }
 
 TEST(CpuParallel, StartsNoThreadUntilADispatchIsSplit) {

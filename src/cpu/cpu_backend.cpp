@@ -1,8 +1,10 @@
 // The CPU backend: plain serial loops over host vectors, float (`cpu`, the paper's baseline) or
 // double (`cpu64`, the oracle of every conformance test); and `cpu-parallel`, the same float
-// pass functions with each dispatch's work items split into contiguous ranges over a thread
-// pool (bitwise the results of `cpu`). Per-pass times are host wall clock.
+// pass functions with each dispatch's work items split into chunks that the threads of a pool
+// run as a step plan says (src/cpu/step_plan.h; bitwise the results of `cpu`). Per-pass times
+// are host wall clock.
 #include "cpu_state.h"
+#include "step_plan.h"
 #include "thread_pool.h"
 
 #include <algorithm>
@@ -79,7 +81,7 @@ class CpuBackend final : public Backend {
 public:
     CpuBackend() = default;
     /// The parallel variant: `threads` >= 1 threads (the caller's included); a dispatch is
-    /// split only into ranges of at least `min_chunk_elements` model elements.
+    /// split only into chunks of at least `min_chunk_elements` cost units (step_plan.h).
     CpuBackend(uint32_t threads, uint32_t min_chunk_elements)
         : pool_(std::make_unique<ThreadPool>(threads)), min_chunk_elements_(min_chunk_elements) {}
 
@@ -103,11 +105,34 @@ public:
 
     Status run(std::span<const Dispatch> program, std::span<const double> wind_x) override {
         times_ = {};
+        if (pool_ && !wind_x.empty()) {
+            try {
+                if (!plan_ || !plan_->matches(program))
+                    plan_ = std::make_unique<StepPlan>(program, pool_->threads(), min_chunk_elements_);
+            } catch (const std::bad_alloc&) {
+                return {ErrorCode::out_of_memory, "cpu-parallel: not enough host memory for the step plan"};
+            }
+        }
         using clock = std::chrono::steady_clock;
+        if (pool_ && !profiling_) {
+            plan_->run(*pool_, wind_x.size(), [&](uint32_t d, size_t step, Range r) {
+                run_range(program[d], wind_x[step], r);
+            });
+            return {};
+        }
         for (double x : wind_x) {
-            for (const Dispatch& d : program) {
+            for (uint32_t i = 0; i < program.size(); ++i) {
+                const Dispatch& d = program[i];
                 auto start = profiling_ ? clock::now() : clock::time_point{};
-                run_pass(d, x);
+                if (!pool_) {
+                    run_range(d, x, {0, work_items(d.pass, d.constants)});
+                } else {
+                    // Profiled: one fork-join per dispatch over the plan's chunks, timed here.
+                    const std::span<const Range> chunks = plan_->chunks(i);
+                    pool_->run_on_all(uint32_t(chunks.size()), [&](uint32_t k) {
+                        if (chunks[k].begin < chunks[k].end) run_range(d, x, chunks[k]);
+                    });
+                }
                 if (profiling_)
                     times_.seconds[uint32_t(d.pass)] +=
                         std::chrono::duration<double>(clock::now() - start).count();
@@ -199,15 +224,6 @@ private:
         s_.total_chains = d.chain_capacity;  // the stride between ping-pong halves
     }
 
-    void run_pass(const Dispatch& d, double wind_x) {
-        const uint32_t items = work_items(d.pass, d.constants);
-        if (!pool_) return run_range(d, wind_x, {0, items});
-        const uint32_t per_item = std::max(1u, elements_per_item(d.pass, d.constants));
-        const uint32_t min_chunk = std::max(1u, min_chunk_elements_ / per_item);
-        pool_->parallel_for(items, min_chunk,
-                            [&](uint32_t begin, uint32_t end) { run_range(d, wind_x, {begin, end}); });
-    }
-
     /// Runs pass function `f` (src/cpu/NAME.cpp); only wind_force takes the step's wind.
     template <class F>
     void call_pass(F f, const Dispatch& d, double wind_x, Range r) {
@@ -262,6 +278,7 @@ private:
     State<T> s_;
     std::unique_ptr<ThreadPool> pool_;  // null: the serial backends
     uint32_t min_chunk_elements_ = 0;
+    std::unique_ptr<StepPlan> plan_;    // cpu-parallel: the plan of the last program run
     bool profiling_ = false;
     PassTimes times_;
 };

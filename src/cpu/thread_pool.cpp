@@ -1,6 +1,7 @@
-// Fork-join over a fixed set of threads. The passes of one step follow each other within
-// microseconds, so a worker spins briefly on the job counter before it sleeps on the condition
-// variable; a caller likewise spins briefly before it sleeps waiting for the last range.
+// Fork-join over a fixed set of threads. Jobs follow each other within microseconds (the steps
+// of a stepping loop, the dispatches of a profiled step), so a worker spins briefly on the job
+// counter before it sleeps on the condition variable; a caller likewise spins briefly before it
+// sleeps waiting for the last body.
 #include "thread_pool.h"
 
 #include <algorithm>
@@ -9,8 +10,8 @@
 namespace hmsm::detail::cpu {
 namespace {
 
-/// How long a thread polls before it blocks: long enough to bridge the gap between two
-/// dispatches of a step, short enough not to steal a core from others while idle.
+/// How long a thread polls before it blocks: long enough to bridge the gap between two jobs,
+/// short enough not to steal a core from others while idle.
 constexpr std::chrono::microseconds kSpin{50};
 
 template <class Done>
@@ -46,27 +47,20 @@ void ThreadPool::start_workers() {
     for (uint32_t i = 1; i < threads_; ++i) workers_.emplace_back([this, i] { worker(i); });
 }
 
-void ThreadPool::run_range(uint32_t k) {
-    const uint32_t begin = uint32_t(uint64_t(k) * count_ / ranges_);
-    const uint32_t end = uint32_t(uint64_t(k + 1) * count_ / ranges_);
-    if (begin < end) call_(body_, begin, end);
-}
-
-void ThreadPool::run(uint32_t count, uint32_t ranges, Trampoline call, void* body) {
+void ThreadPool::run(uint32_t participants, Trampoline call, void* body) {
     if (workers_.empty()) start_workers();
     {
         std::lock_guard<std::mutex> lock(mutex_);
         call_ = call;
         body_ = body;
-        count_ = count;
-        ranges_ = ranges;
-        // Every worker acknowledges every job, those without a range too: then none can still
+        participants_ = participants;
+        // Every worker acknowledges every job, those without a body too: then none can still
         // be reading this job's fields when the next one is written.
         pending_.store(uint32_t(workers_.size()), std::memory_order_relaxed);
         generation_.fetch_add(1, std::memory_order_release);
     }
     wake_.notify_all();
-    run_range(0);
+    call(body, 0);
     auto done = [this] { return pending_.load(std::memory_order_acquire) == 0; };
     if (spin_until(done)) return;
     std::unique_lock<std::mutex> lock(mutex_);
@@ -83,7 +77,7 @@ void ThreadPool::worker(uint32_t index) {
             if (stop_) return;
         }
         seen = generation_.load(std::memory_order_acquire);
-        if (index < ranges_) run_range(index);
+        if (index < participants_) call_(body_, index);
         if (pending_.fetch_sub(1, std::memory_order_acq_rel) == 1) {
             // Taking the mutex orders this notify after the caller's check-then-wait.
             std::lock_guard<std::mutex> lock(mutex_);

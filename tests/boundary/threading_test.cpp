@@ -1,6 +1,7 @@
 // The threading contract of include/hmsm/simulation.h, exercised so that ThreadSanitizer
 // (tools/tsan.sh) can check it: distinct simulations run concurrently, const calls (read()
-// included) on one simulation run concurrently with each other, Vulkan simulations are created
+// included) on one simulation run concurrently with each other, cpu-parallel's threads hand
+// each other their chunks' results within and across steps, Vulkan simulations are created
 // and destroyed from several threads at once, and the C ABI's last message is per thread. Also
 // read()'s own argument check (PublicApi), on the same small scene.
 #include <hmsm/hmsm.h>
@@ -96,6 +97,41 @@ TEST(Threading, ConcurrentReadsOnOneCpuSimulation) {
     ASSERT_TRUE(sim) << sim.status().message();
     ASSERT_TRUE((*sim)->step(30));
     concurrent_reads(**sim, 4, 50);
+}
+
+/// Steps a scene on cpu and on cpu-parallel (4 threads, whatever the host has) in the same
+/// pieces, every output read in between, and expects bitwise equal positions.
+void expect_parallel_equals_serial(const hmsm::Scene& scene, hmsm::Composition composition) {
+    hmsm::SimulationConfig config = config_for(hmsm::BackendKind::cpu);
+    config.composition = composition;
+    auto serial = hmsm::Simulation::create(scene, config);
+    ASSERT_TRUE(serial) << serial.status().message();
+    config.backend = hmsm::BackendKind::cpu_parallel;
+    config.cpu_threads = 4;
+    auto parallel = hmsm::Simulation::create(scene, config);
+    ASSERT_TRUE(parallel) << parallel.status().message();
+    for (uint32_t steps : {1u, 3u, 1u, 6u}) {
+        ASSERT_TRUE((*serial)->step(steps));
+        ASSERT_TRUE((*parallel)->step(steps));
+        for (hmsm::Output o : {hmsm::Output::node_positions, hmsm::Output::vertex_positions}) {
+            std::vector<float> a, b;
+            ASSERT_TRUE((*serial)->read(o, a));
+            ASSERT_TRUE((*parallel)->read(o, b));
+            EXPECT_EQ(a, b) << "output " << int(o) << " after " << (*serial)->steps_done() << " steps";
+        }
+    }
+}
+
+TEST(Threading, CpuParallelThreadsShareAStepOnOneTreeAndOnAForest) {
+    // One large tree: every pass is split, hierarchical rounds wait for the round before.
+    auto tree = hmsm::generate_preset("paper-1");
+    ASSERT_TRUE(tree) << tree.status().message();
+    expect_parallel_equals_serial(hmsm::single_tree_scene(*tree), hmsm::Composition::pointer_jumping);
+    expect_parallel_equals_serial(hmsm::single_tree_scene(*tree), hmsm::Composition::level_by_level);
+    // A forest: each thread its own instances.
+    auto forest = hmsm::grid_scene(small_scene().models[0], 300, 5.0, 3);
+    ASSERT_TRUE(forest) << forest.status().message();
+    expect_parallel_equals_serial(*forest, hmsm::Composition::pointer_jumping);
 }
 
 TEST(Threading, ConcurrentReadsOnOneVulkanSimulation) {
