@@ -161,13 +161,12 @@ cudaError_t launch_fused(const BufferPointers& b, const gpu::PassConstants& pc, 
     const unsigned threads = gpu::rounds_workgroup_size(pc.model_chain_count);
     const uint64_t bytes = gpu::fused_shared_bytes(pc.model_chain_count);
     if (bytes > shared_limit) return launch_pass(fused_kernel<false>, blocks, threads, stream, b, pc);
-    if (bytes > kDefaultSharedBytes) {
-        // Legal during stream capture: a function attribute, not stream work.
-        const cudaError_t error =
-            cudaFuncSetAttribute(fused_kernel<true>, cudaFuncAttributeMaxDynamicSharedMemorySize, int(bytes));
-        if (error != cudaSuccess) return error;
-    }
     return launch_pass(fused_kernel<true>, blocks, threads, stream, b, pc, size_t(bytes));
+}
+
+cudaError_t allow_fused_shared(uint64_t shared_limit) {
+    if (shared_limit <= kDefaultSharedBytes) return cudaSuccess;
+    return cudaFuncSetAttribute(fused_kernel<true>, cudaFuncAttributeMaxDynamicSharedMemorySize, int(shared_limit));
 }
 
 void emulate_fused(const BufferPointers& b, const gpu::PassConstants& pc, uint64_t shared_limit) {

@@ -27,10 +27,12 @@ Result<std::unique_ptr<Backend>> CudaBackend::create() {
     // The fused kernel's rounds may take up to the opt-in maximum of shared memory per block.
     int shared_optin = 0;
     CUDA_TRY(cudaDeviceGetAttribute(&shared_optin, cudaDevAttrMaxSharedMemoryPerBlockOptin, device));
+    const uint64_t fused_shared = fused_shared_limit(uint64_t(shared_optin));
+    CUDA_TRY(allow_fused_shared(fused_shared));
     cudaStream_t stream = nullptr;
     CUDA_TRY(cudaStreamCreateWithFlags(&stream, cudaStreamNonBlocking));
     return std::unique_ptr<Backend>(
-        new CudaBackend(device, properties.name, stream, fused_shared_limit(uint64_t(shared_optin))));
+        new CudaBackend(device, properties.name, stream, fused_shared));
 }
 
 CudaBackend::~CudaBackend() {
