@@ -77,8 +77,9 @@ set(_hmsm_glsl_dir "${CMAKE_CURRENT_SOURCE_DIR}/shaders/glsl")
 set(_hmsm_spirv_dir "${CMAKE_CURRENT_BINARY_DIR}/hmsm_spirv")
 file(MAKE_DIRECTORY "${_hmsm_spirv_dir}")
 set(_hmsm_spirv_headers "")
-# copy_bandwidth is no pass: the device copy `hmsm bench` measures its roofline with.
-foreach(pass IN LISTS HMSM_PASSES ITEMS copy_bandwidth)
+# copy_bandwidth is no pass: the device copy `hmsm bench` measures its roofline with; fused
+# runs passes 1-5 in one dispatch (Composition::fused).
+foreach(pass IN LISTS HMSM_PASSES ITEMS copy_bandwidth fused)
   set(_out "${_hmsm_spirv_dir}/${pass}.h")
   add_custom_command(
     OUTPUT "${_out}"
@@ -86,7 +87,7 @@ foreach(pass IN LISTS HMSM_PASSES ITEMS copy_bandwidth)
             "-I${CMAKE_CURRENT_SOURCE_DIR}/src/common" "-I${_hmsm_glsl_dir}"
             --vn "hmsm_spirv_${pass}" -o "${_out}" "${_hmsm_glsl_dir}/${pass}.comp"
     DEPENDS "${_hmsm_glsl_dir}/${pass}.comp" "${_hmsm_glsl_dir}/common.glsl"
-            "${_hmsm_glsl_dir}/octahedral.glsl"
+            "${_hmsm_glsl_dir}/octahedral.glsl" "${_hmsm_glsl_dir}/chain_math.glsl"
             "${CMAKE_CURRENT_SOURCE_DIR}/src/common/gpu_layout.h"
     COMMENT "hmsm: compiling shaders/glsl/${pass}.comp to SPIR-V"
     VERBATIM)

@@ -139,12 +139,30 @@ Result<std::unique_ptr<Backend>> create_backend(BackendKind kind, uint32_t cpu_t
 uint32_t pass_reads(Pass pass);
 uint32_t pass_writes(Pass pass);
 
+/// Whether `d` is the fused dispatch of Composition::fused (passes 1-5 in one, gpu_layout.h
+/// HMSM_MODE_FUSED); its `pass` is the first fused pass, under which its time is reported.
+inline bool runs_fused(const Dispatch& d) {
+    return d.pass == kFusedDispatchPass && d.constants.mode == HMSM_MODE_FUSED;
+}
+/// Buffers a dispatch reads and writes: its pass's, or for the fused dispatch the union over
+/// the fused passes (pass_table.h).
+inline uint32_t dispatch_reads(const Dispatch& d) { return runs_fused(d) ? fused_reads() : pass_reads(d.pass); }
+inline uint32_t dispatch_writes(const Dispatch& d) { return runs_fused(d) ? fused_writes() : pass_writes(d.pass); }
+
+/// The most shared memory a GPU backend gives a fused workgroup (which keeps its rounds there
+/// when gpu::fused_shared_bytes(chains) fits): the environment variable
+/// HMSM_FUSED_SHARED_BYTES when it is a non-negative integer (0: always device memory; for
+/// tests and measurements; never above `device_limit`), else `device_limit` (the device's most
+/// per workgroup). Backends read it once, when they are created.
+uint64_t fused_shared_limit(uint64_t device_limit);
+
 /// Number of threads of a dispatch and the mapping shared by every backend.
 inline uint32_t dispatch_thread_count(const Dispatch& d) { return d.constants.element_count; }
 
 /// How a dispatch is launched: `workgroups` groups of `workgroup_size` threads. Every mode
 /// maps thread i to element i (gpu_layout.h) except HMSM_MODE_POINTER_JUMPING_IN_DISPATCH,
-/// whose workgroup k runs every round for group instance k.
+/// whose workgroup k runs every round for group instance k, and HMSM_MODE_FUSED, whose
+/// workgroup k runs passes 1-5 for group instance k.
 struct LaunchShape {
     uint64_t workgroups = 0;
     uint32_t workgroup_size = HMSM_WORKGROUP_SIZE;
@@ -155,7 +173,7 @@ inline bool runs_rounds_in_dispatch(const Dispatch& d) {
 inline LaunchShape launch_shape(const Dispatch& d) {
     const uint32_t threads = dispatch_thread_count(d);
     if (threads == 0) return {};
-    if (runs_rounds_in_dispatch(d))
+    if (runs_rounds_in_dispatch(d) || runs_fused(d))
         return {threads / d.constants.model_chain_count, gpu::rounds_workgroup_size(d.constants.model_chain_count)};
     return {(uint64_t(threads) + HMSM_WORKGROUP_SIZE - 1) / HMSM_WORKGROUP_SIZE, HMSM_WORKGROUP_SIZE};
 }

@@ -23,40 +23,43 @@ constexpr uint32_t buffer_bit(BufferId id) { return 1u << static_cast<uint32_t>(
 // Shorthand for the access columns below: one bit per buffer (bit i = BufferId i).
 #define HMSM_B(name) buffer_bit(BufferId::name)
 
-/// X(name, domain, hierarchical, needed_for, reads, writes), in execution order (the same order as
-/// HMSM_PASSES in <hmsm/pass.h>; a static_assert below keeps them equal).
+/// X(name, domain, hierarchical, needed_for, fused, reads, writes), in execution order (the same
+/// order as HMSM_PASSES in <hmsm/pass.h>; a static_assert below keeps them equal).
 /// root_positions writes, with the final O_c, the joint matrix [R_c | O_c] (R_c from compose).
 /// needed_for: the least SimulationConfig::outputs for which a step runs the pass (outputs on
 /// demand: joint matrices need passes 1-5 only). A vertex-domain pass takes the vertex layout
 /// as its mode; in the packed layout contour's vertex_normal has no elements and is not written.
-#define HMSM_PASS_TABLE(X)                                                                       \
-    X(wind_force, chain, false, joints,                                                          \
-      (HMSM_B(chain_rotation) | HMSM_B(chain_origin) | HMSM_B(chain_constants) |                 \
-       HMSM_B(instance_wind) | HMSM_B(wind_table)),                                              \
-      (HMSM_B(chain_force)))                                                                     \
-    X(integrate, chain, false, joints,                                                           \
-      (HMSM_B(chain_force) | HMSM_B(chain_state) | HMSM_B(chain_constants) |                     \
-       HMSM_B(chain_rest_rotation) | HMSM_B(chain_parent) | HMSM_B(instance_yaw)),               \
-      (HMSM_B(chain_state) | HMSM_B(chain_local)))                                               \
-    X(compose, chain, true, joints,                                                              \
-      (HMSM_B(chain_local) | HMSM_B(chain_rotation) | HMSM_B(chain_jump) |                       \
-       HMSM_B(chain_parent)),                                                                    \
-      (HMSM_B(chain_rotation)))                                                                  \
-    X(node_relative, node, false, joints,                                                        \
-      (HMSM_B(chain_rotation) | HMSM_B(node_owner) | HMSM_B(node_local)),                        \
-      (HMSM_B(node_relative)))                                                                   \
-    X(root_positions, chain, true, joints,                                                       \
-      (HMSM_B(node_relative) | HMSM_B(chain_origin) | HMSM_B(chain_jump) |                       \
-       HMSM_B(chain_parent) | HMSM_B(chain_attach) | HMSM_B(instance_origin) |                   \
-       HMSM_B(chain_rotation)),                                                                  \
-      (HMSM_B(chain_origin) | HMSM_B(joint_matrix)))                                             \
-    X(node_world, node, false, joints_and_nodes,                                                 \
-      (HMSM_B(chain_origin) | HMSM_B(node_relative) | HMSM_B(node_owner)),                       \
-      (HMSM_B(node_world)))                                                                      \
-    X(contour, vertex, false, all,                                                               \
-      (HMSM_B(chain_rotation) | HMSM_B(chain_origin) | HMSM_B(vertex_chain) |                    \
-       HMSM_B(vertex_rest_position) | HMSM_B(vertex_rest_normal) |                               \
-       HMSM_B(vertex_parent_position) | HMSM_B(vertex_parent_normal)),                           \
+/// fused: Composition::fused runs the pass inside its one fused dispatch per instance group (a
+/// workgroup per instance, barriers between the passes); the fused passes are consecutive from
+/// wind_force on, and the fused dispatch reads and writes the union of their buffers.
+#define HMSM_PASS_TABLE(X)                                                                        \
+    X(wind_force, chain, false, joints, true,                                                     \
+      (HMSM_B(chain_rotation) | HMSM_B(chain_origin) | HMSM_B(chain_constants) |                  \
+       HMSM_B(instance_wind) | HMSM_B(wind_table)),                                               \
+      (HMSM_B(chain_force)))                                                                      \
+    X(integrate, chain, false, joints, true,                                                      \
+      (HMSM_B(chain_force) | HMSM_B(chain_state) | HMSM_B(chain_constants) |                      \
+       HMSM_B(chain_rest_rotation) | HMSM_B(chain_parent) | HMSM_B(instance_yaw)),                \
+      (HMSM_B(chain_state) | HMSM_B(chain_local)))                                                \
+    X(compose, chain, true, joints, true,                                                         \
+      (HMSM_B(chain_local) | HMSM_B(chain_rotation) | HMSM_B(chain_jump) |                        \
+       HMSM_B(chain_parent)),                                                                     \
+      (HMSM_B(chain_rotation)))                                                                   \
+    X(node_relative, node, false, joints, true,                                                   \
+      (HMSM_B(chain_rotation) | HMSM_B(node_owner) | HMSM_B(node_local)),                         \
+      (HMSM_B(node_relative)))                                                                    \
+    X(root_positions, chain, true, joints, true,                                                  \
+      (HMSM_B(node_relative) | HMSM_B(chain_origin) | HMSM_B(chain_jump) |                        \
+       HMSM_B(chain_parent) | HMSM_B(chain_attach) | HMSM_B(instance_origin) |                    \
+       HMSM_B(chain_rotation)),                                                                   \
+      (HMSM_B(chain_origin) | HMSM_B(joint_matrix)))                                              \
+    X(node_world, node, false, joints_and_nodes, false,                                           \
+      (HMSM_B(chain_origin) | HMSM_B(node_relative) | HMSM_B(node_owner)),                        \
+      (HMSM_B(node_world)))                                                                       \
+    X(contour, vertex, false, all, false,                                                         \
+      (HMSM_B(chain_rotation) | HMSM_B(chain_origin) | HMSM_B(vertex_chain) |                     \
+       HMSM_B(vertex_rest_position) | HMSM_B(vertex_rest_normal) |                                \
+       HMSM_B(vertex_parent_position) | HMSM_B(vertex_parent_normal)),                            \
       (HMSM_B(vertex_position) | HMSM_B(vertex_normal)))
 
 struct PassInfo {
@@ -64,13 +67,14 @@ struct PassInfo {
     PassDomain domain;
     bool hierarchical;
     Outputs needed_for;
+    bool fused;
     uint32_t reads;
     uint32_t writes;
 };
 
 inline constexpr std::array<PassInfo, kPassCount> kPassTable = {{
-#define HMSM_PASS_INFO(name, domain, hierarchical, needed_for, reads, writes) \
-    {Pass::name, PassDomain::domain, hierarchical, Outputs::needed_for, reads, writes},
+#define HMSM_PASS_INFO(name, domain, hierarchical, needed_for, fused, reads, writes) \
+    {Pass::name, PassDomain::domain, hierarchical, Outputs::needed_for, fused, reads, writes},
     HMSM_PASS_TABLE(HMSM_PASS_INFO)
 #undef HMSM_PASS_INFO
 }};
@@ -91,5 +95,36 @@ constexpr PassDomain pass_domain(Pass pass) { return pass_info(pass).domain; }
 constexpr bool pass_runs_for(Pass pass, Outputs outputs) {
     return uint32_t(pass_info(pass).needed_for) <= uint32_t(outputs);
 }
+
+/// Composition::fused: whether `pass` runs inside the fused dispatch, the passes it covers
+/// (bit i = Pass i), and the buffers it reads and writes (the union over those passes).
+constexpr bool is_fused(Pass pass) { return pass_info(pass).fused; }
+constexpr uint32_t fused_passes() {
+    uint32_t bits = 0;
+    for (const PassInfo& p : kPassTable)
+        if (p.fused) bits |= 1u << uint32_t(p.pass);
+    return bits;
+}
+constexpr uint32_t fused_reads() {
+    uint32_t bits = 0;
+    for (const PassInfo& p : kPassTable)
+        if (p.fused) bits |= p.reads;
+    return bits;
+}
+constexpr uint32_t fused_writes() {
+    uint32_t bits = 0;
+    for (const PassInfo& p : kPassTable)
+        if (p.fused) bits |= p.writes;
+    return bits;
+}
+/// The fused dispatch is a dispatch of the first fused pass (its `pass`, under which its time
+/// is reported) with mode HMSM_MODE_FUSED; the backends' fused kernels run wind_force first.
+inline constexpr Pass kFusedDispatchPass = Pass::wind_force;
+constexpr bool fused_passes_are_a_prefix() {
+    const uint32_t bits = fused_passes();
+    return bits != 0 && (bits & (bits + 1)) == 0 && (bits & 1u) &&
+           kPassTable[0].pass == kFusedDispatchPass;
+}
+static_assert(fused_passes_are_a_prefix(), "the fused passes must be consecutive from wind_force on");
 
 }  // namespace hmsm::detail

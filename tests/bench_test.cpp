@@ -83,6 +83,13 @@ void expect_number(const json& j, const char* key, const std::string& where) {
     ASSERT_TRUE(j.contains(key) && j[key].is_number()) << where << " lacks number '" << key << "'";
 }
 
+/// The fused composition's times: the fused dispatch (passes 1-5), then passes 6 and 7.
+void expect_fused_pass_table(const json& j, const std::string& where) {
+    ASSERT_TRUE(j.is_object()) << where;
+    for (const char* pass : {"fused(1-5)", "node_world", "contour"}) expect_number(j, pass, where);
+    EXPECT_EQ(j.size(), 3u) << where;
+}
+
 void expect_pass_table(const json& j, const std::string& where) {
     ASSERT_TRUE(j.is_object()) << where;
     for (const char* pass : {"wind_force", "integrate", "compose", "node_relative", "root_positions",
@@ -129,13 +136,14 @@ void expect_schema(const json& d, const std::string& backend) {
     }
     for (const char* key : {"state", "static", "total"}) expect_number(p["bytes_per_step"], key, "bytes_per_step");
     expect_pass_table(p["bytes_per_step"]["per_pass"], "bytes_per_step.per_pass");
-    for (const char* mode : {"pointer_jumping", "pointer_jumping_in_dispatch", "level_by_level"}) {
+    for (const char* mode : {"pointer_jumping", "pointer_jumping_in_dispatch", "level_by_level", "fused"}) {
         const json& m = p[mode];
         expect_number(m, mode == std::string("level_by_level") ? "levels" : "rounds", mode);
         for (const char* key : {"steps_per_second_batched", "steps_per_second_profiled",
                                 "device_seconds_per_step", "device_effective_bandwidth"})
             expect_number(m, key, mode);
-        expect_pass_table(m["pass_seconds_per_step"], std::string(mode) + ".pass_seconds_per_step");
+        if (mode == std::string("fused")) expect_fused_pass_table(m["pass_seconds_per_step"], "fused.pass_seconds_per_step");
+        else expect_pass_table(m["pass_seconds_per_step"], std::string(mode) + ".pass_seconds_per_step");
     }
 
     // Forest: 1 and 10 instances of paper-1, each measured or skipped with a reason.

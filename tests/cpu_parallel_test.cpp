@@ -115,7 +115,8 @@ uint32_t process_threads_settled(uint32_t expected) {
 TEST(CpuParallel, BitwiseEqualToSerialCpuInEveryCompositionAndLayout) {
     const Scene scene = mixed_forest(3);
     for (Composition composition : {Composition::pointer_jumping, Composition::pointer_jumping_per_round,
-                                    Composition::pointer_jumping_in_dispatch, Composition::level_by_level}) {
+                                    Composition::pointer_jumping_in_dispatch, Composition::level_by_level,
+                                    Composition::fused}) {
         for (VertexLayout layout : {VertexLayout::separate, VertexLayout::packed}) {
             SCOPED_TRACE(std::string(to_string(composition)) + ", " + to_string(layout));
             SimulationConfig config = windy(composition, layout);

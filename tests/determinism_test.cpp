@@ -113,6 +113,22 @@ TEST_P(Determinism, LevelByLevelIsAlsoRepeatable) {
     expect_identical(snapshot(*first), snapshot(*second));
 }
 
+// Passes 1-5 fused into one dispatch, rounds in workgroup shared memory where they fit.
+TEST_P(Determinism, FusedIsAlsoRepeatable) {
+    const Scene scene = test_scene();
+    SimulationConfig config = test_config(GetParam());
+    config.composition = Composition::fused;
+    std::string skip;
+    auto first = test::create_simulation_or_skip(scene, config, config.backend, skip);
+    if (!skip.empty()) GTEST_SKIP() << skip;
+    ASSERT_TRUE(first);
+    auto second = test::create_simulation_or_skip(scene, config, config.backend, skip);
+    ASSERT_TRUE(second);
+    ASSERT_TRUE(first->step(300).ok());
+    for (uint32_t chunk : {1u, 57u, 242u}) ASSERT_TRUE(second->step(chunk).ok());
+    expect_identical(snapshot(*first), snapshot(*second));
+}
+
 INSTANTIATE_TEST_SUITE_P(Backends, Determinism,
                          ::testing::Values(BackendKind::cpu, BackendKind::cpu64, BackendKind::cpu_parallel,
                                            BackendKind::vulkan, BackendKind::cuda),

@@ -105,7 +105,8 @@ TEST_P(Joints, JointMatricesAreRotationsAndOriginsInEveryComposition) {
     const Scene scene = mixed_scene();
     const double height = scene_height(scene);
     for (Composition composition : {Composition::pointer_jumping, Composition::pointer_jumping_per_round,
-                                    Composition::pointer_jumping_in_dispatch, Composition::level_by_level}) {
+                                    Composition::pointer_jumping_in_dispatch, Composition::level_by_level,
+                                    Composition::fused}) {
         SCOPED_TRACE(to_string(composition));
         SimulationConfig config = windy();
         config.composition = composition;

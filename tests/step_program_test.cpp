@@ -126,7 +126,8 @@ TEST(StepProgram, RoundsWorkgroupSizeIsThePowerOfTwoThatCoversTheChains) {
 
 TEST(StepProgram, CompositionNamesRoundTrip) {
     for (Composition c : {Composition::pointer_jumping, Composition::pointer_jumping_per_round,
-                          Composition::pointer_jumping_in_dispatch, Composition::level_by_level})
+                          Composition::pointer_jumping_in_dispatch, Composition::level_by_level,
+                          Composition::fused})
         EXPECT_EQ(parse_composition(to_string(c)), c);
     EXPECT_FALSE(parse_composition("pointer-jumping").has_value());  // the CLI maps '-' to '_'
 }

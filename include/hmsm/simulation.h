@@ -29,7 +29,8 @@ HMSM_API std::optional<BackendKind> parse_backend_kind(std::string_view name);
 /// Backends compiled into this build (never `automatic`).
 HMSM_API std::vector<BackendKind> compiled_backends();
 
-/// How passes 3 and 5 accumulate down the hierarchy. All three give the same poses.
+/// How passes 3 and 5 accumulate down the hierarchy (and, for `fused`, how passes 1-5 are
+/// dispatched). All give the same poses.
 enum class Composition {
     /// The paper's pointer jumping in ceil(log2(D+1)) rounds, per instance group in one
     /// dispatch per pass (as pointer_jumping_in_dispatch) or one dispatch per round (as
@@ -44,6 +45,15 @@ enum class Composition {
     pointer_jumping_in_dispatch,
     /// One dispatch per depth level, D+1 in all (for comparison).
     level_by_level,
+    /// Passes 1-5 (wind_force to root_positions) in ONE dispatch per instance group: one
+    /// workgroup per instance runs the wind force and integration of its chains, the compose
+    /// rounds, the node positions and the root-position rounds, with workgroup barriers in
+    /// between (pointer jumping inside the workgroup; the rounds' ping-pong halves are kept in
+    /// shared memory where an instance's chains fit, else in device memory). Passes 6 and 7
+    /// follow as usual. It removes most dependent launches of a step, which is what a single
+    /// tree or a small forest costs on a GPU (each launch a few microseconds); a large forest,
+    /// whose passes fill the GPU anyway, gains little.
+    fused,
 };
 HMSM_API const char* to_string(Composition composition);
 HMSM_API std::optional<Composition> parse_composition(std::string_view name);

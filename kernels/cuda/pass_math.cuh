@@ -122,9 +122,9 @@ bool programmatic_launch_enabled();
 
 template <class Kernel>
 cudaError_t launch_pass(Kernel kernel, unsigned blocks, unsigned threads, cudaStream_t stream,
-                        const BufferPointers& b, const gpu::PassConstants& pc) {
+                        const BufferPointers& b, const gpu::PassConstants& pc, size_t shared_bytes = 0) {
     if (!programmatic_launch_enabled()) {
-        kernel<<<blocks, threads, 0, stream>>>(b, pc);
+        kernel<<<blocks, threads, shared_bytes, stream>>>(b, pc);
         return cudaGetLastError();
     }
     cudaLaunchAttribute attribute{};
@@ -133,7 +133,7 @@ cudaError_t launch_pass(Kernel kernel, unsigned blocks, unsigned threads, cudaSt
     cudaLaunchConfig_t config{};
     config.gridDim = dim3(blocks);
     config.blockDim = dim3(threads);
-    config.dynamicSmemBytes = 0;
+    config.dynamicSmemBytes = shared_bytes;
     config.stream = stream;
     config.attrs = &attribute;
     config.numAttrs = 1;

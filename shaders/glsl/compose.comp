@@ -8,21 +8,7 @@
 #define HMSM_SPECIALIZED_WORKGROUP_SIZE
 #define HMSM_POSE_COHERENCE coherent
 #include "common.glsl"
-
-/// Product of T over the chains between c and its 2^round-th ancestor (exclusive) so far.
-mat3 product_so_far(uint round, uint src_half, uint chain) {
-    return round == 0u ? as_mat3(chain_local[chain])
-                       : as_mat3(chain_rotation[half_offset(src_half) + chain]);
-}
-
-/// One pointer-jumping round for model chain c of group instance k.
-void jump(uint k, uint c, uint round, uint src_half, uint dst_half) {
-    uint chain = state_chain(k, c);
-    int ancestor = chain_jump[round * pc.total_model_chains + pc.model_chain_begin + c];
-    mat3 r = product_so_far(round, src_half, chain);
-    if (ancestor >= 0) r = product_so_far(round, src_half, state_chain(k, uint(ancestor))) * r;
-    chain_rotation[half_offset(dst_half) + chain] = as_mat3x4(r);
-}
+#include "chain_math.glsl"  // compose_jump
 
 void main() {
     if (pc.mode == HMSM_MODE_POINTER_JUMPING_IN_DISPATCH) {
@@ -30,7 +16,7 @@ void main() {
         if (k >= pc.element_count / pc.model_chain_count) return;  // uniform per workgroup
         for (uint round = 0u; round < pc.round; ++round) {
             for (uint c = gl_LocalInvocationID.x; c < pc.model_chain_count; c += gl_WorkGroupSize.x)
-                jump(k, c, round, HMSM_HALF_READ(round), HMSM_HALF_WRITTEN(round));
+                compose_jump(k, c, round, HMSM_HALF_READ(round), HMSM_HALF_WRITTEN(round));
             memoryBarrierBuffer();
             barrier();
         }
@@ -49,5 +35,5 @@ void main() {
         chain_rotation[dst + chain] = as_mat3x4(r);
         return;
     }
-    jump(i / pc.model_chain_count, i % pc.model_chain_count, pc.round, pc.src_half, pc.dst_half);
+    compose_jump(i / pc.model_chain_count, i % pc.model_chain_count, pc.round, pc.src_half, pc.dst_half);
 }

@@ -234,6 +234,7 @@ private:
     }
 
     void run_range(const Dispatch& d, double wind_x, Range r) {
+        if (runs_fused(d)) return fused<T>(s_, d.constants, wind_x, r);
         switch (d.pass) {
 #define HMSM_CPU_PASS_CASE(name) \
     case Pass::name: return call_pass(name<T>, d, wind_x, r);

@@ -27,9 +27,15 @@
 namespace hmsm::detail::cpu {
 namespace {
 
+/// Whether a dispatch reads anywhere within its instances (a hierarchical pass's parents and
+/// jump targets, or the fused dispatch's passes 1-5), so that its chunks are planned by
+/// instance, not by element.
+bool instance_wide(const Dispatch& d) { return is_hierarchical(d.pass) || runs_fused(d); }
+
 /// Work items per instance of a dispatch (a dispatch covers whole instances of one group).
 uint32_t items_per_instance(const Dispatch& d) {
     const gpu::PassConstants& pc = d.constants;
+    if (runs_fused(d)) return 1;
     if (is_hierarchical(d.pass)) {
         if (pc.mode == HMSM_MODE_POINTER_JUMPING_IN_DISPATCH) return 1;
         if (pc.mode == HMSM_MODE_LEVEL_BY_LEVEL) return pc.level_count;
@@ -73,13 +79,13 @@ bool overlap(uint64_t a0, uint64_t a1, uint64_t b0, uint64_t b1) { return a0 < b
 /// Whether chunks x and y (in either order) must not run concurrently: one writes a buffer the
 /// other reads or writes, at elements both may touch.
 bool conflict(const Dispatch& dx, const Footprint& x, const Dispatch& dy, const Footprint& y) {
-    const PassInfo& px = pass_info(dx.pass);
-    const PassInfo& py = pass_info(dy.pass);
-    const uint32_t shared = (px.writes & (py.reads | py.writes)) | (px.reads & py.writes);
+    const uint32_t shared = (dispatch_writes(dx) & (dispatch_reads(dy) | dispatch_writes(dy))) |
+                            (dispatch_reads(dx) & dispatch_writes(dy));
     if (shared == 0) return false;
     if (!overlap(x.instance_begin, x.instance_end, y.instance_begin, y.instance_end)) return false;
-    if (!px.hierarchical && !py.hierarchical && px.domain == py.domain &&
-        (shared & ~domain_state_buffers(px.domain)) == 0)
+    const PassDomain domain = pass_domain(dx.pass);
+    if (!instance_wide(dx) && !instance_wide(dy) && domain == pass_domain(dy.pass) &&
+        (shared & ~domain_state_buffers(domain)) == 0)
         return overlap(x.element_begin, x.element_end, y.element_begin, y.element_end);
     return true;
 }
@@ -127,7 +133,7 @@ StepPlan::StepPlan(std::span<const Dispatch> program, uint32_t threads, uint32_t
         return ElementsKey{uint32_t(pass_domain(d.pass)), element_base(d), d.constants.element_count};
     };
     for (const Dispatch& d : program_)
-        if (!is_hierarchical(d.pass)) summed[key(d)] += cost(d);
+        if (!instance_wide(d)) summed[key(d)] += cost(d);
 
     chunk_begin_.push_back(0);
     tasks_.resize(threads);
@@ -135,7 +141,7 @@ StepPlan::StepPlan(std::span<const Dispatch> program, uint32_t threads, uint32_t
     for (uint32_t i = 0; i < program_.size(); ++i) {
         const Dispatch& d = program_[i];
         const uint32_t items = work_items(d.pass, d.constants);
-        const double total = is_hierarchical(d.pass) ? cost(d) : summed[key(d)];
+        const double total = instance_wide(d) ? cost(d) : summed[key(d)];
         const uint32_t by_cost = uint32_t(std::min<double>(threads, std::max(1.0, total / min_cost)));
         const uint32_t chunks = std::max(1u, std::min(by_cost, items));
         // Chunks end on instance boundaries where that costs little balance (at least four
@@ -152,7 +158,7 @@ StepPlan::StepPlan(std::span<const Dispatch> program, uint32_t threads, uint32_t
             const Range r{bound(k), k + 1 == chunks ? items : bound(k + 1)};
             dispatch_chunks_.push_back(r);
             if (r.begin == r.end) continue;
-            const uint64_t base = is_hierarchical(d.pass) ? 0 : element_base(d);
+            const uint64_t base = instance_wide(d) ? 0 : element_base(d);
             footprints.push_back({i, k, uint32_t(tasks_[k].size()), d.constants.instance_begin + r.begin / per,
                                   d.constants.instance_begin + (r.end - 1) / per + 1, base + r.begin,
                                   base + r.end});

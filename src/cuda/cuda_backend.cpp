@@ -24,9 +24,15 @@ Result<std::unique_ptr<Backend>> CudaBackend::create() {
     cudaDeviceProp properties{};
     CUDA_TRY(cudaGetDeviceProperties(&properties, device));
     CUDA_TRY(cudaSetDevice(device));
+    // The fused kernel's rounds may take up to the opt-in maximum of shared memory per block.
+    int shared_optin = 0;
+    CUDA_TRY(cudaDeviceGetAttribute(&shared_optin, cudaDevAttrMaxSharedMemoryPerBlockOptin, device));
+    const uint64_t fused_shared = fused_shared_limit(uint64_t(shared_optin));
+    CUDA_TRY(allow_fused_shared(fused_shared));
     cudaStream_t stream = nullptr;
     CUDA_TRY(cudaStreamCreateWithFlags(&stream, cudaStreamNonBlocking));
-    return std::unique_ptr<Backend>(new CudaBackend(device, properties.name, stream));
+    return std::unique_ptr<Backend>(
+        new CudaBackend(device, properties.name, stream, fused_shared));
 }
 
 CudaBackend::~CudaBackend() {
@@ -114,7 +120,7 @@ Status CudaBackend::run(std::span<const Dispatch> program, std::span<const doubl
 
 Status CudaBackend::run_graph(std::span<const Dispatch> program, std::span<const double> wind_x) {
     if (!graph_.matches(program, buffers_.pointers()))
-        HMSM_TRY(graph_.capture(program, buffers_.pointers(), stream_));
+        HMSM_TRY(graph_.capture(program, buffers_.pointers(), stream_, fused_shared_limit_));
     for (double x : wind_x) HMSM_TRY(graph_.replay(float(x), stream_));
     CUDA_TRY(cudaStreamSynchronize(stream_));
     return {};
@@ -129,7 +135,7 @@ Status CudaBackend::run_profiled(std::span<const Dispatch> program, std::span<co
     for (double x : wind_x) {
         CUDA_TRY(cudaEventRecord(events_[0], stream_));
         for (size_t j = 0; j < program.size(); ++j) {
-            CUDA_TRY(launch_dispatch(program[j], buffers_.pointers(), float(x), stream_));
+            CUDA_TRY(launch_dispatch(program[j], buffers_.pointers(), float(x), stream_, fused_shared_limit_));
             CUDA_TRY(cudaEventRecord(events_[j + 1], stream_));
         }
         CUDA_TRY(cudaEventSynchronize(events_[program.size()]));

@@ -42,8 +42,9 @@ public:
     const BufferPointers& device_pointers() const { return buffers_.pointers(); }
 
 private:
-    CudaBackend(int device, std::string name, cudaStream_t own_stream)
-        : device_(device), device_name_(std::move(name)), own_stream_(own_stream), stream_(own_stream) {}
+    CudaBackend(int device, std::string name, cudaStream_t own_stream, uint64_t fused_shared_limit)
+        : device_(device), device_name_(std::move(name)), own_stream_(own_stream), stream_(own_stream),
+          fused_shared_limit_(fused_shared_limit) {}
     Status run_graph(std::span<const Dispatch> program, std::span<const double> wind_x);
     Status run_profiled(std::span<const Dispatch> program, std::span<const double> wind_x);
     Status make_current() const;
@@ -52,6 +53,8 @@ private:
     std::string device_name_;
     cudaStream_t own_stream_;
     cudaStream_t stream_;
+    /// Shared memory a fused block may take (backend.h fused_shared_limit, read at creation).
+    uint64_t fused_shared_limit_;
     DeviceBuffers buffers_;
     StepGraph graph_;
     std::vector<cudaEvent_t> events_;  // profiling: one before and one after each dispatch

@@ -56,13 +56,13 @@ bool StepGraph::matches(std::span<const Dispatch> program, const BufferPointers&
 }
 
 Status StepGraph::capture(std::span<const Dispatch> program, const BufferPointers& buffers,
-                          cudaStream_t stream) {
+                          cudaStream_t stream, uint64_t fused_shared_limit) {
     release();
     CUDA_TRY(cudaStreamBeginCapture(stream, cudaStreamCaptureModeThreadLocal));
     cudaError_t error = cudaSuccess;
     std::vector<WindNode> wind_nodes;
     for (const Dispatch& d : program) {
-        error = launch_dispatch(d, buffers, 0.0f, stream);
+        error = launch_dispatch(d, buffers, 0.0f, stream, fused_shared_limit);
         if (error == cudaSuccess && d.pass == Pass::wind_force && d.constants.element_count > 0) {
             WindNode wind{};
             wind.constants = d.constants;

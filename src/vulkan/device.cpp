@@ -337,6 +337,7 @@ Status Device::load_device_info() {
     for (int i = 0; i < 3; ++i) limits_.max_workgroup_count[i] = l.maxComputeWorkGroupCount[i];
     limits_.max_workgroup_size_x = l.maxComputeWorkGroupSize[0];
     limits_.max_workgroup_invocations = l.maxComputeWorkGroupInvocations;
+    limits_.max_shared_memory_bytes = l.maxComputeSharedMemorySize;
     limits_.max_push_constants_size = l.maxPushConstantsSize;
     limits_.max_storage_buffers_per_stage = l.maxPerStageDescriptorStorageBuffers;
     limits_.max_storage_buffers_per_set = l.maxDescriptorSetStorageBuffers;

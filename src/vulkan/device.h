@@ -24,6 +24,7 @@ struct DeviceLimits {
     uint32_t max_workgroup_count[3] = {};
     uint32_t max_workgroup_size_x = 0;
     uint32_t max_workgroup_invocations = 0;
+    uint32_t max_shared_memory_bytes = 0;  ///< maxComputeSharedMemorySize
     uint32_t max_push_constants_size = 0;
     uint32_t max_storage_buffers_per_stage = 0;
     uint32_t max_storage_buffers_per_set = 0;

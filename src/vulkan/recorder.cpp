@@ -35,7 +35,7 @@ void record_steps(const Device& device, const Pipelines& pipelines, const Window
     for (double x : wind_x) {
         for (const WindowPlan::Part& part : parts) {
             const Dispatch& d = part.dispatch;
-            const uint32_t reads = pass_reads(d.pass), writes = pass_writes(d.pass);
+            const uint32_t reads = dispatch_reads(d), writes = dispatch_writes(d);
             if (((reads | writes) & written) || (writes & read)) {
                 vk.vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
                                         VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, 0, 1, &barrier, 0,
@@ -59,8 +59,8 @@ void record_steps(const Device& device, const Pipelines& pipelines, const Window
             if (d.pass == Pass::wind_force) constants.wind.w = float(x);
             vk.vkCmdPushConstants(cmd, pipelines.layout(), VK_SHADER_STAGE_COMPUTE_BIT, 0,
                                   sizeof(constants), &constants);
-            // One workgroup per instance for in-dispatch rounds, else one per
-            // HMSM_WORKGROUP_SIZE threads.
+            // One workgroup per instance for in-dispatch rounds and fused dispatches, else one
+            // per HMSM_WORKGROUP_SIZE threads.
             WorkgroupGrid grid = workgroup_grid(launch_shape(d).workgroups, device.limits());
             if (grid.x) vk.vkCmdDispatch(cmd, grid.x, grid.y, 1);
             if (timestamps && part.last)

@@ -50,6 +50,8 @@ double nmse(const std::vector<double>& expected, const std::vector<double>& actu
 }
 
 std::vector<Composition> compositions_of(Pass pass) {
+    // The fused dispatch (passes 1-5) is a dispatch of the first fused pass.
+    if (pass == detail::kFusedDispatchPass) return {Composition::pointer_jumping_per_round, Composition::fused};
     if (pass != Pass::compose && pass != Pass::root_positions) return {Composition::pointer_jumping_per_round};
     return {Composition::pointer_jumping_per_round, Composition::pointer_jumping_in_dispatch,
             Composition::level_by_level};

@@ -288,7 +288,7 @@ static void test_bad_configs(void) {
     } while (0)
     CHECK_CONFIG_FAILS(backend, 99);
     CHECK_CONFIG_FAILS(backend, -1);
-    CHECK_CONFIG_FAILS(composition, 4);
+    CHECK_CONFIG_FAILS(composition, 5);
     CHECK_CONFIG_FAILS(vertex_layout, 2);
     CHECK_CONFIG_FAILS(profile_passes, 7);
     CHECK_CONFIG_FAILS(outputs, 3);

@@ -12,7 +12,9 @@
 
 #include <array>
 #include <cmath>
+#include <cstdlib>
 #include <limits>
+#include <string>
 
 namespace hmsm::cuda_test {
 namespace {
@@ -87,9 +89,10 @@ void emulate_steps(const Simulation& sim, HostImage& image, uint32_t steps) {
     }
 }
 
-TEST_P(CudaEmulation, KernelBodiesFollowCpu64OverManySteps) {
+/// The step program of `composition` through the kernel bodies, against cpu64, 240 steps.
+void expect_kernel_bodies_follow_cpu64(Composition composition) {
     const Scene scene = forest_scene(11);
-    auto reference = Simulation::create(scene, test_config(BackendKind::cpu64, GetParam(), false));
+    auto reference = Simulation::create(scene, test_config(BackendKind::cpu64, composition, false));
     ASSERT_TRUE(reference.ok()) << reference.status().message();
     Simulation& sim = **reference;
     HostImage image = image_of(sim);
@@ -126,11 +129,25 @@ TEST_P(CudaEmulation, KernelBodiesFollowCpu64OverManySteps) {
     EXPECT_LE(max_abs_difference(emulated, joints) / std::max(1.0, height), 1e-4);
     // The wind must have moved the trees, or the comparison above proves little.
     std::vector<double> rest, now;
-    auto at_rest = Simulation::create(scene, test_config(BackendKind::cpu64, GetParam(), false));
+    auto at_rest = Simulation::create(scene, test_config(BackendKind::cpu64, composition, false));
     ASSERT_TRUE(at_rest.ok());
     ASSERT_TRUE((*at_rest)->read(Output::node_positions, rest).ok());
     ASSERT_TRUE(sim.read(Output::node_positions, now).ok());
     EXPECT_GT(max_abs_difference(rest, now) / height, 1e-3);
+}
+
+TEST_P(CudaEmulation, KernelBodiesFollowCpu64OverManySteps) { expect_kernel_bodies_follow_cpu64(GetParam()); }
+
+// The fused kernel with its rounds in device memory instead of shared memory (the
+// parameterized case above keeps them in shared memory: the emulation grants an H100's 227 KiB).
+TEST(CudaEmulationFused, DeviceMemoryRoundsFollowCpu64OverManySteps) {
+    const char* old = std::getenv("HMSM_FUSED_SHARED_BYTES");
+    const std::string saved = old ? old : "";
+    setenv("HMSM_FUSED_SHARED_BYTES", "0", 1);
+    ASSERT_EQ(detail::cuda::emulated_fused_shared_limit(), 0u);
+    expect_kernel_bodies_follow_cpu64(Composition::fused);
+    if (old) setenv("HMSM_FUSED_SHARED_BYTES", saved.c_str(), 1);
+    else unsetenv("HMSM_FUSED_SHARED_BYTES");
 }
 
 TEST(CudaEmulationLive, TurbulentWindAndForceFieldsFollowCpu64) {
@@ -205,7 +222,7 @@ TEST(CudaEmulationPacked, ContourWritesThePositionAndTheNormalWordOnly) {
 
 INSTANTIATE_TEST_SUITE_P(Compositions, CudaEmulation,
                          ::testing::Values(Composition::pointer_jumping_per_round, Composition::pointer_jumping_in_dispatch,
-                                           Composition::level_by_level),
+                                           Composition::level_by_level, Composition::fused),
                          [](const auto& info) { return std::string(to_string(info.param)); });
 
 }  // namespace

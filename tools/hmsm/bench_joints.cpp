@@ -108,6 +108,27 @@ int joint_forest_cases(BackendKind backend, const std::vector<JointForestCase>& 
         put(row, "chains_per_second", double(chains_per_instance) * c.count * r.batched);
         put(row, "steps_per_second_profiled", r.profiled);
         if (r.has_passes) put(row, "device_seconds_per_step", r.device_seconds);
+        sim->reset();
+        // The same forest with passes 1-5 fused into one dispatch (Composition::fused), which
+        // is all a joints-only step runs.
+        config.composition = Composition::fused;
+        auto fused_sim = Simulation::create(*scene, config);
+        if (fused_sim) {
+            auto fused = measure(**fused_sim, settings, kBatched | kPasses);
+            if (fused) {
+                json f = json::object();
+                put(f, "steps_per_second", fused->batched);
+                put(f, "seconds_per_step", 1.0 / fused->batched);
+                put(f, "chains_per_second", double(chains_per_instance) * c.count * fused->batched);
+                put(f, "steps_per_second_profiled", fused->profiled);
+                if (fused->has_passes) put(f, "device_seconds_per_step", fused->device_seconds);
+                row["fused"] = f;
+            } else {
+                skip("fused: " + fused.status().message(), true);
+            }
+        } else {
+            skip("fused: " + fused_sim.status().message(), true);
+        }
         rows.push_back(row);
     }
     return failures;
@@ -117,18 +138,25 @@ std::string render_joint_forest(const json& rows) {
     if (!rows.is_array() || rows.empty()) return "";
     std::string out =
         "\n### Forest scaling, joints only (passes 1-5)\n\n"
-        "| backend | model | instances | chains | joint bytes | ms per step | device ms per step | Mchains/s |\n"
-        "|---|---|--:|--:|--:|--:|--:|--:|\n";
-    char line[320];
+        "Default composition, and fused: passes 1-5 in one dispatch, a workgroup per instance.\n\n"
+        "| backend | model | instances | chains | joint bytes | ms per step | device ms per step | Mchains/s "
+        "| fused ms per step | fused device ms per step | fused Mchains/s |\n"
+        "|---|---|--:|--:|--:|--:|--:|--:|--:|--:|--:|\n";
+    char line[400];
     for (const json& r : rows) {
-        auto number = [&](const char* key, double scale) {
-            return r.contains(key) ? r[key].get<double>() * scale : 0.0;
+        auto number_in = [](const json& j, const char* key, double scale) {
+            return j.is_object() && j.contains(key) ? j[key].get<double>() * scale : 0.0;
         };
-        std::snprintf(line, sizeof line, "| %s | %s | %llu | %llu | %llu | %.3f | %.3f | %.1f |\n",
+        auto number = [&](const char* key, double scale) { return number_in(r, key, scale); };
+        const json fused = r.value("fused", json::object());
+        std::snprintf(line, sizeof line,
+                      "| %s | %s | %llu | %llu | %llu | %.3f | %.3f | %.1f | %.3f | %.3f | %.1f |\n",
                       r.value("backend", "").c_str(), r.value("model", "").c_str(),
                       (unsigned long long)r.value("instances", 0ull), (unsigned long long)r.value("chains", 0ull),
                       (unsigned long long)r.value("joint_bytes", 0ull), number("seconds_per_step", 1e3),
-                      number("device_seconds_per_step", 1e3), number("chains_per_second", 1e-6));
+                      number("device_seconds_per_step", 1e3), number("chains_per_second", 1e-6),
+                      number_in(fused, "seconds_per_step", 1e3), number_in(fused, "device_seconds_per_step", 1e3),
+                      number_in(fused, "chains_per_second", 1e-6));
         out += line;
     }
     return out;

@@ -1,0 +1,164 @@
+// The per-chain math of passes 1, 2, 3 and 5, written once for the separate pass kernels
+// (wind_force.cu, integrate.cu, compose.cu, root_positions.cu) and the fused kernel (fused.cu,
+// Composition::fused). Mirrors src/cpu/NAME.cpp and shaders/glsl/chain_math.glsl.
+//
+// Loads of state that a block may have written earlier in the same kernel are plain loads
+// (which __syncthreads() orders), never the read-only path: kWrittenInBlock marks the
+// ping-pong halves of in-dispatch rounds, kFused also T, u and the pose half R (the fused
+// kernel writes all of them before it reads them).
+#pragma once
+
+#include "pass_math.cuh"
+
+#include <cmath>
+
+namespace hmsm::detail::cuda {
+
+/// Pass 1 for model chain c of group instance k: the generalized force g = A (w_loc.z, -w_loc.x)
+/// with w_loc = R^T w in the chain's frame of the previous step (R, and the origin x at which
+/// the force fields act, loaded by the caller from the pose half), w = lambda_i s Y(tau + phi_i)
+/// d plus the force fields. pc.wind.w is the step's slot of the wind table (gpu_layout.h).
+HMSM_HOST_DEVICE float2 chain_wind_force(const BufferPointers& b, const gpu::PassConstants& pc,
+                                         uint32_t k, uint32_t c, float3 x, const Mat3& rotation) {
+    const float4* table = b.wind_table;
+    const uint32_t slot = HMSM_WIND_STEPS + HMSM_WIND_STEP_VEC4S * uint32_t(pc.wind.w);
+    const float4* instance = b.instance_wind + uint64_t(HMSM_INSTANCE_WIND_VEC4S) * (pc.instance_begin + k);
+    const float4 own = load(instance);  // (lambda, phi mod 2, 0, 0)
+    float y;
+    if (pc.profile == HMSM_WIND_PROFILE_TURBULENT)
+        y = turbulent_y<float>(&table[HMSM_WIND_AMPLITUDES].x, &table[slot + 1].x, &instance[1].x);
+    else
+        y = wind_profile_y<float>(pc.profile, load(table + slot).x + own.y);  // tau + phi, both mod 2
+    const float4 vector_count = load(table + HMSM_WIND_VECTOR);  // (s d, number of fields)
+    float3 wind = (own.x * y) * xyz(vector_count);
+    const uint32_t fields = uint32_t(vector_count.w);
+    for (uint32_t f = 0; f < fields; ++f) {
+        const float4 sphere = load(table + HMSM_WIND_FIELDS + 2 * f);
+        const float4 force = load(table + HMSM_WIND_FIELDS + 2 * f + 1);
+        const float3 offset = make_float3(x.x - sphere.x, x.y - sphere.y, x.z - sphere.z);
+        const float distance = sqrtf(dot(offset, offset));
+        const float reach = fmaxf(0.0f, 1.0f - distance / sphere.w);
+        const float h = reach * reach;
+        if (force.w == 0.0f) wind = wind + h * xyz(force);
+        else if (distance >= 1e-9f) wind = wind + (h * force.x / distance) * offset;
+    }
+    const float3 local = transpose_times(rotation, wind);
+    const float area = load(b.chain_constants + pc.model_chain_begin + c).w;
+    return make_float2(area * local.z, -area * local.x);
+}
+
+/// Pass 2 for model chain c of group instance k (state chain `chain`) under force g: symplectic
+/// Euler on S = (theta_x, theta_z), F = g - K S - D V, V += dt/I F, S += dt V, clamped at
+/// max_angle (the rate is zeroed at the stop), stored to chain_state; returns the local
+/// transform T = Q Rz(theta_z) Rx(theta_x), with Ry(yaw) in front for the trunk.
+HMSM_HOST_DEVICE Mat3 chain_integrate(const BufferPointers& b, const gpu::PassConstants& pc,
+                                      uint32_t k, uint32_t c, uint64_t chain, float2 g_force) {
+    const uint32_t model_chain = pc.model_chain_begin + c;
+    const float4 kc = load(b.chain_constants + model_chain);  // (I, K, D, A)
+    const float4 state = b.chain_state[chain];                // (theta_x, theta_z, v_x, v_z)
+    const float dt = pc.params.x, max_angle = pc.params.y;
+
+    float angle[2] = {state.x, state.y};
+    float rate[2] = {state.z, state.w};
+    const float g[2] = {g_force.x, g_force.y};
+#pragma unroll
+    for (int j = 0; j < 2; ++j) {
+        const float f = g[j] - kc.y * angle[j] - kc.z * rate[j];
+        rate[j] += dt / kc.x * f;
+        angle[j] += dt * rate[j];
+        if (fabsf(angle[j]) > max_angle) {
+            angle[j] = copysignf(max_angle, angle[j]);
+            rate[j] = 0.0f;
+        }
+    }
+    b.chain_state[chain] = make_float4(angle[0], angle[1], rate[0], rate[1]);
+
+    float sx, cx, sz, cz;
+    sincosf(angle[0], &sx, &cx);
+    sincosf(angle[1], &sz, &cz);
+    // Rz(theta_z) Rx(theta_x), by columns.
+    const Mat3 bend = {make_float3(cz, sz, 0.0f), make_float3(-sz * cx, cz * cx, sx),
+                       make_float3(sz * sx, -cz * sx, cx)};
+    Mat3 local = load_mat3(b.chain_rest_rotation, model_chain) * bend;
+    if (load(b.chain_parent + model_chain) < 0) {
+        const float4 yaw = load(b.instance_yaw + pc.instance_begin + k);  // (cos, sin)
+        const Mat3 ry = {make_float3(yaw.x, 0.0f, -yaw.y), make_float3(0.0f, 1.0f, 0.0f),
+                         make_float3(yaw.y, 0.0f, yaw.x)};
+        local = ry * local;
+    }
+    return local;
+}
+
+/// One pass-3 pointer-jumping round for model chain c of group instance k in device memory:
+/// P = P(2^round-th ancestor) P, half src_half -> half dst_half (round 0 starts from T).
+template <bool kWrittenInBlock, bool kFused = false>
+HMSM_HOST_DEVICE void compose_jump(const BufferPointers& b, const gpu::PassConstants& pc, uint32_t k,
+                                   uint32_t c, uint32_t round, uint32_t src_half, uint32_t dst_half) {
+    const uint64_t chain = state_chain(pc, k, int32_t(c));
+    const int32_t ancestor =
+        load(b.chain_jump + uint64_t(round) * pc.total_model_chains + pc.model_chain_begin + c);
+    // The product accumulated so far: T itself before round 0, else the src half.
+    auto product_so_far = [&](uint64_t state) {
+        if (round == 0)
+            return kFused ? load_mat3_written_in_block(b.chain_local, state) : load_mat3(b.chain_local, state);
+        const uint64_t at = half_begin(pc, src_half) + state;
+        return kWrittenInBlock ? load_mat3_written_in_block(b.chain_rotation, at)
+                               : load_mat3(b.chain_rotation, at);
+    };
+    Mat3 rotation = product_so_far(chain);
+    if (ancestor >= 0) rotation = product_so_far(state_chain(pc, k, ancestor)) * rotation;
+    store_mat3(b.chain_rotation, half_begin(pc, dst_half) + chain, rotation);
+}
+
+/// Pass 5: what chain c of group instance k contributes on its own: the instance origin for the
+/// trunk, else its attach node's position relative to the parent chain's origin.
+template <bool kFused = false>
+HMSM_HOST_DEVICE float4 own_offset(const BufferPointers& b, const gpu::PassConstants& pc, uint32_t k,
+                                   int32_t c) {
+    if (load(b.chain_parent + pc.model_chain_begin + c) < 0) {
+        const float4 origin = load(b.instance_origin + pc.instance_begin + k);
+        return make_float4(origin.x, origin.y, origin.z, 0.0f);
+    }
+    const float4* u = b.node_relative + state_node(pc, k, load(b.chain_attach + pc.model_chain_begin + c));
+    return kFused ? *u : load(u);
+}
+
+/// Joint matrix of state chain `chain` (gpu_layout.h): rows (R row i, O_i).
+HMSM_HOST_DEVICE void store_joint_of(const BufferPointers& b, uint64_t chain, const Mat3& r, float4 o) {
+    float4* row = b.joint_matrix + 3 * chain;
+    row[0] = make_float4(r.c0.x, r.c1.x, r.c2.x, o.x);
+    row[1] = make_float4(r.c0.y, r.c1.y, r.c2.y, o.y);
+    row[2] = make_float4(r.c0.z, r.c1.z, r.c2.z, o.z);
+}
+
+/// The same with R from `pose_half` of chain_rotation.
+template <bool kFused = false>
+HMSM_HOST_DEVICE void store_joint(const BufferPointers& b, const gpu::PassConstants& pc, uint64_t chain,
+                                  uint32_t pose_half, float4 o) {
+    const uint64_t at = half_begin(pc, pose_half) + chain;
+    store_joint_of(b, chain, kFused ? load_mat3_written_in_block(b.chain_rotation, at)
+                                    : load_mat3(b.chain_rotation, at), o);
+}
+
+/// One pass-5 pointer-jumping round for model chain c of group instance k in device memory:
+/// the partial sum of the 2^round-th ancestor added, src_half -> dst_half, round 0 starting
+/// from each chain's own offset; the joint matrix too where `write_joint`.
+template <bool kWrittenInBlock, bool kFused = false>
+HMSM_HOST_DEVICE void root_jump(const BufferPointers& b, const gpu::PassConstants& pc, uint32_t k,
+                                int32_t c, uint32_t round, uint32_t src_half, uint32_t dst_half,
+                                bool write_joint) {
+    const int32_t ancestor =
+        load(b.chain_jump + uint64_t(round) * pc.total_model_chains + pc.model_chain_begin + c);
+    const uint64_t src = half_begin(pc, src_half);
+    auto sum_so_far = [&](int32_t chain) {
+        if (round == 0) return own_offset<kFused>(b, pc, k, chain);
+        const float4* at = b.chain_origin + src + state_chain(pc, k, chain);
+        return kWrittenInBlock ? *at : load(at);
+    };
+    float4 origin = sum_so_far(c);
+    if (ancestor >= 0) origin = origin + sum_so_far(ancestor);
+    b.chain_origin[half_begin(pc, dst_half) + state_chain(pc, k, c)] = origin;
+    if (write_joint) store_joint<kFused>(b, pc, state_chain(pc, k, c), dst_half, origin);
+}
+
+}  // namespace hmsm::detail::cuda

@@ -1,0 +1,135 @@
+// The per-chain math of passes 1, 2, 3 and 5, written once for the separate pass shaders
+// (wind_force.comp, integrate.comp, compose.comp, root_positions.comp) and the fused one
+// (fused.comp, Composition::fused). Mirrors src/cpu/NAME.cpp; include after common.glsl.
+#ifndef HMSM_CHAIN_MATH_GLSL
+#define HMSM_CHAIN_MATH_GLSL
+
+/// Pass 1 for model chain c of group instance k (state chain `chain`): the generalized force
+/// g = A (w_loc.z, -w_loc.x) from the wind in the chain's previous-step frame w_loc = R^T w,
+/// w = lambda_i s Y(tau + phi_i) d plus the force fields at the chain's previous origin, R and O
+/// read from ping-pong half `pose_half` (docs/model.md 3.5, 3.7, 3.9; table in gpu_layout.h).
+vec2 chain_wind_force(uint k, uint c, uint chain, uint pose_half) {
+    uint slot = HMSM_WIND_STEPS + HMSM_WIND_STEP_VEC4S * uint(pc.wind.w);
+    uint instance = HMSM_INSTANCE_WIND_VEC4S * (pc.instance_begin + k);
+    vec4 own = instance_wind[instance];  // (lambda, phi mod 2, 0, 0)
+    float y;
+    if (pc.profile == HMSM_WIND_PROFILE_TURBULENT) {
+        // Yt = 1 + sum a_k cos(2 pi (frac(m_k tau + u_k) + frac(m_k phi))), reduced to [0, 1).
+        y = 1.0;
+        for (uint e = 0u; e < HMSM_WIND_MODE_VEC4S; ++e) {
+            vec4 phase = wind_table[slot + 1u + e] + instance_wind[instance + 1u + e];
+            phase -= floor(phase);
+            vec4 a = wind_table[HMSM_WIND_AMPLITUDES + e];
+            y += dot(a, cos(2.0 * HMSM_PI * phase));
+        }
+    } else {
+        y = wind_profile_y(pc.profile, wind_table[slot].x + own.y);  // tau + phi, both mod 2
+    }
+    vec4 vector_count = wind_table[HMSM_WIND_VECTOR];  // (s d, number of fields)
+    vec3 wind = own.x * y * vector_count.xyz;
+    uint pose = half_offset(pose_half) + chain;
+    vec3 x = chain_origin[pose].xyz;
+    uint fields = uint(vector_count.w);
+    for (uint f = 0u; f < fields; ++f) {
+        vec4 sphere = wind_table[HMSM_WIND_FIELDS + 2u * f];
+        vec4 force = wind_table[HMSM_WIND_FIELDS + 2u * f + 1u];
+        vec3 offset = x - sphere.xyz;
+        float distance = length(offset);
+        float reach = max(0.0, 1.0 - distance / sphere.w);
+        float h = reach * reach;
+        if (force.w == 0.0) wind += h * force.xyz;
+        else if (distance >= 1e-9) wind += (h * force.x / distance) * offset;
+    }
+    vec3 wind_local = transpose(as_mat3(chain_rotation[pose])) * wind;
+    float area = chain_constants[pc.model_chain_begin + c].w;
+    return vec2(area * wind_local.z, -area * wind_local.x);
+}
+
+/// Pass 2 for model chain c of group instance k under generalized force g: symplectic Euler on
+/// the two joint angles (theta_x, theta_z), clamped at max_angle (chain_state is updated), and
+/// the local transform T = Q Rz(theta_z) Rx(theta_x), with Ry(yaw) in front for the trunk.
+mat3 chain_integrate(uint k, uint c, uint chain, vec2 g) {
+    uint model_chain = pc.model_chain_begin + c;
+    vec4 constants = chain_constants[model_chain];  // (I, K, D, A)
+    float dt = pc.params.x;
+    float max_angle = pc.params.y;
+
+    vec4 s = chain_state[chain];
+    vec2 angle = s.xy;
+    vec2 rate = s.zw;
+    vec2 force = g - constants.y * angle - constants.z * rate;
+    rate += dt / constants.x * force;
+    angle += dt * rate;
+    for (int j = 0; j < 2; ++j) {
+        if (abs(angle[j]) > max_angle) {
+            angle[j] = sign(angle[j]) * max_angle;
+            rate[j] = 0.0;
+        }
+    }
+    chain_state[chain] = vec4(angle, rate);
+
+    float cx = cos(angle.x), sx = sin(angle.x);
+    float cz = cos(angle.y), sz = sin(angle.y);
+    mat3 rx = mat3(vec3(1, 0, 0), vec3(0, cx, sx), vec3(0, -sx, cx));  // columns
+    mat3 rz = mat3(vec3(cz, sz, 0), vec3(-sz, cz, 0), vec3(0, 0, 1));
+    mat3 t = as_mat3(chain_rest_rotation[model_chain]) * rz * rx;
+    if (chain_parent[model_chain] < 0) {
+        vec4 yaw = instance_yaw[pc.instance_begin + k];  // (cos, sin)
+        mat3 ry = mat3(vec3(yaw.x, 0, -yaw.y), vec3(0, 1, 0), vec3(yaw.y, 0, yaw.x));
+        t = ry * t;
+    }
+    return t;
+}
+
+/// Pass 3, product of T over the chains between c and its 2^round-th ancestor (exclusive) so
+/// far: T itself before round 0, else half src_half of chain_rotation.
+mat3 product_so_far(uint round, uint src_half, uint chain) {
+    return round == 0u ? as_mat3(chain_local[chain])
+                       : as_mat3(chain_rotation[half_offset(src_half) + chain]);
+}
+
+/// One pass-3 pointer-jumping round for model chain c of group instance k, in device memory;
+/// returns the product written.
+mat3 compose_jump(uint k, uint c, uint round, uint src_half, uint dst_half) {
+    uint chain = state_chain(k, c);
+    int ancestor = chain_jump[round * pc.total_model_chains + pc.model_chain_begin + c];
+    mat3 r = product_so_far(round, src_half, chain);
+    if (ancestor >= 0) r = product_so_far(round, src_half, state_chain(k, uint(ancestor))) * r;
+    chain_rotation[half_offset(dst_half) + chain] = as_mat3x4(r);
+    return r;
+}
+
+/// Pass 5: the offset chain c of group instance k contributes on its own: the instance origin
+/// for the trunk, else the attach node's position relative to the parent chain's origin.
+vec4 own_offset(uint k, uint c) {
+    if (chain_parent[pc.model_chain_begin + c] < 0)
+        return vec4(instance_origin[pc.instance_begin + k].xyz, 0.0);
+    return node_relative[state_node(k, uint(chain_attach[pc.model_chain_begin + c]))];
+}
+
+vec4 sum_so_far(uint k, uint c, uint round, uint src_half) {
+    return round == 0u ? own_offset(k, c) : chain_origin[half_offset(src_half) + state_chain(k, c)];
+}
+
+/// The joint matrix of state chain `chain`: rows (R row i, O_i).
+void store_joint_of(uint chain, mat3 r, vec4 origin) {
+    joint_matrix[chain] = mat3x4(vec4(r[0].x, r[1].x, r[2].x, origin.x),
+                                 vec4(r[0].y, r[1].y, r[2].y, origin.y),
+                                 vec4(r[0].z, r[1].z, r[2].z, origin.z));
+}
+
+/// The same with R from half `pose_half` of chain_rotation.
+void store_joint(uint chain, uint pose_half, vec4 origin) {
+    store_joint_of(chain, as_mat3(chain_rotation[half_offset(pose_half) + chain]), origin);
+}
+
+/// One pass-5 pointer-jumping round for model chain c of group instance k, in device memory.
+void root_jump(uint k, uint c, uint round, uint src_half, uint dst_half, bool write_joint) {
+    int ancestor = chain_jump[round * pc.total_model_chains + pc.model_chain_begin + c];
+    vec4 origin = sum_so_far(k, c, round, src_half);
+    if (ancestor >= 0) origin += sum_so_far(k, uint(ancestor), round, src_half);
+    chain_origin[half_offset(dst_half) + state_chain(k, c)] = origin;
+    if (write_joint) store_joint(state_chain(k, c), dst_half, origin);
+}
+
+#endif  // HMSM_CHAIN_MATH_GLSL
