@@ -69,6 +69,12 @@ std::string layout_of(const json& entry) {
     return entry.contains("layout") ? text(entry, "layout") : "separate";
 }
 
+/// The layout column of a forest row, with the composition where it is not the default.
+std::string forest_layout_cell(const json& entry) {
+    const std::string composition = entry.contains("composition") ? text(entry, "composition") : "pointer_jumping";
+    return composition == "pointer_jumping" ? layout_of(entry) : layout_of(entry) + " (" + composition + ")";
+}
+
 std::string case_mark(const json& entry) {
     auto it = entry.find("budget_reduced");
     return it != entry.end() && it->is_boolean() && it->get<bool>() ? "*" : "";
@@ -197,7 +203,7 @@ std::string render_markdown(const json& d) {
             double n = 0.0;
             number_at(f, "instances", n);
             rows[{text(f, "backend"), n, layout_of(f) == "packed"}] =
-                row({text(f, "backend") + case_mark(f), text(f, "instances"), layout_of(f), text(f, "mesh_vertices"),
+                row({text(f, "backend") + case_mark(f), text(f, "instances"), forest_layout_cell(f), text(f, "mesh_vertices"),
                      num(f, "seconds_per_step", 1e3), num(f, "steps_per_second"),
                      num(f, "vertices_per_second", 1e-6), num(f, "bytes_per_step", 1e-6),
                      num(f, "effective_bandwidth", 1e-9), num(f, "device_effective_bandwidth", 1e-9),

@@ -230,7 +230,7 @@ void BenchRun::forest_cases(const Model& model, BackendRun& b, const std::vector
                 record_failure(where, scene.status());
                 continue;
             }
-            auto sim = create(*scene, b, Composition::pointer_jumping, where, layout);
+            auto sim = create(*scene, b, settings_.forest_composition, where, layout);
             if (!sim) continue;
             auto measured = measure(*sim, settings_, kBatched | kPasses);
             if (!measured) {
@@ -241,7 +241,8 @@ void BenchRun::forest_cases(const Model& model, BackendRun& b, const std::vector
             slowest = std::max(slowest, r.warmup_seconds_per_step);
             const Traffic traffic = step_traffic(*sim);
             json f = {{"backend", backend}, {"device", sim->device_name()}, {"instances", n},
-                      {"layout", layout_name}, {"mesh_vertices", sim->vertex_count()},
+                      {"layout", layout_name}, {"composition", to_string(settings_.forest_composition)},
+                      {"mesh_vertices", sim->vertex_count()},
                       {"steps_per_batch", r.steps}, {"repeats", r.repeats}, {"budget_reduced", r.reduced},
                       {"bytes_per_step", traffic.total()}, {"state_bytes_per_step", traffic.state_bytes}};
             put(f, "steps_per_second", r.batched);

@@ -36,6 +36,7 @@ struct BenchFlags {
     std::string joint_instances = "1,10,100,1000,10000";  // joints-only forest (bench_joints.h)
     double spacing = 25.0;
     double case_budget = 20.0;
+    std::string forest_composition = "pointer_jumping";
     bool quick = false, no_progress = false;
     std::string json_path, commit = "unknown", render;
 } flags;
@@ -89,6 +90,8 @@ void register_bench_flags(CLI::App& app) {
                    "joints-only forest sizes of paper-1 (outputs joints, passes 1-5), comma-separated "
                    "(default 1,10,100,1000,10000, plus 100000 x paper-5 unless --quick; none: no rows)");
     app.add_option("--spacing", flags.spacing, "forest grid spacing in metres (default 25)");
+    app.add_option("--forest-composition", flags.forest_composition,
+                   "composition of the forest rows (default pointer_jumping; e.g. fused)");
     app.add_option("--case-budget", flags.case_budget,
                    "seconds one case may take: slower cases run fewer steps, forest sizes "
                    "extrapolated past it are skipped (default 20)");
@@ -118,6 +121,9 @@ int run_bench(CLI::App& app) {
         return fail_input("--repeats " + std::to_string(flags.repeats) + ": must be in [1, 1000]");
     if (!(flags.case_budget > 0.0) || !std::isfinite(flags.case_budget))
         return fail_input("--case-budget: must be a positive number of seconds");
+    const auto forest_composition = parse_composition(flags.forest_composition);
+    if (!forest_composition)
+        return fail_input("--forest-composition '" + flags.forest_composition + "': unknown composition");
     if (!(flags.spacing >= 0.0) || !std::isfinite(flags.spacing))
         return fail_input("--spacing: must be a finite number >= 0");
 
@@ -191,7 +197,8 @@ int run_bench(CLI::App& app) {
         json_file = *staged;
     }
 
-    Settings settings{uint32_t(flags.steps), uint32_t(flags.warmup), uint32_t(flags.repeats), flags.case_budget};
+    Settings settings{uint32_t(flags.steps), uint32_t(flags.warmup), uint32_t(flags.repeats), flags.case_budget,
+                      *forest_composition};
     const uint64_t device_copy_bytes = uint64_t((flags.quick ? 64.0 : 1024.0) * kMiB);
     const uint64_t host_copy_bytes = uint64_t((flags.quick ? 32.0 : 256.0) * kMiB);
     // Joints-only forest cases: the forest model (paper-1 or --tree) at each size, and a
@@ -301,6 +308,7 @@ int run_bench(CLI::App& app) {
         {"host", {{"cpu", host_cpu_name()}, {"hardware_threads", std::max(1u, std::thread::hardware_concurrency())}}},
         {"settings", {{"steps_per_batch", settings.steps}, {"warmup_steps", settings.warmup},
                       {"repeats", settings.repeats}, {"case_budget_seconds", settings.case_budget},
+                      {"forest_composition", to_string(settings.forest_composition)},
                       {"instances", counts}, {"forest_model", forest_model.name}, {"spacing", flags.spacing},
                       {"forest_layouts", {to_string(kVertexLayouts[0]), to_string(kVertexLayouts[1])}}}},
         {"backends", backends_json},
