@@ -151,6 +151,28 @@ TEST(CpuParallel, BitwiseEqualToSerialCpuWithDefaultChunksOnAForest) {
     }
 }
 
+TEST(CpuParallel, BitwiseEqualToSerialCpuWithEveryOtherInstancePaused) {
+    // Every other instance paused splits the program into one run per active instance: the
+    // plan has more dispatches than it searches conflicts for and puts a barrier between
+    // dispatches instead (src/cpu/step_plan.cpp).
+    auto scene = grid_scene(test::small_tree(), 240, 6.0, 5);
+    ASSERT_TRUE(scene.ok());
+    for (Composition composition : {Composition::pointer_jumping, Composition::fused}) {
+        SCOPED_TRACE(to_string(composition));
+        SimulationConfig config = windy(composition, VertexLayout::separate);
+        config.backend = BackendKind::cpu;
+        auto serial = Simulation::create(*scene, config);
+        ASSERT_TRUE(serial.ok());
+        auto parallel = create_parallel(*scene, config, 3, 1);
+        ASSERT_TRUE(parallel);
+        for (uint64_t i = 0; i < scene->instances.size(); i += 2) {
+            ASSERT_TRUE((*serial)->set_instance_active(i, false).ok());
+            ASSERT_TRUE(parallel->set_instance_active(i, false).ok());
+        }
+        expect_bitwise_equal_runs(**serial, *parallel, 20);
+    }
+}
+
 TEST(CpuParallel, StepPlanWaitsOnlyWhereAChunkReadsAnotherThreadsWrites) {
     using detail::cpu::StepPlan;
     SimulationConfig config = windy(Composition::pointer_jumping_per_round, VertexLayout::separate);

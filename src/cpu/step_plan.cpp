@@ -74,6 +74,11 @@ struct Footprint {
     uint64_t element_begin, element_end;
 };
 
+/// Dispatches above which the plan puts a barrier between dispatches instead of searching for
+/// each chunk's conflicts, which takes time quadratic in the chunks (at 128 dispatches of 16
+/// chunks, about ten milliseconds, once per program).
+constexpr size_t kMaxConflictSearchDispatches = 128;
+
 bool overlap(uint64_t a0, uint64_t a1, uint64_t b0, uint64_t b1) { return a0 < b1 && b0 < a1; }
 
 /// Whether chunks x and y (in either order) must not run concurrently: one writes a buffer the
@@ -177,7 +182,24 @@ StepPlan::StepPlan(std::span<const Dispatch> program, uint32_t threads, uint32_t
     // dispatch and later ones). Each dispatch runs every step on the same thread over the same
     // items, so a conflict further back is covered by the same chunk one step later.
     std::vector<std::vector<Wait>> raw(footprints.size());
-    for (size_t x = 0; x < footprints.size(); ++x) {
+    // The search below is quadratic in the chunks. A program of many dispatches (a forest
+    // whose paused instances split it into many runs) gets a barrier between dispatches
+    // instead: each chunk waits for every other thread's chunks of all earlier dispatches of
+    // the step (or, in the first dispatch, of the whole previous step). Correct for any
+    // program, and planned in linear time.
+    const bool barriers = program_.size() > kMaxConflictSearchDispatches;
+    if (barriers) {
+        std::vector<uint32_t> finished(threads_, 0);  // per thread: its tasks in earlier dispatches
+        size_t x = 0;
+        for (uint32_t i = 0; i < program_.size(); ++i) {
+            const size_t first = x;
+            for (; x < footprints.size() && footprints[x].dispatch == i; ++x)
+                for (uint32_t u = 0; u < threads_; ++u)
+                    if (u != footprints[x].thread) raw[x].push_back({u, int32_t(finished[u])});
+            for (size_t y = first; y < x; ++y) ++finished[footprints[y].thread];
+        }
+    }
+    for (size_t x = 0; x < footprints.size() && !barriers; ++x) {
         const Footprint& fx = footprints[x];
         for (uint32_t u = 0; u < threads_; ++u) {
             if (u == fx.thread) continue;
