@@ -1,34 +1,74 @@
 // Pass 7: branch-mesh and leaf vertices rigid with their chain, v = O_c + R_c v_rest, normal
 // R_c n_rest. Base-ring vertices of child chains are the paper's contour fix-up: a blend
 // (1 - beta) own + beta parent of the same rest vertex carried by the parent chain, normal
-// renormalized, so the joint stays closed while the child swings. The largest pass (one thread
-// per vertex of every instance): the model-scope inputs are shared by all instances and stay in
-// L2, the outputs are written once, coalesced: 32 bytes per thread (position and normal), or 16
-// in the packed vertex layout (pc.mode, gpu_layout.h), where the position's w carries the
-// octahedral normal word (src/common/octahedral.h) and vertex_normal is not written.
+// renormalized, so the joint stays closed while the child swings. The outputs are written once,
+// coalesced: 32 bytes per vertex (position and normal), or 16 in the packed vertex layout
+// (pc.mode, gpu_layout.h), where the position's w carries the octahedral normal word
+// (src/common/octahedral.h) and vertex_normal is not written.
+//
+// The largest pass, and the one pass whose kernel is not the skeleton's one-element-per-thread
+// loop: a thread reads the model-scope inputs of one model vertex (its chains, rest position and
+// normal, the fix-up's parent copies; shared by all instances) once, into registers, and then
+// places that vertex in up to kInstancesPerThread consecutive instances. Read per vertex of every
+// instance, those inputs were most of the pass's L2 traffic. The host emulation runs the same
+// per-vertex code one element at a time (contour_element).
 #include "pass_math.cuh"
 
 #include "../../src/common/octahedral.h"
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 
 namespace hmsm::detail::cuda {
+namespace {
 
-static HMSM_HOST_DEVICE void contour_element(const BufferPointers& b,
-                                             const gpu::PassConstants& pc, uint32_t i) {
-    const Element e = element_of(i, pc.model_vertex_count);
-    const uint32_t v = pc.model_vertex_begin + e.index;
+/// Instances one thread of the packed kernel places its model vertex in.
+constexpr uint32_t kInstancesPerThread = 8;
+
+
+/// The model-scope inputs of model vertex v of the dispatch's model. The fix-up's parent copies
+/// are read here only where kParentInputs (the packed kernel, which reuses them for several
+/// instances); else contour_vertex reads them where it needs them.
+struct ContourVertex {
+    int2 chains;  // (own chain, fix-up parent chain or -1)
+    float3 rest_position, rest_normal;
+    float3 parent_position, parent_normal;  // the fix-up's copies (chains.y >= 0, kParentInputs)
+};
+
+template <bool kParentInputs>
+HMSM_HOST_DEVICE ContourVertex contour_inputs(const BufferPointers& b, const gpu::PassConstants& pc,
+                                              uint32_t index) {
+    const uint32_t v = pc.model_vertex_begin + index;
+    ContourVertex in;
+    in.chains = load(b.vertex_chain + v);
+    in.rest_position = xyz(load(b.vertex_rest_position + v));
+    in.rest_normal = xyz(load(b.vertex_rest_normal + v));
+    if (kParentInputs && in.chains.y >= 0) {
+        in.parent_position = xyz(load(b.vertex_parent_position + v));
+        in.parent_normal = xyz(load(b.vertex_parent_normal + v));
+    }
+    return in;
+}
+
+/// Model vertex `index` in group instance k, thread i = k n + index of the dispatch.
+template <bool kParentInputs>
+HMSM_HOST_DEVICE void contour_vertex(const BufferPointers& b, const gpu::PassConstants& pc,
+                                     const ContourVertex& in, uint32_t index, uint32_t k, uint64_t i) {
     const uint64_t pose = half_begin(pc, pc.src_half);
-    const int2 chains = load(b.vertex_chain + v);  // (own chain, fix-up parent chain or -1)
-    const uint64_t own = pose + state_chain(pc, e.instance, chains.x);
+    const uint64_t own = pose + state_chain(pc, k, in.chains.x);
     Mat3 rotation = load_mat3(b.chain_rotation, own);
-    float3 position = xyz(load(b.chain_origin + own)) + rotation * xyz(load(b.vertex_rest_position + v));
-    float3 normal = rotation * xyz(load(b.vertex_rest_normal + v));
-    if (chains.y >= 0) {
-        const uint64_t parent = pose + state_chain(pc, e.instance, chains.y);
+    float3 position = xyz(load(b.chain_origin + own)) + rotation * in.rest_position;
+    float3 normal = rotation * in.rest_normal;
+    if (in.chains.y >= 0) {
+        const uint32_t v = pc.model_vertex_begin + index;
+        const float3 parent_position =
+            kParentInputs ? in.parent_position : xyz(load(b.vertex_parent_position + v));
+        const float3 parent_normal = kParentInputs ? in.parent_normal : xyz(load(b.vertex_parent_normal + v));
+        const uint64_t parent = pose + state_chain(pc, k, in.chains.y);
         rotation = load_mat3(b.chain_rotation, parent);
-        const float3 p = xyz(load(b.chain_origin + parent)) + rotation * xyz(load(b.vertex_parent_position + v));
-        const float3 n = rotation * xyz(load(b.vertex_parent_normal + v));
+        const float3 p = xyz(load(b.chain_origin + parent)) + rotation * parent_position;
+        const float3 n = rotation * parent_normal;
         const float beta = pc.params.z;
         position = (1.0f - beta) * position + beta * p;
         normal = (1.0f - beta) * normal + beta * n;
@@ -44,6 +84,47 @@ static HMSM_HOST_DEVICE void contour_element(const BufferPointers& b,
     }
 }
 
-HMSM_CUDA_PASS(contour)
+/// Thread i of the dispatch (the host emulation's order): one vertex of one instance.
+HMSM_HOST_DEVICE void contour_element(const BufferPointers& b, const gpu::PassConstants& pc, uint32_t i) {
+    const Element e = element_of(i, pc.model_vertex_count);
+    contour_vertex<false>(b, pc, contour_inputs<false>(b, pc, e.index), e.index, e.instance, i);
+}
+
+/// The packed layout's kernel. Work item w = (slab s, model vertex v), v fastest, so that a warp
+/// writes consecutive vertices of one instance at a time: vertex v of instances [s K, s K + K).
+__global__ void __launch_bounds__(HMSM_WORKGROUP_SIZE)
+    contour_packed_kernel(const BufferPointers b, const gpu::PassConstants pc) {
+    begin_pass();
+    const uint32_t per_instance = pc.model_vertex_count;
+    const uint32_t instances = pc.element_count / per_instance;
+    const uint64_t items = uint64_t((instances + kInstancesPerThread - 1) / kInstancesPerThread) * per_instance;
+    for (uint64_t w = blockIdx.x * uint64_t(blockDim.x) + threadIdx.x; w < items;
+         w += uint64_t(gridDim.x) * blockDim.x) {
+        const uint32_t slab = uint32_t(w / per_instance), index = uint32_t(w % per_instance);
+        const ContourVertex in = contour_inputs<true>(b, pc, index);
+        const uint32_t first = slab * kInstancesPerThread;
+        const uint32_t last = min(instances, first + kInstancesPerThread);
+        for (uint32_t k = first; k < last; ++k) contour_vertex<true>(b, pc, in, index, k, uint64_t(k) * per_instance + index);
+    }
+}
+
+struct contour_pass {
+    static constexpr bool kRounds = false;
+    HMSM_CUDA_PASS_ELEMENT(contour)
+};
+
+}  // namespace
+
+cudaError_t launch_contour(const BufferPointers& b, const gpu::PassConstants& pc, cudaStream_t stream) {
+    if (pc.element_count == 0) return cudaSuccess;
+    if (pc.mode != HMSM_VERTEX_LAYOUT_PACKED) return launch<contour_pass>(b, pc, stream);
+    const uint32_t instances = pc.element_count / pc.model_vertex_count;
+    const uint64_t items =
+        uint64_t((instances + kInstancesPerThread - 1) / kInstancesPerThread) * pc.model_vertex_count;
+    return launch_pass(contour_packed_kernel, launch_blocks(uint32_t(std::min<uint64_t>(items, UINT32_MAX))),
+                       HMSM_WORKGROUP_SIZE, stream, b, pc);
+}
+
+void emulate_contour(const BufferPointers& b, const gpu::PassConstants& pc) { emulate<contour_pass>(b, pc); }
 
 }  // namespace hmsm::detail::cuda
