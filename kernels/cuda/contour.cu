@@ -6,12 +6,13 @@
 // (pc.mode, gpu_layout.h), where the position's w carries the octahedral normal word
 // (src/common/octahedral.h) and vertex_normal is not written.
 //
-// The largest pass, and the one pass whose kernel is not the skeleton's one-element-per-thread
-// loop: a thread reads the model-scope inputs of one model vertex (its chains, rest position and
-// normal, the fix-up's parent copies; shared by all instances) once, into registers, and then
-// places that vertex in up to kInstancesPerThread consecutive instances. Read per vertex of every
-// instance, those inputs were most of the pass's L2 traffic. The host emulation runs the same
-// per-vertex code one element at a time (contour_element).
+// The largest pass. In the packed layout it has a kernel of its own instead of the skeleton's
+// one-element-per-thread loop: a thread reads the model-scope inputs of one model vertex (its
+// chains, rest position and normal, the fix-up's parent copies; shared by all instances) once,
+// into registers, and places that vertex in up to kPackedInstancesPerThread (8) consecutive
+// instances. Read per vertex of every instance, those inputs were most of the pass's L2 traffic
+// (docs/cuda.md has the measurements). The separate layout keeps the skeleton, and the host
+// emulation runs the same per-vertex code one element at a time (contour_element).
 #include "pass_math.cuh"
 
 #include "../../src/common/octahedral.h"
@@ -24,8 +25,7 @@ namespace hmsm::detail::cuda {
 namespace {
 
 /// Instances one thread of the packed kernel places its model vertex in.
-constexpr uint32_t kInstancesPerThread = 8;
-
+constexpr uint32_t kPackedInstancesPerThread = 8;
 
 /// The model-scope inputs of model vertex v of the dispatch's model. The fix-up's parent copies
 /// are read here only where kParentInputs (the packed kernel, which reuses them for several
@@ -92,19 +92,23 @@ HMSM_HOST_DEVICE void contour_element(const BufferPointers& b, const gpu::PassCo
 
 /// The packed layout's kernel. Work item w = (slab s, model vertex v), v fastest, so that a warp
 /// writes consecutive vertices of one instance at a time: vertex v of instances [s K, s K + K).
+/// (A template, as every kernel here, so that its host stub is not a global symbol of hmsm.)
+template <uint32_t kInstancesPerThread>
 __global__ void __launch_bounds__(HMSM_WORKGROUP_SIZE)
     contour_packed_kernel(const BufferPointers b, const gpu::PassConstants pc) {
     begin_pass();
     const uint32_t per_instance = pc.model_vertex_count;
     const uint32_t instances = pc.element_count / per_instance;
-    const uint64_t items = uint64_t((instances + kInstancesPerThread - 1) / kInstancesPerThread) * per_instance;
+    const uint64_t slabs = (instances + kInstancesPerThread - 1) / kInstancesPerThread;
+    const uint64_t items = slabs * per_instance;
     for (uint64_t w = blockIdx.x * uint64_t(blockDim.x) + threadIdx.x; w < items;
          w += uint64_t(gridDim.x) * blockDim.x) {
         const uint32_t slab = uint32_t(w / per_instance), index = uint32_t(w % per_instance);
         const ContourVertex in = contour_inputs<true>(b, pc, index);
         const uint32_t first = slab * kInstancesPerThread;
         const uint32_t last = min(instances, first + kInstancesPerThread);
-        for (uint32_t k = first; k < last; ++k) contour_vertex<true>(b, pc, in, index, k, uint64_t(k) * per_instance + index);
+        for (uint32_t k = first; k < last; ++k)
+            contour_vertex<true>(b, pc, in, index, k, uint64_t(k) * per_instance + index);
     }
 }
 
@@ -118,11 +122,11 @@ struct contour_pass {
 cudaError_t launch_contour(const BufferPointers& b, const gpu::PassConstants& pc, cudaStream_t stream) {
     if (pc.element_count == 0) return cudaSuccess;
     if (pc.mode != HMSM_VERTEX_LAYOUT_PACKED) return launch<contour_pass>(b, pc, stream);
+    constexpr uint32_t k = kPackedInstancesPerThread;
     const uint32_t instances = pc.element_count / pc.model_vertex_count;
-    const uint64_t items =
-        uint64_t((instances + kInstancesPerThread - 1) / kInstancesPerThread) * pc.model_vertex_count;
-    return launch_pass(contour_packed_kernel, launch_blocks(uint32_t(std::min<uint64_t>(items, UINT32_MAX))),
-                       HMSM_WORKGROUP_SIZE, stream, b, pc);
+    const uint64_t items = uint64_t((instances + k - 1) / k) * pc.model_vertex_count;
+    const uint32_t blocks = launch_blocks(uint32_t(std::min<uint64_t>(items, UINT32_MAX)));
+    return launch_pass(contour_packed_kernel<k>, blocks, HMSM_WORKGROUP_SIZE, stream, b, pc);
 }
 
 void emulate_contour(const BufferPointers& b, const gpu::PassConstants& pc) { emulate<contour_pass>(b, pc); }
