@@ -198,6 +198,8 @@ inline unsigned launch_blocks_per_instance(const gpu::PassConstants& pc) {
 /// (one pointer-jumping round for model chain c of group instance k; kWrittenInBlock: the src
 /// half was written by this block's previous round). HMSM_CUDA_PASS / HMSM_CUDA_ROUNDS_PASS
 /// below build P from NAME_element (and NAME_jump) and define launch_NAME and emulate_NAME.
+/// One launcher adds a kernel of its own: contour's in the packed vertex layout (contour.cu),
+/// which still fills P for the separate layout and the emulation.
 template <class P>
 static __global__ void __launch_bounds__(HMSM_WORKGROUP_SIZE)
     pass_kernel(const BufferPointers b, const gpu::PassConstants pc) {
