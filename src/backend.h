@@ -161,8 +161,9 @@ inline uint32_t dispatch_thread_count(const Dispatch& d) { return d.constants.el
 
 /// How a dispatch is launched: `workgroups` groups of `workgroup_size` threads. Every mode
 /// maps thread i to element i (gpu_layout.h) except HMSM_MODE_POINTER_JUMPING_IN_DISPATCH,
-/// whose workgroup k runs every round for group instance k, and HMSM_MODE_FUSED, whose
-/// workgroup k runs passes 1-5 for group instance k.
+/// whose workgroup k runs every round for group instance k, HMSM_MODE_FUSED, whose
+/// workgroup k runs passes 1-5 for group instance k, and a packed contour, whose thread
+/// places one model vertex in HMSM_PACKED_CONTOUR_INSTANCES instances.
 struct LaunchShape {
     uint64_t workgroups = 0;
     uint32_t workgroup_size = HMSM_WORKGROUP_SIZE;
@@ -170,12 +171,16 @@ struct LaunchShape {
 inline bool runs_rounds_in_dispatch(const Dispatch& d) {
     return is_hierarchical(d.pass) && d.constants.mode == HMSM_MODE_POINTER_JUMPING_IN_DISPATCH;
 }
+inline bool runs_packed_contour(const Dispatch& d) {
+    return d.pass == Pass::contour && d.constants.mode == HMSM_VERTEX_LAYOUT_PACKED;
+}
 inline LaunchShape launch_shape(const Dispatch& d) {
     const uint32_t threads = dispatch_thread_count(d);
     if (threads == 0) return {};
     if (runs_rounds_in_dispatch(d) || runs_fused(d))
         return {threads / d.constants.model_chain_count, gpu::rounds_workgroup_size(d.constants.model_chain_count)};
-    return {(uint64_t(threads) + HMSM_WORKGROUP_SIZE - 1) / HMSM_WORKGROUP_SIZE, HMSM_WORKGROUP_SIZE};
+    const uint64_t launched = runs_packed_contour(d) ? gpu::packed_contour_threads(d.constants) : threads;
+    return {(launched + HMSM_WORKGROUP_SIZE - 1) / HMSM_WORKGROUP_SIZE, HMSM_WORKGROUP_SIZE};
 }
 
 }  // namespace hmsm::detail

@@ -9,10 +9,11 @@
 // The largest pass. In the packed layout it has a kernel of its own instead of the skeleton's
 // one-element-per-thread loop: a thread reads the model-scope inputs of one model vertex (its
 // chains, rest position and normal, the fix-up's parent copies; shared by all instances) once,
-// into registers, and places that vertex in up to kPackedInstancesPerThread (8) consecutive
-// instances. Read per vertex of every instance, those inputs were most of the pass's L2 traffic
-// (docs/cuda.md has the measurements). The separate layout keeps the skeleton, and the host
-// emulation runs the same per-vertex code one element at a time (contour_element).
+// into registers, and places that vertex in up to HMSM_PACKED_CONTOUR_INSTANCES (8) consecutive
+// instances (gpu_layout.h; shaders/glsl/contour.comp does the same). Read per vertex of every
+// instance, those inputs were most of the pass's L2 traffic (docs/cuda.md has the measurements).
+// The separate layout keeps the skeleton, and the host emulation runs the same per-vertex code
+// one element at a time (contour_element).
 #include "pass_math.cuh"
 
 #include "../../src/common/octahedral.h"
@@ -24,8 +25,6 @@
 namespace hmsm::detail::cuda {
 namespace {
 
-/// Instances one thread of the packed kernel places its model vertex in.
-constexpr uint32_t kPackedInstancesPerThread = 8;
 
 /// The model-scope inputs of model vertex v of the dispatch's model. The fix-up's parent copies
 /// are read here only where kParentInputs (the packed kernel, which reuses them for several
@@ -122,11 +121,10 @@ struct contour_pass {
 cudaError_t launch_contour(const BufferPointers& b, const gpu::PassConstants& pc, cudaStream_t stream) {
     if (pc.element_count == 0) return cudaSuccess;
     if (pc.mode != HMSM_VERTEX_LAYOUT_PACKED) return launch<contour_pass>(b, pc, stream);
-    constexpr uint32_t k = kPackedInstancesPerThread;
-    const uint32_t instances = pc.element_count / pc.model_vertex_count;
-    const uint64_t items = uint64_t((instances + k - 1) / k) * pc.model_vertex_count;
-    const uint32_t blocks = launch_blocks(uint32_t(std::min<uint64_t>(items, UINT32_MAX)));
-    return launch_pass(contour_packed_kernel<k>, blocks, HMSM_WORKGROUP_SIZE, stream, b, pc);
+    const uint64_t threads = gpu::packed_contour_threads(pc);  // gpu_layout.h, as Vulkan launches it
+    const uint32_t blocks = launch_blocks(uint32_t(std::min<uint64_t>(threads, UINT32_MAX)));
+    return launch_pass(contour_packed_kernel<HMSM_PACKED_CONTOUR_INSTANCES>, blocks, HMSM_WORKGROUP_SIZE, stream,
+                       b, pc);
 }
 
 void emulate_contour(const BufferPointers& b, const gpu::PassConstants& pc) { emulate<contour_pass>(b, pc); }

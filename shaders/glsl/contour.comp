@@ -4,24 +4,24 @@
 // so joints stay closed while the child swings (src/cpu/contour.cpp). pc.mode is the vertex
 // layout: separate writes vec4(position, 1) and vec4(normal, 0); packed writes only the position,
 // with the octahedral normal word (octahedral.glsl) as its w.
+//
+// Separate: thread i places element i. Packed: thread w reads the model-scope inputs of model
+// vertex w % n once (its chains, rest position and normal) and places that vertex in the
+// HMSM_PACKED_CONTOUR_INSTANCES instances of its group w / n (gpu_layout.h; the host launches
+// that many threads, backend.h launch_shape).
 #extension GL_GOOGLE_include_directive : require
 #include "common.glsl"
 
-void main() {
-    uint i = thread_index();
-    if (i >= pc.element_count) return;
-    uint k = i / pc.model_vertex_count;
-    uint e = i % pc.model_vertex_count;
-    uint v = pc.model_vertex_begin + e;
+/// Model vertex e (index v of the static arrays) in group instance k; the fix-up's parent copies
+/// are read here, where a vertex has them.
+void place_vertex(uint k, uint e, uint v, ivec2 chains, vec3 rest_position, vec3 rest_normal) {
     uint pose = half_offset(pc.src_half);
-    float beta = pc.params.z;
-    ivec2 chains = vertex_chain[v];  // (own chain, fix-up parent chain or -1)
-
     uint own = pose + state_chain(k, uint(chains.x));
     mat3 r = as_mat3(chain_rotation[own]);
-    vec3 position = chain_origin[own].xyz + r * vertex_rest_position[v].xyz;
-    vec3 normal = r * vertex_rest_normal[v].xyz;
+    vec3 position = chain_origin[own].xyz + r * rest_position;
+    vec3 normal = r * rest_normal;
     if (chains.y >= 0) {
+        float beta = pc.params.z;
         uint parent = pose + state_chain(k, uint(chains.y));
         mat3 rp = as_mat3(chain_rotation[parent]);
         vec3 p = chain_origin[parent].xyz + rp * vertex_parent_position[v].xyz;
@@ -36,4 +36,25 @@ void main() {
         vertex_position[out_index] = vec4(position, 1.0);
         vertex_normal[out_index] = vec4(normal, 0.0);
     }
+}
+
+void main() {
+    uint n = pc.model_vertex_count;
+    uint w = thread_index();
+    if (pc.mode != HMSM_VERTEX_LAYOUT_PACKED) {
+        if (w >= pc.element_count) return;
+        uint v = pc.model_vertex_begin + w % n;
+        place_vertex(w / n, w % n, v, vertex_chain[v], vertex_rest_position[v].xyz, vertex_rest_normal[v].xyz);
+        return;
+    }
+    uint instances = pc.element_count / n;
+    if (w >= (instances + HMSM_PACKED_CONTOUR_INSTANCES - 1u) / HMSM_PACKED_CONTOUR_INSTANCES * n) return;
+    uint e = w % n;
+    uint v = pc.model_vertex_begin + e;
+    ivec2 chains = vertex_chain[v];  // (own chain, fix-up parent chain or -1)
+    vec3 rest_position = vertex_rest_position[v].xyz;
+    vec3 rest_normal = vertex_rest_normal[v].xyz;
+    uint first = w / n * HMSM_PACKED_CONTOUR_INSTANCES;
+    uint last = min(instances, first + HMSM_PACKED_CONTOUR_INSTANCES);
+    for (uint k = first; k < last; ++k) place_vertex(k, e, v, chains, rest_position, rest_normal);
 }

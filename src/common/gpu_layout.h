@@ -118,6 +118,12 @@
 /// only vertex_position, its w the bits of the octahedral normal word (src/common/octahedral.h).
 #define HMSM_VERTEX_LAYOUT_SEPARATE 0u
 #define HMSM_VERTEX_LAYOUT_PACKED 1u
+/// A packed contour dispatch runs one thread per model vertex and group of this many consecutive
+/// group instances (the last group may be short): the thread reads the vertex's model-scope
+/// inputs once and places it in each instance of its group. Thread w handles model vertex
+/// w % model_vertex_count of group w / model_vertex_count. A separate one maps thread i to
+/// element i like every other dispatch.
+#define HMSM_PACKED_CONTOUR_INSTANCES 8u
 
 #ifdef __cplusplus
 #include <cstddef>
@@ -165,6 +171,14 @@ struct PassConstants {
 static_assert(sizeof(PassConstants) == 112, "PassConstants must match std430");
 static_assert(offsetof(PassConstants, wind) == 80, "PassConstants must match std430");
 static_assert(sizeof(PassConstants) <= 128, "push constants must fit the guaranteed 128 bytes");
+
+/// Threads of a packed contour dispatch (HMSM_PACKED_CONTOUR_INSTANCES): one per model vertex
+/// and group of instances.
+constexpr uint64_t packed_contour_threads(const PassConstants& pc) {
+    const uint32_t instances = pc.element_count / pc.model_vertex_count;
+    return uint64_t((instances + HMSM_PACKED_CONTOUR_INSTANCES - 1) / HMSM_PACKED_CONTOUR_INSTANCES) *
+           pc.model_vertex_count;
+}
 
 /// Workgroup size of an in-dispatch pointer-jumping dispatch over `chains` chains per instance:
 /// the smallest power of two from 64 to HMSM_MAX_ROUNDS_WORKGROUP_SIZE that is >= `chains`
