@@ -8,7 +8,7 @@
 //
 // The largest pass. In the packed layout it has a kernel of its own instead of the skeleton's
 // one-element-per-thread loop: a thread reads the model-scope inputs of one model vertex (its
-// chains, rest position and normal, the fix-up's parent copies; shared by all instances) once,
+// chains, rest position and normal; shared by all instances) once,
 // into registers, and places that vertex in up to HMSM_PACKED_CONTOUR_INSTANCES (8) consecutive
 // instances (gpu_layout.h; shaders/glsl/contour.comp does the same). Read per vertex of every
 // instance, those inputs were most of the pass's L2 traffic (docs/cuda.md has the measurements).
@@ -26,32 +26,20 @@ namespace hmsm::detail::cuda {
 namespace {
 
 
-/// The model-scope inputs of model vertex v of the dispatch's model. The fix-up's parent copies
-/// are read here only where kParentInputs (the packed kernel, which reuses them for several
-/// instances); else contour_vertex reads them where it needs them.
+/// The model-scope inputs of model vertex v of the dispatch's model that every vertex has (the
+/// fix-up's parent copies are read by contour_vertex, for the vertices that have them).
 struct ContourVertex {
     int2 chains;  // (own chain, fix-up parent chain or -1)
     float3 rest_position, rest_normal;
-    float3 parent_position, parent_normal;  // the fix-up's copies (chains.y >= 0, kParentInputs)
 };
 
-template <bool kParentInputs>
 HMSM_HOST_DEVICE ContourVertex contour_inputs(const BufferPointers& b, const gpu::PassConstants& pc,
                                               uint32_t index) {
     const uint32_t v = pc.model_vertex_begin + index;
-    ContourVertex in;
-    in.chains = load(b.vertex_chain + v);
-    in.rest_position = xyz(load(b.vertex_rest_position + v));
-    in.rest_normal = xyz(load(b.vertex_rest_normal + v));
-    if (kParentInputs && in.chains.y >= 0) {
-        in.parent_position = xyz(load(b.vertex_parent_position + v));
-        in.parent_normal = xyz(load(b.vertex_parent_normal + v));
-    }
-    return in;
+    return {load(b.vertex_chain + v), xyz(load(b.vertex_rest_position + v)), xyz(load(b.vertex_rest_normal + v))};
 }
 
 /// Model vertex `index` in group instance k, thread i = k n + index of the dispatch.
-template <bool kParentInputs>
 HMSM_HOST_DEVICE void contour_vertex(const BufferPointers& b, const gpu::PassConstants& pc,
                                      const ContourVertex& in, uint32_t index, uint32_t k, uint64_t i) {
     const uint64_t pose = half_begin(pc, pc.src_half);
@@ -61,13 +49,10 @@ HMSM_HOST_DEVICE void contour_vertex(const BufferPointers& b, const gpu::PassCon
     float3 normal = rotation * in.rest_normal;
     if (in.chains.y >= 0) {
         const uint32_t v = pc.model_vertex_begin + index;
-        const float3 parent_position =
-            kParentInputs ? in.parent_position : xyz(load(b.vertex_parent_position + v));
-        const float3 parent_normal = kParentInputs ? in.parent_normal : xyz(load(b.vertex_parent_normal + v));
         const uint64_t parent = pose + state_chain(pc, k, in.chains.y);
         rotation = load_mat3(b.chain_rotation, parent);
-        const float3 p = xyz(load(b.chain_origin + parent)) + rotation * parent_position;
-        const float3 n = rotation * parent_normal;
+        const float3 p = xyz(load(b.chain_origin + parent)) + rotation * xyz(load(b.vertex_parent_position + v));
+        const float3 n = rotation * xyz(load(b.vertex_parent_normal + v));
         const float beta = pc.params.z;
         position = (1.0f - beta) * position + beta * p;
         normal = (1.0f - beta) * normal + beta * n;
@@ -86,7 +71,7 @@ HMSM_HOST_DEVICE void contour_vertex(const BufferPointers& b, const gpu::PassCon
 /// Thread i of the dispatch (the host emulation's order): one vertex of one instance.
 HMSM_HOST_DEVICE void contour_element(const BufferPointers& b, const gpu::PassConstants& pc, uint32_t i) {
     const Element e = element_of(i, pc.model_vertex_count);
-    contour_vertex<false>(b, pc, contour_inputs<false>(b, pc, e.index), e.index, e.instance, i);
+    contour_vertex(b, pc, contour_inputs(b, pc, e.index), e.index, e.instance, i);
 }
 
 /// The packed layout's kernel. Work item w = (slab s, model vertex v), v fastest, so that a warp
@@ -103,11 +88,11 @@ __global__ void __launch_bounds__(HMSM_WORKGROUP_SIZE)
     for (uint64_t w = blockIdx.x * uint64_t(blockDim.x) + threadIdx.x; w < items;
          w += uint64_t(gridDim.x) * blockDim.x) {
         const uint32_t slab = uint32_t(w / per_instance), index = uint32_t(w % per_instance);
-        const ContourVertex in = contour_inputs<true>(b, pc, index);
+        const ContourVertex in = contour_inputs(b, pc, index);
         const uint32_t first = slab * kInstancesPerThread;
         const uint32_t last = min(instances, first + kInstancesPerThread);
         for (uint32_t k = first; k < last; ++k)
-            contour_vertex<true>(b, pc, in, index, k, uint64_t(k) * per_instance + index);
+            contour_vertex(b, pc, in, index, k, uint64_t(k) * per_instance + index);
     }
 }
 
