@@ -43,7 +43,8 @@ std::vector<SceneCase> end_to_end_cases() {
     cases.push_back({"deep_tree_origin_yaw", single_tree_scene(test::deep_tree(6), {3, 1, -2}, 1.1), windy});
     auto grid = grid_scene(test::small_tree(), 7, 6.0, 42);
     cases.push_back({"grid_of_7", *grid, windy});
-    // More instances than the CUDA packed contour kernel places per thread (8), not a multiple of it.
+    // More instances than a packed contour thread places (HMSM_PACKED_CONTOUR_INSTANCES, 8), and
+    // not a multiple of it.
     cases.push_back({"grid_of_19", *grid_scene(test::small_tree(), 19, 6.0, 5), windy});
     Scene mixed;
     mixed.models = {test::small_tree(), test::rod(5, 4.0, 0.15)};

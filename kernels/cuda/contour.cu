@@ -8,12 +8,12 @@
 //
 // The largest pass. In the packed layout it has a kernel of its own instead of the skeleton's
 // one-element-per-thread loop: a thread reads the model-scope inputs of one model vertex (its
-// chains, rest position and normal; shared by all instances) once,
-// into registers, and places that vertex in up to HMSM_PACKED_CONTOUR_INSTANCES (8) consecutive
-// instances (gpu_layout.h; shaders/glsl/contour.comp does the same). Read per vertex of every
-// instance, those inputs were most of the pass's L2 traffic (docs/cuda.md has the measurements).
-// The separate layout keeps the skeleton, and the host emulation runs the same per-vertex code
-// one element at a time (contour_element).
+// chains, rest position and normal; shared by all instances) once, into registers, and places
+// that vertex in up to HMSM_PACKED_CONTOUR_INSTANCES (8) consecutive instances (gpu_layout.h;
+// shaders/glsl/contour.comp does the same). Read per vertex of every instance, those inputs were
+// most of the pass's L2 traffic (docs/cuda.md has the measurements). The separate layout keeps
+// the skeleton, and the host emulation runs the same per-vertex code one element at a time
+// (contour_element).
 #include "pass_math.cuh"
 
 #include "../../src/common/octahedral.h"
@@ -24,7 +24,6 @@
 
 namespace hmsm::detail::cuda {
 namespace {
-
 
 /// The model-scope inputs of model vertex v of the dispatch's model that every vertex has (the
 /// fix-up's parent copies are read by contour_vertex, for the vertices that have them).
