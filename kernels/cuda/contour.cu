@@ -12,8 +12,8 @@
 // that vertex in up to HMSM_PACKED_CONTOUR_INSTANCES (8) consecutive instances (gpu_layout.h;
 // shaders/glsl/contour.comp does the same). Read per vertex of every instance, those inputs were
 // most of the pass's L2 traffic (docs/cuda.md has the measurements). The separate layout keeps
-// the skeleton, and the host emulation runs the same per-vertex code one element at a time
-// (contour_element).
+// the skeleton. The host emulation runs the same code in the same mapping: per element for
+// separate, per work item (contour_packed_item) for packed.
 #include "pass_math.cuh"
 
 #include "../../src/common/octahedral.h"
@@ -73,26 +73,30 @@ HMSM_HOST_DEVICE void contour_element(const BufferPointers& b, const gpu::PassCo
     contour_vertex(b, pc, contour_inputs(b, pc, e.index), e.index, e.instance, i);
 }
 
-/// The packed layout's kernel. Work item w = (slab s, model vertex v), v fastest, so that a warp
-/// writes consecutive vertices of one instance at a time: vertex v of instances [s K, s K + K).
-/// (A template, as every kernel here, so that its host stub is not a global symbol of hmsm.)
-template <uint32_t kInstancesPerThread>
+/// Work item w of a packed dispatch (gpu_layout.h HMSM_PACKED_CONTOUR_INSTANCES): model vertex
+/// w % n, read once, placed in instances [s K, s K + K) of group s = w / n. v is fastest, so a
+/// warp writes consecutive vertices of one instance at a time.
+HMSM_HOST_DEVICE void contour_packed_item(const BufferPointers& b, const gpu::PassConstants& pc, uint64_t w) {
+    constexpr uint32_t kGroup = HMSM_PACKED_CONTOUR_INSTANCES;
+    const uint32_t per_instance = pc.model_vertex_count;
+    const uint32_t instances = pc.element_count / per_instance;
+    const uint32_t group = uint32_t(w / per_instance), index = uint32_t(w % per_instance);
+    const ContourVertex in = contour_inputs(b, pc, index);
+    const uint32_t first = group * kGroup;
+    const uint32_t last = instances < first + kGroup ? instances : first + kGroup;
+    for (uint32_t k = first; k < last; ++k) contour_vertex(b, pc, in, index, k, uint64_t(k) * per_instance + index);
+}
+
+/// The packed layout's kernel: a grid-stride loop over the work items. (A template, as every
+/// kernel here, so that its host stub is not a global symbol of hmsm.)
+template <uint32_t kUnused = 0>
 __global__ void __launch_bounds__(HMSM_WORKGROUP_SIZE)
     contour_packed_kernel(const BufferPointers b, const gpu::PassConstants pc) {
     begin_pass();
-    const uint32_t per_instance = pc.model_vertex_count;
-    const uint32_t instances = pc.element_count / per_instance;
-    const uint64_t slabs = (instances + kInstancesPerThread - 1) / kInstancesPerThread;
-    const uint64_t items = slabs * per_instance;
+    const uint64_t items = gpu::packed_contour_threads(pc);
     for (uint64_t w = blockIdx.x * uint64_t(blockDim.x) + threadIdx.x; w < items;
-         w += uint64_t(gridDim.x) * blockDim.x) {
-        const uint32_t slab = uint32_t(w / per_instance), index = uint32_t(w % per_instance);
-        const ContourVertex in = contour_inputs(b, pc, index);
-        const uint32_t first = slab * kInstancesPerThread;
-        const uint32_t last = min(instances, first + kInstancesPerThread);
-        for (uint32_t k = first; k < last; ++k)
-            contour_vertex(b, pc, in, index, k, uint64_t(k) * per_instance + index);
-    }
+         w += uint64_t(gridDim.x) * blockDim.x)
+        contour_packed_item(b, pc, w);
 }
 
 struct contour_pass {
@@ -105,12 +109,17 @@ struct contour_pass {
 cudaError_t launch_contour(const BufferPointers& b, const gpu::PassConstants& pc, cudaStream_t stream) {
     if (pc.element_count == 0) return cudaSuccess;
     if (pc.mode != HMSM_VERTEX_LAYOUT_PACKED) return launch<contour_pass>(b, pc, stream);
-    const uint64_t threads = gpu::packed_contour_threads(pc);  // gpu_layout.h, as Vulkan launches it
-    const uint32_t blocks = launch_blocks(uint32_t(std::min<uint64_t>(threads, UINT32_MAX)));
-    return launch_pass(contour_packed_kernel<HMSM_PACKED_CONTOUR_INSTANCES>, blocks, HMSM_WORKGROUP_SIZE, stream,
-                       b, pc);
+    const uint64_t items = gpu::packed_contour_threads(pc);
+    const uint32_t blocks = launch_blocks(uint32_t(std::min<uint64_t>(items, UINT32_MAX)));
+    return launch_pass(contour_packed_kernel<>, blocks, HMSM_WORKGROUP_SIZE, stream, b, pc);
 }
 
-void emulate_contour(const BufferPointers& b, const gpu::PassConstants& pc) { emulate<contour_pass>(b, pc); }
+/// The same work on the host, in the same order as the device's (a packed dispatch by its work
+/// items, so the tests that emulate it check the mapping the GPU runs).
+void emulate_contour(const BufferPointers& b, const gpu::PassConstants& pc) {
+    if (pc.element_count == 0) return;
+    if (pc.mode != HMSM_VERTEX_LAYOUT_PACKED) return emulate<contour_pass>(b, pc);
+    for (uint64_t w = 0; w < gpu::packed_contour_threads(pc); ++w) contour_packed_item(b, pc, w);
+}
 
 }  // namespace hmsm::detail::cuda

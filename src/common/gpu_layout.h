@@ -126,6 +126,8 @@
 #define HMSM_PACKED_CONTOUR_INSTANCES 8u
 
 #ifdef __cplusplus
+#include "host_device.h"
+
 #include <cstddef>
 #include <cstdint>
 namespace hmsm::gpu {
@@ -173,8 +175,9 @@ static_assert(offsetof(PassConstants, wind) == 80, "PassConstants must match std
 static_assert(sizeof(PassConstants) <= 128, "push constants must fit the guaranteed 128 bytes");
 
 /// Threads of a packed contour dispatch (HMSM_PACKED_CONTOUR_INSTANCES): one per model vertex
-/// and group of instances.
-constexpr uint64_t packed_contour_threads(const PassConstants& pc) {
+/// and group of instances. Host and device: the launchers size their grids by it and the CUDA
+/// kernel bounds its loop by it.
+HMSM_HOST_DEVICE constexpr uint64_t packed_contour_threads(const PassConstants& pc) {
     const uint32_t instances = pc.element_count / pc.model_vertex_count;
     return uint64_t((instances + HMSM_PACKED_CONTOUR_INSTANCES - 1) / HMSM_PACKED_CONTOUR_INSTANCES) *
            pc.model_vertex_count;
