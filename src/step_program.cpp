@@ -48,6 +48,15 @@ void append_pass(std::vector<Dispatch>& program, const SceneData& d,
         }
         return;
     }
+    if (composition == Composition::path_walk) {
+        for (const auto& g : groups) {
+            Dispatch dispatch{pass, group_constants(d, g, final_half)};
+            dispatch.constants.element_count = g.instance_count * d.models[g.model].chain_count;
+            dispatch.constants.mode = HMSM_MODE_PATH_WALK;
+            if (dispatch.constants.element_count > 0) program.push_back(dispatch);
+        }
+        return;
+    }
     if (composition != Composition::level_by_level) {
         // Groups whose rounds run in one dispatch per pass come first; the others take one
         // dispatch per round.

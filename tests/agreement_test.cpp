@@ -61,6 +61,9 @@ std::vector<SceneCase> end_to_end_cases() {
     SimulationConfig level = windy;
     level.composition = Composition::level_by_level;
     cases.push_back({"level_by_level", single_tree_scene(test::deep_tree(5), {0, 0, 0}, 0.2), level});
+    SimulationConfig walk = windy;
+    walk.composition = Composition::path_walk;
+    cases.push_back({"path_walk", *grid_scene(test::deep_tree(6), 3, 9.0, 11), walk});
     SimulationConfig front = windy;
     front.wind.profile = WindProfile::y2;
     front.wind.front_speed = 3.0;

@@ -136,9 +136,10 @@ void expect_schema(const json& d, const std::string& backend) {
     }
     for (const char* key : {"state", "static", "total"}) expect_number(p["bytes_per_step"], key, "bytes_per_step");
     expect_pass_table(p["bytes_per_step"]["per_pass"], "bytes_per_step.per_pass");
-    for (const char* mode : {"pointer_jumping", "pointer_jumping_in_dispatch", "level_by_level", "fused"}) {
+    for (const char* mode : {"pointer_jumping", "pointer_jumping_in_dispatch", "level_by_level", "fused", "path_walk"}) {
         const json& m = p[mode];
-        expect_number(m, mode == std::string("level_by_level") ? "levels" : "rounds", mode);
+        const bool by_level = mode == std::string("level_by_level") || mode == std::string("path_walk");
+        expect_number(m, by_level ? "levels" : "rounds", mode);
         for (const char* key : {"steps_per_second_batched", "steps_per_second_profiled",
                                 "device_seconds_per_step", "device_effective_bandwidth"})
             expect_number(m, key, mode);

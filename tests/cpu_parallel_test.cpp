@@ -116,7 +116,7 @@ TEST(CpuParallel, BitwiseEqualToSerialCpuInEveryCompositionAndLayout) {
     const Scene scene = mixed_forest(3);
     for (Composition composition : {Composition::pointer_jumping, Composition::pointer_jumping_per_round,
                                     Composition::pointer_jumping_in_dispatch, Composition::level_by_level,
-                                    Composition::fused}) {
+                                    Composition::fused, Composition::path_walk}) {
         for (VertexLayout layout : {VertexLayout::separate, VertexLayout::packed}) {
             SCOPED_TRACE(std::string(to_string(composition)) + ", " + to_string(layout));
             SimulationConfig config = windy(composition, layout);

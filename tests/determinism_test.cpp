@@ -120,6 +120,8 @@ TEST_P(Determinism, LevelByLevelIsAlsoRepeatable) { expect_repeatable(GetParam()
 // Passes 1-5 fused into one dispatch, rounds in workgroup shared memory where they fit.
 TEST_P(Determinism, FusedIsAlsoRepeatable) { expect_repeatable(GetParam(), Composition::fused); }
 
+TEST_P(Determinism, PathWalkIsAlsoRepeatable) { expect_repeatable(GetParam(), Composition::path_walk); }
+
 INSTANTIATE_TEST_SUITE_P(Backends, Determinism,
                          ::testing::Values(BackendKind::cpu, BackendKind::cpu64, BackendKind::cpu_parallel,
                                            BackendKind::vulkan, BackendKind::cuda),

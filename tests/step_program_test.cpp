@@ -11,9 +11,10 @@ using namespace hmsm;
 
 namespace {
 
-std::unique_ptr<Simulation> cpu_simulation(const Scene& scene, Composition composition) {
+std::unique_ptr<Simulation> cpu_simulation(const Scene& scene, Composition composition, double wind_gain = 0.2) {
     SimulationConfig config;
     config.backend = BackendKind::cpu;
+    config.parameters.wind_gain = wind_gain;
     config.composition = composition;
     auto sim = Simulation::create(scene, config);
     EXPECT_TRUE(sim.ok()) << sim.status().message();
@@ -97,6 +98,41 @@ TEST(StepProgram, PerRoundAndLevelByLevelIssueOneDispatchPerRoundOrLevel) {
     EXPECT_EQ(hmsm::detail::step_program_of(*per_round).size(), kPassCount - 2 + 2 * 3);
 }
 
+// Path walk: one dispatch per hierarchical pass and group, a thread per chain, writing the pose
+// half; a step of one tree is then 7 dispatches, the fewest of any composition. Its poses are
+// those of level by level (the same products and sums, associated from the chain up).
+TEST(StepProgram, PathWalkIssuesOneDispatchPerPassAndMatchesLevelByLevel) {
+    const Scene scene = single_tree_scene(test::deep_tree(6), {2, 0, -1}, 0.4);
+    const double storm = 15.0;  // wind gain: large angles
+    auto walk = cpu_simulation(scene, Composition::path_walk, storm);
+    auto level = cpu_simulation(scene, Composition::level_by_level, storm);
+    ASSERT_TRUE(walk && level);
+    for (Pass pass : {Pass::compose, Pass::root_positions}) {
+        auto d = dispatches_of(*walk, pass);
+        ASSERT_EQ(d.size(), 1u);
+        EXPECT_EQ(d[0].constants.mode, HMSM_MODE_PATH_WALK);
+        EXPECT_EQ(d[0].constants.element_count, walk->hierarchy(0).chains.size());
+        EXPECT_EQ(d[0].constants.dst_half, HMSM_FINAL_HALF(walk->jump_rounds()));
+    }
+    EXPECT_EQ(hmsm::detail::step_program_of(*walk).size(), kPassCount);
+    ASSERT_TRUE(walk->step(300).ok());
+    ASSERT_TRUE(level->step(300).ok());
+    for (Output o : {Output::chain_rotations, Output::chain_origins, Output::node_positions}) {
+        std::vector<double> a, b;
+        ASSERT_TRUE(walk->read(o, a).ok());
+        ASSERT_TRUE(level->read(o, b).ok());
+        ASSERT_EQ(a.size(), b.size());
+        double error = 0.0, moved = 0.0;
+        for (size_t i = 0; i < a.size(); ++i) error = std::max(error, std::abs(a[i] - b[i]));
+        std::vector<double> rest;
+        auto at_rest = cpu_simulation(scene, Composition::level_by_level, storm);
+        ASSERT_TRUE(at_rest && at_rest->read(o, rest).ok());
+        for (size_t i = 0; i < a.size(); ++i) moved = std::max(moved, std::abs(rest[i] - b[i]));
+        EXPECT_LE(error, 1e-4) << "output " << int(o);
+        EXPECT_GT(moved, 1e-3) << "output " << int(o);  // the wind bent the tree
+    }
+}
+
 TEST(StepProgram, ModelsBeyondTheRoundsLimitFallBackToOneDispatchPerRound) {
     // 16,385 chains: more than 16 per thread of the largest workgroup.
     auto sim = cpu_simulation(single_tree_scene(test::broom(16385)), Composition::pointer_jumping_in_dispatch);
@@ -127,7 +163,7 @@ TEST(StepProgram, RoundsWorkgroupSizeIsThePowerOfTwoThatCoversTheChains) {
 TEST(StepProgram, CompositionNamesRoundTrip) {
     for (Composition c : {Composition::pointer_jumping, Composition::pointer_jumping_per_round,
                           Composition::pointer_jumping_in_dispatch, Composition::level_by_level,
-                          Composition::fused})
+                          Composition::fused, Composition::path_walk})
         EXPECT_EQ(parse_composition(to_string(c)), c);
     EXPECT_FALSE(parse_composition("pointer-jumping").has_value());  // the CLI maps '-' to '_'
 }

@@ -56,6 +56,12 @@ enum class Composition {
     /// chains) on CUDA and Vulkan; a single large tree is slower (one workgroup does it all),
     /// and on Vulkan a tree whose rounds exceed the workgroup's shared memory gains nothing.
     fused,
+    /// One dispatch per pass (3 and 5) in which every chain walks up its own path to the root:
+    /// R_c = T_root ... T_parent T_c and O_c = the sum of the own offsets along the path,
+    /// multiplied and summed from the chain up. Depth-many products per chain instead of
+    /// log2(depth+1) rounds, but no dependent dispatch or barrier inside the pass: the fewest
+    /// dependent dispatches per step of all compositions (7).
+    path_walk,
 };
 HMSM_API const char* to_string(Composition composition);
 HMSM_API std::optional<Composition> parse_composition(std::string_view name);

@@ -112,6 +112,10 @@
 /// two halves of a 3x3 rotation (the origins' two halves of 3 floats reuse the half compose
 /// did not finish in). 72 bytes per chain.
 #define HMSM_FUSED_SHARED_FLOATS_PER_CHAIN 18u
+/// Composition::path_walk (compose, root_positions): thread i handles chain i like a
+/// per-element pass and walks up its ancestors (chain_parent) to the root, writing the final
+/// R (resp. O and the joint matrix) to the pose half dst_half. One dispatch per pass.
+#define HMSM_MODE_PATH_WALK 4u
 
 /// vertex layouts (PassConstants.mode of a contour dispatch; hmsm::VertexLayout values):
 /// separate writes vertex_position (x, y, z, 1) and vertex_normal (nx, ny, nz, 0); packed writes

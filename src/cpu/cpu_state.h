@@ -104,13 +104,24 @@ inline uint32_t elements_per_item(Pass pass, const gpu::PassConstants& pc) {
     return pc.model_chain_count * (2 * pc.round + 2) + pc.model_node_count;
 }
 
-/// The three ways a hierarchical pass (compose, root_positions) runs the work items `r` of one
+/// The four ways a hierarchical pass (compose, root_positions) runs the work items `r` of one
 /// dispatch. Level by level: level(dst, instance, chain, parent) for each chain of one level, in
 /// place in half dst (an element offset). Every round in the dispatch: the work items are
 /// instances, and round(round, src_half, dst_half, chains, last) runs over all their chains,
 /// round after round. One pointer-jumping round: round(...) over `r` itself (last is true).
-template <class T, class Level, class Round>
-void run_hierarchical(const State<T>& s, const gpu::PassConstants& pc, Range r, Level level, Round round) {
+/// Path walk: walk(dst, instance, chain) for each chain, which walks up to the root and writes
+/// the final value to half dst.
+template <class T, class Level, class Round, class Walk>
+void run_hierarchical(const State<T>& s, const gpu::PassConstants& pc, Range r, Level level, Round round,
+                      Walk walk) {
+    if (pc.mode == HMSM_MODE_PATH_WALK) {
+        const uint64_t dst = uint64_t(pc.dst_half) * s.total_chains;
+        for (uint32_t i = r.begin; i < r.end; ++i) {
+            const Element e = element_of(i, pc.model_chain_count);
+            walk(dst, e.instance, int32_t(e.index));
+        }
+        return;
+    }
     if (pc.mode == HMSM_MODE_LEVEL_BY_LEVEL) {
         const uint64_t dst = uint64_t(pc.dst_half) * s.total_chains;
         for (uint32_t i = r.begin; i < r.end; ++i) {

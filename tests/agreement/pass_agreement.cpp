@@ -54,7 +54,7 @@ std::vector<Composition> compositions_of(Pass pass) {
     if (pass == detail::kFusedDispatchPass) return {Composition::pointer_jumping_per_round, Composition::fused};
     if (pass != Pass::compose && pass != Pass::root_positions) return {Composition::pointer_jumping_per_round};
     return {Composition::pointer_jumping_per_round, Composition::pointer_jumping_in_dispatch,
-            Composition::level_by_level};
+            Composition::level_by_level, Composition::path_walk};
 }
 
 }  // namespace hmsm::test

@@ -173,6 +173,18 @@ std::vector<std::vector<detail::Dispatch>> pass_variants(const detail::SceneData
         variants.push_back(list);
         return variants;
     }
+    if (composition == Composition::path_walk) {
+        std::vector<detail::Dispatch> list;  // one dispatch per group, each chain up its path
+        uint32_t half = pick(rng, 0, 1);
+        for (const auto& g : d.groups) {
+            detail::Dispatch dispatch{pass, detail::group_constants(d, g, half)};
+            dispatch.constants.element_count = g.instance_count * d.models[g.model].chain_count;
+            dispatch.constants.mode = HMSM_MODE_PATH_WALK;
+            list.push_back(dispatch);
+        }
+        variants.push_back(list);
+        return variants;
+    }
     if (composition == Composition::pointer_jumping_in_dispatch) {
         std::vector<detail::Dispatch> list;  // every round in one dispatch per group
         for (const auto& g : d.groups) {

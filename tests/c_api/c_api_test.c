@@ -288,7 +288,15 @@ static void test_bad_configs(void) {
     } while (0)
     CHECK_CONFIG_FAILS(backend, 99);
     CHECK_CONFIG_FAILS(backend, -1);
-    CHECK_CONFIG_FAILS(composition, 5);
+    CHECK_CONFIG_FAILS(composition, HMSM_COMPOSITION_PATH_WALK + 1);
+    CHECK_CONFIG_FAILS(composition, -1);
+    /* The last composition is accepted. */
+    hmsm_config_init(&config);
+    config.backend = HMSM_BACKEND_CPU;
+    config.composition = HMSM_COMPOSITION_PATH_WALK;
+    CHECK_OK(hmsm_simulation_create(scene, &config, &simulation));
+    hmsm_simulation_destroy(simulation);
+    simulation = NULL;
     CHECK_CONFIG_FAILS(vertex_layout, 2);
     CHECK_CONFIG_FAILS(profile_passes, 7);
     CHECK_CONFIG_FAILS(outputs, 3);

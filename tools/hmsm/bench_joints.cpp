@@ -110,25 +110,30 @@ int joint_forest_cases(BackendKind backend, const std::vector<JointForestCase>& 
         if (r.has_passes) put(row, "device_seconds_per_step", r.device_seconds);
         sim->reset();
         // The same forest with passes 1-5 fused into one dispatch (Composition::fused), which
-        // is all a joints-only step runs.
-        config.composition = Composition::fused;
-        auto fused_sim = Simulation::create(*scene, config);
-        if (fused_sim) {
-            auto fused = measure(**fused_sim, settings, kBatched | kPasses);
-            if (fused) {
-                json f = json::object();
-                put(f, "steps_per_second", fused->batched);
-                put(f, "seconds_per_step", 1.0 / fused->batched);
-                put(f, "chains_per_second", double(chains_per_instance) * c.count * fused->batched);
-                put(f, "steps_per_second_profiled", fused->profiled);
-                if (fused->has_passes) put(f, "device_seconds_per_step", fused->device_seconds);
-                row["fused"] = f;
-            } else {
-                skip("fused: " + fused.status().message(), true);
+        // is all a joints-only step runs, and with passes 3 and 5 as path walks.
+        const Composition default_composition = config.composition;
+        for (Composition other : {Composition::fused, Composition::path_walk}) {
+            const std::string key = to_string(other);
+            config.composition = other;
+            auto other_sim = Simulation::create(*scene, config);
+            if (!other_sim) {
+                skip(key + ": " + other_sim.status().message(), true);
+                continue;
             }
-        } else {
-            skip("fused: " + fused_sim.status().message(), true);
+            auto result = measure(**other_sim, settings, kBatched | kPasses);
+            if (!result) {
+                skip(key + ": " + result.status().message(), true);
+                continue;
+            }
+            json f = json::object();
+            put(f, "steps_per_second", result->batched);
+            put(f, "seconds_per_step", 1.0 / result->batched);
+            put(f, "chains_per_second", double(chains_per_instance) * c.count * result->batched);
+            put(f, "steps_per_second_profiled", result->profiled);
+            if (result->has_passes) put(f, "device_seconds_per_step", result->device_seconds);
+            row[key] = f;
         }
+        config.composition = default_composition;
         rows.push_back(row);
     }
     return failures;
@@ -138,25 +143,29 @@ std::string render_joint_forest(const json& rows) {
     if (!rows.is_array() || rows.empty()) return "";
     std::string out =
         "\n### Forest scaling, joints only (passes 1-5)\n\n"
-        "Default composition, and fused: passes 1-5 in one dispatch, a workgroup per instance.\n\n"
+        "Default composition; fused: passes 1-5 in one dispatch, a workgroup per instance; path walk: "
+        "passes 3 and 5 in one dispatch each, every chain walking up its path to the root.\n\n"
         "| backend | model | instances | chains | joint bytes | ms per step | device ms per step | Mchains/s "
-        "| fused ms per step | fused device ms per step | fused Mchains/s |\n"
-        "|---|---|--:|--:|--:|--:|--:|--:|--:|--:|--:|\n";
-    char line[400];
+        "| fused ms per step | fused device ms per step | fused Mchains/s "
+        "| path walk ms per step | path walk device ms per step | path walk Mchains/s |\n"
+        "|---|---|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|\n";
+    char line[500];
     for (const json& r : rows) {
         auto number_in = [](const json& j, const char* key, double scale) {
             return j.is_object() && j.contains(key) ? j[key].get<double>() * scale : 0.0;
         };
         auto number = [&](const char* key, double scale) { return number_in(r, key, scale); };
         const json fused = r.value("fused", json::object());
+        const json walk = r.value("path_walk", json::object());
         std::snprintf(line, sizeof line,
-                      "| %s | %s | %llu | %llu | %llu | %.3f | %.3f | %.1f | %.3f | %.3f | %.1f |\n",
+                      "| %s | %s | %llu | %llu | %llu | %.3f | %.3f | %.1f | %.3f | %.3f | %.1f | %.3f | %.3f | %.1f |\n",
                       r.value("backend", "").c_str(), r.value("model", "").c_str(),
                       (unsigned long long)r.value("instances", 0ull), (unsigned long long)r.value("chains", 0ull),
                       (unsigned long long)r.value("joint_bytes", 0ull), number("seconds_per_step", 1e3),
                       number("device_seconds_per_step", 1e3), number("chains_per_second", 1e-6),
                       number_in(fused, "seconds_per_step", 1e3), number_in(fused, "device_seconds_per_step", 1e3),
-                      number_in(fused, "chains_per_second", 1e-6));
+                      number_in(fused, "chains_per_second", 1e-6), number_in(walk, "seconds_per_step", 1e3),
+                      number_in(walk, "device_seconds_per_step", 1e3), number_in(walk, "chains_per_second", 1e-6));
         out += line;
     }
     return out;

@@ -161,7 +161,8 @@ void BenchRun::preset_case(const Model& m, BackendRun& b) {
     for (auto [composition, count_key, count] :
          {std::tuple{Composition::pointer_jumping_in_dispatch, "rounds", rounds},
           std::tuple{Composition::level_by_level, "levels", levels},
-          std::tuple{Composition::fused, "rounds", rounds}}) {
+          std::tuple{Composition::fused, "rounds", rounds},
+          std::tuple{Composition::path_walk, "levels", levels}}) {
         const std::string name = to_string(composition);
         progress_.begin(m.name + " on " + backend + ", " + name);
         json where = {{"section", "presets"}, {"preset", m.name}, {"backend", backend}, {"composition", name}};
