@@ -144,10 +144,30 @@ uint32_t pass_writes(Pass pass);
 inline bool runs_fused(const Dispatch& d) {
     return d.pass == kFusedDispatchPass && d.constants.mode == HMSM_MODE_FUSED;
 }
-/// Buffers a dispatch reads and writes: its pass's, or for the fused dispatch the union over
-/// the fused passes (pass_table.h).
-inline uint32_t dispatch_reads(const Dispatch& d) { return runs_fused(d) ? fused_reads() : pass_reads(d.pass); }
-inline uint32_t dispatch_writes(const Dispatch& d) { return runs_fused(d) ? fused_writes() : pass_writes(d.pass); }
+/// Whether `d` is a path-walk dispatch of Composition::path_walk (gpu_layout.h
+/// HMSM_MODE_PATH_WALK on a pass that leads one): it also runs its pass's walk partner.
+inline bool runs_path_walk(const Dispatch& d) {
+    return d.constants.mode == HMSM_MODE_PATH_WALK && walk_passes(d.pass) != 0;
+}
+/// The passes a dispatch runs (bit i = Pass i): the fused passes, a path walk's two, or its own.
+inline uint32_t dispatch_passes(const Dispatch& d) {
+    if (runs_fused(d)) return fused_passes();
+    if (runs_path_walk(d)) return walk_passes(d.pass);
+    return 1u << uint32_t(d.pass);
+}
+/// Buffers a dispatch reads and writes: the union over the passes it runs (pass_table.h).
+inline uint32_t dispatch_reads(const Dispatch& d) {
+    uint32_t bits = 0;
+    for (Pass pass : kAllPasses)
+        if (dispatch_passes(d) >> uint32_t(pass) & 1u) bits |= pass_reads(pass);
+    return bits;
+}
+inline uint32_t dispatch_writes(const Dispatch& d) {
+    uint32_t bits = 0;
+    for (Pass pass : kAllPasses)
+        if (dispatch_passes(d) >> uint32_t(pass) & 1u) bits |= pass_writes(pass);
+    return bits;
+}
 
 /// The most shared memory a GPU backend gives a fused workgroup (which keeps its rounds there
 /// when gpu::fused_shared_bytes(chains) fits): the environment variable

@@ -23,7 +23,7 @@ constexpr uint32_t buffer_bit(BufferId id) { return 1u << static_cast<uint32_t>(
 // Shorthand for the access columns below: one bit per buffer (bit i = BufferId i).
 #define HMSM_B(name) buffer_bit(BufferId::name)
 
-/// X(name, domain, hierarchical, needed_for, fused, reads, writes), in execution order (the same
+/// X(name, domain, hierarchical, needed_for, fused, walk, reads, writes), in execution order (the same
 /// order as HMSM_PASSES in <hmsm/pass.h>; a static_assert below keeps them equal).
 /// root_positions writes, with the final O_c, the joint matrix [R_c | O_c] (R_c from compose).
 /// needed_for: the least SimulationConfig::outputs for which a step runs the pass (outputs on
@@ -32,35 +32,48 @@ constexpr uint32_t buffer_bit(BufferId id) { return 1u << static_cast<uint32_t>(
 /// fused: Composition::fused runs the pass inside its one fused dispatch per instance group (a
 /// workgroup per instance, barriers between the passes); the fused passes are consecutive from
 /// wind_force on, and the fused dispatch reads and writes the union of their buffers.
+/// walk: Composition::path_walk runs the pass and this later pass in one dispatch of the pass
+/// (none: the pass leads no such dispatch): wind_force with integrate per chain, compose with
+/// root_positions by the top-down walk per chain (which needs no node_relative), node_relative
+/// with node_world per node. Such a dispatch reads and writes the union of the two passes' (the
+/// walk also reads the static node_local, for the attach offsets node_relative would give).
 #define HMSM_PASS_TABLE(X)                                                                        \
-    X(wind_force, chain, false, joints, true,                                                     \
+    X(wind_force, chain, false, joints, true, integrate,                                          \
       (HMSM_B(chain_rotation) | HMSM_B(chain_origin) | HMSM_B(chain_constants) |                  \
        HMSM_B(instance_wind) | HMSM_B(wind_table)),                                               \
       (HMSM_B(chain_force)))                                                                      \
-    X(integrate, chain, false, joints, true,                                                      \
+    X(integrate, chain, false, joints, true, none,                                                \
       (HMSM_B(chain_force) | HMSM_B(chain_state) | HMSM_B(chain_constants) |                      \
        HMSM_B(chain_rest_rotation) | HMSM_B(chain_parent) | HMSM_B(instance_yaw)),                \
       (HMSM_B(chain_state) | HMSM_B(chain_local)))                                                \
-    X(compose, chain, true, joints, true,                                                         \
+    X(compose, chain, true, joints, true, root_positions,                                         \
       (HMSM_B(chain_local) | HMSM_B(chain_rotation) | HMSM_B(chain_jump) |                        \
        HMSM_B(chain_parent)),                                                                     \
       (HMSM_B(chain_rotation)))                                                                   \
-    X(node_relative, node, false, joints, true,                                                   \
+    X(node_relative, node, false, joints, true, node_world,                                       \
       (HMSM_B(chain_rotation) | HMSM_B(node_owner) | HMSM_B(node_local)),                         \
       (HMSM_B(node_relative)))                                                                    \
-    X(root_positions, chain, true, joints, true,                                                  \
+    X(root_positions, chain, true, joints, true, none,                                            \
       (HMSM_B(node_relative) | HMSM_B(chain_origin) | HMSM_B(chain_jump) |                        \
        HMSM_B(chain_parent) | HMSM_B(chain_attach) | HMSM_B(instance_origin) |                    \
        HMSM_B(chain_rotation)),                                                                   \
       (HMSM_B(chain_origin) | HMSM_B(joint_matrix)))                                              \
-    X(node_world, node, false, joints_and_nodes, false,                                           \
+    X(node_world, node, false, joints_and_nodes, false, none,                                     \
       (HMSM_B(chain_origin) | HMSM_B(node_relative) | HMSM_B(node_owner)),                        \
       (HMSM_B(node_world)))                                                                       \
-    X(contour, vertex, false, all, false,                                                         \
+    X(contour, vertex, false, all, false, none,                                                   \
       (HMSM_B(chain_rotation) | HMSM_B(chain_origin) | HMSM_B(vertex_chain) |                     \
        HMSM_B(vertex_rest_position) | HMSM_B(vertex_rest_normal) |                                \
        HMSM_B(vertex_parent_position) | HMSM_B(vertex_parent_normal)),                            \
       (HMSM_B(vertex_position) | HMSM_B(vertex_normal)))
+
+/// The pass column `walk` names: the pass a path-walk dispatch also runs, or none.
+enum class WalkPartner : int32_t {
+    none = -1,
+    integrate = int32_t(Pass::integrate),
+    root_positions = int32_t(Pass::root_positions),
+    node_world = int32_t(Pass::node_world),
+};
 
 struct PassInfo {
     Pass pass;
@@ -68,13 +81,14 @@ struct PassInfo {
     bool hierarchical;
     Outputs needed_for;
     bool fused;
+    WalkPartner walk;
     uint32_t reads;
     uint32_t writes;
 };
 
 inline constexpr std::array<PassInfo, kPassCount> kPassTable = {{
-#define HMSM_PASS_INFO(name, domain, hierarchical, needed_for, fused, reads, writes) \
-    {Pass::name, PassDomain::domain, hierarchical, Outputs::needed_for, fused, reads, writes},
+#define HMSM_PASS_INFO(name, domain, hierarchical, needed_for, fused, walk, reads, writes) \
+    {Pass::name, PassDomain::domain, hierarchical, Outputs::needed_for, fused, WalkPartner::walk, reads, writes},
     HMSM_PASS_TABLE(HMSM_PASS_INFO)
 #undef HMSM_PASS_INFO
 }};
@@ -126,5 +140,24 @@ constexpr bool fused_passes_are_a_prefix() {
            kPassTable[0].pass == kFusedDispatchPass;
 }
 static_assert(fused_passes_are_a_prefix(), "the fused passes must be consecutive from wind_force on");
+
+/// Composition::path_walk: the passes a path-walk dispatch of `pass` runs (bit i = Pass i): the
+/// pass and its walk partner; 0 where the pass leads no such dispatch.
+constexpr uint32_t walk_passes(Pass pass) {
+    const WalkPartner partner = pass_info(pass).walk;
+    return partner == WalkPartner::none ? 0u : (1u << uint32_t(pass)) | (1u << uint32_t(partner));
+}
+/// Every pass is a walk partner of at most one earlier pass and leads at most one walk.
+constexpr bool walk_partners_are_later_and_unique() {
+    uint32_t partners = 0;
+    for (const PassInfo& p : kPassTable) {
+        if (p.walk == WalkPartner::none) continue;
+        const uint32_t bit = 1u << uint32_t(p.walk);
+        if (uint32_t(p.walk) <= uint32_t(p.pass) || (partners & bit) || walk_passes(Pass(p.walk)) != 0) return false;
+        partners |= bit;
+    }
+    return true;
+}
+static_assert(walk_partners_are_later_and_unique(), "a walk partner must be a later pass that leads no walk");
 
 }  // namespace hmsm::detail

@@ -48,15 +48,6 @@ void append_pass(std::vector<Dispatch>& program, const SceneData& d,
         }
         return;
     }
-    if (composition == Composition::path_walk) {
-        for (const auto& g : groups) {
-            Dispatch dispatch{pass, group_constants(d, g, final_half)};
-            dispatch.constants.element_count = g.instance_count * d.models[g.model].chain_count;
-            dispatch.constants.mode = HMSM_MODE_PATH_WALK;
-            if (dispatch.constants.element_count > 0) program.push_back(dispatch);
-        }
-        return;
-    }
     if (composition != Composition::level_by_level) {
         // Groups whose rounds run in one dispatch per pass come first; the others take one
         // dispatch per round.
@@ -124,9 +115,57 @@ void append_fused(std::vector<Dispatch>& program, const SceneData& d,
     }
 }
 
+namespace {
+
+/// Composition::path_walk: the passes from `first` on whose bit is set in `wanted` (those the
+/// outputs need), each walk pair (the pass table's `walk` column) in one dispatch of its leader
+/// where both run. compose and root_positions apart (a program of only one of them) run level
+/// by level, whose poses the walk reproduces bit for bit; node_relative, which the walk does not
+/// read, runs only for node_world, with it after the walk.
+std::vector<Dispatch> build_path_walk_program(const SceneData& d, const std::vector<InstanceGroup>& groups,
+                                              bool dispatches_are_expensive, uint32_t wanted) {
+    auto bit = [](Pass pass) { return 1u << uint32_t(pass); };
+    const bool walk_poses = (wanted & walk_passes(Pass::compose)) == walk_passes(Pass::compose);
+    if (walk_poses && !(wanted & bit(Pass::node_world))) wanted &= ~bit(Pass::node_relative);
+    std::vector<Dispatch> program;
+    uint32_t done = 0;
+    for (Pass pass : kAllPasses) {
+        if (!(wanted & bit(pass)) || (done & bit(pass))) continue;
+        const uint32_t pair = walk_passes(pass);
+        // node_relative with node_world only after a walk (level by level root_positions reads u).
+        const bool pair_runs = pair != 0 && (wanted & pair) == pair && (pass != Pass::node_relative || walk_poses);
+        if (!pair_runs) {
+            append_pass(program, d, groups, pass, Composition::level_by_level, dispatches_are_expensive);
+            done |= bit(pass);
+            continue;
+        }
+        const auto& per_domain = [&](const InstanceGroup& g) {
+            const auto& m = d.models[g.model];
+            return pass_domain(pass) == PassDomain::node ? m.node_count : m.chain_count;
+        };
+        for (const auto& g : groups) {
+            Dispatch dispatch{pass, group_constants(d, g, HMSM_FINAL_HALF(d.jump_rounds))};
+            dispatch.constants.element_count = g.instance_count * per_domain(g);
+            dispatch.constants.mode = HMSM_MODE_PATH_WALK;
+            if (dispatch.constants.element_count > 0) program.push_back(dispatch);
+        }
+        done |= pair;
+    }
+    return program;
+}
+
+}  // namespace
+
 std::vector<Dispatch> build_program(const SceneData& d, const std::vector<InstanceGroup>& groups,
                                     Composition composition, bool dispatches_are_expensive, Pass first,
                                     uint32_t passes) {
+    if (composition == Composition::path_walk) {
+        uint32_t wanted = 0;
+        for (Pass pass : kAllPasses)
+            if (uint32_t(pass) >= uint32_t(first) && (passes >> uint32_t(pass) & 1u) && pass_runs_for(pass, d.outputs))
+                wanted |= 1u << uint32_t(pass);
+        return build_path_walk_program(d, groups, dispatches_are_expensive, wanted);
+    }
     // Fused only where the program runs every fused pass (a step); programs of some passes (the
     // rest pose from integrate on, the recomputation after a removal) run them one by one, with
     // the rounds in one dispatch as in the fused dispatch.

@@ -90,6 +90,14 @@ void expect_fused_pass_table(const json& j, const std::string& where) {
     EXPECT_EQ(j.size(), 3u) << where;
 }
 
+/// The path walk's times: one per dispatch, a walk pair under "LEADER+PARTNER".
+void expect_path_walk_pass_table(const json& j, const std::string& where) {
+    ASSERT_TRUE(j.is_object()) << where;
+    for (const char* key : {"wind_force+integrate", "compose+root_positions", "node_relative+node_world", "contour"})
+        expect_number(j, key, where);
+    EXPECT_EQ(j.size(), 4u) << where;
+}
+
 void expect_pass_table(const json& j, const std::string& where) {
     ASSERT_TRUE(j.is_object()) << where;
     for (const char* pass : {"wind_force", "integrate", "compose", "node_relative", "root_positions",
@@ -144,6 +152,8 @@ void expect_schema(const json& d, const std::string& backend) {
                                 "device_seconds_per_step", "device_effective_bandwidth"})
             expect_number(m, key, mode);
         if (mode == std::string("fused")) expect_fused_pass_table(m["pass_seconds_per_step"], "fused.pass_seconds_per_step");
+        else if (mode == std::string("path_walk"))
+            expect_path_walk_pass_table(m["pass_seconds_per_step"], "path_walk.pass_seconds_per_step");
         else expect_pass_table(m["pass_seconds_per_step"], std::string(mode) + ".pass_seconds_per_step");
     }
 

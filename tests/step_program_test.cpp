@@ -4,6 +4,7 @@
 #include "test_trees.h"
 
 #include "backend.h"
+#include "step_program.h"
 
 #include <gtest/gtest.h>
 
@@ -98,39 +99,77 @@ TEST(StepProgram, PerRoundAndLevelByLevelIssueOneDispatchPerRoundOrLevel) {
     EXPECT_EQ(hmsm::detail::step_program_of(*per_round).size(), kPassCount - 2 + 2 * 3);
 }
 
-// Path walk: one dispatch per hierarchical pass and group, a thread per chain, writing the pose
-// half; a step of one tree is then 7 dispatches, the fewest of any composition. Its poses are
-// those of level by level (the same products and sums, associated from the chain up).
-TEST(StepProgram, PathWalkIssuesOneDispatchPerPassAndMatchesLevelByLevel) {
+// Path walk: each walk pair of the pass table in one dispatch of its leader, a thread per chain
+// (per node for node_relative with node_world): a step of one tree is four dispatches, the fewest
+// of any composition, and joints only two. The poses are level by level's bit for bit (the walk
+// runs its operations in its order).
+TEST(StepProgram, PathWalkRunsThePairsInOneDispatchEachAndEqualsLevelByLevelBitwise) {
     const Scene scene = single_tree_scene(test::deep_tree(6), {2, 0, -1}, 0.4);
     const double storm = 15.0;  // wind gain: large angles
     auto walk = cpu_simulation(scene, Composition::path_walk, storm);
     auto level = cpu_simulation(scene, Composition::level_by_level, storm);
     ASSERT_TRUE(walk && level);
-    for (Pass pass : {Pass::compose, Pass::root_positions}) {
-        auto d = dispatches_of(*walk, pass);
-        ASSERT_EQ(d.size(), 1u);
-        EXPECT_EQ(d[0].constants.mode, HMSM_MODE_PATH_WALK);
-        EXPECT_EQ(d[0].constants.element_count, walk->hierarchy(0).chains.size());
-        EXPECT_EQ(d[0].constants.dst_half, HMSM_FINAL_HALF(walk->jump_rounds()));
+    const auto& program = hmsm::detail::step_program_of(*walk);
+    ASSERT_EQ(program.size(), 4u);
+    const Pass leaders[] = {Pass::wind_force, Pass::compose, Pass::node_relative, Pass::contour};
+    for (size_t i = 0; i < 4; ++i) {
+        EXPECT_EQ(program[i].pass, leaders[i]);
+        const uint64_t per_instance = leaders[i] == Pass::node_relative ? walk->node_count()
+                                      : leaders[i] == Pass::contour     ? program[i].constants.model_vertex_count
+                                                                        : walk->hierarchy(0).chains.size();
+        EXPECT_EQ(program[i].constants.element_count, per_instance);
+        if (leaders[i] != Pass::contour) {
+            EXPECT_EQ(program[i].constants.mode, HMSM_MODE_PATH_WALK);
+            EXPECT_TRUE(hmsm::detail::runs_path_walk(program[i]));
+        }
     }
-    EXPECT_EQ(hmsm::detail::step_program_of(*walk).size(), kPassCount);
+    EXPECT_EQ(program[1].constants.dst_half, HMSM_FINAL_HALF(walk->jump_rounds()));
+    EXPECT_EQ(hmsm::detail::dispatch_passes(program[1]),
+              (1u << uint32_t(Pass::compose)) | (1u << uint32_t(Pass::root_positions)));
     ASSERT_TRUE(walk->step(300).ok());
     ASSERT_TRUE(level->step(300).ok());
-    for (Output o : {Output::chain_rotations, Output::chain_origins, Output::node_positions}) {
-        std::vector<double> a, b;
+    auto at_rest = cpu_simulation(scene, Composition::level_by_level, storm);
+    ASSERT_TRUE(at_rest);
+    for (Output o : {Output::chain_rotations, Output::chain_origins, Output::joint_matrices, Output::node_positions,
+                     Output::vertex_positions}) {
+        std::vector<double> a, b, rest;
         ASSERT_TRUE(walk->read(o, a).ok());
         ASSERT_TRUE(level->read(o, b).ok());
-        ASSERT_EQ(a.size(), b.size());
-        double error = 0.0, moved = 0.0;
-        for (size_t i = 0; i < a.size(); ++i) error = std::max(error, std::abs(a[i] - b[i]));
-        std::vector<double> rest;
-        auto at_rest = cpu_simulation(scene, Composition::level_by_level, storm);
-        ASSERT_TRUE(at_rest && at_rest->read(o, rest).ok());
+        ASSERT_TRUE(at_rest->read(o, rest).ok());
+        EXPECT_EQ(a, b) << "output " << int(o);
+        double moved = 0.0;
         for (size_t i = 0; i < a.size(); ++i) moved = std::max(moved, std::abs(rest[i] - b[i]));
-        EXPECT_LE(error, 1e-4) << "output " << int(o);
         EXPECT_GT(moved, 1e-3) << "output " << int(o);  // the wind bent the tree
     }
+}
+
+// Joints only: the walk needs no node_relative, so a step is the two walk dispatches; programs
+// of some passes (the rest pose from integrate on) run the passes apart from their leader alone.
+TEST(StepProgram, PathWalkProgramsFollowTheOutputsAndThePassesAsked) {
+    const Scene scene = single_tree_scene(test::deep_tree(4));
+    SimulationConfig config;
+    config.backend = BackendKind::cpu;
+    config.composition = Composition::path_walk;
+    config.outputs = Outputs::joints;
+    auto joints = Simulation::create(scene, config);
+    ASSERT_TRUE(joints.ok()) << joints.status().message();
+    const auto& program = hmsm::detail::step_program_of(**joints);
+    ASSERT_EQ(program.size(), 2u);
+    EXPECT_EQ(program[0].pass, Pass::wind_force);
+    EXPECT_EQ(program[1].pass, Pass::compose);
+    config.outputs = Outputs::all;
+    auto all = Simulation::create(scene, config);
+    ASSERT_TRUE(all.ok());
+    const auto& data = hmsm::detail::scene_data_of(**all);
+    const auto rest = hmsm::detail::build_program(data, data.groups, Composition::path_walk, false, Pass::integrate,
+                                                  (1u << kPassCount) - 1);
+    ASSERT_EQ(rest.size(), 4u);  // integrate alone, the walk, node_relative with node_world, contour
+    EXPECT_EQ(rest[0].pass, Pass::integrate);
+    EXPECT_FALSE(hmsm::detail::runs_path_walk(rest[0]));
+    EXPECT_EQ(rest[1].pass, Pass::compose);
+    EXPECT_TRUE(hmsm::detail::runs_path_walk(rest[1]));
+    EXPECT_EQ(rest[2].pass, Pass::node_relative);
+    EXPECT_TRUE(hmsm::detail::runs_path_walk(rest[2]));
 }
 
 TEST(StepProgram, ModelsBeyondTheRoundsLimitFallBackToOneDispatchPerRound) {

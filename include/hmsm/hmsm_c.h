@@ -63,7 +63,7 @@ enum { /* hmsm_config.composition */
     HMSM_COMPOSITION_POINTER_JUMPING_IN_DISPATCH = 2,
     HMSM_COMPOSITION_LEVEL_BY_LEVEL = 3,
     HMSM_COMPOSITION_FUSED = 4, /* passes 1-5 in one dispatch, a workgroup per instance */
-    HMSM_COMPOSITION_PATH_WALK = 5 /* passes 3 and 5 in one dispatch each, each chain up its path */
+    HMSM_COMPOSITION_PATH_WALK = 5 /* each chain walks its ancestors: 4 dispatches per step */
 };
 enum { HMSM_VERTEX_LAYOUT_SEPARATE = 0, HMSM_VERTEX_LAYOUT_PACKED = 1 };
 enum { HMSM_GROUPING_DIRECTION = 0, HMSM_GROUPING_WIDTH = 1 };

@@ -1,6 +1,6 @@
 // The per-chain math of passes 1, 2, 3 and 5, written once for the separate pass kernels
-// (wind_force.cu, integrate.cu, compose.cu, root_positions.cu) and the fused kernel (fused.cu,
-// Composition::fused). Mirrors src/cpu/NAME.cpp and shaders/glsl/chain_math.glsl.
+// (wind_force.cu, integrate.cu, compose.cu, root_positions.cu), the fused kernel (fused.cu,
+// Composition::fused) and the path walk (compose.cu, Composition::path_walk). Mirrors src/cpu/NAME.cpp and shaders/glsl/chain_math.glsl.
 //
 // Loads of state that a block may have written earlier in the same kernel are plain loads
 // (which __syncthreads() orders), never the read-only path: kWrittenInBlock marks the
@@ -159,6 +159,38 @@ HMSM_HOST_DEVICE void root_jump(const BufferPointers& b, const gpu::PassConstant
     if (ancestor >= 0) origin = origin + sum_so_far(ancestor);
     b.chain_origin[half_begin(pc, dst_half) + state_chain(pc, k, c)] = origin;
     if (write_joint) store_joint<kFused>(b, pc, state_chain(pc, k, c), dst_half, origin);
+}
+
+/// The chain `up` depth levels above model chain c, through the 2^round-th ancestors.
+HMSM_HOST_DEVICE int32_t ancestor_above(const BufferPointers& b, const gpu::PassConstants& pc, int32_t c,
+                                        uint32_t up) {
+    for (uint32_t round = 0; up != 0; ++round, up >>= 1)
+        if (up & 1u) c = load(b.chain_jump + uint64_t(round) * pc.total_model_chains + pc.model_chain_begin + c);
+    return c;
+}
+
+/// Composition::path_walk, passes 3 and 5 for model chain c of group instance k: its ancestors
+/// from the trunk down, R = R_parent T and O = O_parent + R_parent l_attach (level by level's
+/// operations in its order), R and O to the pose half dst_half with the joint matrix
+/// (src/cpu/path_walk.cpp).
+HMSM_HOST_DEVICE void path_walk(const BufferPointers& b, const gpu::PassConstants& pc, uint32_t k, int32_t c) {
+    const int32_t* parent = b.chain_parent + pc.model_chain_begin;
+    uint32_t depth = 0;
+    for (int32_t a = load(parent + c); a >= 0; a = load(parent + a)) ++depth;
+    Mat3 rotation = load_mat3(b.chain_local, state_chain(pc, k, ancestor_above(b, pc, c, depth)));
+    const float4 o = load(b.instance_origin + pc.instance_begin + k);
+    float4 origin = make_float4(o.x, o.y, o.z, 0.0f);
+    for (uint32_t level = 1; level <= depth; ++level) {
+        const int32_t x = ancestor_above(b, pc, c, depth - level);
+        const int32_t attach = load(b.chain_attach + pc.model_chain_begin + x);
+        const float3 local = xyz(load(b.node_local + pc.model_node_begin + attach));
+        origin = origin + with_w(rotation * local, 0.0f);
+        rotation = rotation * load_mat3(b.chain_local, state_chain(pc, k, x));
+    }
+    const uint64_t chain = state_chain(pc, k, c);
+    store_mat3(b.chain_rotation, half_begin(pc, pc.dst_half) + chain, rotation);
+    b.chain_origin[half_begin(pc, pc.dst_half) + chain] = origin;
+    store_joint_of(b, chain, rotation, origin);
 }
 
 }  // namespace hmsm::detail::cuda

@@ -5,30 +5,24 @@
 // chain_math.cuh). In-dispatch mode runs every round in one launch, one block per instance,
 // __syncthreads() between rounds. Level by level: one depth per dispatch, R = R_parent T in
 // place in the pose half (dst_half), the parent having been written by the previous dispatch.
-// Path walk: each thread multiplies in its chain's ancestors' T from the chain up to the root
-// and writes the final R to the pose half.
+// Path walk: passes 3 and 5 together, each chain walking its ancestors from the trunk down
+// (chain_math.cuh path_walk).
 #include "chain_math.cuh"
 
 namespace hmsm::detail::cuda {
 
 static HMSM_HOST_DEVICE void compose_element(const BufferPointers& b,
                                              const gpu::PassConstants& pc, uint32_t i) {
+    if (pc.mode == HMSM_MODE_PATH_WALK) {
+        const Element e = element_of(i, pc.model_chain_count);
+        return path_walk(b, pc, e.instance, int32_t(e.index));  // and root_positions
+    }
     if (pc.mode == HMSM_MODE_LEVEL_BY_LEVEL) {
         const LevelChain l = level_chain(b, pc, i);
         Mat3 rotation = load_mat3(b.chain_local, l.chain);
         if (l.parent >= 0)
             rotation = load_mat3(b.chain_rotation, l.dst + state_chain(pc, l.instance, l.parent)) * rotation;
         store_mat3(b.chain_rotation, l.dst + l.chain, rotation);
-        return;
-    }
-    if (pc.mode == HMSM_MODE_PATH_WALK) {
-        const Element e = element_of(i, pc.model_chain_count);
-        const uint64_t chain = state_chain(pc, e.instance, int32_t(e.index));
-        Mat3 rotation = load_mat3(b.chain_local, chain);
-        for (int32_t a = load(b.chain_parent + pc.model_chain_begin + e.index); a >= 0;
-             a = load(b.chain_parent + pc.model_chain_begin + a))
-            rotation = load_mat3(b.chain_local, state_chain(pc, e.instance, a)) * rotation;
-        store_mat3(b.chain_rotation, half_begin(pc, pc.dst_half) + chain, rotation);
         return;
     }
     const Element e = element_of(i, pc.model_chain_count);

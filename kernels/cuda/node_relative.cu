@@ -12,7 +12,14 @@ static HMSM_HOST_DEVICE void node_relative_element(const BufferPointers& b,
     const float3 local = xyz(load(b.node_local + model_node));
     const Mat3 rotation =
         load_mat3(b.chain_rotation, half_begin(pc, pc.src_half) + state_chain(pc, e.instance, owner));
-    b.node_relative[pc.node_begin + i] = with_w(rotation * local, 0.0f);
+    const float3 u = rotation * local;
+    b.node_relative[pc.node_begin + i] = with_w(u, 0.0f);
+    // Path walk: node_world follows in the same launch (node_world.cu).
+    if (pc.mode == HMSM_MODE_PATH_WALK) {
+        const float4 origin =
+            load(b.chain_origin + half_begin(pc, pc.src_half) + state_chain(pc, e.instance, owner));
+        b.node_world[pc.node_begin + i] = with_w(xyz(origin) + u, 1.0f);
+    }
 }
 
 HMSM_CUDA_PASS(node_relative)

@@ -3,7 +3,6 @@
 // adds the partial sum of the 2^r-th ancestor, src_half -> dst_half, round 0 starting from each
 // chain's own offset (root_jump, chain_math.cuh); in-dispatch mode runs every round in one
 // launch, one block per instance. Level by level: one depth per dispatch, in place in dst_half.
-// Path walk: each thread sums its chain's own offsets from the chain up to the root.
 // Wherever O_c is written, the joint matrix [R_c | O_c] is written too, R_c from the same half
 // (compose left the final R there): level by level and the last in-dispatch round write final
 // values once; per-round launches write in every round and the last round (the final half)
@@ -33,17 +32,6 @@ static HMSM_HOST_DEVICE void root_positions_element(const BufferPointers& b,
         if (l.parent >= 0) origin = origin + load(b.chain_origin + l.dst + state_chain(pc, l.instance, l.parent));
         b.chain_origin[l.dst + l.chain] = origin;
         store_joint(b, pc, l.chain, pc.dst_half, origin);
-        return;
-    }
-    if (pc.mode == HMSM_MODE_PATH_WALK) {
-        const Element e = element_of(i, pc.model_chain_count);
-        const uint64_t chain = state_chain(pc, e.instance, int32_t(e.index));
-        float4 origin = own_offset(b, pc, e.instance, int32_t(e.index));
-        for (int32_t a = load(b.chain_parent + pc.model_chain_begin + e.index); a >= 0;
-             a = load(b.chain_parent + pc.model_chain_begin + a))
-            origin = origin + own_offset(b, pc, e.instance, a);
-        b.chain_origin[half_begin(pc, pc.dst_half) + chain] = origin;
-        store_joint(b, pc, chain, pc.dst_half, origin);
         return;
     }
     const Element e = element_of(i, pc.model_chain_count);

@@ -10,8 +10,12 @@ static HMSM_HOST_DEVICE void wind_force_element(const BufferPointers& b,
     const Element e = element_of(i, pc.model_chain_count);
     const uint64_t chain = pc.chain_begin + i;
     const uint64_t pose = half_begin(pc, pc.src_half) + chain;
-    b.chain_force[chain] = chain_wind_force(b, pc, e.instance, e.index, xyz(load(b.chain_origin + pose)),
-                                            load_mat3(b.chain_rotation, pose));
+    const float2 g = chain_wind_force(b, pc, e.instance, e.index, xyz(load(b.chain_origin + pose)),
+                                      load_mat3(b.chain_rotation, pose));
+    b.chain_force[chain] = g;
+    // Path walk: integrate follows in the same launch (integrate.cu).
+    if (pc.mode == HMSM_MODE_PATH_WALK)
+        store_mat3(b.chain_local, chain, chain_integrate(b, pc, e.instance, e.index, chain, g));
 }
 
 HMSM_CUDA_PASS(wind_force)

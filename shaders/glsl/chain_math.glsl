@@ -1,6 +1,7 @@
 // The per-chain math of passes 1, 2, 3 and 5, written once for the separate pass shaders
-// (wind_force.comp, integrate.comp, compose.comp, root_positions.comp) and the fused one
-// (fused.comp, Composition::fused). Mirrors src/cpu/NAME.cpp; include after common.glsl.
+// (wind_force.comp, integrate.comp, compose.comp, root_positions.comp), the fused one
+// (fused.comp, Composition::fused) and the path walk (compose.comp, Composition::path_walk).
+// Mirrors src/cpu/NAME.cpp; include after common.glsl.
 #ifndef HMSM_CHAIN_MATH_GLSL
 #define HMSM_CHAIN_MATH_GLSL
 
@@ -130,6 +131,35 @@ void root_jump(uint k, uint c, uint round, uint src_half, uint dst_half, bool wr
     if (ancestor >= 0) origin += sum_so_far(k, uint(ancestor), round, src_half);
     chain_origin[half_offset(dst_half) + state_chain(k, c)] = origin;
     if (write_joint) store_joint(state_chain(k, c), dst_half, origin);
+}
+
+/// The chain `up` depth levels above model chain c, through the 2^round-th ancestors.
+uint ancestor_above(uint c, uint up) {
+    for (uint round = 0u; up != 0u; ++round, up >>= 1u)
+        if ((up & 1u) != 0u) c = uint(chain_jump[round * pc.total_model_chains + pc.model_chain_begin + c]);
+    return c;
+}
+
+/// Composition::path_walk, passes 3 and 5 for model chain c of group instance k: its ancestors
+/// from the trunk down, R = R_parent T and O = O_parent + R_parent l_attach (level by level's
+/// operations in its order), R and O to the pose half dst_half with the joint matrix
+/// (src/cpu/path_walk.cpp).
+void path_walk(uint k, uint c) {
+    uint depth = 0u;
+    for (int a = chain_parent[pc.model_chain_begin + c]; a >= 0; a = chain_parent[pc.model_chain_begin + uint(a)])
+        ++depth;
+    mat3 r = as_mat3(chain_local[state_chain(k, ancestor_above(c, depth))]);
+    vec4 origin = vec4(instance_origin[pc.instance_begin + k].xyz, 0.0);
+    for (uint level = 1u; level <= depth; ++level) {
+        uint x = ancestor_above(c, depth - level);
+        vec3 local = node_local[pc.model_node_begin + uint(chain_attach[pc.model_chain_begin + x])].xyz;
+        origin += vec4(r * local, 0.0);
+        r = r * as_mat3(chain_local[state_chain(k, x)]);
+    }
+    uint chain = state_chain(k, c);
+    chain_rotation[half_offset(pc.dst_half) + chain] = as_mat3x4(r);
+    chain_origin[half_offset(pc.dst_half) + chain] = origin;
+    store_joint_of(chain, r, origin);
 }
 
 #endif  // HMSM_CHAIN_MATH_GLSL

@@ -3,8 +3,8 @@
 // multiplies in the product held by the 2^round-th ancestor, reading half src_half and writing
 // half dst_half (round 0 reads T), so no thread reads what another writes. In-dispatch mode:
 // workgroup k runs every round for group instance k, a barrier between rounds. Level by level:
-// one depth per dispatch, in place in half dst_half. Path walk: each chain multiplies in its
-// ancestors' T from the chain up to the root, the final R into half dst_half.
+// one depth per dispatch, in place in half dst_half. Path walk: passes 3 and 5 together, each
+// chain walking its ancestors from the trunk down (chain_math.glsl path_walk).
 #extension GL_GOOGLE_include_directive : require
 #define HMSM_SPECIALIZED_WORKGROUP_SIZE
 #define HMSM_POSE_COHERENCE coherent
@@ -25,6 +25,10 @@ void main() {
     }
     uint i = thread_index();
     if (i >= pc.element_count) return;
+    if (pc.mode == HMSM_MODE_PATH_WALK) {
+        path_walk(i / pc.model_chain_count, i % pc.model_chain_count);  // and root_positions
+        return;
+    }
     if (pc.mode == HMSM_MODE_LEVEL_BY_LEVEL) {
         uint dst = half_offset(pc.dst_half);
         uint k = i / pc.level_count;
@@ -34,16 +38,6 @@ void main() {
         mat3 t = as_mat3(chain_local[chain]);
         mat3 r = parent < 0 ? t : as_mat3(chain_rotation[dst + state_chain(k, uint(parent))]) * t;
         chain_rotation[dst + chain] = as_mat3x4(r);
-        return;
-    }
-    if (pc.mode == HMSM_MODE_PATH_WALK) {
-        uint k = i / pc.model_chain_count;
-        uint c = i % pc.model_chain_count;
-        uint chain = state_chain(k, c);
-        mat3 r = as_mat3(chain_local[chain]);
-        for (int a = chain_parent[pc.model_chain_begin + c]; a >= 0; a = chain_parent[pc.model_chain_begin + uint(a)])
-            r = as_mat3(chain_local[state_chain(k, uint(a))]) * r;
-        chain_rotation[half_offset(pc.dst_half) + chain] = as_mat3x4(r);
         return;
     }
     compose_jump(i / pc.model_chain_count, i % pc.model_chain_count, pc.round, pc.src_half, pc.dst_half);

@@ -11,5 +11,11 @@ void main() {
     uint n = i % pc.model_node_count;
     uint owner = uint(node_owner[pc.model_node_begin + n]);
     mat3 r = as_mat3(chain_rotation[half_offset(pc.src_half) + state_chain(k, owner)]);
-    node_relative[state_node(k, n)] = vec4(r * node_local[pc.model_node_begin + n].xyz, 0.0);
+    vec4 u = vec4(r * node_local[pc.model_node_begin + n].xyz, 0.0);
+    node_relative[state_node(k, n)] = u;
+    // Path walk: node_world follows in the same dispatch (node_world.comp).
+    if (pc.mode == HMSM_MODE_PATH_WALK) {
+        vec4 w = chain_origin[half_offset(pc.src_half) + state_chain(k, owner)] + u;
+        node_world[state_node(k, n)] = vec4(w.xyz, 1.0);
+    }
 }

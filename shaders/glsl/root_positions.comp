@@ -3,8 +3,7 @@
 // (src/cpu/root_positions.cpp). Pointer jumping adds the partial sum held by the 2^round-th
 // ancestor (round 0 starts from each chain's own offset), half src_half -> half dst_half;
 // in-dispatch mode: workgroup k runs every round for group instance k, a barrier between
-// rounds. Level by level: one depth per dispatch, in place in half dst_half. Path walk: each
-// chain sums the own offsets from the chain up to the root, the final O into half dst_half.
+// rounds. Level by level: one depth per dispatch, in place in half dst_half.
 // Wherever O_c is written, the joint matrix [R_c | O_c] is written too, R_c from the same half
 // (compose left the final R there): level by level and the last in-dispatch round write final
 // values once; per-round dispatches write in every round and the last round (the final half)
@@ -37,16 +36,6 @@ void main() {
         vec4 origin = own_offset(k, c);
         if (parent >= 0) origin += chain_origin[dst + state_chain(k, uint(parent))];
         chain_origin[dst + state_chain(k, c)] = origin;
-        store_joint(state_chain(k, c), pc.dst_half, origin);
-        return;
-    }
-    if (pc.mode == HMSM_MODE_PATH_WALK) {
-        uint k = i / pc.model_chain_count;
-        uint c = i % pc.model_chain_count;
-        vec4 origin = own_offset(k, c);
-        for (int a = chain_parent[pc.model_chain_begin + c]; a >= 0; a = chain_parent[pc.model_chain_begin + uint(a)])
-            origin += own_offset(k, uint(a));
-        chain_origin[half_offset(pc.dst_half) + state_chain(k, c)] = origin;
         store_joint(state_chain(k, c), pc.dst_half, origin);
         return;
     }

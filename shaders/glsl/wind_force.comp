@@ -12,5 +12,8 @@ void main() {
     uint k = i / pc.model_chain_count;
     uint c = i % pc.model_chain_count;
     uint chain = state_chain(k, c);
-    chain_force[chain] = chain_wind_force(k, c, chain, pc.src_half);
+    vec2 g = chain_wind_force(k, c, chain, pc.src_half);
+    chain_force[chain] = g;
+    // Path walk: integrate follows in the same dispatch (integrate.comp).
+    if (pc.mode == HMSM_MODE_PATH_WALK) chain_local[chain] = as_mat3x4(chain_integrate(k, c, chain, g));
 }

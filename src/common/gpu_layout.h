@@ -112,9 +112,12 @@
 /// two halves of a 3x3 rotation (the origins' two halves of 3 floats reuse the half compose
 /// did not finish in). 72 bytes per chain.
 #define HMSM_FUSED_SHARED_FLOATS_PER_CHAIN 18u
-/// Composition::path_walk (compose, root_positions): thread i handles chain i like a
-/// per-element pass and walks up its ancestors (chain_parent) to the root, writing the final
-/// R (resp. O and the joint matrix) to the pose half dst_half. One dispatch per pass.
+/// Composition::path_walk: a dispatch of a pass that leads a walk (the pass table's `walk`
+/// column) in this mode also runs the pass's walk partner, thread i handling element i of the
+/// pass's domain: wind_force then integrate for chain i; compose then root_positions for chain
+/// i by the top-down walk (its ancestors from the trunk down, found through chain_jump:
+/// R = R_parent T, O = O_parent + R_parent l_attach, written with the joint matrix to the pose
+/// half dst_half); node_relative then node_world for node i.
 #define HMSM_MODE_PATH_WALK 4u
 
 /// vertex layouts (PassConstants.mode of a contour dispatch; hmsm::VertexLayout values):

@@ -1,8 +1,7 @@
 // Pass 3: total rotation R_c = R_parent T_c. Pointer jumping: round r multiplies in the product
 // held by the 2^r-th ancestor, reading one half of chain_rotation and writing the other (round 0
 // reads T); in-dispatch mode runs every round in turn. Level by level: one depth per dispatch,
-// in place in the pose half. Path walk: each chain multiplies in its ancestors' T from the
-// chain up to the root.
+// in place in the pose half.
 #include "cpu_state.h"
 
 namespace hmsm::detail::cpu {
@@ -41,15 +40,7 @@ void compose(State<T>& s, const gpu::PassConstants& pc, Range r) {
     auto round = [&](uint32_t rd, uint32_t src_half, uint32_t dst_half, Range chains, bool) {
         compose_round(s, pc, rd, src_half, dst_half, chains);
     };
-    // Path walk: T of the chain, then of each ancestor multiplied in front, up to the root.
-    auto walk = [&](uint64_t dst, uint32_t k, int32_t c) {
-        const uint64_t gc = state_chain(pc, k, c);
-        auto rotation = s.chain_local[gc];
-        for (int32_t a = s.chain_parent[pc.model_chain_begin + c]; a >= 0; a = s.chain_parent[pc.model_chain_begin + a])
-            rotation = s.chain_local[state_chain(pc, k, a)] * rotation;
-        s.chain_rotation[dst + gc] = rotation;
-    };
-    run_hierarchical(s, pc, r, level, round, walk);
+    run_hierarchical(s, pc, r, level, round);
 }
 
 template void compose<float>(State<float>&, const gpu::PassConstants&, Range);

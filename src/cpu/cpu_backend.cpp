@@ -235,6 +235,19 @@ private:
 
     void run_range(const Dispatch& d, double wind_x, Range r) {
         if (runs_fused(d)) return fused<T>(s_, d.constants, wind_x, r);
+        if (runs_path_walk(d)) {
+            // The pass and its walk partner over the same elements (pass_table.h `walk`).
+            switch (d.pass) {
+                case Pass::wind_force:
+                    wind_force<T>(s_, d.constants, wind_x, r);
+                    return integrate<T>(s_, d.constants, r);
+                case Pass::compose: return path_walk<T>(s_, d.constants, r);
+                case Pass::node_relative:
+                    node_relative<T>(s_, d.constants, r);
+                    return node_world<T>(s_, d.constants, r);
+                default: break;
+            }
+        }
         switch (d.pass) {
 #define HMSM_CPU_PASS_CASE(name) \
     case Pass::name: return call_pass(name<T>, d, wind_x, r);

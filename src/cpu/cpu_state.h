@@ -104,24 +104,13 @@ inline uint32_t elements_per_item(Pass pass, const gpu::PassConstants& pc) {
     return pc.model_chain_count * (2 * pc.round + 2) + pc.model_node_count;
 }
 
-/// The four ways a hierarchical pass (compose, root_positions) runs the work items `r` of one
+/// The three ways a hierarchical pass (compose, root_positions) runs the work items `r` of one
 /// dispatch. Level by level: level(dst, instance, chain, parent) for each chain of one level, in
 /// place in half dst (an element offset). Every round in the dispatch: the work items are
 /// instances, and round(round, src_half, dst_half, chains, last) runs over all their chains,
 /// round after round. One pointer-jumping round: round(...) over `r` itself (last is true).
-/// Path walk: walk(dst, instance, chain) for each chain, which walks up to the root and writes
-/// the final value to half dst.
-template <class T, class Level, class Round, class Walk>
-void run_hierarchical(const State<T>& s, const gpu::PassConstants& pc, Range r, Level level, Round round,
-                      Walk walk) {
-    if (pc.mode == HMSM_MODE_PATH_WALK) {
-        const uint64_t dst = uint64_t(pc.dst_half) * s.total_chains;
-        for (uint32_t i = r.begin; i < r.end; ++i) {
-            const Element e = element_of(i, pc.model_chain_count);
-            walk(dst, e.instance, int32_t(e.index));
-        }
-        return;
-    }
+template <class T, class Level, class Round>
+void run_hierarchical(const State<T>& s, const gpu::PassConstants& pc, Range r, Level level, Round round) {
     if (pc.mode == HMSM_MODE_LEVEL_BY_LEVEL) {
         const uint64_t dst = uint64_t(pc.dst_half) * s.total_chains;
         for (uint32_t i = r.begin; i < r.end; ++i) {
@@ -150,5 +139,7 @@ template <class T> void node_world(State<T>& s, const gpu::PassConstants& pc, Ra
 template <class T> void contour(State<T>& s, const gpu::PassConstants& pc, Range r);
 /// Composition::fused: passes 1-5 for the group instances `r`, one instance after the other.
 template <class T> void fused(State<T>& s, const gpu::PassConstants& pc, double wind_x, Range r);
+/// Composition::path_walk: passes 3 and 5 for the chains `r` by the top-down walk (path_walk.cpp).
+template <class T> void path_walk(State<T>& s, const gpu::PassConstants& pc, Range r);
 
 }  // namespace hmsm::detail::cpu

@@ -1,8 +1,7 @@
 // Pass 5: chain origins O_c = O_parent + u_attach(c), O_trunk = instance origin. Pointer jumping
 // adds the partial sum held by the 2^r-th ancestor (round 0 starts from u at the attach node);
 // in-dispatch mode runs every round in turn. Level by level: one depth per dispatch, in place
-// in the pose half. Path walk: each chain sums the own offsets from the chain up to the root.
-// Wherever a dispatch writes O_c it also writes the joint matrix [R_c | O_c]
+// in the pose half. Wherever a dispatch writes O_c it also writes the joint matrix [R_c | O_c]
 // (R_c from the same half, which compose left final): level by level and the in-dispatch last
 // round write final values once; per-round dispatches write in every round and the last round,
 // whose half is the final one, leaves the final matrices.
@@ -62,16 +61,7 @@ void root_positions(State<T>& s, const gpu::PassConstants& pc, Range r) {
     auto round = [&](uint32_t rd, uint32_t src_half, uint32_t dst_half, Range chains, bool last) {
         root_positions_round(s, pc, rd, src_half, dst_half, chains, last);
     };
-    // Path walk: the own offsets of the chain and of each ancestor, summed up to the root.
-    auto walk = [&](uint64_t dst, uint32_t k, int32_t c) {
-        vec4 origin = own_offset(s, pc, k, c);
-        for (int32_t a = s.chain_parent[pc.model_chain_begin + c]; a >= 0; a = s.chain_parent[pc.model_chain_begin + a])
-            origin += own_offset(s, pc, k, a);
-        const uint64_t chain = state_chain(pc, k, c);
-        s.chain_origin[dst + chain] = origin;
-        store_joint(s, chain, s.chain_rotation[dst + chain], origin);
-    };
-    run_hierarchical(s, pc, r, level, round, walk);
+    run_hierarchical(s, pc, r, level, round);
 }
 
 template void root_positions<float>(State<float>&, const gpu::PassConstants&, Range);

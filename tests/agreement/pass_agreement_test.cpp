@@ -65,7 +65,8 @@ TEST_P(PassAgreement, EachDispatchMatchesCpu64OnRandomStates) {
             ASSERT_TRUE(run.ok()) << run.message();
             ASSERT_TRUE(oracle.value()->run(variants[v], wind_x).ok());
             const bool fused = composition == Composition::fused;
-            const uint32_t writes = fused ? detail::fused_writes() : detail::pass_writes(pass);
+            uint32_t writes = 0;  // of the passes the dispatches run (a fused or path-walk one runs several)
+            for (const detail::Dispatch& dispatch : variants[v]) writes |= detail::dispatch_writes(dispatch);
             for (const auto& info : detail::kBufferTable) {
                 if (!(writes & (1u << uint32_t(info.id)))) continue;
                 uint64_t first = 0, count = data.element_count(info.id);
@@ -94,7 +95,8 @@ std::vector<PassCase> pass_cases() {
 
 std::string case_name(const ::testing::TestParamInfo<PassCase>& info) {
     std::string name = info.param.backend->name + "_" + std::string(pass_name(info.param.pass));
-    if (detail::is_hierarchical(info.param.pass) || info.param.composition == Composition::fused)
+    if (detail::is_hierarchical(info.param.pass) || info.param.composition == Composition::fused ||
+        info.param.composition == Composition::path_walk)
         name += "_" + std::string(to_string(info.param.composition));
     return name;
 }

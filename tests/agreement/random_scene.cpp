@@ -157,6 +157,19 @@ std::vector<std::vector<detail::Dispatch>> pass_variants(const detail::SceneData
         variants.push_back(list);
         return variants;
     }
+    if (composition == Composition::path_walk) {
+        std::vector<detail::Dispatch> list;  // one dispatch per group running the pass and its walk partner
+        uint32_t half = pick(rng, 0, 1);
+        for (const auto& g : d.groups) {
+            detail::Dispatch dispatch{pass, detail::group_constants(d, g, half)};
+            const auto& m = d.models[g.model];
+            dispatch.constants.element_count = g.instance_count * (pass == Pass::node_relative ? m.node_count : m.chain_count);
+            dispatch.constants.mode = HMSM_MODE_PATH_WALK;
+            list.push_back(dispatch);
+        }
+        variants.push_back(list);
+        return variants;
+    }
     if (!hierarchical) {
         std::vector<detail::Dispatch> list;
         uint32_t half = pick(rng, 0, 1);
@@ -168,18 +181,6 @@ std::vector<std::vector<detail::Dispatch>> pass_variants(const detail::SceneData
                                                                                          : m.chain_count;
             dispatch.constants.element_count = g.instance_count * per_instance;
             dispatch.constants.src_half = dispatch.constants.dst_half = half;
-            list.push_back(dispatch);
-        }
-        variants.push_back(list);
-        return variants;
-    }
-    if (composition == Composition::path_walk) {
-        std::vector<detail::Dispatch> list;  // one dispatch per group, each chain up its path
-        uint32_t half = pick(rng, 0, 1);
-        for (const auto& g : d.groups) {
-            detail::Dispatch dispatch{pass, detail::group_constants(d, g, half)};
-            dispatch.constants.element_count = g.instance_count * d.models[g.model].chain_count;
-            dispatch.constants.mode = HMSM_MODE_PATH_WALK;
             list.push_back(dispatch);
         }
         variants.push_back(list);

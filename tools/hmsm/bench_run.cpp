@@ -5,6 +5,7 @@
 #include "simulation_access.h"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstdio>
 #include <map>
@@ -45,12 +46,23 @@ bool is_skip(const Status& s) {
 /// Device seconds per pass. Under Composition::fused the backends report the fused dispatch's
 /// time (passes 1-5) under its first pass, wind_force (docs/architecture.md): here it is the
 /// entry "fused(1-5)", followed by the passes that run on their own.
+/// Device time per dispatch kind: per pass, except that the fused dispatch is "fused(1-5)" and
+/// a path-walk dispatch "LEADER+PARTNER" (its passes' times are reported under its leader).
 json pass_seconds_json(const CaseResult& r, Composition composition = Composition::pointer_jumping) {
     json seconds = json::object();
+    uint32_t partners = 0;
     for (Pass p : kAllPasses) {
         const double s = r.pass_seconds[uint32_t(p)];
-        if (composition != Composition::fused || !hmsm::detail::is_fused(p)) seconds[std::string(pass_name(p))] = s;
-        else if (p == hmsm::detail::kFusedDispatchPass) seconds["fused(1-5)"] = s;
+        const uint32_t walk = hmsm::detail::walk_passes(p);
+        if (composition == Composition::fused && hmsm::detail::is_fused(p)) {
+            if (p == hmsm::detail::kFusedDispatchPass) seconds["fused(1-5)"] = s;
+        } else if (composition == Composition::path_walk && walk != 0) {
+            const Pass partner = Pass(std::countr_zero(walk & ~(1u << uint32_t(p))));
+            seconds[std::string(pass_name(p)) + "+" + std::string(pass_name(partner))] = s;
+            partners |= 1u << uint32_t(partner);
+        } else if (!(composition == Composition::path_walk && (partners >> uint32_t(p) & 1u))) {
+            seconds[std::string(pass_name(p))] = s;
+        }
     }
     return seconds;
 }

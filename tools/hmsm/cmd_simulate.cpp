@@ -175,7 +175,7 @@ void register_simulate_flags(CLI::App& app) {
                    "passes 3 and 5: pointer-jumping (default: the paper's rounds, per round or in one "
                    "dispatch by scene size), pointer-jumping-per-round, pointer-jumping-in-dispatch, "
                    "level-by-level, fused (passes 1-5 in one dispatch, a workgroup per instance) or "
-                   "path-walk (passes 3 and 5 in one dispatch each, every chain up its path)");
+                   "path-walk (every chain walks its ancestors; 4 dispatches per step)");
     app.add_option("--vertex-layout", flags.vertex_layout,
                    "device layout of the mesh vertices: separate (default; position and normal "
                    "vec4) or packed (the normal octahedral-encoded in the position's w)");

@@ -1,0 +1,48 @@
+// Composition::path_walk on the CPU, passes 3 and 5 in one (gpu_layout.h HMSM_MODE_PATH_WALK):
+// each chain of the work items walks its ancestors from the trunk down, R = R_parent T and
+// O = O_parent + R_parent l_attach. These are level by level's operations in level by level's
+// order (its own offset R_parent l_attach is node_relative's u of the attach node), so the poses
+// are level by level's bit for bit, without a dispatch per depth level.
+#include "cpu_state.h"
+
+namespace hmsm::detail::cpu {
+
+template <class T>
+void path_walk(State<T>& s, const gpu::PassConstants& pc, Range r) {
+    using vec3 = typename State<T>::vec3;
+    using vec4 = typename State<T>::vec4;
+    const uint64_t dst = uint64_t(pc.dst_half) * s.total_chains;
+    const int32_t* parent = s.chain_parent.data() + pc.model_chain_begin;
+    for (uint32_t i = r.begin; i < r.end; ++i) {
+        const Element e = element_of(i, pc.model_chain_count);
+        const int32_t c = int32_t(e.index);
+        uint32_t depth = 0;
+        for (int32_t a = parent[c]; a >= 0; a = parent[a]) ++depth;
+        // The ancestor `up` levels above c, through the 2^round-th ancestors of chain_jump.
+        auto ancestor = [&](uint32_t up) {
+            int32_t a = c;
+            for (uint32_t round = 0; up != 0; ++round, up >>= 1)
+                if (up & 1u) a = s.chain_jump[uint64_t(round) * pc.total_model_chains + pc.model_chain_begin + a];
+            return a;
+        };
+        auto rotation = s.chain_local[state_chain(pc, e.instance, ancestor(depth))];
+        const auto& o = s.instance_origin[pc.instance_begin + e.instance];
+        vec4 origin{o.x, o.y, o.z, T(0)};
+        for (uint32_t level = 1; level <= depth; ++level) {
+            const int32_t x = ancestor(depth - level);
+            const auto& local = s.node_local[pc.model_node_begin + s.chain_attach[pc.model_chain_begin + x]];
+            const vec3 u = rotation * vec3(local);
+            origin += vec4{u, T(0)};
+            rotation = rotation * s.chain_local[state_chain(pc, e.instance, x)];
+        }
+        const uint64_t chain = state_chain(pc, e.instance, c);
+        s.chain_rotation[dst + chain] = rotation;
+        s.chain_origin[dst + chain] = origin;
+        store_joint(s, chain, rotation, origin);
+    }
+}
+
+template void path_walk<float>(State<float>&, const gpu::PassConstants&, Range);
+template void path_walk<double>(State<double>&, const gpu::PassConstants&, Range);
+
+}  // namespace hmsm::detail::cpu
