@@ -126,20 +126,26 @@ TEST(StepProgram, PathWalkRunsThePairsInOneDispatchEachAndEqualsLevelByLevelBitw
     EXPECT_EQ(program[1].constants.dst_half, HMSM_FINAL_HALF(walk->jump_rounds()));
     EXPECT_EQ(hmsm::detail::dispatch_passes(program[1]),
               (1u << uint32_t(Pass::compose)) | (1u << uint32_t(Pass::root_positions)));
-    ASSERT_TRUE(walk->step(300).ok());
-    ASSERT_TRUE(level->step(300).ok());
-    auto at_rest = cpu_simulation(scene, Composition::level_by_level, storm);
-    ASSERT_TRUE(at_rest);
-    for (Output o : {Output::chain_rotations, Output::chain_origins, Output::joint_matrices, Output::node_positions,
-                     Output::vertex_positions}) {
-        std::vector<double> a, b, rest;
-        ASSERT_TRUE(walk->read(o, a).ok());
-        ASSERT_TRUE(level->read(o, b).ok());
-        ASSERT_TRUE(at_rest->read(o, rest).ok());
-        EXPECT_EQ(a, b) << "output " << int(o);
-        double moved = 0.0;
-        for (size_t i = 0; i < a.size(); ++i) moved = std::max(moved, std::abs(rest[i] - b[i]));
-        EXPECT_GT(moved, 1e-3) << "output " << int(o);  // the wind bent the tree
+    // Also a tree deeper than the ancestors the walk keeps (HMSM_WALK_PATH_CAPACITY).
+    const Scene deeper = single_tree_scene(test::deep_tree(HMSM_WALK_PATH_CAPACITY + 3), {0, 0, 1}, -0.3);
+    for (const Scene* s : {&scene, &deeper}) {
+        auto w = cpu_simulation(*s, Composition::path_walk, storm);
+        auto l = cpu_simulation(*s, Composition::level_by_level, storm);
+        auto at_rest = cpu_simulation(*s, Composition::level_by_level, storm);
+        ASSERT_TRUE(w && l && at_rest);
+        ASSERT_TRUE(w->step(300).ok());
+        ASSERT_TRUE(l->step(300).ok());
+        for (Output o : {Output::chain_rotations, Output::chain_origins, Output::joint_matrices,
+                         Output::node_positions, Output::vertex_positions}) {
+            std::vector<double> a, b, rest;
+            ASSERT_TRUE(w->read(o, a).ok());
+            ASSERT_TRUE(l->read(o, b).ok());
+            ASSERT_TRUE(at_rest->read(o, rest).ok());
+            EXPECT_EQ(a, b) << "output " << int(o);
+            double moved = 0.0;
+            for (size_t i = 0; i < a.size(); ++i) moved = std::max(moved, std::abs(rest[i] - b[i]));
+            EXPECT_GT(moved, 1e-3) << "output " << int(o);  // the wind bent the tree
+        }
     }
 }
 

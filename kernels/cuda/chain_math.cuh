@@ -174,14 +174,23 @@ HMSM_HOST_DEVICE int32_t ancestor_above(const BufferPointers& b, const gpu::Pass
 /// operations in its order), R and O to the pose half dst_half with the joint matrix
 /// (src/cpu/path_walk.cpp).
 HMSM_HOST_DEVICE void path_walk(const BufferPointers& b, const gpu::PassConstants& pc, uint32_t k, int32_t c) {
+    // The ancestors going up: the first HMSM_WALK_PATH_CAPACITY kept, the depth counted.
     const int32_t* parent = b.chain_parent + pc.model_chain_begin;
+    int32_t path[HMSM_WALK_PATH_CAPACITY];
     uint32_t depth = 0;
-    for (int32_t a = load(parent + c); a >= 0; a = load(parent + a)) ++depth;
-    Mat3 rotation = load_mat3(b.chain_local, state_chain(pc, k, ancestor_above(b, pc, c, depth)));
+    for (int32_t a = load(parent + c); a >= 0; a = load(parent + a)) {
+        if (depth < HMSM_WALK_PATH_CAPACITY) path[depth] = a;
+        ++depth;
+    }
+    auto ancestor = [&](uint32_t up) {
+        if (up == 0) return c;
+        return up <= HMSM_WALK_PATH_CAPACITY ? path[up - 1] : ancestor_above(b, pc, c, up);
+    };
+    Mat3 rotation = load_mat3(b.chain_local, state_chain(pc, k, ancestor(depth)));
     const float4 o = load(b.instance_origin + pc.instance_begin + k);
     float4 origin = make_float4(o.x, o.y, o.z, 0.0f);
     for (uint32_t level = 1; level <= depth; ++level) {
-        const int32_t x = ancestor_above(b, pc, c, depth - level);
+        const int32_t x = ancestor(depth - level);
         const int32_t attach = load(b.chain_attach + pc.model_chain_begin + x);
         const float3 local = xyz(load(b.node_local + pc.model_node_begin + attach));
         origin = origin + with_w(rotation * local, 0.0f);

@@ -144,14 +144,24 @@ uint ancestor_above(uint c, uint up) {
 /// from the trunk down, R = R_parent T and O = O_parent + R_parent l_attach (level by level's
 /// operations in its order), R and O to the pose half dst_half with the joint matrix
 /// (src/cpu/path_walk.cpp).
+uint walk_path[HMSM_WALK_PATH_CAPACITY];  // the ancestors going up, the first ones kept
+
+/// The ancestor `up` levels above c (walk_path filled for c).
+uint walk_ancestor(uint c, uint up) {
+    if (up == 0u) return c;
+    return up <= HMSM_WALK_PATH_CAPACITY ? walk_path[up - 1u] : ancestor_above(c, up);
+}
+
 void path_walk(uint k, uint c) {
     uint depth = 0u;
-    for (int a = chain_parent[pc.model_chain_begin + c]; a >= 0; a = chain_parent[pc.model_chain_begin + uint(a)])
+    for (int a = chain_parent[pc.model_chain_begin + c]; a >= 0; a = chain_parent[pc.model_chain_begin + uint(a)]) {
+        if (depth < HMSM_WALK_PATH_CAPACITY) walk_path[depth] = uint(a);
         ++depth;
-    mat3 r = as_mat3(chain_local[state_chain(k, ancestor_above(c, depth))]);
+    }
+    mat3 r = as_mat3(chain_local[state_chain(k, walk_ancestor(c, depth))]);
     vec4 origin = vec4(instance_origin[pc.instance_begin + k].xyz, 0.0);
     for (uint level = 1u; level <= depth; ++level) {
-        uint x = ancestor_above(c, depth - level);
+        uint x = walk_ancestor(c, depth - level);
         vec3 local = node_local[pc.model_node_begin + uint(chain_attach[pc.model_chain_begin + x])].xyz;
         origin += vec4(r * local, 0.0);
         r = r * as_mat3(chain_local[state_chain(k, x)]);

@@ -119,6 +119,10 @@
 /// R = R_parent T, O = O_parent + R_parent l_attach, written with the joint matrix to the pose
 /// half dst_half); node_relative then node_world for node i.
 #define HMSM_MODE_PATH_WALK 4u
+/// The walk keeps the first this many ancestors it meets going up (parent, grandparent, ...) in
+/// a thread-local array, so that going down it reads them back instead of looking them up in
+/// chain_jump; ancestors further up (chains deeper than this) are looked up.
+#define HMSM_WALK_PATH_CAPACITY 16u
 
 /// vertex layouts (PassConstants.mode of a contour dispatch; hmsm::VertexLayout values):
 /// separate writes vertex_position (x, y, z, 1) and vertex_normal (nx, ny, nz, 0); packed writes

@@ -16,10 +16,17 @@ void path_walk(State<T>& s, const gpu::PassConstants& pc, Range r) {
     for (uint32_t i = r.begin; i < r.end; ++i) {
         const Element e = element_of(i, pc.model_chain_count);
         const int32_t c = int32_t(e.index);
+        // The ancestors going up: the first HMSM_WALK_PATH_CAPACITY kept, the depth counted.
+        int32_t path[HMSM_WALK_PATH_CAPACITY];
         uint32_t depth = 0;
-        for (int32_t a = parent[c]; a >= 0; a = parent[a]) ++depth;
-        // The ancestor `up` levels above c, through the 2^round-th ancestors of chain_jump.
+        for (int32_t a = parent[c]; a >= 0; a = parent[a]) {
+            if (depth < HMSM_WALK_PATH_CAPACITY) path[depth] = a;
+            ++depth;
+        }
+        // The ancestor `up` levels above c: kept, or through the 2^round-th ancestors of chain_jump.
         auto ancestor = [&](uint32_t up) {
+            if (up == 0) return c;
+            if (up <= HMSM_WALK_PATH_CAPACITY) return path[up - 1];
             int32_t a = c;
             for (uint32_t round = 0; up != 0; ++round, up >>= 1)
                 if (up & 1u) a = s.chain_jump[uint64_t(round) * pc.total_model_chains + pc.model_chain_begin + a];
