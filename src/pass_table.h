@@ -23,8 +23,8 @@ constexpr uint32_t buffer_bit(BufferId id) { return 1u << static_cast<uint32_t>(
 // Shorthand for the access columns below: one bit per buffer (bit i = BufferId i).
 #define HMSM_B(name) buffer_bit(BufferId::name)
 
-/// X(name, domain, hierarchical, needed_for, fused, walk, reads, writes), in execution order (the same
-/// order as HMSM_PASSES in <hmsm/pass.h>; a static_assert below keeps them equal).
+/// X(name, domain, hierarchical, needed_for, fused, walk, reads, writes), in execution order
+/// (the same order as HMSM_PASSES in <hmsm/pass.h>; a static_assert below keeps them equal).
 /// root_positions writes, with the final O_c, the joint matrix [R_c | O_c] (R_c from compose).
 /// needed_for: the least SimulationConfig::outputs for which a step runs the pass (outputs on
 /// demand: joint matrices need passes 1-5 only). A vertex-domain pass takes the vertex layout
@@ -153,7 +153,8 @@ constexpr bool walk_partners_are_later_and_unique() {
     for (const PassInfo& p : kPassTable) {
         if (p.walk == WalkPartner::none) continue;
         const uint32_t bit = 1u << uint32_t(p.walk);
-        if (uint32_t(p.walk) <= uint32_t(p.pass) || (partners & bit) || walk_passes(Pass(p.walk)) != 0) return false;
+        const bool later = uint32_t(p.walk) > uint32_t(p.pass);
+        if (!later || (partners & bit) || walk_passes(Pass(p.walk)) != 0) return false;
         partners |= bit;
     }
     return true;

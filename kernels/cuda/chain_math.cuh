@@ -1,6 +1,7 @@
 // The per-chain math of passes 1, 2, 3 and 5, written once for the separate pass kernels
 // (wind_force.cu, integrate.cu, compose.cu, root_positions.cu), the fused kernel (fused.cu,
-// Composition::fused) and the path walk (compose.cu, Composition::path_walk). Mirrors src/cpu/NAME.cpp and shaders/glsl/chain_math.glsl.
+// Composition::fused) and the path walk (compose.cu, Composition::path_walk). Mirrors
+// src/cpu/NAME.cpp and shaders/glsl/chain_math.glsl.
 //
 // Loads of state that a block may have written earlier in the same kernel are plain loads
 // (which __syncthreads() orders), never the read-only path: kWrittenInBlock marks the

@@ -140,11 +140,7 @@ uint ancestor_above(uint c, uint up) {
     return c;
 }
 
-/// Composition::path_walk, passes 3 and 5 for model chain c of group instance k: its ancestors
-/// from the trunk down, R = R_parent T and O = O_parent + R_parent l_attach (level by level's
-/// operations in its order), R and O to the pose half dst_half with the joint matrix
-/// (src/cpu/path_walk.cpp).
-uint walk_path[HMSM_WALK_PATH_CAPACITY];  // the ancestors going up, the first ones kept
+uint walk_path[HMSM_WALK_PATH_CAPACITY];  // the walk's ancestors going up, the first ones kept
 
 /// The ancestor `up` levels above c (walk_path filled for c).
 uint walk_ancestor(uint c, uint up) {
@@ -152,6 +148,10 @@ uint walk_ancestor(uint c, uint up) {
     return up <= HMSM_WALK_PATH_CAPACITY ? walk_path[up - 1u] : ancestor_above(c, up);
 }
 
+/// Composition::path_walk, passes 3 and 5 for model chain c of group instance k: its ancestors
+/// from the trunk down, R = R_parent T and O = O_parent + R_parent l_attach (level by level's
+/// operations in its order), R and O to the pose half dst_half with the joint matrix
+/// (src/cpu/path_walk.cpp).
 void path_walk(uint k, uint c) {
     uint depth = 0u;
     for (int a = chain_parent[pc.model_chain_begin + c]; a >= 0; a = chain_parent[pc.model_chain_begin + uint(a)]) {
