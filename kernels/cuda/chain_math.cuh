@@ -190,6 +190,9 @@ HMSM_HOST_DEVICE void path_walk(const BufferPointers& b, const gpu::PassConstant
     Mat3 rotation = load_mat3(b.chain_local, state_chain(pc, k, ancestor(depth)));
     const float4 o = load(b.instance_origin + pc.instance_begin + k);
     float4 origin = make_float4(o.x, o.y, o.z, 0.0f);
+    // Unrolled so that the loads of several levels are in flight together (they do not depend
+    // on the products); the products stay in level order.
+#pragma unroll 4
     for (uint32_t level = 1; level <= depth; ++level) {
         const int32_t x = ancestor(depth - level);
         const int32_t attach = load(b.chain_attach + pc.model_chain_begin + x);
