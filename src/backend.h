@@ -156,18 +156,8 @@ inline uint32_t dispatch_passes(const Dispatch& d) {
     return 1u << uint32_t(d.pass);
 }
 /// Buffers a dispatch reads and writes: the union over the passes it runs (pass_table.h).
-inline uint32_t dispatch_reads(const Dispatch& d) {
-    uint32_t bits = 0;
-    for (Pass pass : kAllPasses)
-        if (dispatch_passes(d) >> uint32_t(pass) & 1u) bits |= pass_reads(pass);
-    return bits;
-}
-inline uint32_t dispatch_writes(const Dispatch& d) {
-    uint32_t bits = 0;
-    for (Pass pass : kAllPasses)
-        if (dispatch_passes(d) >> uint32_t(pass) & 1u) bits |= pass_writes(pass);
-    return bits;
-}
+inline uint32_t dispatch_reads(const Dispatch& d) { return reads_of_passes(dispatch_passes(d)); }
+inline uint32_t dispatch_writes(const Dispatch& d) { return writes_of_passes(dispatch_passes(d)); }
 
 /// The most shared memory a GPU backend gives a fused workgroup (which keeps its rounds there
 /// when gpu::fused_shared_bytes(chains) fits): the environment variable

@@ -110,8 +110,8 @@ constexpr bool pass_runs_for(Pass pass, Outputs outputs) {
     return uint32_t(pass_info(pass).needed_for) <= uint32_t(outputs);
 }
 
-/// Composition::fused: whether `pass` runs inside the fused dispatch, the passes it covers
-/// (bit i = Pass i), and the buffers it reads and writes (the union over those passes).
+/// Composition::fused: whether `pass` runs inside the fused dispatch, and the passes it covers
+/// (bit i = Pass i).
 constexpr bool is_fused(Pass pass) { return pass_info(pass).fused; }
 constexpr uint32_t fused_passes() {
     uint32_t bits = 0;
@@ -119,16 +119,18 @@ constexpr uint32_t fused_passes() {
         if (p.fused) bits |= 1u << uint32_t(p.pass);
     return bits;
 }
-constexpr uint32_t fused_reads() {
+/// The buffers the passes `passes` (bit i = Pass i) read, resp. write, together: the access of a
+/// dispatch that runs several passes (the fused dispatch, a path-walk pair).
+constexpr uint32_t reads_of_passes(uint32_t passes) {
     uint32_t bits = 0;
     for (const PassInfo& p : kPassTable)
-        if (p.fused) bits |= p.reads;
+        if (passes >> uint32_t(p.pass) & 1u) bits |= p.reads;
     return bits;
 }
-constexpr uint32_t fused_writes() {
+constexpr uint32_t writes_of_passes(uint32_t passes) {
     uint32_t bits = 0;
     for (const PassInfo& p : kPassTable)
-        if (p.fused) bits |= p.writes;
+        if (passes >> uint32_t(p.pass) & 1u) bits |= p.writes;
     return bits;
 }
 /// The fused dispatch is a dispatch of the first fused pass (its `pass`, under which its time

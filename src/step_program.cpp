@@ -139,7 +139,7 @@ std::vector<Dispatch> build_path_walk_program(const SceneData& d, const std::vec
             done |= bit(pass);
             continue;
         }
-        const auto& per_domain = [&](const InstanceGroup& g) {
+        auto per_domain = [&](const InstanceGroup& g) {
             const auto& m = d.models[g.model];
             return pass_domain(pass) == PassDomain::node ? m.node_count : m.chain_count;
         };

@@ -115,9 +115,10 @@
 /// Composition::path_walk: a dispatch of a pass that leads a walk (the pass table's `walk`
 /// column) in this mode also runs the pass's walk partner, thread i handling element i of the
 /// pass's domain: wind_force then integrate for chain i; compose then root_positions for chain
-/// i by the top-down walk (its ancestors from the trunk down, found through chain_jump:
-/// R = R_parent T, O = O_parent + R_parent l_attach, written with the joint matrix to the pose
-/// half dst_half); node_relative then node_world for node i.
+/// i by the top-down walk (its ancestors from the trunk down, found by following chain_parent
+/// up, beyond HMSM_WALK_PATH_CAPACITY through chain_jump: R = R_parent T,
+/// O = O_parent + R_parent l_attach, written with the joint matrix to the pose half dst_half);
+/// node_relative then node_world for node i.
 #define HMSM_MODE_PATH_WALK 4u
 /// The walk keeps the first this many ancestors it meets going up (parent, grandparent, ...) in
 /// a thread-local array, so that going down it reads them back instead of looking them up in

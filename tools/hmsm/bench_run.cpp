@@ -5,7 +5,6 @@
 #include "simulation_access.h"
 
 #include <algorithm>
-#include <bit>
 #include <cmath>
 #include <cstdio>
 #include <map>
@@ -43,11 +42,9 @@ bool is_skip(const Status& s) {
     return s.code() == ErrorCode::out_of_memory || s.code() == ErrorCode::unsupported;
 }
 
-/// Device seconds per pass. Under Composition::fused the backends report the fused dispatch's
-/// time (passes 1-5) under its first pass, wind_force (docs/architecture.md): here it is the
-/// entry "fused(1-5)", followed by the passes that run on their own.
-/// Device time per dispatch kind: per pass, except that the fused dispatch is "fused(1-5)" and
-/// a path-walk dispatch "LEADER+PARTNER" (its passes' times are reported under its leader).
+/// Device seconds per pass. A dispatch that runs several passes reports its time under its first
+/// pass (docs/architecture.md): under Composition::fused that is the entry "fused(1-5)", under
+/// Composition::path_walk a pair's "LEADER+PARTNER"; the passes that run on their own follow.
 json pass_seconds_json(const CaseResult& r, Composition composition = Composition::pointer_jumping) {
     json seconds = json::object();
     uint32_t partners = 0;
@@ -57,7 +54,7 @@ json pass_seconds_json(const CaseResult& r, Composition composition = Compositio
         if (composition == Composition::fused && hmsm::detail::is_fused(p)) {
             if (p == hmsm::detail::kFusedDispatchPass) seconds["fused(1-5)"] = s;
         } else if (composition == Composition::path_walk && walk != 0) {
-            const Pass partner = Pass(std::countr_zero(walk & ~(1u << uint32_t(p))));
+            const Pass partner = Pass(hmsm::detail::pass_info(p).walk);
             seconds[std::string(pass_name(p)) + "+" + std::string(pass_name(partner))] = s;
             partners |= 1u << uint32_t(partner);
         } else if (!(composition == Composition::path_walk && (partners >> uint32_t(p) & 1u))) {
