@@ -155,9 +155,14 @@ inline uint32_t dispatch_passes(const Dispatch& d) {
     if (runs_path_walk(d)) return walk_passes(d.pass);
     return 1u << uint32_t(d.pass);
 }
-/// Buffers a dispatch reads and writes: the union over the passes it runs (pass_table.h).
-inline uint32_t dispatch_reads(const Dispatch& d) { return reads_of_passes(dispatch_passes(d)); }
-inline uint32_t dispatch_writes(const Dispatch& d) { return writes_of_passes(dispatch_passes(d)); }
+/// Buffers a dispatch reads and writes (pass_table.h): a path walk's own columns, else the union
+/// over the passes it runs.
+inline uint32_t dispatch_reads(const Dispatch& d) {
+    return runs_path_walk(d) ? pass_info(d.pass).walk_reads : reads_of_passes(dispatch_passes(d));
+}
+inline uint32_t dispatch_writes(const Dispatch& d) {
+    return runs_path_walk(d) ? pass_info(d.pass).walk_writes : writes_of_passes(dispatch_passes(d));
+}
 
 /// The most shared memory a GPU backend gives a fused workgroup (which keeps its rounds there
 /// when gpu::fused_shared_bytes(chains) fits): the environment variable

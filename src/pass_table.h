@@ -23,7 +23,8 @@ constexpr uint32_t buffer_bit(BufferId id) { return 1u << static_cast<uint32_t>(
 // Shorthand for the access columns below: one bit per buffer (bit i = BufferId i).
 #define HMSM_B(name) buffer_bit(BufferId::name)
 
-/// X(name, domain, hierarchical, needed_for, fused, walk, reads, writes), in execution order
+/// X(name, domain, hierarchical, needed_for, fused, walk, reads, writes, walk_reads, walk_writes),
+/// in execution order
 /// (the same order as HMSM_PASSES in <hmsm/pass.h>; a static_assert below keeps them equal).
 /// root_positions writes, with the final O_c, the joint matrix [R_c | O_c] (R_c from compose).
 /// needed_for: the least SimulationConfig::outputs for which a step runs the pass (outputs on
@@ -34,38 +35,51 @@ constexpr uint32_t buffer_bit(BufferId id) { return 1u << static_cast<uint32_t>(
 /// wind_force on, and the fused dispatch reads and writes the union of their buffers.
 /// walk: Composition::path_walk runs the pass and this later pass in one dispatch of the pass
 /// (none: the pass leads no such dispatch): wind_force with integrate per chain, compose with
-/// root_positions by the top-down walk per chain (which needs no node_relative), node_relative
-/// with node_world per node. Such a dispatch reads and writes the union of the two passes' (the
-/// walk also reads the static node_local, for the attach offsets node_relative would give).
+/// root_positions by the top-down walk per chain, node_relative with node_world per node.
+/// walk_reads, walk_writes: what such a dispatch reads and writes (0 for a pass that leads
+/// none). A path-walk step stores no intermediate that only its own dispatch would read: the
+/// wind pair keeps g in registers and stores only the new angles S/V; the walk computes each
+/// T it multiplies from those angles (so integrate stores no T, and the walk needs no u:
+/// its offsets R_parent l_attach come from the static node_local); the node pair keeps u in
+/// registers. step_program.cpp pairs the wind passes only where the walk follows.
 #define HMSM_PASS_TABLE(X)                                                                        \
     X(wind_force, chain, false, joints, true, integrate,                                          \
       (HMSM_B(chain_rotation) | HMSM_B(chain_origin) | HMSM_B(chain_constants) |                  \
        HMSM_B(instance_wind) | HMSM_B(wind_table)),                                               \
-      (HMSM_B(chain_force)))                                                                      \
+      (HMSM_B(chain_force)),                                                                      \
+      (HMSM_B(chain_rotation) | HMSM_B(chain_origin) | HMSM_B(chain_constants) |                  \
+       HMSM_B(instance_wind) | HMSM_B(wind_table) | HMSM_B(chain_state)),                         \
+      (HMSM_B(chain_state)))                                                                      \
     X(integrate, chain, false, joints, true, none,                                                \
       (HMSM_B(chain_force) | HMSM_B(chain_state) | HMSM_B(chain_constants) |                      \
        HMSM_B(chain_rest_rotation) | HMSM_B(chain_parent) | HMSM_B(instance_yaw)),                \
-      (HMSM_B(chain_state) | HMSM_B(chain_local)))                                                \
+      (HMSM_B(chain_state) | HMSM_B(chain_local)), 0u, 0u)                                        \
     X(compose, chain, true, joints, true, root_positions,                                         \
       (HMSM_B(chain_local) | HMSM_B(chain_rotation) | HMSM_B(chain_jump) |                        \
        HMSM_B(chain_parent)),                                                                     \
-      (HMSM_B(chain_rotation)))                                                                   \
+      (HMSM_B(chain_rotation)),                                                                   \
+      (HMSM_B(chain_state) | HMSM_B(chain_parent) | HMSM_B(chain_jump) | HMSM_B(chain_attach) |   \
+       HMSM_B(chain_rest_rotation) | HMSM_B(node_local) | HMSM_B(instance_origin) |              \
+       HMSM_B(instance_yaw)),                                                                     \
+      (HMSM_B(chain_rotation) | HMSM_B(chain_origin) | HMSM_B(joint_matrix)))                     \
     X(node_relative, node, false, joints, true, node_world,                                       \
       (HMSM_B(chain_rotation) | HMSM_B(node_owner) | HMSM_B(node_local)),                         \
-      (HMSM_B(node_relative)))                                                                    \
+      (HMSM_B(node_relative)),                                                                    \
+      (HMSM_B(chain_rotation) | HMSM_B(chain_origin) | HMSM_B(node_owner) | HMSM_B(node_local)),  \
+      (HMSM_B(node_world)))                                                                       \
     X(root_positions, chain, true, joints, true, none,                                            \
       (HMSM_B(node_relative) | HMSM_B(chain_origin) | HMSM_B(chain_jump) |                        \
        HMSM_B(chain_parent) | HMSM_B(chain_attach) | HMSM_B(instance_origin) |                    \
        HMSM_B(chain_rotation)),                                                                   \
-      (HMSM_B(chain_origin) | HMSM_B(joint_matrix)))                                              \
+      (HMSM_B(chain_origin) | HMSM_B(joint_matrix)), 0u, 0u)                                      \
     X(node_world, node, false, joints_and_nodes, false, none,                                     \
       (HMSM_B(chain_origin) | HMSM_B(node_relative) | HMSM_B(node_owner)),                        \
-      (HMSM_B(node_world)))                                                                       \
+      (HMSM_B(node_world)), 0u, 0u)                                                               \
     X(contour, vertex, false, all, false, none,                                                   \
       (HMSM_B(chain_rotation) | HMSM_B(chain_origin) | HMSM_B(vertex_chain) |                     \
        HMSM_B(vertex_rest_position) | HMSM_B(vertex_rest_normal) |                                \
        HMSM_B(vertex_parent_position) | HMSM_B(vertex_parent_normal)),                            \
-      (HMSM_B(vertex_position) | HMSM_B(vertex_normal)))
+      (HMSM_B(vertex_position) | HMSM_B(vertex_normal)), 0u, 0u)
 
 /// The pass column `walk` names: the pass a path-walk dispatch also runs, or none.
 enum class WalkPartner : int32_t {
@@ -84,11 +98,14 @@ struct PassInfo {
     WalkPartner walk;
     uint32_t reads;
     uint32_t writes;
+    uint32_t walk_reads;
+    uint32_t walk_writes;
 };
 
 inline constexpr std::array<PassInfo, kPassCount> kPassTable = {{
-#define HMSM_PASS_INFO(name, domain, hierarchical, needed_for, fused, walk, reads, writes) \
-    {Pass::name, PassDomain::domain, hierarchical, Outputs::needed_for, fused, WalkPartner::walk, reads, writes},
+#define HMSM_PASS_INFO(name, domain, hierarchical, needed_for, fused, walk, reads, writes, walk_reads, walk_writes) \
+    {Pass::name, PassDomain::domain, hierarchical, Outputs::needed_for, fused, WalkPartner::walk, reads, writes,  \
+     walk_reads, walk_writes},
     HMSM_PASS_TABLE(HMSM_PASS_INFO)
 #undef HMSM_PASS_INFO
 }};
@@ -162,5 +179,16 @@ constexpr bool walk_partners_are_later_and_unique() {
     return true;
 }
 static_assert(walk_partners_are_later_and_unique(), "a walk partner must be a later pass that leads no walk");
+/// A walk dispatch has accesses exactly where the pass leads one, and writes only what its two
+/// passes write (it leaves intermediates out, never adds outputs).
+constexpr bool walk_accesses_are_consistent() {
+    for (const PassInfo& p : kPassTable) {
+        const bool leads = p.walk != WalkPartner::none;
+        if (leads != (p.walk_reads != 0) || leads != (p.walk_writes != 0)) return false;
+        if ((p.walk_writes & ~writes_of_passes(walk_passes(p.pass))) != 0) return false;
+    }
+    return true;
+}
+static_assert(walk_accesses_are_consistent(), "walk_reads/walk_writes: set exactly for walk leaders, writes within the pair's");
 
 }  // namespace hmsm::detail

@@ -123,6 +123,20 @@ TEST(StepProgram, PathWalkRunsThePairsInOneDispatchEachAndEqualsLevelByLevelBitw
         }
     }
     EXPECT_EQ(program[1].constants.dst_half, HMSM_FINAL_HALF(walk->jump_rounds()));
+    // A walk step stores no intermediate: the wind pair only the angles, the walk only the pose
+    // and the joints (T comes from the angles), the node pair only the world positions.
+    using hmsm::detail::BufferId;
+    auto bits = [](std::initializer_list<BufferId> ids) {
+        uint32_t b = 0;
+        for (BufferId id : ids) b |= 1u << uint32_t(id);
+        return b;
+    };
+    EXPECT_EQ(hmsm::detail::dispatch_writes(program[0]), bits({BufferId::chain_state}));
+    EXPECT_EQ(hmsm::detail::dispatch_writes(program[1]),
+              bits({BufferId::chain_rotation, BufferId::chain_origin, BufferId::joint_matrix}));
+    EXPECT_EQ(hmsm::detail::dispatch_reads(program[1]) &
+                  bits({BufferId::chain_local, BufferId::chain_force, BufferId::node_relative}), 0u);
+    EXPECT_EQ(hmsm::detail::dispatch_writes(program[2]), bits({BufferId::node_world}));
     EXPECT_EQ(hmsm::detail::dispatch_passes(program[1]),
               (1u << uint32_t(Pass::compose)) | (1u << uint32_t(Pass::root_positions)));
     // Also a tree deeper than the ancestors the walk keeps (HMSM_WALK_PATH_CAPACITY).
@@ -175,6 +189,17 @@ TEST(StepProgram, PathWalkProgramsFollowTheOutputsAndThePassesAsked) {
     EXPECT_TRUE(hmsm::detail::runs_path_walk(rest[1]));
     EXPECT_EQ(rest[2].pass, Pass::node_relative);
     EXPECT_TRUE(hmsm::detail::runs_path_walk(rest[2]));
+    // Without the walk after it the wind pair runs apart: its pair stores neither g nor T,
+    // which level by level's integrate and compose would read.
+    const uint32_t wind_only = (1u << uint32_t(Pass::wind_force)) | (1u << uint32_t(Pass::integrate)) |
+                               (1u << uint32_t(Pass::compose));
+    const auto apart = hmsm::detail::build_program(data, data.groups, Composition::path_walk, false,
+                                                   Pass::wind_force, wind_only);
+    ASSERT_GE(apart.size(), 3u);
+    EXPECT_EQ(apart[0].pass, Pass::wind_force);
+    EXPECT_FALSE(hmsm::detail::runs_path_walk(apart[0]));
+    EXPECT_EQ(apart[1].pass, Pass::integrate);
+    for (const auto& d : apart) EXPECT_FALSE(hmsm::detail::runs_path_walk(d)) << pass_name(d.pass);
 }
 
 TEST(StepProgram, ModelsBeyondTheRoundsLimitFallBackToOneDispatchPerRound) {

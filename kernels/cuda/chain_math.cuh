@@ -48,17 +48,13 @@ HMSM_HOST_DEVICE float2 chain_wind_force(const BufferPointers& b, const gpu::Pas
     return make_float2(area * local.z, -area * local.x);
 }
 
-/// Pass 2 for model chain c of group instance k (state chain `chain`) under force g: symplectic
-/// Euler on S = (theta_x, theta_z), F = g - K S - D V, V += dt/I F, S += dt V, clamped at
-/// max_angle (the rate is zeroed at the stop), stored to chain_state; returns the local
-/// transform T = Q Rz(theta_z) Rx(theta_x), with Ry(yaw) in front for the trunk.
-HMSM_HOST_DEVICE Mat3 chain_integrate(const BufferPointers& b, const gpu::PassConstants& pc,
-                                      uint32_t k, uint32_t c, uint64_t chain, float2 g_force) {
-    const uint32_t model_chain = pc.model_chain_begin + c;
+/// Pass 2, the step: symplectic Euler on S = (theta_x, theta_z) of static chain model_chain from
+/// state (S, V) under force g, F = g - K S - D V, V += dt/I F, S += dt V, clamped at max_angle
+/// (the rate is zeroed at the stop); returns the new (S, V).
+HMSM_HOST_DEVICE float4 integrate_step(const BufferPointers& b, const gpu::PassConstants& pc,
+                                       uint32_t model_chain, float4 state, float2 g_force) {
     const float4 kc = load(b.chain_constants + model_chain);  // (I, K, D, A)
-    const float4 state = b.chain_state[chain];                // (theta_x, theta_z, v_x, v_z)
     const float dt = pc.params.x, max_angle = pc.params.y;
-
     float angle[2] = {state.x, state.y};
     float rate[2] = {state.z, state.w};
     const float g[2] = {g_force.x, g_force.y};
@@ -72,21 +68,44 @@ HMSM_HOST_DEVICE Mat3 chain_integrate(const BufferPointers& b, const gpu::PassCo
             rate[j] = 0.0f;
         }
     }
-    b.chain_state[chain] = make_float4(angle[0], angle[1], rate[0], rate[1]);
+    return make_float4(angle[0], angle[1], rate[0], rate[1]);
+}
 
+/// The step for state chain `chain`, stored to chain_state (theta_x, theta_z, v_x, v_z).
+HMSM_HOST_DEVICE void integrate_angles(const BufferPointers& b, const gpu::PassConstants& pc,
+                                       uint32_t model_chain, uint64_t chain, float2 g_force) {
+    b.chain_state[chain] = integrate_step(b, pc, model_chain, b.chain_state[chain], g_force);
+}
+
+/// Pass 2, the transform: T = Q Rz(theta_z) Rx(theta_x) of static chain model_chain at angles
+/// S, with Ry(yaw) of group instance k in front for the trunk (`trunk`: it has no parent).
+HMSM_HOST_DEVICE Mat3 local_transform(const BufferPointers& b, const gpu::PassConstants& pc, uint32_t k,
+                                      uint32_t model_chain, bool trunk, float2 angle) {
     float sx, cx, sz, cz;
-    sincosf(angle[0], &sx, &cx);
-    sincosf(angle[1], &sz, &cz);
+    sincosf(angle.x, &sx, &cx);
+    sincosf(angle.y, &sz, &cz);
     // Rz(theta_z) Rx(theta_x), by columns.
     const Mat3 bend = {make_float3(cz, sz, 0.0f), make_float3(-sz * cx, cz * cx, sx),
                        make_float3(sz * sx, -cz * sx, cx)};
     Mat3 local = load_mat3(b.chain_rest_rotation, model_chain) * bend;
-    if (load(b.chain_parent + model_chain) < 0) {
+    if (trunk) {
         const float4 yaw = load(b.instance_yaw + pc.instance_begin + k);  // (cos, sin)
         const Mat3 ry = {make_float3(yaw.x, 0.0f, -yaw.y), make_float3(0.0f, 1.0f, 0.0f),
                          make_float3(yaw.y, 0.0f, yaw.x)};
         local = ry * local;
     }
+    return local;
+}
+
+/// Pass 2 for model chain c of group instance k (state chain `chain`) under force g: the step,
+/// then T. T's static inputs are loaded before the state is stored (no store between the loads).
+HMSM_HOST_DEVICE Mat3 chain_integrate(const BufferPointers& b, const gpu::PassConstants& pc,
+                                      uint32_t k, uint32_t c, uint64_t chain, float2 g_force) {
+    const uint32_t model_chain = pc.model_chain_begin + c;
+    const float4 state = integrate_step(b, pc, model_chain, b.chain_state[chain], g_force);
+    const Mat3 local =
+        local_transform(b, pc, k, model_chain, load(b.chain_parent + model_chain) < 0, make_float2(state.x, state.y));
+    b.chain_state[chain] = state;
     return local;
 }
 
@@ -172,7 +191,8 @@ HMSM_HOST_DEVICE int32_t ancestor_above(const BufferPointers& b, const gpu::Pass
 
 /// Composition::path_walk, passes 3 and 5 for model chain c of group instance k: its ancestors
 /// from the trunk down, R = R_parent T and O = O_parent + R_parent l_attach (level by level's
-/// operations in its order), R and O to the pose half dst_half with the joint matrix
+/// operations in its order), each T computed from the chain's new angles as integrate computes
+/// it (a walk step stores no T), R and O to the pose half dst_half with the joint matrix
 /// (src/cpu/path_walk.cpp).
 HMSM_HOST_DEVICE void path_walk(const BufferPointers& b, const gpu::PassConstants& pc, uint32_t k, int32_t c) {
     // The ancestors going up: the first HMSM_WALK_PATH_CAPACITY kept, the depth counted.
@@ -187,7 +207,11 @@ HMSM_HOST_DEVICE void path_walk(const BufferPointers& b, const gpu::PassConstant
         if (up == 0) return c;
         return up <= HMSM_WALK_PATH_CAPACITY ? path[up - 1] : ancestor_above(b, pc, c, up);
     };
-    Mat3 rotation = load_mat3(b.chain_local, state_chain(pc, k, ancestor(depth)));
+    auto local_of = [&](int32_t x, bool trunk) {
+        const float4 state = load(b.chain_state + state_chain(pc, k, x));
+        return local_transform(b, pc, k, pc.model_chain_begin + uint32_t(x), trunk, make_float2(state.x, state.y));
+    };
+    Mat3 rotation = local_of(ancestor(depth), true);
     const float4 o = load(b.instance_origin + pc.instance_begin + k);
     float4 origin = make_float4(o.x, o.y, o.z, 0.0f);
     // Unrolled so that the loads of several levels are in flight together (they do not depend
@@ -198,7 +222,7 @@ HMSM_HOST_DEVICE void path_walk(const BufferPointers& b, const gpu::PassConstant
         const int32_t attach = load(b.chain_attach + pc.model_chain_begin + x);
         const float3 local = xyz(load(b.node_local + pc.model_node_begin + attach));
         origin = origin + with_w(rotation * local, 0.0f);
-        rotation = rotation * load_mat3(b.chain_local, state_chain(pc, k, x));
+        rotation = rotation * local_of(x, false);
     }
     const uint64_t chain = state_chain(pc, k, c);
     store_mat3(b.chain_rotation, half_begin(pc, pc.dst_half) + chain, rotation);

@@ -13,12 +13,14 @@ static HMSM_HOST_DEVICE void node_relative_element(const BufferPointers& b,
     const Mat3 rotation =
         load_mat3(b.chain_rotation, half_begin(pc, pc.src_half) + state_chain(pc, e.instance, owner));
     const float3 u = rotation * local;
-    b.node_relative[pc.node_begin + i] = with_w(u, 0.0f);
-    // Path walk: node_world follows in the same launch (node_world.cu).
+    // Path walk: node_world follows in the same launch (node_world.cu) with u in hand, which is
+    // not stored (pass_table.h walk_writes).
     if (pc.mode == HMSM_MODE_PATH_WALK) {
         const float4 origin =
             load(b.chain_origin + half_begin(pc, pc.src_half) + state_chain(pc, e.instance, owner));
         b.node_world[pc.node_begin + i] = with_w(xyz(origin) + u, 1.0f);
+    } else {
+        b.node_relative[pc.node_begin + i] = with_w(u, 0.0f);
     }
 }
 

@@ -12,11 +12,10 @@ static HMSM_HOST_DEVICE void wind_force_element(const BufferPointers& b,
     const uint64_t pose = half_begin(pc, pc.src_half) + chain;
     const float2 g = chain_wind_force(b, pc, e.instance, e.index, xyz(load(b.chain_origin + pose)),
                                       load_mat3(b.chain_rotation, pose));
-    // Path walk: integrate follows in the same launch (integrate.cu), before the force is
-    // stored, so that no store stands between the two passes' loads.
-    if (pc.mode == HMSM_MODE_PATH_WALK)
-        store_mat3(b.chain_local, chain, chain_integrate(b, pc, e.instance, e.index, chain, g));
-    b.chain_force[chain] = g;
+    // Path walk: integrate's step follows in the same launch with g in hand; only the angles
+    // are stored (the walk computes T from them; pass_table.h walk_writes).
+    if (pc.mode == HMSM_MODE_PATH_WALK) integrate_angles(b, pc, pc.model_chain_begin + e.index, chain, g);
+    else b.chain_force[chain] = g;
 }
 
 HMSM_CUDA_PASS(wind_force)

@@ -46,16 +46,13 @@ vec2 chain_wind_force(uint k, uint c, uint chain, uint pose_half) {
     return vec2(area * wind_local.z, -area * wind_local.x);
 }
 
-/// Pass 2 for model chain c of group instance k under generalized force g: symplectic Euler on
-/// the two joint angles (theta_x, theta_z), clamped at max_angle (chain_state is updated), and
-/// the local transform T = Q Rz(theta_z) Rx(theta_x), with Ry(yaw) in front for the trunk.
-mat3 chain_integrate(uint k, uint c, uint chain, vec2 g) {
-    uint model_chain = pc.model_chain_begin + c;
+/// Pass 2, the step: symplectic Euler on the two joint angles (theta_x, theta_z) of static chain
+/// model_chain from state s = (angles, rates) under generalized force g, clamped at max_angle;
+/// returns the new state.
+vec4 integrate_step(uint model_chain, vec4 s, vec2 g) {
     vec4 constants = chain_constants[model_chain];  // (I, K, D, A)
     float dt = pc.params.x;
     float max_angle = pc.params.y;
-
-    vec4 s = chain_state[chain];
     vec2 angle = s.xy;
     vec2 rate = s.zw;
     vec2 force = g - constants.y * angle - constants.z * rate;
@@ -67,18 +64,32 @@ mat3 chain_integrate(uint k, uint c, uint chain, vec2 g) {
             rate[j] = 0.0;
         }
     }
-    chain_state[chain] = vec4(angle, rate);
+    return vec4(angle, rate);
+}
 
+/// Pass 2, the transform: T = Q Rz(theta_z) Rx(theta_x) of static chain model_chain at `angle`,
+/// with Ry(yaw) of group instance k in front for the trunk (`trunk`: it has no parent).
+mat3 local_transform(uint k, uint model_chain, bool trunk, vec2 angle) {
     float cx = cos(angle.x), sx = sin(angle.x);
     float cz = cos(angle.y), sz = sin(angle.y);
     mat3 rx = mat3(vec3(1, 0, 0), vec3(0, cx, sx), vec3(0, -sx, cx));  // columns
     mat3 rz = mat3(vec3(cz, sz, 0), vec3(-sz, cz, 0), vec3(0, 0, 1));
     mat3 t = as_mat3(chain_rest_rotation[model_chain]) * rz * rx;
-    if (chain_parent[model_chain] < 0) {
+    if (trunk) {
         vec4 yaw = instance_yaw[pc.instance_begin + k];  // (cos, sin)
         mat3 ry = mat3(vec3(yaw.x, 0, -yaw.y), vec3(0, 1, 0), vec3(yaw.y, 0, yaw.x));
         t = ry * t;
     }
+    return t;
+}
+
+/// Pass 2 for model chain c of group instance k under generalized force g: the step (chain_state
+/// is updated), then T; T's inputs are read before the state is written.
+mat3 chain_integrate(uint k, uint c, uint chain, vec2 g) {
+    uint model_chain = pc.model_chain_begin + c;
+    vec4 s = integrate_step(model_chain, chain_state[chain], g);
+    mat3 t = local_transform(k, model_chain, chain_parent[model_chain] < 0, s.xy);
+    chain_state[chain] = s;
     return t;
 }
 
@@ -148,23 +159,29 @@ uint walk_ancestor(uint c, uint up) {
     return up <= HMSM_WALK_PATH_CAPACITY ? walk_path[up - 1u] : ancestor_above(c, up);
 }
 
+/// T of model chain x of group instance k from its new angles in chain_state, as integrate
+/// computes it (a path-walk step stores no T).
+mat3 walk_local(uint k, uint x, bool trunk) {
+    return local_transform(k, pc.model_chain_begin + x, trunk, chain_state[state_chain(k, x)].xy);
+}
+
 /// Composition::path_walk, passes 3 and 5 for model chain c of group instance k: its ancestors
 /// from the trunk down, R = R_parent T and O = O_parent + R_parent l_attach (level by level's
-/// operations in its order), R and O to the pose half dst_half with the joint matrix
-/// (src/cpu/path_walk.cpp).
+/// operations in its order), each T from the chain's new angles (walk_local), R and O to the
+/// pose half dst_half with the joint matrix (src/cpu/path_walk.cpp).
 void path_walk(uint k, uint c) {
     uint depth = 0u;
     for (int a = chain_parent[pc.model_chain_begin + c]; a >= 0; a = chain_parent[pc.model_chain_begin + uint(a)]) {
         if (depth < HMSM_WALK_PATH_CAPACITY) walk_path[depth] = uint(a);
         ++depth;
     }
-    mat3 r = as_mat3(chain_local[state_chain(k, walk_ancestor(c, depth))]);
+    mat3 r = walk_local(k, walk_ancestor(c, depth), true);
     vec4 origin = vec4(instance_origin[pc.instance_begin + k].xyz, 0.0);
     for (uint level = 1u; level <= depth; ++level) {
         uint x = walk_ancestor(c, depth - level);
         vec3 local = node_local[pc.model_node_begin + uint(chain_attach[pc.model_chain_begin + x])].xyz;
         origin += vec4(r * local, 0.0);
-        r = r * as_mat3(chain_local[state_chain(k, x)]);
+        r = r * walk_local(k, x, false);
     }
     uint chain = state_chain(k, c);
     chain_rotation[half_offset(pc.dst_half) + chain] = as_mat3x4(r);

@@ -13,7 +13,10 @@ void main() {
     uint c = i % pc.model_chain_count;
     uint chain = state_chain(k, c);
     vec2 g = chain_wind_force(k, c, chain, pc.src_half);
-    chain_force[chain] = g;
-    // Path walk: integrate follows in the same dispatch (integrate.comp).
-    if (pc.mode == HMSM_MODE_PATH_WALK) chain_local[chain] = as_mat3x4(chain_integrate(k, c, chain, g));
+    // Path walk: integrate's step follows in the same dispatch with g in hand; only the angles
+    // are stored (the walk computes T from them; src/pass_table.h walk_writes).
+    if (pc.mode == HMSM_MODE_PATH_WALK)
+        chain_state[chain] = integrate_step(pc.model_chain_begin + c, chain_state[chain], g);
+    else
+        chain_force[chain] = g;
 }

@@ -238,13 +238,9 @@ private:
         if (runs_path_walk(d)) {
             // The pass and its walk partner over the same elements (pass_table.h `walk`).
             switch (d.pass) {
-                case Pass::wind_force:
-                    wind_force<T>(s_, d.constants, wind_x, r);
-                    return integrate<T>(s_, d.constants, r);
+                case Pass::wind_force: return wind_force_and_integrate<T>(s_, d.constants, wind_x, r);
                 case Pass::compose: return path_walk<T>(s_, d.constants, r);
-                case Pass::node_relative:
-                    node_relative<T>(s_, d.constants, r);
-                    return node_world<T>(s_, d.constants, r);
+                case Pass::node_relative: return node_relative_and_world<T>(s_, d.constants, r);
                 default: break;
             }
         }

@@ -141,5 +141,17 @@ template <class T> void contour(State<T>& s, const gpu::PassConstants& pc, Range
 template <class T> void fused(State<T>& s, const gpu::PassConstants& pc, double wind_x, Range r);
 /// Composition::path_walk: passes 3 and 5 for the chains `r` by the top-down walk (path_walk.cpp).
 template <class T> void path_walk(State<T>& s, const gpu::PassConstants& pc, Range r);
+/// Composition::path_walk's wind pair: passes 1 and 2 per chain, storing only the angles.
+template <class T> void wind_force_and_integrate(State<T>& s, const gpu::PassConstants& pc, double wind_x, Range r);
+/// Composition::path_walk's node pair: passes 4 and 6 per node, storing only node_world.
+template <class T> void node_relative_and_world(State<T>& s, const gpu::PassConstants& pc, Range r);
+/// Pass 2's halves: the symplectic Euler step of state chain c of static chain model_chain under
+/// g (stores S/V, returns S), and the local transform T of static chain model_chain of global
+/// instance `instance` at angles S.
+template <class T>
+typename State<T>::vec2 integrate_angles(State<T>& s, uint32_t model_chain, uint64_t c, const typename State<T>::vec2& g);
+template <class T>
+typename State<T>::mat3 local_transform(const State<T>& s, uint32_t model_chain, uint32_t instance,
+                                        const typename State<T>::vec2& angle);
 
 }  // namespace hmsm::detail::cpu

@@ -1,6 +1,7 @@
 // Composition::path_walk on the CPU, passes 3 and 5 in one (gpu_layout.h HMSM_MODE_PATH_WALK):
 // each chain of the work items walks its ancestors from the trunk down, R = R_parent T and
-// O = O_parent + R_parent l_attach. These are level by level's operations in level by level's
+// O = O_parent + R_parent l_attach, each T computed from the chain's new angles as integrate
+// computes it (a walk step stores no T). These are level by level's operations in level by level's
 // order (its own offset R_parent l_attach is node_relative's u of the attach node), so the poses
 // are level by level's bit for bit, without a dispatch per depth level.
 #include "cpu_state.h"
@@ -32,7 +33,13 @@ void path_walk(State<T>& s, const gpu::PassConstants& pc, Range r) {
                 if (up & 1u) a = s.chain_jump[uint64_t(round) * pc.total_model_chains + pc.model_chain_begin + a];
             return a;
         };
-        auto rotation = s.chain_local[state_chain(pc, e.instance, ancestor(depth))];
+        // T of chain x from its new angles (integrate's local transform, as integrate gives it).
+        auto local_of = [&](int32_t x) {
+            const auto& state = s.chain_state[state_chain(pc, e.instance, x)];
+            return local_transform(s, pc.model_chain_begin + uint32_t(x), pc.instance_begin + e.instance,
+                                   typename State<T>::vec2(state.x, state.y));
+        };
+        auto rotation = local_of(ancestor(depth));
         const auto& o = s.instance_origin[pc.instance_begin + e.instance];
         vec4 origin{o.x, o.y, o.z, T(0)};
         for (uint32_t level = 1; level <= depth; ++level) {
@@ -40,7 +47,7 @@ void path_walk(State<T>& s, const gpu::PassConstants& pc, Range r) {
             const auto& local = s.node_local[pc.model_node_begin + s.chain_attach[pc.model_chain_begin + x]];
             const vec3 u = rotation * vec3(local);
             origin += vec4{u, T(0)};
-            rotation = rotation * s.chain_local[state_chain(pc, e.instance, x)];
+            rotation = rotation * local_of(x);
         }
         const uint64_t chain = state_chain(pc, e.instance, c);
         s.chain_rotation[dst + chain] = rotation;

@@ -10,8 +10,9 @@
 
 namespace hmsm::detail::cpu {
 
-template <class T>
-void wind_force(State<T>& s, const gpu::PassConstants& pc, double wind_x, Range r) {
+/// g for every chain of the work items, handed to use(state chain, g) instead of stored.
+template <class T, class Use>
+void wind_forces(State<T>& s, const gpu::PassConstants& pc, double wind_x, Range r, Use&& use) {
     using vec3 = typename State<T>::vec3;
     const uint32_t slot = uint32_t(wind_x);  // the step's slot of the wind table
     const auto* table = s.wind_table.data();
@@ -43,11 +44,28 @@ void wind_force(State<T>& s, const gpu::PassConstants& pc, double wind_x, Range 
         }
         auto w_local = glm::transpose(s.chain_rotation[pose]) * w;
         T area = s.chain_constants[pc.model_chain_begin + e.index].w;
-        s.chain_force[c] = typename State<T>::vec2(area * w_local.z, -area * w_local.x);
+        use(c, typename State<T>::vec2(area * w_local.z, -area * w_local.x));
     }
+}
+
+template <class T>
+void wind_force(State<T>& s, const gpu::PassConstants& pc, double wind_x, Range r) {
+    wind_forces(s, pc, wind_x, r, [&](uint64_t c, const typename State<T>::vec2& g) { s.chain_force[c] = g; });
+}
+
+/// Composition::path_walk: integrate in the same pass over the same chains, g kept in hand;
+/// only the new angles are stored (the walk computes T from them).
+template <class T>
+void wind_force_and_integrate(State<T>& s, const gpu::PassConstants& pc, double wind_x, Range r) {
+    wind_forces(s, pc, wind_x, r, [&](uint64_t c, const typename State<T>::vec2& g) {
+        const uint32_t model_chain = pc.model_chain_begin + uint32_t((c - pc.chain_begin) % pc.model_chain_count);
+        integrate_angles(s, model_chain, c, g);
+    });
 }
 
 template void wind_force<float>(State<float>&, const gpu::PassConstants&, double, Range);
 template void wind_force<double>(State<double>&, const gpu::PassConstants&, double, Range);
+template void wind_force_and_integrate<float>(State<float>&, const gpu::PassConstants&, double, Range);
+template void wind_force_and_integrate<double>(State<double>&, const gpu::PassConstants&, double, Range);
 
 }  // namespace hmsm::detail::cpu

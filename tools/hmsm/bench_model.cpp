@@ -51,12 +51,26 @@ bool is_state_scope(Scope s) {
 
 Traffic step_traffic(const Simulation& sim) {
     const detail::SceneData& d = hmsm::detail::scene_data_of(sim);
+    // The buffers each pass touches in the simulation's step program: its own reads and writes
+    // (also inside the fused dispatch, whose passes still pass T and u through memory), or, for
+    // a path-walk dispatch, the dispatch's (counted under its leader), which leave out what the
+    // walk keeps in registers.
+    std::array<uint32_t, kPassCount> reads{}, writes{};
+    for (const detail::Dispatch& dispatch : detail::step_program_of(sim)) {
+        for (Pass p : kAllPasses) {
+            if (!(detail::dispatch_passes(dispatch) >> uint32_t(p) & 1u)) continue;
+            const bool walk = detail::runs_path_walk(dispatch);
+            if (walk && p != dispatch.pass) continue;
+            reads[uint32_t(p)] |= walk ? detail::dispatch_reads(dispatch) : detail::pass_reads(p);
+            writes[uint32_t(p)] |= walk ? detail::dispatch_writes(dispatch) : detail::pass_writes(p);
+        }
+    }
     Traffic t;
     for (Pass p : kAllPasses) {
-        const uint32_t reads = detail::pass_reads(p), writes = detail::pass_writes(p);
+        const uint32_t reads_p = reads[uint32_t(p)], writes_p = writes[uint32_t(p)];
         for (const detail::BufferInfo& info : detail::kBufferTable) {
             const uint32_t bit = 1u << uint32_t(info.id);
-            const int touches = ((reads & bit) ? 1 : 0) + ((writes & bit) ? 1 : 0);
+            const int touches = ((reads_p & bit) ? 1 : 0) + ((writes_p & bit) ? 1 : 0);
             if (touches == 0) continue;
             const double bytes = touches * sweep_bytes(d, p, info);
             t.pass_bytes[uint32_t(p)] += bytes;

@@ -263,6 +263,7 @@ void BenchRun::forest_cases(const Model& model, BackendRun& b, const std::vector
             if (r.has_passes) {
                 put(f, "device_seconds_per_step", r.device_seconds);
                 put(f, "device_effective_bandwidth", traffic.total() / r.device_seconds);
+                f["pass_seconds_per_step"] = pass_seconds_json(r, settings_.forest_composition);
             }
             copy_bandwidth(b, *sim);
             forest.push_back(f);
