@@ -24,9 +24,10 @@ constexpr uint32_t buffer_bit(BufferId id) { return 1u << static_cast<uint32_t>(
 #define HMSM_B(name) buffer_bit(BufferId::name)
 
 /// X(name, domain, hierarchical, needed_for, fused, walk, reads, writes, walk_reads, walk_writes),
-/// in execution order
-/// (the same order as HMSM_PASSES in <hmsm/pass.h>; a static_assert below keeps them equal).
-/// root_positions writes, with the final O_c, the joint matrix [R_c | O_c] (R_c from compose).
+/// in execution order (the same order as HMSM_PASSES in <hmsm/pass.h>; a static_assert below
+/// keeps them equal). root_positions writes, with the final O_c, the joint matrix [R_c | O_c]
+/// (R_c from compose): the step's pose in 48 bytes, which contour reads (and every reader of a
+/// path-walk step; Output::chain_rotations and chain_origins are read from it too).
 /// needed_for: the least SimulationConfig::outputs for which a step runs the pass (outputs on
 /// demand: joint matrices need passes 1-5 only). A vertex-domain pass takes the vertex layout
 /// as its mode; in the packed layout contour's vertex_normal has no elements and is not written.
@@ -41,14 +42,16 @@ constexpr uint32_t buffer_bit(BufferId id) { return 1u << static_cast<uint32_t>(
 /// wind pair keeps g in registers and stores only the new angles S/V; the walk computes each
 /// T it multiplies from those angles (so integrate stores no T, and the walk needs no u:
 /// its offsets R_parent l_attach come from the static node_local); the node pair keeps u in
-/// registers. step_program.cpp pairs the wind passes only where the walk follows.
+/// registers. And the pose is the joint matrix alone: the walk writes no R or O half, the wind
+/// and node pairs read R and O from the joint matrix. step_program.cpp pairs the wind passes
+/// only where the walk follows.
 #define HMSM_PASS_TABLE(X)                                                                        \
     X(wind_force, chain, false, joints, true, integrate,                                          \
       (HMSM_B(chain_rotation) | HMSM_B(chain_origin) | HMSM_B(chain_constants) |                  \
        HMSM_B(instance_wind) | HMSM_B(wind_table)),                                               \
       (HMSM_B(chain_force)),                                                                      \
-      (HMSM_B(chain_rotation) | HMSM_B(chain_origin) | HMSM_B(chain_constants) |                  \
-       HMSM_B(instance_wind) | HMSM_B(wind_table) | HMSM_B(chain_state)),                         \
+      (HMSM_B(joint_matrix) | HMSM_B(chain_constants) | HMSM_B(instance_wind) |                   \
+       HMSM_B(wind_table) | HMSM_B(chain_state)),                                                 \
       (HMSM_B(chain_state)))                                                                      \
     X(integrate, chain, false, joints, true, none,                                                \
       (HMSM_B(chain_force) | HMSM_B(chain_state) | HMSM_B(chain_constants) |                      \
@@ -61,11 +64,11 @@ constexpr uint32_t buffer_bit(BufferId id) { return 1u << static_cast<uint32_t>(
       (HMSM_B(chain_state) | HMSM_B(chain_parent) | HMSM_B(chain_jump) | HMSM_B(chain_attach) |   \
        HMSM_B(chain_rest_rotation) | HMSM_B(node_local) | HMSM_B(instance_origin) |              \
        HMSM_B(instance_yaw)),                                                                     \
-      (HMSM_B(chain_rotation) | HMSM_B(chain_origin) | HMSM_B(joint_matrix)))                     \
+      (HMSM_B(joint_matrix)))                                                                     \
     X(node_relative, node, false, joints, true, node_world,                                       \
       (HMSM_B(chain_rotation) | HMSM_B(node_owner) | HMSM_B(node_local)),                         \
       (HMSM_B(node_relative)),                                                                    \
-      (HMSM_B(chain_rotation) | HMSM_B(chain_origin) | HMSM_B(node_owner) | HMSM_B(node_local)),  \
+      (HMSM_B(joint_matrix) | HMSM_B(node_owner) | HMSM_B(node_local)),                           \
       (HMSM_B(node_world)))                                                                       \
     X(root_positions, chain, true, joints, true, none,                                            \
       (HMSM_B(node_relative) | HMSM_B(chain_origin) | HMSM_B(chain_jump) |                        \
@@ -76,7 +79,7 @@ constexpr uint32_t buffer_bit(BufferId id) { return 1u << static_cast<uint32_t>(
       (HMSM_B(chain_origin) | HMSM_B(node_relative) | HMSM_B(node_owner)),                        \
       (HMSM_B(node_world)), 0u, 0u)                                                               \
     X(contour, vertex, false, all, false, none,                                                   \
-      (HMSM_B(chain_rotation) | HMSM_B(chain_origin) | HMSM_B(vertex_chain) |                     \
+      (HMSM_B(joint_matrix) | HMSM_B(vertex_chain) |                                              \
        HMSM_B(vertex_rest_position) | HMSM_B(vertex_rest_normal) |                                \
        HMSM_B(vertex_parent_position) | HMSM_B(vertex_parent_normal)),                            \
       (HMSM_B(vertex_position) | HMSM_B(vertex_normal)), 0u, 0u)

@@ -285,19 +285,16 @@ Status Simulation::Impl::read_elements(Output output, std::vector<double>* as_do
                           to_string(config_.outputs) + ")"};
     if (output == Output::vertex_normals && data_->packed_vertices())
         return read_packed_normals(as_double, as_float);
-    const uint32_t final_half = HMSM_FINAL_HALF(data_->jump_rounds);
     BufferId id = BufferId::node_world;
     uint64_t first = 0, count = data_->total_nodes;
     switch (output) {
         case Output::node_positions: break;
         case Output::vertex_positions: id = BufferId::vertex_position; count = data_->total_vertices; break;
         case Output::vertex_normals: id = BufferId::vertex_normal; count = data_->total_vertices; break;
+        // The pose of a step is its joint matrix [R | O] by rows (the path walk writes no R or
+        // O half; every composition writes the joint matrix).
         case Output::chain_rotations:
-            id = BufferId::chain_rotation; first = final_half * data_->chain_capacity;
-            count = data_->total_chains; break;
-        case Output::chain_origins:
-            id = BufferId::chain_origin; first = final_half * data_->chain_capacity;
-            count = data_->total_chains; break;
+        case Output::chain_origins: id = BufferId::joint_matrix; count = data_->total_chains; break;
         case Output::chain_angles: id = BufferId::chain_state; count = data_->total_chains; break;
         case Output::joint_matrices: id = BufferId::joint_matrix; count = data_->total_chains; break;
         default:  // a value cast from an integer (the C ABI checks its own)
@@ -306,7 +303,13 @@ Status Simulation::Impl::read_elements(Output output, std::vector<double>* as_do
     }
     const uint32_t stored = detail::shape_scalars(detail::buffer_info(id).shape);
     const uint32_t wanted = output_components(output);
-    // Stored element -> output components: xyz of a vec4, the 3x3 part of a mat3x4, or all.
+    // Output component k -> its scalar in the stored element: from a joint matrix's rows
+    // (r00 r01 r02 ox, r10 ...) R column by column or O; else xyz of a vec4 or all.
+    auto source = [output](uint32_t k) {
+        if (output == Output::chain_rotations) return (k % 3) * 4 + k / 3;
+        if (output == Output::chain_origins) return k * 4 + 3;
+        return k;
+    };
     auto repack = [&](const auto& raw, auto& out) {
         out.resize(count * wanted);
         if (stored == 4 && wanted == 3) {  // positions and normals: the per-frame hot path
@@ -319,7 +322,7 @@ Status Simulation::Impl::read_elements(Output output, std::vector<double>* as_do
         }
         for (uint64_t i = 0; i < count; ++i)
             for (uint32_t k = 0; k < wanted; ++k)
-                out[i * wanted + k] = raw[i * stored + (stored == 12 && wanted == 9 ? (k / 3) * 4 + k % 3 : k)];
+                out[i * wanted + k] = raw[i * stored + source(k)];
     };
     if (as_double) {
         stored_f64_.resize(count * stored);

@@ -119,10 +119,10 @@ namespace {
 
 /// Composition::path_walk: the passes from `first` on whose bit is set in `wanted` (those the
 /// outputs need), each walk pair (the pass table's `walk` column) in one dispatch of its leader
-/// where both run and, for the wind and node pairs, the walk runs too. compose and
-/// root_positions apart (a program of only one of them) run level by level, whose poses the
-/// walk reproduces bit for bit; node_relative, which the walk does not read, runs only for
-/// node_world, with it after the walk.
+/// where both run: the wind pair only before the walk, the node pair where no level-by-level
+/// root_positions needs its u. compose and root_positions apart (a program of only one of
+/// them) run level by level, whose poses the walk reproduces bit for bit; node_relative, which
+/// the walk does not read, runs only for node_world, with it after the walk.
 std::vector<Dispatch> build_path_walk_program(const SceneData& d, const std::vector<InstanceGroup>& groups,
                                               bool dispatches_are_expensive, uint32_t wanted) {
     auto bit = [](Pass pass) { return 1u << uint32_t(pass); };
@@ -133,9 +133,13 @@ std::vector<Dispatch> build_path_walk_program(const SceneData& d, const std::vec
     for (Pass pass : kAllPasses) {
         if (!(wanted & bit(pass)) || (done & bit(pass))) continue;
         const uint32_t pair = walk_passes(pass);
-        // The wind pair only before a walk, the node pair only after one: a walk step stores
-        // neither T nor u (pass_table.h walk_writes), which level by level would read.
-        const bool pair_runs = pair != 0 && (wanted & pair) == pair && (pass == Pass::compose || walk_poses);
+        // The wind pair only before a walk: it stores no T, which level by level would read.
+        // The node pair wherever no level-by-level root_positions reads its u (after a walk, or
+        // without pass 5: the outputs recomputed for moved instances read the pose from the
+        // joint matrices, as after a walk).
+        const bool node_pair_runs = walk_poses || !(wanted & bit(Pass::root_positions));
+        const bool pair_runs = pair != 0 && (wanted & pair) == pair &&
+                               (pass == Pass::compose || (pass == Pass::wind_force ? walk_poses : node_pair_runs));
         if (!pair_runs) {
             append_pass(program, d, groups, pass, Composition::level_by_level, dispatches_are_expensive);
             done |= bit(pass);

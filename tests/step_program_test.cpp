@@ -123,8 +123,9 @@ TEST(StepProgram, PathWalkRunsThePairsInOneDispatchEachAndEqualsLevelByLevelBitw
         }
     }
     EXPECT_EQ(program[1].constants.dst_half, HMSM_FINAL_HALF(walk->jump_rounds()));
-    // A walk step stores no intermediate: the wind pair only the angles, the walk only the pose
-    // and the joints (T comes from the angles), the node pair only the world positions.
+    // A walk step stores no intermediate: the wind pair only the angles, the walk only the joint
+    // matrices, which are the pose (T comes from the angles), the node pair only the world
+    // positions; the wind and node pairs read the pose from the joint matrices.
     using hmsm::detail::BufferId;
     auto bits = [](std::initializer_list<BufferId> ids) {
         uint32_t b = 0;
@@ -132,8 +133,12 @@ TEST(StepProgram, PathWalkRunsThePairsInOneDispatchEachAndEqualsLevelByLevelBitw
         return b;
     };
     EXPECT_EQ(hmsm::detail::dispatch_writes(program[0]), bits({BufferId::chain_state}));
-    EXPECT_EQ(hmsm::detail::dispatch_writes(program[1]),
-              bits({BufferId::chain_rotation, BufferId::chain_origin, BufferId::joint_matrix}));
+    EXPECT_EQ(hmsm::detail::dispatch_writes(program[1]), bits({BufferId::joint_matrix}));
+    for (size_t i : {0u, 2u, 3u}) {
+        EXPECT_NE(hmsm::detail::dispatch_reads(program[i]) & bits({BufferId::joint_matrix}), 0u) << i;
+        EXPECT_EQ(hmsm::detail::dispatch_reads(program[i]) & bits({BufferId::chain_rotation, BufferId::chain_origin}),
+                  0u) << i;
+    }
     EXPECT_EQ(hmsm::detail::dispatch_reads(program[1]) &
                   bits({BufferId::chain_local, BufferId::chain_force, BufferId::node_relative}), 0u);
     EXPECT_EQ(hmsm::detail::dispatch_writes(program[2]), bits({BufferId::node_world}));

@@ -192,8 +192,7 @@ HMSM_HOST_DEVICE int32_t ancestor_above(const BufferPointers& b, const gpu::Pass
 /// Composition::path_walk, passes 3 and 5 for model chain c of group instance k: its ancestors
 /// from the trunk down, R = R_parent T and O = O_parent + R_parent l_attach (level by level's
 /// operations in its order), each T computed from the chain's new angles as integrate computes
-/// it (a walk step stores no T), R and O to the pose half dst_half with the joint matrix
-/// (src/cpu/path_walk.cpp).
+/// it (a walk step stores no T), the pose to the joint matrix alone (src/cpu/path_walk.cpp).
 HMSM_HOST_DEVICE void path_walk(const BufferPointers& b, const gpu::PassConstants& pc, uint32_t k, int32_t c) {
     // The ancestors going up: the first HMSM_WALK_PATH_CAPACITY kept, the depth counted.
     const int32_t* parent = b.chain_parent + pc.model_chain_begin;
@@ -224,10 +223,7 @@ HMSM_HOST_DEVICE void path_walk(const BufferPointers& b, const gpu::PassConstant
         origin = origin + with_w(rotation * local, 0.0f);
         rotation = rotation * local_of(x, false);
     }
-    const uint64_t chain = state_chain(pc, k, c);
-    store_mat3(b.chain_rotation, half_begin(pc, pc.dst_half) + chain, rotation);
-    b.chain_origin[half_begin(pc, pc.dst_half) + chain] = origin;
-    store_joint_of(b, chain, rotation, origin);
+    store_joint_of(b, state_chain(pc, k, c), rotation, origin);
 }
 
 }  // namespace hmsm::detail::cuda

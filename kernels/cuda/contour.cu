@@ -1,5 +1,5 @@
 // Pass 7: branch-mesh and leaf vertices rigid with their chain, v = O_c + R_c v_rest, normal
-// R_c n_rest. Base-ring vertices of child chains are the paper's contour fix-up: a blend
+// R_c n_rest, the pose read from the joint matrix [R_c | O_c] (48 bytes, three loads). Base-ring vertices of child chains are the paper's contour fix-up: a blend
 // (1 - beta) own + beta parent of the same rest vertex carried by the parent chain, normal
 // renormalized, so the joint stays closed while the child swings. The outputs are written once,
 // coalesced: 32 bytes per vertex (position and normal), or 16 in the packed vertex layout
@@ -41,17 +41,14 @@ HMSM_HOST_DEVICE ContourVertex contour_inputs(const BufferPointers& b, const gpu
 /// Model vertex `index` in group instance k, thread i = k n + index of the dispatch.
 HMSM_HOST_DEVICE void contour_vertex(const BufferPointers& b, const gpu::PassConstants& pc,
                                      const ContourVertex& in, uint32_t index, uint32_t k, uint64_t i) {
-    const uint64_t pose = half_begin(pc, pc.src_half);
-    const uint64_t own = pose + state_chain(pc, k, in.chains.x);
-    Mat3 rotation = load_mat3(b.chain_rotation, own);
-    float3 position = xyz(load(b.chain_origin + own)) + rotation * in.rest_position;
-    float3 normal = rotation * in.rest_normal;
+    const Pose own = load_joint(b, state_chain(pc, k, in.chains.x));
+    float3 position = own.origin + own.rotation * in.rest_position;
+    float3 normal = own.rotation * in.rest_normal;
     if (in.chains.y >= 0) {
         const uint32_t v = pc.model_vertex_begin + index;
-        const uint64_t parent = pose + state_chain(pc, k, in.chains.y);
-        rotation = load_mat3(b.chain_rotation, parent);
-        const float3 p = xyz(load(b.chain_origin + parent)) + rotation * xyz(load(b.vertex_parent_position + v));
-        const float3 n = rotation * xyz(load(b.vertex_parent_normal + v));
+        const Pose parent = load_joint(b, state_chain(pc, k, in.chains.y));
+        const float3 p = parent.origin + parent.rotation * xyz(load(b.vertex_parent_position + v));
+        const float3 n = parent.rotation * xyz(load(b.vertex_parent_normal + v));
         const float beta = pc.params.z;
         position = (1.0f - beta) * position + beta * p;
         normal = (1.0f - beta) * normal + beta * n;

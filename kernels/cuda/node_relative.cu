@@ -10,18 +10,16 @@ static HMSM_HOST_DEVICE void node_relative_element(const BufferPointers& b,
     const uint32_t model_node = pc.model_node_begin + e.index;
     const int32_t owner = load(b.node_owner + model_node);
     const float3 local = xyz(load(b.node_local + model_node));
+    // Path walk: node_world follows in the same launch (node_world.cu) with u in hand, which is
+    // not stored, and the pose is the joint matrix (pass_table.h walk_reads, walk_writes).
+    if (pc.mode == HMSM_MODE_PATH_WALK) {
+        const Pose pose = load_joint(b, state_chain(pc, e.instance, owner));
+        b.node_world[pc.node_begin + i] = with_w(pose.origin + pose.rotation * local, 1.0f);
+        return;
+    }
     const Mat3 rotation =
         load_mat3(b.chain_rotation, half_begin(pc, pc.src_half) + state_chain(pc, e.instance, owner));
-    const float3 u = rotation * local;
-    // Path walk: node_world follows in the same launch (node_world.cu) with u in hand, which is
-    // not stored (pass_table.h walk_writes).
-    if (pc.mode == HMSM_MODE_PATH_WALK) {
-        const float4 origin =
-            load(b.chain_origin + half_begin(pc, pc.src_half) + state_chain(pc, e.instance, owner));
-        b.node_world[pc.node_begin + i] = with_w(xyz(origin) + u, 1.0f);
-    } else {
-        b.node_relative[pc.node_begin + i] = with_w(u, 0.0f);
-    }
+    b.node_relative[pc.node_begin + i] = with_w(rotation * local, 0.0f);
 }
 
 HMSM_CUDA_PASS(node_relative)

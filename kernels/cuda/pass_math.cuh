@@ -66,6 +66,19 @@ HMSM_HOST_DEVICE void store_mat3(float4* buffer, uint64_t index, const Mat3& m) 
     p[2] = with_w(m.c2, 0.0f);
 }
 
+/// The pose of state chain `chain` as its joint matrix holds it (rows: R row i, O_i; written by
+/// pass 5 in every composition): R by columns and O, the floats stored.
+struct Pose {
+    Mat3 rotation;
+    float3 origin;
+};
+HMSM_HOST_DEVICE Pose load_joint(const BufferPointers& b, uint64_t chain) {
+    const float4* row = b.joint_matrix + 3 * chain;
+    const float4 r0 = load(row), r1 = load(row + 1), r2 = load(row + 2);
+    return {{make_float3(r0.x, r1.x, r2.x), make_float3(r0.y, r1.y, r2.y), make_float3(r0.z, r1.z, r2.z)},
+            make_float3(r0.w, r1.w, r2.w)};
+}
+
 /// Thread i of a dispatch handles element `index` of group instance `instance`.
 struct Element {
     uint32_t instance;

@@ -7,9 +7,9 @@
 
 /// Pass 1 for model chain c of group instance k (state chain `chain`): the generalized force
 /// g = A (w_loc.z, -w_loc.x) from the wind in the chain's previous-step frame w_loc = R^T w,
-/// w = lambda_i s Y(tau + phi_i) d plus the force fields at the chain's previous origin, R and O
-/// read from ping-pong half `pose_half` (docs/model.md 3.5, 3.7, 3.9; table in gpu_layout.h).
-vec2 chain_wind_force(uint k, uint c, uint chain, uint pose_half) {
+/// w = lambda_i s Y(tau + phi_i) d plus the force fields at the chain's previous origin x, R
+/// the chain's previous rotation (docs/model.md 3.5, 3.7, 3.9; table in gpu_layout.h).
+vec2 chain_wind_force(uint k, uint c, uint chain, vec3 x, mat3 rotation) {
     uint slot = HMSM_WIND_STEPS + HMSM_WIND_STEP_VEC4S * uint(pc.wind.w);
     uint instance = HMSM_INSTANCE_WIND_VEC4S * (pc.instance_begin + k);
     vec4 own = instance_wind[instance];  // (lambda, phi mod 2, 0, 0)
@@ -28,8 +28,6 @@ vec2 chain_wind_force(uint k, uint c, uint chain, uint pose_half) {
     }
     vec4 vector_count = wind_table[HMSM_WIND_VECTOR];  // (s d, number of fields)
     vec3 wind = own.x * y * vector_count.xyz;
-    uint pose = half_offset(pose_half) + chain;
-    vec3 x = chain_origin[pose].xyz;
     uint fields = uint(vector_count.w);
     for (uint f = 0u; f < fields; ++f) {
         vec4 sphere = wind_table[HMSM_WIND_FIELDS + 2u * f];
@@ -41,7 +39,7 @@ vec2 chain_wind_force(uint k, uint c, uint chain, uint pose_half) {
         if (force.w == 0.0) wind += h * force.xyz;
         else if (distance >= 1e-9) wind += (h * force.x / distance) * offset;
     }
-    vec3 wind_local = transpose(as_mat3(chain_rotation[pose])) * wind;
+    vec3 wind_local = transpose(rotation) * wind;
     float area = chain_constants[pc.model_chain_begin + c].w;
     return vec2(area * wind_local.z, -area * wind_local.x);
 }
@@ -167,8 +165,8 @@ mat3 walk_local(uint k, uint x, bool trunk) {
 
 /// Composition::path_walk, passes 3 and 5 for model chain c of group instance k: its ancestors
 /// from the trunk down, R = R_parent T and O = O_parent + R_parent l_attach (level by level's
-/// operations in its order), each T from the chain's new angles (walk_local), R and O to the
-/// pose half dst_half with the joint matrix (src/cpu/path_walk.cpp).
+/// operations in its order), each T from the chain's new angles (walk_local), the pose to the
+/// joint matrix alone (src/cpu/path_walk.cpp).
 void path_walk(uint k, uint c) {
     uint depth = 0u;
     for (int a = chain_parent[pc.model_chain_begin + c]; a >= 0; a = chain_parent[pc.model_chain_begin + uint(a)]) {
@@ -183,10 +181,7 @@ void path_walk(uint k, uint c) {
         origin += vec4(r * local, 0.0);
         r = r * walk_local(k, x, false);
     }
-    uint chain = state_chain(k, c);
-    chain_rotation[half_offset(pc.dst_half) + chain] = as_mat3x4(r);
-    chain_origin[half_offset(pc.dst_half) + chain] = origin;
-    store_joint_of(chain, r, origin);
+    store_joint_of(state_chain(k, c), r, origin);
 }
 
 #endif  // HMSM_CHAIN_MATH_GLSL

@@ -80,6 +80,9 @@ uint half_offset(uint which) { return which * pc.total_chains; }
 
 /// A 3x3 matrix stored as three vec4 columns (w = 0).
 mat3 as_mat3(mat3x4 m) { return mat3(m[0].xyz, m[1].xyz, m[2].xyz); }
+/// The pose a joint matrix holds (rows: R row i, O_i; written by pass 5 in every composition).
+mat3 joint_rotation(mat3x4 j) { return transpose(mat3(j[0].xyz, j[1].xyz, j[2].xyz)); }
+vec3 joint_origin(mat3x4 j) { return vec3(j[0].w, j[1].w, j[2].w); }
 mat3x4 as_mat3x4(mat3 m) { return mat3x4(vec4(m[0], 0.0), vec4(m[1], 0.0), vec4(m[2], 0.0)); }
 
 const float HMSM_PI = 3.14159265358979323846;

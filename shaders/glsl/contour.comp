@@ -1,5 +1,6 @@
 #version 450
-// Pass 7: branch-mesh and leaf vertices rigid with their chain, v = O_c + R_c v_local. The base
+// Pass 7: branch-mesh and leaf vertices rigid with their chain, v = O_c + R_c v_local, the pose
+// read from the joint matrix [R_c | O_c] that pass 5 writes in every composition. The base
 // ring of a child chain blends with the parent chain by fix_weight (the paper's contour fix-up)
 // so joints stay closed while the child swings (src/cpu/contour.cpp). pc.mode is the vertex
 // layout: separate writes vec4(position, 1) and vec4(normal, 0); packed writes only the position,
@@ -15,16 +16,15 @@
 /// Model vertex e (index v of the static arrays) in group instance k; the fix-up's parent copies
 /// are read here, where a vertex has them.
 void place_vertex(uint k, uint e, uint v, ivec2 chains, vec3 rest_position, vec3 rest_normal) {
-    uint pose = half_offset(pc.src_half);
-    uint own = pose + state_chain(k, uint(chains.x));
-    mat3 r = as_mat3(chain_rotation[own]);
-    vec3 position = chain_origin[own].xyz + r * rest_position;
+    mat3x4 own = joint_matrix[state_chain(k, uint(chains.x))];
+    mat3 r = joint_rotation(own);
+    vec3 position = joint_origin(own) + r * rest_position;
     vec3 normal = r * rest_normal;
     if (chains.y >= 0) {
         float beta = pc.params.z;
-        uint parent = pose + state_chain(k, uint(chains.y));
-        mat3 rp = as_mat3(chain_rotation[parent]);
-        vec3 p = chain_origin[parent].xyz + rp * vertex_parent_position[v].xyz;
+        mat3x4 parent = joint_matrix[state_chain(k, uint(chains.y))];
+        mat3 rp = joint_rotation(parent);
+        vec3 p = joint_origin(parent) + rp * vertex_parent_position[v].xyz;
         vec3 n = rp * vertex_parent_normal[v].xyz;
         position = (1.0 - beta) * position + beta * p;
         normal = normalize((1.0 - beta) * normal + beta * n);

@@ -10,14 +10,14 @@ void main() {
     uint k = i / pc.model_node_count;
     uint n = i % pc.model_node_count;
     uint owner = uint(node_owner[pc.model_node_begin + n]);
-    mat3 r = as_mat3(chain_rotation[half_offset(pc.src_half) + state_chain(k, owner)]);
-    vec4 u = vec4(r * node_local[pc.model_node_begin + n].xyz, 0.0);
+    vec3 local = node_local[pc.model_node_begin + n].xyz;
     // Path walk: node_world follows in the same dispatch (node_world.comp) with u in hand, which
-    // is not stored (src/pass_table.h walk_writes).
+    // is not stored, and the pose is the joint matrix (src/pass_table.h walk_reads, walk_writes).
     if (pc.mode == HMSM_MODE_PATH_WALK) {
-        vec4 w = chain_origin[half_offset(pc.src_half) + state_chain(k, owner)] + u;
-        node_world[state_node(k, n)] = vec4(w.xyz, 1.0);
-    } else {
-        node_relative[state_node(k, n)] = u;
+        mat3x4 j = joint_matrix[state_chain(k, owner)];
+        node_world[state_node(k, n)] = vec4(joint_origin(j) + joint_rotation(j) * local, 1.0);
+        return;
     }
+    mat3 r = as_mat3(chain_rotation[half_offset(pc.src_half) + state_chain(k, owner)]);
+    node_relative[state_node(k, n)] = vec4(r * local, 0.0);
 }

@@ -12,11 +12,15 @@ void main() {
     uint k = i / pc.model_chain_count;
     uint c = i % pc.model_chain_count;
     uint chain = state_chain(k, c);
-    vec2 g = chain_wind_force(k, c, chain, pc.src_half);
-    // Path walk: integrate's step follows in the same dispatch with g in hand; only the angles
-    // are stored (the walk computes T from them; src/pass_table.h walk_writes).
-    if (pc.mode == HMSM_MODE_PATH_WALK)
+    // Path walk: the previous pose is the joint matrix (the walk writes no R or O half), and
+    // integrate's step follows in the same dispatch with g in hand; only the angles are stored
+    // (the walk computes T from them; src/pass_table.h walk_reads, walk_writes).
+    if (pc.mode == HMSM_MODE_PATH_WALK) {
+        mat3x4 j = joint_matrix[chain];
+        vec2 g = chain_wind_force(k, c, chain, joint_origin(j), joint_rotation(j));
         chain_state[chain] = integrate_step(pc.model_chain_begin + c, chain_state[chain], g);
-    else
-        chain_force[chain] = g;
+        return;
+    }
+    uint pose = half_offset(pc.src_half) + chain;
+    chain_force[chain] = chain_wind_force(k, c, chain, chain_origin[pose].xyz, as_mat3(chain_rotation[pose]));
 }

@@ -1,4 +1,5 @@
-// Pass 7: branch-mesh and leaf vertices rigid with their chain, v = O_c + R_c v_local; base-ring
+// Pass 7: branch-mesh and leaf vertices rigid with their chain, v = O_c + R_c v_local (the pose
+// read from the joint matrix [R_c | O_c], which every composition writes); base-ring
 // vertices of child chains blend with the parent chain (the paper's contour fix-up) so joints
 // stay closed while the child swings. pc.mode is the vertex layout (gpu_layout.h): packed stores
 // the octahedral normal word in the position's w (src/common/octahedral.h) and no vertex_normal.
@@ -13,20 +14,20 @@ namespace hmsm::detail::cpu {
 template <class T>
 void contour(State<T>& s, const gpu::PassConstants& pc, Range r) {
     using vec3 = typename State<T>::vec3;
-    const uint64_t pose = uint64_t(pc.src_half) * s.total_chains;
     const T beta = s.fix_weight;
     for (uint32_t i = r.begin; i < r.end; ++i) {
         Element e = element_of(i, pc.model_vertex_count);
         uint32_t v = pc.model_vertex_begin + e.index;
         glm::ivec2 chains = s.vertex_chain[v];
-        uint64_t own = pose + state_chain(pc, e.instance, chains.x);
-        vec3 position = vec3(s.chain_origin[own]) + s.chain_rotation[own] * vec3(s.vertex_rest_position[v]);
-        vec3 normal = s.chain_rotation[own] * vec3(s.vertex_rest_normal[v]);
+        const uint64_t own = state_chain(pc, e.instance, chains.x);
+        const auto rotation = joint_rotation(s, own);
+        vec3 position = joint_origin(s, own) + rotation * vec3(s.vertex_rest_position[v]);
+        vec3 normal = rotation * vec3(s.vertex_rest_normal[v]);
         if (chains.y >= 0) {
-            uint64_t parent = pose + state_chain(pc, e.instance, chains.y);
-            vec3 p = vec3(s.chain_origin[parent]) +
-                     s.chain_rotation[parent] * vec3(s.vertex_parent_position[v]);
-            vec3 n = s.chain_rotation[parent] * vec3(s.vertex_parent_normal[v]);
+            const uint64_t parent = state_chain(pc, e.instance, chains.y);
+            const auto parent_rotation = joint_rotation(s, parent);
+            vec3 p = joint_origin(s, parent) + parent_rotation * vec3(s.vertex_parent_position[v]);
+            vec3 n = parent_rotation * vec3(s.vertex_parent_normal[v]);
             position = (T(1) - beta) * position + beta * p;
             normal = glm::normalize((T(1) - beta) * normal + beta * n);
         }

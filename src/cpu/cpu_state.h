@@ -76,6 +76,18 @@ void store_joint(State<T>& s, uint64_t chain, const typename State<T>::mat3& r,
     for (int i = 0; i < 3; ++i) m[i] = typename State<T>::vec4(r[0][i], r[1][i], r[2][i], o[i]);
 }
 
+/// The pose a joint matrix holds: R (rebuilt by columns) and O, the floats stored.
+template <class T>
+typename State<T>::mat3 joint_rotation(const State<T>& s, uint64_t chain) {
+    const auto& m = s.joint_matrix[chain];
+    return typename State<T>::mat3(m[0][0], m[1][0], m[2][0], m[0][1], m[1][1], m[2][1], m[0][2], m[1][2], m[2][2]);
+}
+template <class T>
+typename State<T>::vec3 joint_origin(const State<T>& s, uint64_t chain) {
+    const auto& m = s.joint_matrix[chain];
+    return typename State<T>::vec3(m[0][3], m[1][3], m[2][3]);
+}
+
 /// The work items [begin, end) of one dispatch that one call of a pass runs, in order. An item
 /// is a thread of the dispatch (element i, gpu_layout.h), except in
 /// HMSM_MODE_POINTER_JUMPING_IN_DISPATCH, where it is a group instance running every round

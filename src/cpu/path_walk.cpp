@@ -1,7 +1,7 @@
 // Composition::path_walk on the CPU, passes 3 and 5 in one (gpu_layout.h HMSM_MODE_PATH_WALK):
 // each chain of the work items walks its ancestors from the trunk down, R = R_parent T and
 // O = O_parent + R_parent l_attach, each T computed from the chain's new angles as integrate
-// computes it (a walk step stores no T). These are level by level's operations in level by level's
+// computes it (a walk step stores no T). The pose goes to the joint matrix alone. These are level by level's operations in level by level's
 // order (its own offset R_parent l_attach is node_relative's u of the attach node), so the poses
 // are level by level's bit for bit, without a dispatch per depth level.
 #include "cpu_state.h"
@@ -12,7 +12,6 @@ template <class T>
 void path_walk(State<T>& s, const gpu::PassConstants& pc, Range r) {
     using vec3 = typename State<T>::vec3;
     using vec4 = typename State<T>::vec4;
-    const uint64_t dst = uint64_t(pc.dst_half) * s.total_chains;
     const int32_t* parent = s.chain_parent.data() + pc.model_chain_begin;
     for (uint32_t i = r.begin; i < r.end; ++i) {
         const Element e = element_of(i, pc.model_chain_count);
@@ -49,10 +48,7 @@ void path_walk(State<T>& s, const gpu::PassConstants& pc, Range r) {
             origin += vec4{u, T(0)};
             rotation = rotation * local_of(x);
         }
-        const uint64_t chain = state_chain(pc, e.instance, c);
-        s.chain_rotation[dst + chain] = rotation;
-        s.chain_origin[dst + chain] = origin;
-        store_joint(s, chain, rotation, origin);
+        store_joint(s, state_chain(pc, e.instance, c), rotation, origin);
     }
 }
 

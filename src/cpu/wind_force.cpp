@@ -10,9 +10,10 @@
 
 namespace hmsm::detail::cpu {
 
-/// g for every chain of the work items, handed to use(state chain, g) instead of stored.
+/// g for every chain of the work items, handed to use(state chain, g) instead of stored; the
+/// previous pose from the pose half src_half, or from the joint matrix (`from_joint`: a path walk).
 template <class T, class Use>
-void wind_forces(State<T>& s, const gpu::PassConstants& pc, double wind_x, Range r, Use&& use) {
+void wind_forces(State<T>& s, const gpu::PassConstants& pc, double wind_x, Range r, bool from_joint, Use&& use) {
     using vec3 = typename State<T>::vec3;
     const uint32_t slot = uint32_t(wind_x);  // the step's slot of the wind table
     const auto* table = s.wind_table.data();
@@ -31,7 +32,7 @@ void wind_forces(State<T>& s, const gpu::PassConstants& pc, double wind_x, Range
             y = wind_profile_y<T>(pc.profile, step.x + instance[1]);  // tau + phi, both mod 2
         vec3 w = instance[0] * y * strength_direction;
         const uint64_t pose = pc.src_half * s.total_chains + c;
-        const vec3 x = vec3(s.chain_origin[pose]);
+        const vec3 x = from_joint ? joint_origin(s, c) : vec3(s.chain_origin[pose]);
         for (uint32_t f = 0; f < fields; ++f) {
             const auto& sphere = table[HMSM_WIND_FIELDS + 2 * f];
             const auto& force = table[HMSM_WIND_FIELDS + 2 * f + 1];
@@ -42,7 +43,7 @@ void wind_forces(State<T>& s, const gpu::PassConstants& pc, double wind_x, Range
             if (force.w == T(0)) w += h * vec3(force);
             else if (distance >= T(1e-9)) w += (h * force.x / distance) * offset;
         }
-        auto w_local = glm::transpose(s.chain_rotation[pose]) * w;
+        auto w_local = glm::transpose(from_joint ? joint_rotation(s, c) : s.chain_rotation[pose]) * w;
         T area = s.chain_constants[pc.model_chain_begin + e.index].w;
         use(c, typename State<T>::vec2(area * w_local.z, -area * w_local.x));
     }
@@ -50,14 +51,15 @@ void wind_forces(State<T>& s, const gpu::PassConstants& pc, double wind_x, Range
 
 template <class T>
 void wind_force(State<T>& s, const gpu::PassConstants& pc, double wind_x, Range r) {
-    wind_forces(s, pc, wind_x, r, [&](uint64_t c, const typename State<T>::vec2& g) { s.chain_force[c] = g; });
+    wind_forces(s, pc, wind_x, r, false, [&](uint64_t c, const typename State<T>::vec2& g) { s.chain_force[c] = g; });
 }
 
 /// Composition::path_walk: integrate in the same pass over the same chains, g kept in hand;
-/// only the new angles are stored (the walk computes T from them).
+/// only the new angles are stored (the walk computes T from them). The previous pose is the
+/// joint matrix (a walk step writes no R or O half).
 template <class T>
 void wind_force_and_integrate(State<T>& s, const gpu::PassConstants& pc, double wind_x, Range r) {
-    wind_forces(s, pc, wind_x, r, [&](uint64_t c, const typename State<T>::vec2& g) {
+    wind_forces(s, pc, wind_x, r, true, [&](uint64_t c, const typename State<T>::vec2& g) {
         const uint32_t model_chain = pc.model_chain_begin + uint32_t((c - pc.chain_begin) % pc.model_chain_count);
         integrate_angles(s, model_chain, c, g);
     });

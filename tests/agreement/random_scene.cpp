@@ -276,6 +276,15 @@ void randomize_state(const detail::SceneData& d, detail::Backend& a, detail::Bac
     fill(BufferId::node_world, point);
     fill(BufferId::vertex_position, point);
     fill(BufferId::vertex_normal, point);
+    // A joint matrix [R | O] by rows: the pose the contour pass and a path walk step read.
+    fill(BufferId::joint_matrix, [&](double* m) {
+        glm::dmat3 r = random_rotation(rng);
+        glm::dvec4 o = random_point(rng, 5.0);
+        for (int row = 0; row < 3; ++row) {
+            for (int col = 0; col < 3; ++col) m[4 * row + col] = r[col][row];
+            m[4 * row + 3] = o[row];
+        }
+    });
     // The wind table (gpu_layout.h): amplitudes, wind vector with three force fields of both
     // kinds, and every step slot with tau mod 2 and mode phases in [0, 1).
     std::vector<double> table(4 * HMSM_WIND_TABLE_ELEMENTS, 0.0);
