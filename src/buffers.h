@@ -31,6 +31,7 @@ constexpr bool shape_is_integer(Shape s) { return s == Shape::i32 || s == Shape:
 enum class Scope : uint32_t {
     model_chain,      ///< static chains of all models
     model_chain_jump, ///< jump_rounds x static chains
+    model_chain_walk, ///< HMSM_WALK_RECORD_INTS x static chains
     model_node,
     model_vertex,
     instance,
@@ -68,7 +69,8 @@ enum class Scope : uint32_t {
     X(vertex_normal, HMSM_BINDING_VERTEX_NORMAL, f32x4, vertex)                     \
     X(instance_wind, HMSM_BINDING_INSTANCE_WIND, f32x36, instance)                  \
     X(wind_table, HMSM_BINDING_WIND_TABLE, f32x4, wind)                             \
-    X(joint_matrix, HMSM_BINDING_JOINT_MATRIX, mat3x4, chain)
+    X(joint_matrix, HMSM_BINDING_JOINT_MATRIX, mat3x4, chain)                       \
+    X(chain_walk, HMSM_BINDING_CHAIN_WALK, i32, model_chain_walk)
 
 enum class BufferId : uint32_t {
 #define HMSM_BUFFER_ENUM(name, binding, shape, scope) name = binding,
@@ -97,7 +99,8 @@ constexpr const BufferInfo& buffer_info(BufferId id) { return kBufferTable[stati
 /// every run.
 constexpr bool is_static(BufferId id) {
     Scope s = buffer_info(id).scope;
-    return s == Scope::model_chain || s == Scope::model_chain_jump || s == Scope::model_node ||
+    return s == Scope::model_chain || s == Scope::model_chain_jump || s == Scope::model_chain_walk ||
+           s == Scope::model_node ||
            s == Scope::model_vertex || s == Scope::instance;
 }
 

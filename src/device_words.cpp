@@ -41,6 +41,7 @@ std::vector<std::byte> device_image(const SceneData& d, BufferId id) {
     switch (id) {
         case BufferId::chain_parent: return raw_bytes(d.chain_parent);
         case BufferId::chain_jump: return raw_bytes(d.chain_jump);
+        case BufferId::chain_walk: return raw_bytes(d.chain_walk);
         case BufferId::chain_attach: return raw_bytes(d.chain_attach);
         case BufferId::chain_rest_rotation: return mat3x4_image(d.chain_rest_rotation);
         case BufferId::chain_constants: return float4_image(d.chain_constants);

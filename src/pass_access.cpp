@@ -25,6 +25,7 @@ uint64_t SceneData::element_count(BufferId id) const {
     switch (buffer_info(id).scope) {
         case Scope::model_chain: return chain_parent.size();
         case Scope::model_chain_jump: return chain_jump.size();
+        case Scope::model_chain_walk: return chain_walk.size();
         case Scope::model_node: return node_owner.size();
         case Scope::model_vertex: return vertex_chain.size();
         case Scope::instance: return instance_capacity;

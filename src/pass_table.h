@@ -61,7 +61,7 @@ constexpr uint32_t buffer_bit(BufferId id) { return 1u << static_cast<uint32_t>(
       (HMSM_B(chain_local) | HMSM_B(chain_rotation) | HMSM_B(chain_jump) |                        \
        HMSM_B(chain_parent)),                                                                     \
       (HMSM_B(chain_rotation)),                                                                   \
-      (HMSM_B(chain_state) | HMSM_B(chain_parent) | HMSM_B(chain_jump) | HMSM_B(chain_attach) |   \
+      (HMSM_B(chain_state) | HMSM_B(chain_walk) | HMSM_B(chain_jump) | HMSM_B(chain_attach) |     \
        HMSM_B(chain_rest_rotation) | HMSM_B(node_local) | HMSM_B(instance_origin) |              \
        HMSM_B(instance_yaw)),                                                                     \
       (HMSM_B(joint_matrix)))                                                                     \

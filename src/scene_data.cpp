@@ -41,6 +41,24 @@ gpu::PassConstants group_constants(const SceneData& d, const InstanceGroup& g, u
     return pc;
 }
 
+/// The walk records of every model chain (gpu_layout.h HMSM_WALK_RECORD_INTS): depth, the
+/// ancestors going up, the attach nodes of the chain and of its ancestors.
+void fill_walk_records(SceneData& d) {
+    d.chain_walk.assign(size_t(HMSM_WALK_RECORD_INTS) * d.total_model_chains(), -1);
+    for (const ModelRange& range : d.models) {
+        for (uint32_t c = 0; c < range.chain_count; ++c) {
+            int32_t* record = &d.chain_walk[size_t(HMSM_WALK_RECORD_INTS) * (range.chain_begin + c)];
+            int32_t depth = 0;
+            for (int32_t x = int32_t(c); x >= 0; x = d.chain_parent[range.chain_begin + x], ++depth) {
+                if (depth >= 1 && depth <= int32_t(HMSM_WALK_PATH_CAPACITY)) record[depth] = x;
+                if (depth < 16 && d.chain_parent[range.chain_begin + x] >= 0)
+                    record[HMSM_WALK_ATTACH(uint32_t(depth))] = d.chain_attach[range.chain_begin + x];
+            }
+            record[0] = depth - 1;
+        }
+    }
+}
+
 SceneData flatten_scene(const Scene& scene, const std::vector<Hierarchy>& hierarchies,
                         const std::vector<MeshTemplate>& meshes, const Parameters& parameters,
                         const ModelOptions& options, const Wind& wind,
@@ -99,6 +117,8 @@ SceneData flatten_scene(const Scene& scene, const std::vector<Hierarchy>& hierar
             }
         }
     }
+
+    fill_walk_records(d);
 
     // Instances and groups.
     for (size_t i = 0; i < scene.instances.size(); ++i) {

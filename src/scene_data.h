@@ -40,6 +40,7 @@ struct SceneData {
     // Model-scope arrays (every model's data concatenated).
     std::vector<int32_t> chain_parent;
     std::vector<int32_t> chain_jump;  // jump_rounds x total_model_chains, round-major
+    std::vector<int32_t> chain_walk;  // HMSM_WALK_RECORD_INTS per model chain (gpu_layout.h)
     std::vector<int32_t> chain_attach;
     std::vector<glm::dmat3> chain_rest_rotation;
     std::vector<glm::dvec4> chain_constants;  // (I, K, D, A)
@@ -123,5 +124,8 @@ gpu::PassConstants group_constants(const SceneData& scene, const InstanceGroup& 
 
 /// Pointer-jumping rounds for a maximum chain depth: max(1, ceil(log2(depth + 1))).
 uint32_t jump_rounds_for_depth(int32_t max_depth);
+/// Fills d.chain_walk from d.chain_parent and d.chain_attach of every model (gpu_layout.h
+/// HMSM_WALK_RECORD_INTS).
+void fill_walk_records(SceneData& d);
 
 }  // namespace hmsm::detail

@@ -194,17 +194,25 @@ HMSM_HOST_DEVICE int32_t ancestor_above(const BufferPointers& b, const gpu::Pass
 /// operations in its order), each T computed from the chain's new angles as integrate computes
 /// it (a walk step stores no T), the pose to the joint matrix alone (src/cpu/path_walk.cpp).
 HMSM_HOST_DEVICE void path_walk(const BufferPointers& b, const gpu::PassConstants& pc, uint32_t k, int32_t c) {
-    // The ancestors going up: the first HMSM_WALK_PATH_CAPACITY kept, the depth counted.
-    const int32_t* parent = b.chain_parent + pc.model_chain_begin;
-    int32_t path[HMSM_WALK_PATH_CAPACITY];
-    uint32_t depth = 0;
-    for (int32_t a = load(parent + c); a >= 0; a = load(parent + a)) {
-        if (depth < HMSM_WALK_PATH_CAPACITY) path[depth] = a;
-        ++depth;
+    // The walk record (gpu_layout.h), in one round of loads: depth, ancestors, attach nodes.
+    int32_t record[HMSM_WALK_RECORD_INTS];
+    const int4* words = reinterpret_cast<const int4*>(b.chain_walk + uint64_t(HMSM_WALK_RECORD_INTS) *
+                                                                         (pc.model_chain_begin + uint32_t(c)));
+#pragma unroll
+    for (uint32_t q = 0; q < HMSM_WALK_RECORD_INTS / 4; ++q) {
+        const int4 w = load(words + q);
+        record[4 * q] = w.x;
+        record[4 * q + 1] = w.y;
+        record[4 * q + 2] = w.z;
+        record[4 * q + 3] = w.w;
     }
+    const uint32_t depth = uint32_t(record[0]);
     auto ancestor = [&](uint32_t up) {
         if (up == 0) return c;
-        return up <= HMSM_WALK_PATH_CAPACITY ? path[up - 1] : ancestor_above(b, pc, c, up);
+        return up <= HMSM_WALK_PATH_CAPACITY ? record[up] : ancestor_above(b, pc, c, up);
+    };
+    auto attach = [&](uint32_t up) {
+        return up < 16 ? record[HMSM_WALK_ATTACH(up)] : load(b.chain_attach + pc.model_chain_begin + ancestor(up));
     };
     auto local_of = [&](int32_t x, bool trunk) {
         const float4 state = load(b.chain_state + state_chain(pc, k, x));
@@ -218,8 +226,7 @@ HMSM_HOST_DEVICE void path_walk(const BufferPointers& b, const gpu::PassConstant
 #pragma unroll 4
     for (uint32_t level = 1; level <= depth; ++level) {
         const int32_t x = ancestor(depth - level);
-        const int32_t attach = load(b.chain_attach + pc.model_chain_begin + x);
-        const float3 local = xyz(load(b.node_local + pc.model_node_begin + attach));
+        const float3 local = xyz(load(b.node_local + pc.model_node_begin + attach(depth - level)));
         origin = origin + with_w(rotation * local, 0.0f);
         rotation = rotation * local_of(x, false);
     }

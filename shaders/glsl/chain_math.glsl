@@ -149,12 +149,18 @@ uint ancestor_above(uint c, uint up) {
     return c;
 }
 
-uint walk_path[HMSM_WALK_PATH_CAPACITY];  // the walk's ancestors going up, the first ones kept
+int walk_record[HMSM_WALK_RECORD_INTS];  // the walking chain's record (gpu_layout.h)
 
-/// The ancestor `up` levels above c (walk_path filled for c).
+/// The ancestor `up` levels above c (walk_record filled for c).
 uint walk_ancestor(uint c, uint up) {
     if (up == 0u) return c;
-    return up <= HMSM_WALK_PATH_CAPACITY ? walk_path[up - 1u] : ancestor_above(c, up);
+    return up <= HMSM_WALK_PATH_CAPACITY ? uint(walk_record[up]) : ancestor_above(c, up);
+}
+
+/// The attach node of the chain `up` levels above c (walk_record filled for c).
+uint walk_attach(uint c, uint up) {
+    return up < 16u ? uint(walk_record[HMSM_WALK_ATTACH(up)])
+                    : uint(chain_attach[pc.model_chain_begin + walk_ancestor(c, up)]);
 }
 
 /// T of model chain x of group instance k from its new angles in chain_state, as integrate
@@ -168,16 +174,20 @@ mat3 walk_local(uint k, uint x, bool trunk) {
 /// operations in its order), each T from the chain's new angles (walk_local), the pose to the
 /// joint matrix alone (src/cpu/path_walk.cpp).
 void path_walk(uint k, uint c) {
-    uint depth = 0u;
-    for (int a = chain_parent[pc.model_chain_begin + c]; a >= 0; a = chain_parent[pc.model_chain_begin + uint(a)]) {
-        if (depth < HMSM_WALK_PATH_CAPACITY) walk_path[depth] = uint(a);
-        ++depth;
+    uint first = (pc.model_chain_begin + c) * (HMSM_WALK_RECORD_INTS / 4u);
+    for (uint q = 0u; q < HMSM_WALK_RECORD_INTS / 4u; ++q) {
+        ivec4 w = chain_walk[first + q];
+        walk_record[4u * q] = w.x;
+        walk_record[4u * q + 1u] = w.y;
+        walk_record[4u * q + 2u] = w.z;
+        walk_record[4u * q + 3u] = w.w;
     }
+    uint depth = uint(walk_record[0]);
     mat3 r = walk_local(k, walk_ancestor(c, depth), true);
     vec4 origin = vec4(instance_origin[pc.instance_begin + k].xyz, 0.0);
     for (uint level = 1u; level <= depth; ++level) {
         uint x = walk_ancestor(c, depth - level);
-        vec3 local = node_local[pc.model_node_begin + uint(chain_attach[pc.model_chain_begin + x])].xyz;
+        vec3 local = node_local[pc.model_node_begin + walk_attach(c, depth - level)].xyz;
         origin += vec4(r * local, 0.0);
         r = r * walk_local(k, x, false);
     }

@@ -35,6 +35,8 @@ layout(push_constant, std430) uniform PushBlock {
 layout(set = 0, binding = HMSM_BINDING_CHAIN_PARENT, std430) readonly buffer ChainParent { int chain_parent[]; };
 layout(set = 0, binding = HMSM_BINDING_CHAIN_JUMP, std430) readonly buffer ChainJump { int chain_jump[]; };
 layout(set = 0, binding = HMSM_BINDING_CHAIN_ATTACH, std430) readonly buffer ChainAttach { int chain_attach[]; };
+// HMSM_WALK_RECORD_INTS / 4 ivec4 per model chain: its walk record (gpu_layout.h).
+layout(set = 0, binding = HMSM_BINDING_CHAIN_WALK, std430) readonly buffer ChainWalk { ivec4 chain_walk[]; };
 layout(set = 0, binding = HMSM_BINDING_CHAIN_REST_ROTATION, std430) readonly buffer ChainRestRotation { mat3x4 chain_rest_rotation[]; };
 layout(set = 0, binding = HMSM_BINDING_CHAIN_CONSTANTS, std430) readonly buffer ChainConstants { vec4 chain_constants[]; };
 layout(set = 0, binding = HMSM_BINDING_NODE_OWNER, std430) readonly buffer NodeOwner { int node_owner[]; };

@@ -47,7 +47,9 @@
 // Joint matrix M_c = [R_c | O_c] per chain (docs/formats.md "Joint matrices"): three vec4 ROWS
 // (R_c row i, O_c.i), 48 bytes, written by root_positions where it writes the final O_c.
 #define HMSM_BINDING_JOINT_MATRIX 25         // mat3x4 per chain: rows (R row 0, O.x), (R row 1, O.y), (R row 2, O.z)
-#define HMSM_BINDING_COUNT 26
+// Model scope, for Composition::path_walk:
+#define HMSM_BINDING_CHAIN_WALK 26           // HMSM_WALK_RECORD_INTS int per model chain: its walk record (below)
+#define HMSM_BINDING_COUNT 27
 
 /// The wind of docs/model.md 3.5 on the device. Float backends never see the clock tau or a
 /// phase beyond a few units: the host reduces tau mod 2 and the turbulent mode phases mod 1 in
@@ -115,15 +117,21 @@
 /// Composition::path_walk: a dispatch of a pass that leads a walk (the pass table's `walk`
 /// column) in this mode also runs the pass's walk partner, thread i handling element i of the
 /// pass's domain: wind_force then integrate for chain i; compose then root_positions for chain
-/// i by the top-down walk (its ancestors from the trunk down, found by following chain_parent
-/// up, beyond HMSM_WALK_PATH_CAPACITY through chain_jump: R = R_parent T,
-/// O = O_parent + R_parent l_attach, written with the joint matrix to the pose half dst_half);
-/// node_relative then node_world for node i.
+/// i by the top-down walk (its ancestors from the trunk down, from its walk record, beyond
+/// HMSM_WALK_PATH_CAPACITY through chain_jump and chain_attach: R = R_parent T,
+/// O = O_parent + R_parent l_attach, written to the joint matrix); node_relative then node_world
+/// for node i.
 #define HMSM_MODE_PATH_WALK 4u
-/// The walk keeps the first this many ancestors it meets going up (parent, grandparent, ...) in
-/// a thread-local array, so that going down it reads them back instead of looking them up in
-/// chain_jump; ancestors further up (chains deeper than this) are looked up.
-#define HMSM_WALK_PATH_CAPACITY 16u
+/// A chain's walk record (binding HMSM_BINDING_CHAIN_WALK, static, model-local indices): int 0
+/// its depth d; int u, 1 <= u <= HMSM_WALK_PATH_CAPACITY, its ancestor u levels up (-1 past the
+/// trunk); int HMSM_WALK_ATTACH(u), 0 <= u < 16, the attach node of the chain u levels up (u = 0:
+/// the chain itself; -1 for the trunk and past it). With the whole path in one 128-byte record a
+/// walk thread makes one round of loads for its ancestors and their attach nodes, where
+/// following chain_parent up takes one dependent load per level.
+#define HMSM_WALK_RECORD_INTS 32u
+#define HMSM_WALK_PATH_CAPACITY 15u
+/// Index in the record of the attach node of the chain u levels up (0 <= u <= 15).
+#define HMSM_WALK_ATTACH(u) (16u + (u))
 
 /// vertex layouts (PassConstants.mode of a contour dispatch; hmsm::VertexLayout values):
 /// separate writes vertex_position (x, y, z, 1) and vertex_normal (nx, ny, nz, 0); packed writes

@@ -187,6 +187,7 @@ private:
         using vec4 = typename State<T>::vec4;
         s_.chain_parent = d.chain_parent;
         s_.chain_jump = d.chain_jump;
+        s_.chain_walk = d.chain_walk;
         s_.chain_attach = d.chain_attach;
         s_.node_owner = d.node_owner;
         s_.vertex_chain = d.vertex_chain;

@@ -25,7 +25,7 @@ struct State {
     using joint = glm::mat<3, 4, T>;
 
     // Model and instance scope (uploaded once).
-    std::vector<int32_t> chain_parent, chain_jump, chain_attach, node_owner;
+    std::vector<int32_t> chain_parent, chain_jump, chain_attach, node_owner, chain_walk;
     std::vector<glm::ivec2> vertex_chain;
     std::vector<mat3> chain_rest_rotation;
     std::vector<vec4> chain_constants, node_local;

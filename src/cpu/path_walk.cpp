@@ -1,9 +1,10 @@
 // Composition::path_walk on the CPU, passes 3 and 5 in one (gpu_layout.h HMSM_MODE_PATH_WALK):
 // each chain of the work items walks its ancestors from the trunk down, R = R_parent T and
 // O = O_parent + R_parent l_attach, each T computed from the chain's new angles as integrate
-// computes it (a walk step stores no T). The pose goes to the joint matrix alone. These are level by level's operations in level by level's
-// order (its own offset R_parent l_attach is node_relative's u of the attach node), so the poses
-// are level by level's bit for bit, without a dispatch per depth level.
+// computes it (a walk step stores no T); the pose goes to the joint matrix alone. These are
+// level by level's operations in level by level's order (its own offset R_parent l_attach is
+// node_relative's u of the attach node), so the poses are level by level's bit for bit, without
+// a dispatch per depth level.
 #include "cpu_state.h"
 
 namespace hmsm::detail::cpu {
@@ -12,25 +13,23 @@ template <class T>
 void path_walk(State<T>& s, const gpu::PassConstants& pc, Range r) {
     using vec3 = typename State<T>::vec3;
     using vec4 = typename State<T>::vec4;
-    const int32_t* parent = s.chain_parent.data() + pc.model_chain_begin;
     for (uint32_t i = r.begin; i < r.end; ++i) {
         const Element e = element_of(i, pc.model_chain_count);
         const int32_t c = int32_t(e.index);
-        // The ancestors going up: the first HMSM_WALK_PATH_CAPACITY kept, the depth counted.
-        int32_t path[HMSM_WALK_PATH_CAPACITY];
-        uint32_t depth = 0;
-        for (int32_t a = parent[c]; a >= 0; a = parent[a]) {
-            if (depth < HMSM_WALK_PATH_CAPACITY) path[depth] = a;
-            ++depth;
-        }
-        // The ancestor `up` levels above c: kept, or through the 2^round-th ancestors of chain_jump.
+        // The walk record (gpu_layout.h): depth, ancestors and attach nodes; further up than it
+        // holds, through the 2^round-th ancestors of chain_jump and chain_attach.
+        const int32_t* record = &s.chain_walk[uint64_t(HMSM_WALK_RECORD_INTS) * (pc.model_chain_begin + c)];
+        const uint32_t depth = uint32_t(record[0]);
         auto ancestor = [&](uint32_t up) {
             if (up == 0) return c;
-            if (up <= HMSM_WALK_PATH_CAPACITY) return path[up - 1];
+            if (up <= HMSM_WALK_PATH_CAPACITY) return record[up];
             int32_t a = c;
             for (uint32_t round = 0; up != 0; ++round, up >>= 1)
                 if (up & 1u) a = s.chain_jump[uint64_t(round) * pc.total_model_chains + pc.model_chain_begin + a];
             return a;
+        };
+        auto attach = [&](uint32_t up) {
+            return up < 16 ? record[HMSM_WALK_ATTACH(up)] : s.chain_attach[pc.model_chain_begin + ancestor(up)];
         };
         // T of chain x from its new angles (integrate's local transform, as integrate gives it).
         auto local_of = [&](int32_t x) {
@@ -43,7 +42,7 @@ void path_walk(State<T>& s, const gpu::PassConstants& pc, Range r) {
         vec4 origin{o.x, o.y, o.z, T(0)};
         for (uint32_t level = 1; level <= depth; ++level) {
             const int32_t x = ancestor(depth - level);
-            const auto& local = s.node_local[pc.model_node_begin + s.chain_attach[pc.model_chain_begin + x]];
+            const auto& local = s.node_local[pc.model_node_begin + attach(depth - level)];
             const vec3 u = rotation * vec3(local);
             origin += vec4{u, T(0)};
             rotation = rotation * local_of(x);

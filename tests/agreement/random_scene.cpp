@@ -107,6 +107,7 @@ detail::SceneData random_scene_data(std::mt19937& rng, const std::vector<ModelSh
                     half < 0 ? -1 : d.chain_jump[size_t(r - 1) * total + range.chain_begin + half];
             }
     }
+    detail::fill_walk_records(d);
 
     for (uint32_t i = 0; i < instance_models.size(); ++i) {
         const detail::ModelRange& range = d.models[instance_models[i]];
