@@ -12,6 +12,13 @@ namespace {
 /// one dispatch per round.
 constexpr uint32_t kMaxChainsForRoundsInDispatch = 16 * HMSM_MAX_ROUNDS_WORKGROUP_SIZE;
 
+/// Path walk: groups of at most this many instances read the walk records whole (one round of
+/// loads, HMSM_WALK_FROM_RECORDS); larger ones follow chain_parent up. Measured on the H100
+/// (path walk, CUDA, µs per step): one paper-1 tree 13.5 -> 12.7 with the records; 10 and 16
+/// trees no better (21.7 -> 22.0, 25.3 -> 27.0, packed); 1,000 trees' walk 88 -> 176 (128
+/// distinct bytes per thread cost more L2 sectors than the parent links siblings share).
+constexpr uint32_t kWalkRecordsMaxInstances = 1;
+
 }  // namespace
 
 /// Whether Composition::pointer_jumping runs a group's rounds in one dispatch (one workgroup per
@@ -153,6 +160,8 @@ std::vector<Dispatch> build_path_walk_program(const SceneData& d, const std::vec
             Dispatch dispatch{pass, group_constants(d, g, HMSM_FINAL_HALF(d.jump_rounds))};
             dispatch.constants.element_count = g.instance_count * per_domain(g);
             dispatch.constants.mode = HMSM_MODE_PATH_WALK;
+            if (pass == Pass::compose && g.instance_count <= kWalkRecordsMaxInstances)
+                dispatch.constants.round = HMSM_WALK_FROM_RECORDS;
             if (dispatch.constants.element_count > 0) program.push_back(dispatch);
         }
         done |= pair;

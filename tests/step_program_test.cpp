@@ -144,9 +144,15 @@ TEST(StepProgram, PathWalkRunsThePairsInOneDispatchEachAndEqualsLevelByLevelBitw
     EXPECT_EQ(hmsm::detail::dispatch_writes(program[2]), bits({BufferId::node_world}));
     EXPECT_EQ(hmsm::detail::dispatch_passes(program[1]),
               (1u << uint32_t(Pass::compose)) | (1u << uint32_t(Pass::root_positions)));
-    // Also a tree deeper than the ancestors the walk keeps (HMSM_WALK_PATH_CAPACITY).
+    // Also a tree deeper than the walk records hold (HMSM_WALK_PATH_CAPACITY), and a forest of
+    // it, whose walk gathers its records by following chain_parent up instead of reading them.
     const Scene deeper = single_tree_scene(test::deep_tree(HMSM_WALK_PATH_CAPACITY + 3), {0, 0, 1}, -0.3);
-    for (const Scene* s : {&scene, &deeper}) {
+    const Scene forest = *grid_scene(test::deep_tree(HMSM_WALK_PATH_CAPACITY + 3), 20, 9.0, 3);
+    EXPECT_EQ(program[1].constants.round, HMSM_WALK_FROM_RECORDS);  // one instance: the records
+    auto walk_forest = cpu_simulation(forest, Composition::path_walk, storm);
+    ASSERT_TRUE(walk_forest);
+    EXPECT_EQ(hmsm::detail::step_program_of(*walk_forest)[1].constants.round, 0u);
+    for (const Scene* s : {&scene, &deeper, &forest}) {
         auto w = cpu_simulation(*s, Composition::path_walk, storm);
         auto l = cpu_simulation(*s, Composition::level_by_level, storm);
         auto at_rest = cpu_simulation(*s, Composition::level_by_level, storm);

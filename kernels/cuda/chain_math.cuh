@@ -194,17 +194,28 @@ HMSM_HOST_DEVICE int32_t ancestor_above(const BufferPointers& b, const gpu::Pass
 /// operations in its order), each T computed from the chain's new angles as integrate computes
 /// it (a walk step stores no T), the pose to the joint matrix alone (src/cpu/path_walk.cpp).
 HMSM_HOST_DEVICE void path_walk(const BufferPointers& b, const gpu::PassConstants& pc, uint32_t k, int32_t c) {
-    // The walk record (gpu_layout.h), in one round of loads: depth, ancestors, attach nodes.
+    // The walk record (gpu_layout.h): depth, ancestors, attach nodes. Read whole in one round of
+    // loads where the dispatch says so (a few instances: latency-bound), else gathered by
+    // following chain_parent up (a forest: 128 bytes per thread would cost more than the
+    // dependent loads, which other warps hide).
     int32_t record[HMSM_WALK_RECORD_INTS];
-    const int4* words = reinterpret_cast<const int4*>(b.chain_walk + uint64_t(HMSM_WALK_RECORD_INTS) *
-                                                                         (pc.model_chain_begin + uint32_t(c)));
+    if (pc.round == HMSM_WALK_FROM_RECORDS) {
+        const int4* words = reinterpret_cast<const int4*>(b.chain_walk + uint64_t(HMSM_WALK_RECORD_INTS) *
+                                                                             (pc.model_chain_begin + uint32_t(c)));
 #pragma unroll
-    for (uint32_t q = 0; q < HMSM_WALK_RECORD_INTS / 4; ++q) {
-        const int4 w = load(words + q);
-        record[4 * q] = w.x;
-        record[4 * q + 1] = w.y;
-        record[4 * q + 2] = w.z;
-        record[4 * q + 3] = w.w;
+        for (uint32_t q = 0; q < HMSM_WALK_RECORD_INTS / 4; ++q) {
+            const int4 w = load(words + q);
+            record[4 * q] = w.x;
+            record[4 * q + 1] = w.y;
+            record[4 * q + 2] = w.z;
+            record[4 * q + 3] = w.w;
+        }
+    } else {  // the ancestors only; attach nodes are looked up level by level
+        const int32_t* parent = b.chain_parent + pc.model_chain_begin;
+        uint32_t up = 0;
+        for (int32_t a = load(parent + c); a >= 0; a = load(parent + a))
+            if (++up <= HMSM_WALK_PATH_CAPACITY) record[up] = a;
+        record[0] = int32_t(up);
     }
     const uint32_t depth = uint32_t(record[0]);
     auto ancestor = [&](uint32_t up) {
@@ -212,7 +223,9 @@ HMSM_HOST_DEVICE void path_walk(const BufferPointers& b, const gpu::PassConstant
         return up <= HMSM_WALK_PATH_CAPACITY ? record[up] : ancestor_above(b, pc, c, up);
     };
     auto attach = [&](uint32_t up) {
-        return up < 16 ? record[HMSM_WALK_ATTACH(up)] : load(b.chain_attach + pc.model_chain_begin + ancestor(up));
+        return pc.round == HMSM_WALK_FROM_RECORDS && up < 16
+                   ? record[HMSM_WALK_ATTACH(up)]
+                   : load(b.chain_attach + pc.model_chain_begin + ancestor(up));
     };
     auto local_of = [&](int32_t x, bool trunk) {
         const float4 state = load(b.chain_state + state_chain(pc, k, x));

@@ -157,10 +157,11 @@ uint walk_ancestor(uint c, uint up) {
     return up <= HMSM_WALK_PATH_CAPACITY ? uint(walk_record[up]) : ancestor_above(c, up);
 }
 
-/// The attach node of the chain `up` levels above c (walk_record filled for c).
+/// The attach node of the chain `up` levels above c (walk_record filled for c): from the record
+/// where the dispatch read it whole, else looked up.
 uint walk_attach(uint c, uint up) {
-    return up < 16u ? uint(walk_record[HMSM_WALK_ATTACH(up)])
-                    : uint(chain_attach[pc.model_chain_begin + walk_ancestor(c, up)]);
+    if (pc.round == HMSM_WALK_FROM_RECORDS && up < 16u) return uint(walk_record[HMSM_WALK_ATTACH(up)]);
+    return uint(chain_attach[pc.model_chain_begin + walk_ancestor(c, up)]);
 }
 
 /// T of model chain x of group instance k from its new angles in chain_state, as integrate
@@ -174,13 +175,24 @@ mat3 walk_local(uint k, uint x, bool trunk) {
 /// operations in its order), each T from the chain's new angles (walk_local), the pose to the
 /// joint matrix alone (src/cpu/path_walk.cpp).
 void path_walk(uint k, uint c) {
-    uint first = (pc.model_chain_begin + c) * (HMSM_WALK_RECORD_INTS / 4u);
-    for (uint q = 0u; q < HMSM_WALK_RECORD_INTS / 4u; ++q) {
-        ivec4 w = chain_walk[first + q];
-        walk_record[4u * q] = w.x;
-        walk_record[4u * q + 1u] = w.y;
-        walk_record[4u * q + 2u] = w.z;
-        walk_record[4u * q + 3u] = w.w;
+    // The record whole where the dispatch says so (a few instances), else gathered by following
+    // chain_parent up (kernels/cuda/chain_math.cuh says why).
+    if (pc.round == HMSM_WALK_FROM_RECORDS) {
+        uint first = (pc.model_chain_begin + c) * (HMSM_WALK_RECORD_INTS / 4u);
+        for (uint q = 0u; q < HMSM_WALK_RECORD_INTS / 4u; ++q) {
+            ivec4 w = chain_walk[first + q];
+            walk_record[4u * q] = w.x;
+            walk_record[4u * q + 1u] = w.y;
+            walk_record[4u * q + 2u] = w.z;
+            walk_record[4u * q + 3u] = w.w;
+        }
+    } else {  // the ancestors only; attach nodes are looked up level by level (walk_attach)
+        uint up = 0u;
+        for (int a = chain_parent[pc.model_chain_begin + c]; a >= 0; a = chain_parent[pc.model_chain_begin + uint(a)]) {
+            ++up;
+            if (up <= HMSM_WALK_PATH_CAPACITY) walk_record[up] = a;
+        }
+        walk_record[0] = int(up);
     }
     uint depth = uint(walk_record[0]);
     mat3 r = walk_local(k, walk_ancestor(c, depth), true);

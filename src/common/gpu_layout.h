@@ -129,6 +129,9 @@
 /// walk thread makes one round of loads for its ancestors and their attach nodes, where
 /// following chain_parent up takes one dependent load per level.
 #define HMSM_WALK_RECORD_INTS 32u
+/// PassConstants.round of a walk dispatch (compose) that reads the records; 0: the walk
+/// gathers the same values by following chain_parent up (step_program.cpp chooses).
+#define HMSM_WALK_FROM_RECORDS 1u
 #define HMSM_WALK_PATH_CAPACITY 15u
 /// Index in the record of the attach node of the chain u levels up (0 <= u <= 15).
 #define HMSM_WALK_ATTACH(u) (16u + (u))

@@ -159,16 +159,23 @@ std::vector<std::vector<detail::Dispatch>> pass_variants(const detail::SceneData
         return variants;
     }
     if (composition == Composition::path_walk) {
-        std::vector<detail::Dispatch> list;  // one dispatch per group running the pass and its walk partner
-        uint32_t half = pick(rng, 0, 1);
-        for (const auto& g : d.groups) {
-            detail::Dispatch dispatch{pass, detail::group_constants(d, g, half)};
-            const auto& m = d.models[g.model];
-            dispatch.constants.element_count = g.instance_count * (pass == Pass::node_relative ? m.node_count : m.chain_count);
-            dispatch.constants.mode = HMSM_MODE_PATH_WALK;
-            list.push_back(dispatch);
+        // One dispatch per group running the pass and its walk partner; the walk both ways: from
+        // the records and by following chain_parent up.
+        for (uint32_t from_records : {0u, 1u}) {
+            if (from_records && pass != Pass::compose) continue;
+            std::vector<detail::Dispatch> list;
+            uint32_t half = pick(rng, 0, 1);
+            for (const auto& g : d.groups) {
+                detail::Dispatch dispatch{pass, detail::group_constants(d, g, half)};
+                const auto& m = d.models[g.model];
+                dispatch.constants.element_count =
+                    g.instance_count * (pass == Pass::node_relative ? m.node_count : m.chain_count);
+                dispatch.constants.mode = HMSM_MODE_PATH_WALK;
+                dispatch.constants.round = from_records ? HMSM_WALK_FROM_RECORDS : 0u;
+                list.push_back(dispatch);
+            }
+            variants.push_back(list);
         }
-        variants.push_back(list);
         return variants;
     }
     if (!hierarchical) {
