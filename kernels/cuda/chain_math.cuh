@@ -193,13 +193,14 @@ HMSM_HOST_DEVICE int32_t ancestor_above(const BufferPointers& b, const gpu::Pass
 /// from the trunk down, R = R_parent T and O = O_parent + R_parent l_attach (level by level's
 /// operations in its order), each T computed from the chain's new angles as integrate computes
 /// it (a walk step stores no T), the pose to the joint matrix alone (src/cpu/path_walk.cpp).
+template <bool kFromRecords>
 HMSM_HOST_DEVICE void path_walk(const BufferPointers& b, const gpu::PassConstants& pc, uint32_t k, int32_t c) {
-    // The walk record (gpu_layout.h): depth, ancestors, attach nodes. Read whole in one round of
-    // loads where the dispatch says so (a few instances: latency-bound), else gathered by
-    // following chain_parent up (a forest: 128 bytes per thread would cost more than the
-    // dependent loads, which other warps hide).
-    int32_t record[HMSM_WALK_RECORD_INTS];
-    if (pc.round == HMSM_WALK_FROM_RECORDS) {
+    // The walk record (gpu_layout.h): depth, ancestors, attach nodes. kFromRecords (a dispatch of
+    // one instance, latency-bound): read whole in one round of loads. Else (a forest, where 128
+    // bytes per thread would cost more than the dependent loads, which other warps hide): the
+    // ancestors gathered by following chain_parent up, the attach nodes looked up level by level.
+    int32_t record[kFromRecords ? HMSM_WALK_RECORD_INTS : HMSM_WALK_PATH_CAPACITY + 1];
+    if constexpr (kFromRecords) {
         const int4* words = reinterpret_cast<const int4*>(b.chain_walk + uint64_t(HMSM_WALK_RECORD_INTS) *
                                                                              (pc.model_chain_begin + uint32_t(c)));
 #pragma unroll
@@ -210,7 +211,7 @@ HMSM_HOST_DEVICE void path_walk(const BufferPointers& b, const gpu::PassConstant
             record[4 * q + 2] = w.z;
             record[4 * q + 3] = w.w;
         }
-    } else {  // the ancestors only; attach nodes are looked up level by level
+    } else {
         const int32_t* parent = b.chain_parent + pc.model_chain_begin;
         uint32_t up = 0;
         for (int32_t a = load(parent + c); a >= 0; a = load(parent + a))
@@ -223,9 +224,10 @@ HMSM_HOST_DEVICE void path_walk(const BufferPointers& b, const gpu::PassConstant
         return up <= HMSM_WALK_PATH_CAPACITY ? record[up] : ancestor_above(b, pc, c, up);
     };
     auto attach = [&](uint32_t up) {
-        return pc.round == HMSM_WALK_FROM_RECORDS && up < 16
-                   ? record[HMSM_WALK_ATTACH(up)]
-                   : load(b.chain_attach + pc.model_chain_begin + ancestor(up));
+        if constexpr (kFromRecords) {
+            if (up < 16) return record[HMSM_WALK_ATTACH(up)];
+        }
+        return load(b.chain_attach + pc.model_chain_begin + ancestor(up));
     };
     auto local_of = [&](int32_t x, bool trunk) {
         const float4 state = load(b.chain_state + state_chain(pc, k, x));

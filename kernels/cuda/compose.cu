@@ -13,10 +13,13 @@ namespace hmsm::detail::cuda {
 
 static HMSM_HOST_DEVICE void compose_element(const BufferPointers& b,
                                              const gpu::PassConstants& pc, uint32_t i) {
+#ifndef __CUDA_ARCH__  // the device runs walk_kernel instead (launch_compose)
     if (pc.mode == HMSM_MODE_PATH_WALK) {
         const Element e = element_of(i, pc.model_chain_count);
-        return path_walk(b, pc, e.instance, int32_t(e.index));  // and root_positions
+        if (pc.round == HMSM_WALK_FROM_RECORDS) return path_walk<true>(b, pc, e.instance, int32_t(e.index));
+        return path_walk<false>(b, pc, e.instance, int32_t(e.index));  // and root_positions
     }
+#endif
     if (pc.mode == HMSM_MODE_LEVEL_BY_LEVEL) {
         const LevelChain l = level_chain(b, pc, i);
         Mat3 rotation = load_mat3(b.chain_local, l.chain);
@@ -29,6 +32,35 @@ static HMSM_HOST_DEVICE void compose_element(const BufferPointers& b,
     compose_jump<false>(b, pc, e.instance, e.index, pc.round, pc.src_half, pc.dst_half);
 }
 
-HMSM_CUDA_ROUNDS_PASS(compose)
+/// Path walk on the device: a kernel of its own per way of reading the walk records, so that
+/// neither way's registers weigh on the other or on the pointer-jumping kernel.
+template <bool kFromRecords>
+__global__ void __launch_bounds__(HMSM_WORKGROUP_SIZE) walk_kernel(const BufferPointers b, const gpu::PassConstants pc) {
+    begin_pass();
+    for (uint32_t i = blockIdx.x * blockDim.x + threadIdx.x; i < pc.element_count; i += gridDim.x * blockDim.x) {
+        const Element e = element_of(i, pc.model_chain_count);
+        path_walk<kFromRecords>(b, pc, e.instance, int32_t(e.index));
+    }
+}
+
+struct compose_pass {
+    static constexpr bool kRounds = true;
+    HMSM_CUDA_PASS_ELEMENT(compose)
+    template <bool kWrittenInBlock>
+    static HMSM_HOST_DEVICE void jump(const BufferPointers& b, const gpu::PassConstants& pc, uint32_t k, uint32_t c,
+                                      uint32_t round, uint32_t src_half, uint32_t dst_half) {
+        compose_jump<kWrittenInBlock>(b, pc, k, c, round, src_half, dst_half);
+    }
+};
+
+cudaError_t launch_compose(const BufferPointers& b, const gpu::PassConstants& pc, cudaStream_t stream) {
+    if (pc.element_count == 0 || pc.mode != HMSM_MODE_PATH_WALK) return launch<compose_pass>(b, pc, stream);
+    const unsigned blocks = launch_blocks(pc.element_count);
+    if (pc.round == HMSM_WALK_FROM_RECORDS)
+        return launch_pass(walk_kernel<true>, blocks, HMSM_WORKGROUP_SIZE, stream, b, pc);
+    return launch_pass(walk_kernel<false>, blocks, HMSM_WORKGROUP_SIZE, stream, b, pc);
+}
+
+void emulate_compose(const BufferPointers& b, const gpu::PassConstants& pc) { emulate<compose_pass>(b, pc); }
 
 }  // namespace hmsm::detail::cuda
