@@ -97,6 +97,10 @@ public:
     /// dispatch for somewhat larger models (simulation.cpp).
     virtual bool dispatches_are_expensive() const { return false; }
 
+    /// Whether Composition::automatic resolves to path_walk here (measured fastest on GPUs) rather
+    /// than pointer_jumping (the CPU backends, and Vulkan on a CPU driver).
+    virtual bool prefers_path_walk() const { return false; }
+
     /// Optional, for `hmsm bench`'s roofline: copies `bytes` between two device scratch
     /// buffers (allocated and freed here) a few times and returns the median device copy
     /// bandwidth, counted as (bytes read + bytes written) / device seconds. Default: unsupported.

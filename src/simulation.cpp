@@ -46,6 +46,7 @@ const char* to_string(Composition composition) {
         case Composition::level_by_level: return "level_by_level";
         case Composition::fused: return "fused";
         case Composition::path_walk: return "path_walk";
+        case Composition::automatic: return "automatic";
     }
     return "?";
 }
@@ -53,7 +54,7 @@ const char* to_string(Composition composition) {
 std::optional<Composition> parse_composition(std::string_view name) {
     for (Composition c : {Composition::pointer_jumping, Composition::pointer_jumping_per_round,
                           Composition::pointer_jumping_in_dispatch, Composition::level_by_level,
-                          Composition::fused, Composition::path_walk})
+                          Composition::fused, Composition::path_walk, Composition::automatic})
         if (name == to_string(c)) return c;
     return std::nullopt;
 }
@@ -198,6 +199,9 @@ Result<std::unique_ptr<Simulation>> Simulation::Impl::create(const Scene& scene,
         if (!created) return created.status();
         sim->backend_ = std::move(created).value();
     }
+    if (config.composition == Composition::automatic)
+        sim->config_.composition =
+            sim->backend_->prefers_path_walk() ? Composition::path_walk : Composition::pointer_jumping;
     sim->backend_->set_profiling(config.profile_passes);
     HMSM_TRY(sim->backend_->upload(*sim->data_));
 

@@ -243,7 +243,31 @@ TEST(StepProgram, RoundsWorkgroupSizeIsThePowerOfTwoThatCoversTheChains) {
 TEST(StepProgram, CompositionNamesRoundTrip) {
     for (Composition c : {Composition::pointer_jumping, Composition::pointer_jumping_per_round,
                           Composition::pointer_jumping_in_dispatch, Composition::level_by_level,
-                          Composition::fused, Composition::path_walk})
+                          Composition::fused, Composition::path_walk, Composition::automatic})
         EXPECT_EQ(parse_composition(to_string(c)), c);
     EXPECT_FALSE(parse_composition("pointer-jumping").has_value());  // the CLI maps '-' to '_'
+}
+
+// The default composition resolves by backend: pointer jumping on the CPU backends and on
+// Vulkan over a CPU driver (measured faster there), path walk on a GPU; config() says which.
+TEST(StepProgram, AutomaticCompositionResolvesByBackend) {
+    EXPECT_EQ(SimulationConfig{}.composition, Composition::automatic);
+    const Scene scene = single_tree_scene(test::deep_tree(4));
+    for (BackendKind kind : {BackendKind::cpu, BackendKind::cpu64, BackendKind::cpu_parallel, BackendKind::vulkan,
+                             BackendKind::cuda}) {
+        SimulationConfig config;
+        config.backend = kind;
+        auto sim = Simulation::create(scene, config);
+        if (!sim.ok() && sim.status().code() == ErrorCode::no_device) continue;  // no such device here
+        ASSERT_TRUE(sim.ok()) << to_string(kind) << ": " << sim.status().message();
+        const bool gpu = kind == BackendKind::cuda ||
+                         (kind == BackendKind::vulkan && !hmsm::detail::backend_of(**sim).device_name().starts_with("llvmpipe"));
+        EXPECT_EQ((*sim)->config().composition, gpu ? Composition::path_walk : Composition::pointer_jumping)
+            << to_string(kind) << " on " << (*sim)->device_name();
+        const auto& program = hmsm::detail::step_program_of(**sim);
+        bool walks = false;
+        for (const auto& d : program) walks = walks || hmsm::detail::runs_path_walk(d);
+        EXPECT_EQ(walks, gpu) << to_string(kind);
+        if (gpu) EXPECT_EQ(program.size(), 4u);
+    }
 }

@@ -63,7 +63,8 @@ enum { /* hmsm_config.composition */
     HMSM_COMPOSITION_POINTER_JUMPING_IN_DISPATCH = 2,
     HMSM_COMPOSITION_LEVEL_BY_LEVEL = 3,
     HMSM_COMPOSITION_FUSED = 4, /* passes 1-5 in one dispatch, a workgroup per instance */
-    HMSM_COMPOSITION_PATH_WALK = 5 /* each chain walks its ancestors: 4 dispatches per step */
+    HMSM_COMPOSITION_PATH_WALK = 5, /* each chain walks its ancestors: 4 dispatches per step */
+    HMSM_COMPOSITION_AUTOMATIC = 6  /* the default: path walk on a GPU, else pointer jumping */
 };
 enum { HMSM_VERTEX_LAYOUT_SEPARATE = 0, HMSM_VERTEX_LAYOUT_PACKED = 1 };
 enum { HMSM_GROUPING_DIRECTION = 0, HMSM_GROUPING_WIDTH = 1 };

@@ -64,6 +64,11 @@ enum class Composition {
     /// compositions. Measured faster than pointer_jumping on an H100 (docs/benchmarks) for one
     /// tree and for forests, on CUDA and on Vulkan.
     path_walk,
+    /// The default: the composition measured fastest on the backend the simulation runs on,
+    /// `path_walk` on a GPU (CUDA, Vulkan on a GPU), `pointer_jumping` on the CPU backends and
+    /// on Vulkan over a CPU driver (lavapipe), where the walk's depth-many products cost more
+    /// than the rounds. Simulation::config() reports the composition it resolved to.
+    automatic,
 };
 HMSM_API const char* to_string(Composition composition);
 HMSM_API std::optional<Composition> parse_composition(std::string_view name);
@@ -98,7 +103,7 @@ struct SimulationConfig {
     ModelOptions model;
     Parameters parameters;
     Wind wind;
-    Composition composition = Composition::pointer_jumping;
+    Composition composition = Composition::automatic;
     /// The device layout of the mesh vertices; packed halves the bytes the contour pass writes.
     VertexLayout vertex_layout = VertexLayout::separate;
     /// Threads of the cpu-parallel backend (also when `automatic` picks it); 0: the

@@ -105,7 +105,7 @@ Status to_cpp(const hmsm_config& in, SimulationConfig& out) {
     if (in.backend < HMSM_BACKEND_CPU || in.backend > HMSM_BACKEND_CPU_PARALLEL)
         return bad("config.backend: unknown value " + std::to_string(in.backend));
     if (in.composition < HMSM_COMPOSITION_POINTER_JUMPING ||
-        in.composition > HMSM_COMPOSITION_PATH_WALK)
+        in.composition > HMSM_COMPOSITION_AUTOMATIC)
         return bad("config.composition: unknown value " + std::to_string(in.composition));
     if (in.vertex_layout != HMSM_VERTEX_LAYOUT_SEPARATE &&
         in.vertex_layout != HMSM_VERTEX_LAYOUT_PACKED)

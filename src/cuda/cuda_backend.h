@@ -29,6 +29,7 @@ public:
     Status write(BufferId id, uint64_t first, uint64_t count, const void* src, Scalar as) override;
     Status move_elements(BufferId id, std::span<const ElementMove> moves) override;
     void set_profiling(bool enabled) override { profiling_ = enabled; }
+    bool prefers_path_walk() const override { return true; }
     PassTimes pass_times() const override { return times_; }
 
     /// For `hmsm bench`'s roofline: the median of a few device-to-device copies of `bytes`

@@ -56,6 +56,7 @@ public:
     /// timestamped runs, as (bytes read + bytes written) / seconds.
     Result<double> measure_copy_bandwidth(uint64_t bytes) override;
     bool dispatches_are_expensive() const override { return true; }
+    bool prefers_path_walk() const override { return !device_->is_cpu(); }
 
 private:
     /// One command buffer in flight: its fence, timestamp pool and what it ran.

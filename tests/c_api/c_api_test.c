@@ -288,12 +288,17 @@ static void test_bad_configs(void) {
     } while (0)
     CHECK_CONFIG_FAILS(backend, 99);
     CHECK_CONFIG_FAILS(backend, -1);
-    CHECK_CONFIG_FAILS(composition, HMSM_COMPOSITION_PATH_WALK + 1);
+    CHECK_CONFIG_FAILS(composition, HMSM_COMPOSITION_AUTOMATIC + 1);
     CHECK_CONFIG_FAILS(composition, -1);
-    /* The last composition is accepted. */
+    /* The default is automatic, and the last two compositions are accepted. */
     hmsm_config_init(&config);
+    CHECK(config.composition == HMSM_COMPOSITION_AUTOMATIC);
     config.backend = HMSM_BACKEND_CPU;
     config.composition = HMSM_COMPOSITION_PATH_WALK;
+    CHECK_OK(hmsm_simulation_create(scene, &config, &simulation));
+    hmsm_simulation_destroy(simulation);
+    simulation = NULL;
+    config.composition = HMSM_COMPOSITION_AUTOMATIC;
     CHECK_OK(hmsm_simulation_create(scene, &config, &simulation));
     hmsm_simulation_destroy(simulation);
     simulation = NULL;

@@ -43,6 +43,7 @@ int joint_forest_cases(BackendKind backend, const std::vector<JointForestCase>& 
         SimulationConfig config;
         config.backend = backend;
         config.outputs = Outputs::joints;
+        config.composition = Composition::pointer_jumping;  // the first columns; then fused, path walk
         // Host memory: the state of one instance, from a one-instance simulation on the CPU.
         auto probe = Simulation::create(single_tree_scene(c.tree), [&] {
             SimulationConfig p = config;
@@ -143,7 +144,7 @@ std::string render_joint_forest(const json& rows) {
     if (!rows.is_array() || rows.empty()) return "";
     std::string out =
         "\n### Forest scaling, joints only (passes 1-5)\n\n"
-        "Default composition; fused: passes 1-5 in one dispatch, a workgroup per instance; path walk: "
+        "Pointer jumping; fused: passes 1-5 in one dispatch, a workgroup per instance; path walk: "
         "passes 3 and 5 in one dispatch each, every chain walking up its path to the root.\n\n"
         "| backend | model | instances | chains | joint bytes | ms per step | device ms per step | Mchains/s "
         "| fused ms per step | fused device ms per step | fused Mchains/s "

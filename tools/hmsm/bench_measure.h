@@ -15,7 +15,7 @@ struct Settings {
     uint32_t warmup = 20;        ///< steps before the first timed batch
     uint32_t repeats = 5;        ///< timed batches per figure (the median is reported)
     double case_budget = 20.0;   ///< seconds one case may take; slow cases get fewer steps
-    Composition forest_composition = Composition::pointer_jumping;  ///< of the forest rows
+    Composition forest_composition = Composition::automatic;  ///< of the forest rows
 };
 
 /// What to time on one simulation.

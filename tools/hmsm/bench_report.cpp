@@ -69,7 +69,7 @@ std::string layout_of(const json& entry) {
     return entry.contains("layout") ? text(entry, "layout") : "separate";
 }
 
-/// The layout column of a forest row, with the composition where it is not the default.
+/// The layout column of a forest row, with the composition where it is not pointer jumping.
 std::string forest_layout_cell(const json& entry) {
     const std::string composition = entry.contains("composition") ? text(entry, "composition") : "pointer_jumping";
     return composition == "pointer_jumping" ? layout_of(entry) : layout_of(entry) + " (" + composition + ")";

@@ -251,7 +251,7 @@ void BenchRun::forest_cases(const Model& model, BackendRun& b, const std::vector
             slowest = std::max(slowest, r.warmup_seconds_per_step);
             const Traffic traffic = step_traffic(*sim);
             json f = {{"backend", backend}, {"device", sim->device_name()}, {"instances", n},
-                      {"layout", layout_name}, {"composition", to_string(settings_.forest_composition)},
+                      {"layout", layout_name}, {"composition", to_string(sim->config().composition)},
                       {"mesh_vertices", sim->vertex_count()},
                       {"steps_per_batch", r.steps}, {"repeats", r.repeats}, {"budget_reduced", r.reduced},
                       {"bytes_per_step", traffic.total()}, {"state_bytes_per_step", traffic.state_bytes}};
@@ -263,7 +263,7 @@ void BenchRun::forest_cases(const Model& model, BackendRun& b, const std::vector
             if (r.has_passes) {
                 put(f, "device_seconds_per_step", r.device_seconds);
                 put(f, "device_effective_bandwidth", traffic.total() / r.device_seconds);
-                f["pass_seconds_per_step"] = pass_seconds_json(r, settings_.forest_composition);
+                f["pass_seconds_per_step"] = pass_seconds_json(r, sim->config().composition);
             }
             copy_bandwidth(b, *sim);
             forest.push_back(f);

@@ -36,7 +36,7 @@ struct BenchFlags {
     std::string joint_instances = "1,10,100,1000,10000";  // joints-only forest (bench_joints.h)
     double spacing = 25.0;
     double case_budget = 20.0;
-    std::string forest_composition = "pointer_jumping";
+    std::string forest_composition = "automatic";
     bool quick = false, no_progress = false;
     std::string json_path, commit = "unknown", render;
 } flags;
@@ -91,7 +91,7 @@ void register_bench_flags(CLI::App& app) {
                    "(default 1,10,100,1000,10000, plus 100000 x paper-5 unless --quick; none: no rows)");
     app.add_option("--spacing", flags.spacing, "forest grid spacing in metres (default 25)");
     app.add_option("--forest-composition", flags.forest_composition,
-                   "composition of the forest rows (default pointer_jumping; e.g. fused)");
+                   "composition of the forest rows (default automatic, the library's default; e.g. fused)");
     app.add_option("--case-budget", flags.case_budget,
                    "seconds one case may take: slower cases run fewer steps, forest sizes "
                    "extrapolated past it are skipped (default 20)");

@@ -18,7 +18,7 @@ struct SimulateFlags {
     Parameters parameters;
     WindFlags wind;
     std::string backend = "auto";
-    std::string composition = "pointer-jumping";
+    std::string composition = "automatic";
     std::string vertex_layout = "separate";
     int64_t steps = 120;
     std::string dump_nodes, dump_chains, dump_vertices, report, trace, trace_nodes;
@@ -172,10 +172,11 @@ void register_simulate_flags(CLI::App& app) {
     add_wind_flags(app, flags.wind);
     app.add_option("--backend", flags.backend, "cpu, cpu-parallel, cpu64, vulkan, cuda or auto (default)");
     app.add_option("--composition", flags.composition,
-                   "passes 3 and 5: pointer-jumping (default: the paper's rounds, per round or in one "
-                   "dispatch by scene size), pointer-jumping-per-round, pointer-jumping-in-dispatch, "
-                   "level-by-level, fused (passes 1-5 in one dispatch, a workgroup per instance) or "
-                   "path-walk (every chain walks its ancestors; 4 dispatches per step)");
+                   "passes 3 and 5: automatic (default: path-walk on a GPU, else pointer-jumping), "
+                   "pointer-jumping (the paper's rounds, per round or in one dispatch by scene size), "
+                   "pointer-jumping-per-round, pointer-jumping-in-dispatch, level-by-level, fused (passes "
+                   "1-5 in one dispatch, a workgroup per instance) or path-walk (every chain walks its "
+                   "ancestors; 4 dispatches per step)");
     app.add_option("--vertex-layout", flags.vertex_layout,
                    "device layout of the mesh vertices: separate (default; position and normal "
                    "vec4) or packed (the normal octahedral-encoded in the position's w)");
@@ -206,8 +207,8 @@ int run_simulate(CLI::App& app) {
     std::replace(composition.begin(), composition.end(), '-', '_');
     if (auto parsed = parse_composition(composition)) config.composition = *parsed;
     else return fail_input("--composition '" + flags.composition +
-                           "': expected pointer-jumping, pointer-jumping-per-round, pointer-jumping-in-dispatch, "
-                           "level-by-level, fused or path-walk");
+                           "': expected automatic, pointer-jumping, pointer-jumping-per-round, "
+                           "pointer-jumping-in-dispatch, level-by-level, fused or path-walk");
     auto vertex_layout = parse_vertex_layout(flags.vertex_layout);
     if (!vertex_layout)
         return fail_input("--vertex-layout '" + flags.vertex_layout + "': expected separate or packed");
@@ -323,7 +324,9 @@ int run_simulate(CLI::App& app) {
         nlohmann::json r;
         r["backend"] = to_string(sim.backend_kind());
         r["device"] = sim.device_name();
-        r["composition"] = flags.composition;
+        std::string resolved = to_string(sim.config().composition);  // automatic resolved, as the flag spells it
+        std::replace(resolved.begin(), resolved.end(), '_', '-');
+        r["composition"] = resolved;
         r["vertex_layout"] = to_string(config.vertex_layout);
         r["outputs"] = to_string(config.outputs);
         r["instances"] = sim.instance_count();
