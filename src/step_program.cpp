@@ -12,8 +12,8 @@ namespace {
 /// one dispatch per round.
 constexpr uint32_t kMaxChainsForRoundsInDispatch = 16 * HMSM_MAX_ROUNDS_WORKGROUP_SIZE;
 
-/// Path walk: groups of at most this many instances read the walk records whole (one round of
-/// loads, HMSM_WALK_FROM_RECORDS); larger ones follow chain_parent up. Measured on the H100
+/// Path walk: scenes of at most this many active instances read the walk records whole (one
+/// round of loads, HMSM_WALK_FROM_RECORDS); larger ones follow chain_parent up. Measured on the H100
 /// (path walk, CUDA, µs per step): one paper-1 tree 13.5 -> 12.7 with the records; 10 and 16
 /// trees no better (21.7 -> 22.0, 25.3 -> 27.0, packed); 1,000 trees' walk 88 -> 176 (128
 /// distinct bytes per thread cost more L2 sectors than the parent links siblings share).
@@ -135,6 +135,12 @@ std::vector<Dispatch> build_path_walk_program(const SceneData& d, const std::vec
     auto bit = [](Pass pass) { return 1u << uint32_t(pass); };
     const bool walk_poses = (wanted & walk_passes(Pass::compose)) == walk_passes(Pass::compose);
     if (walk_poses && !(wanted & bit(Pass::node_world))) wanted &= ~bit(Pass::node_relative);
+    // The records only for a scene of one active instance: the same rule for every group, so that
+    // scenes of the same instances grouped differently (reshaped in place, uploaded anew) run the
+    // same kernels, bit for bit.
+    uint64_t instances = 0;
+    for (const auto& g : groups) instances += g.instance_count;
+    const bool from_records = instances <= kWalkRecordsMaxInstances;
     std::vector<Dispatch> program;
     uint32_t done = 0;
     for (Pass pass : kAllPasses) {
@@ -160,8 +166,7 @@ std::vector<Dispatch> build_path_walk_program(const SceneData& d, const std::vec
             Dispatch dispatch{pass, group_constants(d, g, HMSM_FINAL_HALF(d.jump_rounds))};
             dispatch.constants.element_count = g.instance_count * per_domain(g);
             dispatch.constants.mode = HMSM_MODE_PATH_WALK;
-            if (pass == Pass::compose && g.instance_count <= kWalkRecordsMaxInstances)
-                dispatch.constants.round = HMSM_WALK_FROM_RECORDS;
+            if (pass == Pass::compose && from_records) dispatch.constants.round = HMSM_WALK_FROM_RECORDS;
             if (dispatch.constants.element_count > 0) program.push_back(dispatch);
         }
         done |= pair;

@@ -44,10 +44,12 @@ TEST_F(VulkanTest, RoundsRunInOneDispatchForModelsOfUpTo1024Chains) {
     // Dispatches cost more on Vulkan, so pointer_jumping keeps the rounds in one dispatch for
     // models that one 1,024-wide workgroup covers; the CPU (like CUDA) takes one per round.
     const Scene scene = single_tree_scene(test::broom(700));
+    SimulationConfig config = windy_config();
+    config.composition = Composition::pointer_jumping;  // (the default is path walk on a GPU)
     std::string skip;
-    auto vulkan = create_simulation_or_skip(scene, windy_config(), BackendKind::vulkan, skip);
+    auto vulkan = create_simulation_or_skip(scene, config, BackendKind::vulkan, skip);
     if (!skip.empty()) GTEST_SKIP() << skip;
-    auto cpu = create_simulation_or_skip(scene, windy_config(), BackendKind::cpu, skip);
+    auto cpu = create_simulation_or_skip(scene, config, BackendKind::cpu, skip);
     ASSERT_TRUE(vulkan && cpu);
     for (const auto& [sim, mode] : {std::pair{vulkan.get(), HMSM_MODE_POINTER_JUMPING_IN_DISPATCH},
                                     std::pair{cpu.get(), HMSM_MODE_POINTER_JUMPING}})
