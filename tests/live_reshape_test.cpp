@@ -90,6 +90,7 @@ public:
     void set_profiling(bool enabled) override { inner_->set_profiling(enabled); }
     PassTimes pass_times() const override { return inner_->pass_times(); }
     bool dispatches_are_expensive() const override { return inner_->dispatches_are_expensive(); }
+    bool prefers_path_walk() const override { return inner_->prefers_path_walk(); }
 
 private:
     std::unique_ptr<detail::Backend> inner_;

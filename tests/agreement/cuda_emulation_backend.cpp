@@ -17,6 +17,7 @@ class CudaEmulationBackend final : public detail::Backend {
 public:
     BackendKind kind() const override { return BackendKind::cuda; }
     std::string device_name() const override { return "CUDA kernels emulated on the host"; }
+    bool prefers_path_walk() const override { return true; }  // as the CUDA backend
 
     /// Static buffers converted like an upload, state zero-filled; every buffer has at least
     /// one 16-byte element behind it, as on the device (an empty vertex_normal's placeholder).
