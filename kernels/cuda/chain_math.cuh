@@ -201,8 +201,8 @@ HMSM_HOST_DEVICE int32_t ancestor_above(const BufferPointers& b, const gpu::Pass
 /// it (a walk step stores no T), the pose to the joint matrix alone (src/cpu/path_walk.cpp).
 template <bool kFromRecords>
 HMSM_HOST_DEVICE void path_walk(const BufferPointers& b, const gpu::PassConstants& pc, uint32_t k, int32_t c) {
-    // The walk record (gpu_layout.h): depth, ancestors, attach nodes. kFromRecords (a dispatch of
-    // one instance, latency-bound): read whole in one round of loads. Else (a forest, where 128
+    // The walk record (gpu_layout.h): depth, ancestors, attach nodes. kFromRecords (a scene of one
+    // active instance, latency-bound): read whole in one round of loads. Else (a forest, where 128
     // bytes per thread would cost more than the dependent loads, which other warps hide): the
     // ancestors gathered by following chain_parent up, the attach nodes looked up level by level.
     int32_t record[kFromRecords ? HMSM_WALK_RECORD_INTS : HMSM_WALK_PATH_CAPACITY + 1];
