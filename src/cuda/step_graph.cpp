@@ -28,6 +28,29 @@ cudaError_t last_captured_node(cudaStream_t stream, cudaGraphNode_t* node) {
 
 bool same_bytes(const void* a, const void* b, size_t n) { return std::memcmp(a, b, n) == 0; }
 
+/// Whether dispatch y must wait for dispatch x: one writes a buffer the other reads or writes.
+bool depends(const Dispatch& x, const Dispatch& y) {
+    return ((dispatch_writes(x) & (dispatch_reads(y) | dispatch_writes(y))) |
+            (dispatch_reads(x) & dispatch_writes(y))) != 0;
+}
+
+/// Events and the side stream of one capture, released on every path.
+struct ForkResources {
+    cudaStream_t side = nullptr;
+    cudaEvent_t before = nullptr, after = nullptr;
+    ~ForkResources() {
+        if (side) (void)cudaStreamDestroy(side);
+        if (before) (void)cudaEventDestroy(before);
+        if (after) (void)cudaEventDestroy(after);
+    }
+    cudaError_t create() {
+        cudaError_t e = cudaStreamCreateWithFlags(&side, cudaStreamNonBlocking);
+        if (e == cudaSuccess) e = cudaEventCreateWithFlags(&before, cudaEventDisableTiming);
+        if (e == cudaSuccess) e = cudaEventCreateWithFlags(&after, cudaEventDisableTiming);
+        return e;
+    }
+};
+
 /// Field by field: Dispatch has padding between pass and constants, PassConstants has none.
 bool same_dispatch(const Dispatch& a, const Dispatch& b) {
     static_assert(sizeof(gpu::PassConstants) == 20 * 4 + 2 * 16, "PassConstants must be unpadded");
@@ -58,19 +81,37 @@ bool StepGraph::matches(std::span<const Dispatch> program, const BufferPointers&
 Status StepGraph::capture(std::span<const Dispatch> program, const BufferPointers& buffers,
                           cudaStream_t stream, uint64_t fused_shared_limit) {
     release();
+    // A dispatch that does not depend on the one before it (the path walk's node pair and contour,
+    // both reading only the joint matrices) runs beside it: the graph forks after the dispatch
+    // both follow and joins before the next, so a step waits for one of the two launches, not
+    // both in turn. Every other edge stays in program order.
+    ForkResources fork;
+    CUDA_TRY(fork.create());
+    std::vector<bool> beside(program.size(), false);  // dispatch i runs beside dispatch i - 1
+    for (size_t i = 1; i < program.size(); ++i) beside[i] = !beside[i - 1] && !depends(program[i - 1], program[i]);
     CUDA_TRY(cudaStreamBeginCapture(stream, cudaStreamCaptureModeThreadLocal));
     cudaError_t error = cudaSuccess;
     std::vector<WindNode> wind_nodes;
-    for (const Dispatch& d : program) {
-        error = launch_dispatch(d, buffers, 0.0f, stream, fused_shared_limit);
+    for (size_t i = 0; i < program.size() && error == cudaSuccess; ++i) {
+        const Dispatch& d = program[i];
+        if (i + 1 < program.size() && beside[i + 1]) error = cudaEventRecord(fork.before, stream);
+        cudaStream_t on = stream;
+        if (error == cudaSuccess && beside[i]) {
+            on = fork.side;
+            error = cudaStreamWaitEvent(fork.side, fork.before, 0);
+        }
+        if (error == cudaSuccess) error = launch_dispatch(d, buffers, 0.0f, on, fused_shared_limit);
         if (error == cudaSuccess && d.pass == Pass::wind_force && d.constants.element_count > 0) {
             WindNode wind{};
             wind.constants = d.constants;
-            error = last_captured_node(stream, &wind.node);
+            error = last_captured_node(on, &wind.node);
             if (error == cudaSuccess) error = cudaGraphKernelNodeGetParams(wind.node, &wind.launch);
             wind_nodes.push_back(wind);
         }
-        if (error != cudaSuccess) break;
+        if (error == cudaSuccess && beside[i]) {
+            error = cudaEventRecord(fork.after, fork.side);
+            if (error == cudaSuccess) error = cudaStreamWaitEvent(stream, fork.after, 0);
+        }
     }
     cudaGraph_t graph = nullptr;
     const cudaError_t end_error = cudaStreamEndCapture(stream, &graph);

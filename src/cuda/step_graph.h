@@ -1,7 +1,7 @@
 // One step of a program as an instantiated CUDA graph, replayed once per step.
 //
-// The program is captured once from the stream (every dispatch in order, on one stream, so the
-// graph is a chain and ordering replaces barriers). Between replays only the step's wind-table
+// The program is captured once from the stream (every dispatch in order, so ordering replaces
+// barriers; a dispatch that does not depend on the one before it runs beside it, step_graph.cpp). Between replays only the step's wind-table
 // slot (gpu_layout.h) changes: it lives in the wind_force dispatches' constants (pc.wind.w), so before
 // each replay every wind_force kernel node gets new parameters through
 // cudaGraphExecKernelNodeSetParams. That is possible generically because every pass kernel
