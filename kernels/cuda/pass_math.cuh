@@ -213,8 +213,8 @@ inline unsigned launch_blocks_per_instance(const gpu::PassConstants& pc) {
 /// below build P from NAME_element (and NAME_jump) and define launch_NAME and emulate_NAME.
 /// One launcher adds a kernel of its own: contour's in the packed vertex layout (contour.cu),
 /// which still fills P for the separate layout and the emulation.
-template <class P>
-static __global__ void __launch_bounds__(HMSM_WORKGROUP_SIZE)
+template <class P, unsigned kThreads = HMSM_WORKGROUP_SIZE>
+static __global__ void __launch_bounds__(kThreads)
     pass_kernel(const BufferPointers b, const gpu::PassConstants pc) {
     begin_pass();
     for (uint32_t i = blockIdx.x * blockDim.x + threadIdx.x; i < pc.element_count;
