@@ -192,6 +192,7 @@ constexpr bool walk_accesses_are_consistent() {
     }
     return true;
 }
-static_assert(walk_accesses_are_consistent(), "walk_reads/walk_writes: set exactly for walk leaders, writes within the pair's");
+static_assert(walk_accesses_are_consistent(),
+              "walk_reads/walk_writes: set exactly for walk leaders, writes within the pair's");
 
 }  // namespace hmsm::detail

@@ -51,7 +51,7 @@ void fill_walk_records(SceneData& d) {
             int32_t depth = 0;
             for (int32_t x = int32_t(c); x >= 0; x = d.chain_parent[range.chain_begin + x], ++depth) {
                 if (depth >= 1 && depth <= int32_t(HMSM_WALK_PATH_CAPACITY)) record[depth] = x;
-                if (depth < 16 && d.chain_parent[range.chain_begin + x] >= 0)
+                if (depth < int32_t(HMSM_WALK_ATTACH_CAPACITY) && d.chain_parent[range.chain_begin + x] >= 0)
                     record[HMSM_WALK_ATTACH(uint32_t(depth))] = d.chain_attach[range.chain_begin + x];
             }
             record[0] = depth - 1;

@@ -141,16 +141,15 @@ std::vector<Dispatch> build_path_walk_program(const SceneData& d, const std::vec
     uint64_t instances = 0;
     for (const auto& g : groups) instances += g.instance_count;
     const bool from_records = instances <= kWalkRecordsMaxInstances;
+    // The wind pair only before a walk: it stores no T, which level by level would read. The
+    // node pair wherever no level-by-level root_positions reads its u (after a walk, or without
+    // pass 5: the outputs recomputed for moved instances read the pose from the joint matrices).
+    const bool node_pair_runs = walk_poses || !(wanted & bit(Pass::root_positions));
     std::vector<Dispatch> program;
     uint32_t done = 0;
     for (Pass pass : kAllPasses) {
         if (!(wanted & bit(pass)) || (done & bit(pass))) continue;
         const uint32_t pair = walk_passes(pass);
-        // The wind pair only before a walk: it stores no T, which level by level would read.
-        // The node pair wherever no level-by-level root_positions reads its u (after a walk, or
-        // without pass 5: the outputs recomputed for moved instances read the pose from the
-        // joint matrices, as after a walk).
-        const bool node_pair_runs = walk_poses || !(wanted & bit(Pass::root_positions));
         const bool pair_runs = pair != 0 && (wanted & pair) == pair &&
                                (pass == Pass::compose || (pass == Pass::wind_force ? walk_poses : node_pair_runs));
         if (!pair_runs) {

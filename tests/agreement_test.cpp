@@ -64,7 +64,7 @@ std::vector<SceneCase> end_to_end_cases() {
     SimulationConfig walk = windy;
     walk.composition = Composition::path_walk;
     cases.push_back({"path_walk", *grid_scene(test::deep_tree(6), 3, 9.0, 11), walk});
-    // Deeper than the walk keeps ancestors of (HMSM_WALK_PATH_CAPACITY, 16): the rest looked up.
+    // Deeper than the walk records hold ancestors of (HMSM_WALK_PATH_CAPACITY, 15): the rest looked up.
     // A breeze: in the storm float and double part on its hair-thin top chains.
     walk.parameters.wind_gain = 2.0;
     cases.push_back({"path_walk_deep", single_tree_scene(test::deep_tree(19), {1, 0, -1}, 0.7), walk});

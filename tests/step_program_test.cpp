@@ -6,6 +6,10 @@
 #include "backend.h"
 #include "step_program.h"
 
+#ifdef HMSM_HAVE_CUDA
+#include "agreement/cuda_emulation_backend.h"
+#endif
+
 #include <gtest/gtest.h>
 
 using namespace hmsm;
@@ -145,7 +149,7 @@ TEST(StepProgram, PathWalkRunsThePairsInOneDispatchEachAndEqualsLevelByLevelBitw
     EXPECT_EQ(hmsm::detail::dispatch_passes(program[1]),
               (1u << uint32_t(Pass::compose)) | (1u << uint32_t(Pass::root_positions)));
     // Also a tree deeper than the walk records hold (HMSM_WALK_PATH_CAPACITY), and a forest of
-    // it, whose walk gathers its records by following chain_parent up instead of reading them.
+    // it, whose program has the GPU walk follow chain_parent up instead of reading the records.
     const Scene deeper = single_tree_scene(test::deep_tree(HMSM_WALK_PATH_CAPACITY + 3), {0, 0, 1}, -0.3);
     const Scene forest = *grid_scene(test::deep_tree(HMSM_WALK_PATH_CAPACITY + 3), 20, 9.0, 3);
     EXPECT_EQ(program[1].constants.round, HMSM_WALK_FROM_RECORDS);  // one instance: the records
@@ -270,4 +274,13 @@ TEST(StepProgram, AutomaticCompositionResolvesByBackend) {
         EXPECT_EQ(walks, gpu) << to_string(kind);
         if (gpu) EXPECT_EQ(program.size(), 4u);
     }
+#ifdef HMSM_HAVE_CUDA
+    // Without a GPU too: the CUDA kernels on the host, behind the same interface, resolve to the
+    // path walk (CI has no GPU, so this is where a resolution stuck at pointer jumping shows).
+    auto emulated =
+        hmsm::detail::SimulationAccess::create(scene, SimulationConfig{}, test::create_cuda_emulation_backend());
+    ASSERT_TRUE(emulated.ok()) << emulated.status().message();
+    EXPECT_EQ((*emulated)->config().composition, Composition::path_walk);
+    EXPECT_EQ(hmsm::detail::step_program_of(**emulated).size(), 4u);
+#endif
 }

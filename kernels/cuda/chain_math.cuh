@@ -231,7 +231,7 @@ HMSM_HOST_DEVICE void path_walk(const BufferPointers& b, const gpu::PassConstant
     };
     auto attach = [&](uint32_t up) {
         if constexpr (kFromRecords) {
-            if (up < 16) return record[HMSM_WALK_ATTACH(up)];
+            if (up < HMSM_WALK_ATTACH_CAPACITY) return record[HMSM_WALK_ATTACH(up)];
         }
         return load(b.chain_attach + pc.model_chain_begin + ancestor(up));
     };

@@ -35,7 +35,8 @@ static HMSM_HOST_DEVICE void compose_element(const BufferPointers& b,
 /// Path walk on the device: a kernel of its own per way of reading the walk records, so that
 /// neither way's registers weigh on the other or on the pointer-jumping kernel.
 template <bool kFromRecords>
-__global__ void __launch_bounds__(HMSM_WORKGROUP_SIZE) walk_kernel(const BufferPointers b, const gpu::PassConstants pc) {
+__global__ void __launch_bounds__(HMSM_WORKGROUP_SIZE)
+    walk_kernel(const BufferPointers b, const gpu::PassConstants pc) {
     begin_pass();
     for (uint32_t i = blockIdx.x * blockDim.x + threadIdx.x; i < pc.element_count; i += gridDim.x * blockDim.x) {
         const Element e = element_of(i, pc.model_chain_count);
@@ -43,15 +44,7 @@ __global__ void __launch_bounds__(HMSM_WORKGROUP_SIZE) walk_kernel(const BufferP
     }
 }
 
-struct compose_pass {
-    static constexpr bool kRounds = true;
-    HMSM_CUDA_PASS_ELEMENT(compose)
-    template <bool kWrittenInBlock>
-    static HMSM_HOST_DEVICE void jump(const BufferPointers& b, const gpu::PassConstants& pc, uint32_t k, uint32_t c,
-                                      uint32_t round, uint32_t src_half, uint32_t dst_half) {
-        compose_jump<kWrittenInBlock>(b, pc, k, c, round, src_half, dst_half);
-    }
-};
+HMSM_CUDA_ROUNDS_PASS_TYPE(compose)
 
 cudaError_t launch_compose(const BufferPointers& b, const gpu::PassConstants& pc, cudaStream_t stream) {
     if (pc.element_count == 0 || pc.mode != HMSM_MODE_PATH_WALK) return launch<compose_pass>(b, pc, stream);

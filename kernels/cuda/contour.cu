@@ -1,7 +1,8 @@
 // Pass 7: branch-mesh and leaf vertices rigid with their chain, v = O_c + R_c v_rest, normal
-// R_c n_rest, the pose read from the joint matrix [R_c | O_c] (48 bytes, three loads). Base-ring vertices of child chains are the paper's contour fix-up: a blend
-// (1 - beta) own + beta parent of the same rest vertex carried by the parent chain, normal
-// renormalized, so the joint stays closed while the child swings. The outputs are written once,
+// R_c n_rest, the pose read from the joint matrix [R_c | O_c] (48 bytes, three loads). Base-ring
+// vertices of child chains are the paper's contour fix-up: a blend (1 - beta) own + beta parent
+// of the same rest vertex carried by the parent chain, normal renormalized, so the joint stays
+// closed while the child swings. The outputs are written once,
 // coalesced: 32 bytes per vertex (position and normal), or 16 in the packed vertex layout
 // (pc.mode, gpu_layout.h), where the position's w carries the octahedral normal word
 // (src/common/octahedral.h) and vertex_normal is not written.
@@ -109,9 +110,8 @@ cudaError_t launch_contour(const BufferPointers& b, const gpu::PassConstants& pc
         // Blocks of 256: a quarter of the blocks to schedule and drain. Measured on the H100, side
         // by side: one paper-1 tree 10.4 -> 9.9 us per step, 1,000 trees (separate) 1,237 -> 1,201 us.
         constexpr unsigned kThreads = 256;
-        const unsigned blocks = unsigned(std::min<uint64_t>((uint64_t(pc.element_count) + kThreads - 1) / kThreads,
-                                                            max_launch_blocks()));
-        return launch_pass(pass_kernel<contour_pass, kThreads>, blocks, kThreads, stream, b, pc);
+        return launch_pass(pass_kernel<contour_pass, kThreads>, launch_blocks(pc.element_count, kThreads), kThreads,
+                           stream, b, pc);
     }
     const uint64_t items = gpu::packed_contour_threads(pc);
     const uint32_t blocks = launch_blocks(uint32_t(std::min<uint64_t>(items, UINT32_MAX)));

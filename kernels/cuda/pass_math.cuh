@@ -166,9 +166,9 @@ HMSM_HOST_DEVICE uint32_t dispatch_instances(const gpu::PassConstants& pc) {
 /// took 1,482 instead of 1,026 µs on the H100.
 uint32_t max_launch_blocks();
 
-inline unsigned launch_blocks(uint32_t n) {
+inline unsigned launch_blocks(uint32_t n, uint32_t threads = HMSM_WORKGROUP_SIZE) {
     const uint32_t max_blocks = max_launch_blocks();
-    uint32_t blocks = (n + HMSM_WORKGROUP_SIZE - 1) / HMSM_WORKGROUP_SIZE;
+    uint32_t blocks = uint32_t((uint64_t(n) + threads - 1) / threads);
     return blocks < max_blocks ? blocks : max_blocks;
 }
 
@@ -284,7 +284,12 @@ void emulate(const BufferPointers& b, const gpu::PassConstants& pc) {
     HMSM_CUDA_PASS_ENTRY_POINTS(name)
 
 /// The same for a pointer-jumping pass: NAME_element and NAME_jump<kWrittenInBlock>.
-#define HMSM_CUDA_ROUNDS_PASS(name)                                                            \
+/// HMSM_CUDA_ROUNDS_PASS_TYPE alone defines the pass type, for a file whose launcher adds a
+/// kernel of its own (compose.cu, for the path walk).
+#define HMSM_CUDA_ROUNDS_PASS(name)  \
+    HMSM_CUDA_ROUNDS_PASS_TYPE(name) \
+    HMSM_CUDA_PASS_ENTRY_POINTS(name)
+#define HMSM_CUDA_ROUNDS_PASS_TYPE(name)                                                       \
     struct name##_pass {                                                                       \
         static constexpr bool kRounds = true;                                                  \
         HMSM_CUDA_PASS_ELEMENT(name)                                                           \
@@ -294,7 +299,6 @@ void emulate(const BufferPointers& b, const gpu::PassConstants& pc) {
                                           uint32_t src_half, uint32_t dst_half) {              \
             name##_jump<kWrittenInBlock>(b, pc, k, c, round, src_half, dst_half);              \
         }                                                                                      \
-    };                                                                                         \
-    HMSM_CUDA_PASS_ENTRY_POINTS(name)
+    };
 
 }  // namespace hmsm::detail::cuda

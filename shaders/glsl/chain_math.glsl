@@ -5,11 +5,11 @@
 #ifndef HMSM_CHAIN_MATH_GLSL
 #define HMSM_CHAIN_MATH_GLSL
 
-/// Pass 1 for model chain c of group instance k (state chain `chain`): the generalized force
+/// Pass 1 for model chain c of group instance k: the generalized force
 /// g = A (w_loc.z, -w_loc.x) from the wind in the chain's previous-step frame w_loc = R^T w,
 /// w = lambda_i s Y(tau + phi_i) d plus the force fields at the chain's previous origin x, R
 /// the chain's previous rotation (docs/model.md 3.5, 3.7, 3.9; table in gpu_layout.h).
-vec2 chain_wind_force(uint k, uint c, uint chain, vec3 x, mat3 rotation) {
+vec2 chain_wind_force(uint k, uint c, vec3 x, mat3 rotation) {
     uint slot = HMSM_WIND_STEPS + HMSM_WIND_STEP_VEC4S * uint(pc.wind.w);
     uint instance = HMSM_INSTANCE_WIND_VEC4S * (pc.instance_begin + k);
     vec4 own = instance_wind[instance];  // (lambda, phi mod 2, 0, 0)
@@ -160,7 +160,8 @@ uint walk_ancestor(uint c, uint up) {
 /// The attach node of the chain `up` levels above c (walk_record filled for c): from the record
 /// where the dispatch read it whole, else looked up.
 uint walk_attach(uint c, uint up) {
-    if (pc.round == HMSM_WALK_FROM_RECORDS && up < 16u) return uint(walk_record[HMSM_WALK_ATTACH(up)]);
+    if (pc.round == HMSM_WALK_FROM_RECORDS && up < HMSM_WALK_ATTACH_CAPACITY)
+        return uint(walk_record[HMSM_WALK_ATTACH(up)]);
     return uint(chain_attach[pc.model_chain_begin + walk_ancestor(c, up)]);
 }
 
@@ -175,8 +176,8 @@ mat3 walk_local(uint k, uint x, bool trunk) {
 /// operations in its order), each T from the chain's new angles (walk_local), the pose to the
 /// joint matrix alone (src/cpu/path_walk.cpp).
 void path_walk(uint k, uint c) {
-    // The record whole where the dispatch says so (a few instances), else gathered by following
-    // chain_parent up (kernels/cuda/chain_math.cuh says why).
+    // The record whole where the dispatch says so (a scene of one active instance), else the
+    // ancestors gathered by following chain_parent up (kernels/cuda/chain_math.cuh says why).
     if (pc.round == HMSM_WALK_FROM_RECORDS) {
         uint first = (pc.model_chain_begin + c) * (HMSM_WALK_RECORD_INTS / 4u);
         for (uint q = 0u; q < HMSM_WALK_RECORD_INTS / 4u; ++q) {

@@ -75,7 +75,7 @@ void main() {
     for (uint c = first; c < n; c += size) {
         uint chain = state_chain(k, c);
         uint pose = half_offset(pc.src_half) + chain;
-        vec2 g = chain_wind_force(k, c, chain, chain_origin[pose].xyz, as_mat3(chain_rotation[pose]));
+        vec2 g = chain_wind_force(k, c, chain_origin[pose].xyz, as_mat3(chain_rotation[pose]));
         chain_force[chain] = g;
         mat3 t = chain_integrate(k, c, chain, g);
         chain_local[chain] = as_mat3x4(t);

@@ -17,10 +17,10 @@ void main() {
     // (the walk computes T from them; src/pass_table.h walk_reads, walk_writes).
     if (pc.mode == HMSM_MODE_PATH_WALK) {
         mat3x4 j = joint_matrix[chain];
-        vec2 g = chain_wind_force(k, c, chain, joint_origin(j), joint_rotation(j));
+        vec2 g = chain_wind_force(k, c, joint_origin(j), joint_rotation(j));
         chain_state[chain] = integrate_step(pc.model_chain_begin + c, chain_state[chain], g);
         return;
     }
     uint pose = half_offset(pc.src_half) + chain;
-    chain_force[chain] = chain_wind_force(k, c, chain, chain_origin[pose].xyz, as_mat3(chain_rotation[pose]));
+    chain_force[chain] = chain_wind_force(k, c, chain_origin[pose].xyz, as_mat3(chain_rotation[pose]));
 }

@@ -124,7 +124,8 @@
 #define HMSM_MODE_PATH_WALK 4u
 /// A chain's walk record (binding HMSM_BINDING_CHAIN_WALK, static, model-local indices): int 0
 /// its depth d; int u, 1 <= u <= HMSM_WALK_PATH_CAPACITY, its ancestor u levels up (-1 past the
-/// trunk); int HMSM_WALK_ATTACH(u), 0 <= u < 16, the attach node of the chain u levels up (u = 0:
+/// trunk); int HMSM_WALK_ATTACH(u), 0 <= u < HMSM_WALK_ATTACH_CAPACITY, the attach node of the chain
+/// u levels up (u = 0:
 /// the chain itself; -1 for the trunk and past it). With the whole path in one 128-byte record a
 /// walk thread makes one round of loads for its ancestors and their attach nodes, where
 /// following chain_parent up takes one dependent load per level.
@@ -133,8 +134,9 @@
 /// gathers the same values by following chain_parent up (step_program.cpp chooses).
 #define HMSM_WALK_FROM_RECORDS 1u
 #define HMSM_WALK_PATH_CAPACITY 15u
-/// Index in the record of the attach node of the chain u levels up (0 <= u <= 15).
-#define HMSM_WALK_ATTACH(u) (16u + (u))
+/// Index in the record of the attach node of the chain u levels up (u < HMSM_WALK_ATTACH_CAPACITY).
+#define HMSM_WALK_ATTACH_CAPACITY 16u
+#define HMSM_WALK_ATTACH(u) (HMSM_WALK_ATTACH_CAPACITY + (u))
 
 /// vertex layouts (PassConstants.mode of a contour dispatch; hmsm::VertexLayout values):
 /// separate writes vertex_position (x, y, z, 1) and vertex_normal (nx, ny, nz, 0); packed writes

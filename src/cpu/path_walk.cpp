@@ -17,22 +17,10 @@ void path_walk(State<T>& s, const gpu::PassConstants& pc, Range r) {
         const Element e = element_of(i, pc.model_chain_count);
         const int32_t c = int32_t(e.index);
         // The walk record (gpu_layout.h): depth, ancestors and attach nodes; further up than it
-        // holds, through the 2^round-th ancestors of chain_jump and chain_attach.
-        // (Read whole where the dispatch says HMSM_WALK_FROM_RECORDS, else gathered by following
-        // chain_parent up, as the GPU kernels do: the same values either way.)
-        int32_t gathered[HMSM_WALK_RECORD_INTS];
+        // holds, through the 2^round-th ancestors of chain_jump and chain_attach. (The GPU kernels
+        // gather the same values from chain_parent in a forest, HMSM_WALK_FROM_RECORDS unset, where
+        // reading the records costs them L2 traffic; on the CPU the record is the cheaper way.)
         const int32_t* record = &s.chain_walk[uint64_t(HMSM_WALK_RECORD_INTS) * (pc.model_chain_begin + c)];
-        if (pc.round != HMSM_WALK_FROM_RECORDS) {
-            const int32_t* parent = s.chain_parent.data() + pc.model_chain_begin;
-            uint32_t up = 0;
-            for (int32_t x = c, a = parent[c]; a >= 0; x = a, a = parent[a]) {
-                if (up < 16) gathered[HMSM_WALK_ATTACH(up)] = s.chain_attach[pc.model_chain_begin + x];
-                if (++up <= HMSM_WALK_PATH_CAPACITY) gathered[up] = a;
-            }
-            for (uint32_t u = up; u < 16; ++u) gathered[HMSM_WALK_ATTACH(u)] = -1;
-            gathered[0] = int32_t(up);
-            record = gathered;
-        }
         const uint32_t depth = uint32_t(record[0]);
         auto ancestor = [&](uint32_t up) {
             if (up == 0) return c;
@@ -43,7 +31,8 @@ void path_walk(State<T>& s, const gpu::PassConstants& pc, Range r) {
             return a;
         };
         auto attach = [&](uint32_t up) {
-            return up < 16 ? record[HMSM_WALK_ATTACH(up)] : s.chain_attach[pc.model_chain_begin + ancestor(up)];
+            return up < HMSM_WALK_ATTACH_CAPACITY ? record[HMSM_WALK_ATTACH(up)]
+                                                  : s.chain_attach[pc.model_chain_begin + ancestor(up)];
         };
         // T of chain x from its new angles (integrate's local transform, as integrate gives it).
         auto local_of = [&](int32_t x) {

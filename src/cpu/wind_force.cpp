@@ -10,7 +10,7 @@
 
 namespace hmsm::detail::cpu {
 
-/// g for every chain of the work items, handed to use(state chain, g) instead of stored; the
+/// g for every chain of the work items, handed to use(state chain, static chain, g); the
 /// previous pose from the pose half src_half, or from the joint matrix (`from_joint`: a path walk).
 template <class T, class Use>
 void wind_forces(State<T>& s, const gpu::PassConstants& pc, double wind_x, Range r, bool from_joint, Use&& use) {
@@ -45,13 +45,14 @@ void wind_forces(State<T>& s, const gpu::PassConstants& pc, double wind_x, Range
         }
         auto w_local = glm::transpose(from_joint ? joint_rotation(s, c) : s.chain_rotation[pose]) * w;
         T area = s.chain_constants[pc.model_chain_begin + e.index].w;
-        use(c, typename State<T>::vec2(area * w_local.z, -area * w_local.x));
+        use(c, pc.model_chain_begin + e.index, typename State<T>::vec2(area * w_local.z, -area * w_local.x));
     }
 }
 
 template <class T>
 void wind_force(State<T>& s, const gpu::PassConstants& pc, double wind_x, Range r) {
-    wind_forces(s, pc, wind_x, r, false, [&](uint64_t c, const typename State<T>::vec2& g) { s.chain_force[c] = g; });
+    wind_forces(s, pc, wind_x, r, false,
+                [&](uint64_t c, uint32_t, const typename State<T>::vec2& g) { s.chain_force[c] = g; });
 }
 
 /// Composition::path_walk: integrate in the same pass over the same chains, g kept in hand;
@@ -59,8 +60,7 @@ void wind_force(State<T>& s, const gpu::PassConstants& pc, double wind_x, Range 
 /// joint matrix (a walk step writes no R or O half).
 template <class T>
 void wind_force_and_integrate(State<T>& s, const gpu::PassConstants& pc, double wind_x, Range r) {
-    wind_forces(s, pc, wind_x, r, true, [&](uint64_t c, const typename State<T>::vec2& g) {
-        const uint32_t model_chain = pc.model_chain_begin + uint32_t((c - pc.chain_begin) % pc.model_chain_count);
+    wind_forces(s, pc, wind_x, r, true, [&](uint64_t c, uint32_t model_chain, const typename State<T>::vec2& g) {
         integrate_angles(s, model_chain, c, g);
     });
 }

@@ -112,7 +112,6 @@ int joint_forest_cases(BackendKind backend, const std::vector<JointForestCase>& 
         sim->reset();
         // The same forest with passes 1-5 fused into one dispatch (Composition::fused), which
         // is all a joints-only step runs, and with passes 3 and 5 as path walks.
-        const Composition default_composition = config.composition;
         for (Composition other : {Composition::fused, Composition::path_walk}) {
             const std::string key = to_string(other);
             config.composition = other;
@@ -134,7 +133,6 @@ int joint_forest_cases(BackendKind backend, const std::vector<JointForestCase>& 
             if (result->has_passes) put(f, "device_seconds_per_step", result->device_seconds);
             row[key] = f;
         }
-        config.composition = default_composition;
         rows.push_back(row);
     }
     return failures;

@@ -100,9 +100,9 @@ std::string render_markdown(const json& d) {
     const json& presets = member(d, "presets");
     if (!presets.empty()) {
         out += "### Steps per second, all seven passes (the paper's Table 1)\n\n";
-        out += "Pointer jumping, the paper's composition, on every backend (the path walk, the default on a "
-               "GPU, is in the composition table below). step(1)/s: one step per call, outputs left on the device; batched/s: `--steps` "
-               "steps per call; +readback/s: one step and all vertex positions read to the host "
+        out += "Pointer jumping, the paper's composition, on every backend (the path walk, the default on "
+               "a GPU, is in the composition table below). step(1)/s: one step per call, outputs left on "
+               "the device; batched/s: `--steps` steps per call; +readback/s: one step and all vertex positions read to the host "
                "per call (the paper's setting). Speed-ups from the same run over `cpu` (serial "
                "float, the paper's baseline) and over the best CPU backend of the host for that "
                "figure (named in brackets).\n\n";
@@ -154,7 +154,8 @@ std::string render_markdown(const json& d) {
         out += "\n### Passes 3 and 5: pointer jumping vs all rounds in one dispatch vs level by level vs "
                "fused vs path walk\n\n";
         out += "µs per step with device timers on; batched/s with them off. W is the default on a GPU "
-               "(Composition::automatic), PJ on the CPU. PJ: Composition::pointer_jumping (one dispatch per round, or all rounds in one dispatch for models "
+               "(Composition::automatic), PJ on the CPU. PJ: Composition::pointer_jumping (one dispatch "
+               "per round, or all rounds in one dispatch for models "
                "of at most 512 chains, 1,024 on Vulkan; docs/architecture.md); PJ/1: every round in "
                "one dispatch per pass, a workgroup per instance; LbL: one dispatch per depth level; "
                "F: passes 1-5 in one dispatch, a workgroup per instance (fused(1-5): its time); W: path "
