@@ -195,28 +195,58 @@ HMSM_HOST_DEVICE int32_t ancestor_above(const BufferPointers& b, const gpu::Pass
     return c;
 }
 
+/// The walk record of model chain c (gpu_layout.h), read whole in one round of loads.
+struct WalkRecord {
+    int32_t words[HMSM_WALK_RECORD_INTS];
+};
+HMSM_HOST_DEVICE WalkRecord load_walk_record(const BufferPointers& b, const gpu::PassConstants& pc, int32_t c) {
+    WalkRecord record;
+    const int4* words =
+        reinterpret_cast<const int4*>(b.chain_walk + uint64_t(HMSM_WALK_RECORD_INTS) * (pc.model_chain_begin + uint32_t(c)));
+#pragma unroll
+    for (uint32_t q = 0; q < HMSM_WALK_RECORD_INTS / 4; ++q) {
+        const int4 w = load(words + q);
+        record.words[4 * q] = w.x;
+        record.words[4 * q + 1] = w.y;
+        record.words[4 * q + 2] = w.z;
+        record.words[4 * q + 3] = w.w;
+    }
+    return record;
+}
+
+/// The static rows a walk from `record` reads for each chain on its path (the rest rotation
+/// Q) and each attach node (l_attach) asked into L1 ahead of the walk: the walk kernel issues
+/// them before it waits for the pass before, whose end their latency then overlaps.
+HMSM_HOST_DEVICE void prefetch_walk(const BufferPointers& b, const gpu::PassConstants& pc, int32_t c,
+                                    const WalkRecord& record) {
+#ifdef __CUDA_ARCH__
+    const uint32_t depth = uint32_t(record.words[0]);
+    for (uint32_t up = 0; up <= depth && up < HMSM_WALK_ATTACH_CAPACITY; ++up) {
+        const int32_t x = up == 0 ? c : record.words[up];
+        prefetch_l1(b.chain_rest_rotation + 3 * uint64_t(pc.model_chain_begin + uint32_t(x)));
+        if (up < depth) prefetch_l1(b.node_local + pc.model_node_begin + record.words[HMSM_WALK_ATTACH(up)]);
+    }
+#else
+    (void)b, (void)pc, (void)c, (void)record;
+#endif
+}
+
 /// Composition::path_walk, passes 3 and 5 for model chain c of group instance k: its ancestors
 /// from the trunk down, R = R_parent T and O = O_parent + R_parent l_attach (level by level's
 /// operations in its order), each T computed from the chain's new angles as integrate computes
 /// it (a walk step stores no T), the pose to the joint matrix alone (src/cpu/path_walk.cpp).
+/// kFromRecords (a scene of one active instance, latency-bound): the ancestors and their attach
+/// nodes from c's walk record `from` (load_walk_record). Else (a forest, where 128 bytes per
+/// thread would cost more than the dependent loads, which other warps hide): the ancestors
+/// gathered by following chain_parent up, the attach nodes looked up level by level.
 template <bool kFromRecords>
-HMSM_HOST_DEVICE void path_walk(const BufferPointers& b, const gpu::PassConstants& pc, uint32_t k, int32_t c) {
-    // The walk record (gpu_layout.h): depth, ancestors, attach nodes. kFromRecords (a scene of one
-    // active instance, latency-bound): read whole in one round of loads. Else (a forest, where 128
-    // bytes per thread would cost more than the dependent loads, which other warps hide): the
-    // ancestors gathered by following chain_parent up, the attach nodes looked up level by level.
+HMSM_HOST_DEVICE void path_walk(const BufferPointers& b, const gpu::PassConstants& pc, uint32_t k, int32_t c,
+                                const WalkRecord* from = nullptr) {
     int32_t record[kFromRecords ? HMSM_WALK_RECORD_INTS : HMSM_WALK_PATH_CAPACITY + 1];
     if constexpr (kFromRecords) {
-        const int4* words = reinterpret_cast<const int4*>(b.chain_walk + uint64_t(HMSM_WALK_RECORD_INTS) *
-                                                                             (pc.model_chain_begin + uint32_t(c)));
+        const WalkRecord loaded = from ? *from : load_walk_record(b, pc, c);
 #pragma unroll
-        for (uint32_t q = 0; q < HMSM_WALK_RECORD_INTS / 4; ++q) {
-            const int4 w = load(words + q);
-            record[4 * q] = w.x;
-            record[4 * q + 1] = w.y;
-            record[4 * q + 2] = w.z;
-            record[4 * q + 3] = w.w;
-        }
+        for (uint32_t q = 0; q < HMSM_WALK_RECORD_INTS; ++q) record[q] = loaded.words[q];
     } else {
         const int32_t* parent = b.chain_parent + pc.model_chain_begin;
         uint32_t up = 0;

@@ -34,11 +34,29 @@ static HMSM_HOST_DEVICE void compose_element(const BufferPointers& b,
 
 /// Path walk on the device: a kernel of its own per way of reading the walk records, so that
 /// neither way's registers weigh on the other or on the pointer-jumping kernel.
+/// With the records (one instance, where a step is bound by latency), a thread's first chain's
+/// record is read and its static rows asked into L1 before the kernel waits for the wind pair
+/// (begin_pass's halves, pass_math.cuh), so those loads overlap the wind pair's end.
 template <bool kFromRecords>
 __global__ void __launch_bounds__(HMSM_WORKGROUP_SIZE)
     walk_kernel(const BufferPointers b, const gpu::PassConstants pc) {
-    begin_pass();
-    for (uint32_t i = blockIdx.x * blockDim.x + threadIdx.x; i < pc.element_count; i += gridDim.x * blockDim.x) {
+    uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
+    if constexpr (kFromRecords) {
+        let_next_pass_start();
+        WalkRecord first{};
+        const bool has_first = i < pc.element_count;
+        const int32_t c = int32_t(i % pc.model_chain_count);
+        if (has_first) {
+            first = load_walk_record(b, pc, c);
+            prefetch_walk(b, pc, c, first);
+        }
+        wait_for_previous_pass();
+        if (has_first) path_walk<true>(b, pc, i / pc.model_chain_count, c, &first);
+        i += gridDim.x * blockDim.x;
+    } else {
+        begin_pass();
+    }
+    for (; i < pc.element_count; i += gridDim.x * blockDim.x) {
         const Element e = element_of(i, pc.model_chain_count);
         path_walk<kFromRecords>(b, pc, e.instance, int32_t(e.index));
     }

@@ -97,6 +97,30 @@ __global__ void __launch_bounds__(HMSM_WORKGROUP_SIZE)
         contour_packed_item(b, pc, w);
 }
 
+/// The separate layout's kernel: a grid-stride loop over the vertices, each thread's first
+/// vertex's model-scope inputs read before it waits for the pass before (begin_pass's halves,
+/// pass_math.cuh), so their latency overlaps that pass's end. (contour_element's work.)
+template <unsigned kThreads>
+__global__ void __launch_bounds__(kThreads)
+    contour_separate_kernel(const BufferPointers b, const gpu::PassConstants pc) {
+    let_next_pass_start();
+    uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
+    ContourVertex first{};
+    if (i < pc.element_count) {
+        const uint32_t index = i % pc.model_vertex_count;
+        first = contour_inputs(b, pc, index);
+        if (first.chains.y >= 0) {  // the fix-up's parent copies, read after the joints
+            prefetch_l1(b.vertex_parent_position + pc.model_vertex_begin + index);
+            prefetch_l1(b.vertex_parent_normal + pc.model_vertex_begin + index);
+        }
+    }
+    wait_for_previous_pass();
+    for (bool is_first = true; i < pc.element_count; i += gridDim.x * blockDim.x, is_first = false) {
+        const Element e = element_of(i, pc.model_vertex_count);
+        contour_vertex(b, pc, is_first ? first : contour_inputs(b, pc, e.index), e.index, e.instance, i);
+    }
+}
+
 struct contour_pass {
     static constexpr bool kRounds = false;
     HMSM_CUDA_PASS_ELEMENT(contour)
@@ -110,7 +134,7 @@ cudaError_t launch_contour(const BufferPointers& b, const gpu::PassConstants& pc
         // Blocks of 256: a quarter of the blocks to schedule and drain. Measured on the H100, side
         // by side: one paper-1 tree 10.4 -> 9.9 us per step, 1,000 trees (separate) 1,237 -> 1,201 us.
         constexpr unsigned kThreads = 256;
-        return launch_pass(pass_kernel<contour_pass, kThreads>, launch_blocks(pc.element_count, kThreads), kThreads,
+        return launch_pass(contour_separate_kernel<kThreads>, launch_blocks(pc.element_count, kThreads), kThreads,
                            stream, b, pc);
     }
     const uint64_t items = gpu::packed_contour_threads(pc);

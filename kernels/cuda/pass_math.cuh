@@ -120,10 +120,31 @@ HMSM_HOST_DEVICE LevelChain level_chain(const BufferPointers& b, const gpu::Pass
 /// have started, then waits until the previous pass has completed and its writes are visible —
 /// so each kernel boundary of a step costs less than a full launch. A no-op on older GPUs and
 /// for kernels launched without the attribute (launch_pass).
-__device__ __forceinline__ void begin_pass() {
+__device__ __forceinline__ void begin_pass();
+
+/// begin_pass in its two halves, for a kernel that first reads static data (model and instance
+/// buffers: uploaded with the scene, written by no pass), whose loads may then overlap the end
+/// of the pass before: let_next_pass_start() first, then the static loads, then
+/// wait_for_previous_pass() in every thread before any load of what a pass writes.
+__device__ __forceinline__ void let_next_pass_start() {
 #if defined(__CUDA_ARCH__) && __CUDA_ARCH__ >= 900
     asm volatile("griddepcontrol.launch_dependents;" ::: "memory");
+#endif
+}
+__device__ __forceinline__ void wait_for_previous_pass() {
+#if defined(__CUDA_ARCH__) && __CUDA_ARCH__ >= 900
     asm volatile("griddepcontrol.wait;" ::: "memory");
+#endif
+}
+__device__ __forceinline__ void begin_pass() {
+    let_next_pass_start();
+    wait_for_previous_pass();
+}
+
+/// Asks for the 128-byte line holding `p` in L1 without waiting for it (a hint).
+__device__ __forceinline__ void prefetch_l1(const void* p) {
+#ifdef __CUDA_ARCH__
+    asm volatile("prefetch.global.L1 [%0];" ::"l"(p));
 #endif
 }
 
