@@ -115,13 +115,6 @@ HMSM_HOST_DEVICE LevelChain level_chain(const BufferPointers& b, const gpu::Pass
             half_begin(pc, pc.dst_half)};
 }
 
-/// Programmatic dependent launch (compute capability 9.0 and later): every pass kernel starts
-/// with this. It lets the next pass's blocks be scheduled as soon as all of this pass's blocks
-/// have started, then waits until the previous pass has completed and its writes are visible —
-/// so each kernel boundary of a step costs less than a full launch. A no-op on older GPUs and
-/// for kernels launched without the attribute (launch_pass).
-__device__ __forceinline__ void begin_pass();
-
 /// begin_pass in its two halves, for a kernel that first reads static data (model and instance
 /// buffers: uploaded with the scene, written by no pass), whose loads may then overlap the end
 /// of the pass before: let_next_pass_start() first, then the static loads, then
@@ -136,6 +129,12 @@ __device__ __forceinline__ void wait_for_previous_pass() {
     asm volatile("griddepcontrol.wait;" ::: "memory");
 #endif
 }
+
+/// Programmatic dependent launch (compute capability 9.0 and later): every pass kernel starts
+/// with this (or with its halves above). It lets the next pass's blocks be scheduled as soon as all of this pass's blocks
+/// have started, then waits until the previous pass has completed and its writes are visible —
+/// so each kernel boundary of a step costs less than a full launch. A no-op on older GPUs and
+/// for kernels launched without the attribute (launch_pass).
 __device__ __forceinline__ void begin_pass() {
     let_next_pass_start();
     wait_for_previous_pass();
