@@ -21,7 +21,8 @@ void fill_instance_wind(const Wind& wind, const TurbulentModes& modes, const Ins
     const double phi = instance_wind_phase(wind, instance);
     out[0] = instance.wind_scale;
     out[1] = mod2(phi);
-    out[2] = out[3] = 0.0;
+    out[2] = instance.active ? 0.0 : 1.0;  // paused (gpu_layout.h)
+    out[3] = 0.0;
     for (uint32_t k = 0; k < kTurbulentModes; ++k)
         out[4 + k] = wind.profile == WindProfile::turbulent ? frac(modes.multiple[k] * phi) : 0.0;
 }

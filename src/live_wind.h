@@ -33,7 +33,7 @@ struct WindClock {
 /// The instance's wind phase phi = p + (v > 0 ? -f (o.d)/v : 0), d normalized.
 double instance_wind_phase(const Wind& wind, const Instance& instance);
 
-/// instance_wind element of `instance`: (lambda, phi mod 2, 0, 0), then frac(m_k phi).
+/// instance_wind element of `instance`: (lambda, phi mod 2, paused, 0), then frac(m_k phi).
 void fill_instance_wind(const Wind& wind, const TurbulentModes& modes, const Instance& instance,
                         double* out);
 /// Wind table header: amplitudes a_k, (s d, field count), the force fields.

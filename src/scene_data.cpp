@@ -37,7 +37,7 @@ gpu::PassConstants group_constants(const SceneData& d, const InstanceGroup& g, u
     pc.src_half = final_half;
     pc.dst_half = final_half;
     pc.wind = {float(d.wind_vector.x), float(d.wind_vector.y), float(d.wind_vector.z), 0.0f};
-    pc.params = {float(d.dt), float(d.max_angle), float(d.fix_weight), 0.0f};
+    pc.params = {float(d.dt), float(d.max_angle), float(d.fix_weight), g.covers_paused ? 1.0f : 0.0f};
     return pc;
 }
 

@@ -34,6 +34,8 @@ struct InstanceGroup {
     uint32_t model = 0;
     uint32_t instance_begin = 0, instance_count = 0;
     uint32_t chain_begin = 0, node_begin = 0, vertex_begin = 0;  // state offsets
+    /// Some of its instances are paused: its dispatches skip them (gpu_layout.h PassConstants.params).
+    bool covers_paused = false;
 };
 
 struct SceneData {

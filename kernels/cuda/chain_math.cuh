@@ -201,8 +201,8 @@ struct WalkRecord {
 };
 HMSM_HOST_DEVICE WalkRecord load_walk_record(const BufferPointers& b, const gpu::PassConstants& pc, int32_t c) {
     WalkRecord record;
-    const int4* words =
-        reinterpret_cast<const int4*>(b.chain_walk + uint64_t(HMSM_WALK_RECORD_INTS) * (pc.model_chain_begin + uint32_t(c)));
+    const int32_t* first = b.chain_walk + uint64_t(HMSM_WALK_RECORD_INTS) * (pc.model_chain_begin + uint32_t(c));
+    const int4* words = reinterpret_cast<const int4*>(first);
 #pragma unroll
     for (uint32_t q = 0; q < HMSM_WALK_RECORD_INTS / 4; ++q) {
         const int4 w = load(words + q);

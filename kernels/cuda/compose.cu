@@ -16,12 +16,14 @@ static HMSM_HOST_DEVICE void compose_element(const BufferPointers& b,
 #ifndef __CUDA_ARCH__  // the device runs walk_kernel instead (launch_compose)
     if (pc.mode == HMSM_MODE_PATH_WALK) {
         const Element e = element_of(i, pc.model_chain_count);
+        if (instance_paused(b, pc, e.instance)) return;
         if (pc.round == HMSM_WALK_FROM_RECORDS) return path_walk<true>(b, pc, e.instance, int32_t(e.index));
         return path_walk<false>(b, pc, e.instance, int32_t(e.index));  // and root_positions
     }
 #endif
     if (pc.mode == HMSM_MODE_LEVEL_BY_LEVEL) {
         const LevelChain l = level_chain(b, pc, i);
+        if (instance_paused(b, pc, l.instance)) return;
         Mat3 rotation = load_mat3(b.chain_local, l.chain);
         if (l.parent >= 0)
             rotation = load_mat3(b.chain_rotation, l.dst + state_chain(pc, l.instance, l.parent)) * rotation;
@@ -29,6 +31,7 @@ static HMSM_HOST_DEVICE void compose_element(const BufferPointers& b,
         return;
     }
     const Element e = element_of(i, pc.model_chain_count);
+    if (instance_paused(b, pc, e.instance)) return;
     compose_jump<false>(b, pc, e.instance, e.index, pc.round, pc.src_half, pc.dst_half);
 }
 
@@ -51,6 +54,8 @@ __global__ void __launch_bounds__(HMSM_WORKGROUP_SIZE)
             prefetch_walk(b, pc, c, first);
         }
         wait_for_previous_pass();
+        // (No pause check: a scene of one active instance, and a group covers paused instances
+        // only between active ones.)
         if (has_first) path_walk<true>(b, pc, i / pc.model_chain_count, c, &first);
         i += gridDim.x * blockDim.x;
     } else {
@@ -58,7 +63,7 @@ __global__ void __launch_bounds__(HMSM_WORKGROUP_SIZE)
     }
     for (; i < pc.element_count; i += gridDim.x * blockDim.x) {
         const Element e = element_of(i, pc.model_chain_count);
-        path_walk<kFromRecords>(b, pc, e.instance, int32_t(e.index));
+        if (!instance_paused(b, pc, e.instance)) path_walk<kFromRecords>(b, pc, e.instance, int32_t(e.index));
     }
 }
 

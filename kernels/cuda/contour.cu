@@ -68,12 +68,14 @@ HMSM_HOST_DEVICE void contour_vertex(const BufferPointers& b, const gpu::PassCon
 /// Thread i of the dispatch (the host emulation's order): one vertex of one instance.
 HMSM_HOST_DEVICE void contour_element(const BufferPointers& b, const gpu::PassConstants& pc, uint32_t i) {
     const Element e = element_of(i, pc.model_vertex_count);
+    if (instance_paused(b, pc, e.instance)) return;
     contour_vertex(b, pc, contour_inputs(b, pc, e.index), e.index, e.instance, i);
 }
 
 /// Work item w of a packed dispatch (gpu_layout.h HMSM_PACKED_CONTOUR_INSTANCES): model vertex
 /// w % n, read once, placed in instances [s K, s K + K) of group s = w / n. v is fastest, so a
 /// warp writes consecutive vertices of one instance at a time.
+template <bool kMayPause = true>
 HMSM_HOST_DEVICE void contour_packed_item(const BufferPointers& b, const gpu::PassConstants& pc, uint64_t w) {
     constexpr uint32_t kGroup = HMSM_PACKED_CONTOUR_INSTANCES;
     const uint32_t per_instance = pc.model_vertex_count;
@@ -82,25 +84,29 @@ HMSM_HOST_DEVICE void contour_packed_item(const BufferPointers& b, const gpu::Pa
     const ContourVertex in = contour_inputs(b, pc, index);
     const uint32_t first = group * kGroup;
     const uint32_t last = instances < first + kGroup ? instances : first + kGroup;
-    for (uint32_t k = first; k < last; ++k) contour_vertex(b, pc, in, index, k, uint64_t(k) * per_instance + index);
+    for (uint32_t k = first; k < last; ++k)
+        if (!kMayPause || !instance_paused(b, pc, k))
+            contour_vertex(b, pc, in, index, k, uint64_t(k) * per_instance + index);
 }
 
 /// The packed layout's kernel: a grid-stride loop over the work items. (A template, as every
 /// kernel here, so that its host stub is not a global symbol of hmsm.)
-template <uint32_t kUnused = 0>
+/// kMayPause: the dispatch covers paused instances (PassConstants.params.w); without, the kernel
+/// has no check at all (every contour kernel here).
+template <bool kMayPause>
 __global__ void __launch_bounds__(HMSM_WORKGROUP_SIZE)
     contour_packed_kernel(const BufferPointers b, const gpu::PassConstants pc) {
     begin_pass();
     const uint64_t items = gpu::packed_contour_threads(pc);
     for (uint64_t w = blockIdx.x * uint64_t(blockDim.x) + threadIdx.x; w < items;
          w += uint64_t(gridDim.x) * blockDim.x)
-        contour_packed_item(b, pc, w);
+        contour_packed_item<kMayPause>(b, pc, w);
 }
 
 /// The separate layout's kernel: a grid-stride loop over the vertices, each thread's first
 /// vertex's model-scope inputs read before it waits for the pass before (begin_pass's halves,
 /// pass_math.cuh), so their latency overlaps that pass's end. (contour_element's work.)
-template <unsigned kThreads>
+template <unsigned kThreads, bool kMayPause>
 __global__ void __launch_bounds__(kThreads)
     contour_separate_kernel(const BufferPointers b, const gpu::PassConstants pc) {
     let_next_pass_start();
@@ -117,6 +123,7 @@ __global__ void __launch_bounds__(kThreads)
     wait_for_previous_pass();
     for (bool is_first = true; i < pc.element_count; i += gridDim.x * blockDim.x, is_first = false) {
         const Element e = element_of(i, pc.model_vertex_count);
+        if (kMayPause && instance_paused(b, pc, e.instance)) continue;
         contour_vertex(b, pc, is_first ? first : contour_inputs(b, pc, e.index), e.index, e.instance, i);
     }
 }
@@ -134,12 +141,16 @@ cudaError_t launch_contour(const BufferPointers& b, const gpu::PassConstants& pc
         // Blocks of 256: a quarter of the blocks to schedule and drain. Measured on the H100, side
         // by side: one paper-1 tree 10.4 -> 9.9 us per step, 1,000 trees (separate) 1,237 -> 1,201 us.
         constexpr unsigned kThreads = 256;
-        return launch_pass(contour_separate_kernel<kThreads>, launch_blocks(pc.element_count, kThreads), kThreads,
-                           stream, b, pc);
+        const unsigned blocks = launch_blocks(pc.element_count, kThreads);
+        if (pc.params.w != 0.0f)
+            return launch_pass(contour_separate_kernel<kThreads, true>, blocks, kThreads, stream, b, pc);
+        return launch_pass(contour_separate_kernel<kThreads, false>, blocks, kThreads, stream, b, pc);
     }
     const uint64_t items = gpu::packed_contour_threads(pc);
     const uint32_t blocks = launch_blocks(uint32_t(std::min<uint64_t>(items, UINT32_MAX)));
-    return launch_pass(contour_packed_kernel<>, blocks, HMSM_WORKGROUP_SIZE, stream, b, pc);
+    const bool may_pause = pc.params.w != 0.0f;
+    return launch_pass(may_pause ? contour_packed_kernel<true> : contour_packed_kernel<false>, blocks,
+                       HMSM_WORKGROUP_SIZE, stream, b, pc);
 }
 
 /// The same work on the host, in the same order as the device's (a packed dispatch by its work

@@ -146,7 +146,7 @@ __global__ void __launch_bounds__(HMSM_MAX_ROUNDS_WORKGROUP_SIZE)
     };
     auto sync = [] { __syncthreads(); };
     for (uint32_t k = blockIdx.x; k < dispatch_instances(pc); k += gridDim.x)
-        run_instance<kShared>(b, pc, k, pool, each, sync);
+        if (!instance_paused(b, pc, k)) run_instance<kShared>(b, pc, k, pool, each, sync);  // uniform per block
 }
 
 /// Shared memory a block may have without opting in (cudaFuncAttributeMaxDynamicSharedMemorySize).
@@ -179,6 +179,7 @@ void emulate_fused(const BufferPointers& b, const gpu::PassConstants& pc, uint64
     };
     auto sync = [] {};
     for (uint32_t k = 0; k < dispatch_instances(pc); ++k) {
+        if (instance_paused(b, pc, k)) continue;
         if (shared) run_instance<true>(b, pc, k, pool, each, sync);
         else run_instance<false>(b, pc, k, pool, each, sync);
     }

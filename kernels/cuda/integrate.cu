@@ -7,6 +7,7 @@ namespace hmsm::detail::cuda {
 static HMSM_HOST_DEVICE void integrate_element(const BufferPointers& b,
                                                const gpu::PassConstants& pc, uint32_t i) {
     const Element e = element_of(i, pc.model_chain_count);
+    if (instance_paused(b, pc, e.instance)) return;
     const uint64_t chain = pc.chain_begin + i;
     store_mat3(b.chain_local, chain, chain_integrate(b, pc, e.instance, e.index, chain, b.chain_force[chain]));
 }

@@ -7,6 +7,7 @@ namespace hmsm::detail::cuda {
 static HMSM_HOST_DEVICE void node_relative_element(const BufferPointers& b,
                                                    const gpu::PassConstants& pc, uint32_t i) {
     const Element e = element_of(i, pc.model_node_count);
+    if (instance_paused(b, pc, e.instance)) return;
     const uint32_t model_node = pc.model_node_begin + e.index;
     const int32_t owner = load(b.node_owner + model_node);
     const float3 local = xyz(load(b.node_local + model_node));

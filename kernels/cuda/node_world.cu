@@ -6,6 +6,7 @@ namespace hmsm::detail::cuda {
 static HMSM_HOST_DEVICE void node_world_element(const BufferPointers& b,
                                                 const gpu::PassConstants& pc, uint32_t i) {
     const Element e = element_of(i, pc.model_node_count);
+    if (instance_paused(b, pc, e.instance)) return;
     const int32_t owner = load(b.node_owner + pc.model_node_begin + e.index);
     const uint64_t node = pc.node_begin + i;
     const float4 origin =

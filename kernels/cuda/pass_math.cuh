@@ -79,6 +79,15 @@ HMSM_HOST_DEVICE Pose load_joint(const BufferPointers& b, uint64_t chain) {
             make_float3(r0.w, r1.w, r2.w)};
 }
 
+/// Whether group instance k is paused (inactive, frozen: docs/model.md 3.9). A dispatch may cover
+/// paused instances between active ones (live_control.cpp; it says so in params.w); it skips
+/// their elements, writing nothing of theirs. The flag is the z of the instance's first
+/// instance_wind element.
+HMSM_HOST_DEVICE bool instance_paused(const BufferPointers& b, const gpu::PassConstants& pc, uint32_t k) {
+    return pc.params.w != 0.0f &&
+           load(b.instance_wind + uint64_t(HMSM_INSTANCE_WIND_VEC4S) * (pc.instance_begin + k)).z != 0.0f;
+}
+
 /// Thread i of a dispatch handles element `index` of group instance `instance`.
 struct Element {
     uint32_t instance;
@@ -131,9 +140,9 @@ __device__ __forceinline__ void wait_for_previous_pass() {
 }
 
 /// Programmatic dependent launch (compute capability 9.0 and later): every pass kernel starts
-/// with this (or with its halves above). It lets the next pass's blocks be scheduled as soon as all of this pass's blocks
-/// have started, then waits until the previous pass has completed and its writes are visible —
-/// so each kernel boundary of a step costs less than a full launch. A no-op on older GPUs and
+/// with this (or with its halves above). It lets the next pass's blocks be scheduled as soon as
+/// all of this pass's blocks have started, then waits until the previous pass has completed and
+/// its writes are visible — so each kernel boundary of a step costs less than a full launch. A no-op on older GPUs and
 /// for kernels launched without the attribute (launch_pass).
 __device__ __forceinline__ void begin_pass() {
     let_next_pass_start();
@@ -196,8 +205,9 @@ inline unsigned launch_blocks(uint32_t n, uint32_t threads = HMSM_WORKGROUP_SIZE
 /// instance k (and k + gridDim.x, ...), calling jump(k, chain, round, src_half, dst_half) for
 /// each of the instance's chains, with __syncthreads() between rounds.
 template <class Jump>
-__device__ void run_rounds_in_block(const gpu::PassConstants& pc, Jump jump) {
+__device__ void run_rounds_in_block(const BufferPointers& b, const gpu::PassConstants& pc, Jump jump) {
     for (uint32_t k = blockIdx.x; k < dispatch_instances(pc); k += gridDim.x) {
+        if (instance_paused(b, pc, k)) continue;  // the whole block: its barriers stay uniform
         for (uint32_t round = 0; round < pc.round; ++round) {
             for (uint32_t c = threadIdx.x; c < pc.model_chain_count; c += blockDim.x)
                 jump(k, c, round, HMSM_HALF_READ(round), HMSM_HALF_WRITTEN(round));
@@ -208,10 +218,11 @@ __device__ void run_rounds_in_block(const gpu::PassConstants& pc, Jump jump) {
 
 /// The same on the host (emulate_NAME): round after round over every chain of every instance.
 template <class Jump>
-void emulate_rounds(const gpu::PassConstants& pc, Jump jump) {
+void emulate_rounds(const BufferPointers& b, const gpu::PassConstants& pc, Jump jump) {
     for (uint32_t round = 0; round < pc.round; ++round)
         for (uint32_t i = 0; i < pc.element_count; ++i) {
             const Element e = element_of(i, pc.model_chain_count);
+            if (instance_paused(b, pc, e.instance)) continue;
             jump(e.instance, e.index, round, HMSM_HALF_READ(round), HMSM_HALF_WRITTEN(round));
         }
 }
@@ -233,21 +244,33 @@ inline unsigned launch_blocks_per_instance(const gpu::PassConstants& pc) {
 /// below build P from NAME_element (and NAME_jump) and define launch_NAME and emulate_NAME.
 /// One launcher adds a kernel of its own: contour's in the packed vertex layout (contour.cu),
 /// which still fills P for the separate layout and the emulation.
-template <class P, unsigned kThreads = HMSM_WORKGROUP_SIZE>
+/// kMayPause: the dispatch covers paused instances (PassConstants.params.w). Without, the kernel
+/// hands on constants whose params.w is a literal 0, so instance_paused() folds to false and
+/// the kernel carries no check at all (the launchers pick the variant).
+template <bool kMayPause>
+__device__ __forceinline__ gpu::PassConstants constants_for(const gpu::PassConstants& pc) {
+    gpu::PassConstants constants = pc;
+    if constexpr (!kMayPause) constants.params.w = 0.0f;
+    return constants;
+}
+
+template <class P, unsigned kThreads = HMSM_WORKGROUP_SIZE, bool kMayPause = false>
 static __global__ void __launch_bounds__(kThreads)
-    pass_kernel(const BufferPointers b, const gpu::PassConstants pc) {
+    pass_kernel(const BufferPointers b, const gpu::PassConstants pc_in) {
     begin_pass();
+    const gpu::PassConstants pc = constants_for<kMayPause>(pc_in);
     for (uint32_t i = blockIdx.x * blockDim.x + threadIdx.x; i < pc.element_count;
          i += gridDim.x * blockDim.x)
         P::element(b, pc, i);
 }
 
 /// In-dispatch mode: one block per instance runs every round (run_rounds_in_block).
-template <class P>
+template <class P, bool kMayPause = false>
 static __global__ void __launch_bounds__(HMSM_MAX_ROUNDS_WORKGROUP_SIZE)
-    rounds_kernel(const BufferPointers b, const gpu::PassConstants pc) {
+    rounds_kernel(const BufferPointers b, const gpu::PassConstants pc_in) {
     begin_pass();
-    run_rounds_in_block(pc, [&](uint32_t k, uint32_t c, uint32_t round, uint32_t src, uint32_t dst) {
+    const gpu::PassConstants pc = constants_for<kMayPause>(pc_in);
+    run_rounds_in_block(b, pc, [&](uint32_t k, uint32_t c, uint32_t round, uint32_t src, uint32_t dst) {
         P::template jump<true>(b, pc, k, c, round, src, dst);
     });
 }
@@ -258,12 +281,16 @@ static __global__ void __launch_bounds__(HMSM_MAX_ROUNDS_WORKGROUP_SIZE)
 template <class P>
 cudaError_t launch(const BufferPointers& b, const gpu::PassConstants& pc, cudaStream_t stream) {
     if (pc.element_count == 0) return cudaSuccess;
+    const bool may_pause = pc.params.w != 0.0f;
     if constexpr (P::kRounds) {
         if (pc.mode == HMSM_MODE_POINTER_JUMPING_IN_DISPATCH)
-            return launch_pass(rounds_kernel<P>, launch_blocks_per_instance(pc),
-                               gpu::rounds_workgroup_size(pc.model_chain_count), stream, b, pc);
+            return launch_pass(may_pause ? rounds_kernel<P, true> : rounds_kernel<P, false>,
+                               launch_blocks_per_instance(pc), gpu::rounds_workgroup_size(pc.model_chain_count),
+                               stream, b, pc);
     }
-    return launch_pass(pass_kernel<P>, launch_blocks(pc.element_count), HMSM_WORKGROUP_SIZE, stream, b, pc);
+    constexpr unsigned kThreads = HMSM_WORKGROUP_SIZE;
+    return launch_pass(may_pause ? pass_kernel<P, kThreads, true> : pass_kernel<P, kThreads, false>,
+                       launch_blocks(pc.element_count), kThreads, stream, b, pc);
 }
 
 /// emulate_NAME: the same element (or round) code, serially on the host.
@@ -271,7 +298,7 @@ template <class P>
 void emulate(const BufferPointers& b, const gpu::PassConstants& pc) {
     if constexpr (P::kRounds) {
         if (pc.mode == HMSM_MODE_POINTER_JUMPING_IN_DISPATCH) {
-            emulate_rounds(pc, [&](uint32_t k, uint32_t c, uint32_t round, uint32_t src, uint32_t dst) {
+            emulate_rounds(b, pc, [&](uint32_t k, uint32_t c, uint32_t round, uint32_t src, uint32_t dst) {
                 P::template jump<false>(b, pc, k, c, round, src, dst);
             });
             return;

@@ -28,6 +28,7 @@ static HMSM_HOST_DEVICE void root_positions_element(const BufferPointers& b,
                                                     const gpu::PassConstants& pc, uint32_t i) {
     if (pc.mode == HMSM_MODE_LEVEL_BY_LEVEL) {
         const LevelChain l = level_chain(b, pc, i);
+        if (instance_paused(b, pc, l.instance)) return;
         float4 origin = own_offset(b, pc, l.instance, l.c);
         if (l.parent >= 0) origin = origin + load(b.chain_origin + l.dst + state_chain(pc, l.instance, l.parent));
         b.chain_origin[l.dst + l.chain] = origin;
@@ -35,6 +36,7 @@ static HMSM_HOST_DEVICE void root_positions_element(const BufferPointers& b,
         return;
     }
     const Element e = element_of(i, pc.model_chain_count);
+    if (instance_paused(b, pc, e.instance)) return;
     root_positions_jump<false>(b, pc, e.instance, int32_t(e.index), pc.round, pc.src_half, pc.dst_half);
 }
 

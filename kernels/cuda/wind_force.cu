@@ -8,6 +8,7 @@ namespace hmsm::detail::cuda {
 static HMSM_HOST_DEVICE void wind_force_element(const BufferPointers& b,
                                                 const gpu::PassConstants& pc, uint32_t i) {
     const Element e = element_of(i, pc.model_chain_count);
+    if (instance_paused(b, pc, e.instance)) return;
     const uint64_t chain = pc.chain_begin + i;
     // Path walk: the previous pose is the joint matrix (the walk writes no R or O half), and
     // integrate's step follows in the same launch with g in hand; only the angles are stored

@@ -14,7 +14,7 @@
 void main() {
     if (pc.mode == HMSM_MODE_POINTER_JUMPING_IN_DISPATCH) {
         uint k = workgroup_index();
-        if (k >= pc.element_count / pc.model_chain_count) return;  // uniform per workgroup
+        if (k >= pc.element_count / pc.model_chain_count || instance_paused(k)) return;  // uniform per workgroup
         for (uint round = 0u; round < pc.round; ++round) {
             for (uint c = gl_LocalInvocationID.x; c < pc.model_chain_count; c += gl_WorkGroupSize.x)
                 compose_jump(k, c, round, HMSM_HALF_READ(round), HMSM_HALF_WRITTEN(round));
@@ -25,6 +25,7 @@ void main() {
     }
     uint i = thread_index();
     if (i >= pc.element_count) return;
+    if (instance_paused(i / (pc.mode == HMSM_MODE_LEVEL_BY_LEVEL ? pc.level_count : pc.model_chain_count))) return;
     if (pc.mode == HMSM_MODE_PATH_WALK) {
         path_walk(i / pc.model_chain_count, i % pc.model_chain_count);  // and root_positions
         return;

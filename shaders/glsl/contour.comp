@@ -42,7 +42,7 @@ void main() {
     uint n = pc.model_vertex_count;
     uint w = thread_index();
     if (pc.mode != HMSM_VERTEX_LAYOUT_PACKED) {
-        if (w >= pc.element_count) return;
+        if (w >= pc.element_count || instance_paused(w / n)) return;
         uint v = pc.model_vertex_begin + w % n;
         place_vertex(w / n, w % n, v, vertex_chain[v], vertex_rest_position[v].xyz, vertex_rest_normal[v].xyz);
         return;
@@ -56,5 +56,6 @@ void main() {
     vec3 rest_normal = vertex_rest_normal[v].xyz;
     uint first = w / n * HMSM_PACKED_CONTOUR_INSTANCES;
     uint last = min(instances, first + HMSM_PACKED_CONTOUR_INSTANCES);
-    for (uint k = first; k < last; ++k) place_vertex(k, e, v, chains, rest_position, rest_normal);
+    for (uint k = first; k < last; ++k)
+        if (!instance_paused(k)) place_vertex(k, e, v, chains, rest_position, rest_normal);
 }

@@ -64,7 +64,7 @@ void set_shared_origin(uint pose_half, uint which, uint c, vec4 o) {
 void main() {
     uint k = workgroup_index();
     uint n = pc.model_chain_count;
-    if (k >= pc.element_count / n) return;  // uniform per workgroup
+    if (k >= pc.element_count / n || instance_paused(k)) return;  // uniform per workgroup
     uint size = gl_WorkGroupSize.x;
     uint first = gl_LocalInvocationID.x;
     bool in_shared = SHARED_FLOATS >= HMSM_FUSED_SHARED_FLOATS_PER_CHAIN * n;

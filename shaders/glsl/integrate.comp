@@ -10,6 +10,7 @@ void main() {
     uint i = thread_index();
     if (i >= pc.element_count) return;
     uint k = i / pc.model_chain_count;
+    if (instance_paused(k)) return;
     uint c = i % pc.model_chain_count;
     uint chain = state_chain(k, c);
     chain_local[chain] = as_mat3x4(chain_integrate(k, c, chain, chain_force[chain]));

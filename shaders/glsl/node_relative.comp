@@ -8,6 +8,7 @@ void main() {
     uint i = thread_index();
     if (i >= pc.element_count) return;
     uint k = i / pc.model_node_count;
+    if (instance_paused(k)) return;
     uint n = i % pc.model_node_count;
     uint owner = uint(node_owner[pc.model_node_begin + n]);
     vec3 local = node_local[pc.model_node_begin + n].xyz;

@@ -7,6 +7,7 @@ void main() {
     uint i = thread_index();
     if (i >= pc.element_count) return;
     uint k = i / pc.model_node_count;
+    if (instance_paused(k)) return;
     uint n = i % pc.model_node_count;
     uint owner = uint(node_owner[pc.model_node_begin + n]);
     uint node = state_node(k, n);

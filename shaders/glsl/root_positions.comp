@@ -17,7 +17,7 @@
 void main() {
     if (pc.mode == HMSM_MODE_POINTER_JUMPING_IN_DISPATCH) {
         uint k = workgroup_index();
-        if (k >= pc.element_count / pc.model_chain_count) return;  // uniform per workgroup
+        if (k >= pc.element_count / pc.model_chain_count || instance_paused(k)) return;  // uniform per workgroup
         for (uint round = 0u; round < pc.round; ++round) {
             for (uint c = gl_LocalInvocationID.x; c < pc.model_chain_count; c += gl_WorkGroupSize.x)
                 root_jump(k, c, round, HMSM_HALF_READ(round), HMSM_HALF_WRITTEN(round), round + 1u == pc.round);
@@ -31,6 +31,7 @@ void main() {
     if (pc.mode == HMSM_MODE_LEVEL_BY_LEVEL) {
         uint dst = half_offset(pc.dst_half);
         uint k = i / pc.level_count;
+        if (instance_paused(k)) return;
         uint c = pc.level_begin + i % pc.level_count;
         int parent = chain_parent[pc.model_chain_begin + c];
         vec4 origin = own_offset(k, c);
@@ -39,5 +40,6 @@ void main() {
         store_joint(state_chain(k, c), pc.dst_half, origin);
         return;
     }
+    if (instance_paused(i / pc.model_chain_count)) return;
     root_jump(i / pc.model_chain_count, i % pc.model_chain_count, pc.round, pc.src_half, pc.dst_half, true);
 }

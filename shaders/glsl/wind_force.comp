@@ -10,6 +10,7 @@ void main() {
     uint i = thread_index();
     if (i >= pc.element_count) return;
     uint k = i / pc.model_chain_count;
+    if (instance_paused(k)) return;
     uint c = i % pc.model_chain_count;
     uint chain = state_chain(k, c);
     // Path walk: the previous pose is the joint matrix (the walk writes no R or O half), and

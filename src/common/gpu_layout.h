@@ -56,7 +56,10 @@
 /// double and hands over only those.
 ///
 /// instance_wind, 9 vec4 per instance i (element 9 i + j):
-///   j = 0: (lambda_i, phi_i mod 2, 0, 0)  wind scale; wind phase phi_i = p_i - f (o_i.d)/v
+///   j = 0: (lambda_i, phi_i mod 2, paused, 0)  wind scale; wind phase phi_i = p_i - f (o_i.d)/v;
+///          paused 1 while the instance is inactive, else 0: a dispatch may cover paused
+///          instances between active ones (live_control.cpp); where it does (params.w = 1), it
+///          skips their elements
 ///   j = 1..8: frac(m_k phi_i) for the turbulent modes k = 4 (j - 1) .. 4 (j - 1) + 3
 /// wind_table, vec4 elements:
 ///   [HMSM_WIND_AMPLITUDES, +8): turbulent amplitudes a_k (k = 4 e + component)
@@ -191,7 +194,7 @@ struct PassConstants {
     uint src_half;            // ping-pong: half read (pose readers: the half holding R and O)
     uint dst_half;            // ping-pong: half written
     vec4 wind;                // (strength * direction, wind-table step slot) for wind_force
-    vec4 params;              // (dt, max_angle, fix_weight, 0)
+    vec4 params;              // (dt, max_angle, fix_weight, covers paused: 1 if the group has paused instances)
 };
 
 #ifdef __cplusplus

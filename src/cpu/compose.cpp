@@ -17,6 +17,7 @@ void compose_round(State<T>& s, const gpu::PassConstants& pc, uint32_t round, ui
     };
     for (uint32_t i = r.begin; i < r.end; ++i) {
         Element e = element_of(i, pc.model_chain_count);
+        if (instance_paused(s, pc, e.instance)) continue;
         uint64_t gc = state_chain(pc, e.instance, int32_t(e.index));
         int32_t ancestor =
             s.chain_jump[uint64_t(round) * pc.total_model_chains + pc.model_chain_begin + e.index];

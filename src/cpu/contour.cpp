@@ -17,6 +17,7 @@ void contour(State<T>& s, const gpu::PassConstants& pc, Range r) {
     const T beta = s.fix_weight;
     for (uint32_t i = r.begin; i < r.end; ++i) {
         Element e = element_of(i, pc.model_vertex_count);
+        if (instance_paused(s, pc, e.instance)) continue;
         uint32_t v = pc.model_vertex_begin + e.index;
         glm::ivec2 chains = s.vertex_chain[v];
         const uint64_t own = state_chain(pc, e.instance, chains.x);

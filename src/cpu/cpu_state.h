@@ -68,6 +68,14 @@ inline uint64_t state_node(const gpu::PassConstants& pc, uint32_t k, int32_t n) 
     return pc.node_begin + uint64_t(k) * pc.model_node_count + uint64_t(n);
 }
 
+/// Whether group instance k is paused (inactive, frozen): a dispatch may cover paused instances
+/// between active ones (it says so in params.w) and skips their elements (gpu_layout.h,
+/// instance_wind element 0's z).
+template <class T>
+bool instance_paused(const State<T>& s, const gpu::PassConstants& pc, uint32_t k) {
+    return pc.params.w != 0.0f && s.instance_wind[pc.instance_begin + k][2] != T(0);
+}
+
 /// Stores the joint matrix [R | O] of state chain `chain` as three rows (R row i, O_i).
 template <class T>
 void store_joint(State<T>& s, uint64_t chain, const typename State<T>::mat3& r,
@@ -127,6 +135,7 @@ void run_hierarchical(const State<T>& s, const gpu::PassConstants& pc, Range r, 
         const uint64_t dst = uint64_t(pc.dst_half) * s.total_chains;
         for (uint32_t i = r.begin; i < r.end; ++i) {
             const Element e = element_of(i, pc.level_count);
+            if (instance_paused(s, pc, e.instance)) continue;
             const int32_t c = int32_t(pc.level_begin + e.index);
             level(dst, e.instance, c, s.chain_parent[pc.model_chain_begin + c]);
         }

@@ -49,6 +49,7 @@ template <class T>
 void integrate(State<T>& s, const gpu::PassConstants& pc, Range r) {
     for (uint32_t i = r.begin; i < r.end; ++i) {
         Element e = element_of(i, pc.model_chain_count);
+        if (instance_paused(s, pc, e.instance)) continue;
         uint64_t c = state_chain(pc, e.instance, int32_t(e.index));
         const uint32_t model_chain = pc.model_chain_begin + e.index;
         const auto angle = integrate_angles(s, model_chain, c, s.chain_force[c]);

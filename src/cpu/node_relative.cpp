@@ -8,6 +8,7 @@ void node_relative(State<T>& s, const gpu::PassConstants& pc, Range r) {
     const uint64_t pose = uint64_t(pc.src_half) * s.total_chains;
     for (uint32_t i = r.begin; i < r.end; ++i) {
         Element e = element_of(i, pc.model_node_count);
+        if (instance_paused(s, pc, e.instance)) continue;
         int32_t owner = s.node_owner[pc.model_node_begin + e.index];
         const auto& local = s.node_local[pc.model_node_begin + e.index];
         auto u = s.chain_rotation[pose + state_chain(pc, e.instance, owner)] *
@@ -22,6 +23,7 @@ template <class T>
 void node_relative_and_world(State<T>& s, const gpu::PassConstants& pc, Range r) {
     for (uint32_t i = r.begin; i < r.end; ++i) {
         Element e = element_of(i, pc.model_node_count);
+        if (instance_paused(s, pc, e.instance)) continue;
         int32_t owner = s.node_owner[pc.model_node_begin + e.index];
         const uint64_t chain = state_chain(pc, e.instance, owner);
         const auto u = joint_rotation(s, chain) * typename State<T>::vec3(s.node_local[pc.model_node_begin + e.index]);

@@ -8,6 +8,7 @@ void node_world(State<T>& s, const gpu::PassConstants& pc, Range r) {
     const uint64_t pose = uint64_t(pc.src_half) * s.total_chains;
     for (uint32_t i = r.begin; i < r.end; ++i) {
         Element e = element_of(i, pc.model_node_count);
+        if (instance_paused(s, pc, e.instance)) continue;
         int32_t owner = s.node_owner[pc.model_node_begin + e.index];
         uint64_t n = state_node(pc, e.instance, int32_t(e.index));
         auto w = s.chain_origin[pose + state_chain(pc, e.instance, owner)] + s.node_relative[n];

@@ -15,6 +15,7 @@ void path_walk(State<T>& s, const gpu::PassConstants& pc, Range r) {
     using vec4 = typename State<T>::vec4;
     for (uint32_t i = r.begin; i < r.end; ++i) {
         const Element e = element_of(i, pc.model_chain_count);
+        if (instance_paused(s, pc, e.instance)) continue;
         const int32_t c = int32_t(e.index);
         // The walk record (gpu_layout.h): depth, ancestors and attach nodes; further up than it
         // holds, through the 2^round-th ancestors of chain_jump and chain_attach. (The GPU kernels

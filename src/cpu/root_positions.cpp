@@ -33,6 +33,7 @@ void root_positions_round(State<T>& s, const gpu::PassConstants& pc, uint32_t ro
     };
     for (uint32_t i = r.begin; i < r.end; ++i) {
         Element e = element_of(i, pc.model_chain_count);
+        if (instance_paused(s, pc, e.instance)) continue;
         int32_t c = int32_t(e.index);
         int32_t ancestor =
             s.chain_jump[uint64_t(round) * pc.total_model_chains + pc.model_chain_begin + c];

@@ -22,6 +22,7 @@ void wind_forces(State<T>& s, const gpu::PassConstants& pc, double wind_x, Range
     const uint32_t fields = uint32_t(table[HMSM_WIND_VECTOR].w);
     for (uint32_t i = r.begin; i < r.end; ++i) {
         Element e = element_of(i, pc.model_chain_count);
+        if (instance_paused(s, pc, e.instance)) continue;
         uint64_t c = state_chain(pc, e.instance, int32_t(e.index));
         const auto& instance = s.instance_wind[pc.instance_begin + e.instance];
         T y;

@@ -145,6 +145,39 @@ void expect_kernel_bodies_follow_cpu64(Composition composition) {
 
 TEST_P(CudaEmulation, KernelBodiesFollowCpu64OverManySteps) { expect_kernel_bodies_follow_cpu64(GetParam()); }
 
+// A paused instance between active ones of the same group: every kernel of the composition skips
+// its elements (the dispatch covers it), so it stays frozen bit for bit while the others follow
+// cpu64.
+TEST_P(CudaEmulation, PausedInstanceInsideADispatchIsSkipped) {
+    Scene scene = forest_scene(11);
+    for (Instance& instance : scene.instances) instance.model = 0;  // one group of five
+    scene.instances[2].active = false;
+    auto reference = Simulation::create(scene, test_config(BackendKind::cpu64, GetParam(), false));
+    ASSERT_TRUE(reference.ok()) << reference.status().message();
+    Simulation& sim = **reference;
+    ASSERT_TRUE(sim.step(0).ok());  // writes the paused flag
+    const std::vector<detail::Dispatch>& program = hmsm::detail::step_program_of(sim);
+    ASSERT_TRUE(std::any_of(program.begin(), program.end(),
+                            [](const detail::Dispatch& d) { return d.constants.instance_begin == 0 &&
+                                                                   d.constants.element_count > 2 * d.constants.model_chain_count; }));
+    HostImage image = image_of(sim);
+    const HostImage before = image_of(sim);
+    const uint32_t steps = 120;
+    emulate_steps(sim, image, steps);
+    ASSERT_TRUE(sim.step(steps).ok());
+    std::vector<double> expected;
+    ASSERT_TRUE(sim.read(Output::node_positions, expected).ok());
+    EXPECT_LE(max_abs_difference(xyz_of(image, BufferId::node_world), expected) / scene_height(scene), 1e-4);
+    const size_t node_bytes = 16 * size_t(sim.node_count() / 5);
+    for (BufferId id : {BufferId::node_world, BufferId::chain_state}) {
+        const size_t per = id == BufferId::node_world ? node_bytes : 16 * sim.hierarchy(0).chains.size();
+        const auto& a = image.bytes[uint32_t(id)];
+        const auto& b = before.bytes[uint32_t(id)];
+        EXPECT_TRUE(std::equal(a.begin() + 2 * per, a.begin() + 3 * per, b.begin() + 2 * per)) << "paused instance moved";
+        EXPECT_FALSE(std::equal(a.begin() + 3 * per, a.begin() + 4 * per, b.begin() + 3 * per)) << "active instance frozen";
+    }
+}
+
 // The fused kernel with its rounds in device memory instead of shared memory (the
 // parameterized case above keeps them in shared memory: the emulation grants an H100's 227 KiB).
 TEST(CudaEmulationFused, DeviceMemoryRoundsFollowCpu64OverManySteps) {
