@@ -239,6 +239,7 @@ TEST_F(BenchCli, QuickCpuWritesSchemaAndTables) {
         if (e.contains("pause_seconds")) {
             pause = true;
             EXPECT_GE(e.value("paused_step_seconds", -1.0), 0.0) << e.dump();
+            EXPECT_GE(e.value("paused_steps_seconds", -1.0), 0.0) << e.dump();
         }
     }
     EXPECT_TRUE(removal && growth && pause) << d["live_control"].dump();

@@ -91,13 +91,18 @@ nlohmann::json measure_live_control(const TreeModel& model, const std::vector<Ba
             const double pause = seconds_since(start);
             start = Clock::now();
             if (status) status = s.step();
-            const double paused_step = seconds_since(start);
+            const double paused_step = seconds_since(start);  // with the new step program's setup
+            constexpr uint32_t kPausedSteps = 10;
+            start = Clock::now();
+            if (status) status = s.step(kPausedSteps);
+            const double paused_steps = seconds_since(start) / kPausedSteps;
             start = Clock::now();
             for (uint64_t i = 0; status && i < paused; ++i) status = s.set_instance_active(i * 10 % s.instances().size(), true);
             const double resume = seconds_since(start);
             if (status)
                 results.push_back({{"backend", to_string(kind)}, {"instances", forest}, {"paused", paused},
                                    {"pause_seconds", pause}, {"paused_step_seconds", paused_step},
+                                   {"paused_steps_seconds", paused_steps},
                                    {"resume_seconds", resume}});
         }
         // Adding past the capacity (one re-upload, the capacity grows by half), then as many
@@ -150,6 +155,7 @@ std::string render_live_control(const nlohmann::json& rows) {
             const std::string n = std::to_string(r.value("paused", 0ull));
             line("pause " + n, ms(r, "pause_seconds"), "");
             line("step with " + n + " paused", ms(r, "paused_step_seconds"), "");
+            line("each of the next steps", ms(r, "paused_steps_seconds"), "");
             line("resume " + n, ms(r, "resume_seconds"), "");
         } else if (r.contains("add_past_capacity_seconds")) {
             const std::string n = std::to_string(r.value("added", 0ull));
