@@ -137,18 +137,16 @@ struct contour_pass {
 
 cudaError_t launch_contour(const BufferPointers& b, const gpu::PassConstants& pc, cudaStream_t stream) {
     if (pc.element_count == 0) return cudaSuccess;
+    const bool may_pause = pc.params.w != 0.0f;  // the kernel variant with the check
     if (pc.mode != HMSM_VERTEX_LAYOUT_PACKED) {
         // Blocks of 256: a quarter of the blocks to schedule and drain. Measured on the H100, side
         // by side: one paper-1 tree 10.4 -> 9.9 us per step, 1,000 trees (separate) 1,237 -> 1,201 us.
         constexpr unsigned kThreads = 256;
-        const unsigned blocks = launch_blocks(pc.element_count, kThreads);
-        if (pc.params.w != 0.0f)
-            return launch_pass(contour_separate_kernel<kThreads, true>, blocks, kThreads, stream, b, pc);
-        return launch_pass(contour_separate_kernel<kThreads, false>, blocks, kThreads, stream, b, pc);
+        auto* kernel = may_pause ? contour_separate_kernel<kThreads, true> : contour_separate_kernel<kThreads, false>;
+        return launch_pass(kernel, launch_blocks(pc.element_count, kThreads), kThreads, stream, b, pc);
     }
     const uint64_t items = gpu::packed_contour_threads(pc);
     const uint32_t blocks = launch_blocks(uint32_t(std::min<uint64_t>(items, UINT32_MAX)));
-    const bool may_pause = pc.params.w != 0.0f;
     return launch_pass(may_pause ? contour_packed_kernel<true> : contour_packed_kernel<false>, blocks,
                        HMSM_WORKGROUP_SIZE, stream, b, pc);
 }
