@@ -106,14 +106,16 @@ Status Simulation::Impl::apply_pending() {
         dirty_instances_.clear();
     }
     if (!dirty_instances_.empty()) {
-        std::sort(dirty_instances_.begin(), dirty_instances_.end());
-        dirty_instances_.erase(std::unique(dirty_instances_.begin(), dirty_instances_.end()),
-                               dirty_instances_.end());
-        wind_scratch_.resize(detail::kInstanceWindScalars);
-        for (uint32_t i : dirty_instances_) {
-            detail::fill_instance_wind(config_.wind, modes_, instances_[i], wind_scratch_.data());
-            HMSM_TRY(backend_->write(BufferId::instance_wind, i, 1, wind_scratch_.data(), detail::Scalar::f64));
-        }
+        // One write from the first changed instance to the last (those between rewritten as
+        // they are): a write is a transfer of its own, and a tenth of a forest paused for
+        // culling took one each (about 5 µs on CUDA and 45 on Vulkan per instance, H100).
+        const auto [first, last] = std::minmax_element(dirty_instances_.begin(), dirty_instances_.end());
+        const uint32_t begin = *first, count = *last - *first + 1;
+        wind_scratch_.resize(size_t(count) * detail::kInstanceWindScalars);
+        for (uint32_t k = 0; k < count; ++k)
+            detail::fill_instance_wind(config_.wind, modes_, instances_[begin + k],
+                                       &wind_scratch_[size_t(k) * detail::kInstanceWindScalars]);
+        HMSM_TRY(backend_->write(BufferId::instance_wind, begin, count, wind_scratch_.data(), detail::Scalar::f64));
         dirty_instances_.clear();
     }
     if (program_dirty_) {
