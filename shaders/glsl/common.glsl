@@ -65,6 +65,7 @@ layout(set = 0, binding = HMSM_BINDING_JOINT_MATRIX, std430) buffer JointMatrix 
 // Live control, written by the host between steps (gpu_layout.h): 9 vec4 per instance, and the
 // wind table (turbulent amplitudes, wind vector, force fields, per-step slots).
 layout(set = 0, binding = HMSM_BINDING_INSTANCE_WIND, std430) readonly buffer InstanceWind { vec4 instance_wind[]; };
+layout(set = 0, binding = HMSM_BINDING_WIND_TABLE, std430) readonly buffer WindTable { vec4 wind_table[]; };
 
 /// Whether group instance k is paused (inactive, frozen): a dispatch may cover paused instances
 /// between active ones (it says so in params.w) and skips their elements (the z of the
@@ -72,7 +73,6 @@ layout(set = 0, binding = HMSM_BINDING_INSTANCE_WIND, std430) readonly buffer In
 bool instance_paused(uint k) {
     return pc.params.w != 0.0 && instance_wind[HMSM_INSTANCE_WIND_VEC4S * (pc.instance_begin + k)].z != 0.0;
 }
-layout(set = 0, binding = HMSM_BINDING_WIND_TABLE, std430) readonly buffer WindTable { vec4 wind_table[]; };
 
 /// Global thread index. The host spreads large dispatches over a 2-D grid of workgroups
 /// (maxComputeWorkGroupCount[0] may be as low as 65535), so the index is linearized here.
