@@ -71,11 +71,15 @@ std::vector<detail::InstanceGroup> active_groups(const detail::SceneData& d,
             const uint32_t first = k;
             uint32_t end = k + 1;  // one past the run's last active instance
             for (uint32_t paused = 0; k < g.instance_count && paused < kPausedRunThatSplits; ++k) {
-                paused = active(k) ? 0 : paused + 1;
-                if (active(k)) end = k + 1;
+                if (!active(k)) {
+                    ++paused;
+                    continue;
+                }
+                run.covers_paused |= paused > 0;  // paused instances before this active one
+                paused = 0;
+                end = k + 1;
             }
             run.instance_count = end - first;
-            for (uint32_t j = first; j < end; ++j) run.covers_paused |= !active(j);
             k = end;
             runs.push_back(run);
         }

@@ -12,7 +12,7 @@ namespace {
 /// one dispatch per round.
 constexpr uint32_t kMaxChainsForRoundsInDispatch = 16 * HMSM_MAX_ROUNDS_WORKGROUP_SIZE;
 
-/// Path walk: scenes of at most this many active instances read the walk records whole (one
+/// Path walk: steps whose groups cover at most this many instances read the walk records whole (one
 /// round of loads, HMSM_WALK_FROM_RECORDS); larger ones follow chain_parent up. Measured on the H100
 /// (path walk, CUDA, µs per step): one paper-1 tree 13.5 -> 12.7 with the records; 10 and 16
 /// trees no better (21.7 -> 22.0, 25.3 -> 27.0, packed); 1,000 trees' walk 88 -> 176 (128
@@ -135,9 +135,9 @@ std::vector<Dispatch> build_path_walk_program(const SceneData& d, const std::vec
     auto bit = [](Pass pass) { return 1u << uint32_t(pass); };
     const bool walk_poses = (wanted & walk_passes(Pass::compose)) == walk_passes(Pass::compose);
     if (walk_poses && !(wanted & bit(Pass::node_world))) wanted &= ~bit(Pass::node_relative);
-    // The records only for a scene of one active instance: the same rule for every group, so that
-    // scenes of the same instances grouped differently (reshaped in place, uploaded anew) run the
-    // same kernels, bit for bit.
+    // The records only for groups covering one instance (an active one: a group starts and ends
+    // at active instances): the same rule for every group, so that scenes of the same instances
+    // grouped differently (reshaped in place, uploaded anew) run the same kernels, bit for bit.
     uint64_t instances = 0;
     for (const auto& g : groups) instances += g.instance_count;
     const bool from_records = instances <= kWalkRecordsMaxInstances;

@@ -75,7 +75,6 @@ HMSM_HOST_DEVICE void contour_element(const BufferPointers& b, const gpu::PassCo
 /// Work item w of a packed dispatch (gpu_layout.h HMSM_PACKED_CONTOUR_INSTANCES): model vertex
 /// w % n, read once, placed in instances [s K, s K + K) of group s = w / n. v is fastest, so a
 /// warp writes consecutive vertices of one instance at a time.
-template <bool kMayPause = true>
 HMSM_HOST_DEVICE void contour_packed_item(const BufferPointers& b, const gpu::PassConstants& pc, uint64_t w) {
     constexpr uint32_t kGroup = HMSM_PACKED_CONTOUR_INSTANCES;
     const uint32_t per_instance = pc.model_vertex_count;
@@ -85,22 +84,21 @@ HMSM_HOST_DEVICE void contour_packed_item(const BufferPointers& b, const gpu::Pa
     const uint32_t first = group * kGroup;
     const uint32_t last = instances < first + kGroup ? instances : first + kGroup;
     for (uint32_t k = first; k < last; ++k)
-        if (!kMayPause || !instance_paused(b, pc, k))
-            contour_vertex(b, pc, in, index, k, uint64_t(k) * per_instance + index);
+        if (!instance_paused(b, pc, k)) contour_vertex(b, pc, in, index, k, uint64_t(k) * per_instance + index);
 }
 
 /// The packed layout's kernel: a grid-stride loop over the work items. (A template, as every
 /// kernel here, so that its host stub is not a global symbol of hmsm.)
-/// kMayPause: the dispatch covers paused instances (PassConstants.params.w); without, the kernel
-/// has no check at all (every contour kernel here).
+/// kMayPause: as pass_kernel's (pass_math.cuh constants_for), for every contour kernel here.
 template <bool kMayPause>
 __global__ void __launch_bounds__(HMSM_WORKGROUP_SIZE)
-    contour_packed_kernel(const BufferPointers b, const gpu::PassConstants pc) {
+    contour_packed_kernel(const BufferPointers b, const gpu::PassConstants pc_in) {
     begin_pass();
+    const gpu::PassConstants pc = constants_for<kMayPause>(pc_in);
     const uint64_t items = gpu::packed_contour_threads(pc);
     for (uint64_t w = blockIdx.x * uint64_t(blockDim.x) + threadIdx.x; w < items;
          w += uint64_t(gridDim.x) * blockDim.x)
-        contour_packed_item<kMayPause>(b, pc, w);
+        contour_packed_item(b, pc, w);
 }
 
 /// The separate layout's kernel: a grid-stride loop over the vertices, each thread's first
@@ -108,8 +106,9 @@ __global__ void __launch_bounds__(HMSM_WORKGROUP_SIZE)
 /// pass_math.cuh), so their latency overlaps that pass's end. (contour_element's work.)
 template <unsigned kThreads, bool kMayPause>
 __global__ void __launch_bounds__(kThreads)
-    contour_separate_kernel(const BufferPointers b, const gpu::PassConstants pc) {
+    contour_separate_kernel(const BufferPointers b, const gpu::PassConstants pc_in) {
     let_next_pass_start();
+    const gpu::PassConstants pc = constants_for<kMayPause>(pc_in);
     uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
     ContourVertex first{};
     if (i < pc.element_count) {
@@ -123,7 +122,7 @@ __global__ void __launch_bounds__(kThreads)
     wait_for_previous_pass();
     for (bool is_first = true; i < pc.element_count; i += gridDim.x * blockDim.x, is_first = false) {
         const Element e = element_of(i, pc.model_vertex_count);
-        if (kMayPause && instance_paused(b, pc, e.instance)) continue;
+        if (instance_paused(b, pc, e.instance)) continue;
         contour_vertex(b, pc, is_first ? first : contour_inputs(b, pc, e.index), e.index, e.instance, i);
     }
 }

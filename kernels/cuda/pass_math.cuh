@@ -142,8 +142,8 @@ __device__ __forceinline__ void wait_for_previous_pass() {
 /// Programmatic dependent launch (compute capability 9.0 and later): every pass kernel starts
 /// with this (or with its halves above). It lets the next pass's blocks be scheduled as soon as
 /// all of this pass's blocks have started, then waits until the previous pass has completed and
-/// its writes are visible — so each kernel boundary of a step costs less than a full launch. A no-op on older GPUs and
-/// for kernels launched without the attribute (launch_pass).
+/// its writes are visible — so each kernel boundary of a step costs less than a full launch. A
+/// no-op on older GPUs and for kernels launched without the attribute (launch_pass).
 __device__ __forceinline__ void begin_pass() {
     let_next_pass_start();
     wait_for_previous_pass();
