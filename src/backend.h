@@ -97,6 +97,12 @@ public:
     /// dispatch for somewhat larger models (simulation.cpp).
     virtual bool dispatches_are_expensive() const { return false; }
 
+    /// Whether path-walk step programs of forests may integrate ahead (gpu_layout.h
+    /// HMSM_WALK_AHEAD; step_program.cpp): the backend then keeps the next step's angles and
+    /// skips a step's wind_force dispatches when nothing changed since the step before
+    /// (src/cuda/cuda_backend.cpp).
+    virtual bool walks_ahead() const { return false; }
+
     /// Whether Composition::automatic resolves to path_walk here (measured fastest on GPUs) rather
     /// than pointer_jumping (the CPU backends, and Vulkan on a CPU driver).
     virtual bool prefers_path_walk() const { return false; }
@@ -153,6 +159,17 @@ inline bool runs_fused(const Dispatch& d) {
 inline bool runs_path_walk(const Dispatch& d) {
     return d.constants.mode == HMSM_MODE_PATH_WALK && walk_passes(d.pass) != 0;
 }
+/// The two dispatches of the walk that integrates ahead (gpu_layout.h HMSM_WALK_TOP_POSES,
+/// HMSM_WALK_AHEAD): path-walk compose dispatches told apart by their round.
+inline bool is_top_poses_walk(const Dispatch& d) {
+    return d.pass == Pass::compose && d.constants.mode == HMSM_MODE_PATH_WALK && d.constants.round == HMSM_WALK_TOP_POSES;
+}
+inline bool is_walk_ahead(const Dispatch& d) {
+    return d.pass == Pass::compose && d.constants.mode == HMSM_MODE_PATH_WALK && d.constants.round == HMSM_WALK_AHEAD;
+}
+/// Whether a dispatch reads the step's wind-table slot from constants.wind.w (Backend::run sets
+/// it): wind_force, and the top poses (which read the next step's, the slot after).
+inline bool reads_wind_slot(const Dispatch& d) { return d.pass == Pass::wind_force || is_top_poses_walk(d); }
 /// The passes a dispatch runs (bit i = Pass i): the fused passes, a path walk's two, or its own.
 inline uint32_t dispatch_passes(const Dispatch& d) {
     if (runs_fused(d)) return fused_passes();
@@ -162,9 +179,13 @@ inline uint32_t dispatch_passes(const Dispatch& d) {
 /// Buffers a dispatch reads and writes (pass_table.h): a path walk's own columns, else the union
 /// over the passes it runs.
 inline uint32_t dispatch_reads(const Dispatch& d) {
+    if (is_top_poses_walk(d)) return kWalkTopPosesReads;
+    if (is_walk_ahead(d)) return kWalkAheadReads;
     return runs_path_walk(d) ? pass_info(d.pass).walk_reads : reads_of_passes(dispatch_passes(d));
 }
 inline uint32_t dispatch_writes(const Dispatch& d) {
+    if (is_top_poses_walk(d)) return kWalkTopPosesWrites;
+    if (is_walk_ahead(d)) return kWalkAheadWrites;
     return runs_path_walk(d) ? pass_info(d.pass).walk_writes : writes_of_passes(dispatch_passes(d));
 }
 

@@ -84,6 +84,21 @@ constexpr uint32_t buffer_bit(BufferId id) { return 1u << static_cast<uint32_t>(
        HMSM_B(vertex_parent_position) | HMSM_B(vertex_parent_normal)),                            \
       (HMSM_B(vertex_position) | HMSM_B(vertex_normal)), 0u, 0u)
 
+/// The two dispatches of the walk that integrates ahead (gpu_layout.h HMSM_WALK_TOP_POSES and
+/// HMSM_WALK_AHEAD, CUDA forests; step_program.cpp), each a compose walk with more to do: the
+/// top poses also read the wind (the next step's profile value) and write the pose halves of
+/// the chains of depth 0 and 1; the walk ahead reads those and the wind, writes the joint
+/// matrix and the next step's angles (to chain_state's twin, which the backend swaps in: counted
+/// as a write of chain_state).
+inline constexpr uint32_t kWalkTopPosesReads =
+    HMSM_B(chain_state) | HMSM_B(chain_jump) | HMSM_B(chain_attach) | HMSM_B(chain_parent) |
+    HMSM_B(chain_rest_rotation) | HMSM_B(node_local) | HMSM_B(instance_origin) | HMSM_B(instance_yaw) |
+    HMSM_B(instance_wind) | HMSM_B(wind_table);
+inline constexpr uint32_t kWalkTopPosesWrites = HMSM_B(chain_rotation) | HMSM_B(chain_origin);
+inline constexpr uint32_t kWalkAheadReads =
+    kWalkTopPosesReads | HMSM_B(chain_rotation) | HMSM_B(chain_origin) | HMSM_B(chain_constants);
+inline constexpr uint32_t kWalkAheadWrites = HMSM_B(joint_matrix) | HMSM_B(chain_state);
+
 /// The pass column `walk` names: the pass a path-walk dispatch also runs, or none.
 enum class WalkPartner : int32_t {
     none = -1,

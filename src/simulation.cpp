@@ -119,7 +119,7 @@ Simulation::Simulation(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 std::vector<Dispatch> Simulation::Impl::program_for(const std::vector<detail::InstanceGroup>& groups,
                                                     Pass first, uint32_t passes) const {
     return build_program(*data_, groups, config_.composition, backend_->dispatches_are_expensive(), first,
-                         passes);
+                         passes, backend_->walks_ahead());
 }
 
 Status Simulation::Impl::check_size(std::span<const Instance> instances) const {
@@ -223,22 +223,27 @@ Status Simulation::Impl::step(uint32_t count) {
     times_ = {};
     while (done < count) {
         // One wind-table slot per step of the run: tau mod 2 and the turbulent mode phases,
-        // reduced on the host in double.
-        const uint32_t steps = std::min<uint32_t>(count - done, HMSM_WIND_STEP_SLOTS);
-        wind_scratch_.resize(size_t(steps) * detail::kWindStepScalars);
+        // reduced on the host in double; and one for the step after the run, which a walk
+        // that integrates ahead reads (gpu_layout.h HMSM_WALK_AHEAD).
+        const uint32_t steps = std::min<uint32_t>(count - done, HMSM_WIND_STEP_SLOTS - 1);
+        wind_scratch_.resize(size_t(steps + 1) * detail::kWindStepScalars);
         wind_phases_.resize(steps);
-        for (uint32_t k = 0; k < steps; ++k) {
+        for (uint32_t k = 0; k <= steps; ++k) {
             const uint64_t n = steps_done_ + k + 1;  // steps_done_ counts the earlier chunks
             const double tau = clock_.tau(wind.frequency, dt, n);
+            if (!std::isfinite(tau) && k == steps) {  // the step after: its own step() will say
+                std::fill_n(&wind_scratch_[size_t(k) * detail::kWindStepScalars], detail::kWindStepScalars, 0.0);
+                continue;
+            }
             if (!std::isfinite(tau))  // f * t overflowed: no phase, and the profile would be NaN
                 return Status{ErrorCode::invalid_argument,
                               "wind frequency " + number(wind.frequency) + " times time " +
                                   number(double(n - 1) * dt) + " s overflows: the wind phase is not finite"};
             detail::fill_wind_step(wind, modes_, tau, &wind_scratch_[size_t(k) * detail::kWindStepScalars]);
-            wind_phases_[k] = double(k);
+            if (k < steps) wind_phases_[k] = double(k);
         }
         HMSM_TRY(backend_->write(detail::BufferId::wind_table, HMSM_WIND_STEPS,
-                                 uint64_t(steps) * HMSM_WIND_STEP_VEC4S, wind_scratch_.data(),
+                                 uint64_t(steps + 1) * HMSM_WIND_STEP_VEC4S, wind_scratch_.data(),
                                  detail::Scalar::f64));
         HMSM_TRY(backend_->run(step_program_, wind_phases_));
         const PassTimes chunk = backend_->pass_times();

@@ -124,6 +124,24 @@ void append_fused(std::vector<Dispatch>& program, const SceneData& d,
 
 namespace {
 
+/// The walk that integrates ahead (gpu_layout.h): the top poses of every group (one thread per
+/// chain of depth 0 and 1: the first level_count model chains, chains being stored by depth),
+/// then the walk ahead of every group.
+void append_walk_ahead(std::vector<Dispatch>& program, const SceneData& d, const std::vector<InstanceGroup>& groups) {
+    for (uint32_t round : {HMSM_WALK_TOP_POSES, HMSM_WALK_AHEAD}) {
+        for (const auto& g : groups) {
+            const auto& m = d.models[g.model];
+            Dispatch dispatch{Pass::compose, group_constants(d, g, HMSM_FINAL_HALF(d.jump_rounds))};
+            dispatch.constants.mode = HMSM_MODE_PATH_WALK;
+            dispatch.constants.round = round;
+            dispatch.constants.level_count = m.level_begin[std::min<size_t>(2, m.level_begin.size() - 1)];
+            const uint32_t per_instance = round == HMSM_WALK_AHEAD ? m.chain_count : dispatch.constants.level_count;
+            dispatch.constants.element_count = g.instance_count * per_instance;
+            if (dispatch.constants.element_count > 0) program.push_back(dispatch);
+        }
+    }
+}
+
 /// Composition::path_walk: the passes from `first` on whose bit is set in `wanted` (those the
 /// outputs need), each walk pair (the pass table's `walk` column) in one dispatch of its leader
 /// where both run: the wind pair only before the walk, the node pair where no level-by-level
@@ -131,7 +149,7 @@ namespace {
 /// them) run level by level, whose poses the walk reproduces bit for bit; node_relative, which
 /// the walk does not read, runs only for node_world, with it after the walk.
 std::vector<Dispatch> build_path_walk_program(const SceneData& d, const std::vector<InstanceGroup>& groups,
-                                              bool dispatches_are_expensive, uint32_t wanted) {
+                                              bool dispatches_are_expensive, uint32_t wanted, bool walk_ahead) {
     auto bit = [](Pass pass) { return 1u << uint32_t(pass); };
     const bool walk_poses = (wanted & walk_passes(Pass::compose)) == walk_passes(Pass::compose);
     if (walk_poses && !(wanted & bit(Pass::node_world))) wanted &= ~bit(Pass::node_relative);
@@ -145,6 +163,13 @@ std::vector<Dispatch> build_path_walk_program(const SceneData& d, const std::vec
     // node pair wherever no level-by-level root_positions reads its u (after a walk, or without
     // pass 5: the outputs recomputed for moved instances read the pose from the joint matrices).
     const bool node_pair_runs = walk_poses || !(wanted & bit(Pass::root_positions));
+    // The walk integrates ahead in a step (the wind pair runs before it) of a forest whose every
+    // instance is active: the next step's angles are written for every chain, so that the step
+    // after may take them whole (a paused instance's would be left behind).
+    const bool wind_pair_runs = (wanted & walk_passes(Pass::wind_force)) == walk_passes(Pass::wind_force);
+    bool all_active = instances == d.instance_count();
+    for (const auto& g : groups) all_active = all_active && !g.covers_paused;
+    const bool ahead = walk_ahead && walk_poses && wind_pair_runs && !from_records && all_active;
     std::vector<Dispatch> program;
     uint32_t done = 0;
     for (Pass pass : kAllPasses) {
@@ -161,6 +186,11 @@ std::vector<Dispatch> build_path_walk_program(const SceneData& d, const std::vec
             const auto& m = d.models[g.model];
             return pass_domain(pass) == PassDomain::node ? m.node_count : m.chain_count;
         };
+        if (pass == Pass::compose && ahead) {
+            append_walk_ahead(program, d, groups);
+            done |= pair;
+            continue;
+        }
         for (const auto& g : groups) {
             Dispatch dispatch{pass, group_constants(d, g, HMSM_FINAL_HALF(d.jump_rounds))};
             dispatch.constants.element_count = g.instance_count * per_domain(g);
@@ -177,13 +207,13 @@ std::vector<Dispatch> build_path_walk_program(const SceneData& d, const std::vec
 
 std::vector<Dispatch> build_program(const SceneData& d, const std::vector<InstanceGroup>& groups,
                                     Composition composition, bool dispatches_are_expensive, Pass first,
-                                    uint32_t passes) {
+                                    uint32_t passes, bool walk_ahead) {
     if (composition == Composition::path_walk) {
         uint32_t wanted = 0;
         for (Pass pass : kAllPasses)
             if (uint32_t(pass) >= uint32_t(first) && (passes >> uint32_t(pass) & 1u) && pass_runs_for(pass, d.outputs))
                 wanted |= 1u << uint32_t(pass);
-        return build_path_walk_program(d, groups, dispatches_are_expensive, wanted);
+        return build_path_walk_program(d, groups, dispatches_are_expensive, wanted, walk_ahead);
     }
     // Fused only where the program runs every fused pass (a step); programs of some passes (the
     // rest pose from integrate on, the recomputation after a removal) run them one by one, with

@@ -12,6 +12,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 using namespace hmsm;
 
 namespace {
@@ -215,6 +217,62 @@ TEST(StepProgram, PathWalkProgramsFollowTheOutputsAndThePassesAsked) {
     EXPECT_FALSE(hmsm::detail::runs_path_walk(apart[0]));
     EXPECT_EQ(apart[1].pass, Pass::integrate);
     for (const auto& d : apart) EXPECT_FALSE(hmsm::detail::runs_path_walk(d)) << pass_name(d.pass);
+}
+
+// The walk that integrates ahead (gpu_layout.h HMSM_WALK_AHEAD): where a backend asks for it, a
+// step of a forest whose every instance is active runs the wind pair, the top poses (the chains
+// of depth 0 and 1 of each instance) and the walk ahead; a single tree, a forest with a paused
+// instance and programs without the wind pair keep the plain walk.
+TEST(StepProgram, WalkAheadOnlyForStepsOfForestsWithEveryInstanceActive) {
+    auto count = [](const std::vector<detail::Dispatch>& program, bool (*is)(const detail::Dispatch&)) {
+        return std::count_if(program.begin(), program.end(), is);
+    };
+    const uint32_t all = (1u << kPassCount) - 1;
+    auto forest = cpu_simulation(*grid_scene(test::small_tree(), 7, 6.0, 42), Composition::path_walk);
+    ASSERT_TRUE(forest);
+    const auto& data = hmsm::detail::scene_data_of(*forest);
+    const auto& tree = forest->hierarchy(0);
+    uint32_t top = 0;
+    for (const Chain& chain : tree.chains) top += chain.depth <= 1 ? 1 : 0;
+    ASSERT_GT(top, 1u);
+    ASSERT_LT(top, tree.chains.size());
+    const auto ahead = detail::build_program(data, data.groups, Composition::path_walk, false, Pass::wind_force, all, true);
+    ASSERT_GE(ahead.size(), 3u);
+    EXPECT_EQ(ahead[0].pass, Pass::wind_force);
+    ASSERT_TRUE(detail::is_top_poses_walk(ahead[1]));
+    EXPECT_EQ(ahead[1].constants.level_count, top);
+    EXPECT_EQ(ahead[1].constants.element_count, 7 * top);
+    EXPECT_TRUE(detail::reads_wind_slot(ahead[1]));
+    ASSERT_TRUE(detail::is_walk_ahead(ahead[2]));
+    EXPECT_EQ(ahead[2].constants.element_count, 7 * tree.chains.size());
+    EXPECT_EQ(count(ahead, detail::is_walk_ahead), 1);
+    // The walk ahead writes the angles, so nothing that reads them may run beside it.
+    EXPECT_TRUE(detail::dispatch_writes(ahead[2]) & detail::buffer_bit(detail::BufferId::chain_state));
+    EXPECT_TRUE(detail::dispatch_reads(ahead[2]) & detail::dispatch_writes(ahead[1]));
+    // Not asked for, not a step, one tree, a paused instance: the plain walk.
+    const auto plain = detail::build_program(data, data.groups, Composition::path_walk, false, Pass::wind_force, all);
+    EXPECT_EQ(count(plain, detail::is_walk_ahead) + count(plain, detail::is_top_poses_walk), 0);
+    const auto rest = detail::build_program(data, data.groups, Composition::path_walk, false, Pass::integrate, all, true);
+    EXPECT_EQ(count(rest, detail::is_walk_ahead), 0);
+    auto one = cpu_simulation(*grid_scene(test::small_tree(), 1, 6.0, 42), Composition::path_walk);
+    ASSERT_TRUE(one);
+    const auto& one_data = hmsm::detail::scene_data_of(*one);
+    EXPECT_EQ(count(detail::build_program(one_data, one_data.groups, Composition::path_walk, false, Pass::wind_force,
+                                          all, true),
+                    detail::is_walk_ahead),
+              0);
+    // A paused instance inside the group (live_control.cpp active_groups), or left out of it.
+    auto groups = data.groups;
+    ASSERT_EQ(groups.size(), 1u);
+    groups[0].covers_paused = true;
+    EXPECT_EQ(count(detail::build_program(data, groups, Composition::path_walk, false, Pass::wind_force, all, true),
+                    detail::is_walk_ahead),
+              0);
+    groups[0].covers_paused = false;
+    groups[0].instance_count -= 1;
+    EXPECT_EQ(count(detail::build_program(data, groups, Composition::path_walk, false, Pass::wind_force, all, true),
+                    detail::is_walk_ahead),
+              0);
 }
 
 TEST(StepProgram, ModelsBeyondTheRoundsLimitFallBackToOneDispatchPerRound) {

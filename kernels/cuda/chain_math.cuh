@@ -19,17 +19,23 @@ namespace hmsm::detail::cuda {
 /// with w_loc = R^T w in the chain's frame of the previous step (R, and the origin x at which
 /// the force fields act, loaded by the caller from the pose half), w = lambda_i s Y(tau + phi_i)
 /// d plus the force fields. pc.wind.w is the step's slot of the wind table (gpu_layout.h).
-HMSM_HOST_DEVICE float2 chain_wind_force(const BufferPointers& b, const gpu::PassConstants& pc,
-                                         uint32_t k, uint32_t c, float3 x, const Mat3& rotation) {
+/// The profile value Y(tau + phi_i) of group instance k at wind-table step slot `step_slot`:
+/// the part of pass 1 that depends only on the instance and the step.
+HMSM_HOST_DEVICE float instance_wind_y(const BufferPointers& b, const gpu::PassConstants& pc, uint32_t k,
+                                       uint32_t step_slot) {
     const float4* table = b.wind_table;
-    const uint32_t slot = HMSM_WIND_STEPS + HMSM_WIND_STEP_VEC4S * uint32_t(pc.wind.w);
+    const uint32_t slot = HMSM_WIND_STEPS + HMSM_WIND_STEP_VEC4S * step_slot;
     const float4* instance = b.instance_wind + uint64_t(HMSM_INSTANCE_WIND_VEC4S) * (pc.instance_begin + k);
-    const float4 own = load(instance);  // (lambda, phi mod 2, 0, 0)
-    float y;
     if (pc.profile == HMSM_WIND_PROFILE_TURBULENT)
-        y = turbulent_y<float>(&table[HMSM_WIND_AMPLITUDES].x, &table[slot + 1].x, &instance[1].x);
-    else
-        y = wind_profile_y<float>(pc.profile, load(table + slot).x + own.y);  // tau + phi, both mod 2
+        return turbulent_y<float>(&table[HMSM_WIND_AMPLITUDES].x, &table[slot + 1].x, &instance[1].x);
+    return wind_profile_y<float>(pc.profile, load(table + slot).x + load(instance).y);  // tau + phi, both mod 2
+}
+
+/// Pass 1 with the profile value y = instance_wind_y(...) in hand.
+HMSM_HOST_DEVICE float2 chain_wind_force_at(const BufferPointers& b, const gpu::PassConstants& pc, uint32_t k,
+                                            uint32_t c, float3 x, const Mat3& rotation, float y) {
+    const float4* table = b.wind_table;
+    const float4 own = load(b.instance_wind + uint64_t(HMSM_INSTANCE_WIND_VEC4S) * (pc.instance_begin + k));
     const float4 vector_count = load(table + HMSM_WIND_VECTOR);  // (s d, number of fields)
     float3 wind = (own.x * y) * xyz(vector_count);
     const uint32_t fields = uint32_t(vector_count.w);
@@ -46,6 +52,11 @@ HMSM_HOST_DEVICE float2 chain_wind_force(const BufferPointers& b, const gpu::Pas
     const float3 local = transpose_times(rotation, wind);
     const float area = load(b.chain_constants + pc.model_chain_begin + c).w;
     return make_float2(area * local.z, -area * local.x);
+}
+
+HMSM_HOST_DEVICE float2 chain_wind_force(const BufferPointers& b, const gpu::PassConstants& pc,
+                                         uint32_t k, uint32_t c, float3 x, const Mat3& rotation) {
+    return chain_wind_force_at(b, pc, k, c, x, rotation, instance_wind_y(b, pc, k, uint32_t(pc.wind.w)));
 }
 
 /// Pass 2, the step: symplectic Euler on S = (theta_x, theta_z) of static chain model_chain from
@@ -234,14 +245,17 @@ HMSM_HOST_DEVICE void prefetch_walk(const BufferPointers& b, const gpu::PassCons
 /// Composition::path_walk, passes 3 and 5 for model chain c of group instance k: its ancestors
 /// from the trunk down, R = R_parent T and O = O_parent + R_parent l_attach (level by level's
 /// operations in its order), each T computed from the chain's new angles as integrate computes
-/// it (a walk step stores no T), the pose to the joint matrix alone (src/cpu/path_walk.cpp).
+/// it (a walk step stores no T); the pose to `rotation` and `origin` (src/cpu/path_walk.cpp).
 /// kFromRecords (a scene of one active instance, latency-bound): the ancestors and their attach
 /// nodes from c's walk record `from` (load_walk_record). Else (a forest, where 128 bytes per
 /// thread would cost more than the dependent loads, which other warps hide): the ancestors
 /// gathered by following chain_parent up, the attach nodes looked up level by level.
-template <bool kFromRecords>
-HMSM_HOST_DEVICE void path_walk(const BufferPointers& b, const gpu::PassConstants& pc, uint32_t k, int32_t c,
-                                const WalkRecord* from = nullptr) {
+/// kFromTopPoses (HMSM_WALK_AHEAD): the walk starts from the pose of c's depth-1 ancestor (c's
+/// own at depth 0 or 1) as the HMSM_WALK_TOP_POSES dispatch stored it in half src_half: the
+/// same operations on the same values, so the same pose bit for bit.
+template <bool kFromRecords, bool kFromTopPoses = false>
+HMSM_HOST_DEVICE void walk_pose(const BufferPointers& b, const gpu::PassConstants& pc, uint32_t k, int32_t c,
+                                const WalkRecord* from, Mat3& rotation, float4& origin) {
     int32_t record[kFromRecords ? HMSM_WALK_RECORD_INTS : HMSM_WALK_PATH_CAPACITY + 1];
     if constexpr (kFromRecords) {
         const WalkRecord loaded = from ? *from : load_walk_record(b, pc, c);
@@ -269,19 +283,66 @@ HMSM_HOST_DEVICE void path_walk(const BufferPointers& b, const gpu::PassConstant
         const float4 state = load(b.chain_state + state_chain(pc, k, x));
         return local_transform(b, pc, k, pc.model_chain_begin + uint32_t(x), trunk, make_float2(state.x, state.y));
     };
-    Mat3 rotation = local_of(ancestor(depth), true);
-    const float4 o = load(b.instance_origin + pc.instance_begin + k);
-    float4 origin = make_float4(o.x, o.y, o.z, 0.0f);
+    uint32_t first_level = 1;
+    if constexpr (kFromTopPoses) {
+        const uint64_t top = half_begin(pc, pc.src_half) + state_chain(pc, k, ancestor(depth == 0 ? 0 : depth - 1));
+        rotation = load_mat3(b.chain_rotation, top);
+        const float4 o = load(b.chain_origin + top);
+        origin = make_float4(o.x, o.y, o.z, 0.0f);
+        first_level = 2;
+    } else {
+        rotation = local_of(ancestor(depth), true);
+        const float4 o = load(b.instance_origin + pc.instance_begin + k);
+        origin = make_float4(o.x, o.y, o.z, 0.0f);
+    }
     // Unrolled so that the loads of several levels are in flight together (they do not depend
     // on the products); the products stay in level order.
 #pragma unroll 4
-    for (uint32_t level = 1; level <= depth; ++level) {
+    for (uint32_t level = first_level; level <= depth; ++level) {
         const int32_t x = ancestor(depth - level);
         const float3 local = xyz(load(b.node_local + pc.model_node_begin + attach(depth - level)));
         origin = origin + with_w(rotation * local, 0.0f);
         rotation = rotation * local_of(x, false);
     }
+}
+
+/// The path walk of chain c of group instance k with its pose stored to the joint matrix.
+template <bool kFromRecords>
+HMSM_HOST_DEVICE void path_walk(const BufferPointers& b, const gpu::PassConstants& pc, uint32_t k, int32_t c,
+                                const WalkRecord* from = nullptr) {
+    Mat3 rotation;
+    float4 origin;
+    walk_pose<kFromRecords>(b, pc, k, c, from, rotation, origin);
     store_joint_of(b, state_chain(pc, k, c), rotation, origin);
+}
+
+/// HMSM_WALK_TOP_POSES for chain c (depth 0 or 1) of group instance k: its pose to half
+/// src_half of chain_rotation and chain_origin; the trunk's origin carries in w the profile
+/// value of the next step (wind-table slot wind.w + 1) for the walk that integrates ahead.
+HMSM_HOST_DEVICE void walk_top_pose(const BufferPointers& b, const gpu::PassConstants& pc, uint32_t k, int32_t c) {
+    Mat3 rotation;
+    float4 origin;
+    walk_pose<false>(b, pc, k, c, nullptr, rotation, origin);
+    const uint64_t at = half_begin(pc, pc.src_half) + state_chain(pc, k, c);
+    store_mat3(b.chain_rotation, at, rotation);
+    const uint32_t next_slot = uint32_t(pc.wind.w) + 1u < HMSM_WIND_STEP_SLOTS ? uint32_t(pc.wind.w) + 1u : uint32_t(pc.wind.w);
+    origin.w = c == 0 ? instance_wind_y(b, pc, k, next_slot) : 0.0f;
+    b.chain_origin[at] = origin;
+}
+
+/// HMSM_WALK_AHEAD for chain c of group instance k: the path walk from the top poses, its pose
+/// to the joint matrix, then the next step's pass 1 at that pose (what the next step's
+/// wind_force would read back from the joint matrix) and pass 2's integration, the new angles
+/// to chain_state_next.
+HMSM_HOST_DEVICE void walk_ahead(const BufferPointers& b, const gpu::PassConstants& pc, uint32_t k, int32_t c) {
+    Mat3 rotation;
+    float4 origin;
+    walk_pose<false, true>(b, pc, k, c, nullptr, rotation, origin);
+    const uint64_t chain = state_chain(pc, k, c);
+    store_joint_of(b, chain, rotation, origin);
+    const float y = load(b.chain_origin + half_begin(pc, pc.src_half) + state_chain(pc, k, 0)).w;
+    const float2 g = chain_wind_force_at(b, pc, k, uint32_t(c), xyz(origin), rotation, y);
+    b.chain_state_next[chain] = integrate_step(b, pc, pc.model_chain_begin + uint32_t(c), load(b.chain_state + chain), g);
 }
 
 }  // namespace hmsm::detail::cuda

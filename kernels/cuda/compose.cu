@@ -14,8 +14,13 @@ namespace hmsm::detail::cuda {
 static HMSM_HOST_DEVICE void compose_element(const BufferPointers& b,
                                              const gpu::PassConstants& pc, uint32_t i) {
 #ifndef __CUDA_ARCH__  // the device runs walk_kernel instead (launch_compose)
+    if (pc.mode == HMSM_MODE_PATH_WALK && pc.round == HMSM_WALK_TOP_POSES) {
+        const Element e = element_of(i, pc.level_count);
+        return walk_top_pose(b, pc, e.instance, int32_t(e.index));
+    }
     if (pc.mode == HMSM_MODE_PATH_WALK) {
         const Element e = element_of(i, pc.model_chain_count);
+        if (pc.round == HMSM_WALK_AHEAD) return walk_ahead(b, pc, e.instance, int32_t(e.index));
         if (instance_paused(b, pc, e.instance)) return;
         if (pc.round == HMSM_WALK_FROM_RECORDS) return path_walk<true>(b, pc, e.instance, int32_t(e.index));
         return path_walk<false>(b, pc, e.instance, int32_t(e.index));  // and root_positions
@@ -67,6 +72,20 @@ __global__ void __launch_bounds__(HMSM_WORKGROUP_SIZE)
     }
 }
 
+/// The walk that integrates ahead (gpu_layout.h): its top poses (kTopPoses) and the walk ahead.
+/// Their programs cover no paused instance (step_program.cpp), so neither checks.
+template <bool kTopPoses>
+__global__ void __launch_bounds__(HMSM_WORKGROUP_SIZE)
+    walk_ahead_kernel(const BufferPointers b, const gpu::PassConstants pc) {
+    begin_pass();
+    const uint32_t per_instance = kTopPoses ? pc.level_count : pc.model_chain_count;
+    for (uint32_t i = blockIdx.x * blockDim.x + threadIdx.x; i < pc.element_count; i += gridDim.x * blockDim.x) {
+        const Element e = element_of(i, per_instance);
+        if constexpr (kTopPoses) walk_top_pose(b, pc, e.instance, int32_t(e.index));
+        else walk_ahead(b, pc, e.instance, int32_t(e.index));
+    }
+}
+
 HMSM_CUDA_ROUNDS_PASS_TYPE(compose)
 
 cudaError_t launch_compose(const BufferPointers& b, const gpu::PassConstants& pc, cudaStream_t stream) {
@@ -74,6 +93,10 @@ cudaError_t launch_compose(const BufferPointers& b, const gpu::PassConstants& pc
     const unsigned blocks = launch_blocks(pc.element_count);
     if (pc.round == HMSM_WALK_FROM_RECORDS)
         return launch_pass(walk_kernel<true>, blocks, HMSM_WORKGROUP_SIZE, stream, b, pc);
+    if (pc.round == HMSM_WALK_TOP_POSES)
+        return launch_pass(walk_ahead_kernel<true>, blocks, HMSM_WORKGROUP_SIZE, stream, b, pc);
+    if (pc.round == HMSM_WALK_AHEAD)
+        return launch_pass(walk_ahead_kernel<false>, blocks, HMSM_WORKGROUP_SIZE, stream, b, pc);
     return launch_pass(walk_kernel<false>, blocks, HMSM_WORKGROUP_SIZE, stream, b, pc);
 }
 

@@ -34,6 +34,10 @@ struct BufferPointers {
 #define HMSM_CUDA_POINTER(name, binding, shape, scope) DeviceType_##shape* name = nullptr;
     HMSM_BUFFERS(HMSM_CUDA_POINTER)
 #undef HMSM_CUDA_POINTER
+    /// CUDA only, not in the buffer table: as many elements as chain_state, where the walk that
+    /// integrates ahead (HMSM_WALK_AHEAD) writes the next step's angles. The backend swaps it
+    /// with chain_state when a step takes them (src/cuda/cuda_backend.cpp).
+    float4* chain_state_next = nullptr;
 };
 
 #define HMSM_CUDA_DECLARE_PASS(name)                                                         \

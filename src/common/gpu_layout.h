@@ -136,6 +136,16 @@
 /// PassConstants.round of a walk dispatch (compose) that reads the records; 0: the walk
 /// gathers the same values by following chain_parent up (step_program.cpp chooses).
 #define HMSM_WALK_FROM_RECORDS 1u
+/// The walk that integrates ahead (CUDA, forests; docs/cuda.md): PassConstants.round of its two
+/// compose dispatches. HMSM_WALK_TOP_POSES: one thread per chain of depth 0 and 1 (the first
+/// level_count model chains) walks the pose from the angles of chain_state and stores it to
+/// half src_half of chain_rotation and chain_origin; the trunk's thread also stores the wind
+/// profile Y of the next step (wind-table slot wind.w + 1) of its instance in the w of its
+/// chain_origin. HMSM_WALK_AHEAD: every chain walks from the stored pose of its depth-1
+/// ancestor, writes its joint matrix, then runs the next step's wind_force and integrate with
+/// that pose and Y, writing the next angles to a second state buffer.
+#define HMSM_WALK_TOP_POSES 2u
+#define HMSM_WALK_AHEAD 3u
 #define HMSM_WALK_PATH_CAPACITY 15u
 /// Index in the record of the attach node of the chain u levels up (u < HMSM_WALK_ATTACH_CAPACITY).
 #define HMSM_WALK_ATTACH_CAPACITY 16u

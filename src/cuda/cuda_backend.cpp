@@ -6,6 +6,8 @@
 #include <cuda_runtime_api.h>
 
 #include <algorithm>
+#include <cstdlib>
+#include <string_view>
 
 namespace hmsm::detail {
 namespace cuda {
@@ -31,15 +33,17 @@ Result<std::unique_ptr<Backend>> CudaBackend::create() {
     CUDA_TRY(allow_fused_shared(fused_shared));
     cudaStream_t stream = nullptr;
     CUDA_TRY(cudaStreamCreateWithFlags(&stream, cudaStreamNonBlocking));
-    return std::unique_ptr<Backend>(
-        new CudaBackend(device, properties.name, stream, fused_shared));
+    auto backend = std::unique_ptr<CudaBackend>(new CudaBackend(device, properties.name, stream, fused_shared));
+    const char* ahead = std::getenv("HMSM_CUDA_WALK_AHEAD");
+    backend->walk_ahead_ = !(ahead && std::string_view(ahead) == "0");
+    return std::unique_ptr<Backend>(std::move(backend));
 }
 
 CudaBackend::~CudaBackend() {
     (void)cudaSetDevice(device_);
     for (cudaEvent_t event : events_) (void)cudaEventDestroy(event);
     if (own_stream_) (void)cudaStreamDestroy(own_stream_);
-    // buffers_ and graph_ release themselves.
+    // buffers_ and graphs_ release themselves.
 }
 
 Status CudaBackend::make_current() const {
@@ -56,6 +60,7 @@ Status CudaBackend::set_stream(cudaStream_t stream) {
 
 Status CudaBackend::upload(const SceneData& scene) {
     HMSM_TRY(make_current());
+    next_state_ready_ = false;
     HMSM_TRY(buffers_.allocate(scene));
     return buffers_.upload(scene, stream_);
 }
@@ -67,11 +72,22 @@ Status CudaBackend::read(BufferId id, uint64_t first, uint64_t count, void* dst,
 
 Status CudaBackend::write(BufferId id, uint64_t first, uint64_t count, const void* src, Scalar as) {
     HMSM_TRY(make_current());
-    return buffers_.write(id, first, count, src, as, stream_);
+    HMSM_TRY(buffers_.write(id, first, count, src, as, stream_));
+    if (id != BufferId::wind_table || first < HMSM_WIND_STEPS) {
+        next_state_ready_ = false;  // anything a step reads may have changed
+        return {};
+    }
+    // The step slots, which every step() writes: kept on the host for next_state_fits().
+    step_slots_.resize(4 * (HMSM_WIND_TABLE_ELEMENTS - HMSM_WIND_STEPS));
+    for (uint64_t i = 0; i < 4 * count; ++i)
+        step_slots_[4 * (first - HMSM_WIND_STEPS) + i] =
+            as == Scalar::f64 ? float(static_cast<const double*>(src)[i]) : static_cast<const float*>(src)[i];
+    return {};
 }
 
 Status CudaBackend::move_elements(BufferId id, std::span<const ElementMove> moves) {
     HMSM_TRY(make_current());
+    next_state_ready_ = false;
     return buffers_.move(id, moves, stream_);
 }
 
@@ -111,42 +127,90 @@ Result<double> CudaBackend::measure_copy_bandwidth(uint64_t bytes) {
     return 2.0 * double(bytes) / median_seconds;
 }
 
+Result<StepGraph*> CudaBackend::graph_for(std::span<const Dispatch> program) {
+    size_t oldest = 0;
+    for (size_t i = 0; i < graphs_.size(); ++i) {
+        if (graphs_[i].matches(program, buffers_.pointers())) {
+            graph_used_[i] = ++graph_clock_;
+            return &graphs_[i];
+        }
+        if (graph_used_[i] < graph_used_[oldest]) oldest = i;
+    }
+    HMSM_TRY(graphs_[oldest].capture(program, buffers_.pointers(), stream_, fused_shared_limit_));
+    graph_used_[oldest] = ++graph_clock_;
+    return &graphs_[oldest];
+}
+
+bool CudaBackend::next_state_fits(std::span<const Dispatch> program, uint32_t slot) const {
+    if (!next_state_ready_ || program.size() != ahead_program_.size() ||
+        step_slots_.size() < 4 * HMSM_WIND_STEP_VEC4S * (uint64_t(slot) + 1))
+        return false;
+    for (size_t i = 0; i < program.size(); ++i)
+        if (!same_dispatch(program[i], ahead_program_[i])) return false;
+    return std::equal(ahead_slot_.begin(), ahead_slot_.end(), step_slots_.begin() + 4 * HMSM_WIND_STEP_VEC4S * slot);
+}
+
+// A program of the walk ahead leaves in chain_state_next the angles of the step after its own,
+// from its pose and the next wind-table slot. The next step takes them (swapping the two state
+// buffers) and runs without its wind_force dispatches where they are what it would integrate:
+// within a run always (its slots follow one another), at the start of a run when
+// next_state_fits(). Otherwise it runs whole: wind_force integrates from chain_state, and the
+// walk ahead again writes the step after.
 Status CudaBackend::run(std::span<const Dispatch> program, std::span<const double> wind_x) {
     HMSM_TRY(make_current());
     times_ = {};
     if (wind_x.empty() || program.empty()) return {};
-    return profiling_ ? run_profiled(program, wind_x) : run_graph(program, wind_x);
-}
-
-Status CudaBackend::run_graph(std::span<const Dispatch> program, std::span<const double> wind_x) {
-    if (!graph_.matches(program, buffers_.pointers()))
-        HMSM_TRY(graph_.capture(program, buffers_.pointers(), stream_, fused_shared_limit_));
-    for (double x : wind_x) HMSM_TRY(graph_.replay(float(x), stream_));
+    const bool ahead = std::any_of(program.begin(), program.end(), [](const Dispatch& d) { return is_walk_ahead(d); });
+    std::vector<Dispatch> without_wind;
+    for (const Dispatch& d : program)
+        if (ahead && d.pass != Pass::wind_force) without_wind.push_back(d);
+    for (size_t k = 0; k < wind_x.size(); ++k) {
+        const uint32_t slot = uint32_t(wind_x[k]);
+        const bool take = ahead && (k == 0 ? next_state_fits(program, slot) : slot == uint32_t(wind_x[k - 1]) + 1);
+        if (take) {
+            buffers_.take_next_state();
+            ++steps_taken_ahead_;
+        }
+        next_state_ready_ = false;  // being rewritten (or, without the walk ahead, left stale)
+        const std::span<const Dispatch> step = take ? std::span<const Dispatch>(without_wind) : program;
+        if (profiling_) {
+            HMSM_TRY(run_profiled(step, slot));
+        } else {
+            auto graph = graph_for(step);
+            if (!graph) return graph.status();
+            HMSM_TRY((*graph)->replay(float(slot), stream_));
+        }
+    }
     CUDA_TRY(cudaStreamSynchronize(stream_));
+    times_.steps = profiling_ ? wind_x.size() : 0;
+    if (!ahead) return {};
+    // The slot the last step's top poses read (gpu_layout.h: the one after, at most the last).
+    const uint32_t next = std::min<uint32_t>(uint32_t(wind_x.back()) + 1, HMSM_WIND_STEP_SLOTS - 1);
+    ahead_slot_.assign(4 * HMSM_WIND_STEP_VEC4S, 0.0f);
+    if (step_slots_.size() >= 4 * HMSM_WIND_STEP_VEC4S * (uint64_t(next) + 1))
+        std::copy_n(step_slots_.begin() + 4 * HMSM_WIND_STEP_VEC4S * next, ahead_slot_.size(), ahead_slot_.begin());
+    ahead_program_.assign(program.begin(), program.end());
+    next_state_ready_ = true;
     return {};
 }
 
-Status CudaBackend::run_profiled(std::span<const Dispatch> program, std::span<const double> wind_x) {
+Status CudaBackend::run_profiled(std::span<const Dispatch> program, uint32_t slot) {
     while (events_.size() < program.size() + 1) {
         cudaEvent_t event = nullptr;
         CUDA_TRY(cudaEventCreate(&event));
         events_.push_back(event);
     }
-    for (double x : wind_x) {
-        CUDA_TRY(cudaEventRecord(events_[0], stream_));
-        for (size_t j = 0; j < program.size(); ++j) {
-            CUDA_TRY(launch_dispatch(program[j], buffers_.pointers(), float(x), stream_, fused_shared_limit_));
-            CUDA_TRY(cudaEventRecord(events_[j + 1], stream_));
-        }
-        CUDA_TRY(cudaEventSynchronize(events_[program.size()]));
-        for (size_t j = 0; j < program.size(); ++j) {
-            float milliseconds = 0.0f;
-            CUDA_TRY(cudaEventElapsedTime(&milliseconds, events_[j], events_[j + 1]));
-            times_.seconds[uint32_t(program[j].pass)] += 1e-3 * double(milliseconds);
-        }
+    CUDA_TRY(cudaEventRecord(events_[0], stream_));
+    for (size_t j = 0; j < program.size(); ++j) {
+        CUDA_TRY(launch_dispatch(program[j], buffers_.pointers(), float(slot), stream_, fused_shared_limit_));
+        CUDA_TRY(cudaEventRecord(events_[j + 1], stream_));
     }
-    CUDA_TRY(cudaStreamSynchronize(stream_));
-    times_.steps = wind_x.size();
+    CUDA_TRY(cudaEventSynchronize(events_[program.size()]));
+    for (size_t j = 0; j < program.size(); ++j) {
+        float milliseconds = 0.0f;
+        CUDA_TRY(cudaEventElapsedTime(&milliseconds, events_[j], events_[j + 1]));
+        times_.seconds[uint32_t(program[j].pass)] += 1e-3 * double(milliseconds);
+    }
     return {};
 }
 

@@ -7,6 +7,7 @@
 #include "device_buffers.h"
 #include "step_graph.h"
 
+#include <array>
 #include <string>
 #include <vector>
 
@@ -21,15 +22,22 @@ public:
     BackendKind kind() const override { return BackendKind::cuda; }
     std::string device_name() const override { return device_name_; }
     Status upload(const SceneData& scene) override;
-    /// Without profiling, each step is one replay of the captured step graph (captured on the
+    /// Without profiling, each step is one replay of a captured step graph (captured on the
     /// first run() of a program); with profiling, the dispatches are launched one by one
-    /// between events and every step is timed.
+    /// between events and every step is timed. A program of the walk that integrates ahead
+    /// runs its steps without wind_force where it may (cuda_backend.cpp).
     Status run(std::span<const Dispatch> program, std::span<const double> wind_x) override;
     Status read(BufferId id, uint64_t first, uint64_t count, void* dst, Scalar as) const override;
     Status write(BufferId id, uint64_t first, uint64_t count, const void* src, Scalar as) override;
     Status move_elements(BufferId id, std::span<const ElementMove> moves) override;
     void set_profiling(bool enabled) override { profiling_ = enabled; }
     bool prefers_path_walk() const override { return true; }
+    /// On unless HMSM_CUDA_WALK_AHEAD=0 (read when the backend is created; for A/B measurements
+    /// and tests).
+    bool walks_ahead() const override { return walk_ahead_; }
+    /// Steps run without their wind_force dispatches, taking the angles the step before
+    /// integrated ahead (since the backend was created; for tests).
+    uint64_t steps_taken_ahead() const { return steps_taken_ahead_; }
     PassTimes pass_times() const override { return times_; }
 
     /// For `hmsm bench`'s roofline: the median of a few device-to-device copies of `bytes`
@@ -46,8 +54,16 @@ private:
     CudaBackend(int device, std::string name, cudaStream_t own_stream, uint64_t fused_shared_limit)
         : device_(device), device_name_(std::move(name)), own_stream_(own_stream), stream_(own_stream),
           fused_shared_limit_(fused_shared_limit) {}
-    Status run_graph(std::span<const Dispatch> program, std::span<const double> wind_x);
-    Status run_profiled(std::span<const Dispatch> program, std::span<const double> wind_x);
+    /// The captured graph of `program` over the current buffers, captured now if none of the
+    /// last few is.
+    Result<StepGraph*> graph_for(std::span<const Dispatch> program);
+    /// Whether the angles in chain_state_next are what step `slot` of `program` would integrate
+    /// now: the last run ran `program`, nothing was written to the device since (but the wind
+    /// table's step slots) and slot `slot` holds what the last run's next slot held.
+    bool next_state_fits(std::span<const Dispatch> program, uint32_t slot) const;
+    /// One step of `program` launched dispatch by dispatch between events, its device times
+    /// added to times_ (synchronizes).
+    Status run_profiled(std::span<const Dispatch> program, uint32_t slot);
     Status make_current() const;
 
     int device_;
@@ -57,7 +73,18 @@ private:
     /// Shared memory a fused block may take (backend.h fused_shared_limit, read at creation).
     uint64_t fused_shared_limit_;
     DeviceBuffers buffers_;
-    StepGraph graph_;
+    /// A program of the walk ahead replays two graphs (with and without wind_force), each over
+    /// two buffer layouts (the state and its twin swapped or not): the least recently used of
+    /// these is replaced.
+    std::array<StepGraph, 4> graphs_;
+    std::array<uint64_t, 4> graph_used_{};
+    uint64_t graph_clock_ = 0;
+    bool walk_ahead_ = true;
+    bool next_state_ready_ = false;        // see next_state_fits()
+    std::vector<Dispatch> ahead_program_;  // the program whose last step wrote chain_state_next
+    std::vector<float> ahead_slot_;        // the wind-table step slot it read, as it was then
+    std::vector<float> step_slots_;        // host copy of the wind table's step slots as written
+    uint64_t steps_taken_ahead_ = 0;       // steps that took the angles integrated ahead
     std::vector<cudaEvent_t> events_;  // profiling: one before and one after each dispatch
     bool profiling_ = false;
     PassTimes times_;

@@ -34,6 +34,8 @@ void DeviceBuffers::release() {
         if (base) (void)cudaFree(base);
         base = nullptr;
     }
+    if (next_state_) (void)cudaFree(next_state_);
+    next_state_ = nullptr;
     if (pinned_) (void)cudaFreeHost(pinned_);
     pinned_ = nullptr;
     if (move_scratch_) (void)cudaFree(move_scratch_);
@@ -46,7 +48,7 @@ void DeviceBuffers::release() {
 uint64_t DeviceBuffers::bytes() const {
     uint64_t total = 0;
     for (const BufferInfo& info : kBufferTable) total += counts_[uint32_t(info.id)] * device_element_bytes(info.id);
-    return total;
+    return total + counts_[uint32_t(BufferId::chain_state)] * device_element_bytes(BufferId::chain_state);
 }
 
 Status DeviceBuffers::allocate(const SceneData& scene) {
@@ -69,11 +71,27 @@ Status DeviceBuffers::allocate(const SceneData& scene) {
                                        " of device memory): " + status.message()};
         }
     }
+    // chain_state's twin, for the walk that integrates ahead.
+    const uint64_t state_bytes =
+        std::max<uint64_t>(counts_[uint32_t(BufferId::chain_state)] * device_element_bytes(BufferId::chain_state), 16);
+    if (const cudaError_t error = cudaMalloc(&next_state_, state_bytes); error != cudaSuccess) {
+        next_state_ = nullptr;
+        const Status status = cuda_status(error, "cudaMalloc", __FILE__, __LINE__);
+        release();
+        return {status.code(), "cuda: cannot allocate the next-step angles of " + human_bytes(state_bytes) + ": " +
+                                   status.message()};
+    }
 #define HMSM_CUDA_BIND(name, binding, shape, scope) \
     pointers_.name = static_cast<DeviceType_##shape*>(bases_[binding]);
     HMSM_BUFFERS(HMSM_CUDA_BIND)
 #undef HMSM_CUDA_BIND
+    pointers_.chain_state_next = static_cast<float4*>(next_state_);
     return {};
+}
+
+void DeviceBuffers::take_next_state() {
+    std::swap(bases_[uint32_t(BufferId::chain_state)], next_state_);
+    std::swap(pointers_.chain_state, pointers_.chain_state_next);
 }
 
 Status DeviceBuffers::upload(const SceneData& scene, cudaStream_t stream) {

@@ -35,6 +35,10 @@ public:
     /// may overlap), in stream order; complete on return.
     Status move(BufferId id, std::span<const ElementMove> moves, cudaStream_t stream);
 
+    /// Makes the angles the walk ahead wrote (BufferPointers::chain_state_next) chain_state, and
+    /// chain_state's old allocation the next twin: a swap of two pointers, nothing copied.
+    void take_next_state();
+
     const BufferPointers& pointers() const { return pointers_; }
     uint64_t element_count(BufferId id) const { return counts_[uint32_t(id)]; }
     /// Device memory held, in bytes.
@@ -49,6 +53,7 @@ private:
     std::byte* pinned_staging() const;
 
     std::array<void*, kBufferCount> bases_{};
+    void* next_state_ = nullptr;  // chain_state's twin (BufferPointers::chain_state_next)
     void* move_scratch_ = nullptr;  // move(), grown on demand
     uint64_t move_scratch_bytes_ = 0;
     mutable std::byte* pinned_ = nullptr;

@@ -22,10 +22,11 @@ uint32_t max_launch_blocks() {
     return blocks;
 }
 
-// The wind phase of the step reaches wind_force through its constants (Backend::run).
+// The wind phase of the step reaches the dispatches that read it through their constants
+// (Backend::run).
 static gpu::PassConstants step_constants(const Dispatch& dispatch, float wind_x) {
     gpu::PassConstants pc = dispatch.constants;
-    if (dispatch.pass == Pass::wind_force) pc.wind.w = wind_x;
+    if (reads_wind_slot(dispatch)) pc.wind.w = wind_x;
     return pc;
 }
 

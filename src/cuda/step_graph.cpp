@@ -51,13 +51,13 @@ struct ForkResources {
     }
 };
 
+}  // namespace
+
 /// Field by field: Dispatch has padding between pass and constants, PassConstants has none.
 bool same_dispatch(const Dispatch& a, const Dispatch& b) {
     static_assert(sizeof(gpu::PassConstants) == 20 * 4 + 2 * 16, "PassConstants must be unpadded");
     return a.pass == b.pass && same_bytes(&a.constants, &b.constants, sizeof a.constants);
 }
-
-}  // namespace
 
 StepGraph::~StepGraph() { release(); }
 
@@ -101,7 +101,7 @@ Status StepGraph::capture(std::span<const Dispatch> program, const BufferPointer
             error = cudaStreamWaitEvent(fork.side, fork.before, 0);
         }
         if (error == cudaSuccess) error = launch_dispatch(d, buffers, 0.0f, on, fused_shared_limit);
-        if (error == cudaSuccess && d.pass == Pass::wind_force && d.constants.element_count > 0) {
+        if (error == cudaSuccess && reads_wind_slot(d) && d.constants.element_count > 0) {
             WindNode wind{};
             wind.constants = d.constants;
             error = last_captured_node(on, &wind.node);

@@ -2,8 +2,9 @@
 //
 // The program is captured once from the stream (every dispatch in order, so ordering replaces
 // barriers; a dispatch that does not depend on the one before it runs beside it, step_graph.cpp). Between replays only the step's wind-table
-// slot (gpu_layout.h) changes: it lives in the wind_force dispatches' constants (pc.wind.w), so before
-// each replay every wind_force kernel node gets new parameters through
+// slot (gpu_layout.h) changes: it lives in the constants (pc.wind.w) of the dispatches that read
+// it (backend.h reads_wind_slot: wind_force, the top poses of the walk ahead), so before
+// each replay every such kernel node gets new parameters through
 // cudaGraphExecKernelNodeSetParams. That is possible generically because every pass kernel
 // takes (BufferPointers, PassConstants) by value (launchers.h). Launches already enqueued keep
 // the parameters they were launched with, so steps can be enqueued back to back.
@@ -16,6 +17,9 @@
 #include <vector>
 
 namespace hmsm::detail::cuda {
+
+/// Whether two dispatches are the same launch: pass and constants, bit for bit.
+bool same_dispatch(const Dispatch& a, const Dispatch& b);
 
 class StepGraph {
 public:

@@ -8,6 +8,7 @@
 #include <hmsm/cuda.h>
 
 #include "common/octahedral.h"
+#include "cuda/cuda_backend.h"
 
 #include <cuda_runtime_api.h>
 #include <algorithm>
@@ -67,6 +68,50 @@ void expect_agreement(const Scene& scene, Composition composition, bool profile,
         EXPECT_LE(max_abs_difference(actual, expected) / (normals ? 1.0 : height), normals ? 1e-3 : 1e-4)
             << "output " << int(output);
     }
+}
+
+// The walk that integrates ahead (forests on CUDA): stepped call by call with live changes in
+// between (the wind, force fields, an instance's wind scale, one paused and resumed, one added),
+// a simulation that takes the angles integrated ahead leaves the same joint matrices and angles,
+// bit for bit, as one whose backend does not integrate ahead, and it does take them.
+TEST(CudaWalkAhead, StepByStepWithLiveChangesEqualsThePlainWalkBitForBit) {
+    HMSM_SKIP_WITHOUT_CUDA();
+    const Scene scene = forest_scene(7);
+    const SimulationConfig config = test_config(BackendKind::cuda, Composition::path_walk, false);
+    setenv("HMSM_CUDA_WALK_AHEAD", "0", 1);
+    auto plain = create_or_fail(scene, config);
+    unsetenv("HMSM_CUDA_WALK_AHEAD");
+    auto ahead = create_or_fail(scene, config);
+    ASSERT_TRUE(plain && ahead);
+    const auto& backend = dynamic_cast<const detail::cuda::CudaBackend&>(hmsm::detail::backend_of(*ahead));
+    bool walked_ahead = false;
+    for (uint32_t k = 0; k < 48; ++k) {
+        for (Simulation* sim : {plain.get(), ahead.get()}) {
+            Wind wind = sim->wind();
+            wind.strength *= 1.5;
+            ForceField field;
+            field.center = {2, 3, 1};
+            field.radius = 15.0;
+            field.directional = {4, 0, 2};
+            if (k == 8) ASSERT_TRUE(sim->set_wind(wind).ok());
+            if (k == 16) ASSERT_TRUE(sim->set_force_fields({&field, 1}).ok());
+            if (k == 20) ASSERT_TRUE(sim->set_instance_wind_scale(1, 0.3).ok());
+            if (k == 24) ASSERT_TRUE(sim->set_instance_active(1, false).ok());
+            if (k == 30) ASSERT_TRUE(sim->set_instance_active(1, true).ok());
+            if (k == 36) ASSERT_TRUE(sim->add_instances({&scene.instances[0], 1}).ok());
+            ASSERT_TRUE(sim->step(k % 4 == 3 ? 3 : 1).ok());
+        }
+        const auto& program = hmsm::detail::step_program_of(*ahead);
+        walked_ahead = walked_ahead || std::any_of(program.begin(), program.end(), detail::is_walk_ahead);
+        for (Output output : {Output::joint_matrices, Output::chain_angles}) {
+            std::vector<double> expected, actual;
+            ASSERT_TRUE(plain->read(output, expected).ok());
+            ASSERT_TRUE(ahead->read(output, actual).ok());
+            ASSERT_EQ(actual, expected) << "output " << int(output) << " after call " << k;
+        }
+    }
+    EXPECT_TRUE(walked_ahead);
+    EXPECT_GE(backend.steps_taken_ahead(), 30u);
 }
 
 class CudaSimulation : public ::testing::TestWithParam<Composition> {};

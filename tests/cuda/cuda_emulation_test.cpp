@@ -8,8 +8,10 @@
 #include "device_words.h"
 #include "live_wind.h"
 #include "cuda/launch_dispatch.h"
+#include "step_program.h"
 #include "common/octahedral.h"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdlib>
@@ -25,6 +27,7 @@ using detail::cuda::BufferPointers;
 /// Every buffer of the table in host memory, laid out as on the device.
 struct HostImage {
     std::array<std::vector<std::byte>, detail::kBufferCount> bytes;
+    std::vector<std::byte> next_state;  // BufferPointers::chain_state_next
     BufferPointers pointers;
 };
 
@@ -52,6 +55,8 @@ HostImage image_of(const Simulation& reference) {
     image.pointers.name = reinterpret_cast<detail::cuda::DeviceType_##shape*>(image.bytes[binding].data());
     HMSM_BUFFERS(HMSM_TEST_BIND)
 #undef HMSM_TEST_BIND
+    image.next_state.assign(image.bytes[uint32_t(BufferId::chain_state)].size(), std::byte{0});
+    image.pointers.chain_state_next = reinterpret_cast<float4*>(image.next_state.data());
     return image;
 }
 
@@ -258,6 +263,90 @@ TEST(CudaEmulationPacked, ContourWritesThePositionAndTheNormalWordOnly) {
     EXPECT_LE(max_abs_difference(decoded, normals), 1e-3);
     // The placeholder behind the empty vertex_normal buffer is never written.
     for (float w : xyz_of(image, BufferId::vertex_normal)) EXPECT_TRUE(std::isnan(w));
+}
+
+/// Wind-table slots 0 and 1 of `image` with the wind clock of steps k and k + 1 (0-based, as
+/// emulate_steps).
+void write_step_slots(const Simulation& sim, HostImage& image, uint32_t k) {
+    const Wind& wind = sim.wind();
+    const TurbulentModes modes = turbulent_modes(wind.turbulence, wind.seed);
+    auto* table = reinterpret_cast<float*>(image.bytes[uint32_t(BufferId::wind_table)].data());
+    double slot[detail::kWindStepScalars];
+    for (uint32_t s = 0; s < 2; ++s) {
+        detail::fill_wind_step(wind, modes, (wind.frequency * sim.config().parameters.dt) * double(k + s), slot);
+        for (uint32_t i = 0; i < detail::kWindStepScalars; ++i)
+            table[4 * (HMSM_WIND_STEPS + s * HMSM_WIND_STEP_VEC4S) + i] = float(slot[i]);
+    }
+}
+
+bool same_buffer(const HostImage& a, const HostImage& b, BufferId id) {
+    return a.bytes[uint32_t(id)] == b.bytes[uint32_t(id)];
+}
+
+// The walk that integrates ahead (gpu_layout.h HMSM_WALK_AHEAD), as the CUDA backend runs it:
+// the first step whole, then each step without its wind_force dispatches, taking the angles the
+// step before wrote to chain_state_next. Its joint matrices and angles equal the plain path
+// walk's bit for bit, with the turbulent profile (whose value the top poses hoist per instance)
+// and force fields; after a live change (the wind vector) a step must run whole again: one
+// that takes the stale angles departs from the plain walk.
+TEST(CudaEmulationWalkAhead, EqualsThePathWalkBitForBit) {
+    const Scene scene = forest_scene(11);
+    SimulationConfig config = test_config(BackendKind::cpu64, Composition::path_walk, false);
+    config.wind.profile = WindProfile::turbulent;
+    config.wind.turbulence = 0.9;
+    auto reference = Simulation::create(scene, config);
+    ASSERT_TRUE(reference.ok()) << reference.status().message();
+    Simulation& sim = **reference;
+    ForceField field;
+    field.center = {0, 3, 0};
+    field.radius = 20.0;
+    field.directional = {0, 0, 6};
+    ASSERT_TRUE(sim.set_force_fields({&field, 1}).ok());
+    ASSERT_TRUE(sim.step(0).ok());  // uploads the pending wind table
+    const detail::SceneData& data = hmsm::detail::scene_data_of(sim);
+    using detail::Dispatch;
+    const auto plain = detail::build_program(data, data.groups, Composition::path_walk, false, Pass::wind_force, ~0u);
+    const auto ahead =
+        detail::build_program(data, data.groups, Composition::path_walk, false, Pass::wind_force, ~0u, true);
+    ASSERT_EQ(std::count_if(ahead.begin(), ahead.end(), detail::is_walk_ahead), data.groups.size());
+    ASSERT_EQ(std::count_if(ahead.begin(), ahead.end(), detail::is_top_poses_walk), data.groups.size());
+    std::vector<Dispatch> without_wind;
+    for (const Dispatch& d : ahead)
+        if (d.pass != Pass::wind_force) without_wind.push_back(d);
+
+    HostImage walked = image_of(sim), walked_ahead = image_of(sim), stale = image_of(sim);
+    auto run = [](const std::vector<Dispatch>& program, HostImage& image) {
+        for (const Dispatch& d : program) detail::cuda::emulate_dispatch(d, image.pointers, 0.0f);
+    };
+    auto take_next_state = [](HostImage& image) {
+        std::swap(image.bytes[uint32_t(BufferId::chain_state)], image.next_state);
+        image.pointers.chain_state = reinterpret_cast<float4*>(image.bytes[uint32_t(BufferId::chain_state)].data());
+        image.pointers.chain_state_next = reinterpret_cast<float4*>(image.next_state.data());
+    };
+    const uint32_t steps = 60, change = 40;
+    for (uint32_t k = 0; k < steps; ++k) {
+        if (k == change) {
+            for (HostImage* image : {&walked, &walked_ahead, &stale}) {
+                auto* vector = reinterpret_cast<float*>(image->bytes[uint32_t(BufferId::wind_table)].data()) +
+                               4 * HMSM_WIND_VECTOR;
+                vector[0] += 3.0f;
+            }
+        }
+        for (HostImage* image : {&walked, &walked_ahead, &stale}) write_step_slots(sim, *image, k);
+        run(plain, walked);
+        if (k == 0 || k == change) {
+            run(ahead, walked_ahead);
+        } else {
+            take_next_state(walked_ahead);
+            run(without_wind, walked_ahead);
+        }
+        if (k > 0) take_next_state(stale);
+        run(k == 0 ? ahead : without_wind, stale);
+        ASSERT_TRUE(same_buffer(walked, walked_ahead, BufferId::joint_matrix)) << "step " << k;
+        ASSERT_TRUE(same_buffer(walked, walked_ahead, BufferId::chain_state)) << "step " << k;
+        if (k < change) ASSERT_TRUE(same_buffer(walked, stale, BufferId::joint_matrix)) << "step " << k;
+    }
+    EXPECT_FALSE(same_buffer(walked, stale, BufferId::joint_matrix));
 }
 
 INSTANTIATE_TEST_SUITE_P(Compositions, CudaEmulation,

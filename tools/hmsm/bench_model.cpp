@@ -55,13 +55,21 @@ Traffic step_traffic(const Simulation& sim) {
     // (also inside the fused dispatch, whose passes still pass T and u through memory), or, for
     // a path-walk dispatch, the dispatch's (counted under its leader), which leave out what the
     // walk keeps in registers.
+    // A program of the walk that integrates ahead (CUDA forests) is counted as its steps run
+    // when nothing changes: without the wind pair, whose work the walk ahead does with the pose
+    // in its registers, and without the top poses (the chains of depth 0 and 1, a few per
+    // instance), whose pose halves the walk ahead reads only for those chains.
+    const std::vector<detail::Dispatch>& program = detail::step_program_of(sim);
+    const bool ahead = std::any_of(program.begin(), program.end(), [](const auto& x) { return detail::is_walk_ahead(x); });
+    const uint32_t top_poses = detail::kWalkTopPosesWrites;
     std::array<uint32_t, kPassCount> reads{}, writes{};
-    for (const detail::Dispatch& dispatch : detail::step_program_of(sim)) {
+    for (const detail::Dispatch& dispatch : program) {
+        if (ahead && (dispatch.pass == Pass::wind_force || detail::is_top_poses_walk(dispatch))) continue;
         for (Pass p : kAllPasses) {
             if (!(detail::dispatch_passes(dispatch) >> uint32_t(p) & 1u)) continue;
             const bool walk = detail::runs_path_walk(dispatch);
             if (walk && p != dispatch.pass) continue;
-            reads[uint32_t(p)] |= walk ? detail::dispatch_reads(dispatch) : detail::pass_reads(p);
+            reads[uint32_t(p)] |= walk ? detail::dispatch_reads(dispatch) & ~(ahead ? top_poses : 0u) : detail::pass_reads(p);
             writes[uint32_t(p)] |= walk ? detail::dispatch_writes(dispatch) : detail::pass_writes(p);
         }
     }
