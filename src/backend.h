@@ -162,7 +162,8 @@ inline bool runs_path_walk(const Dispatch& d) {
 /// The two dispatches of the walk that integrates ahead (gpu_layout.h HMSM_WALK_TOP_POSES,
 /// HMSM_WALK_AHEAD): path-walk compose dispatches told apart by their round.
 inline bool is_top_poses_walk(const Dispatch& d) {
-    return d.pass == Pass::compose && d.constants.mode == HMSM_MODE_PATH_WALK && d.constants.round == HMSM_WALK_TOP_POSES;
+    return d.pass == Pass::compose && d.constants.mode == HMSM_MODE_PATH_WALK &&
+           d.constants.round == HMSM_WALK_TOP_POSES;
 }
 inline bool is_walk_ahead(const Dispatch& d) {
     return d.pass == Pass::compose && d.constants.mode == HMSM_MODE_PATH_WALK && d.constants.round == HMSM_WALK_AHEAD;

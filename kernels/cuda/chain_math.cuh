@@ -15,10 +15,6 @@
 
 namespace hmsm::detail::cuda {
 
-/// Pass 1 for model chain c of group instance k: the generalized force g = A (w_loc.z, -w_loc.x)
-/// with w_loc = R^T w in the chain's frame of the previous step (R, and the origin x at which
-/// the force fields act, loaded by the caller from the pose half), w = lambda_i s Y(tau + phi_i)
-/// d plus the force fields. pc.wind.w is the step's slot of the wind table (gpu_layout.h).
 /// The profile value Y(tau + phi_i) of group instance k at wind-table step slot `step_slot`:
 /// the part of pass 1 that depends only on the instance and the step.
 HMSM_HOST_DEVICE float instance_wind_y(const BufferPointers& b, const gpu::PassConstants& pc, uint32_t k,
@@ -54,6 +50,10 @@ HMSM_HOST_DEVICE float2 chain_wind_force_at(const BufferPointers& b, const gpu::
     return make_float2(area * local.z, -area * local.x);
 }
 
+/// Pass 1 for model chain c of group instance k: the generalized force g = A (w_loc.z, -w_loc.x)
+/// with w_loc = R^T w in the chain's frame of the previous step (R, and the origin x at which
+/// the force fields act, loaded by the caller from the pose half), w = lambda_i s Y(tau + phi_i)
+/// d plus the force fields. pc.wind.w is the step's slot of the wind table (gpu_layout.h).
 HMSM_HOST_DEVICE float2 chain_wind_force(const BufferPointers& b, const gpu::PassConstants& pc,
                                          uint32_t k, uint32_t c, float3 x, const Mat3& rotation) {
     return chain_wind_force_at(b, pc, k, c, x, rotation, instance_wind_y(b, pc, k, uint32_t(pc.wind.w)));
@@ -325,8 +325,9 @@ HMSM_HOST_DEVICE void walk_top_pose(const BufferPointers& b, const gpu::PassCons
     walk_pose<false>(b, pc, k, c, nullptr, rotation, origin);
     const uint64_t at = half_begin(pc, pc.src_half) + state_chain(pc, k, c);
     store_mat3(b.chain_rotation, at, rotation);
-    const uint32_t next_slot = uint32_t(pc.wind.w) + 1u < HMSM_WIND_STEP_SLOTS ? uint32_t(pc.wind.w) + 1u : uint32_t(pc.wind.w);
-    origin.w = c == 0 ? instance_wind_y(b, pc, k, next_slot) : 0.0f;
+    const uint32_t slot = uint32_t(pc.wind.w);
+    const uint32_t next_slot = slot + 1u < HMSM_WIND_STEP_SLOTS ? slot + 1u : slot;
+    origin.w = c == 0 ? instance_wind_y(b, pc, k, next_slot) : 0.0f;  // chain 0: the trunk
     b.chain_origin[at] = origin;
 }
 
@@ -342,7 +343,8 @@ HMSM_HOST_DEVICE void walk_ahead(const BufferPointers& b, const gpu::PassConstan
     store_joint_of(b, chain, rotation, origin);
     const float y = load(b.chain_origin + half_begin(pc, pc.src_half) + state_chain(pc, k, 0)).w;
     const float2 g = chain_wind_force_at(b, pc, k, uint32_t(c), xyz(origin), rotation, y);
-    b.chain_state_next[chain] = integrate_step(b, pc, pc.model_chain_begin + uint32_t(c), load(b.chain_state + chain), g);
+    const uint32_t model_chain = pc.model_chain_begin + uint32_t(c);
+    b.chain_state_next[chain] = integrate_step(b, pc, model_chain, load(b.chain_state + chain), g);
 }
 
 }  // namespace hmsm::detail::cuda

@@ -73,15 +73,17 @@ Status CudaBackend::read(BufferId id, uint64_t first, uint64_t count, void* dst,
 Status CudaBackend::write(BufferId id, uint64_t first, uint64_t count, const void* src, Scalar as) {
     HMSM_TRY(make_current());
     HMSM_TRY(buffers_.write(id, first, count, src, as, stream_));
-    if (id != BufferId::wind_table || first < HMSM_WIND_STEPS) {
-        next_state_ready_ = false;  // anything a step reads may have changed
-        return {};
-    }
-    // The step slots, which every step() writes: kept on the host for next_state_fits().
+    // Anything a step reads may have changed, but for the wind table's step slots, which every
+    // step() writes: those are kept on the host for next_state_fits().
+    if (id != BufferId::wind_table || first < HMSM_WIND_STEPS) next_state_ready_ = false;
+    if (id != BufferId::wind_table) return {};
     step_slots_.resize(4 * (HMSM_WIND_TABLE_ELEMENTS - HMSM_WIND_STEPS));
-    for (uint64_t i = 0; i < 4 * count; ++i)
-        step_slots_[4 * (first - HMSM_WIND_STEPS) + i] =
-            as == Scalar::f64 ? float(static_cast<const double*>(src)[i]) : static_cast<const float*>(src)[i];
+    for (uint64_t e = std::max<uint64_t>(first, HMSM_WIND_STEPS); e < first + count; ++e)
+        for (uint64_t i = 0; i < 4; ++i) {
+            const uint64_t at = 4 * (e - first) + i;
+            step_slots_[4 * (e - HMSM_WIND_STEPS) + i] =
+                as == Scalar::f64 ? float(static_cast<const double*>(src)[at]) : static_cast<const float*>(src)[at];
+        }
     return {};
 }
 

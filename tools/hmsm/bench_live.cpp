@@ -157,7 +157,8 @@ std::string render_live_control(const nlohmann::json& rows) {
         } else if (r.contains("set_wind_step_seconds")) {
             line("set_wind + step", ms(r, "set_wind_step_seconds"), "");
             line("plain step", ms(r, "plain_step_seconds"), "");
-            if (r.contains("step_per_call_seconds")) line("each of 10 more steps, one per call", ms(r, "step_per_call_seconds"), "");
+            if (r.contains("step_per_call_seconds"))
+                line("each of 10 more steps, one per call", ms(r, "step_per_call_seconds"), "");
         } else if (r.contains("pause_seconds")) {
             const std::string n = std::to_string(r.value("paused", 0ull));
             line("pause " + n, ms(r, "pause_seconds"), "");

@@ -60,7 +60,8 @@ Traffic step_traffic(const Simulation& sim) {
     // in its registers, and without the top poses (the chains of depth 0 and 1, a few per
     // instance), whose pose halves the walk ahead reads only for those chains.
     const std::vector<detail::Dispatch>& program = detail::step_program_of(sim);
-    const bool ahead = std::any_of(program.begin(), program.end(), [](const auto& x) { return detail::is_walk_ahead(x); });
+    const bool ahead =
+        std::any_of(program.begin(), program.end(), [](const auto& x) { return detail::is_walk_ahead(x); });
     const uint32_t top_poses = detail::kWalkTopPosesWrites;
     std::array<uint32_t, kPassCount> reads{}, writes{};
     for (const detail::Dispatch& dispatch : program) {
@@ -69,7 +70,8 @@ Traffic step_traffic(const Simulation& sim) {
             if (!(detail::dispatch_passes(dispatch) >> uint32_t(p) & 1u)) continue;
             const bool walk = detail::runs_path_walk(dispatch);
             if (walk && p != dispatch.pass) continue;
-            reads[uint32_t(p)] |= walk ? detail::dispatch_reads(dispatch) & ~(ahead ? top_poses : 0u) : detail::pass_reads(p);
+            const uint32_t walk_reads = detail::dispatch_reads(dispatch) & ~(ahead ? top_poses : 0u);
+            reads[uint32_t(p)] |= walk ? walk_reads : detail::pass_reads(p);
             writes[uint32_t(p)] |= walk ? detail::dispatch_writes(dispatch) : detail::pass_writes(p);
         }
     }
