@@ -61,6 +61,7 @@ Status CudaBackend::set_stream(cudaStream_t stream) {
 Status CudaBackend::upload(const SceneData& scene) {
     HMSM_TRY(make_current());
     next_state_ready_ = false;
+    written_since_run_ = true;
     HMSM_TRY(buffers_.allocate(scene));
     return buffers_.upload(scene, stream_);
 }
@@ -75,7 +76,7 @@ Status CudaBackend::write(BufferId id, uint64_t first, uint64_t count, const voi
     HMSM_TRY(buffers_.write(id, first, count, src, as, stream_));
     // Anything a step reads may have changed, but for the wind table's step slots, which every
     // step() writes: those are kept on the host for next_state_fits().
-    if (id != BufferId::wind_table || first < HMSM_WIND_STEPS) next_state_ready_ = false;
+    if (id != BufferId::wind_table || first < HMSM_WIND_STEPS) next_state_ready_ = false, written_since_run_ = true;
     if (id != BufferId::wind_table) return {};
     step_slots_.resize(4 * (HMSM_WIND_TABLE_ELEMENTS - HMSM_WIND_STEPS));
     for (uint64_t e = std::max<uint64_t>(first, HMSM_WIND_STEPS); e < first + count; ++e)
@@ -90,6 +91,7 @@ Status CudaBackend::write(BufferId id, uint64_t first, uint64_t count, const voi
 Status CudaBackend::move_elements(BufferId id, std::span<const ElementMove> moves) {
     HMSM_TRY(make_current());
     next_state_ready_ = false;
+    written_since_run_ = true;
     return buffers_.move(id, moves, stream_);
 }
 
@@ -152,29 +154,69 @@ bool CudaBackend::next_state_fits(std::span<const Dispatch> program, uint32_t sl
     return std::equal(ahead_slot_.begin(), ahead_slot_.end(), step_slots_.begin() + 4 * HMSM_WIND_STEP_VEC4S * slot);
 }
 
+namespace {
+
+/// After this many runs in a row each preceded by a live change (a force field that follows a
+/// character), the first step of a run takes the plain walk, except every kRetryWalkAhead-th
+/// run, which tries the walk ahead again; a run without a change before it ends the streak.
+constexpr uint32_t kChangedRunsBeforePlain = 2;
+constexpr uint32_t kRetryWalkAhead = 8;
+
+/// `program` (of the walk ahead) as the plain walk: without the top poses, the walk ahead a
+/// plain forest walk (step_program.cpp builds the same dispatch).
+std::vector<Dispatch> plain_walk_of(std::span<const Dispatch> program) {
+    std::vector<Dispatch> plain;
+    for (Dispatch d : program) {
+        if (is_top_poses_walk(d)) continue;
+        if (is_walk_ahead(d)) d.constants.round = d.constants.level_count = 0;
+        plain.push_back(d);
+    }
+    return plain;
+}
+
+}  // namespace
+
 // A program of the walk ahead leaves in chain_state_next the angles of the step after its own,
 // from its pose and the next wind-table slot. The next step takes them (swapping the two state
 // buffers) and runs without its wind_force dispatches where they are what it would integrate:
 // within a run always (its slots follow one another), at the start of a run when
 // next_state_fits(). Otherwise it runs whole: wind_force integrates from chain_state, and the
-// walk ahead again writes the step after.
+// walk ahead again writes the step after. A whole step costs a little more than the plain walk
+// (the top poses, the next angles written), so where changes come before step after step, the
+// first step of a run walks plain (kChangedRunsBeforePlain).
 Status CudaBackend::run(std::span<const Dispatch> program, std::span<const double> wind_x) {
     HMSM_TRY(make_current());
     times_ = {};
     if (wind_x.empty() || program.empty()) return {};
     const bool ahead = std::any_of(program.begin(), program.end(), [](const Dispatch& d) { return is_walk_ahead(d); });
-    std::vector<Dispatch> without_wind;
-    for (const Dispatch& d : program)
-        if (ahead && d.pass != Pass::wind_force) without_wind.push_back(d);
+    std::vector<Dispatch> without_wind, plain;
+    if (ahead) {
+        for (const Dispatch& d : program)
+            if (d.pass != Pass::wind_force) without_wind.push_back(d);
+        plain = plain_walk_of(program);
+    }
+    bool next_written = false;  // by the step before, in this run
     for (size_t k = 0; k < wind_x.size(); ++k) {
         const uint32_t slot = uint32_t(wind_x[k]);
-        const bool take = ahead && (k == 0 ? next_state_fits(program, slot) : slot == uint32_t(wind_x[k - 1]) + 1);
+        bool take = false, walk_plain = false;
+        if (ahead && k == 0) {
+            take = next_state_fits(program, slot);
+            runs_changed_ = written_since_run_ ? runs_changed_ + 1 : 0;
+            walk_plain = !take && runs_changed_ >= kChangedRunsBeforePlain && runs_changed_ % kRetryWalkAhead != 0;
+        } else if (ahead) {
+            take = next_written && slot == uint32_t(wind_x[k - 1]) + 1;
+        }
         if (take) {
             buffers_.take_next_state();
             ++steps_taken_ahead_;
         }
+        steps_walked_plain_ += walk_plain ? 1 : 0;
+        next_written = ahead && !walk_plain;
         next_state_ready_ = false;  // being rewritten (or, without the walk ahead, left stale)
-        const std::span<const Dispatch> step = take ? std::span<const Dispatch>(without_wind) : program;
+        written_since_run_ = false;
+        const std::span<const Dispatch> step = take ? std::span<const Dispatch>(without_wind)
+                                               : walk_plain ? std::span<const Dispatch>(plain)
+                                                            : program;
         if (profiling_) {
             HMSM_TRY(run_profiled(step, slot));
         } else {
@@ -185,7 +227,7 @@ Status CudaBackend::run(std::span<const Dispatch> program, std::span<const doubl
     }
     CUDA_TRY(cudaStreamSynchronize(stream_));
     times_.steps = profiling_ ? wind_x.size() : 0;
-    if (!ahead) return {};
+    if (!next_written) return {};
     // The slot the last step's top poses read (gpu_layout.h: the one after, at most the last).
     const uint32_t next = std::min<uint32_t>(uint32_t(wind_x.back()) + 1, HMSM_WIND_STEP_SLOTS - 1);
     ahead_slot_.assign(4 * HMSM_WIND_STEP_VEC4S, 0.0f);

@@ -38,6 +38,9 @@ public:
     /// Steps run without their wind_force dispatches, taking the angles the step before
     /// integrated ahead (since the backend was created; for tests).
     uint64_t steps_taken_ahead() const { return steps_taken_ahead_; }
+    /// Steps of a walk-ahead program run as the plain walk, after live changes before several
+    /// steps in a row (cuda_backend.cpp; for tests).
+    uint64_t steps_walked_plain() const { return steps_walked_plain_; }
     PassTimes pass_times() const override { return times_; }
 
     /// For `hmsm bench`'s roofline: the median of a few device-to-device copies of `bytes`
@@ -73,11 +76,11 @@ private:
     /// Shared memory a fused block may take (backend.h fused_shared_limit, read at creation).
     uint64_t fused_shared_limit_;
     DeviceBuffers buffers_;
-    /// A program of the walk ahead replays two graphs (with and without wind_force), each over
-    /// two buffer layouts (the state and its twin swapped or not): the least recently used of
-    /// these is replaced.
-    std::array<StepGraph, 4> graphs_;
-    std::array<uint64_t, 4> graph_used_{};
+    /// A program of the walk ahead replays up to three graphs (whole, without wind_force, as the
+    /// plain walk), each over two buffer layouts (the state and its twin swapped or not): the
+    /// least recently used of these is replaced.
+    std::array<StepGraph, 6> graphs_;
+    std::array<uint64_t, 6> graph_used_{};
     uint64_t graph_clock_ = 0;
     bool walk_ahead_ = true;
     bool next_state_ready_ = false;        // see next_state_fits()
@@ -85,6 +88,9 @@ private:
     std::vector<float> ahead_slot_;        // the wind-table step slot it read, as it was then
     std::vector<float> step_slots_;        // host copy of the wind table's step slots as written
     uint64_t steps_taken_ahead_ = 0;       // steps that took the angles integrated ahead
+    uint64_t steps_walked_plain_ = 0;      // steps_walked_plain()
+    bool written_since_run_ = false;       // a write (but of the wind step slots) since the last run
+    uint32_t runs_changed_ = 0;            // runs in a row with such a write before them
     std::vector<cudaEvent_t> events_;  // profiling: one before and one after each dispatch
     bool profiling_ = false;
     PassTimes times_;

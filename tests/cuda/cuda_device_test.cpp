@@ -71,8 +71,8 @@ void expect_agreement(const Scene& scene, Composition composition, bool profile,
 }
 
 // The walk that integrates ahead (forests on CUDA): stepped call by call with live changes in
-// between (the wind, force fields, an instance's wind scale, one paused and resumed, one added)
-// and one call of many steps, a simulation that takes the angles integrated ahead leaves the same
+// between (the wind, force fields, an instance's wind scale, one paused and resumed, one added, a
+// field moved before every call for a while) and one call of many steps, a simulation that takes the angles integrated ahead leaves the same
 // joint matrices and angles, bit for bit, as one whose backend does not integrate ahead, and it
 // does take them.
 TEST(CudaWalkAhead, StepByStepWithLiveChangesEqualsThePlainWalkBitForBit) {
@@ -86,7 +86,9 @@ TEST(CudaWalkAhead, StepByStepWithLiveChangesEqualsThePlainWalkBitForBit) {
     ASSERT_TRUE(plain && ahead);
     const auto& backend = dynamic_cast<const detail::cuda::CudaBackend&>(hmsm::detail::backend_of(*ahead));
     bool walked_ahead = false;
-    for (uint32_t k = 0; k < 48; ++k) {
+    uint64_t taken_before_calm = 0;
+    for (uint32_t k = 0; k < 60; ++k) {
+        if (k == 56) taken_before_calm = backend.steps_taken_ahead();
         for (Simulation* sim : {plain.get(), ahead.get()}) {
             Wind wind = sim->wind();
             wind.strength *= 1.5;
@@ -100,6 +102,9 @@ TEST(CudaWalkAhead, StepByStepWithLiveChangesEqualsThePlainWalkBitForBit) {
             if (k == 24) ASSERT_TRUE(sim->set_instance_active(1, false).ok());
             if (k == 30) ASSERT_TRUE(sim->set_instance_active(1, true).ok());
             if (k == 36) ASSERT_TRUE(sim->add_instances({&scene.instances[0], 1}).ok());
+            // A field that moves before every call (a character walking), then calm again.
+            field.center.x = double(k);
+            if (k > 40 && k < 56) ASSERT_TRUE(sim->set_force_fields({&field, 1}).ok());
             // Mostly one step per call, some three; one call of 300 runs in two chunks of the
             // wind table (Simulation::step), the second taking the first's angles.
             ASSERT_TRUE(sim->step(k == 40 ? 300 : k % 4 == 3 ? 3 : 1).ok());
@@ -115,6 +120,9 @@ TEST(CudaWalkAhead, StepByStepWithLiveChangesEqualsThePlainWalkBitForBit) {
     }
     EXPECT_TRUE(walked_ahead);
     EXPECT_GE(backend.steps_taken_ahead(), 320u);
+    // The moving field: most of those calls walked plain; after it, the walk ahead again.
+    EXPECT_GE(backend.steps_walked_plain(), 10u);
+    EXPECT_GE(backend.steps_taken_ahead() - taken_before_calm, 3u);
 }
 
 class CudaSimulation : public ::testing::TestWithParam<Composition> {};

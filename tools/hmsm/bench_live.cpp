@@ -79,6 +79,17 @@ nlohmann::json measure_live_control(const TreeModel& model, const std::vector<Ba
         start = Clock::now();
         for (uint32_t k = 0; k < kCalls; ++k) (void)s.step();
         const double per_call = seconds_since(start) / kCalls;
+        // And with a force field moved before each call (a character walking through the forest).
+        ForceField field;
+        field.radius = 10.0;
+        field.directional = {0.0, 0.0, 5.0};
+        start = Clock::now();
+        for (uint32_t k = 0; k < kCalls; ++k) {
+            field.center = {2.0 * k, 2.0, 0.0};
+            if (s.set_force_fields({&field, 1})) (void)s.step();
+        }
+        const double moving_field = seconds_since(start) / kCalls;
+        (void)s.set_force_fields({});
         Wind wind = s.wind();
         wind.profile = WindProfile::turbulent;
         start = Clock::now();
@@ -87,7 +98,8 @@ nlohmann::json measure_live_control(const TreeModel& model, const std::vector<Ba
         const double changed = seconds_since(start);
         if (status)
             results.push_back({{"backend", to_string(kind)}, {"instances", forest}, {"set_wind_step_seconds", changed},
-                               {"plain_step_seconds", plain}, {"step_per_call_seconds", per_call}});
+                               {"plain_step_seconds", plain}, {"step_per_call_seconds", per_call},
+                               {"moving_field_step_seconds", moving_field}});
         // Pausing a tenth of the forest (the step program is rebuilt over the active runs),
         // the next step, and resuming them.
         {
@@ -159,6 +171,8 @@ std::string render_live_control(const nlohmann::json& rows) {
             line("plain step", ms(r, "plain_step_seconds"), "");
             if (r.contains("step_per_call_seconds"))
                 line("each of 10 more steps, one per call", ms(r, "step_per_call_seconds"), "");
+            if (r.contains("moving_field_step_seconds"))
+                line("each of 10 steps, a force field moved before each", ms(r, "moving_field_step_seconds"), "");
         } else if (r.contains("pause_seconds")) {
             const std::string n = std::to_string(r.value("paused", 0ull));
             line("pause " + n, ms(r, "pause_seconds"), "");
