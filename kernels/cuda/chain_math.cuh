@@ -15,25 +15,25 @@
 
 namespace hmsm::detail::cuda {
 
-/// The profile value Y(tau + phi_i) of group instance k at wind-table step slot `step_slot`:
-/// the part of pass 1 that depends only on the instance and the step.
+/// The profile value Y(tau + phi_i) of group instance k at wind-table step slot `step_slot`,
+/// `own` its first instance_wind element (lambda, phi mod 2, paused, 0): with lambda, the part
+/// of pass 1 that depends only on the instance and the step.
 HMSM_HOST_DEVICE float instance_wind_y(const BufferPointers& b, const gpu::PassConstants& pc, uint32_t k,
-                                       uint32_t step_slot) {
+                                       uint32_t step_slot, float4 own) {
     const float4* table = b.wind_table;
     const uint32_t slot = HMSM_WIND_STEPS + HMSM_WIND_STEP_VEC4S * step_slot;
     const float4* instance = b.instance_wind + uint64_t(HMSM_INSTANCE_WIND_VEC4S) * (pc.instance_begin + k);
     if (pc.profile == HMSM_WIND_PROFILE_TURBULENT)
         return turbulent_y<float>(&table[HMSM_WIND_AMPLITUDES].x, &table[slot + 1].x, &instance[1].x);
-    return wind_profile_y<float>(pc.profile, load(table + slot).x + load(instance).y);  // tau + phi, both mod 2
+    return wind_profile_y<float>(pc.profile, load(table + slot).x + own.y);  // tau + phi, both mod 2
 }
 
-/// Pass 1 with the profile value y = instance_wind_y(...) in hand.
-HMSM_HOST_DEVICE float2 chain_wind_force_at(const BufferPointers& b, const gpu::PassConstants& pc, uint32_t k,
-                                            uint32_t c, float3 x, const Mat3& rotation, float y) {
+/// Pass 1 for model chain c with the instance's wind scale in hand: `scale` = lambda_i Y.
+HMSM_HOST_DEVICE float2 chain_wind_force_at(const BufferPointers& b, const gpu::PassConstants& pc, uint32_t c,
+                                            float3 x, const Mat3& rotation, float scale) {
     const float4* table = b.wind_table;
-    const float4 own = load(b.instance_wind + uint64_t(HMSM_INSTANCE_WIND_VEC4S) * (pc.instance_begin + k));
     const float4 vector_count = load(table + HMSM_WIND_VECTOR);  // (s d, number of fields)
-    float3 wind = (own.x * y) * xyz(vector_count);
+    float3 wind = scale * xyz(vector_count);
     const uint32_t fields = uint32_t(vector_count.w);
     for (uint32_t f = 0; f < fields; ++f) {
         const float4 sphere = load(table + HMSM_WIND_FIELDS + 2 * f);
@@ -50,13 +50,20 @@ HMSM_HOST_DEVICE float2 chain_wind_force_at(const BufferPointers& b, const gpu::
     return make_float2(area * local.z, -area * local.x);
 }
 
+/// The wind scale lambda_i Y(tau + phi_i) of group instance k at step slot `step_slot`.
+HMSM_HOST_DEVICE float instance_wind_scale(const BufferPointers& b, const gpu::PassConstants& pc, uint32_t k,
+                                           uint32_t step_slot) {
+    const float4 own = load(b.instance_wind + uint64_t(HMSM_INSTANCE_WIND_VEC4S) * (pc.instance_begin + k));
+    return own.x * instance_wind_y(b, pc, k, step_slot, own);
+}
+
 /// Pass 1 for model chain c of group instance k: the generalized force g = A (w_loc.z, -w_loc.x)
 /// with w_loc = R^T w in the chain's frame of the previous step (R, and the origin x at which
 /// the force fields act, loaded by the caller from the pose half), w = lambda_i s Y(tau + phi_i)
 /// d plus the force fields. pc.wind.w is the step's slot of the wind table (gpu_layout.h).
 HMSM_HOST_DEVICE float2 chain_wind_force(const BufferPointers& b, const gpu::PassConstants& pc,
                                          uint32_t k, uint32_t c, float3 x, const Mat3& rotation) {
-    return chain_wind_force_at(b, pc, k, c, x, rotation, instance_wind_y(b, pc, k, uint32_t(pc.wind.w)));
+    return chain_wind_force_at(b, pc, c, x, rotation, instance_wind_scale(b, pc, k, uint32_t(pc.wind.w)));
 }
 
 /// Pass 2, the step: symplectic Euler on S = (theta_x, theta_z) of static chain model_chain from
@@ -317,8 +324,8 @@ HMSM_HOST_DEVICE void path_walk(const BufferPointers& b, const gpu::PassConstant
 }
 
 /// HMSM_WALK_TOP_POSES for chain c (depth 0 or 1) of group instance k: its pose to half
-/// src_half of chain_rotation and chain_origin; the trunk's origin carries in w the profile
-/// value of the next step (wind-table slot wind.w + 1) for the walk that integrates ahead.
+/// src_half of chain_rotation and chain_origin; the trunk's origin carries in w the wind scale
+/// lambda_i Y of the next step (wind-table slot wind.w + 1) for the walk that integrates ahead.
 HMSM_HOST_DEVICE void walk_top_pose(const BufferPointers& b, const gpu::PassConstants& pc, uint32_t k, int32_t c) {
     Mat3 rotation;
     float4 origin;
@@ -327,22 +334,22 @@ HMSM_HOST_DEVICE void walk_top_pose(const BufferPointers& b, const gpu::PassCons
     store_mat3(b.chain_rotation, at, rotation);
     const uint32_t slot = uint32_t(pc.wind.w);
     const uint32_t next_slot = slot + 1u < HMSM_WIND_STEP_SLOTS ? slot + 1u : slot;
-    origin.w = c == 0 ? instance_wind_y(b, pc, k, next_slot) : 0.0f;  // chain 0: the trunk
+    origin.w = c == 0 ? instance_wind_scale(b, pc, k, next_slot) : 0.0f;  // chain 0: the trunk
     b.chain_origin[at] = origin;
 }
 
 /// HMSM_WALK_AHEAD for chain c of group instance k: the path walk from the top poses, its pose
 /// to the joint matrix, then the next step's pass 1 at that pose (what the next step's
-/// wind_force would read back from the joint matrix) and pass 2's integration, the new angles
-/// to chain_state_next.
+/// wind_force would read back from the joint matrix, with the trunk's stored wind scale) and
+/// pass 2's integration, the new angles to chain_state_next.
 HMSM_HOST_DEVICE void walk_ahead(const BufferPointers& b, const gpu::PassConstants& pc, uint32_t k, int32_t c) {
     Mat3 rotation;
     float4 origin;
     walk_pose<false, true>(b, pc, k, c, nullptr, rotation, origin);
     const uint64_t chain = state_chain(pc, k, c);
     store_joint_of(b, chain, rotation, origin);
-    const float y = load(b.chain_origin + half_begin(pc, pc.src_half) + state_chain(pc, k, 0)).w;
-    const float2 g = chain_wind_force_at(b, pc, k, uint32_t(c), xyz(origin), rotation, y);
+    const float scale = load(b.chain_origin + half_begin(pc, pc.src_half) + state_chain(pc, k, 0)).w;
+    const float2 g = chain_wind_force_at(b, pc, uint32_t(c), xyz(origin), rotation, scale);
     const uint32_t model_chain = pc.model_chain_begin + uint32_t(c);
     b.chain_state_next[chain] = integrate_step(b, pc, model_chain, load(b.chain_state + chain), g);
 }

@@ -140,8 +140,8 @@
 /// compose dispatches. HMSM_WALK_TOP_POSES: one thread per chain of depth 0 and 1 (the first
 /// level_count model chains) walks the pose from the angles of chain_state and stores it to
 /// half src_half of chain_rotation and chain_origin; the trunk's thread also stores the wind
-/// profile Y of the next step (wind-table slot wind.w + 1) of its instance in the w of its
-/// chain_origin. HMSM_WALK_AHEAD: every chain walks from the stored pose of its depth-1
+/// scale lambda_i Y of the next step (wind-table slot wind.w + 1) of its instance in the w of
+/// its chain_origin. HMSM_WALK_AHEAD: every chain walks from the stored pose of its depth-1
 /// ancestor, writes its joint matrix, then runs the next step's wind_force and integrate with
 /// that pose and Y, writing the next angles to a second state buffer.
 #define HMSM_WALK_TOP_POSES 2u
