@@ -75,8 +75,11 @@ Status CudaBackend::write(BufferId id, uint64_t first, uint64_t count, const voi
     HMSM_TRY(make_current());
     HMSM_TRY(buffers_.write(id, first, count, src, as, stream_));
     // Anything a step reads may have changed, but for the wind table's step slots, which every
-    // step() writes: those are kept on the host for next_state_fits().
-    if (id != BufferId::wind_table || first < HMSM_WIND_STEPS) next_state_ready_ = false, written_since_run_ = true;
+    // step() writes: those are kept on the host for next_slot_fits().
+    if (id != BufferId::wind_table || first < HMSM_WIND_STEPS) {
+        next_state_ready_ = false;
+        written_since_run_ = true;
+    }
     if (id != BufferId::wind_table) return {};
     step_slots_.resize(4 * (HMSM_WIND_TABLE_ELEMENTS - HMSM_WIND_STEPS));
     for (uint64_t e = std::max<uint64_t>(first, HMSM_WIND_STEPS); e < first + count; ++e)
@@ -145,12 +148,8 @@ Result<StepGraph*> CudaBackend::graph_for(std::span<const Dispatch> program) {
     return &graphs_[oldest];
 }
 
-bool CudaBackend::next_state_fits(std::span<const Dispatch> program, uint32_t slot) const {
-    if (!next_state_ready_ || program.size() != ahead_program_.size() ||
-        step_slots_.size() < 4 * HMSM_WIND_STEP_VEC4S * (uint64_t(slot) + 1))
-        return false;
-    for (size_t i = 0; i < program.size(); ++i)
-        if (!same_dispatch(program[i], ahead_program_[i])) return false;
+bool CudaBackend::next_slot_fits(uint32_t slot) const {
+    if (step_slots_.size() < 4 * HMSM_WIND_STEP_VEC4S * (uint64_t(slot) + 1)) return false;
     return std::equal(ahead_slot_.begin(), ahead_slot_.end(), step_slots_.begin() + 4 * HMSM_WIND_STEP_VEC4S * slot);
 }
 
@@ -162,25 +161,28 @@ namespace {
 constexpr uint32_t kChangedRunsBeforePlain = 2;
 constexpr uint32_t kRetryWalkAhead = 8;
 
-/// `program` (of the walk ahead) as the plain walk: without the top poses, the walk ahead a
-/// plain forest walk (step_program.cpp builds the same dispatch).
-std::vector<Dispatch> plain_walk_of(std::span<const Dispatch> program) {
-    std::vector<Dispatch> plain;
+}  // namespace
+
+void CudaBackend::derive_ahead_variants(std::span<const Dispatch> program) {
+    ahead_.whole.assign(program.begin(), program.end());
+    ahead_.without_wind.clear();
+    ahead_.plain.clear();
     for (Dispatch d : program) {
+        if (d.pass != Pass::wind_force) ahead_.without_wind.push_back(d);
+        // The plain walk: no top poses, and the walk ahead a plain forest walk (step_program.cpp
+        // builds the same dispatch).
         if (is_top_poses_walk(d)) continue;
         if (is_walk_ahead(d)) d.constants.round = d.constants.level_count = 0;
-        plain.push_back(d);
+        ahead_.plain.push_back(d);
     }
-    return plain;
 }
-
-}  // namespace
 
 // A program of the walk ahead leaves in chain_state_next the angles of the step after its own,
 // from its pose and the next wind-table slot. The next step takes them (swapping the two state
 // buffers) and runs without its wind_force dispatches where they are what it would integrate:
-// within a run always (its slots follow one another), at the start of a run when
-// next_state_fits(). Otherwise it runs whole: wind_force integrates from chain_state, and the
+// within a run always (its slots follow one another); at the start of a run where the last run
+// ran the same program, nothing but the wind table's step slots was written since, and
+// next_slot_fits(). Otherwise it runs whole: wind_force integrates from chain_state, and the
 // walk ahead again writes the step after. A whole step costs a little more than the plain walk
 // (the top poses, the next angles written), so where changes come before step after step, the
 // first step of a run walks plain (kChangedRunsBeforePlain).
@@ -189,18 +191,14 @@ Status CudaBackend::run(std::span<const Dispatch> program, std::span<const doubl
     times_ = {};
     if (wind_x.empty() || program.empty()) return {};
     const bool ahead = std::any_of(program.begin(), program.end(), [](const Dispatch& d) { return is_walk_ahead(d); });
-    std::vector<Dispatch> without_wind, plain;
-    if (ahead) {
-        for (const Dispatch& d : program)
-            if (d.pass != Pass::wind_force) without_wind.push_back(d);
-        plain = plain_walk_of(program);
-    }
+    const bool same_program = ahead && same_dispatches(program, ahead_.whole);
+    if (ahead && !same_program) derive_ahead_variants(program);  // once per program
     bool next_written = false;  // by the step before, in this run
     for (size_t k = 0; k < wind_x.size(); ++k) {
         const uint32_t slot = uint32_t(wind_x[k]);
         bool take = false, walk_plain = false;
         if (ahead && k == 0) {
-            take = next_state_fits(program, slot);
+            take = next_state_ready_ && same_program && next_slot_fits(slot);
             runs_changed_ = written_since_run_ ? runs_changed_ + 1 : 0;
             walk_plain = !take && runs_changed_ >= kChangedRunsBeforePlain && runs_changed_ % kRetryWalkAhead != 0;
         } else if (ahead) {
@@ -214,8 +212,8 @@ Status CudaBackend::run(std::span<const Dispatch> program, std::span<const doubl
         next_written = ahead && !walk_plain;
         next_state_ready_ = false;  // being rewritten (or, without the walk ahead, left stale)
         written_since_run_ = false;
-        const std::span<const Dispatch> step = take ? std::span<const Dispatch>(without_wind)
-                                               : walk_plain ? std::span<const Dispatch>(plain)
+        const std::span<const Dispatch> step = take         ? std::span<const Dispatch>(ahead_.without_wind)
+                                               : walk_plain ? std::span<const Dispatch>(ahead_.plain)
                                                             : program;
         if (profiling_) {
             HMSM_TRY(run_profiled(step, slot));
@@ -233,7 +231,6 @@ Status CudaBackend::run(std::span<const Dispatch> program, std::span<const doubl
     ahead_slot_.assign(4 * HMSM_WIND_STEP_VEC4S, 0.0f);
     if (step_slots_.size() >= 4 * HMSM_WIND_STEP_VEC4S * (uint64_t(next) + 1))
         std::copy_n(step_slots_.begin() + 4 * HMSM_WIND_STEP_VEC4S * next, ahead_slot_.size(), ahead_slot_.begin());
-    ahead_program_.assign(program.begin(), program.end());
     next_state_ready_ = true;
     return {};
 }

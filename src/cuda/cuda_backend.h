@@ -60,10 +60,11 @@ private:
     /// The captured graph of `program` over the current buffers, captured now if none of the
     /// last few is.
     Result<StepGraph*> graph_for(std::span<const Dispatch> program);
-    /// Whether the angles in chain_state_next are what step `slot` of `program` would integrate
-    /// now: the last run ran `program`, nothing was written to the device since (but the wind
-    /// table's step slots) and slot `slot` holds what the last run's next slot held.
-    bool next_state_fits(std::span<const Dispatch> program, uint32_t slot) const;
+    /// Whether wind-table step slot `slot` holds what the last run's next slot held (the one its
+    /// walk ahead read), as the host last wrote them.
+    bool next_slot_fits(uint32_t slot) const;
+    /// ahead_ for a program of the walk ahead.
+    void derive_ahead_variants(std::span<const Dispatch> program);
     /// One step of `program` launched dispatch by dispatch between events, its device times
     /// added to times_ (synchronizes).
     Status run_profiled(std::span<const Dispatch> program, uint32_t slot);
@@ -83,8 +84,13 @@ private:
     std::array<uint64_t, 6> graph_used_{};
     uint64_t graph_clock_ = 0;
     bool walk_ahead_ = true;
-    bool next_state_ready_ = false;        // see next_state_fits()
-    std::vector<Dispatch> ahead_program_;  // the program whose last step wrote chain_state_next
+    /// The last program of the walk ahead that ran, and what its steps run instead where they
+    /// take the angles integrated ahead (without wind_force) or walk plain: derived once per
+    /// program (cuda_backend.cpp).
+    struct AheadVariants {
+        std::vector<Dispatch> whole, without_wind, plain;
+    } ahead_;
+    bool next_state_ready_ = false;        // chain_state_next holds what ahead_.whole's last run wrote
     std::vector<float> ahead_slot_;        // the wind-table step slot it read, as it was then
     std::vector<float> step_slots_;        // host copy of the wind table's step slots as written
     uint64_t steps_taken_ahead_ = 0;       // steps that took the angles integrated ahead

@@ -3,6 +3,7 @@
 #include "cuda_error.h"
 #include "launch_dispatch.h"
 
+#include <algorithm>
 #include <cstring>
 
 namespace hmsm::detail::cuda {
@@ -59,6 +60,10 @@ bool same_dispatch(const Dispatch& a, const Dispatch& b) {
     return a.pass == b.pass && same_bytes(&a.constants, &b.constants, sizeof a.constants);
 }
 
+bool same_dispatches(std::span<const Dispatch> a, std::span<const Dispatch> b) {
+    return std::equal(a.begin(), a.end(), b.begin(), b.end(), same_dispatch);
+}
+
 StepGraph::~StepGraph() { release(); }
 
 void StepGraph::release() {
@@ -71,11 +76,7 @@ void StepGraph::release() {
 }
 
 bool StepGraph::matches(std::span<const Dispatch> program, const BufferPointers& buffers) const {
-    if (!exec_ || program.size() != program_.size() || !same_bytes(&buffers, &buffers_, sizeof buffers))
-        return false;
-    for (size_t i = 0; i < program.size(); ++i)
-        if (!same_dispatch(program[i], program_[i])) return false;
-    return true;
+    return exec_ && same_bytes(&buffers, &buffers_, sizeof buffers) && same_dispatches(program, program_);
 }
 
 Status StepGraph::capture(std::span<const Dispatch> program, const BufferPointers& buffers,

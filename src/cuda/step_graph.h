@@ -20,6 +20,8 @@ namespace hmsm::detail::cuda {
 
 /// Whether two dispatches are the same launch: pass and constants, bit for bit.
 bool same_dispatch(const Dispatch& a, const Dispatch& b);
+/// Whether two programs are the same launches in the same order.
+bool same_dispatches(std::span<const Dispatch> a, std::span<const Dispatch> b);
 
 class StepGraph {
 public:

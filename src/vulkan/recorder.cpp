@@ -56,7 +56,7 @@ void record_steps(const Device& device, const Pipelines& pipelines, const Window
                 bound_set = set;
             }
             gpu::PassConstants constants = d.constants;
-            if (d.pass == Pass::wind_force) constants.wind.w = float(x);
+            if (reads_wind_slot(d)) constants.wind.w = float(x);
             vk.vkCmdPushConstants(cmd, pipelines.layout(), VK_SHADER_STAGE_COMPUTE_BIT, 0,
                                   sizeof(constants), &constants);
             // One workgroup per instance for in-dispatch rounds and fused dispatches, else one
