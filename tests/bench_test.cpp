@@ -1,5 +1,6 @@
 // `hmsm bench --quick` through the CLI binary: the JSON schema of docs/benchmarks/README.md, every
-// figure finite and positive, the markdown on stdout and --render agreeing. No timing thresholds.
+// figure finite and positive, the markdown on stdout, --render and the --out page agreeing. No timing
+// thresholds.
 #include <hmsm/simulation.h>
 
 #include <nlohmann/json.hpp>
@@ -314,5 +315,54 @@ TEST_F(BenchCli, BadArgumentsExitTwoWithOneLine) {
         EXPECT_EQ(r.exit_code, 2) << r.err;
         EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
         EXPECT_FALSE(fs::exists(dir_ / "out.json"));
+    }
+}
+
+/// --out STEM: the device page (a header with the device, commit and date, then the tables printed
+/// on stdout) and the raw result beside it, replacing earlier files; --render --out writes the same
+/// page from a saved result.
+TEST_F(BenchCli, OutWritesTheDevicePageAndReplacesIt) {
+    const fs::path stem = dir_ / "test-device";
+    std::ofstream(stem.string() + ".md") << "an earlier page\n";
+    std::ofstream(stem.string() + ".json") << "{}\n";
+    const BenchRun r = run("bench --quick --no-progress --backends cpu --presets none --instances none "
+                           "--joint-instances 1 --commit abc1234 --out " + stem.string());
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const json d = json::parse(slurp(stem.string() + ".json"), nullptr, false);
+    ASSERT_FALSE(d.is_discarded());
+    EXPECT_EQ(d.value("format", ""), "hmsm-bench");
+    EXPECT_EQ(d.value("commit", ""), "abc1234");
+    ASSERT_FALSE(d["forest_joints"].empty()) << d.dump();
+    const std::string page = slurp(stem.string() + ".md");
+    EXPECT_EQ(page.rfind("# hmsm bench: test-device\n", 0), 0u) << page;
+    EXPECT_NE(page.find("commit abc1234, " + d.value("date", std::string("?"))), std::string::npos) << page;
+    EXPECT_NE(page.find("[test-device.json](test-device.json)"), std::string::npos) << page;
+    ASSERT_GE(page.size(), r.out.size());
+    EXPECT_EQ(page.substr(page.size() - r.out.size()), r.out) << "the page's tables differ from stdout";
+    EXPECT_EQ(page.find("an earlier page"), std::string::npos);
+    EXPECT_FALSE(fs::exists(stem.string() + ".md.tmp-hmsm"));
+
+    const fs::path copy = dir_ / "copy";
+    const BenchRun rendered = run("bench --render " + stem.string() + ".json --out " + copy.string());
+    ASSERT_EQ(rendered.exit_code, 0) << rendered.err;
+    EXPECT_EQ(rendered.out, r.out);
+    EXPECT_EQ(slurp(copy.string() + ".json"), slurp(stem.string() + ".json"));
+    const std::string copied_page = slurp(copy.string() + ".md");
+    EXPECT_EQ(copied_page.rfind("# hmsm bench: copy\n", 0), 0u) << copied_page;
+    EXPECT_EQ(copied_page.substr(copied_page.size() - r.out.size()), r.out);
+}
+
+TEST_F(BenchCli, OutWithAnExtensionOrAMissingFolderExitsTwoWritingNothing) {
+    for (const std::string stem : {(dir_ / "page.json").string(), (dir_ / "page.md").string(),
+                                   (dir_ / "absent" / "page").string()}) {
+        SCOPED_TRACE(stem);
+        const BenchRun r = run("bench --quick --backends cpu --out " + stem);
+        EXPECT_EQ(r.exit_code, 2) << r.err;
+        EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+        EXPECT_NE(r.err.find("--out"), std::string::npos) << r.err;
+        size_t files = 0;
+        for (const auto& entry : fs::directory_iterator(dir_))
+            files += entry.path().filename() != "stdout.txt" && entry.path().filename() != "stderr.txt";
+        EXPECT_EQ(files, 0u);
     }
 }

@@ -1,6 +1,6 @@
 // hmsm bench (docs/model.md 7): the paper's Table 1 per preset and backend, pointer jumping
 // vs level by level, and forest scaling against the copy-bandwidth roofline. Markdown on stdout,
-// JSON with --json (schema: docs/benchmarks/README.md).
+// JSON with --json (schema: docs/benchmarks/README.md), both as a device's page with --out.
 #include "bench_joints.h"
 #include "bench_report.h"
 #include "bench_run.h"
@@ -38,7 +38,7 @@ struct BenchFlags {
     double case_budget = 20.0;
     std::string forest_composition = "automatic";
     bool quick = false, no_progress = false;
-    std::string json_path, commit = "unknown", render;
+    std::string json_path, out_stem, commit = "unknown", render;
 } flags;
 
 std::vector<std::string> split_list(const std::string& text) {
@@ -61,15 +61,53 @@ std::string utc_now() {
     return text;
 }
 
+/// Every table of a result document, as a run prints them on stdout.
+std::string render_tables(const json& document) {
+    return render_markdown(document) + bench::render_joint_forest(document.value("forest_joints", json::array())) +
+           bench::render_live_control(document.value("live_control", json::array()));
+}
+
+/// The device page `--out STEM` writes as STEM.md: a header naming the device (the stem's file
+/// name), the commit and date, and the raw result beside it, then the tables.
+std::string render_page(const json& document, const std::string& stem) {
+    const std::string device = std::filesystem::path(stem).filename().string();
+    std::string page = "# hmsm bench: " + device + "\n\n";
+    page += "The newest result on this device: commit " + document.value("commit", std::string("unknown")) +
+            ", " + document.value("date", std::string("unknown")) + ". Raw result: [" + device + ".json](" +
+            device + ".json). Written by `hmsm bench --out`; a re-run replaces both files. The method, the "
+            "byte model and the JSON schema: docs/benchmarks/README.md.\n\n";
+    return page + render_tables(document);
+}
+
+/// Stages STEM.json and STEM.md (`--out`): both are written whole at commit, or neither.
+Status write_page(StagedOutputs& outputs, const std::string& stem, const std::string& json_text,
+                  const json& document) {
+    auto json_file = outputs.stage(stem + ".json", "--out");
+    if (!json_file) return json_file.status();
+    auto page_file = outputs.stage(stem + ".md", "--out");
+    if (!page_file) return page_file.status();
+    const std::string page = render_page(document, stem);
+    Status written = outputs.write(*json_file, json_text.data(), json_text.size());
+    if (written) written = outputs.write(*page_file, page.data(), page.size());
+    return written;
+}
+
 int render(const std::string& path) {
     std::ifstream in(path);
     if (!in) return fail_input("--render '" + path + "': cannot read the file");
-    json document = json::parse(in, nullptr, false);
+    std::stringstream text;
+    text << in.rdbuf();
+    json document = json::parse(text.str(), nullptr, false);
     if (document.is_discarded() || !document.is_object() || document.value("format", "") != "hmsm-bench")
         return fail_input("--render '" + path + "': not an hmsm-bench JSON document");
-    std::fputs(render_markdown(document).c_str(), stdout);
-    std::fputs(bench::render_joint_forest(document.value("forest_joints", json::array())).c_str(), stdout);
-    std::fputs(bench::render_live_control(document.value("live_control", json::array())).c_str(), stdout);
+    StagedOutputs outputs;
+    if (!flags.out_stem.empty()) {
+        Status staged = write_page(outputs, flags.out_stem, text.str(), document);
+        if (!staged) return fail(staged);
+    }
+    std::fputs(render_tables(document).c_str(), stdout);
+    Status committed = outputs.commit();
+    if (!committed) return fail(committed);
     return kExitOk;
 }
 
@@ -97,12 +135,25 @@ void register_bench_flags(CLI::App& app) {
                    "extrapolated past it are skipped (default 20)");
     app.add_flag("--quick", flags.quick, "CI-sized run: paper-5, 5 steps, instances 1,10 (explicit flags win)");
     app.add_option("--json", flags.json_path, "write the results as JSON (docs/benchmarks/README.md)");
+    app.add_option("--out", flags.out_stem,
+                   "write STEM.json and STEM.md (a header with the commit and date, then the tables), "
+                   "replacing them; e.g. docs/benchmarks/nvidia-h100 (also with --render)");
     app.add_option("--commit", flags.commit, "commit id to record in the results");
     app.add_flag("--no-progress", flags.no_progress, "no progress on stderr");
-    app.add_option("--render", flags.render, "print the markdown tables of an earlier --json file and exit");
+    app.add_option("--render", flags.render, "print the markdown tables of an earlier --json file (and "
+                                             "write them with --out) and exit");
 }
 
 int run_bench(CLI::App& app) {
+    if (!flags.out_stem.empty()) {  // checked before the run: a stem that cannot be written fails at once
+        const std::filesystem::path stem(flags.out_stem), folder = stem.parent_path();
+        std::error_code ec;
+        if (stem.extension() == ".json" || stem.extension() == ".md" || stem.filename().empty())
+            return fail_input("--out " + flags.out_stem + ": expected a path without extension, e.g. "
+                              "docs/benchmarks/nvidia-h100 (STEM.json and STEM.md are written)");
+        if (!folder.empty() && !std::filesystem::is_directory(folder, ec))
+            return fail_input("--out " + flags.out_stem + ": the folder " + folder.string() + " does not exist");
+    }
     if (!flags.render.empty()) return render(flags.render);
     if (flags.quick) {
         if (!app.count("--presets") && flags.tree.empty()) flags.presets = "paper-5";
@@ -325,13 +376,15 @@ int run_bench(CLI::App& app) {
         document["settings"].erase("forest_layouts");
     }
 
-    std::fputs(render_markdown(document).c_str(), stdout);
-    std::fputs(bench::render_joint_forest(forest_joints).c_str(), stdout);
-    std::fputs(bench::render_live_control(live_control).c_str(), stdout);
+    std::fputs(render_tables(document).c_str(), stdout);
     std::fflush(stdout);
+    const std::string text = document.dump(2) + "\n";
     if (json_file) {
-        std::string text = document.dump(2) + "\n";
         Status written = outputs.write(*json_file, text.data(), text.size());
+        if (!written) return fail(written);
+    }
+    if (!flags.out_stem.empty()) {
+        Status written = write_page(outputs, flags.out_stem, text, document);
         if (!written) return fail(written);
     }
     Status committed = outputs.commit();
