@@ -7,8 +7,9 @@
 # HMSM_BENCH_ARGS adds `hmsm bench` flags (e.g. "--presets paper-1,paper-5 --repeats 3").
 #
 # Writes $OUT/bench.json (the result), $OUT/bench.md (its tables), $OUT/bench.err (progress,
-# skips) and $OUT/gpu.txt. Back on the development machine:
-#   tools/bench_doc.sh <fetched>/bench.json nvidia-h100
+# skips) and $OUT/gpu.txt. Back on the development machine, the device's page
+# (docs/benchmarks/README.md):
+#   build/hmsm bench --render <fetched>/bench.json --out docs/benchmarks/nvidia-h100
 set -u
 BUILD=${1:-build-gpu}
 COMMIT=${2:-unknown}
