@@ -44,9 +44,9 @@ std::string instance_name(uint64_t instance) { return "instance " + std::to_stri
 /// Paused instances in a row that split a group's dispatches in two; fewer stay inside a
 /// dispatch, whose threads skip them (gpu_layout.h, instance_wind's paused flag). A dispatch
 /// costs a launch per pass, a paused instance inside one only its threads' check, so a split
-/// pays only past a long run (16: not tuned). The earlier rule, a dispatch per run of active
-/// instances, took 2.50 ms per step on an H100 with every tenth of 1,000 paper-1 trees paused
-/// (packed, CUDA), against 0.86 with none; this one takes 0.84 (docs/architecture.md).
+/// pays only past a long run (16: not tuned). A dispatch per run of active instances costs three
+/// times as much with every tenth tree paused (measured: docs/benchmarks/history/
+/// 2026-11-26-nvidia-h100-d110289.md, analysis, paused instances; docs/architecture.md).
 constexpr uint32_t kPausedRunThatSplits = 16;
 
 /// The step program's groups: each group's instances from its first active one to its last,
@@ -112,7 +112,7 @@ Status Simulation::Impl::apply_pending() {
     if (!dirty_instances_.empty()) {
         // One write from the first changed instance to the last (those between rewritten as
         // they are): a write is a transfer of its own, and a tenth of a forest paused for
-        // culling took one each (about 5 µs on CUDA and 45 on Vulkan per instance, H100).
+        // culling would take one each.
         const auto [first, last] = std::minmax_element(dirty_instances_.begin(), dirty_instances_.end());
         const uint32_t begin = *first, count = *last - *first + 1;
         wind_scratch_.resize(size_t(count) * detail::kInstanceWindScalars);

@@ -13,22 +13,21 @@ namespace {
 constexpr uint32_t kMaxChainsForRoundsInDispatch = 16 * HMSM_MAX_ROUNDS_WORKGROUP_SIZE;
 
 /// Path walk: steps whose groups cover at most this many instances read the walk records whole (one
-/// round of loads, HMSM_WALK_FROM_RECORDS); larger ones follow chain_parent up. Measured on the H100
-/// (path walk, CUDA, µs per step): one paper-1 tree 13.5 -> 12.7 with the records; 10 and 16
-/// trees no better (21.7 -> 22.0, 25.3 -> 27.0, packed); 1,000 trees' walk 88 -> 176 (128
-/// distinct bytes per thread cost more L2 sectors than the parent links siblings share).
+/// round of loads, HMSM_WALK_FROM_RECORDS); larger ones follow chain_parent up: the records help
+/// one tree, and in forests their 128 distinct bytes per thread cost more L2 sectors than the
+/// parent links siblings share (measured: docs/benchmarks/history/2026-11-26-nvidia-h100-4967ccd.md,
+/// analysis, change 3).
 constexpr uint32_t kWalkRecordsMaxInstances = 1;
 
 }  // namespace
 
 /// Whether Composition::pointer_jumping runs a group's rounds in one dispatch (one workgroup per
-/// instance, round after round) rather than one dispatch per round over every chain. Measured on
-/// the H100 (docs/benchmarks): in one dispatch wins for forests (64+ instances: 3-6% from 100
-/// paper-1 trees up), and for single trees whose chains one workgroup covers in one go (paper-5,
-/// 393 chains: +16% on CUDA, +61% on Vulkan); it loses where a few workgroups each loop over
-/// many chains while the GPU idles (one paper-1 tree, 2,345 chains: 31,000 vs 55,000 steps/s on
-/// CUDA). Between 512 and 1,024 chains it pays only where dispatches are expensive (Vulkan:
-/// +10-39% for paper-2/3/4; CUDA -4 to -13%).
+/// instance, round after round) rather than one dispatch per round over every chain. The rounds
+/// in one dispatch win for forests (64+ instances) and for single trees whose chains one workgroup
+/// covers in one go (paper-5, 393 chains); they lose where a few workgroups each loop over many
+/// chains while the GPU idles (one paper-1 tree, 2,345 chains). Between 512 and 1,024 chains they
+/// pay only where dispatches are expensive (Vulkan). Measured: docs/benchmarks/history/
+/// 2026-11-22-nvidia-h100-e7f0bd9.md, analysis, item 3 (the "PJ/1" columns).
 bool rounds_in_dispatch_pay(uint32_t instances, uint32_t chains, bool dispatches_are_expensive) {
     return instances >= 64 || chains <= 512 || (dispatches_are_expensive && chains <= 1024);
 }

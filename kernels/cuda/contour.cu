@@ -138,8 +138,8 @@ cudaError_t launch_contour(const BufferPointers& b, const gpu::PassConstants& pc
     if (pc.element_count == 0) return cudaSuccess;
     const bool may_pause = pc.params.w != 0.0f;  // the kernel variant with the check
     if (pc.mode != HMSM_VERTEX_LAYOUT_PACKED) {
-        // Blocks of 256: a quarter of the blocks to schedule and drain. Measured on the H100, side
-        // by side: one paper-1 tree 10.4 -> 9.9 us per step, 1,000 trees (separate) 1,237 -> 1,201 us.
+        // Blocks of 256: a quarter of the blocks to schedule and drain (measured faster for one tree
+        // and for forests: docs/benchmarks/history/2026-11-26-nvidia-h100-45f6584.md, analysis).
         constexpr unsigned kThreads = 256;
         auto* kernel = may_pause ? contour_separate_kernel<kThreads, true> : contour_separate_kernel<kThreads, false>;
         return launch_pass(kernel, launch_blocks(pc.element_count, kThreads), kThreads, stream, b, pc);

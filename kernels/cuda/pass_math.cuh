@@ -191,8 +191,8 @@ HMSM_HOST_DEVICE uint32_t dispatch_instances(const gpu::PassConstants& pc) {
 /// measurements; read once). Every kernel strides over the elements beyond its grid, so any
 /// element count (10,000 instances x 78,563 vertices is 7.9e8) fits one launch. The cap is
 /// 65,536 blocks (4.2M threads, a dozen waves on an H100): each block pays begin_pass() once,
-/// and with one block per 64 elements (up to 2^24 blocks) the contour of 1,000 paper-1 trees
-/// took 1,482 instead of 1,026 µs on the H100.
+/// and one block per 64 elements (up to 2^24 blocks) made the contour of 1,000 paper-1 trees
+/// slower (measured: docs/benchmarks/history/2026-11-22-nvidia-h100-e7f0bd9.md, analysis, item 2).
 uint32_t max_launch_blocks();
 
 inline unsigned launch_blocks(uint32_t n, uint32_t threads = HMSM_WORKGROUP_SIZE) {

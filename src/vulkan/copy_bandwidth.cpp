@@ -3,8 +3,8 @@
 // the method of CUDA's cudaMemcpyDeviceToDevice measurement (src/cuda/cuda_backend.cpp).
 //
 // Two copies are timed and the faster one is the roofline. vkCmdCopyBuffer alone is not
-// enough: it moved 851 GB/s on an H100 where cudaMemcpy moved 2,990 GB/s and the hmsm passes
-// themselves (SM loads and stores) ran at up to 2.4 times that "roofline" — the driver
+// enough: on an H100 the hmsm passes themselves (SM loads and stores) outran that "roofline"
+// (measured: docs/benchmarks/README.md, copy bandwidth) — the driver
 // apparently serves it with a copy (DMA) engine rather than the SMs. The second copy is a
 // compute shader (shaders/glsl/copy_bandwidth.comp) streaming 16-byte words like the passes.
 #include "vulkan_backend.h"
