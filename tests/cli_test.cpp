@@ -163,6 +163,22 @@ TEST_F(Cli, BadArgumentsExitTwoWithoutOutput) {
     expect_bad_input("simulate" + tree + " --steps abc", "steps");
 }
 
+TEST_F(Cli, ChoiceErrorsListTheNameTables) {
+    const std::string tree = " --tree " + path("small.json");
+    expect_bad_input("simulate" + tree + " --composition rounds",
+                     "expected pointer-jumping, pointer-jumping-per-round, pointer-jumping-in-dispatch");
+    expect_bad_input("simulate" + tree + " --outputs vertices", "expected joints, nodes or all");
+    expect_bad_input("simulate" + tree + " --wind gale", "expected none, constant, y1, y2, y3, y4 or turbulent");
+    CliRun bench = run("bench --no-progress --forest-composition rounds");
+    EXPECT_EQ(bench.exit_code, 2) << bench.err;
+    EXPECT_NE(bench.err.find("--forest-composition 'rounds': expected pointer-jumping"), std::string::npos) << bench.err;
+    // Compositions are accepted with '-' or '_' between words.
+    for (const char* name : {"path-walk", "path_walk"}) {
+        CliRun r = run("simulate" + tree + " --backend cpu --steps 1 --composition " + name);
+        EXPECT_EQ(r.exit_code, 0) << name << ": " << r.err;
+    }
+}
+
 TEST_F(Cli, BadTreeFilesExitTwoNamingTheNode) {
     std::ofstream(path("cycle.json")) << R"({"format": "hmsm-tree", "version": 1, "nodes": [
         {"parent": -1, "position": [0,0,0], "radius": 0.3},

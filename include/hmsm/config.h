@@ -6,6 +6,7 @@
 
 #include <hmsm/export.h>
 
+#include <hmsm/names.h>
 #include <hmsm/options.h>
 #include <hmsm/status.h>
 #include <hmsm/types.h>
@@ -23,6 +24,10 @@ namespace hmsm {
 /// threads, bitwise the results of `cpu`; `automatic` picks CUDA, then a Vulkan GPU, then
 /// cpu-parallel where the host has more than one thread, else `cpu`.
 enum class BackendKind { cpu, cpu64, vulkan, cuda, automatic, cpu_parallel };
+inline constexpr NamedValue<BackendKind> kBackendKindNames[] = {
+    {BackendKind::cpu, "cpu"},       {BackendKind::cpu64, "cpu64"}, {BackendKind::cpu_parallel, "cpu-parallel"},
+    {BackendKind::vulkan, "vulkan"}, {BackendKind::cuda, "cuda"},   {BackendKind::automatic, "auto"},
+};
 
 HMSM_API const char* to_string(BackendKind kind);
 HMSM_API std::optional<BackendKind> parse_backend_kind(std::string_view name);
@@ -70,6 +75,15 @@ enum class Composition {
     /// than the rounds. Simulation::config() reports the composition it resolved to.
     automatic,
 };
+inline constexpr NamedValue<Composition> kCompositionNames[] = {
+    {Composition::pointer_jumping, "pointer_jumping"},
+    {Composition::pointer_jumping_per_round, "pointer_jumping_per_round"},
+    {Composition::pointer_jumping_in_dispatch, "pointer_jumping_in_dispatch"},
+    {Composition::level_by_level, "level_by_level"},
+    {Composition::fused, "fused"},
+    {Composition::path_walk, "path_walk"},
+    {Composition::automatic, "automatic"},
+};
 HMSM_API const char* to_string(Composition composition);
 HMSM_API std::optional<Composition> parse_composition(std::string_view name);
 
@@ -84,6 +98,8 @@ HMSM_API std::optional<Composition> parse_composition(std::string_view name);
 ///   elements and is never written; hmsm::vulkan::SharedBuffers and
 ///   hmsm::cuda::DeviceOutputs report the layout.
 enum class VertexLayout { separate, packed };
+inline constexpr NamedValue<VertexLayout> kVertexLayoutNames[] = {
+    {VertexLayout::separate, "separate"}, {VertexLayout::packed, "packed"}};
 HMSM_API const char* to_string(VertexLayout layout);
 HMSM_API std::optional<VertexLayout> parse_vertex_layout(std::string_view name);
 
@@ -94,8 +110,9 @@ HMSM_API std::optional<VertexLayout> parse_vertex_layout(std::string_view name);
 /// fails with invalid_argument. Chain rotations, origins, angles and joint matrices are always
 /// produced.
 enum class Outputs { joints, joints_and_nodes, all };
+inline constexpr NamedValue<Outputs> kOutputsNames[] = {
+    {Outputs::joints, "joints"}, {Outputs::joints_and_nodes, "nodes"}, {Outputs::all, "all"}};
 HMSM_API const char* to_string(Outputs outputs);
-/// "joints", "nodes" (joints_and_nodes) or "all".
 HMSM_API std::optional<Outputs> parse_outputs(std::string_view name);
 
 struct SimulationConfig {

@@ -91,7 +91,9 @@ void register_bench_flags(CLI::App& app) {
                    "(default 1,10,100,1000,10000, plus 100000 x paper-5 unless --quick; none: no rows)");
     app.add_option("--spacing", flags.spacing, "forest grid spacing in metres (default 25)");
     app.add_option("--forest-composition", flags.forest_composition,
-                   "composition of the forest rows (default automatic, the library's default; e.g. fused)");
+                   "composition of the forest rows: " +
+                       choices(kCompositionNames, Spelling::hyphens, Composition::automatic) +
+                       " (automatic: the library's default)");
     app.add_option("--case-budget", flags.case_budget,
                    "seconds one case may take: slower cases run fewer steps, forest sizes "
                    "extrapolated past it are skipped (default 20)");
@@ -121,9 +123,9 @@ int run_bench(CLI::App& app) {
         return fail_input("--repeats " + std::to_string(flags.repeats) + ": must be in [1, 1000]");
     if (!(flags.case_budget > 0.0) || !std::isfinite(flags.case_budget))
         return fail_input("--case-budget: must be a positive number of seconds");
-    const auto forest_composition = parse_composition(flags.forest_composition);
-    if (!forest_composition)
-        return fail_input("--forest-composition '" + flags.forest_composition + "': unknown composition");
+    const auto forest_composition =
+        parse_choice(kCompositionNames, flags.forest_composition, "--forest-composition", Spelling::hyphens);
+    if (!forest_composition) return fail(forest_composition.status());
     if (!(flags.spacing >= 0.0) || !std::isfinite(flags.spacing))
         return fail_input("--spacing: must be a finite number >= 0");
 
