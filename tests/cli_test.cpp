@@ -179,6 +179,21 @@ TEST_F(Cli, ChoiceErrorsListTheNameTables) {
     }
 }
 
+TEST_F(Cli, BackendErrorsAreTheSameInEverySubcommand) {
+    const std::string backends = "expected cpu, cpu64, cpu-parallel, vulkan, cuda or auto";
+    expect_bad_input("simulate --tree " + path("small.json") + " --backend quantum",
+                     "--backend 'quantum': " + backends);
+    CliRun r = run("export --preset paper-1 --seconds 1 --fps 10 --gltf " + path("e.glb") + " --backend quantum");
+    EXPECT_EQ(r.exit_code, 2) << r.err;
+    EXPECT_NE(r.err.find("--backend 'quantum': " + backends), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(path("e.glb")));
+    // bench runs named backends only: no "auto".
+    r = run("bench --no-progress --backends cpu,auto");
+    EXPECT_EQ(r.exit_code, 2) << r.err;
+    EXPECT_NE(r.err.find("--backends 'auto': expected cpu, cpu64, cpu-parallel, vulkan or cuda"), std::string::npos)
+        << r.err;
+}
+
 TEST_F(Cli, BadTreeFilesExitTwoNamingTheNode) {
     std::ofstream(path("cycle.json")) << R"({"format": "hmsm-tree", "version": 1, "nodes": [
         {"parent": -1, "position": [0,0,0], "radius": 0.3},

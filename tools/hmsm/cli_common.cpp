@@ -36,6 +36,16 @@ std::string spelled(std::string_view name, Spelling spelling) {
     return text;
 }
 
+Result<BackendKind> parse_backend(const std::string& name, const std::string& flag, bool allow_auto) {
+    if (allow_auto) return parse_choice(kBackendKindNames, name, flag, Spelling::as_is);
+    return parse_choice(kBackendKindNames, name, flag, Spelling::as_is, {BackendKind::automatic});
+}
+
+std::string backend_choices(std::optional<BackendKind> marked, bool allow_auto) {
+    if (allow_auto) return choices(kBackendKindNames, Spelling::as_is, marked);
+    return choices(kBackendKindNames, Spelling::as_is, marked, {BackendKind::automatic});
+}
+
 void add_source_flags(CLI::App& app, SourceFlags& f, bool with_forest_and_instances) {
     auto* tree = app.add_option("--tree", f.tree, "hmsm-tree JSON file");
     auto* preset = app.add_option("--preset", f.preset, "built-in tree: paper-1 ... paper-5");

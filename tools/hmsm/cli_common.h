@@ -92,6 +92,12 @@ Result<Enum> parse_choice(const NamedValue<Enum> (&table)[N], const std::string&
                   flag + " '" + text + "': expected " + choices<Enum>(table, spelling, std::nullopt, excluded)};
 }
 
+/// The backend a flag names (`automatic`, spelled "auto", only where `allow_auto`); otherwise
+/// the error "FLAG 'NAME': expected cpu, cpu64, ...".
+Result<BackendKind> parse_backend(const std::string& name, const std::string& flag, bool allow_auto = true);
+/// The backends a flag accepts, for its help; `marked` is the default.
+std::string backend_choices(std::optional<BackendKind> marked, bool allow_auto = true);
+
 /// Where the trees come from: one of --tree, --preset, --forest; plus a grid of instances.
 struct SourceFlags {
     std::string tree, preset, forest;

@@ -79,8 +79,9 @@ void register_bench_flags(CLI::App& app) {
     app.add_option("--presets", flags.presets, "comma-separated presets (default paper-1,...,paper-5; none: forest only)");
     app.add_option("--tree", flags.tree, "benchmark this hmsm-tree file instead of the presets "
                                          "(also the forest model)");
-    app.add_option("--backends", flags.backends, "comma-separated backends (default cpu,cpu-parallel,vulkan,cuda; "
-                                                 "unavailable ones are skipped with a note)");
+    app.add_option("--backends", flags.backends,
+                   "comma-separated backends: " + backend_choices(std::nullopt, false) +
+                       " (default cpu,cpu-parallel,vulkan,cuda; unavailable ones are skipped with a note)");
     add_integer_option(app, "--steps", flags.steps, "steps per timed batch (default 100)");
     add_integer_option(app, "--warmup", flags.warmup, "warm-up steps before timing (default 20)");
     add_integer_option(app, "--repeats", flags.repeats, "timed batches per figure; medians are reported (default 5)");
@@ -134,9 +135,8 @@ int run_bench(CLI::App& app) {
     json skipped_backends = json::array();
     const auto compiled = compiled_backends();
     for (const std::string& name : split_list(flags.backends)) {
-        auto kind = parse_backend_kind(name);
-        if (!kind || *kind == BackendKind::automatic)
-            return fail_input("--backends '" + name + "': expected cpu, cpu-parallel, cpu64, vulkan or cuda");
+        auto kind = parse_backend(name, "--backends", false);
+        if (!kind) return fail(kind.status());
         bool duplicate = false;
         for (const auto& b : backends) duplicate |= b.kind == *kind;
         if (duplicate) continue;

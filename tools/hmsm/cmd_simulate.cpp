@@ -170,7 +170,7 @@ void register_simulate_flags(CLI::App& app) {
     add_model_flags(app, flags.model);
     add_parameter_flags(app, flags.parameters);
     add_wind_flags(app, flags.wind);
-    app.add_option("--backend", flags.backend, "cpu, cpu-parallel, cpu64, vulkan, cuda or auto (default)");
+    app.add_option("--backend", flags.backend, backend_choices(BackendKind::automatic));
     app.add_option("--composition", flags.composition,
                    "passes 3 and 5 (docs/cli.md): " +
                        choices(kCompositionNames, Spelling::hyphens, Composition::automatic) +
@@ -199,9 +199,8 @@ void register_simulate_flags(CLI::App& app) {
 
 int run_simulate(CLI::App& app) {
     SimulationConfig config;
-    auto backend = parse_backend_kind(flags.backend);
-    if (!backend)
-        return fail_input("--backend '" + flags.backend + "': expected cpu, cpu-parallel, cpu64, vulkan, cuda or auto");
+    auto backend = parse_backend(flags.backend, "--backend");
+    if (!backend) return fail(backend.status());
     config.backend = *backend;
     config.profile_passes = !flags.report.empty();  // per-pass times only feed the report
     auto composition = parse_choice(kCompositionNames, flags.composition, "--composition", Spelling::hyphens);
