@@ -1,5 +1,7 @@
 // `hmsm bench --quick` through the CLI binary: the JSON schema of docs/benchmarks/README.md, every
 // figure finite and positive, the markdown on stdout and --render agreeing. No timing thresholds.
+#include "cli_fixture.h"
+
 #include <hmsm/simulation.h>
 
 #include <nlohmann/json.hpp>
@@ -7,61 +9,33 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <map>
-#include <sstream>
 #include <string>
-#include <sys/wait.h>
 
 namespace fs = std::filesystem;
 using nlohmann::json;
 
 namespace {
 
-struct BenchRun {
-    int exit_code;
-    std::string out, err;
-};
+using hmsm::test::CliRun;
+using hmsm::test::read_text;
 
-std::string slurp(const fs::path& path) {
-    std::ifstream in(path);
-    std::stringstream s;
-    s << in.rdbuf();
-    return s.str();
-}
-
-class BenchCli : public ::testing::Test {
+class BenchCli : public hmsm::test::CliFixture {
 protected:
-    void SetUp() override {
-        dir_ = fs::temp_directory_path() /
-               ("hmsm_bench_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
-        fs::remove_all(dir_);
-        fs::create_directories(dir_);
-    }
-    void TearDown() override { fs::remove_all(dir_); }
-
-    BenchRun run(const std::string& args) const {
-        const std::string command = std::string(HMSM_CLI_PATH) + " " + args + " > " +
-                                    (dir_ / "stdout.txt").string() + " 2> " + (dir_ / "stderr.txt").string();
-        const int status = std::system(command.c_str());
-        return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(dir_ / "stdout.txt"),
-                slurp(dir_ / "stderr.txt")};
-    }
+    BenchCli() : CliFixture(/*small_tree=*/false) {}
 
     /// Runs the quick bench on one backend; returns its JSON document.
-    json quick(const std::string& backend, BenchRun& r) {
-        const std::string path = (dir_ / "bench.json").string();
-        r = run("bench --quick --no-progress --backends " + backend + " --json " + path + " --commit test");
+    json quick(const std::string& backend, CliRun& r) {
+        const std::string file = path("bench.json");
+        r = run("bench --quick --no-progress --backends " + backend + " --json " + file + " --commit test");
         EXPECT_EQ(r.exit_code, 0) << r.err;
-        if (!fs::exists(path)) return json();
-        json document = json::parse(slurp(path), nullptr, false);
+        if (!fs::exists(file)) return json();
+        json document = json::parse(read_text(file), nullptr, false);
         EXPECT_FALSE(document.is_discarded()) << "not JSON";
         return document;
     }
-
-    fs::path dir_;
 };
 
 /// Every number under `j` is finite and positive; nothing is null (NaN and inf dump as null).
@@ -216,7 +190,7 @@ void expect_schema(const json& d, const std::string& backend) {
 }  // namespace
 
 TEST_F(BenchCli, QuickCpuWritesSchemaAndTables) {
-    BenchRun r;
+    CliRun r;
     json d = quick("cpu", r);
     expect_schema(d, "cpu");
     EXPECT_NE(r.out.find("| preset | vertices | backend |"), std::string::npos) << r.out;
@@ -244,7 +218,7 @@ TEST_F(BenchCli, QuickCpuWritesSchemaAndTables) {
     }
     EXPECT_TRUE(removal && growth && pause) << d["live_control"].dump();
     // --render prints the same tables from the JSON.
-    BenchRun rendered = run("bench --render " + (dir_ / "bench.json").string());
+    CliRun rendered = run("bench --render " + (dir_ / "bench.json").string());
     EXPECT_EQ(rendered.exit_code, 0) << rendered.err;
     EXPECT_EQ(rendered.out, r.out);
 }
@@ -252,7 +226,7 @@ TEST_F(BenchCli, QuickCpuWritesSchemaAndTables) {
 /// cpu beside cpu-parallel: both in the schema; speed-ups over cpu and over the best CPU backend
 /// of each case, the best being the faster of the two, with ratios consistent with the rates.
 TEST_F(BenchCli, QuickCpuParallelReportsSpeedUpsOverCpuAndBestCpu) {
-    BenchRun r;
+    CliRun r;
     json d = quick("cpu,cpu-parallel", r);
     ASSERT_TRUE(d.is_object());
     std::map<std::string, json> by_backend;
@@ -286,11 +260,11 @@ TEST_F(BenchCli, QuickVulkanWritesSchema) {
     const auto kinds = hmsm::compiled_backends();
     if (std::find(kinds.begin(), kinds.end(), hmsm::BackendKind::vulkan) == kinds.end())
         GTEST_SKIP() << "the Vulkan backend is not compiled into this build";
-    BenchRun r;
+    CliRun r;
     const std::string path = (dir_ / "bench.json").string();
     r = run("bench --quick --no-progress --backends cpu,vulkan --json " + path + " --commit test");
     ASSERT_EQ(r.exit_code, 0) << r.err;
-    json d = json::parse(slurp(path), nullptr, false);
+    json d = json::parse(read_text(path), nullptr, false);
     ASSERT_FALSE(d.is_discarded());
     for (const json& b : d["backends"])
         if (b.value("backend", "") == "vulkan" && !b.value("available", false))
@@ -307,12 +281,10 @@ TEST_F(BenchCli, QuickVulkanWritesSchema) {
 }
 
 TEST_F(BenchCli, BadArgumentsExitTwoWithOneLine) {
-    for (const std::string args : {"bench --steps 0", "bench --backends cpu,metal", "bench --instances 1,x",
-                                   "bench --presets paper-9 --instances none", "bench --render /nonexistent.json"}) {
-        SCOPED_TRACE(args);
-        BenchRun r = run(args + " --json " + (dir_ / "out.json").string());
-        EXPECT_EQ(r.exit_code, 2) << r.err;
-        EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
-        EXPECT_FALSE(fs::exists(dir_ / "out.json"));
-    }
+    for (const auto& [args, fragment] :
+         {std::pair{"bench --steps 0", "--steps"}, std::pair{"bench --backends cpu,metal", "--backends 'metal'"},
+          std::pair{"bench --instances 1,x", "--instances"},
+          std::pair{"bench --presets paper-9 --instances none", "paper-9"},
+          std::pair{"bench --render /nonexistent.json", "/nonexistent.json"}})
+        expect_bad_input(std::string(args) + " --json " + path("out.json"), fragment);
 }
