@@ -52,6 +52,21 @@ std::vector<std::string> split_list(const std::string& text) {
     return items;
 }
 
+/// Instance counts "N,N,..." in [1, 1000000], or "none" (no rows).
+Result<std::vector<uint32_t>> instance_counts(const std::string& text, const std::string& flag) {
+    std::vector<uint32_t> counts;
+    if (text == "none") return counts;
+    for (const std::string& item : split_list(text)) {
+        char* end = nullptr;
+        const long long n = std::strtoll(item.c_str(), &end, 10);
+        if (item.empty() || *end != '\0' || n < 1 || n > 1000000)
+            return Status{ErrorCode::invalid_argument,
+                          flag + " '" + item + "': expected counts in [1, 1000000] or none"};
+        counts.push_back(uint32_t(n));
+    }
+    return counts;
+}
+
 std::string utc_now() {
     std::time_t now = std::time(nullptr);
     std::tm tm{};
@@ -148,27 +163,12 @@ int run_bench(CLI::App& app) {
         backends.push_back(BackendRun{*kind, true, {}, std::nullopt});
     }
 
-    std::vector<uint32_t> counts;
-    if (flags.instances != "none") {
-        for (const std::string& item : split_list(flags.instances)) {
-            char* end = nullptr;
-            const long long n = std::strtoll(item.c_str(), &end, 10);
-            if (item.empty() || *end != '\0' || n < 1 || n > 1000000)
-                return fail_input("--instances '" + item + "': expected counts in [1, 1000000] or none");
-            counts.push_back(uint32_t(n));
-        }
-    }
-
-    std::vector<uint32_t> joint_counts;
-    if (flags.joint_instances != "none") {
-        for (const std::string& item : split_list(flags.joint_instances)) {
-            char* end = nullptr;
-            const long long n = std::strtoll(item.c_str(), &end, 10);
-            if (item.empty() || *end != '\0' || n < 1 || n > 1000000)
-                return fail_input("--joint-instances '" + item + "': expected counts in [1, 1000000] or none");
-            joint_counts.push_back(uint32_t(n));
-        }
-    }
+    auto parsed_counts = instance_counts(flags.instances, "--instances");
+    if (!parsed_counts) return fail(parsed_counts.status());
+    const std::vector<uint32_t> counts = std::move(parsed_counts).value();
+    auto parsed_joint_counts = instance_counts(flags.joint_instances, "--joint-instances");
+    if (!parsed_joint_counts) return fail(parsed_joint_counts.status());
+    const std::vector<uint32_t> joint_counts = std::move(parsed_joint_counts).value();
 
     // Models: the presets (or --tree), and the forest model (paper-1 or --tree).
     std::vector<Model> models;
