@@ -109,7 +109,7 @@ void register_bench_flags(CLI::App& app) {
     app.add_option("--forest-composition", flags.forest_composition,
                    "composition of the forest rows: " +
                        choices(kCompositionNames, Spelling::hyphens, Composition::automatic) +
-                       " (automatic: the library's default)");
+                       "; automatic is the library's default");
     app.add_option("--case-budget", flags.case_budget,
                    "seconds one case may take: slower cases run fewer steps, forest sizes "
                    "extrapolated past it are skipped (default 20)");

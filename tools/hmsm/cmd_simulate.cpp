@@ -178,8 +178,8 @@ void register_simulate_flags(CLI::App& app) {
     app.add_option("--vertex-layout", flags.vertex_layout,
                    "device layout of the mesh vertices: " +
                        choices(kVertexLayoutNames, Spelling::as_is, VertexLayout::separate) +
-                       " (separate: position and normal vec4; packed: the normal octahedral-encoded "
-                       "in the position's w)");
+                       "; separate: position and normal vec4, packed: the normal octahedral-encoded "
+                       "in the position's w");
     add_integer_option(app, "--steps", flags.steps, "time steps to run (default 120)");
     app.add_option("--dump-nodes", flags.dump_nodes, "CSV instance,node,x,y,z after the last step");
     app.add_option("--dump-chains", flags.dump_chains,
@@ -191,8 +191,8 @@ void register_simulate_flags(CLI::App& app) {
     app.add_option("--dump-vertices", flags.dump_vertices, "float32 xyz per mesh vertex");
     app.add_option("--outputs", flags.outputs,
                    "what each step produces: " + choices(kOutputsNames, Spelling::as_is, Outputs::all) +
-                       " (joints: passes 1-5, joint matrices; nodes: 1-6, plus node positions; all: "
-                       "1-7, plus mesh vertices)");
+                       "; joints: passes 1-5, joint matrices; nodes: 1-6, plus node positions; all: "
+                       "1-7, plus mesh vertices");
     app.add_option("--report", flags.report, "JSON report: backend, device, counts, times");
     app.add_flag("--no-progress", flags.no_progress, "no progress on stderr");
 }
