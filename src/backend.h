@@ -7,7 +7,7 @@
 #include "scene_data.h"
 
 #include <hmsm/pass.h>
-#include <hmsm/simulation.h>
+#include <hmsm/config.h>
 #include <hmsm/status.h>
 
 #include <cstdint>

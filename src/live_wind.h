@@ -5,7 +5,7 @@
 
 #include <hmsm/options.h>
 #include <hmsm/scene.h>
-#include <hmsm/simulation.h>
+#include <hmsm/config.h>
 
 #include "common/gpu_layout.h"
 

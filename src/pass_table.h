@@ -7,7 +7,7 @@
 #include "buffers.h"
 
 #include <hmsm/pass.h>
-#include <hmsm/simulation.h>
+#include <hmsm/config.h>
 
 #include <array>
 #include <cstdint>

@@ -9,7 +9,7 @@
 #include <hmsm/mesh.h>
 #include <hmsm/options.h>
 #include <hmsm/scene.h>
-#include <hmsm/simulation.h>
+#include <hmsm/config.h>
 
 #include <glm/mat3x3.hpp>
 #include <glm/vec2.hpp>

@@ -6,7 +6,7 @@
 #include "scene_data.h"
 
 #include <hmsm/pass.h>
-#include <hmsm/simulation.h>
+#include <hmsm/config.h>
 
 #include <cstdint>
 #include <vector>

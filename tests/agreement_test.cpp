@@ -84,15 +84,6 @@ double scene_height(const Scene& scene) {
 
 class Agreement : public ::testing::TestWithParam<BackendKind> {};
 
-}  // namespace
-
-namespace hmsm {
-/// Test names and failure messages show the backend by name.
-inline void PrintTo(BackendKind kind, std::ostream* os) { *os << to_string(kind); }
-}  // namespace hmsm
-
-namespace {
-
 TEST_P(Agreement, EndToEndAfter1000Steps) {
     for (SceneCase& c : end_to_end_cases()) {
         SCOPED_TRACE(c.name);

@@ -1,18 +1,15 @@
 // hmsm analyze's numbers (tools/hmsm/analysis.cpp) on trees whose answers are known, and the
 // `hmsm import` / `hmsm analyze` command lines: exit codes, one error line, no partial output.
 #include "analysis.h"
+#include "cli_fixture.h"
 #include "test_trees.h"
 
 #include <nlohmann/json.hpp>
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <cstdlib>
 #include <filesystem>
-#include <fstream>
 #include <numbers>
-#include <sstream>
-#include <sys/wait.h>
 
 using namespace hmsm;
 namespace fs = std::filesystem;
@@ -114,50 +111,21 @@ TEST(Analyze, CapFlagFollowsTheSpecFormula) {
 
 // --- the command lines ------------------------------------------------------------------------
 
-class ImportAnalyzeCli : public ::testing::Test {
+class ImportAnalyzeCli : public test::CliFixture {
 protected:
-    void SetUp() override {
-        dir_ = fs::temp_directory_path() /
-               ("hmsm_ia_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
-        fs::remove_all(dir_);
-        fs::create_directories(dir_);
-    }
-    void TearDown() override { fs::remove_all(dir_); }
-    std::string path(const std::string& name) const { return (dir_ / name).string(); }
-    int run(const std::string& args) {
-        const std::string command = std::string(HMSM_CLI_PATH) + " " + args + " > " + path("out.txt") + " 2> " +
-                                    path("err.txt");
-        const int status = std::system(command.c_str());
-        return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    }
-    std::string text(const std::string& name) const {
-        std::ifstream in(path(name), std::ios::binary);
-        std::stringstream s;
-        s << in.rdbuf();
-        return s.str();
-    }
-    /// Exit 2, one stderr line containing `fragment`, and nothing but the captured streams left.
-    void expect_bad(const std::string& args, const std::string& fragment) {
-        SCOPED_TRACE(args);
-        EXPECT_EQ(run(args), 2);
-        const std::string err = text("err.txt");
-        EXPECT_NE(err.find(fragment), std::string::npos) << err;
-        EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
-        for (const auto& entry : fs::directory_iterator(dir_)) {
-            const std::string name = entry.path().filename().string();
-            EXPECT_TRUE(name == "out.txt" || name == "err.txt") << name;
-        }
-    }
-    fs::path dir_;
+    ImportAnalyzeCli() : CliFixture(/*small_tree=*/false) {}
+    /// A file of the scratch folder, whole.
+    std::string text(const std::string& name) const { return test::read_text(path(name)); }
+
     const fs::path data_ = fs::path(HMSM_TEST_DATA);
 };
 
 TEST_F(ImportAnalyzeCli, ImportWritesATreeAndPrintsWhatItRead) {
     ASSERT_EQ(run("import --treeqsm " + (data_ / "import" / "scan_treeqsm_v23.txt").string() + " --out " +
-                  path("t.json") + " --leaves 120 --leaf-seed 3 --json"),
+                  path("t.json") + " --leaves 120 --leaf-seed 3 --json").exit_code,
               0)
-        << text("err.txt");
-    auto summary = nlohmann::json::parse(text("out.txt"));
+        << last_.err;
+    auto summary = nlohmann::json::parse(last_.out);
     EXPECT_EQ(summary["format"], "treeqsm-v2.3");
     EXPECT_EQ(summary["cylinders"], 230);
     EXPECT_EQ(summary["leaves"], 120);
@@ -171,28 +139,28 @@ TEST_F(ImportAnalyzeCli, ImportWritesATreeAndPrintsWhatItRead) {
 
 TEST_F(ImportAnalyzeCli, ImportRejectsBadFilesAndFlagsWithoutOutput) {
     const std::string bad = (data_ / "bad" / "treeqsms" / "cycle.txt").string();
-    expect_bad("import --treeqsm " + bad + " --out " + path("t.json"), "line 3: cylinder is in a cycle");
-    expect_bad("import --simpleforest " + (data_ / "bad" / "simpleforests" / "zero_radius.csv").string() + " --out " +
-                   path("t.json"),
-               "line 3: radius must be > 0");
-    expect_bad("import --out " + path("t.json"), "--treeqsm FILE or --simpleforest FILE");
+    expect_bad_input("import --treeqsm " + bad + " --out " + path("t.json"), "line 3: cylinder is in a cycle");
+    expect_bad_input("import --simpleforest " + (data_ / "bad" / "simpleforests" / "zero_radius.csv").string() +
+                         " --out " + path("t.json"),
+                     "line 3: radius must be > 0");
+    expect_bad_input("import --out " + path("t.json"), "--treeqsm FILE or --simpleforest FILE");
     const std::string good = (data_ / "import" / "scan_treeqsm.txt").string();
-    expect_bad("import --treeqsm " + good + " --simpleforest " + good + " --out " + path("t.json"), "excludes");
-    expect_bad("import --treeqsm " + good + " --out " + path("t.json") + " --leaves 5 --leaf-size 0 0.1",
-               "leaf size");
-    expect_bad("import --treeqsm " + path("missing.txt") + " --out " + path("t.json"), "cannot open");
+    expect_bad_input("import --treeqsm " + good + " --simpleforest " + good + " --out " + path("t.json"), "excludes");
+    expect_bad_input("import --treeqsm " + good + " --out " + path("t.json") + " --leaves 5 --leaf-size 0 0.1",
+                     "leaf size");
+    expect_bad_input("import --treeqsm " + path("missing.txt") + " --out " + path("t.json"), "cannot open");
 }
 
 TEST_F(ImportAnalyzeCli, AnalyzeWritesNumbersAndPlots) {
     ASSERT_EQ(run("import --simpleforest " + (data_ / "import" / "scan_simpleforest.csv").string() + " --out " +
-                  path("t.json")),
+                  path("t.json")).exit_code,
               0);
     ASSERT_EQ(run("analyze --tree " + path("t.json") + " --step-seconds 20 --spectrum-seconds 20 --json" +
                   " --plot-step " + path("step.png") + " --plot-spectrum " + path("spectrum.png") +
-                  " --plot-chains " + path("chains.png")),
+                  " --plot-chains " + path("chains.png")).exit_code,
               0)
-        << text("err.txt");
-    auto j = nlohmann::json::parse(text("out.txt"));
+        << last_.err;
+    auto j = nlohmann::json::parse(last_.out);
     ASSERT_EQ(j["models"].size(), 1u);
     const auto& m = j["models"][0];
     auto tree = load_tree(path("t.json"));
@@ -210,18 +178,18 @@ TEST_F(ImportAnalyzeCli, AnalyzeWritesNumbersAndPlots) {
         EXPECT_EQ(bytes.substr(1, 3), "PNG") << png;
     }
     // Text output names the trunk frequency too.
-    ASSERT_EQ(run("analyze --preset paper-5 --step-seconds 2 --spectrum-seconds 2"), 0) << text("err.txt");
-    EXPECT_NE(text("out.txt").find("trunk natural frequency"), std::string::npos);
+    ASSERT_EQ(run("analyze --preset paper-5 --step-seconds 2 --spectrum-seconds 2").exit_code, 0) << last_.err;
+    EXPECT_NE(last_.out.find("trunk natural frequency"), std::string::npos);
 }
 
 TEST_F(ImportAnalyzeCli, AnalyzeRejectsBadInputWithoutPlots) {
     const std::string plots = " --plot-step " + path("s.png") + " --plot-chains " + path("c.png");
-    expect_bad("analyze --preset paper-5 --wind-speed -1" + plots, "--wind-speed");
-    expect_bad("analyze --preset paper-5 --step-seconds 0" + plots, "--step-seconds");
-    expect_bad("analyze --preset paper-5 --wind-strength 2" + plots, "--wind-speed");
-    expect_bad("analyze --preset nope" + plots, "nope");
-    expect_bad("analyze" + plots, "--tree FILE or --preset NAME");
-    expect_bad("analyze --preset paper-5 --dt 0" + plots, "dt");
+    expect_bad_input("analyze --preset paper-5 --wind-speed -1" + plots, "--wind-speed");
+    expect_bad_input("analyze --preset paper-5 --step-seconds 0" + plots, "--step-seconds");
+    expect_bad_input("analyze --preset paper-5 --wind-strength 2" + plots, "--wind-speed");
+    expect_bad_input("analyze --preset nope" + plots, "nope");
+    expect_bad_input("analyze" + plots, "--tree FILE or --preset NAME");
+    expect_bad_input("analyze --preset paper-5 --dt 0" + plots, "dt");
 }
 
 }  // namespace

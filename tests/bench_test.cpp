@@ -1,6 +1,8 @@
 // `hmsm bench --quick` through the CLI binary: the JSON schema of docs/benchmarks/README.md, every
 // figure finite and positive, the markdown on stdout, --render and the --out page agreeing. No timing
 // thresholds.
+#include "cli_fixture.h"
+
 #include <hmsm/simulation.h>
 
 #include <nlohmann/json.hpp>
@@ -8,61 +10,33 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <map>
-#include <sstream>
 #include <string>
-#include <sys/wait.h>
 
 namespace fs = std::filesystem;
 using nlohmann::json;
 
 namespace {
 
-struct BenchRun {
-    int exit_code;
-    std::string out, err;
-};
+using hmsm::test::CliRun;
+using hmsm::test::read_text;
 
-std::string slurp(const fs::path& path) {
-    std::ifstream in(path);
-    std::stringstream s;
-    s << in.rdbuf();
-    return s.str();
-}
-
-class BenchCli : public ::testing::Test {
+class BenchCli : public hmsm::test::CliFixture {
 protected:
-    void SetUp() override {
-        dir_ = fs::temp_directory_path() /
-               ("hmsm_bench_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
-        fs::remove_all(dir_);
-        fs::create_directories(dir_);
-    }
-    void TearDown() override { fs::remove_all(dir_); }
-
-    BenchRun run(const std::string& args) const {
-        const std::string command = std::string(HMSM_CLI_PATH) + " " + args + " > " +
-                                    (dir_ / "stdout.txt").string() + " 2> " + (dir_ / "stderr.txt").string();
-        const int status = std::system(command.c_str());
-        return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(dir_ / "stdout.txt"),
-                slurp(dir_ / "stderr.txt")};
-    }
+    BenchCli() : CliFixture(/*small_tree=*/false) {}
 
     /// Runs the quick bench on one backend; returns its JSON document.
-    json quick(const std::string& backend, BenchRun& r) {
-        const std::string path = (dir_ / "bench.json").string();
-        r = run("bench --quick --no-progress --backends " + backend + " --json " + path + " --commit test");
+    json quick(const std::string& backend, CliRun& r) {
+        const std::string file = path("bench.json");
+        r = run("bench --quick --no-progress --backends " + backend + " --json " + file + " --commit test");
         EXPECT_EQ(r.exit_code, 0) << r.err;
-        if (!fs::exists(path)) return json();
-        json document = json::parse(slurp(path), nullptr, false);
+        if (!fs::exists(file)) return json();
+        json document = json::parse(read_text(file), nullptr, false);
         EXPECT_FALSE(document.is_discarded()) << "not JSON";
         return document;
     }
-
-    fs::path dir_;
 };
 
 /// Every number under `j` is finite and positive; nothing is null (NaN and inf dump as null).
@@ -217,7 +191,7 @@ void expect_schema(const json& d, const std::string& backend) {
 }  // namespace
 
 TEST_F(BenchCli, QuickCpuWritesSchemaAndTables) {
-    BenchRun r;
+    CliRun r;
     json d = quick("cpu", r);
     expect_schema(d, "cpu");
     EXPECT_NE(r.out.find("| preset | vertices | backend |"), std::string::npos) << r.out;
@@ -245,7 +219,7 @@ TEST_F(BenchCli, QuickCpuWritesSchemaAndTables) {
     }
     EXPECT_TRUE(removal && growth && pause) << d["live_control"].dump();
     // --render prints the same tables from the JSON.
-    BenchRun rendered = run("bench --render " + (dir_ / "bench.json").string());
+    CliRun rendered = run("bench --render " + (dir_ / "bench.json").string());
     EXPECT_EQ(rendered.exit_code, 0) << rendered.err;
     EXPECT_EQ(rendered.out, r.out);
 }
@@ -253,7 +227,7 @@ TEST_F(BenchCli, QuickCpuWritesSchemaAndTables) {
 /// cpu beside cpu-parallel: both in the schema; speed-ups over cpu and over the best CPU backend
 /// of each case, the best being the faster of the two, with ratios consistent with the rates.
 TEST_F(BenchCli, QuickCpuParallelReportsSpeedUpsOverCpuAndBestCpu) {
-    BenchRun r;
+    CliRun r;
     json d = quick("cpu,cpu-parallel", r);
     ASSERT_TRUE(d.is_object());
     std::map<std::string, json> by_backend;
@@ -287,11 +261,11 @@ TEST_F(BenchCli, QuickVulkanWritesSchema) {
     const auto kinds = hmsm::compiled_backends();
     if (std::find(kinds.begin(), kinds.end(), hmsm::BackendKind::vulkan) == kinds.end())
         GTEST_SKIP() << "the Vulkan backend is not compiled into this build";
-    BenchRun r;
+    CliRun r;
     const std::string path = (dir_ / "bench.json").string();
     r = run("bench --quick --no-progress --backends cpu,vulkan --json " + path + " --commit test");
     ASSERT_EQ(r.exit_code, 0) << r.err;
-    json d = json::parse(slurp(path), nullptr, false);
+    json d = json::parse(read_text(path), nullptr, false);
     ASSERT_FALSE(d.is_discarded());
     for (const json& b : d["backends"])
         if (b.value("backend", "") == "vulkan" && !b.value("available", false))
@@ -308,14 +282,12 @@ TEST_F(BenchCli, QuickVulkanWritesSchema) {
 }
 
 TEST_F(BenchCli, BadArgumentsExitTwoWithOneLine) {
-    for (const std::string args : {"bench --steps 0", "bench --backends cpu,metal", "bench --instances 1,x",
-                                   "bench --presets paper-9 --instances none", "bench --render /nonexistent.json"}) {
-        SCOPED_TRACE(args);
-        BenchRun r = run(args + " --json " + (dir_ / "out.json").string());
-        EXPECT_EQ(r.exit_code, 2) << r.err;
-        EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
-        EXPECT_FALSE(fs::exists(dir_ / "out.json"));
-    }
+    for (const auto& [args, fragment] :
+         {std::pair{"bench --steps 0", "--steps"}, std::pair{"bench --backends cpu,metal", "--backends 'metal'"},
+          std::pair{"bench --instances 1,x", "--instances"},
+          std::pair{"bench --presets paper-9 --instances none", "paper-9"},
+          std::pair{"bench --render /nonexistent.json", "/nonexistent.json"}})
+        expect_bad_input(std::string(args) + " --json " + path("out.json"), fragment);
 }
 
 /// --out STEM: the device page (a header with the device, commit and date, then the tables printed
@@ -325,15 +297,15 @@ TEST_F(BenchCli, OutWritesTheDevicePageAndReplacesIt) {
     const fs::path stem = dir_ / "test-device";
     std::ofstream(stem.string() + ".md") << "an earlier page\n";
     std::ofstream(stem.string() + ".json") << "{}\n";
-    const BenchRun r = run("bench --quick --no-progress --backends cpu --presets none --instances none "
-                           "--joint-instances 1 --commit abc1234 --out " + stem.string());
+    const CliRun r = run("bench --quick --no-progress --backends cpu --presets none --instances none "
+                         "--joint-instances 1 --commit abc1234 --out " + stem.string());
     ASSERT_EQ(r.exit_code, 0) << r.err;
-    const json d = json::parse(slurp(stem.string() + ".json"), nullptr, false);
+    const json d = json::parse(read_text(stem.string() + ".json"), nullptr, false);
     ASSERT_FALSE(d.is_discarded());
     EXPECT_EQ(d.value("format", ""), "hmsm-bench");
     EXPECT_EQ(d.value("commit", ""), "abc1234");
     ASSERT_FALSE(d["forest_joints"].empty()) << d.dump();
-    const std::string page = slurp(stem.string() + ".md");
+    const std::string page = read_text(stem.string() + ".md");
     EXPECT_EQ(page.rfind("# hmsm bench: test-device\n", 0), 0u) << page;
     EXPECT_NE(page.find("commit abc1234, " + d.value("date", std::string("?"))), std::string::npos) << page;
     EXPECT_NE(page.find("[test-device.json](test-device.json)"), std::string::npos) << page;
@@ -343,26 +315,16 @@ TEST_F(BenchCli, OutWritesTheDevicePageAndReplacesIt) {
     EXPECT_FALSE(fs::exists(stem.string() + ".md.tmp-hmsm"));
 
     const fs::path copy = dir_ / "copy";
-    const BenchRun rendered = run("bench --render " + stem.string() + ".json --out " + copy.string());
+    const CliRun rendered = run("bench --render " + stem.string() + ".json --out " + copy.string());
     ASSERT_EQ(rendered.exit_code, 0) << rendered.err;
     EXPECT_EQ(rendered.out, r.out);
-    EXPECT_EQ(slurp(copy.string() + ".json"), slurp(stem.string() + ".json"));
-    const std::string copied_page = slurp(copy.string() + ".md");
+    EXPECT_EQ(read_text(copy.string() + ".json"), read_text(stem.string() + ".json"));
+    const std::string copied_page = read_text(copy.string() + ".md");
     EXPECT_EQ(copied_page.rfind("# hmsm bench: copy\n", 0), 0u) << copied_page;
     EXPECT_EQ(copied_page.substr(copied_page.size() - r.out.size()), r.out);
 }
 
 TEST_F(BenchCli, OutWithAnExtensionOrAMissingFolderExitsTwoWritingNothing) {
-    for (const std::string stem : {(dir_ / "page.json").string(), (dir_ / "page.md").string(),
-                                   (dir_ / "absent" / "page").string()}) {
-        SCOPED_TRACE(stem);
-        const BenchRun r = run("bench --quick --backends cpu --out " + stem);
-        EXPECT_EQ(r.exit_code, 2) << r.err;
-        EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
-        EXPECT_NE(r.err.find("--out"), std::string::npos) << r.err;
-        size_t files = 0;
-        for (const auto& entry : fs::directory_iterator(dir_))
-            files += entry.path().filename() != "stdout.txt" && entry.path().filename() != "stderr.txt";
-        EXPECT_EQ(files, 0u);
-    }
+    for (const std::string stem : {path("page.json"), path("page.md"), (dir_ / "absent" / "page").string()})
+        expect_bad_input("bench --quick --backends cpu --out " + stem, "--out");
 }

@@ -1,16 +1,15 @@
 // `hmsm simulate`'s wind, schedule and output flags (docs/model.md 5): --dump-chains, --trace,
 // --dump-nodes formats (%.17g, the current instance list), turbulent wind and --wind-speed,
 // --max-frequency, --wind-schedule, integers beyond their type, progress.
+#include "cli_fixture.h"
 #include "test_trees.h"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
-#include <sys/wait.h>
 
 using namespace hmsm;
 namespace fs = std::filesystem;
@@ -18,34 +17,10 @@ namespace fs = std::filesystem;
 namespace {
 
 using Rows = std::vector<std::vector<std::string>>;
+using test::read_text;
 
-class CliLive : public ::testing::Test {
+class CliLive : public test::CliFixture {
 protected:
-    void SetUp() override {
-        dir_ = fs::temp_directory_path() /
-               ("hmsm_cli_live_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
-        fs::remove_all(dir_);
-        fs::create_directories(dir_);
-        ASSERT_TRUE(save_tree(test::small_tree(), path("small.json")).ok());
-    }
-    void TearDown() override { fs::remove_all(dir_); }
-
-    std::string path(const std::string& name) const { return (dir_ / name).string(); }
-
-    /// Exit code; stderr in err_.
-    int run(const std::string& args) {
-        const std::string command = std::string(HMSM_CLI_PATH) + " " + args + " > " + path("stdout.txt") + " 2> " +
-                                    path("stderr.txt");
-        const int status = std::system(command.c_str());
-        err_ = text(path("stderr.txt"));
-        return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    }
-    static std::string text(const std::string& file) {
-        std::ifstream in(file);
-        std::stringstream s;
-        s << in.rdbuf();
-        return s.str();
-    }
     /// Header and rows of a CSV file.
     static Rows csv(const std::string& file, std::string& header) {
         std::ifstream in(file);
@@ -61,24 +36,14 @@ protected:
     }
     void write(const std::string& name, const std::string& content) { std::ofstream(path(name)) << content; }
 
-    /// Bad input: exit 2, one stderr line with `fragment`, and no output file.
+    /// Bad input to a simulation that would otherwise write out.csv.
     void expect_bad(const std::string& args, const std::string& fragment) {
-        SCOPED_TRACE(args);
-        const std::string out = path("out.csv");
-        EXPECT_EQ(run(args + " --dump-nodes " + out), 2) << err_;
-        EXPECT_NE(err_.find(fragment), std::string::npos) << err_;
-        EXPECT_EQ(std::count(err_.begin(), err_.end(), '\n'), 1) << err_;
-        EXPECT_FALSE(fs::exists(out));
-        for (const auto& entry : fs::directory_iterator(dir_))
-            EXPECT_EQ(entry.path().string().find(".tmp-hmsm"), std::string::npos) << entry.path();
+        expect_bad_input(args + " --dump-nodes " + path("out.csv"), fragment);
     }
 
     std::string simulate(const std::string& extra) const {
         return "simulate --tree " + path("small.json") + " --backend cpu64 " + extra;
     }
-
-    fs::path dir_;
-    std::string err_;
 };
 
 /// %.17g round trip: the text is the shortest exact rendering of the double it parses to.
@@ -93,9 +58,9 @@ void expect_round_trip(const std::string& cell) {
 
 TEST_F(CliLive, DumpChainsAndNodesMatchTheLibraryToTheLastBit) {
     ASSERT_EQ(run(simulate("--steps 25 --instances 3 --spacing 4 --dump-chains " + path("c.csv") + " --dump-nodes " +
-                           path("n.csv"))),
+                           path("n.csv"))).exit_code,
               0)
-        << err_;
+        << last_.err;
     std::string header;
     Rows chains = csv(path("c.csv"), header);
     EXPECT_EQ(header, "instance,chain,ox,oy,oz,r00,r10,r20,r01,r11,r21,r02,r12,r22");
@@ -141,9 +106,9 @@ TEST_F(CliLive, DumpChainsAndNodesMatchTheLibraryToTheLastBit) {
 TEST_F(CliLive, TraceRowsEveryStepForTheListedNodesOfEveryInstance) {
     const TreeModel tree = test::small_tree();
     ASSERT_EQ(run(simulate("--steps 7 --instances 2 --trace " + path("t.csv") + " --trace-nodes 3,0 --dump-nodes " +
-                           path("n.csv"))),
+                           path("n.csv"))).exit_code,
               0)
-        << err_;
+        << last_.err;
     std::string header;
     Rows trace = csv(path("t.csv"), header);
     EXPECT_EQ(header, "step,instance,node,x,y,z");
@@ -172,13 +137,13 @@ TEST_F(CliLive, TraceRowsEveryStepForTheListedNodesOfEveryInstance) {
     uint32_t top = 0;
     for (uint32_t i = 1; i < tree.nodes.size(); ++i)
         if (tree.nodes[i].position.y > tree.nodes[top].position.y) top = i;
-    ASSERT_EQ(run(simulate("--steps 3 --trace " + path("top.csv") + " --trace-nodes top")), 0) << err_;
+    ASSERT_EQ(run(simulate("--steps 3 --trace " + path("top.csv") + " --trace-nodes top")).exit_code, 0) << last_.err;
     Rows tops = csv(path("top.csv"), header);
     ASSERT_EQ(tops.size(), 3u);
     for (const auto& r : tops) EXPECT_EQ(r[2], std::to_string(top));
     // No steps: the header alone.
-    ASSERT_EQ(run(simulate("--steps 0 --trace " + path("none.csv") + " --trace-nodes top")), 0) << err_;
-    EXPECT_EQ(text(path("none.csv")), "step,instance,node,x,y,z\n");
+    ASSERT_EQ(run(simulate("--steps 0 --trace " + path("none.csv") + " --trace-nodes top")).exit_code, 0) << last_.err;
+    EXPECT_EQ(read_text(path("none.csv")), "step,instance,node,x,y,z\n");
 }
 
 TEST_F(CliLive, TraceNodesMustExistInEveryModel) {
@@ -193,11 +158,14 @@ TEST_F(CliLive, TraceNodesMustExistInEveryModel) {
 }
 
 TEST_F(CliLive, WindSpeedIsStrengthOfTheSquaredRatioToSixMetresPerSecond) {
-    ASSERT_EQ(run(simulate("--steps 30 --wind constant --wind-speed 12 --dump-nodes " + path("a.csv"))), 0) << err_;
-    ASSERT_EQ(run(simulate("--steps 30 --wind constant --wind-strength 4 --dump-nodes " + path("b.csv"))), 0) << err_;
-    ASSERT_EQ(run(simulate("--steps 30 --wind constant --wind-strength 1 --dump-nodes " + path("c.csv"))), 0) << err_;
-    EXPECT_EQ(text(path("a.csv")), text(path("b.csv")));
-    EXPECT_NE(text(path("a.csv")), text(path("c.csv")));
+    ASSERT_EQ(run(simulate("--steps 30 --wind constant --wind-speed 12 --dump-nodes " + path("a.csv"))).exit_code, 0)
+        << last_.err;
+    ASSERT_EQ(run(simulate("--steps 30 --wind constant --wind-strength 4 --dump-nodes " + path("b.csv"))).exit_code, 0)
+        << last_.err;
+    ASSERT_EQ(run(simulate("--steps 30 --wind constant --wind-strength 1 --dump-nodes " + path("c.csv"))).exit_code, 0)
+        << last_.err;
+    EXPECT_EQ(read_text(path("a.csv")), read_text(path("b.csv")));
+    EXPECT_NE(read_text(path("a.csv")), read_text(path("c.csv")));
     expect_bad(simulate("--steps 2 --wind-speed 12 --wind-strength 4"), "--wind-speed");
     expect_bad(simulate("--steps 2 --wind-speed -1"), "--wind-speed");
     expect_bad(simulate("--steps 2 --wind-speed nan"), "--wind-speed");
@@ -205,9 +173,9 @@ TEST_F(CliLive, WindSpeedIsStrengthOfTheSquaredRatioToSixMetresPerSecond) {
 
 TEST_F(CliLive, TurbulentWindFlags) {
     ASSERT_EQ(run(simulate("--steps 20 --wind turbulent --turbulence 0.5 --wind-seed 18446744073709551615 "
-                           "--dump-nodes " + path("a.csv"))),
+                           "--dump-nodes " + path("a.csv"))).exit_code,
               0)
-        << err_;
+        << last_.err;
     EXPECT_TRUE(fs::exists(path("a.csv")));
     expect_bad(simulate("--steps 2 --wind turbulent --wind-seed 18446744073709551616"), "--wind-seed");
     expect_bad(simulate("--steps 2 --wind turbulent --wind-seed -3"), "--wind-seed");
@@ -220,27 +188,27 @@ TEST_F(CliLive, TurbulentWindFlags) {
 TEST_F(CliLive, TurbulentWindDependsOnTheSeed) {
     for (auto [seed, file] : {std::pair{"1", "s1.csv"}, std::pair{"1", "s1b.csv"}, std::pair{"2", "s2.csv"}})
         ASSERT_EQ(run(simulate(std::string("--steps 60 --wind turbulent --wind-seed ") + seed + " --dump-nodes " +
-                               path(file))),
+                               path(file))).exit_code,
                   0)
-            << err_;
-    EXPECT_EQ(text(path("s1.csv")), text(path("s1b.csv")));
-    EXPECT_NE(text(path("s1.csv")), text(path("s2.csv")));
+            << last_.err;
+    EXPECT_EQ(read_text(path("s1.csv")), read_text(path("s1b.csv")));
+    EXPECT_NE(read_text(path("s1.csv")), read_text(path("s2.csv")));
 }
 
 TEST_F(CliLive, MaxFrequencyDecidesTheCappedChains) {
-    ASSERT_EQ(run("info --tree " + path("small.json") + " --json --max-frequency 0.05"), 0) << err_;
-    const auto low = nlohmann::json::parse(text(path("stdout.txt")));
-    ASSERT_EQ(run("info --tree " + path("small.json") + " --json --max-frequency 1000"), 0) << err_;
-    const auto high = nlohmann::json::parse(text(path("stdout.txt")));
+    ASSERT_EQ(run("info --tree " + path("small.json") + " --json --max-frequency 0.05").exit_code, 0) << last_.err;
+    const auto low = nlohmann::json::parse(last_.out);
+    ASSERT_EQ(run("info --tree " + path("small.json") + " --json --max-frequency 1000").exit_code, 0) << last_.err;
+    const auto high = nlohmann::json::parse(last_.out);
     EXPECT_GT(low["capped_chains"].get<int>(), high["capped_chains"].get<int>());
     EXPECT_EQ(low["capped_chains"].get<int>(), low["chains"].get<int>()) << "at 0.05 Hz every chain is capped";
-    ASSERT_EQ(run("info --tree " + path("small.json") + " --max-frequency 0.05"), 0) << err_;
-    EXPECT_NE(text(path("stdout.txt")).find("capped chains    " + std::to_string(low["chains"].get<int>())),
+    ASSERT_EQ(run("info --tree " + path("small.json") + " --max-frequency 0.05").exit_code, 0) << last_.err;
+    EXPECT_NE(last_.out.find("capped chains    " + std::to_string(low["chains"].get<int>())),
               std::string::npos);
     // The cap changes the motion.
-    ASSERT_EQ(run(simulate("--steps 40 --max-frequency 0.05 --dump-nodes " + path("a.csv"))), 0) << err_;
-    ASSERT_EQ(run(simulate("--steps 40 --dump-nodes " + path("b.csv"))), 0) << err_;
-    EXPECT_NE(text(path("a.csv")), text(path("b.csv")));
+    ASSERT_EQ(run(simulate("--steps 40 --max-frequency 0.05 --dump-nodes " + path("a.csv"))).exit_code, 0) << last_.err;
+    ASSERT_EQ(run(simulate("--steps 40 --dump-nodes " + path("b.csv"))).exit_code, 0) << last_.err;
+    EXPECT_NE(read_text(path("a.csv")), read_text(path("b.csv")));
     expect_bad(simulate("--steps 2 --max-frequency 0"), "max_frequency");
     expect_bad(simulate("--steps 2 --max-frequency -4"), "max_frequency");
 }
@@ -261,21 +229,22 @@ TEST_F(CliLive, TooLargeAGridIsRefusedBeforeAnyAllocation) {
     for (const std::string& args : {std::string("simulate --preset paper-5 --backend cpu --steps 1 --instances 100000000"),
                                     simulate("--steps 1 --instances 4000000000")}) {
         SCOPED_TRACE(args);
-        EXPECT_EQ(run(args + " --dump-nodes " + path("n.csv")), 1) << err_;
-        EXPECT_NE(err_.find("scene too large"), std::string::npos) << err_;
-        EXPECT_EQ(std::count(err_.begin(), err_.end(), '\n'), 1) << err_;
+        EXPECT_EQ(run(args + " --dump-nodes " + path("n.csv")).exit_code, 1) << last_.err;
+        EXPECT_NE(last_.err.find("scene too large"), std::string::npos) << last_.err;
+        EXPECT_EQ(std::count(last_.err.begin(), last_.err.end(), '\n'), 1) << last_.err;
         EXPECT_FALSE(fs::exists(path("n.csv")));
     }
-    EXPECT_NE(err_.find("4000000000"), std::string::npos) << err_;
+    EXPECT_NE(last_.err.find("4000000000"), std::string::npos) << last_.err;
 }
 
 TEST_F(CliLive, ScheduleEventsAfterTheLastStepAreValidatedButNotApplied) {
     write("late.json", R"({"format": "hmsm-schedule", "version": 1, "events": [
         {"step": 50, "wind": {"strength": 9}, "forces": [{"center": [0, 1, 0], "radius": 3, "radial": 5}]}]})");
-    ASSERT_EQ(run(simulate("--steps 20 --wind-schedule " + path("late.json") + " --dump-nodes " + path("a.csv"))), 0)
-        << err_;
-    ASSERT_EQ(run(simulate("--steps 20 --dump-nodes " + path("b.csv"))), 0) << err_;
-    EXPECT_EQ(text(path("a.csv")), text(path("b.csv")));
+    ASSERT_EQ(
+        run(simulate("--steps 20 --wind-schedule " + path("late.json") + " --dump-nodes " + path("a.csv"))).exit_code, 0)
+        << last_.err;
+    ASSERT_EQ(run(simulate("--steps 20 --dump-nodes " + path("b.csv"))).exit_code, 0) << last_.err;
+    EXPECT_EQ(read_text(path("a.csv")), read_text(path("b.csv")));
     write("late_bad.json", R"({"format": "hmsm-schedule", "version": 1, "events": [
         {"step": 5000, "instances": [{"instance": 3, "active": false}]}]})");
     expect_bad(simulate("--steps 20 --wind-schedule " + path("late_bad.json")), "instance 3");
@@ -300,17 +269,19 @@ TEST_F(CliLive, BadSchedulesLeaveNoOutput) {
 TEST_F(CliLive, ScheduleDrivesTheRun) {
     write("s.json", R"({"format": "hmsm-schedule", "version": 1, "events": [
         {"step": 1, "wind": {"profile": "constant", "strength": 3}}]})");
-    ASSERT_EQ(run(simulate("--steps 30 --wind-schedule " + path("s.json") + " --dump-chains " + path("a.csv"))), 0)
-        << err_;
-    ASSERT_EQ(run(simulate("--steps 30 --wind constant --wind-strength 3 --dump-chains " + path("b.csv"))), 0) << err_;
-    EXPECT_EQ(text(path("a.csv")), text(path("b.csv")));
+    ASSERT_EQ(
+        run(simulate("--steps 30 --wind-schedule " + path("s.json") + " --dump-chains " + path("a.csv"))).exit_code, 0)
+        << last_.err;
+    ASSERT_EQ(run(simulate("--steps 30 --wind constant --wind-strength 3 --dump-chains " + path("b.csv"))).exit_code, 0)
+        << last_.err;
+    EXPECT_EQ(read_text(path("a.csv")), read_text(path("b.csv")));
     write("s.json", R"({"format": "hmsm-schedule", "version": 1, "events": [
         {"step": 10, "forces": [{"center": [0, 1, 0], "radius": 6, "radial": 20}]},
         {"step": 20, "remove": [0], "add": [{"model": "tree", "origin": [3, 0, 0]}, {"model": "tree"}]}]})");
     ASSERT_EQ(run(simulate("--steps 30 --wind-schedule " + path("s.json") + " --dump-nodes " + path("c.csv") +
-                           " --trace " + path("t.csv") + " --trace-nodes top")),
+                           " --trace " + path("t.csv") + " --trace-nodes top")).exit_code,
               0)
-        << err_;
+        << last_.err;
     std::string header;
     Rows nodes = csv(path("c.csv"), header);
     EXPECT_EQ(nodes.size(), 2 * test::small_tree().nodes.size());  // the current list: two instances
@@ -319,10 +290,10 @@ TEST_F(CliLive, ScheduleDrivesTheRun) {
 }
 
 TEST_F(CliLive, ProgressOnlyOnATerminal) {
-    ASSERT_EQ(run(simulate("--steps 5")), 0) << err_;
-    EXPECT_EQ(err_.find("step 5/5"), std::string::npos) << "stderr is not a terminal here: " << err_;
-    ASSERT_EQ(run(simulate("--steps 5 --no-progress")), 0) << err_;
-    EXPECT_EQ(std::count(err_.begin(), err_.end(), '\n'), 1) << err_;
+    ASSERT_EQ(run(simulate("--steps 5")).exit_code, 0) << last_.err;
+    EXPECT_EQ(last_.err.find("step 5/5"), std::string::npos) << "stderr is not a terminal here: " << last_.err;
+    ASSERT_EQ(run(simulate("--steps 5 --no-progress")).exit_code, 0) << last_.err;
+    EXPECT_EQ(std::count(last_.err.begin(), last_.err.end(), '\n'), 1) << last_.err;
 }
 
 // Needs wind_scale and active in the backends. A forest's wind_scale 0 and active false keep an
@@ -333,8 +304,8 @@ TEST_F(CliLive, ForestWindScaleAndActiveReachTheSimulation) {
                       {"model": "t", "origin": [12, 0, 0], "active": false},
                       {"model": "t", "origin": [18, 0, 0], "wind_scale": 2, "wind_phase": 0.5}]})");
     const std::string forest = "simulate --forest " + path("forest.json") + " --backend cpu64 --wind constant ";
-    ASSERT_EQ(run(forest + "--steps 0 --dump-nodes " + path("rest.csv")), 0) << err_;
-    ASSERT_EQ(run(forest + "--steps 40 --dump-nodes " + path("moved.csv")), 0) << err_;
+    ASSERT_EQ(run(forest + "--steps 0 --dump-nodes " + path("rest.csv")).exit_code, 0) << last_.err;
+    ASSERT_EQ(run(forest + "--steps 40 --dump-nodes " + path("moved.csv")).exit_code, 0) << last_.err;
     std::string header;
     Rows rest = csv(path("rest.csv"), header), moved = csv(path("moved.csv"), header);
     const size_t n = test::small_tree().nodes.size();

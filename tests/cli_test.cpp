@@ -1,70 +1,27 @@
 // The command-line contract (docs/model.md 5): exit codes, one clear error line, no partial output.
+#include "cli_fixture.h"
 #include "test_trees.h"
 
 #include <nlohmann/json.hpp>
 #include <gtest/gtest.h>
 
-#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
-#include <sstream>
-#include <sys/wait.h>
 
 using namespace hmsm;
 namespace fs = std::filesystem;
 
 namespace {
 
-struct CliRun {
-    int exit_code;
-    std::string err;
-};
+using test::CliRun;
 
-class Cli : public ::testing::Test {
+class Cli : public test::CliFixture {
 protected:
-    void SetUp() override {
-        dir_ = fs::temp_directory_path() /
-               ("hmsm_cli_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
-        fs::remove_all(dir_);
-        fs::create_directories(dir_);
-        ASSERT_TRUE(save_tree(test::small_tree(), path("small.json")).ok());
-    }
-    void TearDown() override { fs::remove_all(dir_); }
-
-    std::string path(const std::string& name) const { return (dir_ / name).string(); }
-
-    CliRun run(const std::string& args) const {
-        std::string err_file = path("stderr.txt");
-        std::string command = std::string(HMSM_CLI_PATH) + " " + args + " > " + path("stdout.txt") +
-                              " 2> " + err_file;
-        int status = std::system(command.c_str());
-        std::ifstream in(err_file);
-        std::stringstream err;
-        err << in.rdbuf();
-        return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, err.str()};
-    }
-    std::string stdout_text() const {
-        std::ifstream in(path("stdout.txt"));
-        std::stringstream s;
-        s << in.rdbuf();
-        return s.str();
-    }
-
-    /// Bad input: exit 2, one line naming the problem, no output file.
+    /// Bad input to a command that would otherwise write nodes.csv.
     void expect_bad_input(const std::string& args, const std::string& fragment) {
-        SCOPED_TRACE(args);
-        std::string out = path("nodes.csv");
-        CliRun r = run(args + " --dump-nodes " + out);
-        EXPECT_EQ(r.exit_code, 2) << r.err;
-        EXPECT_NE(r.err.find(fragment), std::string::npos) << r.err;
-        EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
-        EXPECT_FALSE(fs::exists(out));
-        for (const auto& entry : fs::directory_iterator(dir_))
-            EXPECT_EQ(entry.path().string().find(".tmp-hmsm"), std::string::npos) << entry.path();
+        CliFixture::expect_bad_input(args + " --dump-nodes " + path("nodes.csv"), fragment);
     }
-
-    fs::path dir_;
 };
 
 }  // namespace
@@ -123,7 +80,7 @@ TEST_F(Cli, GridForestDumpsEveryInstance) {
 TEST_F(Cli, InfoPrintsCountsAndChains) {
     CliRun r = run("info --tree " + path("small.json") + " --json --chains " + path("chains.csv"));
     ASSERT_EQ(r.exit_code, 0) << r.err;
-    auto info = nlohmann::json::parse(stdout_text());
+    auto info = nlohmann::json::parse(last_.out);
     auto h = build_hierarchy(test::small_tree(), {});
     EXPECT_EQ(info["nodes"], 16);
     EXPECT_EQ(info["chains"], h->chains.size());
@@ -163,6 +120,33 @@ TEST_F(Cli, BadArgumentsExitTwoWithoutOutput) {
     expect_bad_input("simulate" + tree + " --steps abc", "steps");
 }
 
+TEST_F(Cli, ChoiceErrorsListTheNameTables) {
+    const std::string tree = " --tree " + path("small.json");
+    expect_bad_input("simulate" + tree + " --composition rounds",
+                     "expected pointer-jumping, pointer-jumping-per-round, pointer-jumping-in-dispatch");
+    expect_bad_input("simulate" + tree + " --outputs vertices", "expected joints, nodes or all");
+    expect_bad_input("simulate" + tree + " --wind gale", "expected none, constant, y1, y2, y3, y4 or turbulent");
+    CliFixture::expect_bad_input("bench --no-progress --forest-composition rounds",
+                                 "--forest-composition 'rounds': expected pointer-jumping");
+    // Compositions are accepted with '-' or '_' between words.
+    for (const char* name : {"path-walk", "path_walk"}) {
+        CliRun r = run("simulate" + tree + " --backend cpu --steps 1 --composition " + name);
+        EXPECT_EQ(r.exit_code, 0) << name << ": " << r.err;
+    }
+}
+
+TEST_F(Cli, BackendErrorsAreTheSameInEverySubcommand) {
+    const std::string backends = "expected cpu, cpu64, cpu-parallel, vulkan, cuda or auto";
+    expect_bad_input("simulate --tree " + path("small.json") + " --backend quantum",
+                     "--backend 'quantum': " + backends);
+    CliFixture::expect_bad_input("export --preset paper-1 --seconds 1 --fps 10 --gltf " + path("e.glb") +
+                                     " --backend quantum",
+                                 "--backend 'quantum': " + backends);
+    // bench runs named backends only: no "auto".
+    CliFixture::expect_bad_input("bench --no-progress --backends cpu,auto",
+                                 "--backends 'auto': expected cpu, cpu64, cpu-parallel, vulkan or cuda");
+}
+
 TEST_F(Cli, BadTreeFilesExitTwoNamingTheNode) {
     std::ofstream(path("cycle.json")) << R"({"format": "hmsm-tree", "version": 1, "nodes": [
         {"parent": -1, "position": [0,0,0], "radius": 0.3},
@@ -200,7 +184,7 @@ TEST_F(Cli, UnavailableBackendExitsOne) {
 TEST_F(Cli, PresetInfoAndSimulateAcceptance) {
     CliRun r = run("info --preset paper-1 --json");
     ASSERT_EQ(r.exit_code, 0) << r.err;
-    auto info = nlohmann::json::parse(stdout_text());
+    auto info = nlohmann::json::parse(last_.out);
     EXPECT_NEAR(info["mesh_vertices"].get<double>(), 78563.0, 785.63);
     EXPECT_EQ(info["max_depth"], 4);
     EXPECT_GT(info["leaves"].get<int>(), 0);

@@ -2,6 +2,7 @@
 // evaluated here, independently of the exporter — joint world matrices from the node hierarchy
 // and the clip's keys, times the inverse bind matrices, blended by the weights — and compared
 // with hmsm's own vertices after the same number of steps. The Khronos validator checks the file.
+#include "cli_fixture.h"
 #include "test_trees.h"
 
 #include <tiny_gltf.h>
@@ -19,42 +20,13 @@
 #include <fstream>
 #include <map>
 #include <sstream>
-#include <sys/wait.h>
 
 using namespace hmsm;
 namespace fs = std::filesystem;
 
 namespace {
 
-struct CliRun {
-    int exit_code;
-    std::string out;  // stdout and stderr
-};
-
-class Export : public ::testing::Test {
-protected:
-    void SetUp() override {
-        dir_ = fs::temp_directory_path() /
-               ("hmsm_export_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
-        fs::remove_all(dir_);
-        fs::create_directories(dir_);
-        ASSERT_TRUE(save_tree(test::small_tree(), path("small.json")).ok());
-    }
-    void TearDown() override { fs::remove_all(dir_); }
-    std::string path(const std::string& name) const { return (dir_ / name).string(); }
-
-    CliRun run(const std::string& command) const {
-        std::string log = path("log.txt");
-        int status = std::system((command + " > " + log + " 2>&1").c_str());
-        std::ifstream in(log);
-        std::stringstream text;
-        text << in.rdbuf();
-        return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, text.str()};
-    }
-    CliRun hmsm(const std::string& args) const { return run(std::string(HMSM_CLI_PATH) + " " + args); }
-
-    fs::path dir_;
-};
+class Export : public test::CliFixture {};
 
 template <class T>
 std::vector<T> read_accessor(const tinygltf::Model& m, int index, int components, int component_type) {
@@ -191,9 +163,9 @@ TEST_F(Export, Paper1ClipReproducesSimulation) {
     c.config.wind.frequency = 0.5;
     c.seconds = 1.0;
     c.fps = 6.0;
-    auto r = hmsm("export --preset paper-1 --gltf " + path("p1.glb") +
+    auto r = run("export --preset paper-1 --gltf " + path("p1.glb") +
                   " --seconds 1 --fps 6 --wind y2 --wind-strength 4 --wind-frequency 0.5");
-    ASSERT_EQ(r.exit_code, 0) << r.out;
+    ASSERT_EQ(r.exit_code, 0) << r.err;
     expect_clip_reproduces_simulation(c, load_glb(path("p1.glb")));
 }
 
@@ -218,10 +190,10 @@ TEST_F(Export, OddTreeWithOriginYawAndFixWeight) {
     c.yaw = 0.7;
     c.seconds = 1.3;  // frames 0 ... 9 at 7 fps: steps round(k / 0.07)
     c.fps = 7.0;
-    auto r = hmsm("export --tree " + path("shifted.json") + " --gltf " + path("small.glb") +
+    auto r = run("export --tree " + path("shifted.json") + " --gltf " + path("small.glb") +
                   " --ring-sides 5 --fix-weight 0.3 --max-chain-segments 2 --dt 0.01 --wind y1 --wind-strength 30"
                   " --wind-dir 1,0,1 --wind-frequency 0.7 --origin 1.5,0.25,-2 --yaw 0.7 --seconds 1.3 --fps 7");
-    ASSERT_EQ(r.exit_code, 0) << r.out;
+    ASSERT_EQ(r.exit_code, 0) << r.err;
     const tinygltf::Model m = load_glb(path("small.glb"));
     expect_clip_reproduces_simulation(c, m);
 
@@ -247,8 +219,8 @@ TEST_F(Export, FileFollowsTheGltfMapping) {
         std::ostringstream args;
         args << "export --tree " << path("small.json") << " --gltf " << path("m.glb")
              << " --seconds 2 --fps 10 --wind constant --wind-strength 40 --fix-weight " << beta;
-        auto r = hmsm(args.str());
-        ASSERT_EQ(r.exit_code, 0) << r.out;
+        auto r = run(args.str());
+        ASSERT_EQ(r.exit_code, 0) << r.err;
         tinygltf::Model m = load_glb(path("m.glb"));
         ModelOptions options;
         options.fix_weight = beta;
@@ -349,18 +321,18 @@ TEST_F(Export, BadArgumentsExitTwoWithoutFile) {
                              "--seconds 1 --fps 10 --fix-weight 2", "--seconds 1 --fps 10 --wind gale",
                              "--seconds 1e9 --fps 1e3", "--seconds 1 --fps 10 --dt 0"}) {
         SCOPED_TRACE(args);
-        auto r = hmsm("export --gltf " + out + tree + " " + args);
-        EXPECT_EQ(r.exit_code, 2) << r.out;
-        EXPECT_NE(r.out.find("error"), std::string::npos) << r.out;
+        auto r = run("export --gltf " + out + tree + " " + args);
+        EXPECT_EQ(r.exit_code, 2) << r.err;
+        EXPECT_NE(r.err.find("error"), std::string::npos) << r.err;
         EXPECT_FALSE(fs::exists(out));
         EXPECT_FALSE(fs::exists(out + ".tmp-hmsm"));
     }
-    auto missing = hmsm("export --seconds 1 --fps 10" + tree);  // no --gltf
-    EXPECT_EQ(missing.exit_code, 2) << missing.out;
-    auto no_tree = hmsm("export --gltf " + out + " --seconds 1 --fps 10 --tree " + path("absent.json"));
-    EXPECT_EQ(no_tree.exit_code, 2) << no_tree.out;
-    auto no_dir = hmsm("export --gltf " + path("no/such/dir.glb") + tree + " --seconds 1 --fps 10");
-    EXPECT_EQ(no_dir.exit_code, 2) << no_dir.out;
+    auto missing = run("export --seconds 1 --fps 10" + tree);  // no --gltf
+    EXPECT_EQ(missing.exit_code, 2) << missing.err;
+    auto no_tree = run("export --gltf " + out + " --seconds 1 --fps 10 --tree " + path("absent.json"));
+    EXPECT_EQ(no_tree.exit_code, 2) << no_tree.err;
+    auto no_dir = run("export --gltf " + path("no/such/dir.glb") + tree + " --seconds 1 --fps 10");
+    EXPECT_EQ(no_dir.exit_code, 2) << no_dir.err;
     EXPECT_FALSE(fs::exists(out));
 }
 
@@ -380,11 +352,11 @@ TEST_F(Export, KhronosValidatorFindsNoError) {
                              Export_{"still.glb", "--tree " + path("small.json") + " --seconds 0 --fps 30"},
                              Export_{"rod.glb", "--tree " + path("rod.json") + " --seconds 0.5 --fps 24"}}) {
         SCOPED_TRACE(e.args);
-        auto r = hmsm("export --gltf " + path(e.file) + " " + e.args);
-        ASSERT_EQ(r.exit_code, 0) << r.out;
-        auto v = run("node " + tools + "/validate.mjs " + path(e.file));
-        EXPECT_EQ(v.exit_code, 0) << v.out;
-        EXPECT_NE(v.out.find(": 0 errors"), std::string::npos) << v.out;
+        auto r = run("export --gltf " + path(e.file) + " " + e.args);
+        ASSERT_EQ(r.exit_code, 0) << r.err;
+        auto v = run_command("node " + tools + "/validate.mjs " + path(e.file));
+        EXPECT_EQ(v.exit_code, 0) << v.out << v.err;
+        EXPECT_NE(v.out.find(": 0 errors"), std::string::npos) << v.out << v.err;
     }
 }
 

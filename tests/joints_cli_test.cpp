@@ -1,48 +1,21 @@
 // hmsm simulate --outputs and --dump-chains (docs/model.md 5, 3.10): the chain dump is every
 // instance's O_c and R_c column by column as %.17g, equal to the library's joint matrices, with
 // any --outputs; dumps of outputs not produced are bad input (exit 2, no file).
+#include "cli_fixture.h"
 #include "test_trees.h"
 
 #include <nlohmann/json.hpp>
 #include <gtest/gtest.h>
 
-#include <algorithm>
 #include <cstdlib>
-#include <filesystem>
 #include <fstream>
 #include <sstream>
-#include <sys/wait.h>
 
 using namespace hmsm;
-namespace fs = std::filesystem;
 
 namespace {
 
-class JointsCli : public ::testing::Test {
-protected:
-    void SetUp() override {
-        dir_ = fs::temp_directory_path() /
-               ("hmsm_joints_cli_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
-        fs::remove_all(dir_);
-        fs::create_directories(dir_);
-        ASSERT_TRUE(save_tree(test::small_tree(), path("small.json")).ok());
-    }
-    void TearDown() override { fs::remove_all(dir_); }
-    std::string path(const std::string& name) const { return (dir_ / name).string(); }
-    int run(const std::string& args, std::string* err = nullptr) const {
-        const std::string command = std::string(HMSM_CLI_PATH) + " " + args + " > " + path("stdout.txt") +
-                                    " 2> " + path("stderr.txt");
-        const int status = std::system(command.c_str());
-        if (err) {
-            std::ifstream in(path("stderr.txt"));
-            std::stringstream s;
-            s << in.rdbuf();
-            *err = s.str();
-        }
-        return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    }
-    fs::path dir_;
-};
+class JointsCli : public test::CliFixture {};
 
 std::vector<std::vector<double>> read_csv(const std::string& file, std::string& header) {
     std::ifstream in(file);
@@ -70,10 +43,10 @@ TEST_F(JointsCli, DumpChainsEqualsTheLibrarysJointMatricesForEveryOutputs) {
     const uint64_t chains = (*sim)->chain_count();
     for (const std::string outputs : {"joints", "nodes", "all"}) {
         SCOPED_TRACE(outputs);
-        std::string err;
-        ASSERT_EQ(run("simulate --tree " + path("small.json") + " --backend cpu64 --steps 50 --wind-strength 4 "
-                      "--origin 1,0,2 --yaw 0.7 --outputs " + outputs + " --dump-chains " + path("chains.csv"), &err),
-                  0) << err;
+        const test::CliRun r = run("simulate --tree " + path("small.json") +
+                                   " --backend cpu64 --steps 50 --wind-strength 4 --origin 1,0,2 --yaw 0.7 --outputs " +
+                                   outputs + " --dump-chains " + path("chains.csv"));
+        ASSERT_EQ(r.exit_code, 0) << r.err;
         std::string header;
         auto rows = read_csv(path("chains.csv"), header);
         EXPECT_EQ(header, "instance,chain,ox,oy,oz,r00,r10,r20,r01,r11,r21,r02,r12,r22");
@@ -93,23 +66,17 @@ TEST_F(JointsCli, DumpChainsEqualsTheLibrarysJointMatricesForEveryOutputs) {
 TEST_F(JointsCli, DumpsOfOutputsNotProducedAreBadInput) {
     for (const auto& [outputs, dump] : {std::pair{"joints", "--dump-nodes"}, std::pair{"joints", "--dump-vertices"},
                                         std::pair{"nodes", "--dump-vertices"}, std::pair{"everything", "--dump-chains"}}) {
-        SCOPED_TRACE(std::string(outputs) + " " + dump);
-        std::string err;
-        EXPECT_EQ(run("simulate --tree " + path("small.json") + " --backend cpu --steps 2 --outputs " + outputs +
-                      " " + dump + " " + path("out.file"), &err),
-                  2);
-        EXPECT_NE(err.find("--"), std::string::npos) << err;
-        EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
-        EXPECT_FALSE(fs::exists(path("out.file")));
+        expect_bad_input("simulate --tree " + path("small.json") + " --backend cpu --steps 2 --outputs " + outputs +
+                             " " + dump + " " + path("out.file"),
+                         "--");
     }
 }
 
 /// hmsm bench's joints-only forest rows: one per size, passes 1-5 only, 48 bytes per joint.
 TEST_F(JointsCli, BenchWritesJointsOnlyForestRows) {
-    std::string err;
-    ASSERT_EQ(run("bench --quick --no-progress --backends cpu --presets none --instances none "
-                  "--joint-instances 1,3 --json " + path("bench.json") + " --commit test", &err),
-              0) << err;
+    const test::CliRun r = run("bench --quick --no-progress --backends cpu --presets none --instances none "
+                               "--joint-instances 1,3 --json " + path("bench.json") + " --commit test");
+    ASSERT_EQ(r.exit_code, 0) << r.err;
     std::ifstream in(path("bench.json"));
     const nlohmann::json d = nlohmann::json::parse(in, nullptr, false);
     ASSERT_TRUE(d.is_object());
@@ -134,10 +101,7 @@ TEST_F(JointsCli, BenchWritesJointsOnlyForestRows) {
             EXPECT_GT(row[other].value("seconds_per_step", 0.0), 0.0) << other;
         }
     }
-    std::ifstream out(path("stdout.txt"));
-    std::stringstream text;
-    text << out.rdbuf();
-    EXPECT_NE(text.str().find("### Forest scaling, joints only"), std::string::npos) << text.str();
+    EXPECT_NE(r.out.find("### Forest scaling, joints only"), std::string::npos) << r.out;
 }
 
 }  // namespace

@@ -5,6 +5,7 @@
 #include "render/skinned.h"
 #include "vulkan/validation.h"
 
+#include "cli_fixture.h"
 #include "test_trees.h"
 
 #include <hmsm/hmsm.h>
@@ -24,8 +25,6 @@
 #include <fstream>
 #include <mutex>
 #include <string>
-#include <sys/wait.h>
-#include <unistd.h>
 #include <vector>
 
 namespace hmsm::test {
@@ -369,40 +368,13 @@ TEST_F(RenderTest, SkinnedDrawsWhatTheVerticesDraw) {
 
 // --- hmsm render ------------------------------------------------------------------------------
 
-struct CliRun {
-    int exit_code = -1;
-    std::string stderr_text;
-};
-
-CliRun run_cli(const std::string& arguments, const std::string& environment = "") {
-    const std::string log = (fs::temp_directory_path() / ("hmsm_render_test_" + std::to_string(getpid()) + ".log")).string();
-    const std::string command = environment + " " HMSM_CLI_PATH " render " + arguments + " 2>" + log;
-    const int status = std::system(command.c_str());
-    CliRun run;
-    run.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    std::ifstream file(log);
-    run.stderr_text.assign(std::istreambuf_iterator<char>(file), {});
-    fs::remove(log);
-    return run;
-}
-
-class RenderCli : public ::testing::Test {
+class RenderCli : public CliFixture {
 protected:
-    void SetUp() override {
-        dir_ = fs::temp_directory_path() / ("hmsm_render_cli_" + std::to_string(getpid()));
-        fs::remove_all(dir_);
-        fs::create_directories(dir_);
+    RenderCli() : CliFixture(/*small_tree=*/false) {}
+    /// Runs `hmsm render ARGS`.
+    CliRun run_render(const std::string& arguments, const std::string& environment = "") {
+        return run("render " + arguments, environment);
     }
-    void TearDown() override { fs::remove_all(dir_); }
-    /// Files and folders left in the scratch folder (names).
-    std::vector<std::string> leftovers() const {
-        std::vector<std::string> names;
-        for (const auto& e : fs::directory_iterator(dir_)) names.push_back(e.path().filename().string());
-        std::sort(names.begin(), names.end());
-        return names;
-    }
-    std::string path(const std::string& name) const { return (dir_ / name).string(); }
-    fs::path dir_;
 };
 
 TEST_F(RenderCli, BadArgumentsExitTwoWithOneLineAndNoOutput) {
@@ -413,37 +385,34 @@ TEST_F(RenderCli, BadArgumentsExitTwoWithOneLineAndNoOutput) {
                                    "--preset paper-5 --wind gale", "--preset paper-5 --look-at 1,2",
                                    "--preset paper-5 --leaf-scale big", "--preset paper-5 --draw bones",
                                    "--frames 2"}) {
-        CliRun run = run_cli(args + outs);
-        EXPECT_EQ(run.exit_code, 2) << args << ": " << run.stderr_text;
-        EXPECT_EQ(std::count(run.stderr_text.begin(), run.stderr_text.end(), '\n'), 1) << run.stderr_text;
-        EXPECT_TRUE(leftovers().empty()) << args;
+        expect_bad_input("render " + args + outs, "hmsm: error: ");
     }
     std::ofstream(path("file")) << "x";
-    CliRun run = run_cli("--preset paper-5 --frames 1 --out " + path("file"));
-    EXPECT_EQ(run.exit_code, 2) << run.stderr_text;
-    CliRun missing_parent = run_cli("--preset paper-5 --frames 1 --out " + path("no/such/dir"));
-    EXPECT_EQ(missing_parent.exit_code, 2) << missing_parent.stderr_text;
-    EXPECT_EQ(leftovers(), std::vector<std::string>{"file"});
+    CliRun r = run_render("--preset paper-5 --frames 1 --out " + path("file"));
+    EXPECT_EQ(r.exit_code, 2) << r.err;
+    CliRun missing_parent = run_render("--preset paper-5 --frames 1 --out " + path("no/such/dir"));
+    EXPECT_EQ(missing_parent.exit_code, 2) << missing_parent.err;
+    EXPECT_EQ(entries(), std::vector<std::string>{"file"});
 }
 
 TEST_F(RenderCli, DeviceErrorExitsOneWithoutOutput) {
-    CliRun run = run_cli("--preset paper-5 --frames 1 --width 32 --height 32 --out " + path("frames") +
-                          " --gif " + path("a.gif"),
-                      "HMSM_VULKAN_DEVICE=no-such-device-anywhere");
-    EXPECT_EQ(run.exit_code, 1) << run.stderr_text;
-    EXPECT_TRUE(leftovers().empty());
+    CliRun r = run_render("--preset paper-5 --frames 1 --width 32 --height 32 --out " + path("frames") + " --gif " +
+                              path("a.gif"),
+                          "HMSM_VULKAN_DEVICE=no-such-device-anywhere");
+    EXPECT_EQ(r.exit_code, 1) << r.err;
+    EXPECT_TRUE(entries().empty());
 }
 
 TEST_F(RenderCli, DrawSkinnedWritesWhatDrawVerticesWrites) {
     render::Image images[2];
     for (int i = 0; i < 2; ++i) {
         const std::string out = path(i ? "skinned" : "vertices");
-        CliRun run = run_cli("--preset paper-5 --wind turbulent --width 64 --height 48 --frames 2 --no-progress --draw " +
-                             std::string(i ? "skinned" : "vertices") + " --out " + out);
-        if (run.exit_code == 1 && run.stderr_text.find("vulkan") != std::string::npos)
-            GTEST_SKIP() << run.stderr_text;
-        ASSERT_EQ(run.exit_code, 0) << run.stderr_text;
-        EXPECT_NE(run.stderr_text.find(i ? "skinned draw" : "vertices draw"), std::string::npos) << run.stderr_text;
+        CliRun r = run_render("--preset paper-5 --wind turbulent --width 64 --height 48 --frames 2 --no-progress --draw " +
+                              std::string(i ? "skinned" : "vertices") + " --out " + out);
+        if (r.exit_code == 1 && r.err.find("vulkan") != std::string::npos)
+            GTEST_SKIP() << r.err;
+        ASSERT_EQ(r.exit_code, 0) << r.err;
+        EXPECT_NE(r.err.find(i ? "skinned draw" : "vertices draw"), std::string::npos) << r.err;
         int w = 0, h = 0, n = 0;
         stbi_uc* pixels = stbi_load((out + "/frame_0001.png").c_str(), &w, &h, &n, 4);
         ASSERT_NE(pixels, nullptr);
@@ -458,15 +427,15 @@ TEST_F(RenderCli, WritesFramesGifAndStripAndReplacesAnEarlierRender) {
     fs::create_directories(dir_ / "frames");
     std::ofstream(dir_ / "frames" / "frame_0007.png") << "stale";
     std::ofstream(dir_ / "frames" / "notes.txt") << "kept";
-    CliRun run = run_cli(common + " --frames 3 --gif " + path("anim.gif") + " --strip " + path("strip.png"));
-    if (run.exit_code == 1 && run.stderr_text.find("vulkan") != std::string::npos)
-        GTEST_SKIP() << run.stderr_text;
-    ASSERT_EQ(run.exit_code, 0) << run.stderr_text;
+    CliRun r = run_render(common + " --frames 3 --gif " + path("anim.gif") + " --strip " + path("strip.png"));
+    if (r.exit_code == 1 && r.err.find("vulkan") != std::string::npos)
+        GTEST_SKIP() << r.err;
+    ASSERT_EQ(r.exit_code, 0) << r.err;
     std::vector<std::string> frames;
     for (const auto& e : fs::directory_iterator(dir_ / "frames")) frames.push_back(e.path().filename().string());
     std::sort(frames.begin(), frames.end());
     EXPECT_EQ(frames, (std::vector<std::string>{"frame_0000.png", "frame_0001.png", "frame_0002.png", "notes.txt"}));
-    EXPECT_EQ(leftovers(), (std::vector<std::string>{"anim.gif", "frames", "strip.png"}));
+    EXPECT_EQ(entries(), (std::vector<std::string>{"anim.gif", "frames", "strip.png"}));
 
     int w = 0, h = 0, channels = 0;
     stbi_uc* strip = stbi_load(path("strip.png").c_str(), &w, &h, &channels, 4);

@@ -90,14 +90,6 @@ void skin_on_cpu(const Simulation& sim, const std::vector<double>& joints, std::
 
 class Joints : public ::testing::TestWithParam<BackendKind> {};
 
-}  // namespace
-
-namespace hmsm {
-inline void PrintTo(BackendKind kind, std::ostream* os) { *os << to_string(kind); }
-}  // namespace hmsm
-
-namespace {
-
 /// Output::joint_matrices holds R_c and O_c of the chain outputs, in the documented order, in
 /// every composition (the window of the final root_positions writes differs per composition),
 /// and agrees with the cpu64 oracle.

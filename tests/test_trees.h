@@ -1,9 +1,10 @@
-// Small hand-built trees shared by the tests.
+// Small hand-built trees shared by the tests, and how the tests print a backend.
 #pragma once
 
 #include <hmsm/hmsm.h>
 
 #include <initializer_list>
+#include <ostream>
 
 namespace hmsm::test {
 
@@ -38,3 +39,8 @@ double max_abs_difference(const std::vector<double>& a, const std::vector<double
 bool all_finite(const std::vector<double>& values);
 
 }  // namespace hmsm::test
+
+namespace hmsm {
+/// Test names and failure messages show a backend by its name.
+inline void PrintTo(BackendKind kind, std::ostream* os) { *os << to_string(kind); }
+}  // namespace hmsm

@@ -2,6 +2,7 @@
 // The one header an engine includes.
 #pragma once
 
+#include <hmsm/config.h>
 #include <hmsm/generator.h>
 #include <hmsm/hierarchy.h>
 #include <hmsm/import.h>

@@ -3,6 +3,7 @@
 
 #include <hmsm/export.h>
 
+#include <hmsm/names.h>
 #include <hmsm/status.h>
 
 #include <hmsm/types.h>
@@ -15,6 +16,8 @@ namespace hmsm {
 
 /// How a node picks the child that continues its chain (docs/model.md 3.2).
 enum class Grouping { direction, width };
+inline constexpr NamedValue<Grouping> kGroupingNames[] = {{Grouping::direction, "direction"},
+                                                          {Grouping::width, "width"}};
 
 /// Options that shape the hierarchy and the branch mesh.
 struct ModelOptions {
@@ -38,6 +41,11 @@ struct Parameters {
 /// The paper's four wind profiles, constant (Y = 1), none (Y = 0) and turbulent (a sum of 32
 /// modes with a von Karman-like spectrum, docs/model.md 3.5).
 enum class WindProfile : uint32_t { none = 0, constant = 1, y1 = 2, y2 = 3, y3 = 4, y4 = 5, turbulent = 6 };
+inline constexpr NamedValue<WindProfile> kWindProfileNames[] = {
+    {WindProfile::none, "none"}, {WindProfile::constant, "constant"}, {WindProfile::y1, "y1"},
+    {WindProfile::y2, "y2"},     {WindProfile::y3, "y3"},             {WindProfile::y4, "y4"},
+    {WindProfile::turbulent, "turbulent"},
+};
 
 struct Wind {
     WindProfile profile = WindProfile::y1;

@@ -10,6 +10,7 @@
 
 #include "launchers.h"
 
+#include "../../src/common/element_index.h"  // Element, element_of, state_chain, state_node
 #include "../../src/common/wind_profile.h"  // HMSM_HOST_DEVICE, wind_profile_y
 
 #include <cstdint>
@@ -88,21 +89,6 @@ HMSM_HOST_DEVICE bool instance_paused(const BufferPointers& b, const gpu::PassCo
            load(b.instance_wind + uint64_t(HMSM_INSTANCE_WIND_VEC4S) * (pc.instance_begin + k)).z != 0.0f;
 }
 
-/// Thread i of a dispatch handles element `index` of group instance `instance`.
-struct Element {
-    uint32_t instance;
-    uint32_t index;
-};
-HMSM_HOST_DEVICE Element element_of(uint32_t i, uint32_t per_instance) {
-    return {i / per_instance, i % per_instance};
-}
-/// State index of model chain `c` of group instance `k` (one ping-pong half).
-HMSM_HOST_DEVICE uint64_t state_chain(const gpu::PassConstants& pc, uint32_t k, int32_t c) {
-    return pc.chain_begin + uint64_t(k) * pc.model_chain_count + uint64_t(c);
-}
-HMSM_HOST_DEVICE uint64_t state_node(const gpu::PassConstants& pc, uint32_t k, int32_t n) {
-    return pc.node_begin + uint64_t(k) * pc.model_node_count + uint64_t(n);
-}
 /// First element of ping-pong half `half` of a chain_halves buffer.
 HMSM_HOST_DEVICE uint64_t half_begin(const gpu::PassConstants& pc, uint32_t half) {
     return uint64_t(half) * pc.total_chains;

@@ -4,6 +4,7 @@
 #pragma once
 
 #include "../backend.h"
+#include "../common/element_index.h"  // Element, element_of, state_chain, state_node
 
 #include <glm/mat3x3.hpp>
 #include <glm/vec2.hpp>
@@ -51,22 +52,6 @@ struct State {
     vec3 wind_vector{0};
     uint64_t total_chains = 0;
 };
-
-/// Which instance of the group and which model element thread `i` of a dispatch handles.
-struct Element {
-    uint32_t instance;  ///< index within the group
-    uint32_t index;     ///< model-local chain, node or vertex
-};
-inline Element element_of(uint32_t i, uint32_t per_instance) {
-    return {i / per_instance, i % per_instance};
-}
-/// State index of model chain `c` of group instance `k`.
-inline uint64_t state_chain(const gpu::PassConstants& pc, uint32_t k, int32_t c) {
-    return pc.chain_begin + uint64_t(k) * pc.model_chain_count + uint64_t(c);
-}
-inline uint64_t state_node(const gpu::PassConstants& pc, uint32_t k, int32_t n) {
-    return pc.node_begin + uint64_t(k) * pc.model_node_count + uint64_t(n);
-}
 
 /// Whether group instance k is paused (inactive, frozen): a dispatch may cover paused instances
 /// between active ones (it says so in params.w) and skips their elements (gpu_layout.h,

@@ -76,35 +76,11 @@ glm::dvec3 wind_at(const Wind& wind, const glm::dvec3& origin, double t, double 
     return instance_scale * wind.strength * y * glm::normalize(wind.direction);
 }
 
-const char* to_string(Grouping grouping) {
-    return grouping == Grouping::direction ? "direction" : "width";
-}
-
-const char* to_string(WindProfile profile) {
-    switch (profile) {
-        case WindProfile::none: return "none";
-        case WindProfile::constant: return "constant";
-        case WindProfile::y1: return "y1";
-        case WindProfile::y2: return "y2";
-        case WindProfile::y3: return "y3";
-        case WindProfile::y4: return "y4";
-        case WindProfile::turbulent: return "turbulent";
-    }
-    return "?";
-}
-
-std::optional<Grouping> parse_grouping(std::string_view name) {
-    if (name == "direction") return Grouping::direction;
-    if (name == "width") return Grouping::width;
-    return std::nullopt;
-}
-
+const char* to_string(Grouping grouping) { return name_in(kGroupingNames, grouping); }
+const char* to_string(WindProfile profile) { return name_in(kWindProfileNames, profile); }
+std::optional<Grouping> parse_grouping(std::string_view name) { return value_named(kGroupingNames, name); }
 std::optional<WindProfile> parse_wind_profile(std::string_view name) {
-    for (WindProfile p : {WindProfile::none, WindProfile::constant, WindProfile::y1,
-                          WindProfile::y2, WindProfile::y3, WindProfile::y4,
-                          WindProfile::turbulent})
-        if (name == to_string(p)) return p;
-    return std::nullopt;
+    return value_named(kWindProfileNames, name);
 }
 
 namespace {

@@ -21,6 +21,31 @@ int fail_input(const std::string& message) {
     return fail(Status{ErrorCode::invalid_argument, message});
 }
 
+std::string join_choices(const std::vector<std::string>& names) {
+    std::string text;
+    for (size_t i = 0; i < names.size(); ++i) {
+        if (i > 0) text += i + 1 == names.size() ? " or " : ", ";
+        text += names[i];
+    }
+    return text;
+}
+
+std::string spelled(std::string_view name, Spelling spelling) {
+    std::string text(name);
+    if (spelling == Spelling::hyphens) std::replace(text.begin(), text.end(), '_', '-');
+    return text;
+}
+
+Result<BackendKind> parse_backend(const std::string& name, const std::string& flag, bool allow_auto) {
+    if (allow_auto) return parse_choice(kBackendKindNames, name, flag, Spelling::as_is);
+    return parse_choice(kBackendKindNames, name, flag, Spelling::as_is, {BackendKind::automatic});
+}
+
+std::string backend_choices(std::optional<BackendKind> marked, bool allow_auto) {
+    if (allow_auto) return choices(kBackendKindNames, Spelling::as_is, marked);
+    return choices(kBackendKindNames, Spelling::as_is, marked, {BackendKind::automatic});
+}
+
 void add_source_flags(CLI::App& app, SourceFlags& f, bool with_forest_and_instances) {
     auto* tree = app.add_option("--tree", f.tree, "hmsm-tree JSON file");
     auto* preset = app.add_option("--preset", f.preset, "built-in tree: paper-1 ... paper-5");
@@ -96,7 +121,8 @@ Result<Scene> load_scene(const SourceFlags& f, CLI::App& app, const ModelOptions
 }
 
 void add_model_flags(CLI::App& app, ModelFlags& f) {
-    app.add_option("--grouping", f.grouping, "chain grouping: direction (default) or width");
+    app.add_option("--grouping", f.grouping,
+                   "chain grouping: " + choices(kGroupingNames, Spelling::as_is, Grouping::direction));
     add_integer_option(app, "--max-chain-segments", f.options.max_chain_segments,
                        "cut chains after K nodes (0 = never, default)");
     add_integer_option(app, "--ring-sides", f.options.ring_sides, "vertices per branch ring (default 8)");
@@ -104,10 +130,8 @@ void add_model_flags(CLI::App& app, ModelFlags& f) {
 }
 
 Result<ModelOptions> model_options(const ModelFlags& f) {
-    auto grouping = parse_grouping(f.grouping);
-    if (!grouping)
-        return Status{ErrorCode::invalid_argument,
-                      "--grouping '" + f.grouping + "': expected direction or width"};
+    auto grouping = parse_choice(kGroupingNames, f.grouping, "--grouping", Spelling::as_is);
+    if (!grouping) return grouping.status();
     ModelOptions options = f.options;
     options.grouping = *grouping;
     HMSM_TRY(validate(options));
@@ -127,7 +151,7 @@ void add_parameter_flags(CLI::App& app, Parameters& p) {
 
 void add_wind_flags(CLI::App& app, WindFlags& f) {
     app.add_option("--wind", f.profile,
-                   "wind profile: none, constant, y1, y2, y3, y4, turbulent (default y1)");
+                   "wind profile: " + choices(kWindProfileNames, Spelling::as_is, WindProfile::y1));
     app.add_option("--wind-dir", f.direction, "wind direction X,Y,Z (default 1,0,0)");
     f.strength_option = app.add_option("--wind-strength", f.wind.strength,
                                        "wind strength: dynamic pressure relative to a 6 m/s breeze (default 1)");
@@ -143,10 +167,8 @@ void add_wind_flags(CLI::App& app, WindFlags& f) {
 }
 
 Result<Wind> wind_options(const WindFlags& f) {
-    auto profile = parse_wind_profile(f.profile);
-    if (!profile)
-        return Status{ErrorCode::invalid_argument,
-                      "--wind '" + f.profile + "': expected none, constant, y1, y2, y3, y4 or turbulent"};
+    auto profile = parse_choice(kWindProfileNames, f.profile, "--wind", Spelling::as_is);
+    if (!profile) return profile.status();
     auto direction = parse_vec3(f.direction, "--wind-dir");
     if (!direction) return direction.status();
     Wind wind = f.wind;

@@ -6,11 +6,14 @@
 
 #include <CLI/CLI.hpp>
 
+#include <algorithm>
 #include <charconv>
+#include <initializer_list>
 #include <limits>
 #include <memory>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <type_traits>
 #include <vector>
 
@@ -53,6 +56,47 @@ CLI::Option* add_integer_option(CLI::App& app, const std::string& name, T& targe
         },
         help);
 }
+
+/// How a flag spells the names of a name table (include/hmsm/names.h): as the table does, or
+/// with '-' between words where the table has '_' (either is accepted then).
+enum class Spelling { as_is, hyphens };
+
+/// "a, b or c" (a alone, "a or b"), as a flag's help and error texts list its choices.
+std::string join_choices(const std::vector<std::string>& names);
+std::string spelled(std::string_view name, Spelling spelling);
+
+/// The names of `table` in its order, spelled for a flag, without the `excluded` values;
+/// `marked` is followed by " (default)".
+template <class Enum, std::size_t N>
+std::string choices(const NamedValue<Enum> (&table)[N], Spelling spelling,
+                    std::type_identity_t<std::optional<Enum>> marked = std::nullopt,
+                    std::type_identity_t<std::initializer_list<Enum>> excluded = {}) {
+    std::vector<std::string> names;
+    for (const NamedValue<Enum>& row : table) {
+        if (std::find(excluded.begin(), excluded.end(), row.value) != excluded.end()) continue;
+        names.push_back(spelled(row.name, spelling) + (marked && row.value == *marked ? " (default)" : ""));
+    }
+    return join_choices(names);
+}
+
+/// The value of `table` that a flag's `text` names (not one of `excluded`); otherwise the
+/// error "FLAG 'TEXT': expected a, b or c".
+template <class Enum, std::size_t N>
+Result<Enum> parse_choice(const NamedValue<Enum> (&table)[N], const std::string& text, const std::string& flag,
+                          Spelling spelling, std::type_identity_t<std::initializer_list<Enum>> excluded = {}) {
+    std::string key = text;
+    if (spelling == Spelling::hyphens) std::replace(key.begin(), key.end(), '-', '_');
+    std::optional<Enum> value = value_named(table, key);
+    if (value && std::find(excluded.begin(), excluded.end(), *value) == excluded.end()) return *value;
+    return Status{ErrorCode::invalid_argument,
+                  flag + " '" + text + "': expected " + choices<Enum>(table, spelling, std::nullopt, excluded)};
+}
+
+/// The backend a flag names (`automatic`, spelled "auto", only where `allow_auto`); otherwise
+/// the error "FLAG 'NAME': expected cpu, cpu64, ...".
+Result<BackendKind> parse_backend(const std::string& name, const std::string& flag, bool allow_auto = true);
+/// The backends a flag accepts, for its help; `marked` is the default.
+std::string backend_choices(std::optional<BackendKind> marked, bool allow_auto = true);
 
 /// Where the trees come from: one of --tree, --preset, --forest; plus a grid of instances.
 struct SourceFlags {

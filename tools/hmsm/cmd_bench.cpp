@@ -52,6 +52,21 @@ std::vector<std::string> split_list(const std::string& text) {
     return items;
 }
 
+/// Instance counts "N,N,..." in [1, 1000000], or "none" (no rows).
+Result<std::vector<uint32_t>> instance_counts(const std::string& text, const std::string& flag) {
+    std::vector<uint32_t> counts;
+    if (text == "none") return counts;
+    for (const std::string& item : split_list(text)) {
+        char* end = nullptr;
+        const long long n = std::strtoll(item.c_str(), &end, 10);
+        if (item.empty() || *end != '\0' || n < 1 || n > 1000000)
+            return Status{ErrorCode::invalid_argument,
+                          flag + " '" + item + "': expected counts in [1, 1000000] or none"};
+        counts.push_back(uint32_t(n));
+    }
+    return counts;
+}
+
 std::string utc_now() {
     std::time_t now = std::time(nullptr);
     std::tm tm{};
@@ -117,8 +132,9 @@ void register_bench_flags(CLI::App& app) {
     app.add_option("--presets", flags.presets, "comma-separated presets (default paper-1,...,paper-5; none: forest only)");
     app.add_option("--tree", flags.tree, "benchmark this hmsm-tree file instead of the presets "
                                          "(also the forest model)");
-    app.add_option("--backends", flags.backends, "comma-separated backends (default cpu,cpu-parallel,vulkan,cuda; "
-                                                 "unavailable ones are skipped with a note)");
+    app.add_option("--backends", flags.backends,
+                   "comma-separated backends: " + backend_choices(std::nullopt, false) +
+                       " (default cpu,cpu-parallel,vulkan,cuda; unavailable ones are skipped with a note)");
     add_integer_option(app, "--steps", flags.steps, "steps per timed batch (default 100)");
     add_integer_option(app, "--warmup", flags.warmup, "warm-up steps before timing (default 20)");
     add_integer_option(app, "--repeats", flags.repeats, "timed batches per figure; medians are reported (default 5)");
@@ -129,7 +145,9 @@ void register_bench_flags(CLI::App& app) {
                    "(default 1,10,100,1000,10000, plus 100000 x paper-5 unless --quick; none: no rows)");
     app.add_option("--spacing", flags.spacing, "forest grid spacing in metres (default 25)");
     app.add_option("--forest-composition", flags.forest_composition,
-                   "composition of the forest rows (default automatic, the library's default; e.g. fused)");
+                   "composition of the forest rows: " +
+                       choices(kCompositionNames, Spelling::hyphens, Composition::automatic) +
+                       "; automatic is the library's default");
     app.add_option("--case-budget", flags.case_budget,
                    "seconds one case may take: slower cases run fewer steps, forest sizes "
                    "extrapolated past it are skipped (default 20)");
@@ -172,9 +190,9 @@ int run_bench(CLI::App& app) {
         return fail_input("--repeats " + std::to_string(flags.repeats) + ": must be in [1, 1000]");
     if (!(flags.case_budget > 0.0) || !std::isfinite(flags.case_budget))
         return fail_input("--case-budget: must be a positive number of seconds");
-    const auto forest_composition = parse_composition(flags.forest_composition);
-    if (!forest_composition)
-        return fail_input("--forest-composition '" + flags.forest_composition + "': unknown composition");
+    const auto forest_composition =
+        parse_choice(kCompositionNames, flags.forest_composition, "--forest-composition", Spelling::hyphens);
+    if (!forest_composition) return fail(forest_composition.status());
     if (!(flags.spacing >= 0.0) || !std::isfinite(flags.spacing))
         return fail_input("--spacing: must be a finite number >= 0");
 
@@ -183,9 +201,8 @@ int run_bench(CLI::App& app) {
     json skipped_backends = json::array();
     const auto compiled = compiled_backends();
     for (const std::string& name : split_list(flags.backends)) {
-        auto kind = parse_backend_kind(name);
-        if (!kind || *kind == BackendKind::automatic)
-            return fail_input("--backends '" + name + "': expected cpu, cpu-parallel, cpu64, vulkan or cuda");
+        auto kind = parse_backend(name, "--backends", false);
+        if (!kind) return fail(kind.status());
         bool duplicate = false;
         for (const auto& b : backends) duplicate |= b.kind == *kind;
         if (duplicate) continue;
@@ -197,27 +214,12 @@ int run_bench(CLI::App& app) {
         backends.push_back(BackendRun{*kind, true, {}, std::nullopt});
     }
 
-    std::vector<uint32_t> counts;
-    if (flags.instances != "none") {
-        for (const std::string& item : split_list(flags.instances)) {
-            char* end = nullptr;
-            const long long n = std::strtoll(item.c_str(), &end, 10);
-            if (item.empty() || *end != '\0' || n < 1 || n > 1000000)
-                return fail_input("--instances '" + item + "': expected counts in [1, 1000000] or none");
-            counts.push_back(uint32_t(n));
-        }
-    }
-
-    std::vector<uint32_t> joint_counts;
-    if (flags.joint_instances != "none") {
-        for (const std::string& item : split_list(flags.joint_instances)) {
-            char* end = nullptr;
-            const long long n = std::strtoll(item.c_str(), &end, 10);
-            if (item.empty() || *end != '\0' || n < 1 || n > 1000000)
-                return fail_input("--joint-instances '" + item + "': expected counts in [1, 1000000] or none");
-            joint_counts.push_back(uint32_t(n));
-        }
-    }
+    auto parsed_counts = instance_counts(flags.instances, "--instances");
+    if (!parsed_counts) return fail(parsed_counts.status());
+    const std::vector<uint32_t> counts = std::move(parsed_counts).value();
+    auto parsed_joint_counts = instance_counts(flags.joint_instances, "--joint-instances");
+    if (!parsed_joint_counts) return fail(parsed_joint_counts.status());
+    const std::vector<uint32_t> joint_counts = std::move(parsed_joint_counts).value();
 
     // Models: the presets (or --tree), and the forest model (paper-1 or --tree).
     std::vector<Model> models;

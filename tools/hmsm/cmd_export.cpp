@@ -33,14 +33,13 @@ void register_export_flags(CLI::App& app) {
     add_wind_flags(app, flags.wind);
     app.add_option("--seconds", flags.seconds, "clip length T in seconds")->required();
     app.add_option("--fps", flags.fps, "key frames per second F (frame k = 0 ... T*F)")->required();
-    app.add_option("--backend", flags.backend, "cpu, cpu-parallel, cpu64 (default), vulkan, cuda or auto");
+    app.add_option("--backend", flags.backend, backend_choices(BackendKind::cpu64));
 }
 
 int run_export(CLI::App& app) {
     SimulationConfig config;
-    auto backend = parse_backend_kind(flags.backend);
-    if (!backend)
-        return fail_input("--backend '" + flags.backend + "': expected cpu, cpu-parallel, cpu64, vulkan, cuda or auto");
+    auto backend = parse_backend(flags.backend, "--backend");
+    if (!backend) return fail(backend.status());
     config.backend = *backend;
     if (!std::isfinite(flags.seconds) || flags.seconds < 0.0)
         return fail_input("--seconds " + std::to_string(flags.seconds) + ": must be finite and >= 0");

@@ -131,8 +131,10 @@ void register_render_flags(CLI::App& app) {
     add_parameter_flags(app, flags.parameters);
     add_wind_flags(app, flags.wind);
     app.add_option("--backend", flags.backend,
-                   "auto (default) or vulkan: simulate on the rendering device and draw from its "
-                   "buffers; cpu, cpu-parallel, cpu64, cuda: read back and upload each frame");
+                   "auto (default) or vulkan: simulate on the rendering device and draw from its buffers; " +
+                       choices(kBackendKindNames, Spelling::as_is, std::nullopt,
+                               {BackendKind::automatic, BackendKind::vulkan}) +
+                       ": read back and upload each frame");
     add_integer_option(app, "--frames", flags.frames, "frames to render (default 60)");
     app.add_option("--fps", flags.fps, "frames per second of simulated time (default 30)");
     app.add_option("--warmup", flags.warmup, "seconds simulated before the first frame (default 0)");
@@ -166,9 +168,8 @@ int run_render(CLI::App& app) {
     // --- everything the user can get wrong is checked before any file is touched ---
     SimulationConfig config;
     config.profile_passes = false;
-    auto backend = parse_backend_kind(flags.backend);
-    if (!backend)
-        return fail_input("--backend '" + flags.backend + "': expected cpu, cpu-parallel, cpu64, vulkan, cuda or auto");
+    auto backend = parse_backend(flags.backend, "--backend");
+    if (!backend) return fail(backend.status());
     config.backend = *backend;
     if (flags.frames < 1 || flags.frames > 100000)
         return fail_input("--frames " + std::to_string(flags.frames) + ": must be within 1..100000");

@@ -170,16 +170,16 @@ void register_simulate_flags(CLI::App& app) {
     add_model_flags(app, flags.model);
     add_parameter_flags(app, flags.parameters);
     add_wind_flags(app, flags.wind);
-    app.add_option("--backend", flags.backend, "cpu, cpu-parallel, cpu64, vulkan, cuda or auto (default)");
+    app.add_option("--backend", flags.backend, backend_choices(BackendKind::automatic));
     app.add_option("--composition", flags.composition,
-                   "passes 3 and 5: automatic (default: path-walk on a GPU, else pointer-jumping), "
-                   "pointer-jumping (the paper's rounds, per round or in one dispatch by scene size), "
-                   "pointer-jumping-per-round, pointer-jumping-in-dispatch, level-by-level, fused (passes "
-                   "1-5 in one dispatch, a workgroup per instance) or path-walk (every chain walks its "
-                   "ancestors; 4 dispatches per step)");
+                   "passes 3 and 5 (docs/cli.md): " +
+                       choices(kCompositionNames, Spelling::hyphens, Composition::automatic) +
+                       "; automatic is path-walk on a GPU, else pointer-jumping");
     app.add_option("--vertex-layout", flags.vertex_layout,
-                   "device layout of the mesh vertices: separate (default; position and normal "
-                   "vec4) or packed (the normal octahedral-encoded in the position's w)");
+                   "device layout of the mesh vertices: " +
+                       choices(kVertexLayoutNames, Spelling::as_is, VertexLayout::separate) +
+                       "; separate: position and normal vec4, packed: the normal octahedral-encoded "
+                       "in the position's w");
     add_integer_option(app, "--steps", flags.steps, "time steps to run (default 120)");
     app.add_option("--dump-nodes", flags.dump_nodes, "CSV instance,node,x,y,z after the last step");
     app.add_option("--dump-chains", flags.dump_chains,
@@ -190,31 +190,27 @@ void register_simulate_flags(CLI::App& app) {
                    "nodes --trace follows in every instance: top (per model the highest) or I,J,...");
     app.add_option("--dump-vertices", flags.dump_vertices, "float32 xyz per mesh vertex");
     app.add_option("--outputs", flags.outputs,
-                   "what each step produces: joints (passes 1-5: joint matrices), nodes (1-6: plus "
-                   "node positions) or all (default; 1-7: plus mesh vertices)");
+                   "what each step produces: " + choices(kOutputsNames, Spelling::as_is, Outputs::all) +
+                       "; joints: passes 1-5, joint matrices; nodes: 1-6, plus node positions; all: "
+                       "1-7, plus mesh vertices");
     app.add_option("--report", flags.report, "JSON report: backend, device, counts, times");
     app.add_flag("--no-progress", flags.no_progress, "no progress on stderr");
 }
 
 int run_simulate(CLI::App& app) {
     SimulationConfig config;
-    auto backend = parse_backend_kind(flags.backend);
-    if (!backend)
-        return fail_input("--backend '" + flags.backend + "': expected cpu, cpu-parallel, cpu64, vulkan, cuda or auto");
+    auto backend = parse_backend(flags.backend, "--backend");
+    if (!backend) return fail(backend.status());
     config.backend = *backend;
     config.profile_passes = !flags.report.empty();  // per-pass times only feed the report
-    std::string composition = flags.composition;
-    std::replace(composition.begin(), composition.end(), '-', '_');
-    if (auto parsed = parse_composition(composition)) config.composition = *parsed;
-    else return fail_input("--composition '" + flags.composition +
-                           "': expected automatic, pointer-jumping, pointer-jumping-per-round, "
-                           "pointer-jumping-in-dispatch, level-by-level, fused or path-walk");
-    auto vertex_layout = parse_vertex_layout(flags.vertex_layout);
-    if (!vertex_layout)
-        return fail_input("--vertex-layout '" + flags.vertex_layout + "': expected separate or packed");
+    auto composition = parse_choice(kCompositionNames, flags.composition, "--composition", Spelling::hyphens);
+    if (!composition) return fail(composition.status());
+    config.composition = *composition;
+    auto vertex_layout = parse_choice(kVertexLayoutNames, flags.vertex_layout, "--vertex-layout", Spelling::as_is);
+    if (!vertex_layout) return fail(vertex_layout.status());
     config.vertex_layout = *vertex_layout;
-    auto produced = parse_outputs(flags.outputs);
-    if (!produced) return fail_input("--outputs '" + flags.outputs + "': expected joints, nodes or all");
+    auto produced = parse_choice(kOutputsNames, flags.outputs, "--outputs", Spelling::as_is);
+    if (!produced) return fail(produced.status());
     config.outputs = *produced;
     if (!flags.dump_nodes.empty() && config.outputs == Outputs::joints)
         return fail_input("--dump-nodes needs node positions: --outputs nodes or all, not joints");
@@ -324,9 +320,8 @@ int run_simulate(CLI::App& app) {
         nlohmann::json r;
         r["backend"] = to_string(sim.backend_kind());
         r["device"] = sim.device_name();
-        std::string resolved = to_string(sim.config().composition);  // automatic resolved, as the flag spells it
-        std::replace(resolved.begin(), resolved.end(), '_', '-');
-        r["composition"] = resolved;
+        // automatic resolved, as the flag spells it
+        r["composition"] = spelled(to_string(sim.config().composition), Spelling::hyphens);
         r["vertex_layout"] = to_string(config.vertex_layout);
         r["outputs"] = to_string(config.outputs);
         r["instances"] = sim.instance_count();
