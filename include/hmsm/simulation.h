@@ -142,7 +142,8 @@ struct ForceField {
 /// At most this many force fields act at once.
 inline constexpr uint32_t kMaxForceFields = 16;
 
-/// Checks a force-field list (count, finite numbers, radius > 0); the message names the field.
+/// Checks a force-field list (count; centre, radius and force within the ranges of
+/// docs/model.md 3.11); the message names the field, the value and the limit.
 HMSM_API Status validate_force_fields(std::span<const ForceField> fields);
 
 /// A running simulation of a scene. Threading: one Simulation may be used by one thread at a
@@ -177,8 +178,9 @@ public:
     /// Replaces the force-field list (at most kMaxForceFields; empty removes all).
     Status set_force_fields(std::span<const ForceField> fields);
     std::span<const ForceField> force_fields() const;
-    /// Per instance (index into the current instance list): wind scale (>= 0), wind phase (in
-    /// profile units) and the active flag. An inactive instance is frozen: its state and outputs
+    /// Per instance (index into the current instance list): wind scale (0 to 1e6, and the
+    /// chains' wind force A s lambda at most 1e30: docs/model.md 3.11), wind phase (in profile
+    /// units) and the active flag. An inactive instance is frozen: its state and outputs
     /// stay as they are until it is activated again.
     Status set_instance_wind_scale(uint64_t instance, double wind_scale);
     Status set_instance_wind_phase(uint64_t instance, double wind_phase);

@@ -70,6 +70,11 @@ Result<Scene> load_scene(const SourceFlags& f, CLI::App& app, const ModelOptions
     if (!tree) return tree.status();
     if (app.get_option_no_throw("--instances") && app.count("--instances") > 0) {
         if (f.instances == 0) return Status{ErrorCode::invalid_argument, "--instances must be >= 1"};
+        // The library's instance limit (Simulation::create's), before anything is built.
+        if (f.instances > kMaxInstances)
+            return Status{ErrorCode::unsupported, "scene too large: --instances " + std::to_string(f.instances) +
+                                                      ", at most " + std::to_string(kMaxInstances) +
+                                                      " instances are supported"};
         if (app.count("--origin") || app.count("--yaw"))
             return Status{ErrorCode::invalid_argument,
                           "--origin and --yaw place a single instance; they cannot be used with --instances"};
