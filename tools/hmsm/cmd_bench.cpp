@@ -190,6 +190,7 @@ int run_bench(CLI::App& app) {
     }
 
     StagedOutputs outputs;
+    outputs.add_inputs({flags.tree});
     std::optional<size_t> json_file;
     if (!flags.json_path.empty()) {
         auto staged = outputs.stage(flags.json_path, "--json");
