@@ -233,9 +233,11 @@ Result<std::unique_ptr<Simulation>> Simulation::Impl::create(const Scene& scene,
         if (!created) return created.status();
         sim->backend_ = std::move(created).value();
     }
-    if (config.composition == Composition::automatic)
-        sim->config_.composition =
-            sim->backend_->prefers_path_walk() ? Composition::path_walk : Composition::pointer_jumping;
+    if (config.composition == Composition::automatic) {
+        int32_t deepest = 0;
+        for (const Hierarchy& h : sim->hierarchies_) deepest = std::max(deepest, h.max_depth);
+        sim->config_.composition = detail::automatic_composition(sim->backend_->prefers_path_walk(), deepest);
+    }
     sim->backend_->set_profiling(config.profile_passes);
     HMSM_TRY(sim->backend_->upload(*sim->data_));
 

@@ -1,6 +1,7 @@
 // hmsm bench (docs/model.md 7): the paper's Table 1 per preset and backend, pointer jumping
 // vs level by level, and forest scaling against the copy-bandwidth roofline. Markdown on stdout,
 // JSON with --json (schema: docs/benchmarks/README.md).
+#include "bench_depth.h"
 #include "bench_joints.h"
 #include "bench_report.h"
 #include "bench_run.h"
@@ -34,6 +35,7 @@ struct BenchFlags {
     int64_t steps = 100, warmup = 20, repeats = 5;
     std::string instances = "1,10,100,1000,10000";
     std::string joint_instances = "1,10,100,1000,10000";  // joints-only forest (bench_joints.h)
+    std::string composition_depths = "none";  // path walk against pointer jumping (bench_depth.h)
     double spacing = 25.0;
     double case_budget = 20.0;
     std::string forest_composition = "automatic";
@@ -63,13 +65,15 @@ std::string utc_now() {
 
 int render(const std::string& path) {
     std::ifstream in(path);
-    if (!in) return fail_input("--render '" + path + "': cannot read the file");
+    if (!in) return fail_input("--render '" + detail::quote_input(path) + "': cannot read the file");
     json document = json::parse(in, nullptr, false);
     if (document.is_discarded() || !document.is_object() || document.value("format", "") != "hmsm-bench")
-        return fail_input("--render '" + path + "': not an hmsm-bench JSON document");
+        return fail_input("--render '" + detail::quote_input(path) + "': not an hmsm-bench JSON document");
     std::fputs(render_markdown(document).c_str(), stdout);
     std::fputs(bench::render_joint_forest(document.value("forest_joints", json::array())).c_str(), stdout);
     std::fputs(bench::render_live_control(document.value("live_control", json::array())).c_str(), stdout);
+    std::fputs(bench::render_composition_depths(document.value("composition_depths", json::array())).c_str(),
+               stdout);
     return kExitOk;
 }
 
@@ -89,6 +93,9 @@ void register_bench_flags(CLI::App& app) {
     app.add_option("--joint-instances", flags.joint_instances,
                    "joints-only forest sizes of paper-1 (outputs joints, passes 1-5), comma-separated "
                    "(default 1,10,100,1000,10000, plus 100000 x paper-5 unless --quick; none: no rows)");
+    app.add_option("--composition-depths", flags.composition_depths,
+                   "path_walk against pointer_jumping per step on synthetic chains of these depths, "
+                   "1 and 100 instances, e.g. 16,32,64,128,256,1024 (default none)");
     app.add_option("--spacing", flags.spacing, "forest grid spacing in metres (default 25)");
     app.add_option("--forest-composition", flags.forest_composition,
                    "composition of the forest rows (default automatic, the library's default; e.g. fused)");
@@ -123,7 +130,7 @@ int run_bench(CLI::App& app) {
         return fail_input("--case-budget: must be a positive number of seconds");
     const auto forest_composition = parse_composition(flags.forest_composition);
     if (!forest_composition)
-        return fail_input("--forest-composition '" + flags.forest_composition + "': unknown composition");
+        return fail_input("--forest-composition '" + detail::quote_input(flags.forest_composition) + "': unknown composition");
     if (!(flags.spacing >= 0.0) || !std::isfinite(flags.spacing))
         return fail_input("--spacing: must be a finite number >= 0");
 
@@ -152,7 +159,7 @@ int run_bench(CLI::App& app) {
             char* end = nullptr;
             const long long n = std::strtoll(item.c_str(), &end, 10);
             if (item.empty() || *end != '\0' || n < 1 || n > 1000000)
-                return fail_input("--instances '" + item + "': expected counts in [1, 1000000] or none");
+                return fail_input("--instances '" + detail::quote_input(item) + "': expected counts in [1, 1000000] or none");
             counts.push_back(uint32_t(n));
         }
     }
@@ -163,8 +170,19 @@ int run_bench(CLI::App& app) {
             char* end = nullptr;
             const long long n = std::strtoll(item.c_str(), &end, 10);
             if (item.empty() || *end != '\0' || n < 1 || n > 1000000)
-                return fail_input("--joint-instances '" + item + "': expected counts in [1, 1000000] or none");
+                return fail_input("--joint-instances '" + detail::quote_input(item) + "': expected counts in [1, 1000000] or none");
             joint_counts.push_back(uint32_t(n));
+        }
+    }
+
+    std::vector<uint32_t> depths;
+    if (flags.composition_depths != "none") {
+        for (const std::string& item : split_list(flags.composition_depths)) {
+            char* end = nullptr;
+            const long long n = std::strtoll(item.c_str(), &end, 10);
+            if (item.empty() || *end != '\0' || n < 1 || n > 4096)
+                return fail_input("--composition-depths '" + detail::quote_input(item) + "': expected depths in [1, 4096] or none");
+            depths.push_back(uint32_t(n));
         }
     }
 
@@ -256,6 +274,10 @@ int run_bench(CLI::App& app) {
     const json live_control = counts.empty() ? json::array()
                                              : measure_live_control(forest_model.tree, live_backends,
                                                                     flags.quick ? 20u : 1000u, flags.spacing);
+    const json composition_depths =
+        depths.empty() ? json::array()
+                       : measure_composition_depths(live_backends, depths, settings.steps, settings.warmup,
+                                                    settings.case_budget);
     progress.finish();
 
     add_speedups(run.presets, run.forest);
@@ -317,6 +339,7 @@ int run_bench(CLI::App& app) {
         {"forest", run.forest},
         {"forest_joints", forest_joints},
         {"live_control", live_control},
+        {"composition_depths", composition_depths},
         {"copy_bandwidth", copy},
         {"skipped", run.skipped},
         {"notes", notes},
@@ -329,6 +352,7 @@ int run_bench(CLI::App& app) {
     std::fputs(render_markdown(document).c_str(), stdout);
     std::fputs(bench::render_joint_forest(forest_joints).c_str(), stdout);
     std::fputs(bench::render_live_control(live_control).c_str(), stdout);
+    std::fputs(bench::render_composition_depths(composition_depths).c_str(), stdout);
     std::fflush(stdout);
     if (json_file) {
         std::string text = document.dump(2) + "\n";
