@@ -245,4 +245,18 @@ Status Simulation::remove_instances(std::span<const uint64_t> indices) {
     return s.reshape(survivors, {});
 }
 
+Status Simulation::reset_instances(std::span<const uint32_t> indices) {
+    if (indices.empty()) return {};
+    Impl& s = *impl_;
+    std::vector<bool> listed(s.instances_.size(), false);
+    for (uint32_t i : indices) {
+        HMSM_TRY(check_instance(i, s.instances_.size()));
+        if (listed[i]) return {ErrorCode::invalid_argument, instance_name(i) + " is listed twice for reset"};
+        listed[i] = true;
+    }
+    std::vector<uint32_t> sorted(indices.begin(), indices.end());
+    std::sort(sorted.begin(), sorted.end());
+    return s.reset(sorted);
+}
+
 }  // namespace hmsm

@@ -44,6 +44,8 @@ struct __attribute__((visibility("hidden"))) Simulation::Impl {
     /// `fields` against the float range (docs/model.md 3.11).
     Status check_forces(const Wind& wind, std::span<const Instance> instances,
                         std::span<const ForceField> fields) const;
+    /// Resets `indices` to rest (S = V = 0, posed at rest); live_control.cpp.
+    Status reset(std::span<const uint32_t> indices);
     /// Checks that the wind keeps every force and phase finite for `instances`.
     Status check_wind(const Wind& wind, std::span<const Instance> instances) const;
     Status read_elements(Output output, std::vector<double>* as_double,

@@ -193,6 +193,14 @@ public:
     /// Removes instances by their current indices (no repeats); the survivors keep their order
     /// and their state, moved on the device (docs/driving.md).
     Status remove_instances(std::span<const uint64_t> indices);
+    /// Puts instances (current indices, no repeats) back at rest, exactly as right after
+    /// add_instances(): S = V = 0, generalized force 0, posed at rest, whatever their state was
+    /// (violent motion, or NaN from the caller's own numbers). Their settings (origin, wind
+    /// scale and phase, active flag) and every other instance are untouched; a paused instance
+    /// is reset and stays paused. Takes effect at once (read() returns the rest pose) and costs
+    /// one rest pose of the listed instances. An index out of range or listed twice is refused
+    /// and changes nothing. Threading as every non-const member (see the class comment).
+    Status reset_instances(std::span<const uint32_t> indices);
     /// The current instance list (models are those of the scene given to create()).
     std::span<const Instance> instances() const;
 

@@ -231,6 +231,17 @@ hmsm_status hmsm_simulation_remove_instances(hmsm_simulation* simulation, const 
     });
 }
 
+hmsm_status hmsm_simulation_reset_instances(hmsm_simulation* simulation, const uint32_t* indices,
+                                            size_t count) {
+    return guarded([&]() -> Status {
+        const char* fn = "hmsm_simulation_reset_instances";
+        if (!simulation) return bad(std::string(fn) + ": simulation is NULL");
+        if (!indices && count > 0) return bad(std::string(fn) + ": indices is NULL with count > 0");
+        std::vector<uint32_t> copied(indices, indices + count);
+        return simulation->simulation->reset_instances(copied);
+    });
+}
+
 hmsm_status hmsm_simulation_instances(const hmsm_simulation* simulation, hmsm_instance* instances,
                                       size_t capacity, size_t* count) {
     return guarded([&]() -> Status {
