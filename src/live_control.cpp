@@ -2,6 +2,7 @@
 // adding and removing instances (their reshaping of the device scene: live_reshape.cpp).
 #include <hmsm/simulation.h>
 
+#include "model/input_limits.h"
 #include "simulation_impl.h"
 
 #include <glm/geometric.hpp>
@@ -12,12 +13,6 @@
 
 namespace hmsm {
 
-namespace {
-
-bool finite(const Vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
-
-}  // namespace
-
 Status validate_force_fields(std::span<const ForceField> fields) {
     if (fields.size() > kMaxForceFields)
         return {ErrorCode::invalid_argument, std::to_string(fields.size()) + " force fields: at most " +
@@ -27,12 +22,7 @@ Status validate_force_fields(std::span<const ForceField> fields) {
         const std::string name = "force field " + std::to_string(i);
         if (f.kind != ForceField::Kind::directional && f.kind != ForceField::Kind::radial)
             return {ErrorCode::invalid_argument, name + ": kind must be directional or radial"};
-        if (!finite(f.center)) return {ErrorCode::invalid_argument, name + ": center is not finite"};
-        if (!std::isfinite(f.radius) || !(f.radius > 0.0))
-            return {ErrorCode::invalid_argument, name + ": radius must be finite and > 0"};
-        if (!finite(f.directional))
-            return {ErrorCode::invalid_argument, name + ": directional is not finite"};
-        if (!std::isfinite(f.radial)) return {ErrorCode::invalid_argument, name + ": radial is not finite"};
+        HMSM_TRY(detail::check_force_field(name, f.center, f.radius, f.directional, f.radial));
     }
     return {};
 }
@@ -159,6 +149,7 @@ Status Simulation::set_wind(const Wind& wind) {
 
 Status Simulation::set_force_fields(std::span<const ForceField> fields) {
     HMSM_TRY(validate_force_fields(fields));
+    HMSM_TRY(impl_->check_forces(impl_->config_.wind, {}, fields));
     impl_->force_fields_.assign(fields.begin(), fields.end());
     impl_->header_dirty_ = true;
     return {};
@@ -175,8 +166,11 @@ Status check_instance(uint64_t instance, size_t count) {
 
 Status Simulation::set_instance_wind_scale(uint64_t instance, double wind_scale) {
     HMSM_TRY(check_instance(instance, impl_->instances_.size()));
-    if (!std::isfinite(wind_scale) || wind_scale < 0.0)
-        return {ErrorCode::invalid_argument, instance_name(instance) + ": wind scale must be finite and >= 0"};
+    HMSM_TRY(detail::check_wind_scale(instance_name(instance) + ": wind scale", wind_scale));
+    Instance changed = impl_->instances_[instance];
+    changed.wind_scale = wind_scale;
+    HMSM_TRY(detail::check_wind_force(instance_name(instance), impl_->config_.wind.strength, wind_scale,
+                                      impl_->largest_wind_area_[changed.model]));
     impl_->instances_[instance].wind_scale = wind_scale;
     impl_->dirty_instances_.push_back(uint32_t(instance));
     return {};
@@ -206,6 +200,10 @@ Status Simulation::set_instance_active(uint64_t instance, bool active) {
 Status Simulation::add_instances(std::span<const Instance> instances) {
     if (instances.empty()) return {};
     Impl& s = *impl_;
+    if (instances.size() > kMaxInstances - s.instances_.size())
+        return {ErrorCode::unsupported, "scene too large: " + std::to_string(s.instances_.size()) + " + " +
+                                            std::to_string(instances.size()) + " instances, at most " +
+                                            std::to_string(kMaxInstances) + " are supported"};
     for (size_t i = 0; i < instances.size(); ++i) {
         const Instance& inst = instances[i];
         const std::string where = "added instance " + std::to_string(i) + ": ";
@@ -213,11 +211,12 @@ Status Simulation::add_instances(std::span<const Instance> instances) {
             return {ErrorCode::invalid_argument, where + "model index " + std::to_string(inst.model) +
                                                      " does not exist (the scene has " +
                                                      std::to_string(s.scene_.models.size()) + " models)"};
-        if (!std::isfinite(inst.origin.x) || !std::isfinite(inst.origin.y) || !std::isfinite(inst.origin.z))
-            return {ErrorCode::invalid_argument, where + "origin is not finite"};
+        HMSM_TRY(detail::check_coordinate(where + "origin", inst.origin));
         if (!std::isfinite(inst.yaw)) return {ErrorCode::invalid_argument, where + "yaw is not finite"};
-        if (!std::isfinite(inst.wind_scale) || inst.wind_scale < 0.0)
-            return {ErrorCode::invalid_argument, where + "wind scale must be finite and >= 0"};
+        HMSM_TRY(detail::check_wind_scale(where + "wind scale", inst.wind_scale));
+        HMSM_TRY(detail::check_wind_force(where + "model '" + detail::quote_input(s.scene_.model_names[inst.model]) + "'",
+                                          s.config_.wind.strength, inst.wind_scale,
+                                          s.largest_wind_area_[inst.model]));
         if (!std::isfinite(inst.wind_phase) ||
             !std::isfinite(detail::instance_wind_phase(s.config_.wind, inst)))
             return {ErrorCode::invalid_argument, where + "wind phase is not finite"};
@@ -244,6 +243,20 @@ Status Simulation::remove_instances(std::span<const uint64_t> indices) {
     for (uint32_t i = 0; i < s.instances_.size(); ++i)
         if (!removed[i]) survivors.push_back(i);
     return s.reshape(survivors, {});
+}
+
+Status Simulation::reset_instances(std::span<const uint32_t> indices) {
+    if (indices.empty()) return {};
+    Impl& s = *impl_;
+    std::vector<bool> listed(s.instances_.size(), false);
+    for (uint32_t i : indices) {
+        HMSM_TRY(check_instance(i, s.instances_.size()));
+        if (listed[i]) return {ErrorCode::invalid_argument, instance_name(i) + " is listed twice for reset"};
+        listed[i] = true;
+    }
+    std::vector<uint32_t> sorted(indices.begin(), indices.end());
+    std::sort(sorted.begin(), sorted.end());
+    return s.reset(sorted);
 }
 
 }  // namespace hmsm

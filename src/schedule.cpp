@@ -2,6 +2,8 @@
 // schedule_apply.cpp).
 #include <hmsm/schedule.h>
 
+#include "model/input_limits.h"
+
 #include <algorithm>
 #include <cmath>
 #include <map>
@@ -28,12 +30,17 @@ Status bad(size_t event, const ScheduleEvent& e, const std::string& what) {
             "schedule: events[" + std::to_string(event) + "] (step " + std::to_string(e.step) + "): " + what};
 }
 
+/// A limit's status with the event named.
+Status prefixed(size_t event, const ScheduleEvent& e, const Status& status) {
+    return status ? status : bad(event, e, status.message());
+}
+
 bool finite(const Vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
 
 std::string model_list(std::span<const std::string> names) {
     std::string list;
     for (size_t m = 0; m < names.size(); ++m) list += (m ? ", " : "") + ("\"" + names[m] + "\"");
-    return list;
+    return detail::quote_input(list);
 }
 
 }  // namespace
@@ -60,7 +67,8 @@ Status validate_schedule(const Schedule& schedule, std::span<const std::string> 
                 return bad(i, e, "wind.front_speed must be 0 or >= 0.01 m/s");
         }
         if (e.forces) {
-            // validate_force_fields' checks, here so that the parsers link without a simulation.
+            // validate_force_fields' checks (the limits' own), here so that the parsers link
+            // without a simulation.
             if (e.forces->size() > kMaxForceFields)
                 return bad(i, e, "forces: " + std::to_string(e.forces->size()) + " force fields, at most " +
                                      std::to_string(kMaxForceFields) + " may act at once");
@@ -69,10 +77,10 @@ Status validate_schedule(const Schedule& schedule, std::span<const std::string> 
                 const std::string at = "forces[" + std::to_string(k) + "]: ";
                 if (f.kind != ForceField::Kind::directional && f.kind != ForceField::Kind::radial)
                     return bad(i, e, at + "kind must be directional or radial");
-                if (!finite(f.center) || !finite(f.directional) || !std::isfinite(f.radial))
-                    return bad(i, e, at + "center, directional and radial must be finite");
-                if (!(std::isfinite(f.radius) && f.radius > 0.0))
-                    return bad(i, e, at + "radius must be finite and > 0");
+                if (Status range = detail::check_force_field("forces[" + std::to_string(k) + "]", f.center,
+                                                             f.radius, f.directional, f.radial);
+                    !range)
+                    return bad(i, e, range.message());
             }
         }
         std::map<uint64_t, bool> named;
@@ -82,9 +90,11 @@ Status validate_schedule(const Schedule& schedule, std::span<const std::string> 
                                      std::to_string(count) + " instance(s) before this event)");
             if (!named.emplace(c.instance, true).second)
                 return bad(i, e, "instances: instance " + std::to_string(c.instance) + " is named twice");
-            if (c.wind_scale && !(std::isfinite(*c.wind_scale) && *c.wind_scale >= 0.0))
-                return bad(i, e, "instances: wind_scale of instance " + std::to_string(c.instance) +
-                                     " must be finite and >= 0");
+            if (c.wind_scale)
+                if (Status range = detail::check_wind_scale(
+                        "instances: wind_scale of instance " + std::to_string(c.instance), *c.wind_scale);
+                    !range)
+                    return bad(i, e, range.message());
             if (c.wind_phase && !std::isfinite(*c.wind_phase))
                 return bad(i, e, "instances: wind_phase of instance " + std::to_string(c.instance) +
                                      " must be finite");
@@ -102,12 +112,12 @@ Status validate_schedule(const Schedule& schedule, std::span<const std::string> 
             const ScheduledInstance& a = e.add[k];
             const std::string at = "add[" + std::to_string(k) + "]: ";
             if (std::find(model_names.begin(), model_names.end(), a.model) == model_names.end())
-                return bad(i, e, at + "model \"" + a.model + "\" is not one of the run's models (" +
+                return bad(i, e, at + "model \"" + detail::quote_input(a.model) + "\" is not one of the run's models (" +
                                      model_list(model_names) + ")");
             if (!finite(a.origin) || !std::isfinite(a.yaw) || !std::isfinite(a.wind_phase))
                 return bad(i, e, at + "origin, yaw and wind_phase must be finite");
-            if (!(std::isfinite(a.wind_scale) && a.wind_scale >= 0.0))
-                return bad(i, e, at + "wind_scale must be finite and >= 0");
+            HMSM_TRY(prefixed(i, e, detail::check_coordinate(at + "origin", a.origin)));
+            HMSM_TRY(prefixed(i, e, detail::check_wind_scale(at + "wind_scale", a.wind_scale)));
         }
         count += e.add.size();
         if (count == 0)

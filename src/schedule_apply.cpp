@@ -3,6 +3,8 @@
 // list: see below), through the live-control calls of Simulation.
 #include <hmsm/schedule.h>
 
+#include "model/input_limits.h"
+
 #include <algorithm>
 
 namespace hmsm {
@@ -40,7 +42,7 @@ Status apply_schedule_events(const Schedule& schedule, uint64_t step, Simulation
             for (const ScheduledInstance& a : e.add) {
                 auto found = std::find(names.begin(), names.end(), a.model);
                 if (found == names.end())
-                    return {ErrorCode::invalid_argument, where + "model \"" + a.model + "\" is not one of the run's models"};
+                    return {ErrorCode::invalid_argument, where + "model \"" + detail::quote_input(a.model) + "\" is not one of the run's models"};
                 Instance inst;
                 inst.model = uint32_t(found - names.begin());
                 inst.origin = a.origin;

@@ -4,6 +4,7 @@
 #include <hmsm/schedule.h>
 
 #include "model/json_util.h"
+#include "model/input_limits.h"
 
 #include <cmath>
 #include <initializer_list>
@@ -29,7 +30,7 @@ public:
         for (auto it = j.begin(); it != j.end(); ++it) {
             bool known = false;
             for (const char* key : allowed) known = known || it.key() == key;
-            if (!known) return error(where, "unknown key \"" + it.key() + "\"");
+            if (!known) return error(where, "unknown key \"" + detail::quote_input(it.key()) + "\"");
         }
         return {};
     }
@@ -37,7 +38,7 @@ public:
     Status number(const json& j, const std::string& where, double& out) const {
         if (!j.is_number()) return error(where, "expected a number, got " + shown(j));
         out = j.get<double>();
-        if (!std::isfinite(out)) return error(where, "number " + j.dump() + " is not finite");
+        if (!std::isfinite(out)) return error(where, "number " + shown(j) + " is not finite");
         return {};
     }
 
@@ -64,11 +65,7 @@ public:
     }
 
     /// A short rendering of a value for messages (long arrays and objects are cut).
-    static std::string shown(const json& j) {
-        std::string text = j.dump();
-        if (text.size() > 40) text = text.substr(0, 37) + "...";
-        return text;
-    }
+    static std::string shown(const json& j) { return detail::quote_input(j.dump()); }
 
 private:
     std::string source_;
@@ -86,7 +83,7 @@ Status parse_wind(const Reader& r, const json& j, const std::string& where, Wind
             if (!it->is_string()) return r.error(at, "expected a profile name, got " + Reader::shown(*it));
             auto profile = parse_wind_profile(it->get<std::string>());
             if (!profile)
-                return r.error(at, "\"" + it->get<std::string>() +
+                return r.error(at, "\"" + detail::quote_input(it->get<std::string>()) +
                                        "\": expected none, constant, y1, y2, y3, y4 or turbulent");
             out.profile = *profile;
         } else if (key == "direction") {
@@ -131,12 +128,17 @@ Status parse_force(const Reader& r, const json& j, const std::string& where, For
     HMSM_TRY(r.vec3(j["center"], where + ".center", out.center));
     HMSM_TRY(r.number(j["radius"], where + ".radius", out.radius));
     if (!(out.radius > 0.0)) return r.error(where + ".radius", "must be > 0");
+    if (Status range = detail::check_coordinate("center", out.center); !range) return r.error(where, range.message());
+    if (Status range = detail::check_radius("radius", out.radius); !range) return r.error(where, range.message());
     if (directional) {
         out.kind = ForceField::Kind::directional;
         HMSM_TRY(r.vec3(j["directional"], where + ".directional", out.directional));
+        if (Status range = detail::check_force("directional", out.directional); !range)
+            return r.error(where, range.message());
     } else {
         out.kind = ForceField::Kind::radial;
         HMSM_TRY(r.number(j["radial"], where + ".radial", out.radial));
+        if (Status range = detail::check_force("radial", out.radial); !range) return r.error(where, range.message());
     }
     return {};
 }
@@ -148,7 +150,8 @@ Status parse_instance_change(const Reader& r, const json& j, const std::string& 
     if (j.contains("wind_scale")) {
         double v = 0.0;
         HMSM_TRY(r.number(j["wind_scale"], where + ".wind_scale", v));
-        if (v < 0.0) return r.error(where + ".wind_scale", "must be >= 0");
+        if (Status range = detail::check_wind_scale("wind_scale", v); !range)
+            return r.error(where + ".wind_scale", range.message());
         out.wind_scale = v;
     }
     if (j.contains("wind_phase")) {
@@ -169,11 +172,16 @@ Status parse_added(const Reader& r, const json& j, const std::string& where, Sch
     if (!j.contains("model")) return r.error(where + ".model", "missing");
     if (!j["model"].is_string()) return r.error(where + ".model", "expected a model name, got " + Reader::shown(j["model"]));
     out.model = j["model"].get<std::string>();
-    if (j.contains("origin")) HMSM_TRY(r.vec3(j["origin"], where + ".origin", out.origin));
+    if (j.contains("origin")) {
+        HMSM_TRY(r.vec3(j["origin"], where + ".origin", out.origin));
+        if (Status range = detail::check_coordinate("origin", out.origin); !range)
+            return r.error(where + ".origin", range.message());
+    }
     if (j.contains("yaw")) HMSM_TRY(r.number(j["yaw"], where + ".yaw", out.yaw));
     if (j.contains("wind_scale")) {
         HMSM_TRY(r.number(j["wind_scale"], where + ".wind_scale", out.wind_scale));
-        if (out.wind_scale < 0.0) return r.error(where + ".wind_scale", "must be >= 0");
+        if (Status range = detail::check_wind_scale("wind_scale", out.wind_scale); !range)
+            return r.error(where + ".wind_scale", range.message());
     }
     if (j.contains("wind_phase")) HMSM_TRY(r.number(j["wind_phase"], where + ".wind_phase", out.wind_phase));
     if (j.contains("active")) HMSM_TRY(r.boolean(j["active"], where + ".active", out.active));
@@ -254,6 +262,17 @@ Result<Schedule> parse_schedule(std::string_view text, std::string_view source) 
     const json& events = doc["events"];
     if (!events.is_array()) return r.error("events", "expected an array of events");
     Schedule schedule;
+    // Sized from the counts before the events are allocated: each event and each instance it
+    // changes, removes or adds is one entry (docs/model.md 3.11).
+    uint64_t entries = events.size();
+    for (const json& event : events)
+        if (event.is_object())
+            for (const char* key : {"instances", "remove", "add"})
+                if (auto it = event.find(key); it != event.end() && it->is_array()) entries += it->size();
+    if (Status counted = detail::check_count("entries (events and the instances they change)", entries,
+                                             detail::size_limits().schedule_events);
+        !counted)
+        return r.error("events", counted.message());
     schedule.events.resize(events.size());
     for (size_t e = 0; e < events.size(); ++e) {
         const std::string where = "events[" + std::to_string(e) + "]";

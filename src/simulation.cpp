@@ -4,6 +4,7 @@
 
 #include "backend.h"
 #include "common/octahedral.h"
+#include "model/input_limits.h"
 #include "scene_data.h"
 #include "simulation_impl.h"
 #include "step_program.h"
@@ -50,26 +51,46 @@ Status Simulation::Impl::check_size(std::span<const Instance> instances) const {
         nodes += hierarchies_[inst.model].node_owner.size();
     }
     if (vertices >= std::numeric_limits<uint32_t>::max() || chains >= std::numeric_limits<uint32_t>::max() ||
-        nodes >= std::numeric_limits<uint32_t>::max() || instances.size() >= (uint64_t(1) << 24))
+        nodes >= std::numeric_limits<uint32_t>::max() || instances.size() > kMaxInstances)
         return Status{ErrorCode::unsupported,
                       "scene too large: " + std::to_string(instances.size()) + " instances with " +
                           std::to_string(vertices) + " mesh vertices and " + std::to_string(chains / 2) +
-                          " chains over all instances (at most 2^32 - 1 elements and 2^24 instances are supported)"};
+                          " chains over all instances (at most 2^32 - 1 elements and " +
+                          std::to_string(kMaxInstances) + " instances are supported)"};
+    return {};
+}
+
+Status Simulation::Impl::check_forces(const Wind& wind, std::span<const Instance> instances,
+                                      std::span<const ForceField> fields) const {
+    // The wind force A s lambda of every chain, and a field's A |F|, must stay in the range the
+    // float backends compute in (docs/model.md 3.11): the largest wind area of each model bounds
+    // its chains.
+    for (size_t i = 0; i < instances.size(); ++i) {
+        const uint32_t m = instances[i].model;
+        HMSM_TRY(detail::check_wind_force("instance " + std::to_string(i) + " (model '" +
+                                              detail::quote_input(scene_.model_names[m]) + "')",
+                                          wind.strength, instances[i].wind_scale, largest_wind_area_[m]));
+    }
+    double area = 0.0;
+    for (double a : largest_wind_area_) area = std::max(area, a);
+    for (size_t f = 0; f < fields.size(); ++f) {
+        const ForceField& field = fields[f];
+        const double strength = field.kind == ForceField::Kind::radial
+                                    ? field.radial
+                                    : std::max({std::abs(field.directional.x), std::abs(field.directional.y),
+                                                std::abs(field.directional.z)});
+        HMSM_TRY(detail::check_wind_force("force field " + std::to_string(f), strength, 1.0, area));
+    }
     return {};
 }
 
 Status Simulation::Impl::check_wind(const Wind& wind, std::span<const Instance> instances) const {
     HMSM_TRY(validate(wind));
-    // The wind force A s must stay in the range the float backends compute in (see the
-    // constants check in build_hierarchy); a front so slow that -f (o.d)/v overflows would make
-    // the phase, and every force, NaN.
-    const double strength = std::abs(wind.strength);
-    for (size_t m = 0; m < hierarchies_.size(); ++m)
-        for (const Chain& chain : hierarchies_[m].chains)
-            if (strength > 1e30 || chain.wind_area * strength > 1e30)
-                return Status{ErrorCode::invalid_argument,
-                              "wind strength " + number(wind.strength) + " is too strong for model '" +
-                                  scene_.model_names[m] + "': wind force A*s above 1e30, beyond the computable range"};
+    // The clock f t at the next step (docs/model.md 3.11).
+    const double next_time = double(steps_done_ + 1) * config_.parameters.dt;
+    HMSM_TRY(detail::check_wind_clock(wind.frequency, next_time, clock_.base_tau + wind.frequency * next_time));
+    HMSM_TRY(check_forces(wind, instances, force_fields_));
+    // A front so slow that -f (o.d)/v overflows would make the phase, and every force, NaN.
     for (size_t i = 0; i < instances.size(); ++i)
         if (!std::isfinite(detail::instance_wind_phase(wind, instances[i])))
             return Status{ErrorCode::invalid_argument,
@@ -86,6 +107,16 @@ Result<std::unique_ptr<Simulation>> Simulation::Impl::create(const Scene& scene,
     HMSM_TRY(validate(config.wind));
     HMSM_TRY(validate_scene(scene));
 
+    // Sized from the models' counts before anything is built (docs/model.md 3.11).
+    uint64_t build_bytes = 0;
+    for (const TreeModel& model : scene.models)
+        build_bytes += detail::model_build_bytes(model.nodes.size(), model.leaves.size(), config.model.ring_sides);
+    if (build_bytes > detail::size_limits().build_bytes)
+        return Status{ErrorCode::unsupported,
+                      "scene too large: building its " + std::to_string(scene.models.size()) + " model(s) takes about " +
+                          std::to_string(build_bytes >> 20) + " MiB of host memory, more than the limit of " +
+                          std::to_string(detail::size_limits().build_bytes >> 20) + " MiB (docs/model.md 3.11)"};
+
     std::unique_ptr<Simulation> created(new Simulation(std::make_unique<Impl>()));
     Impl* sim = created->impl_.get();
     sim->config_ = config;
@@ -97,6 +128,9 @@ Result<std::unique_ptr<Simulation>> Simulation::Impl::create(const Scene& scene,
                           "model '" + scene.model_names[m] + "': " + hierarchy.status().message()};
         }
         sim->meshes_.push_back(build_mesh(scene.models[m], *hierarchy, config.model));
+        double largest = 0.0;
+        for (const Chain& chain : hierarchy->chains) largest = std::max(largest, chain.wind_area);
+        sim->largest_wind_area_.push_back(largest);
         sim->hierarchies_.push_back(std::move(hierarchy).value());
     }
 
@@ -119,9 +153,11 @@ Result<std::unique_ptr<Simulation>> Simulation::Impl::create(const Scene& scene,
         if (!created) return created.status();
         sim->backend_ = std::move(created).value();
     }
-    if (config.composition == Composition::automatic)
-        sim->config_.composition =
-            sim->backend_->prefers_path_walk() ? Composition::path_walk : Composition::pointer_jumping;
+    if (config.composition == Composition::automatic) {
+        int32_t deepest = 0;
+        for (const Hierarchy& h : sim->hierarchies_) deepest = std::max(deepest, h.max_depth);
+        sim->config_.composition = detail::automatic_composition(sim->backend_->prefers_path_walk(), deepest);
+    }
     sim->backend_->set_profiling(config.profile_passes);
     HMSM_TRY(sim->backend_->upload(*sim->data_));
 
@@ -151,14 +187,12 @@ Status Simulation::Impl::step(uint32_t count) {
         for (uint32_t k = 0; k <= steps; ++k) {
             const uint64_t n = steps_done_ + k + 1;  // steps_done_ counts the earlier chunks
             const double tau = clock_.tau(wind.frequency, dt, n);
-            if (!std::isfinite(tau) && k == steps) {  // the step after: its own step() will say
+            if (!(std::abs(tau) <= detail::kMaxWindPhase) && k == steps) {  // the step after: its own step() will say
                 std::fill_n(&wind_scratch_[size_t(k) * detail::kWindStepScalars], detail::kWindStepScalars, 0.0);
                 continue;
             }
-            if (!std::isfinite(tau))  // f * t overflowed: no phase, and the profile would be NaN
-                return Status{ErrorCode::invalid_argument,
-                              "wind frequency " + number(wind.frequency) + " times time " +
-                                  number(double(n - 1) * dt) + " s overflows: the wind phase is not finite"};
+            if (!(std::abs(tau) <= detail::kMaxWindPhase))  // f t past the clock's range
+                HMSM_TRY(detail::check_wind_clock(wind.frequency, double(n - 1) * dt, tau));
             detail::fill_wind_step(wind, modes_, tau, &wind_scratch_[size_t(k) * detail::kWindStepScalars]);
             if (k < steps) wind_phases_[k] = double(k);
         }

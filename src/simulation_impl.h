@@ -40,6 +40,12 @@ struct __attribute__((visibility("hidden"))) Simulation::Impl {
                         const std::vector<uint64_t>& old_chain);
     /// Checks that `instances` fit the 32-bit element counts of the device layout.
     Status check_size(std::span<const Instance> instances) const;
+    /// Checks the wind force of every chain of `instances` under `wind` and the force of
+    /// `fields` against the float range (docs/model.md 3.11).
+    Status check_forces(const Wind& wind, std::span<const Instance> instances,
+                        std::span<const ForceField> fields) const;
+    /// Resets `indices` to rest (S = V = 0, posed at rest); live_control.cpp.
+    Status reset(std::span<const uint32_t> indices);
     /// Checks that the wind keeps every force and phase finite for `instances`.
     Status check_wind(const Wind& wind, std::span<const Instance> instances) const;
     Status read_elements(Output output, std::vector<double>* as_double,
@@ -50,6 +56,7 @@ struct __attribute__((visibility("hidden"))) Simulation::Impl {
     Scene scene_;
     std::vector<Hierarchy> hierarchies_;
     std::vector<MeshTemplate> meshes_;
+    std::vector<double> largest_wind_area_;  // per model: the largest chain wind area A_c
     std::unique_ptr<detail::SceneData> data_;
     std::unique_ptr<detail::Backend> backend_;
     std::vector<detail::Dispatch> step_program_;

@@ -238,4 +238,9 @@ std::vector<Dispatch> build_program(const SceneData& d, const std::vector<Instan
     return program;
 }
 
+Composition automatic_composition(bool backend_prefers_path_walk, int32_t deepest_chain_depth) {
+    return backend_prefers_path_walk && deepest_chain_depth <= kPathWalkMaxDepth ? Composition::path_walk
+                                                                                 : Composition::pointer_jumping;
+}
+
 }  // namespace hmsm::detail

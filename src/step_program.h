@@ -30,4 +30,14 @@ std::vector<Dispatch> build_program(const SceneData& d, const std::vector<Instan
                                     Composition composition, bool dispatches_are_expensive,
                                     Pass first, uint32_t passes, bool walk_ahead = false);
 
+/// Deepest hierarchy (chain depth levels below the trunk) for which Composition::automatic keeps
+/// the path walk on a backend that prefers it: the walk costs depth-many products per chain, the
+/// rounds of pointer jumping log2 of the depth, so past a break-even depth the rounds win. A
+/// conservative first value, to be measured on the H100 (`hmsm bench --composition-depths`).
+inline constexpr int32_t kPathWalkMaxDepth = 64;
+
+/// What Composition::automatic resolves to: the path walk where the backend prefers it and no
+/// model is deeper than kPathWalkMaxDepth, else pointer jumping.
+Composition automatic_composition(bool backend_prefers_path_walk, int32_t deepest_chain_depth);
+
 }  // namespace hmsm::detail

@@ -328,3 +328,23 @@ TEST_F(BenchCli, OutWithAnExtensionOrAMissingFolderExitsTwoWritingNothing) {
     for (const std::string stem : {path("page.json"), path("page.md"), (dir_ / "absent" / "page").string()})
         expect_bad_input("bench --quick --backends cpu --out " + stem, "--out");
 }
+
+// The break-even measurement of Composition::automatic's depth rule: both compositions timed
+// per depth and forest size.
+TEST_F(BenchCli, CompositionDepthsTimesWalkAndJumping) {
+    const std::string file = path("depths.json");
+    const CliRun r = run("bench --no-progress --backends cpu --presets none --instances none --joint-instances none "
+                     "--composition-depths 4,24 --steps 2 --warmup 1 --repeats 1 --case-budget 1 --json " + file);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const json d = json::parse(read_text(file), nullptr, false);
+    ASSERT_TRUE(d.contains("composition_depths"));
+    const json& rows = d["composition_depths"];
+    ASSERT_EQ(rows.size(), 4u);  // 2 depths x 1 and 100 instances
+    for (const json& row : rows) {
+        EXPECT_FALSE(row.contains("failed")) << row.dump();
+        expect_figures_positive(row["path_walk_ms"], "path_walk_ms");
+        expect_figures_positive(row["pointer_jumping_ms"], "pointer_jumping_ms");
+    }
+    EXPECT_EQ(rows[2]["depth"], 24);
+    EXPECT_NE(r.out.find("walk / jumping"), std::string::npos);
+}

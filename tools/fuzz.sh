@@ -17,19 +17,21 @@ cmake --build "$build" -j "$(nproc 2>/dev/null || echo 2)"
 
 mkdir -p "$build/artifacts"
 status=0
-for target in tree forest schedule treeqsm simpleforest; do
+for target in tree forest schedule treeqsm simpleforest import_size; do
   work="$build/corpus-$target"  # new inputs land here; the seed folders stay untouched
   mkdir -p "$work"
   seeds=("$root/tests/fuzz/corpus/$target" "$root/tests/fuzz/regressions/$target"
          "$root/tests/data/bad/${target}s")
+  [ "$target" = import_size ] && seeds=("$root/tests/fuzz/corpus/import_size")
   echo "fuzz.sh: fuzz_$target for ${seconds} s" >&2
   # -max_len bounds an input (the deep-nesting seeds are larger and get truncated to it);
-  # -timeout flags any input that takes more than 10 s as a hang.
+  # -timeout flags any input that takes more than 10 s as a hang; -rss_limit_mb bounds the memory
+  # any one input may take (the parsers size their inputs before allocating).
   dict=()  # the JSON dictionary helps the JSON parsers only
   case $target in tree|forest|schedule) dict=(-dict="$root/tests/fuzz/json.dict") ;; esac
   if ! "$build/fuzz_$target" "$work" "${seeds[@]}" \
       "${dict[@]}" -max_total_time="$seconds" -max_len=16384 \
-      -timeout=10 -rss_limit_mb=2048 -print_final_stats=1 \
+      -timeout=10 -rss_limit_mb=512 -print_final_stats=1 \
       -artifact_prefix="$build/artifacts/$target-" >"$build/fuzz_$target.log" 2>&1; then
     echo "fuzz.sh: fuzz_$target FAILED; the last lines of $build/fuzz_$target.log:" >&2
     tail -n 40 "$build/fuzz_$target.log" >&2

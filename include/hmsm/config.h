@@ -159,7 +159,8 @@ struct ForceField {
 /// At most this many force fields act at once.
 inline constexpr uint32_t kMaxForceFields = 16;
 
-/// Checks a force-field list (count, finite numbers, radius > 0); the message names the field.
+/// Checks a force-field list (count; centre, radius and force within the ranges of
+/// docs/model.md 3.11); the message names the field, the value and the limit.
 HMSM_API Status validate_force_fields(std::span<const ForceField> fields);
 
 }  // namespace hmsm

@@ -247,6 +247,11 @@ HMSM_API hmsm_status hmsm_simulation_add_instances(hmsm_simulation* simulation,
                                                    const hmsm_instance* instances, size_t count);
 HMSM_API hmsm_status hmsm_simulation_remove_instances(hmsm_simulation* simulation,
                                                       const uint64_t* indices, size_t count);
+/* Puts instances (current indices, no repeats) back at rest as right after adding them
+   (Simulation::reset_instances): state zero, posed at rest, settings kept. A bad index changes
+   nothing. */
+HMSM_API hmsm_status hmsm_simulation_reset_instances(hmsm_simulation* simulation,
+                                                     const uint32_t* indices, size_t count);
 /* The current instance list into instances[capacity]; *count = the number of instances. */
 HMSM_API hmsm_status hmsm_simulation_instances(const hmsm_simulation* simulation,
                                                hmsm_instance* instances, size_t capacity,

@@ -30,8 +30,11 @@ struct Scene {
 /// One instance of `tree` (at the origin with yaw 0 by default).
 HMSM_API Scene single_tree_scene(TreeModel tree, Vec3 origin = Vec3(0.0), double yaw = 0.0);
 
-/// Most instances grid_scene places (2^24).
-inline constexpr uint32_t kMaxGridInstances = uint32_t(1) << 24;
+/// Most instances a simulation holds (2^24 - 1): Simulation::create, add_instances, a forest
+/// file and grid_scene refuse more (docs/model.md 3.11).
+inline constexpr uint32_t kMaxInstances = (uint32_t(1) << 24) - 1;
+/// Most instances grid_scene places: kMaxInstances.
+inline constexpr uint32_t kMaxGridInstances = kMaxInstances;
 
 /// `count` instances of `tree` on a square grid `spacing` apart, centred on the origin, with
 /// yaws drawn deterministically from `seed`. Counts above kMaxGridInstances, or with more than

@@ -50,8 +50,9 @@ public:
     /// Replaces the force-field list (at most kMaxForceFields; empty removes all).
     Status set_force_fields(std::span<const ForceField> fields);
     std::span<const ForceField> force_fields() const;
-    /// Per instance (index into the current instance list): wind scale (>= 0), wind phase (in
-    /// profile units) and the active flag. An inactive instance is frozen: its state and outputs
+    /// Per instance (index into the current instance list): wind scale (0 to 1e6, and the
+    /// chains' wind force A s lambda at most 1e30: docs/model.md 3.11), wind phase (in profile
+    /// units) and the active flag. An inactive instance is frozen: its state and outputs
     /// stay as they are until it is activated again.
     Status set_instance_wind_scale(uint64_t instance, double wind_scale);
     Status set_instance_wind_phase(uint64_t instance, double wind_phase);
@@ -64,6 +65,14 @@ public:
     /// Removes instances by their current indices (no repeats); the survivors keep their order
     /// and their state, moved on the device (docs/driving.md).
     Status remove_instances(std::span<const uint64_t> indices);
+    /// Puts instances (current indices, no repeats) back at rest, exactly as right after
+    /// add_instances(): S = V = 0, generalized force 0, posed at rest, whatever their state was
+    /// (violent motion, or NaN from the caller's own numbers). Their settings (origin, wind
+    /// scale and phase, active flag) and every other instance are untouched; a paused instance
+    /// is reset and stays paused. Takes effect at once (read() returns the rest pose) and costs
+    /// one rest pose of the listed instances. An index out of range or listed twice is refused
+    /// and changes nothing. Threading as every non-const member (see the class comment).
+    Status reset_instances(std::span<const uint32_t> indices);
     /// The current instance list (models are those of the scene given to create()).
     std::span<const Instance> instances() const;
 

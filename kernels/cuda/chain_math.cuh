@@ -41,6 +41,7 @@ HMSM_HOST_DEVICE float2 chain_wind_force_at(const BufferPointers& b, const gpu::
         const float3 offset = make_float3(x.x - sphere.x, x.y - sphere.y, x.z - sphere.z);
         const float distance = sqrtf(dot(offset, offset));
         const float reach = fmaxf(0.0f, 1.0f - distance / sphere.w);
+        if (!(reach > 0.0f)) continue;  // outside the sphere: no contribution at all (never 0 * F)
         const float h = reach * reach;
         if (force.w == 0.0f) wind = wind + h * xyz(force);
         else if (distance >= 1e-9f) wind = wind + (h * force.x / distance) * offset;

@@ -35,6 +35,7 @@ vec2 chain_wind_force(uint k, uint c, vec3 x, mat3 rotation) {
         vec3 offset = x - sphere.xyz;
         float distance = length(offset);
         float reach = max(0.0, 1.0 - distance / sphere.w);
+        if (!(reach > 0.0)) continue;  // outside the sphere: no contribution at all (never 0 * F)
         float h = reach * reach;
         if (force.w == 0.0) wind += h * force.xyz;
         else if (distance >= 1e-9) wind += (h * force.x / distance) * offset;

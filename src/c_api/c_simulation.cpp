@@ -1,5 +1,6 @@
 // The C ABI's simulations: create, step, read into caller buffers, live control, destroy.
 #include "c_api_internal.h"
+#include "model/input_limits.h"
 
 #include <cstring>
 #include <vector>
@@ -178,8 +179,7 @@ hmsm_status hmsm_simulation_set_instance_wind_scale(hmsm_simulation* simulation,
     return guarded([&]() -> Status {
         const char* fn = "hmsm_simulation_set_instance_wind_scale";
         HMSM_TRY(check_instance(fn, simulation, instance));
-        if (!std::isfinite(wind_scale) || wind_scale < 0.0)
-            return bad(std::string(fn) + ": wind_scale must be finite and >= 0");
+        HMSM_TRY(detail::check_wind_scale(std::string(fn) + ": wind_scale", wind_scale));
         return simulation->simulation->set_instance_wind_scale(instance, wind_scale);
     });
 }
@@ -228,6 +228,17 @@ hmsm_status hmsm_simulation_remove_instances(hmsm_simulation* simulation, const 
         if (!indices && count > 0) return bad(std::string(fn) + ": indices is NULL with count > 0");
         std::vector<uint64_t> copied(indices, indices + count);
         return simulation->simulation->remove_instances(copied);
+    });
+}
+
+hmsm_status hmsm_simulation_reset_instances(hmsm_simulation* simulation, const uint32_t* indices,
+                                            size_t count) {
+    return guarded([&]() -> Status {
+        const char* fn = "hmsm_simulation_reset_instances";
+        if (!simulation) return bad(std::string(fn) + ": simulation is NULL");
+        if (!indices && count > 0) return bad(std::string(fn) + ": indices is NULL with count > 0");
+        std::vector<uint32_t> copied(indices, indices + count);
+        return simulation->simulation->reset_instances(copied);
     });
 }
 

@@ -40,6 +40,7 @@ void wind_forces(State<T>& s, const gpu::PassConstants& pc, double wind_x, Range
             const vec3 offset = x - vec3(sphere);
             const T distance = std::sqrt(offset.x * offset.x + offset.y * offset.y + offset.z * offset.z);
             const T reach = std::max(T(0), T(1) - distance / sphere.w);
+            if (!(reach > T(0))) continue;  // outside the sphere: no contribution at all (never 0 * F)
             const T h = reach * reach;
             if (force.w == T(0)) w += h * vec3(force);
             else if (distance >= T(1e-9)) w += (h * force.x / distance) * offset;

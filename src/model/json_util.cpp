@@ -1,10 +1,15 @@
 #include "json_util.h"
 
+#include "input_limits.h"
+
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+
+#include <sys/stat.h>
+#include <unistd.h>
 
 namespace hmsm::detail {
 
@@ -65,49 +70,89 @@ Result<nlohmann::json> parse_json(std::string_view text, std::string_view source
             (void)unused;
         } catch (const nlohmann::json::exception& e) {
             return Status{ErrorCode::invalid_tree,
-                          one_line(std::string(source) + ": not valid JSON (" + e.what() + ")")};
+                          one_line(std::string(source) + ": not valid JSON (" + quote_input(e.what()) + ")")};
         }
         return Status{ErrorCode::invalid_tree, std::string(source) + ": not valid JSON"};
     }
     return doc;
 }
 
-Result<std::string> read_text_file(const std::string& path) {
+Result<std::string> read_text_file(const std::string& path, bool regular_file_only) {
+    const uint64_t limit = size_limits().input_bytes;
+    auto too_large = [&] {
+        return Status{ErrorCode::io, one_line(path) + ": larger than " + std::to_string(limit >> 20) +
+                                         " MiB, the limit of an input file (docs/model.md 3.11)"};
+    };
     std::error_code ec;
-    if (std::filesystem::is_directory(path, ec))
-        return Status{ErrorCode::io, path + ": is a directory, expected a file"};
+    const auto status = std::filesystem::status(path, ec);
+    if (std::filesystem::is_directory(status))
+        return Status{ErrorCode::io, one_line(path) + ": is a directory, expected a file"};
+    if (std::filesystem::is_regular_file(status)) {
+        const auto size = std::filesystem::file_size(path, ec);
+        if (!ec && size > limit) return too_large();
+    } else if (regular_file_only && std::filesystem::exists(status)) {
+        return Status{ErrorCode::io, one_line(path) + ": not a regular file (a device, FIFO or socket)"};
+    }
     std::ifstream in(path, std::ios::binary);
-    if (!in) return Status{ErrorCode::io, path + ": cannot open file for reading"};
+    if (!in) return Status{ErrorCode::io, one_line(path) + ": cannot open file for reading"};
     std::string text;
     char chunk[1 << 16];
     while (in.read(chunk, sizeof chunk) || in.gcount() > 0) {
+        if (text.size() + uint64_t(in.gcount()) > limit) return too_large();
         text.append(chunk, size_t(in.gcount()));
-        if (text.size() > kMaxTextFileBytes)
-            return Status{ErrorCode::io, one_line(path + ": larger than " +
-                                                  std::to_string(kMaxTextFileBytes >> 20) +
-                                                  " MiB, not a tree or forest file")};
     }
-    if (in.bad()) return Status{ErrorCode::io, path + ": read error"};
+    if (in.bad()) return Status{ErrorCode::io, one_line(path) + ": read error"};
     return text;
 }
 
+Result<uint32_t> output_file_mode(const std::string& path) {
+    struct stat existing {};
+    if (::lstat(path.c_str(), &existing) != 0) {
+        const mode_t mask = ::umask(0);
+        ::umask(mask);
+        return uint32_t(0666 & ~mask);
+    }
+    if (S_ISLNK(existing.st_mode))
+        return Status{ErrorCode::io, one_line(path) + ": is a symbolic link; hmsm does not replace links, "
+                                                       "name the file itself"};
+    if (S_ISDIR(existing.st_mode)) return Status{ErrorCode::io, one_line(path) + ": is a directory"};
+    if (!S_ISREG(existing.st_mode))
+        return Status{ErrorCode::io, one_line(path) + ": is not a regular file (a device, FIFO or socket); "
+                                                       "hmsm replaces only regular files"};
+    return uint32_t(existing.st_mode & 07777);
+}
+
+Result<int> create_temporary_beside(const std::string& path, std::string& temporary) {
+    std::string name = path + ".tmp-hmsm-XXXXXX";
+    const int fd = ::mkstemp(name.data());
+    if (fd < 0) return Status{ErrorCode::io, one_line(path) + ": cannot open for writing"};
+    temporary = name;
+    return fd;
+}
+
 Status write_text_file_atomically(const std::string& path, std::string_view text) {
-    std::string temporary = path + ".tmp-hmsm";
-    {
-        std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
-        if (!out) return {ErrorCode::io, path + ": cannot open file for writing"};
-        out.write(text.data(), std::streamsize(text.size()));
-        out.close();
-        if (!out) {
-            std::remove(temporary.c_str());
-            return {ErrorCode::io, path + ": write error"};
-        }
+    auto mode = output_file_mode(path);
+    if (!mode) return mode.status();
+    std::string temporary;
+    auto fd = create_temporary_beside(path, temporary);
+    if (!fd) return fd.status();
+    std::FILE* out = ::fdopen(*fd, "wb");
+    if (!out) {
+        ::close(*fd);
+        std::remove(temporary.c_str());
+        return {ErrorCode::io, one_line(path) + ": cannot open file for writing"};
+    }
+    const bool written = std::fwrite(text.data(), 1, text.size(), out) == text.size() &&
+                         ::fchmod(*fd, mode_t(*mode)) == 0;
+    if (std::fclose(out) != 0 || !written) {
+        std::remove(temporary.c_str());
+        return {ErrorCode::io, one_line(path) + ": write error"};
     }
     std::error_code ec;
     std::filesystem::rename(temporary, path, ec);
     if (ec) {
         std::remove(temporary.c_str());
-        return {ErrorCode::io, path + ": cannot write file (" + ec.message() + ")"};
+        return {ErrorCode::io, one_line(path) + ": cannot write file (" + ec.message() + ")"};
     }
     return {};
 }
@@ -133,11 +178,11 @@ Status JsonReader::expect_format(const nlohmann::json& doc, const char* format) 
     std::string value;
     HMSM_TRY(string_field(doc, "", "format", value));
     if (value != format)
-        return error("", "format", "is \"" + value + "\", expected \"" + format + "\"");
+        return error("", "format", "is \"" + quote_input(value) + "\", expected \"" + format + "\"");
     const auto* version = field(doc, "version");
     if (!version) return error("", "version", "missing");
     if (!version->is_number_integer() || version->get<int64_t>() != 1)
-        return error("", "version", "is " + version->dump() + ", only version 1 is supported");
+        return error("", "version", "is " + quote_input(version->dump()) + ", only version 1 is supported");
     return {};
 }
 
@@ -162,11 +207,11 @@ Status JsonReader::int_field(const nlohmann::json& obj, const std::string& where
                              int32_t& out) const {
     const auto* f = field(obj, key);
     if (!f) return error(where, key, "missing");
-    if (!f->is_number_integer()) return error(where, key, "expected an integer, got " + f->dump());
+    if (!f->is_number_integer()) return error(where, key, "expected an integer, got " + quote_input(f->dump()));
     int64_t v = f->get<int64_t>();
     if (f->is_number_unsigned() && f->get<uint64_t>() > uint64_t(INT32_MAX))
-        return error(where, key, "integer " + f->dump() + " out of range");
-    if (v < INT32_MIN || v > INT32_MAX) return error(where, key, "integer " + f->dump() + " out of range");
+        return error(where, key, "integer " + quote_input(f->dump()) + " out of range");
+    if (v < INT32_MIN || v > INT32_MAX) return error(where, key, "integer " + quote_input(f->dump()) + " out of range");
     out = int32_t(v);
     return {};
 }
@@ -175,7 +220,7 @@ Status JsonReader::number_field(const nlohmann::json& obj, const std::string& wh
                                 const char* key, double& out) const {
     const auto* f = field(obj, key);
     if (!f) return error(where, key, "missing");
-    if (!f->is_number()) return error(where, key, "expected a number, got " + f->dump());
+    if (!f->is_number()) return error(where, key, "expected a number, got " + quote_input(f->dump()));
     out = f->get<double>();
     if (!std::isfinite(out)) return error(where, key, "number is not finite");
     return {};

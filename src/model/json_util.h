@@ -15,17 +15,25 @@ namespace hmsm::detail {
 
 /// Deepest nesting accepted; deeper documents are rejected before parsing.
 inline constexpr int kMaxJsonDepth = 64;
-/// Largest file read_text_file accepts (a 1M-node tree is ~100 MB): without a bound, a path such
-/// as /dev/zero would be read until memory runs out.
-inline constexpr uint64_t kMaxTextFileBytes = uint64_t(256) << 20;
-
 /// `text` with control characters escaped (\n, \t, \xNN), so that names taken from a file
 /// (object keys, strings) cannot split an error message over several lines.
 std::string one_line(std::string_view text);
 
 Result<nlohmann::json> parse_json(std::string_view text, std::string_view source);
-Result<std::string> read_text_file(const std::string& path);
-/// Writes to a temporary file beside `path`, then renames: no partial file on failure.
+/// The whole file, refused past size_limits().input_bytes (256 MiB: a 1M-node tree is about
+/// 100 MB; without a bound a path such as /dev/zero would be read until memory runs out). A
+/// regular file is sized before it is read; with `regular_file_only` anything else (a device,
+/// a FIFO) is refused before it is opened.
+Result<std::string> read_text_file(const std::string& path, bool regular_file_only = false);
+/// The rules for replacing an output file (docs/cli.md, "Outputs"): a symbolic link and
+/// anything but a regular file (a directory, device, FIFO) are refused; the result is the mode
+/// the written file gets, an existing file's own, else 0666 less the umask.
+Result<uint32_t> output_file_mode(const std::string& path);
+/// Creates a temporary file beside `path` (PATH.tmp-hmsm-XXXXXX, mode 0600) and opens it for
+/// writing; its name goes into `temporary`. Returns the descriptor.
+Result<int> create_temporary_beside(const std::string& path, std::string& temporary);
+/// Writes to a temporary file beside `path`, then renames: no partial file on failure, an
+/// existing file's mode kept, output_file_mode's refusals.
 Status write_text_file_atomically(const std::string& path, std::string_view text);
 
 class JsonReader {

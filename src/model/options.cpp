@@ -2,6 +2,7 @@
 #include <hmsm/options.h>
 
 #include "../common/wind_profile.h"
+#include "input_limits.h"
 
 #include <glm/geometric.hpp>
 
@@ -126,9 +127,8 @@ Status validate(const Parameters& p) {
 }
 
 Status validate(const Wind& w) {
-    if (!std::isfinite(w.strength)) return bad("wind strength", w.strength, "must be finite");
-    if (!std::isfinite(w.frequency) || w.frequency < 0.0)
-        return bad("wind frequency", w.frequency, "must be finite and >= 0");
+    HMSM_TRY(detail::check_force("wind strength", w.strength));
+    HMSM_TRY(detail::check_wind_frequency(w.frequency));
     if (!std::isfinite(w.front_speed) || w.front_speed < 0.0)
         return bad("front speed", w.front_speed, "must be finite and >= 0");
     if (w.front_speed > 0.0 && w.front_speed < 0.01)

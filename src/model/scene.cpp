@@ -1,5 +1,6 @@
 #include <hmsm/scene.h>
 
+#include "input_limits.h"
 #include "random.h"
 
 #include <cmath>
@@ -48,18 +49,17 @@ Status validate_scene(const Scene& scene) {
     if (scene.model_names.size() != scene.models.size())
         return {ErrorCode::invalid_argument, "scene: model_names and models differ in length"};
     if (scene.instances.empty()) return {ErrorCode::invalid_argument, "scene has no instances"};
+    HMSM_TRY(detail::check_count("scene: instances", scene.instances.size(), kMaxInstances,
+                                 ErrorCode::unsupported));
     for (size_t i = 0; i < scene.instances.size(); ++i) {
         const Instance& inst = scene.instances[i];
         std::string where = "instance " + std::to_string(i) + ": ";
         if (inst.model >= scene.models.size())
             return {ErrorCode::invalid_argument, where + "model index " + std::to_string(inst.model) +
                                                      " does not exist"};
-        if (!std::isfinite(inst.origin.x) || !std::isfinite(inst.origin.y) ||
-            !std::isfinite(inst.origin.z))
-            return {ErrorCode::invalid_argument, where + "origin is not finite"};
+        HMSM_TRY(detail::check_coordinate(where + "origin", inst.origin));
         if (!std::isfinite(inst.yaw)) return {ErrorCode::invalid_argument, where + "yaw is not finite"};
-        if (!std::isfinite(inst.wind_scale) || inst.wind_scale < 0.0)
-            return {ErrorCode::invalid_argument, where + "wind_scale must be finite and >= 0"};
+        HMSM_TRY(detail::check_wind_scale(where + "wind_scale", inst.wind_scale));
         if (!std::isfinite(inst.wind_phase))
             return {ErrorCode::invalid_argument, where + "wind_phase is not finite"};
     }

@@ -2,6 +2,7 @@
 #include <hmsm/tree.h>
 
 #include "json_util.h"
+#include "input_limits.h"
 
 #include <glm/geometric.hpp>
 
@@ -17,6 +18,11 @@ namespace {
 
 Status tree_error(std::string message) { return {ErrorCode::invalid_tree, std::move(message)}; }
 
+/// A limit's status as a tree error (the class every tree check reports).
+Status size_checked(const Status& status) {
+    return status ? status : tree_error(status.message());
+}
+
 bool finite3(const glm::dvec3& v) {
     return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
 }
@@ -27,13 +33,18 @@ Status validate_tree(const TreeModel& tree) {
     const auto& nodes = tree.nodes;
     const int64_t n = int64_t(nodes.size());
     if (n < 2) return tree_error("a tree needs at least two nodes, got " + std::to_string(n));
+    HMSM_TRY(size_checked(detail::check_count("tree: nodes", uint64_t(n), detail::size_limits().tree_nodes)));
+    HMSM_TRY(size_checked(
+        detail::check_count("tree: leaves", tree.leaves.size(), detail::size_limits().tree_leaves)));
     int64_t root = -1;
     for (int64_t i = 0; i < n; ++i) {
         const TreeNode& node = nodes[i];
         std::string where = "node " + std::to_string(i) + ": ";
         if (!finite3(node.position)) return tree_error(where + "position is not finite");
+        HMSM_TRY(size_checked(detail::check_coordinate(where + "position", node.position)));
         if (!std::isfinite(node.radius) || node.radius <= 0.0)
             return tree_error(where + "radius must be finite and > 0");
+        HMSM_TRY(size_checked(detail::check_radius(where + "radius", node.radius)));
         if (node.parent == -1) {
             if (root >= 0)
                 return tree_error(where + "second root (node " + std::to_string(root) +
@@ -105,6 +116,9 @@ Result<TreeModel> parse_tree(std::string_view text, std::string_view source) {
     HMSM_TRY(r.expect_format(doc, "hmsm-tree"));
     const nlohmann::json* nodes = nullptr;
     HMSM_TRY(r.array_field(doc, "", "nodes", nodes));
+    // Sized from the counts before the node and leaf lists are allocated.
+    if (Status counted = detail::check_count("tree: nodes", nodes->size(), detail::size_limits().tree_nodes); !counted)
+        return Status{ErrorCode::invalid_tree, std::string(source) + ": " + counted.message()};
     tree.nodes.resize(nodes->size());
     for (size_t i = 0; i < nodes->size(); ++i) {
         const auto& item = (*nodes)[i];
@@ -117,6 +131,9 @@ Result<TreeModel> parse_tree(std::string_view text, std::string_view source) {
     if (doc.contains("leaves")) {
         const nlohmann::json* leaves = nullptr;
         HMSM_TRY(r.array_field(doc, "", "leaves", leaves));
+        if (Status counted = detail::check_count("tree: leaves", leaves->size(), detail::size_limits().tree_leaves);
+            !counted)
+            return Status{ErrorCode::invalid_tree, std::string(source) + ": " + counted.message()};
         tree.leaves.resize(leaves->size());
         for (size_t j = 0; j < leaves->size(); ++j) {
             const auto& item = (*leaves)[j];

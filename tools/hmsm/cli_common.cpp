@@ -6,6 +6,11 @@
 #include <filesystem>
 #include <limits>
 
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "model/json_util.h"
+
 namespace hmsm::cli {
 
 int fail(const Status& status) {
@@ -70,18 +75,18 @@ Result<glm::dvec3> parse_vec3(const std::string& text, const char* flag) {
         auto [next, ec] = std::from_chars(p, end, v[k]);
         if (ec != std::errc() || !std::isfinite(v[k]))
             return Status{ErrorCode::invalid_argument,
-                          std::string(flag) + " '" + text + "': expected three finite numbers X,Y,Z"};
+                          std::string(flag) + " '" + detail::quote_input(text) + "': expected three finite numbers X,Y,Z"};
         p = next;
         if (k < 2) {
             if (p == end || *p != ',')
                 return Status{ErrorCode::invalid_argument,
-                              std::string(flag) + " '" + text + "': expected X,Y,Z"};
+                              std::string(flag) + " '" + detail::quote_input(text) + "': expected X,Y,Z"};
             ++p;
         }
     }
     if (p != end)
         return Status{ErrorCode::invalid_argument,
-                      std::string(flag) + " '" + text + "': unexpected text after X,Y,Z"};
+                      std::string(flag) + " '" + detail::quote_input(text) + "': unexpected text after X,Y,Z"};
     return v;
 }
 
@@ -95,6 +100,11 @@ Result<Scene> load_scene(const SourceFlags& f, CLI::App& app, const ModelOptions
     if (!tree) return tree.status();
     if (app.get_option_no_throw("--instances") && app.count("--instances") > 0) {
         if (f.instances == 0) return Status{ErrorCode::invalid_argument, "--instances must be >= 1"};
+        // The library's instance limit (Simulation::create's), before anything is built.
+        if (f.instances > kMaxInstances)
+            return Status{ErrorCode::unsupported, "scene too large: --instances " + std::to_string(f.instances) +
+                                                      ", at most " + std::to_string(kMaxInstances) +
+                                                      " instances are supported"};
         if (app.count("--origin") || app.count("--yaw"))
             return Status{ErrorCode::invalid_argument,
                           "--origin and --yaw place a single instance; they cannot be used with --instances"};
@@ -221,16 +231,49 @@ StagedOutputs::~StagedOutputs() {
     }
 }
 
-Result<size_t> StagedOutputs::stage(const std::string& path, const char* flag) {
+void StagedOutputs::add_inputs(std::initializer_list<std::string> paths) {
+    for (const std::string& path : paths)
+        if (!path.empty()) inputs_.push_back(path);
+}
+
+namespace {
+
+/// Whether two paths name one file: the same file if both exist, else the same absolute path.
+bool same_file(const std::string& a, const std::string& b) {
     std::error_code ec;
-    if (std::filesystem::is_directory(path, ec))
-        return Status{ErrorCode::io, std::string(flag) + " " + path + ": is a directory"};
+    if (std::filesystem::equivalent(a, b, ec) && !ec) return true;
+    const auto canonical_a = std::filesystem::weakly_canonical(a, ec);
+    if (ec) return false;
+    const auto canonical_b = std::filesystem::weakly_canonical(b, ec);
+    return !ec && canonical_a == canonical_b;
+}
+
+}  // namespace
+
+Result<size_t> StagedOutputs::stage(const std::string& path, const char* flag) {
+    const std::string named = std::string(flag) + " " + detail::one_line(path);
+    for (const File& other : files_)
+        if (same_file(other.path, path))
+            return Status{ErrorCode::invalid_argument,
+                          named + ": " + other.flag + " writes the same file; give each output its own path"};
+    for (const std::string& input : inputs_)
+        if (same_file(input, path))
+            return Status{ErrorCode::invalid_argument, named + ": is an input of this command; an output "
+                                                                   "may not replace an input"};
+    auto mode = detail::output_file_mode(path);
+    if (!mode) return Status{mode.status().code(), std::string(flag) + " " + mode.status().message()};
     File f;
     f.path = path;
-    f.temporary = path + ".tmp-hmsm";
-    f.handle.reset(std::fopen(f.temporary.c_str(), "wb"));
-    if (!f.handle)
-        return Status{ErrorCode::io, std::string(flag) + " " + path + ": cannot open for writing"};
+    f.flag = flag;
+    f.mode = *mode;
+    auto fd = detail::create_temporary_beside(path, f.temporary);
+    if (!fd) return Status{ErrorCode::io, named + ": cannot open for writing"};
+    f.handle.reset(::fdopen(*fd, "wb"));
+    if (!f.handle) {
+        ::close(*fd);
+        std::remove(f.temporary.c_str());
+        return Status{ErrorCode::io, named + ": cannot open for writing"};
+    }
     files_.push_back(std::move(f));
     return files_.size() - 1;
 }
@@ -244,7 +287,8 @@ Status StagedOutputs::write(size_t index, const void* data, size_t bytes) {
 
 Status StagedOutputs::commit() {
     for (File& f : files_) {
-        if (std::fclose(f.handle.release()) != 0) return {ErrorCode::io, f.path + ": write error"};
+        const bool moded = ::fchmod(::fileno(f.handle.get()), mode_t(f.mode)) == 0;
+        if (std::fclose(f.handle.release()) != 0 || !moded) return {ErrorCode::io, f.path + ": write error"};
     }
     for (File& f : files_) {
         std::error_code ec;

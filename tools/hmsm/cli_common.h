@@ -6,6 +6,8 @@
 
 #include <CLI/CLI.hpp>
 
+#include "model/input_limits.h"
+
 #include <algorithm>
 #include <charconv>
 #include <initializer_list>
@@ -36,7 +38,7 @@ Result<T> parse_integer(const std::string& text, const std::string& flag) {
     auto [next, ec] = std::from_chars(text.data(), end, value);
     if (text.empty() || ec != std::errc() || next != end)
         return Status{ErrorCode::invalid_argument,
-                      flag + " '" + text + "': expected an integer within " +
+                      flag + " '" + detail::quote_input(text) + "': expected an integer within " +
                           std::to_string(std::numeric_limits<T>::min()) + ".." +
                           std::to_string(std::numeric_limits<T>::max())};
     return value;
@@ -89,7 +91,7 @@ Result<Enum> parse_choice(const NamedValue<Enum> (&table)[N], const std::string&
     std::optional<Enum> value = value_named(table, key);
     if (value && std::find(excluded.begin(), excluded.end(), *value) == excluded.end()) return *value;
     return Status{ErrorCode::invalid_argument,
-                  flag + " '" + text + "': expected " + choices<Enum>(table, spelling, std::nullopt, excluded)};
+                  flag + " '" + detail::quote_input(text) + "': expected " + choices<Enum>(table, spelling, std::nullopt, excluded)};
 }
 
 /// The backend a flag names (`automatic`, spelled "auto", only where `allow_auto`); otherwise
@@ -144,10 +146,14 @@ Result<std::optional<Schedule>> schedule_option(const WindFlags& flags, const Sc
 Result<glm::dvec3> parse_vec3(const std::string& text, const char* flag);
 
 /// Output files staged as temporaries when the command starts (so an unwritable path fails
-/// before any work) and renamed into place only by commit(); otherwise removed.
+/// before any work) and renamed into place only by commit(); otherwise removed. Before any work
+/// it refuses two outputs on one path, an output on an input, and replacing a symbolic link or
+/// anything but a regular file; a replaced file keeps its mode (docs/cli.md, "Outputs").
 class StagedOutputs {
 public:
     ~StagedOutputs();
+    /// Names the command's input files (empty names are ignored): no output may be one of them.
+    void add_inputs(std::initializer_list<std::string> paths);
     /// Reserves `path`; returns the index to write through.
     Result<size_t> stage(const std::string& path, const char* flag);
     Status write(size_t index, const void* data, size_t bytes);
@@ -155,10 +161,12 @@ public:
 
 private:
     struct File {
-        std::string path, temporary;
+        std::string path, temporary, flag;
+        uint32_t mode = 0644;
         std::unique_ptr<std::FILE, int (*)(std::FILE*)> handle{nullptr, &std::fclose};
     };
     std::vector<File> files_;
+    std::vector<std::string> inputs_;
     bool committed_ = false;
 };
 

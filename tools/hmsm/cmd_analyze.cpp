@@ -200,6 +200,7 @@ int run_analyze(CLI::App& app) {
     settings.spectrum_wind = *wind;
     settings.spectrum_wind.strength = strength_of_speed(flags.wind_speed);
     StagedOutputs outputs;
+    outputs.add_inputs({flags.source.tree, flags.source.forest, flags.wind.schedule});
     std::vector<std::pair<size_t, int>> files;
     const std::pair<const std::string*, const char*> plots[] = {
         {&flags.plot_step, "--plot-step"}, {&flags.plot_spectrum, "--plot-spectrum"}, {&flags.plot_chains, "--plot-chains"}};

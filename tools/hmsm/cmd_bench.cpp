@@ -1,6 +1,7 @@
 // hmsm bench (docs/model.md 7): the paper's Table 1 per preset and backend, pointer jumping
 // vs level by level, and forest scaling against the copy-bandwidth roofline. Markdown on stdout,
 // JSON with --json (schema: docs/benchmarks/README.md), both as a device's page with --out.
+#include "bench_depth.h"
 #include "bench_joints.h"
 #include "bench_report.h"
 #include "bench_run.h"
@@ -34,6 +35,7 @@ struct BenchFlags {
     int64_t steps = 100, warmup = 20, repeats = 5;
     std::string instances = "1,10,100,1000,10000";
     std::string joint_instances = "1,10,100,1000,10000";  // joints-only forest (bench_joints.h)
+    std::string composition_depths = "none";  // path walk against pointer jumping (bench_depth.h)
     double spacing = 25.0;
     double case_budget = 20.0;
     std::string forest_composition = "automatic";
@@ -52,16 +54,17 @@ std::vector<std::string> split_list(const std::string& text) {
     return items;
 }
 
-/// Instance counts "N,N,..." in [1, 1000000], or "none" (no rows).
-Result<std::vector<uint32_t>> instance_counts(const std::string& text, const std::string& flag) {
+/// Counts "N,N,..." in [1, `largest`] (`what`: "counts", "depths"), or "none" (no rows).
+Result<std::vector<uint32_t>> count_list(const std::string& text, const std::string& flag, long long largest,
+                                         const char* what) {
     std::vector<uint32_t> counts;
     if (text == "none") return counts;
     for (const std::string& item : split_list(text)) {
         char* end = nullptr;
         const long long n = std::strtoll(item.c_str(), &end, 10);
-        if (item.empty() || *end != '\0' || n < 1 || n > 1000000)
-            return Status{ErrorCode::invalid_argument,
-                          flag + " '" + item + "': expected counts in [1, 1000000] or none"};
+        if (item.empty() || *end != '\0' || n < 1 || n > largest)
+            return Status{ErrorCode::invalid_argument, flag + " '" + detail::quote_input(item) + "': expected " +
+                                                           what + " in [1, " + std::to_string(largest) + "] or none"};
         counts.push_back(uint32_t(n));
     }
     return counts;
@@ -79,7 +82,8 @@ std::string utc_now() {
 /// Every table of a result document, as a run prints them on stdout.
 std::string render_tables(const json& document) {
     return render_markdown(document) + bench::render_joint_forest(document.value("forest_joints", json::array())) +
-           bench::render_live_control(document.value("live_control", json::array()));
+           bench::render_live_control(document.value("live_control", json::array())) +
+           bench::render_composition_depths(document.value("composition_depths", json::array()));
 }
 
 /// The device page `--out STEM` writes as STEM.md: a header naming the device (the stem's file
@@ -109,12 +113,12 @@ Status write_page(StagedOutputs& outputs, const std::string& stem, const std::st
 
 int render(const std::string& path) {
     std::ifstream in(path);
-    if (!in) return fail_input("--render '" + path + "': cannot read the file");
+    if (!in) return fail_input("--render '" + detail::quote_input(path) + "': cannot read the file");
     std::stringstream text;
     text << in.rdbuf();
     json document = json::parse(text.str(), nullptr, false);
     if (document.is_discarded() || !document.is_object() || document.value("format", "") != "hmsm-bench")
-        return fail_input("--render '" + path + "': not an hmsm-bench JSON document");
+        return fail_input("--render '" + detail::quote_input(path) + "': not an hmsm-bench JSON document");
     StagedOutputs outputs;
     if (!flags.out_stem.empty()) {
         Status staged = write_page(outputs, flags.out_stem, text.str(), document);
@@ -143,6 +147,9 @@ void register_bench_flags(CLI::App& app) {
     app.add_option("--joint-instances", flags.joint_instances,
                    "joints-only forest sizes of paper-1 (outputs joints, passes 1-5), comma-separated "
                    "(default 1,10,100,1000,10000, plus 100000 x paper-5 unless --quick; none: no rows)");
+    app.add_option("--composition-depths", flags.composition_depths,
+                   "path_walk against pointer_jumping per step on synthetic chains of these depths, "
+                   "1 and 100 instances, e.g. 16,32,64,128,256,1024 (default none)");
     app.add_option("--spacing", flags.spacing, "forest grid spacing in metres (default 25)");
     app.add_option("--forest-composition", flags.forest_composition,
                    "composition of the forest rows: " +
@@ -214,12 +221,16 @@ int run_bench(CLI::App& app) {
         backends.push_back(BackendRun{*kind, true, {}, std::nullopt});
     }
 
-    auto parsed_counts = instance_counts(flags.instances, "--instances");
+    auto parsed_counts = count_list(flags.instances, "--instances", 1000000, "counts");
     if (!parsed_counts) return fail(parsed_counts.status());
     const std::vector<uint32_t> counts = std::move(parsed_counts).value();
-    auto parsed_joint_counts = instance_counts(flags.joint_instances, "--joint-instances");
+    auto parsed_joint_counts = count_list(flags.joint_instances, "--joint-instances", 1000000, "counts");
     if (!parsed_joint_counts) return fail(parsed_joint_counts.status());
     const std::vector<uint32_t> joint_counts = std::move(parsed_joint_counts).value();
+
+    auto parsed_depths = count_list(flags.composition_depths, "--composition-depths", 4096, "depths");
+    if (!parsed_depths) return fail(parsed_depths.status());
+    const std::vector<uint32_t> depths = std::move(parsed_depths).value();
 
     // Models: the presets (or --tree), and the forest model (paper-1 or --tree).
     std::vector<Model> models;
@@ -243,6 +254,7 @@ int run_bench(CLI::App& app) {
     }
 
     StagedOutputs outputs;
+    outputs.add_inputs({flags.tree});
     std::optional<size_t> json_file;
     if (!flags.json_path.empty()) {
         auto staged = outputs.stage(flags.json_path, "--json");
@@ -308,6 +320,10 @@ int run_bench(CLI::App& app) {
     const json live_control = counts.empty() ? json::array()
                                              : measure_live_control(forest_model.tree, live_backends,
                                                                     flags.quick ? 20u : 1000u, flags.spacing);
+    const json composition_depths =
+        depths.empty() ? json::array()
+                       : measure_composition_depths(live_backends, depths, settings.steps, settings.warmup,
+                                                    settings.case_budget);
     progress.finish();
 
     add_speedups(run.presets, run.forest);
@@ -369,6 +385,7 @@ int run_bench(CLI::App& app) {
         {"forest", run.forest},
         {"forest_joints", forest_joints},
         {"live_control", live_control},
+        {"composition_depths", composition_depths},
         {"copy_bandwidth", copy},
         {"skipped", run.skipped},
         {"notes", notes},

@@ -63,6 +63,7 @@ int run_export(CLI::App& app) {
     config.outputs = Outputs::joints;  // the clip needs the joint rotations alone (passes 1-5)
 
     StagedOutputs outputs;
+    outputs.add_inputs({flags.source.tree, flags.source.forest, flags.wind.schedule});
     auto file = outputs.stage(flags.gltf, "--gltf");
     if (!file) return fail(file.status());
 

@@ -31,13 +31,22 @@ void register_import_flags(CLI::App& app) {
 int run_import(CLI::App&) {
     if (flags.treeqsm.empty() && flags.simpleforest.empty())
         return fail_input("give the cylinder model with --treeqsm FILE or --simpleforest FILE");
+    // The output is checked (not the input, a regular file, not a link) before the import runs.
+    StagedOutputs outputs;
+    outputs.add_inputs({flags.treeqsm, flags.simpleforest});
+    auto out_file = outputs.stage(flags.out, "--out");
+    if (!out_file) return fail(out_file.status());
     auto imported = flags.treeqsm.empty() ? import_simpleforest(flags.simpleforest)
                                           : import_treeqsm(flags.treeqsm);
     if (!imported) return fail(imported.status());
     TreeModel& tree = imported->tree;
     Status leaves = scatter_leaves(tree, flags.leaves, flags.leaf_seed, flags.leaf_size[0], flags.leaf_size[1]);
     if (!leaves) return fail(leaves);
-    Status saved = save_tree(tree, flags.out);
+    Status valid = validate_tree(tree);
+    if (!valid) return fail(valid);
+    const std::string text = tree_to_json(tree);
+    Status saved = outputs.write(*out_file, text.data(), text.size());
+    if (saved) saved = outputs.commit();
     if (!saved) return fail(saved);
     const ImportSummary& s = imported->summary;
     if (flags.json) {

@@ -36,6 +36,7 @@ int run_info(CLI::App& app) {
     if (!scene) return fail(scene.status());
     const TreeModel& tree = scene->models[0];
     StagedOutputs outputs;
+    outputs.add_inputs({flags.source.tree});
     std::optional<size_t> chains_file;
     if (!flags.chains_csv.empty()) {
         auto staged = outputs.stage(flags.chains_csv, "--chains");

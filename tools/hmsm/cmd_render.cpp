@@ -195,7 +195,7 @@ int run_render(CLI::App& app) {
     settings.msaa = flags.msaa;
     settings.shadows = !flags.no_shadows;
     auto draw = render::parse_draw_mode(flags.draw);
-    if (!draw) return fail_input("--draw '" + flags.draw + "': expected vertices or skinned");
+    if (!draw) return fail_input("--draw '" + detail::quote_input(flags.draw) + "': expected vertices or skinned");
     settings.draw = *draw;
     if (flags.leaf_scale == "auto") {
         settings.leaf_scale = 0.0;
@@ -203,7 +203,7 @@ int run_render(CLI::App& app) {
         char* end = nullptr;
         settings.leaf_scale = std::strtod(flags.leaf_scale.c_str(), &end);
         if (flags.leaf_scale.empty() || *end != '\0' || settings.leaf_scale == 0.0)
-            return fail_input("--leaf-scale '" + flags.leaf_scale + "': expected auto or a number within 0.1..20");
+            return fail_input("--leaf-scale '" + detail::quote_input(flags.leaf_scale) + "': expected auto or a number within 0.1..20");
     }
     settings.camera.distance = flags.camera_distance;
     settings.camera.yaw_degrees = flags.camera_yaw;
@@ -242,6 +242,7 @@ int run_render(CLI::App& app) {
                                   "and instance settings, not add or remove instances");
 
     StagedOutputs outputs;
+    outputs.add_inputs({flags.source.tree, flags.source.forest, flags.wind.schedule});
     std::optional<size_t> gif_file, strip_file;
     for (auto [path, flag, slot] : {std::tuple{&flags.gif, "--gif", &gif_file},
                                     std::tuple{&flags.strip, "--strip", &strip_file}}) {

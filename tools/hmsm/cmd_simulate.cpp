@@ -105,16 +105,19 @@ Result<std::vector<std::vector<uint32_t>>> trace_nodes(const std::string& text, 
         auto index = parse_integer<uint32_t>(item, "--trace-nodes");
         if (!index)
             return Status{ErrorCode::invalid_argument,
-                          "--trace-nodes '" + text + "': expected top or node indices I,J,... (" +
-                              (item.empty() ? std::string("empty item") : "'" + item + "' is not an index") + ")"};
+                          "--trace-nodes '" + detail::quote_input(text) + "': expected top or node indices I,J,... (" +
+                              (item.empty() ? std::string("empty item")
+                                            : "'" + detail::quote_input(item) + "' is not an index") +
+                              ")"};
         if (std::find(list.begin(), list.end(), *index) != list.end())
             return Status{ErrorCode::invalid_argument,
-                          "--trace-nodes '" + text + "': node " + item + " is listed twice"};
+                          "--trace-nodes '" + detail::quote_input(text) + "': node " + item + " is listed twice"};
         for (size_t m = 0; m < scene.models.size(); ++m)
             if (*index >= scene.models[m].nodes.size())
                 return Status{ErrorCode::invalid_argument,
-                              "--trace-nodes: node " + item + " does not exist in model '" + scene.model_names[m] +
-                                  "' (" + std::to_string(scene.models[m].nodes.size()) + " nodes)"};
+                              "--trace-nodes: node " + item + " does not exist in model '" +
+                                  detail::quote_input(scene.model_names[m]) + "' (" +
+                                  std::to_string(scene.models[m].nodes.size()) + " nodes)"};
         list.push_back(*index);
         if (comma == std::string::npos) break;
         at = comma + 1;
@@ -235,6 +238,7 @@ int run_simulate(CLI::App& app) {
     }
 
     StagedOutputs outputs;
+    outputs.add_inputs({flags.source.tree, flags.source.forest, flags.wind.schedule});
     std::optional<size_t> nodes_file, chains_file, trace_file, vertices_file, report_file;
     for (auto [path, flag, slot] : {std::tuple{&flags.dump_nodes, "--dump-nodes", &nodes_file},
                                     std::tuple{&flags.dump_chains, "--dump-chains", &chains_file},

@@ -1,5 +1,6 @@
 // Cylinder list -> hmsm skeleton (docs/model.md 4, "Imports"); conventions in hmsm/import.h.
 #include "import/cylinders.h"
+#include "input_limits.h"
 
 #include <glm/geometric.hpp>
 
@@ -30,6 +31,14 @@ Status bad(std::string message) { return {ErrorCode::invalid_tree, std::move(mes
 glm::dvec3 to_y_up(const glm::dvec3& p) { return {p.x, p.z, -p.y}; }
 
 }  // namespace
+
+Status check_line_count(std::string_view text, std::string_view source) {
+    const uint64_t lines = uint64_t(std::count(text.begin(), text.end(), '\n')) + 1;
+    // One header line besides the rows.
+    if (Status counted = check_count("lines", lines, size_limits().tree_nodes + 1); !counted)
+        return {ErrorCode::invalid_tree, std::string(source) + ": " + counted.message()};
+    return {};
+}
 
 std::vector<Line> split_lines(std::string_view text) {
     std::vector<Line> lines;

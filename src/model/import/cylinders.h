@@ -27,6 +27,9 @@ struct Line {
     size_t number = 0;
 };
 std::vector<Line> split_lines(std::string_view text);
+/// Refuses a text of more lines than a tree may have nodes (docs/model.md 3.11; every cylinder
+/// row makes at least one node) before anything per line is allocated.
+Status check_line_count(std::string_view text, std::string_view source);
 
 /// Splits on any of `separators`; runs of separators count as one when `merge_runs`.
 std::vector<std::string_view> split_fields(std::string_view line, std::string_view separators,

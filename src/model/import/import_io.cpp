@@ -1,5 +1,6 @@
 // File entry points of the importers, format detection, and leaves for scanned (leafless) trees.
 #include "import/cylinders.h"
+#include "json_util.h"
 #include "random.h"
 
 #include <glm/geometric.hpp>
@@ -16,15 +17,6 @@ namespace hmsm {
 
 namespace {
 
-Result<std::string> read_file(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) return Status{ErrorCode::io, path + ": cannot open"};
-    std::ostringstream text;
-    text << in.rdbuf();
-    if (in.bad()) return Status{ErrorCode::io, path + ": read error"};
-    return text.str();
-}
-
 /// A unit vector perpendicular to unit `d`, as close to `hint` as possible.
 glm::dvec3 perpendicular(const glm::dvec3& d, const glm::dvec3& hint) {
     glm::dvec3 p = hint - glm::dot(hint, d) * d;
@@ -38,13 +30,13 @@ glm::dvec3 perpendicular(const glm::dvec3& d, const glm::dvec3& hint) {
 }  // namespace
 
 Result<ImportedTree> import_treeqsm(const std::string& path) {
-    auto text = read_file(path);
+    auto text = detail::read_text_file(path, /*regular_file_only=*/true);
     if (!text) return text.status();
     return parse_treeqsm(*text, path);
 }
 
 Result<ImportedTree> import_simpleforest(const std::string& path) {
-    auto text = read_file(path);
+    auto text = detail::read_text_file(path, /*regular_file_only=*/true);
     if (!text) return text.status();
     return parse_simpleforest(*text, path);
 }

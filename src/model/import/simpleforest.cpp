@@ -29,6 +29,7 @@ bool is_integer(double v) { return v == std::floor(v) && std::fabs(v) < 9e15; }
 }  // namespace
 
 Result<ImportedTree> parse_simpleforest(std::string_view text, std::string_view source) {
+    HMSM_TRY(check_line_count(text, source));
     const std::vector<Line> lines = split_lines(text);
     if (lines.empty()) return bad(std::string(source) + ": empty file (no header, no cylinder rows)");
     const std::string_view header = lines[0].text;

@@ -29,6 +29,7 @@ constexpr std::string_view kSeparators = " \t,;";
 }  // namespace
 
 Result<ImportedTree> parse_treeqsm(std::string_view text, std::string_view source) {
+    HMSM_TRY(check_line_count(text, source));
     const std::vector<Line> lines = split_lines(text);
     if (lines.empty()) return bad(std::string(source) + ": empty file (no cylinder rows)");
     size_t first_row = 0;

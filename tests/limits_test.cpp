@@ -1,0 +1,261 @@
+// The input limits (docs/model.md 3.11) through the C++ API and the loaders: numbers beyond the
+// float range are refused where they enter with a message naming the value and the limit; sizes
+// are refused from their counts before anything proportional is built.
+#include "test_trees.h"
+
+#include "model/input_limits.h"
+#include "step_program.h"
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+namespace hmsm {
+namespace {
+
+namespace fs = std::filesystem;
+
+SimulationConfig cpu_config() {
+    SimulationConfig config;
+    config.backend = BackendKind::cpu;
+    config.wind.profile = WindProfile::constant;
+    return config;
+}
+
+std::unique_ptr<Simulation> small_simulation() {
+    auto sim = Simulation::create(single_tree_scene(test::small_tree()), cpu_config());
+    EXPECT_TRUE(sim.ok()) << sim.status().message();
+    return sim.ok() ? std::move(sim).value() : nullptr;
+}
+
+void expect_refused(const Status& status, std::initializer_list<const char*> fragments) {
+    EXPECT_FALSE(status.ok());
+    EXPECT_TRUE(is_input_error(status.code())) << status.message();
+    for (const char* f : fragments) EXPECT_NE(status.message().find(f), std::string::npos) << status.message();
+}
+
+// A force field strength or centre beyond float range made every chain NaN for good.
+TEST(Limits, ForceFieldsBeyondFloatRangeAreRefused) {
+    auto sim = small_simulation();
+    ASSERT_TRUE(sim);
+    ForceField radial;
+    radial.kind = ForceField::Kind::radial;
+    radial.radius = 3.0;
+    radial.radial = 3.5e38;
+    expect_refused(sim->set_force_fields({&radial, 1}), {"force field 0", "radial", "3.5e+38", "1e+30"});
+    ForceField directional;
+    directional.directional = Vec3(0.0, 0.0, -4e38);
+    expect_refused(sim->set_force_fields({&directional, 1}), {"directional", "1e+30"});
+    ForceField far;
+    far.center = Vec3(1e308, 0.0, 0.0);
+    expect_refused(sim->set_force_fields({&far, 1}), {"center", "1e+09"});
+    ForceField huge;
+    huge.radius = 1e308;
+    expect_refused(sim->set_force_fields({&huge, 1}), {"radius", "1e+308"});
+    EXPECT_TRUE(sim->force_fields().empty());
+    // The largest accepted field still leaves every chain finite (outside it: no contribution).
+    ForceField strong;
+    strong.kind = ForceField::Kind::radial;
+    strong.center = Vec3(1e9, 0.0, 0.0);
+    strong.radius = 1.0;
+    strong.radial = 1e-3 * detail::kMaxForce;
+    ASSERT_TRUE(sim->set_force_fields({&strong, 1}).ok());
+    ASSERT_TRUE(sim->step(10).ok());
+    std::vector<double> angles;
+    ASSERT_TRUE(sim->read(Output::chain_angles, angles).ok());
+    EXPECT_TRUE(test::all_finite(angles));
+}
+
+// wind_scale beyond float range, and the product strength x scale x area.
+TEST(Limits, WindScaleAndItsProductWithTheStrengthAreBounded) {
+    auto sim = small_simulation();
+    ASSERT_TRUE(sim);
+    expect_refused(sim->set_instance_wind_scale(0, 1e28), {"wind scale", "1e+28", "1e+06"});
+    Wind wind = sim->wind();
+    wind.strength = 1e26;
+    ASSERT_TRUE(sim->set_wind(wind).ok());
+    expect_refused(sim->set_instance_wind_scale(0, 1e6), {"wind force", "1e+30"});
+    EXPECT_EQ(sim->instances()[0].wind_scale, 1.0);
+    Instance added;
+    added.wind_scale = 1e5;
+    expect_refused(sim->add_instances({&added, 1}), {"added instance 0", "wind force"});
+    Scene scene = single_tree_scene(test::small_tree());
+    scene.instances[0].wind_scale = 1e28;
+    expect_refused(Simulation::create(scene, cpu_config()).status(), {"wind_scale", "1e+28"});
+    scene.instances[0].wind_scale = 1e6;
+    SimulationConfig strong = cpu_config();
+    strong.wind.strength = 1e28;
+    expect_refused(Simulation::create(scene, strong).status(), {"wind force"});
+}
+
+// Origins and radii of 1e300 ran with inf and NaN outputs.
+TEST(Limits, OriginsAndRadiiBeyondTheRangeAreRefused) {
+    Scene scene = single_tree_scene(test::small_tree(), Vec3(1e300, 0.0, 0.0));
+    expect_refused(Simulation::create(scene, cpu_config()).status(), {"origin", "1e+300", "1e+09"});
+    expect_refused(validate_tree(test::make_tree({{-1, 0, 0, 0, 1e300}, {0, 0, 1, 0, 0.1}})), {"radius", "1e+300"});
+    expect_refused(validate_tree(test::make_tree({{-1, 0, 0, 0, 0.1}, {0, 0, 1e300, 0, 0.1}})), {"position"});
+    auto sim = small_simulation();
+    ASSERT_TRUE(sim);
+    Instance far;
+    far.origin = Vec3(0.0, 0.0, -1e300);
+    expect_refused(sim->add_instances({&far, 1}), {"origin"});
+    EXPECT_EQ(sim->instance_count(), 1u);
+    auto forest = parse_forest(R"({"format": "hmsm-forest", "version": 1, "models": {"p": "preset:paper-5"},
+        "instances": [{"model": "p", "origin": [1e300, 0, 0]}]})", ".", "f.json");
+    expect_refused(forest.status(), {"instances[0].origin", "1e+300"});
+}
+
+// A wind frequency of 1e308 was accepted by set_wind and refused only at step().
+TEST(Limits, WindFrequencyIsCheckedAgainstTheClockWhereItEnters) {
+    auto sim = small_simulation();
+    ASSERT_TRUE(sim);
+    Wind wind = sim->wind();
+    wind.frequency = 1e308;
+    expect_refused(sim->set_wind(wind), {"wind frequency", "1e+308", "1e+06"});
+    EXPECT_NE(sim->wind().frequency, 1e308);
+    ASSERT_TRUE(sim->step(1).ok());
+}
+
+// A tree of millions of nodes was built (24 GB) before anything sized it.
+TEST(Limits, TreesAreSizedFromTheirCountsBeforeTheBuild) {
+    detail::SizeLimits small = detail::kDefaultSizeLimits;
+    small.tree_nodes = 8;
+    detail::ScopedSizeLimits scoped(small);
+    std::string text = R"({"format": "hmsm-tree", "version": 1, "nodes": [{"parent": -1, "position": [0,0,0], "radius": 0.1})";
+    for (int i = 1; i < 9; ++i)
+        text += R"(, {"parent": )" + std::to_string(i - 1) + R"(, "position": [0,)" + std::to_string(i) + R"(,0], "radius": 0.1})";
+    text += "]}";
+    auto tree = parse_tree(text, "big.json");
+    ASSERT_FALSE(tree.ok());
+    EXPECT_EQ(tree.status().code(), ErrorCode::invalid_tree);
+    EXPECT_NE(tree.status().message().find("9 is more than the limit of 8"), std::string::npos) << tree.status().message();
+    // The memory a build takes: a lowered budget refuses the scene before building.
+    small.tree_nodes = detail::kDefaultSizeLimits.tree_nodes;
+    small.build_bytes = 1 << 20;
+    detail::ScopedSizeLimits budget(small);
+    auto sim = Simulation::create(single_tree_scene(test::rod(2000, 0.1, 0.2)), cpu_config());
+    ASSERT_FALSE(sim.ok());
+    EXPECT_EQ(sim.status().code(), ErrorCode::unsupported);
+    EXPECT_NE(sim.status().message().find("MiB"), std::string::npos) << sim.status().message();
+}
+
+// 2,000 names of one preset were each generated and built (about 6 MB each): out of memory.
+TEST(Limits, ForestLoadsEachReferenceOnceAndSizesTheBuildFirst) {
+    auto forest_of = [](int names) {
+        std::string text = R"({"format": "hmsm-forest", "version": 1, "models": {)";
+        for (int i = 0; i < names; ++i) text += (i ? ", " : "") + ("\"m" + std::to_string(i) + "\": \"preset:paper-5\"");
+        return text + R"(}, "instances": [{"model": "m7"}, {"model": "m9"}, {"model": "m7"}]})";
+    };
+    const auto start = std::chrono::steady_clock::now();
+    auto huge = parse_forest(forest_of(2000), ".", "f.json");
+    ASSERT_FALSE(huge.ok());
+    EXPECT_EQ(huge.status().code(), ErrorCode::unsupported);
+    EXPECT_NE(huge.status().message().find("MiB"), std::string::npos) << huge.status().message();
+    EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 5.0);
+    auto scene = parse_forest(forest_of(20), ".", "f.json");
+    ASSERT_TRUE(scene.ok()) << scene.status().message();
+    ASSERT_EQ(scene->models.size(), 20u);  // every name, for schedules that add instances
+    EXPECT_EQ(scene->model_names[scene->instances[0].model], "m7");
+    EXPECT_EQ(scene->model_names[scene->instances[1].model], "m9");
+    EXPECT_EQ(scene->instances[2].model, scene->instances[0].model);
+    detail::SizeLimits small = detail::kDefaultSizeLimits;
+    small.forest_models = 10;
+    detail::ScopedSizeLimits scoped(small);
+    expect_refused(parse_forest(forest_of(20), ".", "f.json").status(), {"models", "20", "10"});
+}
+
+// Importers: a 2 GB sparse file and a character device were read (4.2 GB, or until memory ran out).
+TEST(Limits, ImportersAreSizedBeforeReading) {
+    const fs::path dir = fs::temp_directory_path() / "hmsm_limits_import";
+    fs::create_directories(dir);
+    const std::string sparse = (dir / "sparse.txt").string();
+    const int fd = ::open(sparse.c_str(), O_CREAT | O_TRUNC | O_WRONLY, 0644);
+    ASSERT_GE(fd, 0);
+    ASSERT_EQ(::ftruncate(fd, off_t(2) << 30), 0);
+    ::close(fd);
+    const auto start = std::chrono::steady_clock::now();
+    for (auto imported : {import_treeqsm(sparse), import_simpleforest(sparse)}) {
+        ASSERT_FALSE(imported.ok());
+        EXPECT_EQ(imported.status().code(), ErrorCode::io);
+        EXPECT_NE(imported.status().message().find("256 MiB"), std::string::npos) << imported.status().message();
+    }
+    EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 2.0);
+    for (auto imported : {import_treeqsm("/dev/urandom"), import_simpleforest("/dev/zero")}) {
+        ASSERT_FALSE(imported.ok());
+        EXPECT_NE(imported.status().message().find("not a regular file"), std::string::npos)
+            << imported.status().message();
+    }
+    fs::remove_all(dir);
+    // Rows are counted before they are split.
+    detail::SizeLimits small = detail::kDefaultSizeLimits;
+    small.tree_nodes = 4;
+    detail::ScopedSizeLimits scoped(small);
+    auto rows = parse_treeqsm("1 1 0 0 0 0 0 1 0 0\n1\n1\n1\n1\n1\n1\n", "rows.txt");
+    ASSERT_FALSE(rows.ok());
+    EXPECT_NE(rows.status().message().find("more than the limit"), std::string::npos) << rows.status().message();
+}
+
+// A schedule of 10^7 events took 5.9 GB.
+TEST(Limits, SchedulesAreSizedFromTheirCounts) {
+    detail::SizeLimits small = detail::kDefaultSizeLimits;
+    small.schedule_events = 10;
+    detail::ScopedSizeLimits scoped(small);
+    std::string text = R"({"format": "hmsm-schedule", "version": 1, "events": [)";
+    for (int i = 1; i <= 11; ++i) text += (i > 1 ? ", " : "") + ("{\"step\": " + std::to_string(i) + "}");
+    text += "]}";
+    auto schedule = parse_schedule(text, "s.json");
+    ASSERT_FALSE(schedule.ok());
+    EXPECT_NE(schedule.status().message().find("11 is more than the limit of 10"), std::string::npos)
+        << schedule.status().message();
+    auto removals = parse_schedule(R"({"format": "hmsm-schedule", "version": 1, "events": [
+        {"step": 1, "remove": [0, 1, 2, 3, 4, 5, 6, 7, 8, 9]}]})", "s.json");
+    EXPECT_FALSE(removals.ok());
+}
+
+// A 100 MB "format" string made a 100 MB error line.
+TEST(Limits, MessagesQuoteAtMostEightyCharactersOfAValue) {
+    const std::string huge(1 << 20, 'x');
+    auto tree = parse_tree(R"({"format": ")" + huge + R"(", "version": 1, "nodes": []})", "t.json");
+    ASSERT_FALSE(tree.ok());
+    EXPECT_LT(tree.status().message().size(), 300u) << tree.status().message().substr(0, 400);
+    EXPECT_NE(tree.status().message().find("1048576 bytes"), std::string::npos);
+    auto forest = parse_forest(R"({"format": "hmsm-forest", "version": 1, "models": {"p": "preset:paper-5"},
+        "instances": [{"model": ")" + huge + R"("}]})", ".", "f.json");
+    ASSERT_FALSE(forest.ok());
+    EXPECT_LT(forest.status().message().size(), 300u);
+    auto schedule = parse_schedule(R"({"format": "hmsm-schedule", "version": 1, "events": [{"step": 1, ")" + huge +
+                                       R"(": 1}]})", "s.json");
+    ASSERT_FALSE(schedule.ok());
+    EXPECT_LT(schedule.status().message().size(), 300u);
+    EXPECT_EQ(detail::quote_input("a\nb"), "a\\nb");
+}
+
+// The grid allowed 2^24 instances, built 3.1 GB, and create refused >= 2^24.
+TEST(Limits, OneInstanceLimitForGridCreateAndAdd) {
+    EXPECT_EQ(kMaxGridInstances, kMaxInstances);
+    auto grid = grid_scene(test::small_tree(), kMaxInstances + 1, 1.0, 1);
+    ASSERT_FALSE(grid.ok());
+    EXPECT_EQ(grid.status().code(), ErrorCode::unsupported);
+    EXPECT_NE(grid.status().message().find(std::to_string(kMaxInstances)), std::string::npos)
+        << grid.status().message();
+    EXPECT_TRUE(grid_scene(test::small_tree(), 4, 1.0, 1).ok());
+}
+
+// `automatic` picked the walk on every GPU whatever the depth: O(depth^2) per step.
+TEST(Limits, AutomaticKeepsThePathWalkOnlyUpToTheBreakEvenDepth) {
+    EXPECT_EQ(detail::automatic_composition(true, 3), Composition::path_walk);
+    EXPECT_EQ(detail::automatic_composition(true, detail::kPathWalkMaxDepth), Composition::path_walk);
+    EXPECT_EQ(detail::automatic_composition(true, detail::kPathWalkMaxDepth + 1), Composition::pointer_jumping);
+    EXPECT_EQ(detail::automatic_composition(true, 20000), Composition::pointer_jumping);
+    EXPECT_EQ(detail::automatic_composition(false, 3), Composition::pointer_jumping);
+}
+
+}  // namespace
+}  // namespace hmsm
