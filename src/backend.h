@@ -149,11 +149,6 @@ Result<std::unique_ptr<Backend>> create_backend(BackendKind kind, uint32_t cpu_t
 uint32_t pass_reads(Pass pass);
 uint32_t pass_writes(Pass pass);
 
-/// Whether `d` is the fused dispatch of Composition::fused (passes 1-5 in one, gpu_layout.h
-/// HMSM_MODE_FUSED); its `pass` is the first fused pass, under which its time is reported.
-inline bool runs_fused(const Dispatch& d) {
-    return d.pass == kFusedDispatchPass && d.constants.mode == HMSM_MODE_FUSED;
-}
 /// Whether `d` is a path-walk dispatch of Composition::path_walk (gpu_layout.h
 /// HMSM_MODE_PATH_WALK on a pass that leads one): it also runs its pass's walk partner.
 inline bool runs_path_walk(const Dispatch& d) {
@@ -171,9 +166,8 @@ inline bool is_walk_ahead(const Dispatch& d) {
 /// Whether a dispatch reads the step's wind-table slot from constants.wind.w (Backend::run sets
 /// it): wind_force, and the top poses (which read the next step's, the slot after).
 inline bool reads_wind_slot(const Dispatch& d) { return d.pass == Pass::wind_force || is_top_poses_walk(d); }
-/// The passes a dispatch runs (bit i = Pass i): the fused passes, a path walk's two, or its own.
+/// The passes a dispatch runs (bit i = Pass i): a path walk's two, or its own.
 inline uint32_t dispatch_passes(const Dispatch& d) {
-    if (runs_fused(d)) return fused_passes();
     if (runs_path_walk(d)) return walk_passes(d.pass);
     return 1u << uint32_t(d.pass);
 }
@@ -190,20 +184,12 @@ inline uint32_t dispatch_writes(const Dispatch& d) {
     return runs_path_walk(d) ? pass_info(d.pass).walk_writes : writes_of_passes(dispatch_passes(d));
 }
 
-/// The most shared memory a GPU backend gives a fused workgroup (which keeps its rounds there
-/// when gpu::fused_shared_bytes(chains) fits): the environment variable
-/// HMSM_FUSED_SHARED_BYTES when it is a non-negative integer (0: always device memory; for
-/// tests and measurements; never above `device_limit`), else `device_limit` (the device's most
-/// per workgroup). Backends read it once, when they are created.
-uint64_t fused_shared_limit(uint64_t device_limit);
-
 /// Number of threads of a dispatch and the mapping shared by every backend.
 inline uint32_t dispatch_thread_count(const Dispatch& d) { return d.constants.element_count; }
 
 /// How a dispatch is launched: `workgroups` groups of `workgroup_size` threads. Every mode
 /// maps thread i to element i (gpu_layout.h) except HMSM_MODE_POINTER_JUMPING_IN_DISPATCH,
-/// whose workgroup k runs every round for group instance k, HMSM_MODE_FUSED, whose
-/// workgroup k runs passes 1-5 for group instance k, and a packed contour, whose thread
+/// whose workgroup k runs every round for group instance k, and a packed contour, whose thread
 /// places one model vertex in HMSM_PACKED_CONTOUR_INSTANCES instances.
 struct LaunchShape {
     uint64_t workgroups = 0;
@@ -218,7 +204,7 @@ inline bool runs_packed_contour(const Dispatch& d) {
 inline LaunchShape launch_shape(const Dispatch& d) {
     const uint32_t threads = dispatch_thread_count(d);
     if (threads == 0) return {};
-    if (runs_rounds_in_dispatch(d) || runs_fused(d))
+    if (runs_rounds_in_dispatch(d))
         return {threads / d.constants.model_chain_count, gpu::rounds_workgroup_size(d.constants.model_chain_count)};
     const uint64_t launched = runs_packed_contour(d) ? gpu::packed_contour_threads(d.constants) : threads;
     return {(launched + HMSM_WORKGROUP_SIZE - 1) / HMSM_WORKGROUP_SIZE, HMSM_WORKGROUP_SIZE};

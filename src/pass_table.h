@@ -23,7 +23,7 @@ constexpr uint32_t buffer_bit(BufferId id) { return 1u << static_cast<uint32_t>(
 // Shorthand for the access columns below: one bit per buffer (bit i = BufferId i).
 #define HMSM_B(name) buffer_bit(BufferId::name)
 
-/// X(name, domain, hierarchical, needed_for, fused, walk, reads, writes, walk_reads, walk_writes),
+/// X(name, domain, hierarchical, needed_for, walk, reads, writes, walk_reads, walk_writes),
 /// in execution order (the same order as HMSM_PASSES in <hmsm/pass.h>; a static_assert below
 /// keeps them equal). root_positions writes, with the final O_c, the joint matrix [R_c | O_c]
 /// (R_c from compose): the step's pose in 48 bytes, which contour reads (and every reader of a
@@ -31,9 +31,6 @@ constexpr uint32_t buffer_bit(BufferId id) { return 1u << static_cast<uint32_t>(
 /// needed_for: the least SimulationConfig::outputs for which a step runs the pass (outputs on
 /// demand: joint matrices need passes 1-5 only). A vertex-domain pass takes the vertex layout
 /// as its mode; in the packed layout contour's vertex_normal has no elements and is not written.
-/// fused: Composition::fused runs the pass inside its one fused dispatch per instance group (a
-/// workgroup per instance, barriers between the passes); the fused passes are consecutive from
-/// wind_force on, and the fused dispatch reads and writes the union of their buffers.
 /// walk: Composition::path_walk runs the pass and this later pass in one dispatch of the pass
 /// (none: the pass leads no such dispatch): wind_force with integrate per chain, compose with
 /// root_positions by the top-down walk per chain, node_relative with node_world per node.
@@ -46,18 +43,18 @@ constexpr uint32_t buffer_bit(BufferId id) { return 1u << static_cast<uint32_t>(
 /// and node pairs read R and O from the joint matrix. step_program.cpp pairs the wind passes
 /// only where the walk follows.
 #define HMSM_PASS_TABLE(X)                                                                        \
-    X(wind_force, chain, false, joints, true, integrate,                                          \
+    X(wind_force, chain, false, joints, integrate,                                          \
       (HMSM_B(chain_rotation) | HMSM_B(chain_origin) | HMSM_B(chain_constants) |                  \
        HMSM_B(instance_wind) | HMSM_B(wind_table)),                                               \
       (HMSM_B(chain_force)),                                                                      \
       (HMSM_B(joint_matrix) | HMSM_B(chain_constants) | HMSM_B(instance_wind) |                   \
        HMSM_B(wind_table) | HMSM_B(chain_state)),                                                 \
       (HMSM_B(chain_state)))                                                                      \
-    X(integrate, chain, false, joints, true, none,                                                \
+    X(integrate, chain, false, joints, none,                                                \
       (HMSM_B(chain_force) | HMSM_B(chain_state) | HMSM_B(chain_constants) |                      \
        HMSM_B(chain_rest_rotation) | HMSM_B(chain_parent) | HMSM_B(instance_yaw)),                \
       (HMSM_B(chain_state) | HMSM_B(chain_local)), 0u, 0u)                                        \
-    X(compose, chain, true, joints, true, root_positions,                                         \
+    X(compose, chain, true, joints, root_positions,                                         \
       (HMSM_B(chain_local) | HMSM_B(chain_rotation) | HMSM_B(chain_jump) |                        \
        HMSM_B(chain_parent)),                                                                     \
       (HMSM_B(chain_rotation)),                                                                   \
@@ -65,20 +62,20 @@ constexpr uint32_t buffer_bit(BufferId id) { return 1u << static_cast<uint32_t>(
        HMSM_B(chain_rest_rotation) | HMSM_B(node_local) | HMSM_B(instance_origin) |              \
        HMSM_B(instance_yaw)),                                                                     \
       (HMSM_B(joint_matrix)))                                                                     \
-    X(node_relative, node, false, joints, true, node_world,                                       \
+    X(node_relative, node, false, joints, node_world,                                       \
       (HMSM_B(chain_rotation) | HMSM_B(node_owner) | HMSM_B(node_local)),                         \
       (HMSM_B(node_relative)),                                                                    \
       (HMSM_B(joint_matrix) | HMSM_B(node_owner) | HMSM_B(node_local)),                           \
       (HMSM_B(node_world)))                                                                       \
-    X(root_positions, chain, true, joints, true, none,                                            \
+    X(root_positions, chain, true, joints, none,                                            \
       (HMSM_B(node_relative) | HMSM_B(chain_origin) | HMSM_B(chain_jump) |                        \
        HMSM_B(chain_parent) | HMSM_B(chain_attach) | HMSM_B(instance_origin) |                    \
        HMSM_B(chain_rotation)),                                                                   \
       (HMSM_B(chain_origin) | HMSM_B(joint_matrix)), 0u, 0u)                                      \
-    X(node_world, node, false, joints_and_nodes, false, none,                                     \
+    X(node_world, node, false, joints_and_nodes, none,                                     \
       (HMSM_B(chain_origin) | HMSM_B(node_relative) | HMSM_B(node_owner)),                        \
       (HMSM_B(node_world)), 0u, 0u)                                                               \
-    X(contour, vertex, false, all, false, none,                                                   \
+    X(contour, vertex, false, all, none,                                                   \
       (HMSM_B(joint_matrix) | HMSM_B(vertex_chain) |                                              \
        HMSM_B(vertex_rest_position) | HMSM_B(vertex_rest_normal) |                                \
        HMSM_B(vertex_parent_position) | HMSM_B(vertex_parent_normal)),                            \
@@ -112,7 +109,6 @@ struct PassInfo {
     PassDomain domain;
     bool hierarchical;
     Outputs needed_for;
-    bool fused;
     WalkPartner walk;
     uint32_t reads;
     uint32_t writes;
@@ -121,8 +117,8 @@ struct PassInfo {
 };
 
 inline constexpr std::array<PassInfo, kPassCount> kPassTable = {{
-#define HMSM_PASS_INFO(name, domain, hierarchical, needed_for, fused, walk, reads, writes, walk_reads, walk_writes) \
-    {Pass::name, PassDomain::domain, hierarchical, Outputs::needed_for, fused, WalkPartner::walk, reads, writes,  \
+#define HMSM_PASS_INFO(name, domain, hierarchical, needed_for, walk, reads, writes, walk_reads, walk_writes) \
+    {Pass::name, PassDomain::domain, hierarchical, Outputs::needed_for, WalkPartner::walk, reads, writes,        \
      walk_reads, walk_writes},
     HMSM_PASS_TABLE(HMSM_PASS_INFO)
 #undef HMSM_PASS_INFO
@@ -145,17 +141,8 @@ constexpr bool pass_runs_for(Pass pass, Outputs outputs) {
     return uint32_t(pass_info(pass).needed_for) <= uint32_t(outputs);
 }
 
-/// Composition::fused: whether `pass` runs inside the fused dispatch, and the passes it covers
-/// (bit i = Pass i).
-constexpr bool is_fused(Pass pass) { return pass_info(pass).fused; }
-constexpr uint32_t fused_passes() {
-    uint32_t bits = 0;
-    for (const PassInfo& p : kPassTable)
-        if (p.fused) bits |= 1u << uint32_t(p.pass);
-    return bits;
-}
 /// The buffers the passes `passes` (bit i = Pass i) read, resp. write, together: the access of a
-/// dispatch that runs several passes (the fused dispatch, a path-walk pair).
+/// dispatch that runs several passes (a path-walk pair).
 constexpr uint32_t reads_of_passes(uint32_t passes) {
     uint32_t bits = 0;
     for (const PassInfo& p : kPassTable)
@@ -168,16 +155,6 @@ constexpr uint32_t writes_of_passes(uint32_t passes) {
         if (passes >> uint32_t(p.pass) & 1u) bits |= p.writes;
     return bits;
 }
-/// The fused dispatch is a dispatch of the first fused pass (its `pass`, under which its time
-/// is reported) with mode HMSM_MODE_FUSED; the backends' fused kernels run wind_force first.
-inline constexpr Pass kFusedDispatchPass = Pass::wind_force;
-constexpr bool fused_passes_are_a_prefix() {
-    const uint32_t bits = fused_passes();
-    return bits != 0 && (bits & (bits + 1)) == 0 && (bits & 1u) &&
-           kPassTable[0].pass == kFusedDispatchPass;
-}
-static_assert(fused_passes_are_a_prefix(), "the fused passes must be consecutive from wind_force on");
-
 /// Composition::path_walk: the passes a path-walk dispatch of `pass` runs (bit i = Pass i): the
 /// pass and its walk partner; 0 where the pass leads no such dispatch.
 constexpr uint32_t walk_passes(Pass pass) {

@@ -44,7 +44,6 @@ const char* to_string(Composition composition) {
         case Composition::pointer_jumping_per_round: return "pointer_jumping_per_round";
         case Composition::pointer_jumping_in_dispatch: return "pointer_jumping_in_dispatch";
         case Composition::level_by_level: return "level_by_level";
-        case Composition::fused: return "fused";
         case Composition::path_walk: return "path_walk";
         case Composition::automatic: return "automatic";
     }
@@ -54,7 +53,7 @@ const char* to_string(Composition composition) {
 std::optional<Composition> parse_composition(std::string_view name) {
     for (Composition c : {Composition::pointer_jumping, Composition::pointer_jumping_per_round,
                           Composition::pointer_jumping_in_dispatch, Composition::level_by_level,
-                          Composition::fused, Composition::path_walk, Composition::automatic})
+                          Composition::path_walk, Composition::automatic})
         if (name == to_string(c)) return c;
     return std::nullopt;
 }

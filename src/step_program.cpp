@@ -61,9 +61,7 @@ void append_pass(std::vector<Dispatch>& program, const SceneData& d,
         auto in_dispatch = [&](const InstanceGroup& g) {
             const uint32_t chains = d.models[g.model].chain_count;
             if (chains > kMaxChainsForRoundsInDispatch) return false;
-            // (Composition::fused reaches here only for programs of some passes: in dispatch.)
             return composition == Composition::pointer_jumping_in_dispatch ||
-                   composition == Composition::fused ||
                    (composition == Composition::pointer_jumping &&
                     rounds_in_dispatch_pay(g.instance_count, chains, dispatches_are_expensive));
         };
@@ -104,21 +102,6 @@ void append_pass(std::vector<Dispatch>& program, const SceneData& d,
             dispatch.constants.element_count = g.instance_count * count;
             program.push_back(dispatch);
         }
-    }
-}
-
-/// Composition::fused: one dispatch per group runs the fused passes (1-5) for every instance of
-/// the group, a workgroup per instance (gpu_layout.h HMSM_MODE_FUSED). Its constants are those of
-/// an in-dispatch round dispatch: one element per chain, `round` the number of rounds, both
-/// halves the pose half (which wind_force reads and the last rounds write).
-void append_fused(std::vector<Dispatch>& program, const SceneData& d,
-                  const std::vector<InstanceGroup>& groups) {
-    for (const auto& g : groups) {
-        Dispatch dispatch{kFusedDispatchPass, group_constants(d, g, HMSM_FINAL_HALF(d.jump_rounds))};
-        dispatch.constants.element_count = g.instance_count * d.models[g.model].chain_count;
-        dispatch.constants.mode = HMSM_MODE_FUSED;
-        dispatch.constants.round = d.jump_rounds;
-        if (dispatch.constants.element_count > 0) program.push_back(dispatch);
     }
 }
 
@@ -215,25 +198,11 @@ std::vector<Dispatch> build_program(const SceneData& d, const std::vector<Instan
                 wanted |= 1u << uint32_t(pass);
         return build_path_walk_program(d, groups, dispatches_are_expensive, wanted, walk_ahead);
     }
-    // Fused only where the program runs every fused pass (a step); programs of some passes (the
-    // rest pose from integrate on, the recomputation after a removal) run them one by one, with
-    // the rounds in one dispatch as in the fused dispatch.
-    bool fuse = false;
-    if (composition == Composition::fused) {
-        const uint32_t wanted = uint32_t(first) == 0 ? passes : 0u;
-        fuse = (wanted & fused_passes()) == fused_passes();
-        for (Pass pass : kAllPasses) fuse = fuse && (!is_fused(pass) || pass_runs_for(pass, d.outputs));
-        composition = Composition::pointer_jumping_in_dispatch;
-    }
     std::vector<Dispatch> program;
     for (Pass pass : kAllPasses) {
         if (uint32_t(pass) < uint32_t(first) || !(passes >> uint32_t(pass) & 1u)) continue;
         // Outputs on demand: passes whose outputs the step does not produce are not dispatched.
         if (!pass_runs_for(pass, d.outputs)) continue;
-        if (fuse && is_fused(pass)) {
-            if (pass == kFusedDispatchPass) append_fused(program, d, groups);
-            continue;
-        }
         append_pass(program, d, groups, pass, composition, dispatches_are_expensive);
     }
     return program;

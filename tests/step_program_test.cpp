@@ -305,9 +305,10 @@ TEST(StepProgram, RoundsWorkgroupSizeIsThePowerOfTwoThatCoversTheChains) {
 TEST(StepProgram, CompositionNamesRoundTrip) {
     for (Composition c : {Composition::pointer_jumping, Composition::pointer_jumping_per_round,
                           Composition::pointer_jumping_in_dispatch, Composition::level_by_level,
-                          Composition::fused, Composition::path_walk, Composition::automatic})
+                          Composition::path_walk, Composition::automatic})
         EXPECT_EQ(parse_composition(to_string(c)), c);
     EXPECT_FALSE(parse_composition("pointer-jumping").has_value());  // the CLI maps '-' to '_'
+    EXPECT_FALSE(parse_composition("fused").has_value());
 }
 
 // The default composition resolves by backend: pointer jumping on the CPU backends and on

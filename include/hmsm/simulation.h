@@ -29,8 +29,7 @@ HMSM_API std::optional<BackendKind> parse_backend_kind(std::string_view name);
 /// Backends compiled into this build (never `automatic`).
 HMSM_API std::vector<BackendKind> compiled_backends();
 
-/// How passes 3 and 5 accumulate down the hierarchy (and, for `fused`, how passes 1-5 are
-/// dispatched). All give the same poses.
+/// How passes 3 and 5 accumulate down the hierarchy. All give the same poses.
 enum class Composition {
     /// The paper's pointer jumping in ceil(log2(D+1)) rounds, per instance group in one
     /// dispatch per pass (as pointer_jumping_in_dispatch) or one dispatch per round (as
@@ -45,17 +44,6 @@ enum class Composition {
     pointer_jumping_in_dispatch,
     /// One dispatch per depth level, D+1 in all (for comparison).
     level_by_level,
-    /// Passes 1-5 (wind_force to root_positions) in ONE dispatch per instance group: one
-    /// workgroup per instance runs the wind force and integration of its chains, the compose
-    /// rounds, the node positions and the root-position rounds, with workgroup barriers in
-    /// between (pointer jumping inside the workgroup; the rounds' ping-pong halves are kept in
-    /// shared memory where an instance's chains fit, else in device memory). Passes 6 and 7
-    /// follow as usual. It removes most dependent launches and keeps the rounds on chip. On an
-    /// H100 (docs/benchmarks) it is the faster choice for forests on CUDA (1.2x with meshes,
-    /// 1.6x joints only, from 100 trees of 2,345 chains) and for small trees (a few hundred
-    /// chains) on CUDA and Vulkan; a single large tree is slower (one workgroup does it all),
-    /// and on Vulkan a tree whose rounds exceed the workgroup's shared memory gains nothing.
-    fused,
     /// Passes 3 and 5 in one dispatch in which every chain walks its ancestors from the trunk
     /// down (R = R_parent T, O = O_parent + R_parent l_attach: level by level's poses bit for
     /// bit, depth-many products per chain, no dependent dispatch or barrier inside); passes 1

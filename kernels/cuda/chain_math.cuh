@@ -1,12 +1,10 @@
 // The per-chain math of passes 1, 2, 3 and 5, written once for the separate pass kernels
-// (wind_force.cu, integrate.cu, compose.cu, root_positions.cu), the fused kernel (fused.cu,
-// Composition::fused) and the path walk (compose.cu, Composition::path_walk). Mirrors
-// src/cpu/NAME.cpp and shaders/glsl/chain_math.glsl.
+// (wind_force.cu, integrate.cu, compose.cu, root_positions.cu) and the path walk (compose.cu,
+// Composition::path_walk). Mirrors src/cpu/NAME.cpp and shaders/glsl/chain_math.glsl.
 //
 // Loads of state that a block may have written earlier in the same kernel are plain loads
 // (which __syncthreads() orders), never the read-only path: kWrittenInBlock marks the
-// ping-pong halves of in-dispatch rounds, kFused also T, u and the pose half R (the fused
-// kernel writes all of them before it reads them).
+// ping-pong halves of in-dispatch rounds.
 #pragma once
 
 #include "pass_math.cuh"
@@ -135,7 +133,7 @@ HMSM_HOST_DEVICE Mat3 chain_integrate(const BufferPointers& b, const gpu::PassCo
 
 /// One pass-3 pointer-jumping round for model chain c of group instance k in device memory:
 /// P = P(2^round-th ancestor) P, half src_half -> half dst_half (round 0 starts from T).
-template <bool kWrittenInBlock, bool kFused = false>
+template <bool kWrittenInBlock>
 HMSM_HOST_DEVICE void compose_jump(const BufferPointers& b, const gpu::PassConstants& pc, uint32_t k,
                                    uint32_t c, uint32_t round, uint32_t src_half, uint32_t dst_half) {
     const uint64_t chain = state_chain(pc, k, int32_t(c));
@@ -143,8 +141,7 @@ HMSM_HOST_DEVICE void compose_jump(const BufferPointers& b, const gpu::PassConst
         load(b.chain_jump + uint64_t(round) * pc.total_model_chains + pc.model_chain_begin + c);
     // The product accumulated so far: T itself before round 0, else the src half.
     auto product_so_far = [&](uint64_t state) {
-        if (round == 0)
-            return kFused ? load_mat3_written_in_block(b.chain_local, state) : load_mat3(b.chain_local, state);
+        if (round == 0) return load_mat3(b.chain_local, state);
         const uint64_t at = half_begin(pc, src_half) + state;
         return kWrittenInBlock ? load_mat3_written_in_block(b.chain_rotation, at)
                                : load_mat3(b.chain_rotation, at);
@@ -156,7 +153,6 @@ HMSM_HOST_DEVICE void compose_jump(const BufferPointers& b, const gpu::PassConst
 
 /// Pass 5: what chain c of group instance k contributes on its own: the instance origin for the
 /// trunk, else its attach node's position relative to the parent chain's origin.
-template <bool kFused = false>
 HMSM_HOST_DEVICE float4 own_offset(const BufferPointers& b, const gpu::PassConstants& pc, uint32_t k,
                                    int32_t c) {
     if (load(b.chain_parent + pc.model_chain_begin + c) < 0) {
@@ -164,7 +160,7 @@ HMSM_HOST_DEVICE float4 own_offset(const BufferPointers& b, const gpu::PassConst
         return make_float4(origin.x, origin.y, origin.z, 0.0f);
     }
     const float4* u = b.node_relative + state_node(pc, k, load(b.chain_attach + pc.model_chain_begin + c));
-    return kFused ? *u : load(u);
+    return load(u);
 }
 
 /// Joint matrix of state chain `chain` (gpu_layout.h): rows (R row i, O_i).
@@ -176,18 +172,15 @@ HMSM_HOST_DEVICE void store_joint_of(const BufferPointers& b, uint64_t chain, co
 }
 
 /// The same with R from `pose_half` of chain_rotation.
-template <bool kFused = false>
 HMSM_HOST_DEVICE void store_joint(const BufferPointers& b, const gpu::PassConstants& pc, uint64_t chain,
                                   uint32_t pose_half, float4 o) {
-    const uint64_t at = half_begin(pc, pose_half) + chain;
-    store_joint_of(b, chain, kFused ? load_mat3_written_in_block(b.chain_rotation, at)
-                                    : load_mat3(b.chain_rotation, at), o);
+    store_joint_of(b, chain, load_mat3(b.chain_rotation, half_begin(pc, pose_half) + chain), o);
 }
 
 /// One pass-5 pointer-jumping round for model chain c of group instance k in device memory:
 /// the partial sum of the 2^round-th ancestor added, src_half -> dst_half, round 0 starting
 /// from each chain's own offset; the joint matrix too where `write_joint`.
-template <bool kWrittenInBlock, bool kFused = false>
+template <bool kWrittenInBlock>
 HMSM_HOST_DEVICE void root_jump(const BufferPointers& b, const gpu::PassConstants& pc, uint32_t k,
                                 int32_t c, uint32_t round, uint32_t src_half, uint32_t dst_half,
                                 bool write_joint) {
@@ -195,14 +188,14 @@ HMSM_HOST_DEVICE void root_jump(const BufferPointers& b, const gpu::PassConstant
         load(b.chain_jump + uint64_t(round) * pc.total_model_chains + pc.model_chain_begin + c);
     const uint64_t src = half_begin(pc, src_half);
     auto sum_so_far = [&](int32_t chain) {
-        if (round == 0) return own_offset<kFused>(b, pc, k, chain);
+        if (round == 0) return own_offset(b, pc, k, chain);
         const float4* at = b.chain_origin + src + state_chain(pc, k, chain);
         return kWrittenInBlock ? *at : load(at);
     };
     float4 origin = sum_so_far(c);
     if (ancestor >= 0) origin = origin + sum_so_far(ancestor);
     b.chain_origin[half_begin(pc, dst_half) + state_chain(pc, k, c)] = origin;
-    if (write_joint) store_joint<kFused>(b, pc, state_chain(pc, k, c), dst_half, origin);
+    if (write_joint) store_joint(b, pc, state_chain(pc, k, c), dst_half, origin);
 }
 
 /// The chain `up` depth levels above model chain c, through the 2^round-th ancestors.

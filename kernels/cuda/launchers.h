@@ -47,15 +47,4 @@ struct BufferPointers {
 HMSM_PASSES(HMSM_CUDA_DECLARE_PASS)
 #undef HMSM_CUDA_DECLARE_PASS
 
-/// Composition::fused (kernels/cuda/fused.cu): passes 1-5 for one group instance per block, the
-/// rounds in shared memory where gpu::fused_shared_bytes(pc.model_chain_count) is at most
-/// `shared_limit` bytes, else in device memory.
-cudaError_t launch_fused(const BufferPointers& buffers, const gpu::PassConstants& pc,
-                         cudaStream_t stream, uint64_t shared_limit);
-void emulate_fused(const BufferPointers& host_buffers, const gpu::PassConstants& pc, uint64_t shared_limit);
-/// Lets the fused kernel take up to `shared_limit` bytes of dynamic shared memory on the current
-/// device (past the default 48 KiB a kernel must opt in). Called once per backend, outside any
-/// stream capture.
-cudaError_t allow_fused_shared(uint64_t shared_limit);
-
 }  // namespace hmsm::detail::cuda

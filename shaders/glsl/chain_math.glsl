@@ -1,6 +1,6 @@
 // The per-chain math of passes 1, 2, 3 and 5, written once for the separate pass shaders
-// (wind_force.comp, integrate.comp, compose.comp, root_positions.comp), the fused one
-// (fused.comp, Composition::fused) and the path walk (compose.comp, Composition::path_walk).
+// (wind_force.comp, integrate.comp, compose.comp, root_positions.comp) and the path walk
+// (compose.comp, Composition::path_walk).
 // Mirrors src/cpu/NAME.cpp; include after common.glsl.
 #ifndef HMSM_CHAIN_MATH_GLSL
 #define HMSM_CHAIN_MATH_GLSL

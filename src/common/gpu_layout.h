@@ -106,17 +106,6 @@
 /// HMSM_MAX_ROUNDS_WORKGROUP_SIZE (hmsm::gpu::rounds_workgroup_size).
 #define HMSM_MODE_POINTER_JUMPING_IN_DISPATCH 2u
 #define HMSM_MAX_ROUNDS_WORKGROUP_SIZE 1024
-/// Composition::fused: a wind_force dispatch in this mode runs passes 1-5 (the pass table's
-/// fused column) for one group instance per workgroup, workgroups sized as in-dispatch rounds:
-/// wind_force and integrate per chain, compose's pointer-jumping rounds (PassConstants.round
-/// holds the number of rounds, halves as in-dispatch), node_relative per node, root_positions'
-/// rounds, a workgroup barrier between any two. src_half = dst_half = the pose half. Only the
-/// pose half of chain_rotation and chain_origin is defined afterwards (the other is scratch).
-#define HMSM_MODE_FUSED 3u
-/// Floats of workgroup shared memory per chain when the fused dispatch keeps its rounds there:
-/// two halves of a 3x3 rotation (the origins' two halves of 3 floats reuse the half compose
-/// did not finish in). 72 bytes per chain.
-#define HMSM_FUSED_SHARED_FLOATS_PER_CHAIN 18u
 /// Composition::path_walk: a dispatch of a pass that leads a walk (the pass table's `walk`
 /// column) in this mode also runs the pass's walk partner, thread i handling element i of the
 /// pass's domain: wind_force then integrate for chain i; compose then root_positions for chain
@@ -230,11 +219,6 @@ constexpr uint32_t rounds_workgroup_size(uint32_t chains) {
     return size;
 }
 
-/// Bytes of workgroup shared memory a fused dispatch over `chains` chains per instance needs to
-/// keep its rounds there (HMSM_FUSED_SHARED_FLOATS_PER_CHAIN floats per chain).
-constexpr uint64_t fused_shared_bytes(uint32_t chains) {
-    return uint64_t(chains) * HMSM_FUSED_SHARED_FLOATS_PER_CHAIN * sizeof(float);
-}
 }  // namespace hmsm::gpu
 #endif
 

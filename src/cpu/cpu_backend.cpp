@@ -235,7 +235,6 @@ private:
     }
 
     void run_range(const Dispatch& d, double wind_x, Range r) {
-        if (runs_fused(d)) return fused<T>(s_, d.constants, wind_x, r);
         if (runs_path_walk(d)) {
             // The pass and its walk partner over the same elements (pass_table.h `walk`).
             switch (d.pass) {

@@ -99,8 +99,7 @@ typename State<T>::vec3 joint_origin(const State<T>& s, uint64_t chain) {
 /// The work items [begin, end) of one dispatch that one call of a pass runs, in order. An item
 /// is a thread of the dispatch (element i, gpu_layout.h), except in
 /// HMSM_MODE_POINTER_JUMPING_IN_DISPATCH, where it is a group instance running every round
-/// (a workgroup on a GPU), and in HMSM_MODE_FUSED, where it is a group instance running passes
-/// 1-5 (fused.cpp). Distinct items of one dispatch write distinct elements and read
+/// (a workgroup on a GPU). Distinct items of one dispatch write distinct elements and read
 /// only what earlier dispatches (or, in-dispatch, earlier rounds of the same instance) wrote,
 /// so disjoint ranges may run concurrently (the cpu-parallel backend) with the same float
 /// results as one serial call over all items.
@@ -109,19 +108,16 @@ struct Range {
 };
 /// Whether a work item of a dispatch of `pass` is a group instance (see Range).
 inline bool items_are_instances(Pass pass, const gpu::PassConstants& pc) {
-    return (is_hierarchical(pass) && pc.mode == HMSM_MODE_POINTER_JUMPING_IN_DISPATCH) ||
-           (pass == kFusedDispatchPass && pc.mode == HMSM_MODE_FUSED);
+    return is_hierarchical(pass) && pc.mode == HMSM_MODE_POINTER_JUMPING_IN_DISPATCH;
 }
 /// Number of work items of a dispatch of `pass` (see Range).
 inline uint32_t work_items(Pass pass, const gpu::PassConstants& pc) {
     return items_are_instances(pass, pc) ? pc.element_count / pc.model_chain_count : pc.element_count;
 }
-/// Model elements (chains, nodes or vertices) one work item of `pass` touches, for chunking: a
-/// fused item runs two chain passes, two sets of rounds and a node pass.
+/// Model elements (chains, nodes or vertices) one work item of `pass` touches, for chunking: an
+/// instance item runs every round over its chains.
 inline uint32_t elements_per_item(Pass pass, const gpu::PassConstants& pc) {
-    if (!items_are_instances(pass, pc)) return 1;
-    if (is_hierarchical(pass)) return pc.model_chain_count * pc.round;
-    return pc.model_chain_count * (2 * pc.round + 2) + pc.model_node_count;
+    return items_are_instances(pass, pc) ? pc.model_chain_count * pc.round : 1;
 }
 
 /// The three ways a hierarchical pass (compose, root_positions) runs the work items `r` of one
@@ -158,8 +154,6 @@ template <class T> void node_relative(State<T>& s, const gpu::PassConstants& pc,
 template <class T> void root_positions(State<T>& s, const gpu::PassConstants& pc, Range r);
 template <class T> void node_world(State<T>& s, const gpu::PassConstants& pc, Range r);
 template <class T> void contour(State<T>& s, const gpu::PassConstants& pc, Range r);
-/// Composition::fused: passes 1-5 for the group instances `r`, one instance after the other.
-template <class T> void fused(State<T>& s, const gpu::PassConstants& pc, double wind_x, Range r);
 /// Composition::path_walk: passes 3 and 5 for the chains `r` by the top-down walk (path_walk.cpp).
 template <class T> void path_walk(State<T>& s, const gpu::PassConstants& pc, Range r);
 /// Composition::path_walk's wind pair: passes 1 and 2 per chain, storing only the angles.

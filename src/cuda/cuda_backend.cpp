@@ -26,14 +26,9 @@ Result<std::unique_ptr<Backend>> CudaBackend::create() {
     cudaDeviceProp properties{};
     CUDA_TRY(cudaGetDeviceProperties(&properties, device));
     CUDA_TRY(cudaSetDevice(device));
-    // The fused kernel's rounds may take up to the opt-in maximum of shared memory per block.
-    int shared_optin = 0;
-    CUDA_TRY(cudaDeviceGetAttribute(&shared_optin, cudaDevAttrMaxSharedMemoryPerBlockOptin, device));
-    const uint64_t fused_shared = fused_shared_limit(uint64_t(shared_optin));
-    CUDA_TRY(allow_fused_shared(fused_shared));
     cudaStream_t stream = nullptr;
     CUDA_TRY(cudaStreamCreateWithFlags(&stream, cudaStreamNonBlocking));
-    auto backend = std::unique_ptr<CudaBackend>(new CudaBackend(device, properties.name, stream, fused_shared));
+    auto backend = std::unique_ptr<CudaBackend>(new CudaBackend(device, properties.name, stream));
     const char* ahead = std::getenv("HMSM_CUDA_WALK_AHEAD");
     backend->walk_ahead_ = !(ahead && std::string_view(ahead) == "0");
     return std::unique_ptr<Backend>(std::move(backend));
@@ -143,7 +138,7 @@ Result<StepGraph*> CudaBackend::graph_for(std::span<const Dispatch> program) {
         }
         if (graph_used_[i] < graph_used_[oldest]) oldest = i;
     }
-    HMSM_TRY(graphs_[oldest].capture(program, buffers_.pointers(), stream_, fused_shared_limit_));
+    HMSM_TRY(graphs_[oldest].capture(program, buffers_.pointers(), stream_));
     graph_used_[oldest] = ++graph_clock_;
     return &graphs_[oldest];
 }
@@ -243,7 +238,7 @@ Status CudaBackend::run_profiled(std::span<const Dispatch> program, uint32_t slo
     }
     CUDA_TRY(cudaEventRecord(events_[0], stream_));
     for (size_t j = 0; j < program.size(); ++j) {
-        CUDA_TRY(launch_dispatch(program[j], buffers_.pointers(), float(slot), stream_, fused_shared_limit_));
+        CUDA_TRY(launch_dispatch(program[j], buffers_.pointers(), float(slot), stream_));
         CUDA_TRY(cudaEventRecord(events_[j + 1], stream_));
     }
     CUDA_TRY(cudaEventSynchronize(events_[program.size()]));

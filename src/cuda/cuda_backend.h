@@ -54,9 +54,8 @@ public:
     const BufferPointers& device_pointers() const { return buffers_.pointers(); }
 
 private:
-    CudaBackend(int device, std::string name, cudaStream_t own_stream, uint64_t fused_shared_limit)
-        : device_(device), device_name_(std::move(name)), own_stream_(own_stream), stream_(own_stream),
-          fused_shared_limit_(fused_shared_limit) {}
+    CudaBackend(int device, std::string name, cudaStream_t own_stream)
+        : device_(device), device_name_(std::move(name)), own_stream_(own_stream), stream_(own_stream) {}
     /// The captured graph of `program` over the current buffers, captured now if none of the
     /// last few is.
     Result<StepGraph*> graph_for(std::span<const Dispatch> program);
@@ -74,8 +73,6 @@ private:
     std::string device_name_;
     cudaStream_t own_stream_;
     cudaStream_t stream_;
-    /// Shared memory a fused block may take (backend.h fused_shared_limit, read at creation).
-    uint64_t fused_shared_limit_;
     DeviceBuffers buffers_;
     /// A program of the walk ahead replays up to three graphs (whole, without wind_force, as the
     /// plain walk), each over two buffer layouts (the state and its twin swapped or not): the

@@ -34,7 +34,7 @@ public:
     bool matches(std::span<const Dispatch> program, const BufferPointers& buffers) const;
     /// Captures `program` from `stream` and instantiates it (replacing any earlier graph).
     Status capture(std::span<const Dispatch> program, const BufferPointers& buffers,
-                   cudaStream_t stream, uint64_t fused_shared_limit);
+                   cudaStream_t stream);
     /// Enqueues one step reading wind-table slot `wind_x` on `stream`.
     Status replay(float wind_x, cudaStream_t stream);
 

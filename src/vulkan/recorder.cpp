@@ -59,7 +59,7 @@ void record_steps(const Device& device, const Pipelines& pipelines, const Window
             if (reads_wind_slot(d)) constants.wind.w = float(x);
             vk.vkCmdPushConstants(cmd, pipelines.layout(), VK_SHADER_STAGE_COMPUTE_BIT, 0,
                                   sizeof(constants), &constants);
-            // One workgroup per instance for in-dispatch rounds and fused dispatches, else one
+            // One workgroup per instance for in-dispatch rounds, else one
             // per HMSM_WORKGROUP_SIZE threads.
             WorkgroupGrid grid = workgroup_grid(launch_shape(d).workgroups, device.limits());
             if (grid.x) vk.vkCmdDispatch(cmd, grid.x, grid.y, 1);

@@ -146,18 +146,6 @@ std::vector<std::vector<detail::Dispatch>> pass_variants(const detail::SceneData
                                                          Composition composition, std::mt19937& rng) {
     std::vector<std::vector<detail::Dispatch>> variants;
     const bool hierarchical = pass == Pass::compose || pass == Pass::root_positions;
-    if (composition == Composition::fused) {
-        std::vector<detail::Dispatch> list;  // passes 1-5 in one dispatch per group
-        for (const auto& g : d.groups) {
-            detail::Dispatch dispatch{pass, detail::group_constants(d, g, HMSM_FINAL_HALF(d.jump_rounds))};
-            dispatch.constants.element_count = g.instance_count * d.models[g.model].chain_count;
-            dispatch.constants.mode = HMSM_MODE_FUSED;
-            dispatch.constants.round = d.jump_rounds;
-            list.push_back(dispatch);
-        }
-        variants.push_back(list);
-        return variants;
-    }
     if (composition == Composition::path_walk) {
         // One dispatch per group running the pass and its walk partner; the walk both ways: from
         // the records and by following chain_parent up.

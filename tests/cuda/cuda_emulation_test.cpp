@@ -183,18 +183,6 @@ TEST_P(CudaEmulation, PausedInstanceInsideADispatchIsSkipped) {
     }
 }
 
-// The fused kernel with its rounds in device memory instead of shared memory (the
-// parameterized case above keeps them in shared memory: the emulation grants an H100's 227 KiB).
-TEST(CudaEmulationFused, DeviceMemoryRoundsFollowCpu64OverManySteps) {
-    const char* old = std::getenv("HMSM_FUSED_SHARED_BYTES");
-    const std::string saved = old ? old : "";
-    setenv("HMSM_FUSED_SHARED_BYTES", "0", 1);
-    ASSERT_EQ(detail::cuda::emulated_fused_shared_limit(), 0u);
-    expect_kernel_bodies_follow_cpu64(Composition::fused);
-    if (old) setenv("HMSM_FUSED_SHARED_BYTES", saved.c_str(), 1);
-    else unsetenv("HMSM_FUSED_SHARED_BYTES");
-}
-
 TEST(CudaEmulationLive, TurbulentWindAndForceFieldsFollowCpu64) {
     // The wind_force kernel with the turbulent profile, a front, per-instance wind scale and
     // phase, and force fields of both kinds (docs/model.md 3.5, 3.9).
@@ -351,7 +339,7 @@ TEST(CudaEmulationWalkAhead, EqualsThePathWalkBitForBit) {
 
 INSTANTIATE_TEST_SUITE_P(Compositions, CudaEmulation,
                          ::testing::Values(Composition::pointer_jumping_per_round, Composition::pointer_jumping_in_dispatch,
-                                           Composition::level_by_level, Composition::fused, Composition::path_walk),
+                                           Composition::level_by_level, Composition::path_walk),
                          [](const auto& info) { return std::string(to_string(info.param)); });
 
 }  // namespace

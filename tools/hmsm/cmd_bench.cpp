@@ -91,7 +91,7 @@ void register_bench_flags(CLI::App& app) {
                    "(default 1,10,100,1000,10000, plus 100000 x paper-5 unless --quick; none: no rows)");
     app.add_option("--spacing", flags.spacing, "forest grid spacing in metres (default 25)");
     app.add_option("--forest-composition", flags.forest_composition,
-                   "composition of the forest rows (default automatic, the library's default; e.g. fused)");
+                   "composition of the forest rows (default automatic, the library's default; e.g. pointer_jumping)");
     app.add_option("--case-budget", flags.case_budget,
                    "seconds one case may take: slower cases run fewer steps, forest sizes "
                    "extrapolated past it are skipped (default 20)");

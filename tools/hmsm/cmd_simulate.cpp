@@ -174,9 +174,8 @@ void register_simulate_flags(CLI::App& app) {
     app.add_option("--composition", flags.composition,
                    "passes 3 and 5: automatic (default: path-walk on a GPU, else pointer-jumping), "
                    "pointer-jumping (the paper's rounds, per round or in one dispatch by scene size), "
-                   "pointer-jumping-per-round, pointer-jumping-in-dispatch, level-by-level, fused (passes "
-                   "1-5 in one dispatch, a workgroup per instance) or path-walk (every chain walks its "
-                   "ancestors; 4 dispatches per step)");
+                   "pointer-jumping-per-round, pointer-jumping-in-dispatch, level-by-level or path-walk "
+                   "(every chain walks its ancestors; 4 dispatches per step)");
     app.add_option("--vertex-layout", flags.vertex_layout,
                    "device layout of the mesh vertices: separate (default; position and normal "
                    "vec4) or packed (the normal octahedral-encoded in the position's w)");
@@ -208,7 +207,7 @@ int run_simulate(CLI::App& app) {
     if (auto parsed = parse_composition(composition)) config.composition = *parsed;
     else return fail_input("--composition '" + flags.composition +
                            "': expected automatic, pointer-jumping, pointer-jumping-per-round, "
-                           "pointer-jumping-in-dispatch, level-by-level, fused or path-walk");
+                           "pointer-jumping-in-dispatch, level-by-level or path-walk");
     auto vertex_layout = parse_vertex_layout(flags.vertex_layout);
     if (!vertex_layout)
         return fail_input("--vertex-layout '" + flags.vertex_layout + "': expected separate or packed");
