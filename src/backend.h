@@ -98,7 +98,7 @@ public:
     virtual bool dispatches_are_expensive() const { return false; }
 
     /// Whether path-walk step programs of forests may integrate ahead (gpu_layout.h
-    /// HMSM_WALK_AHEAD; step_program.cpp): the backend then keeps the next step's angles and
+    /// HMSM_DISPATCH_WALK_AHEAD; step_program.cpp): the backend then keeps the next step's angles and
     /// skips a step's wind_force dispatches when nothing changed since the step before
     /// (src/cuda/cuda_backend.cpp).
     virtual bool walks_ahead() const { return false; }
@@ -149,20 +149,15 @@ Result<std::unique_ptr<Backend>> create_backend(BackendKind kind, uint32_t cpu_t
 uint32_t pass_reads(Pass pass);
 uint32_t pass_writes(Pass pass);
 
-/// Whether `d` is a path-walk dispatch of Composition::path_walk (gpu_layout.h
-/// HMSM_MODE_PATH_WALK on a pass that leads one): it also runs its pass's walk partner.
-inline bool runs_path_walk(const Dispatch& d) {
-    return d.constants.mode == HMSM_MODE_PATH_WALK && walk_passes(d.pass) != 0;
-}
-/// The two dispatches of the walk that integrates ahead (gpu_layout.h HMSM_WALK_TOP_POSES,
-/// HMSM_WALK_AHEAD): path-walk compose dispatches told apart by their round.
-inline bool is_top_poses_walk(const Dispatch& d) {
-    return d.pass == Pass::compose && d.constants.mode == HMSM_MODE_PATH_WALK &&
-           d.constants.round == HMSM_WALK_TOP_POSES;
-}
-inline bool is_walk_ahead(const Dispatch& d) {
-    return d.pass == Pass::compose && d.constants.mode == HMSM_MODE_PATH_WALK && d.constants.round == HMSM_WALK_AHEAD;
-}
+/// What `d` runs (gpu_layout.h HMSM_DISPATCH_*; the step program sets only kinds that fit the
+/// dispatch's pass, pass_table.h kind_fits_pass).
+inline DispatchKind dispatch_kind(const Dispatch& d) { return DispatchKind(d.constants.kind); }
+/// Whether `d` is a path-walk dispatch of Composition::path_walk: it also runs its pass's walk
+/// partner (pass_table.h runs_walk_pair).
+inline bool runs_path_walk(const Dispatch& d) { return runs_walk_pair(dispatch_kind(d)); }
+/// The two dispatches of the walk that integrates ahead (gpu_layout.h).
+inline bool is_top_poses_walk(const Dispatch& d) { return dispatch_kind(d) == DispatchKind::walk_top_poses; }
+inline bool is_walk_ahead(const Dispatch& d) { return dispatch_kind(d) == DispatchKind::walk_ahead; }
 /// Whether a dispatch reads the step's wind-table slot from constants.wind.w (Backend::run sets
 /// it): wind_force, and the top poses (which read the next step's, the slot after).
 inline bool reads_wind_slot(const Dispatch& d) { return d.pass == Pass::wind_force || is_top_poses_walk(d); }
@@ -186,21 +181,32 @@ inline uint32_t dispatch_writes(const Dispatch& d) {
 
 /// Number of threads of a dispatch and the mapping shared by every backend.
 inline uint32_t dispatch_thread_count(const Dispatch& d) { return d.constants.element_count; }
+/// Threads per instance of the group (element_count / instances): the model's chains, nodes or
+/// vertices by the pass's domain, or the chains of one level (LEVEL) or of the top two levels
+/// (WALK_TOP_POSES).
+inline uint32_t threads_per_instance(const Dispatch& d) {
+    const gpu::PassConstants& c = d.constants;
+    switch (dispatch_kind(d)) {
+        case DispatchKind::level:
+        case DispatchKind::walk_top_poses: return c.level_count;
+        default: break;
+    }
+    const uint32_t per_domain[] = {c.model_chain_count, c.model_node_count, c.model_vertex_count};
+    return per_domain[uint32_t(pass_domain(d.pass))];
+}
 
-/// How a dispatch is launched: `workgroups` groups of `workgroup_size` threads. Every mode
-/// maps thread i to element i (gpu_layout.h) except HMSM_MODE_POINTER_JUMPING_IN_DISPATCH,
-/// whose workgroup k runs every round for group instance k, and a packed contour, whose thread
-/// places one model vertex in HMSM_PACKED_CONTOUR_INSTANCES instances.
+/// How a dispatch is launched: `workgroups` groups of `workgroup_size` threads. Every kind
+/// maps thread i to element i (gpu_layout.h) except JUMP_ROUNDS_IN_DISPATCH, whose workgroup k
+/// runs every round for group instance k, and CONTOUR_PACKED, whose thread places one model
+/// vertex in HMSM_PACKED_CONTOUR_INSTANCES instances.
 struct LaunchShape {
     uint64_t workgroups = 0;
     uint32_t workgroup_size = HMSM_WORKGROUP_SIZE;
 };
 inline bool runs_rounds_in_dispatch(const Dispatch& d) {
-    return is_hierarchical(d.pass) && d.constants.mode == HMSM_MODE_POINTER_JUMPING_IN_DISPATCH;
+    return dispatch_kind(d) == DispatchKind::jump_rounds_in_dispatch;
 }
-inline bool runs_packed_contour(const Dispatch& d) {
-    return d.pass == Pass::contour && d.constants.mode == HMSM_VERTEX_LAYOUT_PACKED;
-}
+inline bool runs_packed_contour(const Dispatch& d) { return dispatch_kind(d) == DispatchKind::contour_packed; }
 inline LaunchShape launch_shape(const Dispatch& d) {
     const uint32_t threads = dispatch_thread_count(d);
     if (threads == 0) return {};

@@ -81,8 +81,8 @@ constexpr uint32_t buffer_bit(BufferId id) { return 1u << static_cast<uint32_t>(
        HMSM_B(vertex_parent_position) | HMSM_B(vertex_parent_normal)),                            \
       (HMSM_B(vertex_position) | HMSM_B(vertex_normal)), 0u, 0u)
 
-/// The two dispatches of the walk that integrates ahead (gpu_layout.h HMSM_WALK_TOP_POSES and
-/// HMSM_WALK_AHEAD, CUDA forests; step_program.cpp), each a compose walk with more to do: the
+/// The two dispatches of the walk that integrates ahead (gpu_layout.h HMSM_DISPATCH_WALK_TOP_POSES
+/// and HMSM_DISPATCH_WALK_AHEAD, CUDA forests; step_program.cpp), each a compose walk with more to do: the
 /// top poses also read the wind (the next step's profile value) and write the pose halves of
 /// the chains of depth 0 and 1; the walk ahead reads those and the wind, writes the joint
 /// matrix and the next step's angles (to chain_state's twin, which the backend swaps in: counted
@@ -95,6 +95,68 @@ inline constexpr uint32_t kWalkTopPosesWrites = HMSM_B(chain_rotation) | HMSM_B(
 inline constexpr uint32_t kWalkAheadReads =
     kWalkTopPosesReads | HMSM_B(chain_rotation) | HMSM_B(chain_origin) | HMSM_B(chain_constants);
 inline constexpr uint32_t kWalkAheadWrites = HMSM_B(joint_matrix) | HMSM_B(chain_state);
+
+/// What one dispatch runs (PassConstants.kind): X(name, NAME, passes) with NAME the suffix of its
+/// HMSM_DISPATCH_* number in gpu_layout.h (shared with CUDA and GLSL) and `passes` the passes
+/// whose dispatches may be of this kind (bit i = Pass i). Every backend switches on the kind.
+#define HMSM_DISPATCH_KINDS(X)                                                                          \
+    X(per_element, PER_ELEMENT,                                                                         \
+      HMSM_P(wind_force) | HMSM_P(integrate) | HMSM_P(node_relative) | HMSM_P(node_world))             \
+    X(jump_round, JUMP_ROUND, HMSM_P(compose) | HMSM_P(root_positions))                                 \
+    X(jump_rounds_in_dispatch, JUMP_ROUNDS_IN_DISPATCH, HMSM_P(compose) | HMSM_P(root_positions))       \
+    X(level, LEVEL, HMSM_P(compose) | HMSM_P(root_positions))                                           \
+    X(wind_pair, WIND_PAIR, HMSM_P(wind_force))                                                         \
+    X(pose_walk, POSE_WALK, HMSM_P(compose))                                                            \
+    X(pose_walk_from_records, POSE_WALK_FROM_RECORDS, HMSM_P(compose))                                  \
+    X(node_pair, NODE_PAIR, HMSM_P(node_relative))                                                      \
+    X(walk_top_poses, WALK_TOP_POSES, HMSM_P(compose))                                                  \
+    X(walk_ahead, WALK_AHEAD, HMSM_P(compose))                                                          \
+    X(contour_separate, CONTOUR_SEPARATE, HMSM_P(contour))                                              \
+    X(contour_packed, CONTOUR_PACKED, HMSM_P(contour))
+
+#define HMSM_P(name) (1u << uint32_t(Pass::name))
+enum class DispatchKind : uint32_t {
+#define HMSM_DISPATCH_KIND_ENUM(name, NAME, passes) name = HMSM_DISPATCH_##NAME,
+    HMSM_DISPATCH_KINDS(HMSM_DISPATCH_KIND_ENUM)
+#undef HMSM_DISPATCH_KIND_ENUM
+};
+
+struct DispatchKindInfo {
+    DispatchKind kind;
+    uint32_t passes;  ///< the passes whose dispatches may be of this kind (bit i = Pass i)
+};
+inline constexpr DispatchKindInfo kDispatchKinds[] = {
+#define HMSM_DISPATCH_KIND_INFO(name, NAME, passes) {DispatchKind::name, passes},
+    HMSM_DISPATCH_KINDS(HMSM_DISPATCH_KIND_INFO)
+#undef HMSM_DISPATCH_KIND_INFO
+};
+#undef HMSM_P
+
+/// The kinds are numbered 0, 1, ... in the order listed, as gpu_layout.h numbers them.
+constexpr bool dispatch_kinds_are_numbered_in_order() {
+    uint32_t i = 0;
+    for (const DispatchKindInfo& k : kDispatchKinds)
+        if (uint32_t(k.kind) != i++) return false;
+    return i == HMSM_DISPATCH_KIND_COUNT;
+}
+static_assert(dispatch_kinds_are_numbered_in_order(), "HMSM_DISPATCH_KINDS must list HMSM_DISPATCH_* 0, 1, ...");
+/// Whether a dispatch of `pass` may be of `kind` (an unknown kind fits no pass).
+constexpr bool kind_fits_pass(uint32_t kind, Pass pass) {
+    return kind < HMSM_DISPATCH_KIND_COUNT && (kDispatchKinds[kind].passes >> uint32_t(pass) & 1u);
+}
+/// The kinds of Composition::path_walk that run a pass and its walk partner in one dispatch
+/// (the walk ahead's two included: compose walks with more to do).
+constexpr bool runs_walk_pair(DispatchKind kind) {
+    switch (kind) {
+        case DispatchKind::wind_pair:
+        case DispatchKind::pose_walk:
+        case DispatchKind::pose_walk_from_records:
+        case DispatchKind::node_pair:
+        case DispatchKind::walk_top_poses:
+        case DispatchKind::walk_ahead: return true;
+        default: return false;
+    }
+}
 
 /// The pass column `walk` names: the pass a path-walk dispatch also runs, or none.
 enum class WalkPartner : int32_t {

@@ -30,7 +30,7 @@ gpu::PassConstants group_constants(const SceneData& d, const InstanceGroup& g, u
     pc.model_chain_count = m.chain_count;
     pc.model_node_count = m.node_count;
     pc.model_vertex_count = m.vertex_count;
-    pc.mode = HMSM_MODE_POINTER_JUMPING;
+    pc.kind = HMSM_DISPATCH_PER_ELEMENT;
     pc.profile = uint32_t(d.profile);
     pc.total_chains = uint32_t(d.chain_capacity);  // the stride between ping-pong halves
     pc.total_model_chains = d.total_model_chains();

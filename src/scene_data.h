@@ -119,8 +119,8 @@ SceneData flatten_scene(const Scene& scene, const std::vector<Hierarchy>& hierar
                         uint64_t max_group_elements = (1ull << 31));
 
 /// The constants every dispatch over `group` shares (offsets, counts, wind, parameters), with
-/// pointer jumping as the mode and `final_half` as both halves; a dispatch then sets its own
-/// element count, round, halves and level.
+/// kind per_element and `final_half` as both halves; a dispatch then sets its own kind, element
+/// count, round, halves and level.
 gpu::PassConstants group_constants(const SceneData& scene, const InstanceGroup& group,
                                    uint32_t final_half);
 

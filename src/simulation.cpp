@@ -223,7 +223,7 @@ Status Simulation::Impl::step(uint32_t count) {
     while (done < count) {
         // One wind-table slot per step of the run: tau mod 2 and the turbulent mode phases,
         // reduced on the host in double; and one for the step after the run, which a walk
-        // that integrates ahead reads (gpu_layout.h HMSM_WALK_AHEAD).
+        // that integrates ahead reads (gpu_layout.h HMSM_DISPATCH_WALK_AHEAD).
         const uint32_t steps = std::min<uint32_t>(count - done, HMSM_WIND_STEP_SLOTS - 1);
         wind_scratch_.resize(size_t(steps + 1) * detail::kWindStepScalars);
         wind_phases_.resize(steps);

@@ -13,7 +13,7 @@ namespace {
 constexpr uint32_t kMaxChainsForRoundsInDispatch = 16 * HMSM_MAX_ROUNDS_WORKGROUP_SIZE;
 
 /// Path walk: steps whose groups cover at most this many instances read the walk records whole (one
-/// round of loads, HMSM_WALK_FROM_RECORDS); larger ones follow chain_parent up. Measured on the H100
+/// round of loads, HMSM_DISPATCH_POSE_WALK_FROM_RECORDS); larger ones follow chain_parent up. Measured on the H100
 /// (path walk, CUDA, µs per step): one paper-1 tree 13.5 -> 12.7 with the records; 10 and 16
 /// trees no better (21.7 -> 22.0, 25.3 -> 27.0, packed); 1,000 trees' walk 88 -> 176 (128
 /// distinct bytes per thread cost more L2 sectors than the parent links siblings share).
@@ -49,8 +49,8 @@ void append_pass(std::vector<Dispatch>& program, const SceneData& d,
             const uint32_t per_instance = per_domain[uint32_t(pass_domain(pass))];
             dispatch.constants.element_count = g.instance_count * per_instance;
             if (pass_domain(pass) == PassDomain::vertex)
-                dispatch.constants.mode = d.packed_vertices() ? HMSM_VERTEX_LAYOUT_PACKED
-                                                              : HMSM_VERTEX_LAYOUT_SEPARATE;
+                dispatch.constants.kind = d.packed_vertices() ? HMSM_DISPATCH_CONTOUR_PACKED
+                                                              : HMSM_DISPATCH_CONTOUR_SEPARATE;
             if (dispatch.constants.element_count > 0) program.push_back(dispatch);
         }
         return;
@@ -69,7 +69,7 @@ void append_pass(std::vector<Dispatch>& program, const SceneData& d,
             if (!in_dispatch(g)) continue;
             Dispatch dispatch{pass, group_constants(d, g, final_half)};
             dispatch.constants.element_count = g.instance_count * d.models[g.model].chain_count;
-            dispatch.constants.mode = HMSM_MODE_POINTER_JUMPING_IN_DISPATCH;
+            dispatch.constants.kind = HMSM_DISPATCH_JUMP_ROUNDS_IN_DISPATCH;
             dispatch.constants.round = d.jump_rounds;
             if (dispatch.constants.element_count > 0) program.push_back(dispatch);
         }
@@ -78,6 +78,7 @@ void append_pass(std::vector<Dispatch>& program, const SceneData& d,
                 if (in_dispatch(g)) continue;
                 Dispatch dispatch{pass, group_constants(d, g, final_half)};
                 dispatch.constants.element_count = g.instance_count * d.models[g.model].chain_count;
+                dispatch.constants.kind = HMSM_DISPATCH_JUMP_ROUND;
                 dispatch.constants.round = r;
                 dispatch.constants.src_half = HMSM_HALF_READ(r);  // unused in round 0
                 dispatch.constants.dst_half = HMSM_HALF_WRITTEN(r);
@@ -95,8 +96,7 @@ void append_pass(std::vector<Dispatch>& program, const SceneData& d,
             uint32_t count = m.level_begin[level + 1] - m.level_begin[level];
             if (count == 0) continue;
             Dispatch dispatch{pass, group_constants(d, g, final_half)};
-            dispatch.constants.mode = HMSM_MODE_LEVEL_BY_LEVEL;
-            dispatch.constants.round = uint32_t(level);
+            dispatch.constants.kind = HMSM_DISPATCH_LEVEL;
             dispatch.constants.level_begin = m.level_begin[level];
             dispatch.constants.level_count = count;
             dispatch.constants.element_count = g.instance_count * count;
@@ -111,14 +111,13 @@ namespace {
 /// chain of depth 0 and 1: the first level_count model chains, chains being stored by depth),
 /// then the walk ahead of every group.
 void append_walk_ahead(std::vector<Dispatch>& program, const SceneData& d, const std::vector<InstanceGroup>& groups) {
-    for (uint32_t round : {HMSM_WALK_TOP_POSES, HMSM_WALK_AHEAD}) {
+    for (uint32_t kind : {HMSM_DISPATCH_WALK_TOP_POSES, HMSM_DISPATCH_WALK_AHEAD}) {
         for (const auto& g : groups) {
             const auto& m = d.models[g.model];
             Dispatch dispatch{Pass::compose, group_constants(d, g, HMSM_FINAL_HALF(d.jump_rounds))};
-            dispatch.constants.mode = HMSM_MODE_PATH_WALK;
-            dispatch.constants.round = round;
+            dispatch.constants.kind = kind;
             dispatch.constants.level_count = m.level_begin[std::min<size_t>(2, m.level_begin.size() - 1)];
-            const uint32_t per_instance = round == HMSM_WALK_AHEAD ? m.chain_count : dispatch.constants.level_count;
+            const uint32_t per_instance = kind == HMSM_DISPATCH_WALK_AHEAD ? m.chain_count : dispatch.constants.level_count;
             dispatch.constants.element_count = g.instance_count * per_instance;
             if (dispatch.constants.element_count > 0) program.push_back(dispatch);
         }
@@ -174,11 +173,14 @@ std::vector<Dispatch> build_path_walk_program(const SceneData& d, const std::vec
             done |= pair;
             continue;
         }
+        const uint32_t kind = pass == Pass::wind_force ? HMSM_DISPATCH_WIND_PAIR
+                              : pass == Pass::node_relative ? HMSM_DISPATCH_NODE_PAIR
+                              : from_records                ? HMSM_DISPATCH_POSE_WALK_FROM_RECORDS
+                                                            : HMSM_DISPATCH_POSE_WALK;
         for (const auto& g : groups) {
             Dispatch dispatch{pass, group_constants(d, g, HMSM_FINAL_HALF(d.jump_rounds))};
             dispatch.constants.element_count = g.instance_count * per_domain(g);
-            dispatch.constants.mode = HMSM_MODE_PATH_WALK;
-            if (pass == Pass::compose && from_records) dispatch.constants.round = HMSM_WALK_FROM_RECORDS;
+            dispatch.constants.kind = kind;
             if (dispatch.constants.element_count > 0) program.push_back(dispatch);
         }
         done |= pair;

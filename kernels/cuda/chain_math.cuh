@@ -250,8 +250,8 @@ HMSM_HOST_DEVICE void prefetch_walk(const BufferPointers& b, const gpu::PassCons
 /// nodes from c's walk record `from` (load_walk_record). Else (a forest, where 128 bytes per
 /// thread would cost more than the dependent loads, which other warps hide): the ancestors
 /// gathered by following chain_parent up, the attach nodes looked up level by level.
-/// kFromTopPoses (HMSM_WALK_AHEAD): the walk starts from the pose of c's depth-1 ancestor (c's
-/// own at depth 0 or 1) as the HMSM_WALK_TOP_POSES dispatch stored it in half src_half: the
+/// kFromTopPoses (HMSM_DISPATCH_WALK_AHEAD): the walk starts from the pose of c's depth-1 ancestor
+/// (c's own at depth 0 or 1) as the HMSM_DISPATCH_WALK_TOP_POSES dispatch stored it in half src_half: the
 /// same operations on the same values, so the same pose bit for bit.
 template <bool kFromRecords, bool kFromTopPoses = false>
 HMSM_HOST_DEVICE void walk_pose(const BufferPointers& b, const gpu::PassConstants& pc, uint32_t k, int32_t c,
@@ -316,7 +316,7 @@ HMSM_HOST_DEVICE void path_walk(const BufferPointers& b, const gpu::PassConstant
     store_joint_of(b, state_chain(pc, k, c), rotation, origin);
 }
 
-/// HMSM_WALK_TOP_POSES for chain c (depth 0 or 1) of group instance k: its pose to half
+/// HMSM_DISPATCH_WALK_TOP_POSES for chain c (depth 0 or 1) of group instance k: its pose to half
 /// src_half of chain_rotation and chain_origin; the trunk's origin carries in w the wind scale
 /// lambda_i Y of the next step (wind-table slot wind.w + 1) for the walk that integrates ahead.
 HMSM_HOST_DEVICE void walk_top_pose(const BufferPointers& b, const gpu::PassConstants& pc, uint32_t k, int32_t c) {
@@ -331,7 +331,7 @@ HMSM_HOST_DEVICE void walk_top_pose(const BufferPointers& b, const gpu::PassCons
     b.chain_origin[at] = origin;
 }
 
-/// HMSM_WALK_AHEAD for chain c of group instance k: the path walk from the top poses, its pose
+/// HMSM_DISPATCH_WALK_AHEAD for chain c of group instance k: the path walk from the top poses, its pose
 /// to the joint matrix, then the next step's pass 1 at that pose (what the next step's
 /// wind_force would read back from the joint matrix, with the trunk's stored wind scale) and
 /// pass 2's integration, the new angles to chain_state_next.

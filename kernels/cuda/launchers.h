@@ -35,7 +35,7 @@ struct BufferPointers {
     HMSM_BUFFERS(HMSM_CUDA_POINTER)
 #undef HMSM_CUDA_POINTER
     /// CUDA only, not in the buffer table: as many elements as chain_state, where the walk that
-    /// integrates ahead (HMSM_WALK_AHEAD) writes the next step's angles. The backend swaps it
+    /// integrates ahead (HMSM_DISPATCH_WALK_AHEAD) writes the next step's angles. The backend swaps it
     /// with chain_state when a step takes them (src/cuda/cuda_backend.cpp).
     float4* chain_state_next = nullptr;
 };

@@ -160,7 +160,7 @@ uint walk_ancestor(uint c, uint up) {
 /// The attach node of the chain `up` levels above c (walk_record filled for c): from the record
 /// where the dispatch read it whole, else looked up.
 uint walk_attach(uint c, uint up) {
-    if (pc.round == HMSM_WALK_FROM_RECORDS && up < HMSM_WALK_ATTACH_CAPACITY)
+    if (pc.kind == HMSM_DISPATCH_POSE_WALK_FROM_RECORDS && up < HMSM_WALK_ATTACH_CAPACITY)
         return uint(walk_record[HMSM_WALK_ATTACH(up)]);
     return uint(chain_attach[pc.model_chain_begin + walk_ancestor(c, up)]);
 }
@@ -178,7 +178,7 @@ mat3 walk_local(uint k, uint x, bool trunk) {
 void path_walk(uint k, uint c) {
     // The record whole where the dispatch says so (a scene of one active instance), else the
     // ancestors gathered by following chain_parent up (kernels/cuda/chain_math.cuh says why).
-    if (pc.round == HMSM_WALK_FROM_RECORDS) {
+    if (pc.kind == HMSM_DISPATCH_POSE_WALK_FROM_RECORDS) {
         uint first = (pc.model_chain_begin + c) * (HMSM_WALK_RECORD_INTS / 4u);
         for (uint q = 0u; q < HMSM_WALK_RECORD_INTS / 4u; ++q) {
             ivec4 w = chain_walk[first + q];

@@ -235,14 +235,16 @@ private:
     }
 
     void run_range(const Dispatch& d, double wind_x, Range r) {
-        if (runs_path_walk(d)) {
-            // The pass and its walk partner over the same elements (pass_table.h `walk`).
-            switch (d.pass) {
-                case Pass::wind_force: return wind_force_and_integrate<T>(s_, d.constants, wind_x, r);
-                case Pass::compose: return path_walk<T>(s_, d.constants, r);
-                case Pass::node_relative: return node_relative_and_world<T>(s_, d.constants, r);
-                default: break;
-            }
+        // A walk pair runs the pass and its walk partner over the same elements (pass_table.h
+        // `walk`); the other kinds run the pass's own function, which reads the kind.
+        switch (dispatch_kind(d)) {
+            case DispatchKind::wind_pair: return wind_force_and_integrate<T>(s_, d.constants, wind_x, r);
+            case DispatchKind::pose_walk:
+            case DispatchKind::pose_walk_from_records: return path_walk<T>(s_, d.constants, r);
+            case DispatchKind::node_pair: return node_relative_and_world<T>(s_, d.constants, r);
+            case DispatchKind::walk_top_poses:
+            case DispatchKind::walk_ahead: return;  // never asked for (capabilities: no walk ahead)
+            default: break;
         }
         switch (d.pass) {
 #define HMSM_CPU_PASS_CASE(name) \

@@ -167,7 +167,10 @@ void CudaBackend::derive_ahead_variants(std::span<const Dispatch> program) {
         // The plain walk: no top poses, and the walk ahead a plain forest walk (step_program.cpp
         // builds the same dispatch).
         if (is_top_poses_walk(d)) continue;
-        if (is_walk_ahead(d)) d.constants.round = d.constants.level_count = 0;
+        if (is_walk_ahead(d)) {
+            d.constants.kind = HMSM_DISPATCH_POSE_WALK;
+            d.constants.level_count = 0;
+        }
         ahead_.plain.push_back(d);
     }
 }

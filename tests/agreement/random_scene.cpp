@@ -158,8 +158,10 @@ std::vector<std::vector<detail::Dispatch>> pass_variants(const detail::SceneData
                 const auto& m = d.models[g.model];
                 dispatch.constants.element_count =
                     g.instance_count * (pass == Pass::node_relative ? m.node_count : m.chain_count);
-                dispatch.constants.mode = HMSM_MODE_PATH_WALK;
-                dispatch.constants.round = from_records ? HMSM_WALK_FROM_RECORDS : 0u;
+                dispatch.constants.kind = pass == Pass::wind_force      ? HMSM_DISPATCH_WIND_PAIR
+                                          : pass == Pass::node_relative ? HMSM_DISPATCH_NODE_PAIR
+                                          : from_records                ? HMSM_DISPATCH_POSE_WALK_FROM_RECORDS
+                                                                        : HMSM_DISPATCH_POSE_WALK;
                 list.push_back(dispatch);
             }
             variants.push_back(list);
@@ -176,6 +178,8 @@ std::vector<std::vector<detail::Dispatch>> pass_variants(const detail::SceneData
                                     : pass == Pass::contour                              ? m.vertex_count
                                                                                          : m.chain_count;
             dispatch.constants.element_count = g.instance_count * per_instance;
+            if (pass == Pass::contour)
+                dispatch.constants.kind = d.packed_vertices() ? HMSM_DISPATCH_CONTOUR_PACKED : HMSM_DISPATCH_CONTOUR_SEPARATE;
             dispatch.constants.src_half = dispatch.constants.dst_half = half;
             list.push_back(dispatch);
         }
@@ -187,7 +191,7 @@ std::vector<std::vector<detail::Dispatch>> pass_variants(const detail::SceneData
         for (const auto& g : d.groups) {
             detail::Dispatch dispatch{pass, detail::group_constants(d, g, 0)};
             dispatch.constants.element_count = g.instance_count * d.models[g.model].chain_count;
-            dispatch.constants.mode = HMSM_MODE_POINTER_JUMPING_IN_DISPATCH;
+            dispatch.constants.kind = HMSM_DISPATCH_JUMP_ROUNDS_IN_DISPATCH;
             dispatch.constants.round = d.jump_rounds;
             list.push_back(dispatch);
         }
@@ -201,6 +205,7 @@ std::vector<std::vector<detail::Dispatch>> pass_variants(const detail::SceneData
             for (const auto& g : d.groups) {
                 detail::Dispatch dispatch{pass, detail::group_constants(d, g, 0)};
                 dispatch.constants.element_count = g.instance_count * d.models[g.model].chain_count;
+                dispatch.constants.kind = HMSM_DISPATCH_JUMP_ROUND;
                 dispatch.constants.round = r;
                 dispatch.constants.src_half = src;
                 dispatch.constants.dst_half = 1 - src;
@@ -221,8 +226,7 @@ std::vector<std::vector<detail::Dispatch>> pass_variants(const detail::SceneData
             uint32_t count = m.level_begin[level + 1] - m.level_begin[level];
             if (count == 0) continue;
             detail::Dispatch dispatch{pass, detail::group_constants(d, g, 0)};
-            dispatch.constants.mode = HMSM_MODE_LEVEL_BY_LEVEL;
-            dispatch.constants.round = uint32_t(level);
+            dispatch.constants.kind = HMSM_DISPATCH_LEVEL;
             dispatch.constants.level_begin = m.level_begin[level];
             dispatch.constants.level_count = count;
             dispatch.constants.element_count = g.instance_count * count;

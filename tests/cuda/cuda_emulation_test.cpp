@@ -271,7 +271,7 @@ bool same_buffer(const HostImage& a, const HostImage& b, BufferId id) {
     return a.bytes[uint32_t(id)] == b.bytes[uint32_t(id)];
 }
 
-// The walk that integrates ahead (gpu_layout.h HMSM_WALK_AHEAD), as the CUDA backend runs it:
+// The walk that integrates ahead (gpu_layout.h HMSM_DISPATCH_WALK_AHEAD), as the CUDA backend runs it:
 // the first step whole, then each step without its wind_force dispatches, taking the angles the
 // step before wrote to chain_state_next. Its joint matrices and angles equal the plain path
 // walk's bit for bit, with the turbulent profile (whose value the top poses hoist per instance)

@@ -51,10 +51,10 @@ TEST_F(VulkanTest, RoundsRunInOneDispatchForModelsOfUpTo1024Chains) {
     if (!skip.empty()) GTEST_SKIP() << skip;
     auto cpu = create_simulation_or_skip(scene, config, BackendKind::cpu, skip);
     ASSERT_TRUE(vulkan && cpu);
-    for (const auto& [sim, mode] : {std::pair{vulkan.get(), HMSM_MODE_POINTER_JUMPING_IN_DISPATCH},
-                                    std::pair{cpu.get(), HMSM_MODE_POINTER_JUMPING}})
+    for (const auto& [sim, kind] : {std::pair{vulkan.get(), HMSM_DISPATCH_JUMP_ROUNDS_IN_DISPATCH},
+                                    std::pair{cpu.get(), HMSM_DISPATCH_JUMP_ROUND}})
         for (const auto& d : hmsm::detail::step_program_of(*sim))
-            if (d.pass == Pass::compose || d.pass == Pass::root_positions) EXPECT_EQ(d.constants.mode, mode);
+            if (d.pass == Pass::compose || d.pass == Pass::root_positions) EXPECT_EQ(d.constants.kind, kind);
     ASSERT_TRUE(vulkan->step(20).ok());
     ASSERT_TRUE(cpu->step(20).ok());
     std::vector<double> a, b;
