@@ -49,6 +49,20 @@ Result<uint64_t> largest_move_bytes(std::span<const ElementMove> moves, uint64_t
     return largest;
 }
 
+/// How one step of a program with the walk that integrates ahead (is_walk_ahead, gpu_layout.h
+/// HMSM_DISPATCH_WALK_AHEAD) runs. The step layer decides (step_program.h AheadSchedule, from
+/// the simulation's change flags); a backend that walks ahead runs what it is told.
+enum class AheadStep : uint8_t {
+    /// The program as built: the wind pair integrates from chain_state, the walk ahead writes
+    /// the next step's angles to chain_state's twin.
+    whole,
+    /// The angles the step before integrated ahead are this step's: the backend swaps the twin
+    /// in and runs the program without its wind_force dispatches.
+    take,
+    /// The plain walk (AheadVariants::plain): no top poses, and no next angles written.
+    plain,
+};
+
 class Backend {
 public:
     virtual ~Backend() = default;
@@ -69,7 +83,11 @@ public:
     /// wind_force dispatch with constants.wind.w = wind_x[k]: the wind-table slot (a small
     /// integer < HMSM_WIND_STEP_SLOTS) holding that step's reduced wind clock.
     /// Dispatches see the writes of all earlier dispatches. Returns when all work is complete.
-    virtual Status run(std::span<const Dispatch> program, std::span<const double> wind_x) = 0;
+    /// `ahead` (empty, or one per step) says how each step of a program with the walk ahead
+    /// runs; empty: every step whole. Only a backend whose walks_ahead() is true gets such
+    /// programs.
+    virtual Status run(std::span<const Dispatch> program, std::span<const double> wind_x,
+                       std::span<const AheadStep> ahead = {}) = 0;
 
     /// Copies elements [first, first+count) of `id` (count * shape_scalars scalars; integer
     /// buffers are read as their numeric values) into `dst` as float or double.
@@ -97,10 +115,9 @@ public:
     /// dispatch for somewhat larger models (simulation.cpp).
     virtual bool dispatches_are_expensive() const { return false; }
 
-    /// Whether path-walk step programs of forests may integrate ahead (gpu_layout.h
-    /// HMSM_DISPATCH_WALK_AHEAD; step_program.cpp): the backend then keeps the next step's angles and
-    /// skips a step's wind_force dispatches when nothing changed since the step before
-    /// (src/cuda/cuda_backend.cpp).
+    /// Whether the backend can run path-walk step programs of forests that integrate ahead
+    /// (gpu_layout.h HMSM_DISPATCH_WALK_AHEAD; step_program.cpp): it keeps chain_state's twin
+    /// and runs each step as run()'s `ahead` says (src/cuda/cuda_backend.cpp).
     virtual bool walks_ahead() const { return false; }
 
     /// Whether Composition::automatic resolves to path_walk here (measured fastest on GPUs) rather

@@ -92,6 +92,8 @@ std::vector<detail::InstanceGroup> active_groups(const detail::SceneData& d,
 
 Status Simulation::Impl::apply_pending() {
     using detail::BufferId;
+    if (header_dirty_ || instance_wind_dirty_ || !dirty_instances_.empty() || program_dirty_)
+        ahead_schedule_.live_change();
     if (header_dirty_) {
         wind_scratch_.assign(detail::kWindHeaderScalars, 0.0);
         detail::fill_wind_header(config_.wind, modes_, force_fields_, wind_scratch_.data());

@@ -244,7 +244,14 @@ Status Simulation::Impl::step(uint32_t count) {
         HMSM_TRY(backend_->write(detail::BufferId::wind_table, HMSM_WIND_STEPS,
                                  uint64_t(steps + 1) * HMSM_WIND_STEP_VEC4S, wind_scratch_.data(),
                                  detail::Scalar::f64));
-        HMSM_TRY(backend_->run(step_program_, wind_phases_));
+        // The walk that integrates ahead: the step layer says how each step runs.
+        const bool ahead = std::any_of(step_program_.begin(), step_program_.end(), detail::is_walk_ahead);
+        if (ahead) ahead_schedule_.plan(steps, ahead_steps_);
+        else ahead_steps_.clear();
+        if (Status run = backend_->run(step_program_, wind_phases_, ahead_steps_); !run.ok() || !ahead) {
+            ahead_schedule_.forget();
+            HMSM_TRY(run);
+        }
         const PassTimes chunk = backend_->pass_times();
         for (size_t p = 0; p < chunk.seconds.size(); ++p) times_.seconds[p] += chunk.seconds[p];
         times_.steps += chunk.steps;

@@ -210,4 +210,30 @@ std::vector<Dispatch> build_program(const SceneData& d, const std::vector<Instan
     return program;
 }
 
+AheadVariants ahead_variants(std::span<const Dispatch> program) {
+    AheadVariants v;
+    v.whole.assign(program.begin(), program.end());
+    for (Dispatch d : program) {
+        if (d.pass != Pass::wind_force) v.without_wind.push_back(d);
+        if (is_top_poses_walk(d)) continue;
+        if (is_walk_ahead(d)) {  // as build_path_walk_program builds the plain walk of a forest
+            d.constants.kind = HMSM_DISPATCH_POSE_WALK;
+            d.constants.level_count = 0;
+        }
+        v.plain.push_back(d);
+    }
+    return v;
+}
+
+void AheadSchedule::plan(uint32_t steps, std::vector<AheadStep>& out) {
+    const bool take = ready_;
+    changed_runs_ = changed_ ? changed_runs_ + 1 : 0;
+    const bool plain = !take && changed_runs_ >= kChangedRunsBeforePlain && changed_runs_ % kRetryWalkAhead != 0;
+    out.assign(steps, AheadStep::take);
+    out[0] = take ? AheadStep::take : plain ? AheadStep::plain : AheadStep::whole;
+    if (plain && steps > 1) out[1] = AheadStep::whole;  // nothing was integrated ahead for it
+    changed_ = false;
+    ready_ = steps > 1 || !plain;
+}
+
 }  // namespace hmsm::detail

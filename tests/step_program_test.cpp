@@ -309,6 +309,39 @@ TEST(StepProgram, EveryDispatchKindFitsItsPassAndOnlyJumpsUseTheRound) {
     EXPECT_FALSE(detail::kind_fits_pass(HMSM_DISPATCH_WIND_PAIR, Pass::compose));
 }
 
+// The step layer's schedule of the walk that integrates ahead (AheadSchedule): a run's first step
+// takes the angles the last run integrated ahead unless a live change came in between, later
+// steps take the step before's; after two runs in a row each preceded by a change, a run's first
+// step walks plain (and the second runs whole), every eighth such run trying the walk ahead.
+TEST(StepProgram, AheadScheduleTakesWhereNothingChangedAndWalksPlainUnderSteadyChanges) {
+    using detail::AheadStep;
+    using Steps = std::vector<AheadStep>;
+    detail::AheadSchedule schedule;
+    Steps steps;
+    schedule.plan(3, steps);  // the first run: nothing integrated ahead yet
+    EXPECT_EQ(steps, (Steps{AheadStep::whole, AheadStep::take, AheadStep::take}));
+    schedule.plan(1, steps);  // nothing changed since
+    EXPECT_EQ(steps, Steps{AheadStep::take});
+    schedule.live_change();
+    schedule.plan(1, steps);  // the first run after a change
+    EXPECT_EQ(steps, Steps{AheadStep::whole});
+    for (uint32_t streak = 2; streak <= 9; ++streak) {
+        SCOPED_TRACE(streak);
+        schedule.live_change();
+        schedule.plan(2, steps);
+        if (streak == detail::AheadSchedule::kRetryWalkAhead) EXPECT_EQ(steps, (Steps{AheadStep::whole, AheadStep::take}));
+        else EXPECT_EQ(steps, (Steps{AheadStep::plain, AheadStep::whole}));
+    }
+    schedule.plan(1, steps);  // calm again: the last run's second step integrated ahead
+    EXPECT_EQ(steps, Steps{AheadStep::take});
+    schedule.forget();  // a failed run
+    schedule.plan(1, steps);
+    EXPECT_EQ(steps, Steps{AheadStep::whole});
+    schedule.live_change();
+    schedule.plan(1, steps);  // one change after a calm run: no streak
+    EXPECT_EQ(steps, Steps{AheadStep::whole});
+}
+
 TEST(StepProgram, ModelsBeyondTheRoundsLimitFallBackToOneDispatchPerRound) {
     // 16,385 chains: more than 16 per thread of the largest workgroup.
     auto sim = cpu_simulation(single_tree_scene(test::broom(16385)), Composition::pointer_jumping_in_dispatch);

@@ -103,7 +103,8 @@ public:
         return {};
     }
 
-    Status run(std::span<const Dispatch> program, std::span<const double> wind_x) override {
+    Status run(std::span<const Dispatch> program, std::span<const double> wind_x,
+               std::span<const AheadStep>) override {
         times_ = {};
         if (pool_ && !wind_x.empty()) {
             try {

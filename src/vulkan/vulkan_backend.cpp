@@ -262,7 +262,8 @@ Status VulkanBackend::finish_slot(Slot& slot, std::span<const Dispatch> program)
     return {};
 }
 
-Status VulkanBackend::run(std::span<const Dispatch> program, std::span<const double> wind_x) {
+Status VulkanBackend::run(std::span<const Dispatch> program, std::span<const double> wind_x,
+                          std::span<const AheadStep>) {
     times_ = {};
     if (program.empty() || wind_x.empty()) return {};
     if (!plan_ || !sets_) return {ErrorCode::internal, "vulkan: run() before upload()"};

@@ -27,7 +27,8 @@ public:
     BackendKind kind() const override { return BackendKind::vulkan; }
     std::string device_name() const override { return device_->name(); }
     Status upload(const SceneData& scene) override;
-    Status run(std::span<const Dispatch> program, std::span<const double> wind_x) override;
+    Status run(std::span<const Dispatch> program, std::span<const double> wind_x,
+               std::span<const AheadStep> ahead) override;
     Status read(BufferId id, uint64_t first, uint64_t count, void* dst, Scalar as) const override;
     Status write(BufferId id, uint64_t first, uint64_t count, const void* src, Scalar as) override;
     /// Each move copies through a device-local scratch buffer (vkCmdCopyBuffer forbids
