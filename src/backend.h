@@ -17,8 +17,8 @@
 
 namespace hmsm::detail {
 
-/// One dispatch of the step program: a pass over one instance group. The integer fields of
-/// `constants` are final; `constants.wind.w` is replaced per step by the backend (see run()).
+/// One dispatch of the step program: a pass over one instance group. The fields of `constants`
+/// are final but `constants.wind_slot`, which the backend sets per step (see run()).
 /// A CPU backend takes dt, max_angle and fix_weight from SceneData (double), a GPU backend from
 /// the float copies in `constants`; every backend takes the wind from the wind table and
 /// instance_wind buffers (gpu_layout.h), which the simulation writes.
@@ -63,6 +63,13 @@ enum class AheadStep : uint8_t {
     plain,
 };
 
+/// One step of a run: the wind-table slot it reads (< HMSM_WIND_STEP_SLOTS, holding the step's
+/// reduced wind clock, gpu_layout.h) and, in a program with the walk ahead, how it runs.
+struct RunStep {
+    uint32_t wind_slot = 0;
+    AheadStep ahead = AheadStep::whole;
+};
+
 class Backend {
 public:
     virtual ~Backend() = default;
@@ -79,15 +86,12 @@ public:
     /// not fit.
     virtual Status upload(const SceneData& scene) = 0;
 
-    /// Runs `program` wind_x.size() times, in order, one step each; step k runs every
-    /// wind_force dispatch with constants.wind.w = wind_x[k]: the wind-table slot (a small
-    /// integer < HMSM_WIND_STEP_SLOTS) holding that step's reduced wind clock.
-    /// Dispatches see the writes of all earlier dispatches. Returns when all work is complete.
-    /// `ahead` (empty, or one per step) says how each step of a program with the walk ahead
-    /// runs; empty: every step whole. Only a backend whose walks_ahead() is true gets such
-    /// programs.
-    virtual Status run(std::span<const Dispatch> program, std::span<const double> wind_x,
-                       std::span<const AheadStep> ahead = {}) = 0;
+    /// Runs `program` steps.size() times, in order, one step each; step k runs every dispatch
+    /// that reads the wind slot (reads_wind_slot) with constants.wind_slot = steps[k].wind_slot,
+    /// and, in a program with the walk ahead, as steps[k].ahead says (only a backend whose
+    /// walks_ahead() is true gets such programs). Dispatches see the writes of all earlier
+    /// dispatches. Returns when all work is complete.
+    virtual Status run(std::span<const Dispatch> program, std::span<const RunStep> steps) = 0;
 
     /// Copies elements [first, first+count) of `id` (count * shape_scalars scalars; integer
     /// buffers are read as their numeric values) into `dst` as float or double.
@@ -175,8 +179,8 @@ inline bool runs_path_walk(const Dispatch& d) { return runs_walk_pair(dispatch_k
 /// The two dispatches of the walk that integrates ahead (gpu_layout.h).
 inline bool is_top_poses_walk(const Dispatch& d) { return dispatch_kind(d) == DispatchKind::walk_top_poses; }
 inline bool is_walk_ahead(const Dispatch& d) { return dispatch_kind(d) == DispatchKind::walk_ahead; }
-/// Whether a dispatch reads the step's wind-table slot from constants.wind.w (Backend::run sets
-/// it): wind_force, and the top poses (which read the next step's, the slot after).
+/// Whether a dispatch reads the step's wind-table slot from constants.wind_slot (Backend::run
+/// sets it): wind_force, and the top poses (which read the next step's, the slot after).
 inline bool reads_wind_slot(const Dispatch& d) { return d.pass == Pass::wind_force || is_top_poses_walk(d); }
 /// The passes a dispatch runs (bit i = Pass i): a path walk's two, or its own.
 inline uint32_t dispatch_passes(const Dispatch& d) {

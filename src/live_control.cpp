@@ -150,8 +150,6 @@ Status Simulation::set_wind(const Wind& wind) {
     const bool profile_changed = wind.profile != old.profile;  // PassConstants.profile of the program
     s.config_.wind = wind;
     s.data_->profile = wind.profile;
-    s.data_->wind_vector = wind.strength * glm::normalize(wind.direction);
-    s.data_->wind_frequency = wind.frequency;
     if (turbulence_changed) s.modes_ = turbulent_modes(wind.turbulence, wind.seed);
     s.header_dirty_ = true;
     s.instance_wind_dirty_ = s.instance_wind_dirty_ || phases_changed;

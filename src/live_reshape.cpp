@@ -91,7 +91,7 @@ Status Simulation::Impl::reshape(const std::vector<uint32_t>& survivors, std::sp
     // Survivors whose state moved: node positions and vertices are a pure function of the
     // carried R and O (passes 4, 6, 7 map elements one to one), so recomputing them restores
     // them exactly. Added instances are posed at rest from S = V = 0.
-    const double no_wind[1] = {0.0};
+    const detail::RunStep at_rest[1] = {};
     const uint32_t first_added = uint32_t(survivors.size());
     std::vector<detail::InstanceGroup> moved;
     for (detail::InstanceGroup g : groups_from(*data_, first_moved)) {
@@ -101,9 +101,9 @@ Status Simulation::Impl::reshape(const std::vector<uint32_t>& survivors, std::sp
     }
     const uint32_t outputs = (1u << uint32_t(Pass::node_relative)) | (1u << uint32_t(Pass::node_world)) |
                              (1u << uint32_t(Pass::contour));
-    if (!moved.empty()) HMSM_TRY(backend_->run(program_for(moved, Pass::node_relative, outputs), no_wind));
+    if (!moved.empty()) HMSM_TRY(backend_->run(program_for(moved, Pass::node_relative, outputs), at_rest));
     if (!added.empty())
-        HMSM_TRY(backend_->run(program_for(groups_from(*data_, first_added), Pass::integrate), no_wind));
+        HMSM_TRY(backend_->run(program_for(groups_from(*data_, first_added), Pass::integrate), at_rest));
     return apply_pending();
 }
 

@@ -36,7 +36,6 @@ gpu::PassConstants group_constants(const SceneData& d, const InstanceGroup& g, u
     pc.total_model_chains = d.total_model_chains();
     pc.src_half = final_half;
     pc.dst_half = final_half;
-    pc.wind = {float(d.wind_vector.x), float(d.wind_vector.y), float(d.wind_vector.z), 0.0f};
     pc.params = {float(d.dt), float(d.max_angle), float(d.fix_weight), g.covers_paused ? 1.0f : 0.0f};
     return pc;
 }
@@ -151,8 +150,6 @@ SceneData flatten_scene(const Scene& scene, const std::vector<Hierarchy>& hierar
     d.max_angle = parameters.max_angle;
     d.fix_weight = options.fix_weight;
     d.profile = wind.profile;
-    d.wind_vector = wind.strength * glm::normalize(wind.direction);
-    d.wind_frequency = wind.frequency;
     return d;
 }
 

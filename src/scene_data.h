@@ -90,8 +90,6 @@ struct SceneData {
     double max_angle = 0.8;
     double fix_weight = 0.5;
     WindProfile profile = WindProfile::none;
-    glm::dvec3 wind_vector{0.0};  // strength * normalized direction
-    double wind_frequency = 0.0;
     /// The contour pass's output layout; packed leaves vertex_normal without elements.
     VertexLayout vertex_layout = VertexLayout::separate;
     bool packed_vertices() const { return vertex_layout == VertexLayout::packed; }

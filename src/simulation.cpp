@@ -206,8 +206,8 @@ Result<std::unique_ptr<Simulation>> Simulation::Impl::create(const Scene& scene,
 
     // Pose at rest (every instance, active or not): with g = 0, integrate keeps S = V = 0 and
     // writes the rest transforms; the remaining passes then fill R, O, node positions and the mesh.
-    const double no_wind[1] = {0.0};
-    HMSM_TRY(sim->backend_->run(sim->program_for(sim->data_->groups, Pass::integrate), no_wind));
+    const detail::RunStep at_rest[1] = {};
+    HMSM_TRY(sim->backend_->run(sim->program_for(sim->data_->groups, Pass::integrate), at_rest));
     HMSM_TRY(sim->apply_pending());
     return created;
 }
@@ -226,7 +226,7 @@ Status Simulation::Impl::step(uint32_t count) {
         // that integrates ahead reads (gpu_layout.h HMSM_DISPATCH_WALK_AHEAD).
         const uint32_t steps = std::min<uint32_t>(count - done, HMSM_WIND_STEP_SLOTS - 1);
         wind_scratch_.resize(size_t(steps + 1) * detail::kWindStepScalars);
-        wind_phases_.resize(steps);
+        run_steps_.resize(steps);
         for (uint32_t k = 0; k <= steps; ++k) {
             const uint64_t n = steps_done_ + k + 1;  // steps_done_ counts the earlier chunks
             const double tau = clock_.tau(wind.frequency, dt, n);
@@ -239,16 +239,15 @@ Status Simulation::Impl::step(uint32_t count) {
                               "wind frequency " + number(wind.frequency) + " times time " +
                                   number(double(n - 1) * dt) + " s overflows: the wind phase is not finite"};
             detail::fill_wind_step(wind, modes_, tau, &wind_scratch_[size_t(k) * detail::kWindStepScalars]);
-            if (k < steps) wind_phases_[k] = double(k);
+            if (k < steps) run_steps_[k] = {k, detail::AheadStep::whole};
         }
         HMSM_TRY(backend_->write(detail::BufferId::wind_table, HMSM_WIND_STEPS,
                                  uint64_t(steps + 1) * HMSM_WIND_STEP_VEC4S, wind_scratch_.data(),
                                  detail::Scalar::f64));
         // The walk that integrates ahead: the step layer says how each step runs.
         const bool ahead = std::any_of(step_program_.begin(), step_program_.end(), detail::is_walk_ahead);
-        if (ahead) ahead_schedule_.plan(steps, ahead_steps_);
-        else ahead_steps_.clear();
-        if (Status run = backend_->run(step_program_, wind_phases_, ahead_steps_); !run.ok() || !ahead) {
+        if (ahead) ahead_schedule_.plan(run_steps_);
+        if (Status run = backend_->run(step_program_, run_steps_); !run.ok() || !ahead) {
             ahead_schedule_.forget();
             HMSM_TRY(run);
         }

@@ -60,11 +60,10 @@ struct __attribute__((visibility("hidden"))) Simulation::Impl {
     TurbulentModes modes_{};
     bool program_dirty_ = true, header_dirty_ = true, instance_wind_dirty_ = true;
     std::vector<uint32_t> dirty_instances_;  // instance_wind elements to rewrite
-    std::vector<double> wind_phases_;  // scratch: the wind-table slot of each step of a run
+    std::vector<detail::RunStep> run_steps_;  // scratch: the wind-table slot of each step of a run
     /// The walk that integrates ahead: whether a run's steps may take the angles integrated
-    /// ahead (live control calls live_change()), and the plan of the current run.
+    /// ahead (live control calls live_change()).
     detail::AheadSchedule ahead_schedule_;
-    std::vector<detail::AheadStep> ahead_steps_;
     std::vector<double> wind_scratch_;
     // Scratch for read(): elements as the backend stores them, kept between calls so a
     // per-frame readback neither allocates nor zero-fills.

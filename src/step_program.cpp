@@ -225,15 +225,15 @@ AheadVariants ahead_variants(std::span<const Dispatch> program) {
     return v;
 }
 
-void AheadSchedule::plan(uint32_t steps, std::vector<AheadStep>& out) {
+void AheadSchedule::plan(std::span<RunStep> steps) {
     const bool take = ready_;
     changed_runs_ = changed_ ? changed_runs_ + 1 : 0;
     const bool plain = !take && changed_runs_ >= kChangedRunsBeforePlain && changed_runs_ % kRetryWalkAhead != 0;
-    out.assign(steps, AheadStep::take);
-    out[0] = take ? AheadStep::take : plain ? AheadStep::plain : AheadStep::whole;
-    if (plain && steps > 1) out[1] = AheadStep::whole;  // nothing was integrated ahead for it
+    for (RunStep& step : steps) step.ahead = AheadStep::take;
+    steps[0].ahead = take ? AheadStep::take : plain ? AheadStep::plain : AheadStep::whole;
+    if (plain && steps.size() > 1) steps[1].ahead = AheadStep::whole;  // nothing was integrated ahead for it
     changed_ = false;
-    ready_ = steps > 1 || !plain;
+    ready_ = steps.size() > 1 || !plain;
 }
 
 }  // namespace hmsm::detail

@@ -61,8 +61,9 @@ public:
         ready_ = false;
         changed_ = true;
     }
-    /// The steps of the next run of `steps` steps (> 0) of a walk-ahead program, into `out`.
-    void plan(uint32_t steps, std::vector<AheadStep>& out);
+    /// Sets how each step of the next run of a walk-ahead program runs (RunStep::ahead; at
+    /// least one step).
+    void plan(std::span<RunStep> steps);
     /// A run that failed, or that ran a program without the walk ahead: nothing is integrated
     /// ahead.
     void forget() { ready_ = false; }

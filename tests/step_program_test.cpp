@@ -318,27 +318,34 @@ TEST(StepProgram, AheadScheduleTakesWhereNothingChangedAndWalksPlainUnderSteadyC
     using Steps = std::vector<AheadStep>;
     detail::AheadSchedule schedule;
     Steps steps;
-    schedule.plan(3, steps);  // the first run: nothing integrated ahead yet
+    // The plan of a run of `count` steps, as AheadSteps.
+    auto plan = [&](uint32_t count, Steps& out) {
+        std::vector<detail::RunStep> run(count);
+        schedule.plan(run);
+        out.clear();
+        for (const detail::RunStep& step : run) out.push_back(step.ahead);
+    };
+    plan(3, steps);  // the first run: nothing integrated ahead yet
     EXPECT_EQ(steps, (Steps{AheadStep::whole, AheadStep::take, AheadStep::take}));
-    schedule.plan(1, steps);  // nothing changed since
+    plan(1, steps);  // nothing changed since
     EXPECT_EQ(steps, Steps{AheadStep::take});
     schedule.live_change();
-    schedule.plan(1, steps);  // the first run after a change
+    plan(1, steps);  // the first run after a change
     EXPECT_EQ(steps, Steps{AheadStep::whole});
     for (uint32_t streak = 2; streak <= 9; ++streak) {
         SCOPED_TRACE(streak);
         schedule.live_change();
-        schedule.plan(2, steps);
+        plan(2, steps);
         if (streak == detail::AheadSchedule::kRetryWalkAhead) EXPECT_EQ(steps, (Steps{AheadStep::whole, AheadStep::take}));
         else EXPECT_EQ(steps, (Steps{AheadStep::plain, AheadStep::whole}));
     }
-    schedule.plan(1, steps);  // calm again: the last run's second step integrated ahead
+    plan(1, steps);  // calm again: the last run's second step integrated ahead
     EXPECT_EQ(steps, Steps{AheadStep::take});
     schedule.forget();  // a failed run
-    schedule.plan(1, steps);
+    plan(1, steps);
     EXPECT_EQ(steps, Steps{AheadStep::whole});
     schedule.live_change();
-    schedule.plan(1, steps);  // one change after a calm run: no streak
+    plan(1, steps);  // one change after a calm run: no streak
     EXPECT_EQ(steps, Steps{AheadStep::whole});
 }
 

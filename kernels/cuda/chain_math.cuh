@@ -58,10 +58,10 @@ HMSM_HOST_DEVICE float instance_wind_scale(const BufferPointers& b, const gpu::P
 /// Pass 1 for model chain c of group instance k: the generalized force g = A (w_loc.z, -w_loc.x)
 /// with w_loc = R^T w in the chain's frame of the previous step (R, and the origin x at which
 /// the force fields act, loaded by the caller from the pose half), w = lambda_i s Y(tau + phi_i)
-/// d plus the force fields. pc.wind.w is the step's slot of the wind table (gpu_layout.h).
+/// d plus the force fields. pc.wind_slot is the step's slot of the wind table (gpu_layout.h).
 HMSM_HOST_DEVICE float2 chain_wind_force(const BufferPointers& b, const gpu::PassConstants& pc,
                                          uint32_t k, uint32_t c, float3 x, const Mat3& rotation) {
-    return chain_wind_force_at(b, pc, c, x, rotation, instance_wind_scale(b, pc, k, uint32_t(pc.wind.w)));
+    return chain_wind_force_at(b, pc, c, x, rotation, instance_wind_scale(b, pc, k, pc.wind_slot));
 }
 
 /// Pass 2, the step: symplectic Euler on S = (theta_x, theta_z) of static chain model_chain from
@@ -318,14 +318,14 @@ HMSM_HOST_DEVICE void path_walk(const BufferPointers& b, const gpu::PassConstant
 
 /// HMSM_DISPATCH_WALK_TOP_POSES for chain c (depth 0 or 1) of group instance k: its pose to half
 /// src_half of chain_rotation and chain_origin; the trunk's origin carries in w the wind scale
-/// lambda_i Y of the next step (wind-table slot wind.w + 1) for the walk that integrates ahead.
+/// lambda_i Y of the next step (wind-table slot wind_slot + 1) for the walk that integrates ahead.
 HMSM_HOST_DEVICE void walk_top_pose(const BufferPointers& b, const gpu::PassConstants& pc, uint32_t k, int32_t c) {
     Mat3 rotation;
     float4 origin;
     walk_pose<false>(b, pc, k, c, nullptr, rotation, origin);
     const uint64_t at = half_begin(pc, pc.src_half) + state_chain(pc, k, c);
     store_mat3(b.chain_rotation, at, rotation);
-    const uint32_t slot = uint32_t(pc.wind.w);
+    const uint32_t slot = pc.wind_slot;
     const uint32_t next_slot = slot + 1u < HMSM_WIND_STEP_SLOTS ? slot + 1u : slot;
     origin.w = c == 0 ? instance_wind_scale(b, pc, k, next_slot) : 0.0f;  // chain 0: the trunk
     b.chain_origin[at] = origin;

@@ -1,5 +1,5 @@
 // Pass 1: generalized wind force per chain (chain_math.cuh), R and O of the previous step read
-// from the pose half src_half (path walk: from the joint matrix); pc.wind.w is the step's slot
+// from the pose half src_half (path walk: from the joint matrix); pc.wind_slot is the step's slot
 // of the wind table (gpu_layout.h), which holds tau and the turbulent phases reduced on the host.
 #include "chain_math.cuh"
 

@@ -10,7 +10,7 @@
 /// w = lambda_i s Y(tau + phi_i) d plus the force fields at the chain's previous origin x, R
 /// the chain's previous rotation (docs/model.md 3.5, 3.7, 3.9; table in gpu_layout.h).
 vec2 chain_wind_force(uint k, uint c, vec3 x, mat3 rotation) {
-    uint slot = HMSM_WIND_STEPS + HMSM_WIND_STEP_VEC4S * uint(pc.wind.w);
+    uint slot = HMSM_WIND_STEPS + HMSM_WIND_STEP_VEC4S * pc.wind_slot;
     uint instance = HMSM_INSTANCE_WIND_VEC4S * (pc.instance_begin + k);
     vec4 own = instance_wind[instance];  // (lambda, phi mod 2, 0, 0)
     float y;

@@ -67,7 +67,7 @@
 ///   [HMSM_WIND_FIELDS, +2 per field): (centre xyz, radius), (F xyz, kind) with kind 0 =
 ///       directional (force h F), 1 = radial (force h F.x unit(x - centre))
 ///   [HMSM_WIND_STEPS + 9 s, +9): step slot s: (tau mod 2, 0, 0, 0), then frac(m_k tau + u_k)
-///       as instance_wind's elements 1..8. A wind_force dispatch reads slot uint(pc.wind.w).
+///       as instance_wind's elements 1..8. A wind_force dispatch reads slot pc.wind_slot.
 #define HMSM_WIND_MODES 32
 #define HMSM_WIND_MODE_VEC4S 8
 #define HMSM_INSTANCE_WIND_VEC4S 9
@@ -125,7 +125,7 @@
 /// WALK_TOP_POSES: one thread per chain of depth 0 and 1 (the first level_count model chains)
 ///   walks the pose from the angles of chain_state and stores it to half src_half of
 ///   chain_rotation and chain_origin; the trunk's thread also stores the wind scale lambda_i Y
-///   of the next step (wind-table slot wind.w + 1) of its instance in the w of its chain_origin.
+///   of the next step (wind-table slot wind_slot + 1) of its instance in the w of its chain_origin.
 /// WALK_AHEAD: every chain walks from the stored pose of its depth-1 ancestor, writes its joint
 ///   matrix, then runs the next step's wind_force and integrate with that pose and Y, writing
 ///   the next angles to a second state buffer.
@@ -206,13 +206,14 @@ struct PassConstants {
     uint total_model_chains;  // static chains of the scene: stride between chain_jump rounds
     uint src_half;            // ping-pong: half read (pose readers: the half holding R and O)
     uint dst_half;            // ping-pong: half written
-    vec4 wind;                // (strength * direction, wind-table step slot) for wind_force
+    uint wind_slot;           // the step's wind-table slot (Backend::run sets it where reads_wind_slot)
     vec4 params;              // (dt, max_angle, fix_weight, covers paused: 1 if the group has paused instances)
 };
 
 #ifdef __cplusplus
 static_assert(sizeof(PassConstants) == 112, "PassConstants must match std430");
-static_assert(offsetof(PassConstants, wind) == 80, "PassConstants must match std430");
+static_assert(offsetof(PassConstants, wind_slot) == 80 && offsetof(PassConstants, params) == 96,
+              "PassConstants must match std430");
 static_assert(offsetof(PassConstants, round) == 52 && offsetof(PassConstants, kind) == 56,
               "PassConstants must match std430");
 static_assert(sizeof(PassConstants) <= 128, "push constants must fit the guaranteed 128 bytes");

@@ -47,8 +47,6 @@ struct State {
     std::vector<joint> joint_matrix;   // [R_c | O_c] by rows
     // Uniforms.
     T dt{}, max_angle{}, fix_weight{};
-    uint32_t profile = 0;
-    vec3 wind_vector{0};
     uint64_t total_chains = 0;
 };
 
@@ -151,7 +149,7 @@ void run_hierarchical(const State<T>& s, const gpu::PassConstants& pc, Range r, 
 }
 
 // The seven passes; each runs the work items `r` of one dispatch serially.
-template <class T> void wind_force(State<T>& s, const gpu::PassConstants& pc, double wind_x, Range r);
+template <class T> void wind_force(State<T>& s, const gpu::PassConstants& pc, uint32_t wind_slot, Range r);
 template <class T> void integrate(State<T>& s, const gpu::PassConstants& pc, Range r);
 template <class T> void compose(State<T>& s, const gpu::PassConstants& pc, Range r);
 template <class T> void node_relative(State<T>& s, const gpu::PassConstants& pc, Range r);
@@ -161,7 +159,7 @@ template <class T> void contour(State<T>& s, const gpu::PassConstants& pc, Range
 /// Composition::path_walk: passes 3 and 5 for the chains `r` by the top-down walk (path_walk.cpp).
 template <class T> void path_walk(State<T>& s, const gpu::PassConstants& pc, Range r);
 /// Composition::path_walk's wind pair: passes 1 and 2 per chain, storing only the angles.
-template <class T> void wind_force_and_integrate(State<T>& s, const gpu::PassConstants& pc, double wind_x, Range r);
+template <class T> void wind_force_and_integrate(State<T>& s, const gpu::PassConstants& pc, uint32_t wind_slot, Range r);
 /// Composition::path_walk's node pair: passes 4 and 6 per node, storing only node_world.
 template <class T> void node_relative_and_world(State<T>& s, const gpu::PassConstants& pc, Range r);
 /// Pass 2's halves: the symplectic Euler step of state chain c of static chain model_chain under

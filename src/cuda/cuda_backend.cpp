@@ -129,19 +129,16 @@ Result<StepGraph*> CudaBackend::graph_for(std::span<const Dispatch> program) {
 // from its pose and the next wind-table slot. A step that takes them (AheadStep::take, the step
 // layer's decision) swaps the two state buffers and runs without its wind_force dispatches; a
 // plain one runs the plain walk, a whole one the program.
-Status CudaBackend::run(std::span<const Dispatch> program, std::span<const double> wind_x,
-                        std::span<const AheadStep> ahead) {
+Status CudaBackend::run(std::span<const Dispatch> program, std::span<const RunStep> steps) {
     HMSM_TRY(make_current());
     times_ = {};
-    if (wind_x.empty() || program.empty()) return {};
-    if (!ahead.empty() && ahead.size() != wind_x.size())
-        return {ErrorCode::internal, "cuda: one AheadStep per step expected"};
-    const bool walks_ahead = !ahead.empty() &&
-                             std::any_of(program.begin(), program.end(), [](const Dispatch& d) { return is_walk_ahead(d); });
+    if (steps.empty() || program.empty()) return {};
+    const bool walks_ahead =
+        std::any_of(program.begin(), program.end(), [](const Dispatch& d) { return is_walk_ahead(d); });
     if (walks_ahead && !same_dispatches(program, ahead_.whole)) ahead_ = ahead_variants(program);  // once per program
-    for (size_t k = 0; k < wind_x.size(); ++k) {
-        const uint32_t slot = uint32_t(wind_x[k]);
-        const AheadStep how = walks_ahead ? ahead[k] : AheadStep::whole;
+    for (const RunStep& run_step : steps) {
+        const uint32_t slot = run_step.wind_slot;
+        const AheadStep how = walks_ahead ? run_step.ahead : AheadStep::whole;
         if (how == AheadStep::take) {
             buffers_.take_next_state();
             ++steps_taken_ahead_;
@@ -155,11 +152,11 @@ Status CudaBackend::run(std::span<const Dispatch> program, std::span<const doubl
         } else {
             auto graph = graph_for(step);
             if (!graph) return graph.status();
-            HMSM_TRY((*graph)->replay(float(slot), stream_));
+            HMSM_TRY((*graph)->replay(slot, stream_));
         }
     }
     CUDA_TRY(cudaStreamSynchronize(stream_));
-    times_.steps = profiling_ ? wind_x.size() : 0;
+    times_.steps = profiling_ ? steps.size() : 0;
     return {};
 }
 
@@ -171,7 +168,7 @@ Status CudaBackend::run_profiled(std::span<const Dispatch> program, uint32_t slo
     }
     CUDA_TRY(cudaEventRecord(events_[0], stream_));
     for (size_t j = 0; j < program.size(); ++j) {
-        CUDA_TRY(launch_dispatch(program[j], buffers_.pointers(), float(slot), stream_));
+        CUDA_TRY(launch_dispatch(program[j], buffers_.pointers(), slot, stream_));
         CUDA_TRY(cudaEventRecord(events_[j + 1], stream_));
     }
     CUDA_TRY(cudaEventSynchronize(events_[program.size()]));

@@ -27,8 +27,7 @@ public:
     /// first run() of a program); with profiling, the dispatches are launched one by one
     /// between events and every step is timed. A program of the walk that integrates ahead
     /// runs each step as `ahead` says (cuda_backend.cpp).
-    Status run(std::span<const Dispatch> program, std::span<const double> wind_x,
-               std::span<const AheadStep> ahead) override;
+    Status run(std::span<const Dispatch> program, std::span<const RunStep> steps) override;
     Status read(BufferId id, uint64_t first, uint64_t count, void* dst, Scalar as) const override;
     Status write(BufferId id, uint64_t first, uint64_t count, const void* src, Scalar as) override;
     Status move_elements(BufferId id, std::span<const ElementMove> moves) override;

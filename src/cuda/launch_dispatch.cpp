@@ -22,17 +22,17 @@ uint32_t max_launch_blocks() {
     return blocks;
 }
 
-// The wind phase of the step reaches the dispatches that read it through their constants
+// The wind-table slot of the step reaches the dispatches that read it through their constants
 // (Backend::run).
-static gpu::PassConstants step_constants(const Dispatch& dispatch, float wind_x) {
+static gpu::PassConstants step_constants(const Dispatch& dispatch, uint32_t wind_slot) {
     gpu::PassConstants pc = dispatch.constants;
-    if (reads_wind_slot(dispatch)) pc.wind.w = wind_x;
+    if (reads_wind_slot(dispatch)) pc.wind_slot = wind_slot;
     return pc;
 }
 
-cudaError_t launch_dispatch(const Dispatch& dispatch, const BufferPointers& buffers, float wind_x,
+cudaError_t launch_dispatch(const Dispatch& dispatch, const BufferPointers& buffers, uint32_t wind_slot,
                             cudaStream_t stream) {
-    const gpu::PassConstants pc = step_constants(dispatch, wind_x);
+    const gpu::PassConstants pc = step_constants(dispatch, wind_slot);
     switch (dispatch.pass) {
 #define HMSM_CUDA_LAUNCH_CASE(name) \
     case Pass::name: return launch_##name(buffers, pc, stream);
@@ -42,8 +42,8 @@ cudaError_t launch_dispatch(const Dispatch& dispatch, const BufferPointers& buff
     return cudaErrorInvalidValue;
 }
 
-void emulate_dispatch(const Dispatch& dispatch, const BufferPointers& host_buffers, float wind_x) {
-    const gpu::PassConstants pc = step_constants(dispatch, wind_x);
+void emulate_dispatch(const Dispatch& dispatch, const BufferPointers& host_buffers, uint32_t wind_slot) {
+    const gpu::PassConstants pc = step_constants(dispatch, wind_slot);
     switch (dispatch.pass) {
 #define HMSM_CUDA_EMULATE_CASE(name) \
     case Pass::name: emulate_##name(host_buffers, pc); return;

@@ -27,8 +27,7 @@ public:
     BackendKind kind() const override { return BackendKind::vulkan; }
     std::string device_name() const override { return device_->name(); }
     Status upload(const SceneData& scene) override;
-    Status run(std::span<const Dispatch> program, std::span<const double> wind_x,
-               std::span<const AheadStep> ahead) override;
+    Status run(std::span<const Dispatch> program, std::span<const RunStep> steps) override;
     Status read(BufferId id, uint64_t first, uint64_t count, void* dst, Scalar as) const override;
     Status write(BufferId id, uint64_t first, uint64_t count, const void* src, Scalar as) override;
     /// Each move copies through a device-local scratch buffer (vkCmdCopyBuffer forbids
@@ -78,7 +77,7 @@ private:
     /// Static model buffers within maxStorageBufferRange; the segments of the state buffers.
     Status plan_windows(const SceneData& scene);
     Status upload_static(BufferId id, const SceneData& scene);
-    Status submit_chunk(Slot& slot, std::span<const Dispatch> program, std::span<const double> wind_x);
+    Status submit_chunk(Slot& slot, std::span<const Dispatch> program, std::span<const RunStep> steps);
     /// Waits for `slot` and adds its timestamps to times_ (program = what it ran).
     Status finish_slot(Slot& slot, std::span<const Dispatch> program);
     Status ensure_timestamp_capacity(Slot& slot, uint32_t queries);

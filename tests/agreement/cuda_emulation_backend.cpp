@@ -42,14 +42,13 @@ public:
         return {};
     }
 
-    /// The CUDA backend hands each step's wind phase to the kernels as a float, and runs each
+    /// The CUDA backend hands each step's wind-table slot to the kernels, and runs each
     /// step of a walk-ahead program as `ahead` says (src/cuda/cuda_backend.cpp).
-    Status run(std::span<const detail::Dispatch> program, std::span<const double> wind_x,
-               std::span<const detail::AheadStep> ahead) override {
-        const bool walks = ahead_ && !ahead.empty() && std::any_of(program.begin(), program.end(), detail::is_walk_ahead);
+    Status run(std::span<const detail::Dispatch> program, std::span<const detail::RunStep> steps) override {
+        const bool walks = ahead_ && std::any_of(program.begin(), program.end(), detail::is_walk_ahead);
         const detail::AheadVariants variants = walks ? detail::ahead_variants(program) : detail::AheadVariants{};
-        for (size_t k = 0; k < wind_x.size(); ++k) {
-            const detail::AheadStep how = walks ? ahead[k] : detail::AheadStep::whole;
+        for (const detail::RunStep& run_step : steps) {
+            const detail::AheadStep how = walks ? run_step.ahead : detail::AheadStep::whole;
             std::span<const detail::Dispatch> step = program;
             if (how == detail::AheadStep::take) {
                 std::swap(bytes_[uint32_t(BufferId::chain_state)], next_state_);
@@ -61,7 +60,7 @@ public:
                 step = variants.plain;
                 ++ahead_->plain;
             }
-            for (const detail::Dispatch& d : step) detail::cuda::emulate_dispatch(d, pointers_, float(wind_x[k]));
+            for (const detail::Dispatch& d : step) detail::cuda::emulate_dispatch(d, pointers_, run_step.wind_slot);
         }
         return {};
     }

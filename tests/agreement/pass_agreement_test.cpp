@@ -60,10 +60,10 @@ TEST_P(PassAgreement, EachDispatchMatchesCpu64OnRandomStates) {
         for (size_t v = 0; v < variants.size(); ++v) {
             SCOPED_TRACE("variant " + std::to_string(v));
             randomize_state(data, *backend.value(), *oracle.value(), rng);
-            const double wind_x[1] = {uniform_wind_phase(rng)};
-            const Status run = backend.value()->run(variants[v], wind_x);
+            const detail::RunStep step[1] = {{uniform_wind_slot(rng)}};
+            const Status run = backend.value()->run(variants[v], step);
             ASSERT_TRUE(run.ok()) << run.message();
-            ASSERT_TRUE(oracle.value()->run(variants[v], wind_x).ok());
+            ASSERT_TRUE(oracle.value()->run(variants[v], step).ok());
             uint32_t writes = 0;  // of the passes the dispatches run (a path-walk one runs two)
             for (const detail::Dispatch& dispatch : variants[v]) writes |= detail::dispatch_writes(dispatch);
             for (const auto& info : detail::kBufferTable) {

@@ -137,8 +137,6 @@ detail::SceneData random_scene_data(std::mt19937& rng, const std::vector<ModelSh
     d.max_angle = 0.8;
     d.fix_weight = 0.4;
     d.profile = uniform(rng, 0, 1) < 0.5 ? WindProfile::y1 : WindProfile::turbulent;
-    d.wind_vector = {3.0, 0.5, -2.0};
-    d.wind_frequency = 0.1;
     return d;
 }
 
@@ -238,8 +236,8 @@ std::vector<std::vector<detail::Dispatch>> pass_variants(const detail::SceneData
     return variants;
 }
 
-double uniform_wind_phase(std::mt19937& rng) {
-    return std::floor(uniform(rng, 0.0, double(HMSM_WIND_STEP_SLOTS) - 1e-9));  // a wind-table slot
+uint32_t uniform_wind_slot(std::mt19937& rng) {
+    return uint32_t(std::floor(uniform(rng, 0.0, double(HMSM_WIND_STEP_SLOTS) - 1e-9)));
 }
 
 void randomize_state(const detail::SceneData& d, detail::Backend& a, detail::Backend& b,

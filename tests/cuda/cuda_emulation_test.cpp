@@ -90,7 +90,7 @@ void emulate_steps(const Simulation& sim, HostImage& image, uint32_t steps) {
     for (uint32_t k = 0; k < steps; ++k) {
         detail::fill_wind_step(wind, modes, (wind.frequency * dt) * double(k), slot);
         for (uint32_t i = 0; i < detail::kWindStepScalars; ++i) table[4 * HMSM_WIND_STEPS + i] = float(slot[i]);
-        for (const detail::Dispatch& d : hmsm::detail::step_program_of(sim)) detail::cuda::emulate_dispatch(d, image.pointers, 0.0f);
+        for (const detail::Dispatch& d : hmsm::detail::step_program_of(sim)) detail::cuda::emulate_dispatch(d, image.pointers, 0);
     }
 }
 
@@ -304,7 +304,7 @@ TEST(CudaEmulationWalkAhead, EqualsThePathWalkBitForBit) {
 
     HostImage walked = image_of(sim), walked_ahead = image_of(sim), stale = image_of(sim);
     auto run = [](const std::vector<Dispatch>& program, HostImage& image) {
-        for (const Dispatch& d : program) detail::cuda::emulate_dispatch(d, image.pointers, 0.0f);
+        for (const Dispatch& d : program) detail::cuda::emulate_dispatch(d, image.pointers, 0);
     };
     auto take_next_state = [](HostImage& image) {
         std::swap(image.bytes[uint32_t(BufferId::chain_state)], image.next_state);
