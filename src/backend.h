@@ -70,6 +70,26 @@ struct RunStep {
     AheadStep ahead = AheadStep::whole;
 };
 
+/// What a backend can do and prefers; the step layer (simulation.cpp, live_reshape.cpp,
+/// step_program.cpp) builds its programs and chooses its paths from it.
+struct BackendCapabilities {
+    /// Instances may be added and removed in place: buffers keep their allocation and layout,
+    /// state moves with move_elements and instance buffers are rewritten with write(). False (a
+    /// Vulkan scene split into windows) makes the simulation upload the scene anew.
+    bool reshapes_in_place = true;
+    /// Each dispatch costs much more than a CUDA graph node (Vulkan: a pipeline barrier and its
+    /// own command); the step program then runs pointer-jumping rounds in one dispatch for
+    /// somewhat larger models (step_program.cpp rounds_in_dispatch_pay).
+    bool dispatches_are_expensive = false;
+    /// The backend can run path-walk step programs of forests that integrate ahead
+    /// (gpu_layout.h HMSM_DISPATCH_WALK_AHEAD): it keeps chain_state's twin and runs each step
+    /// as run()'s RunStep::ahead says (src/cuda/cuda_backend.cpp).
+    bool walks_ahead = false;
+    /// Composition::automatic resolves to path_walk here (measured fastest on GPUs) rather than
+    /// pointer_jumping (the CPU backends, and Vulkan on a CPU driver).
+    bool prefers_path_walk = false;
+};
+
 class Backend {
 public:
     virtual ~Backend() = default;
@@ -89,8 +109,8 @@ public:
     /// Runs `program` steps.size() times, in order, one step each; step k runs every dispatch
     /// that reads the wind slot (reads_wind_slot) with constants.wind_slot = steps[k].wind_slot,
     /// and, in a program with the walk ahead, as steps[k].ahead says (only a backend whose
-    /// walks_ahead() is true gets such programs). Dispatches see the writes of all earlier
-    /// dispatches. Returns when all work is complete.
+    /// capabilities().walks_ahead is true gets such programs). Dispatches see the writes of all
+    /// earlier dispatches. Returns when all work is complete.
     virtual Status run(std::span<const Dispatch> program, std::span<const RunStep> steps) = 0;
 
     /// Copies elements [first, first+count) of `id` (count * shape_scalars scalars; integer
@@ -104,29 +124,14 @@ public:
     /// temporary (source and destination may overlap): the state of surviving instances when
     /// others are removed (live_control.cpp). Nothing goes through the host.
     virtual Status move_elements(BufferId id, std::span<const ElementMove> moves) = 0;
-    /// Whether instances may be added and removed in place: buffers keep their allocation and
-    /// layout, state moves with move_elements and instance buffers are rewritten with write().
-    /// False (a Vulkan scene split into windows) makes the simulation upload the scene anew.
-    virtual bool reshapes_in_place() const { return true; }
+    /// What the backend can do and prefers (BackendCapabilities); may change with upload()
+    /// (Vulkan: whether the scene is split into windows).
+    virtual BackendCapabilities capabilities() const { return {}; }
 
     /// Turns per-pass device timing on or off (off: pass_times() returns zeros).
     virtual void set_profiling(bool enabled) = 0;
     /// Device seconds per pass summed over the steps of the last run().
     virtual PassTimes pass_times() const = 0;
-
-    /// True where each dispatch costs much more than a CUDA graph node (Vulkan: a pipeline
-    /// barrier and its own command); the step program then runs pointer-jumping rounds in one
-    /// dispatch for somewhat larger models (simulation.cpp).
-    virtual bool dispatches_are_expensive() const { return false; }
-
-    /// Whether the backend can run path-walk step programs of forests that integrate ahead
-    /// (gpu_layout.h HMSM_DISPATCH_WALK_AHEAD; step_program.cpp): it keeps chain_state's twin
-    /// and runs each step as run()'s `ahead` says (src/cuda/cuda_backend.cpp).
-    virtual bool walks_ahead() const { return false; }
-
-    /// Whether Composition::automatic resolves to path_walk here (measured fastest on GPUs) rather
-    /// than pointer_jumping (the CPU backends, and Vulkan on a CPU driver).
-    virtual bool prefers_path_walk() const { return false; }
 
     /// Optional, for `hmsm bench`'s roofline: copies `bytes` between two device scratch
     /// buffers (allocated and freed here) a few times and returns the median device copy

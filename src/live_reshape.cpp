@@ -79,7 +79,7 @@ Status Simulation::Impl::reshape(const std::vector<uint32_t>& survivors, std::sp
         }
 
     ahead_schedule_.live_change();  // the state moves, the angles integrated ahead with it
-    if (backend_->reshapes_in_place() && data_->holds(*data)) {
+    if (backend_->capabilities().reshapes_in_place && data_->holds(*data)) {
         HMSM_TRY(reshape_in_place(std::move(data), survivors, old_chain, first_moved));
     } else {
         HMSM_TRY(reshape_anew(std::move(data), survivors, old_chain));

@@ -117,8 +117,9 @@ Simulation::Simulation(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 
 std::vector<Dispatch> Simulation::Impl::program_for(const std::vector<detail::InstanceGroup>& groups,
                                                     Pass first, uint32_t passes) const {
-    return build_program(*data_, groups, config_.composition, backend_->dispatches_are_expensive(), first,
-                         passes, backend_->walks_ahead());
+    const detail::BackendCapabilities can = backend_->capabilities();
+    return build_program(*data_, groups, config_.composition, can.dispatches_are_expensive, first, passes,
+                         can.walks_ahead);
 }
 
 Status Simulation::Impl::check_size(std::span<const Instance> instances) const {
@@ -200,7 +201,7 @@ Result<std::unique_ptr<Simulation>> Simulation::Impl::create(const Scene& scene,
     }
     if (config.composition == Composition::automatic)
         sim->config_.composition =
-            sim->backend_->prefers_path_walk() ? Composition::path_walk : Composition::pointer_jumping;
+            sim->backend_->capabilities().prefers_path_walk ? Composition::path_walk : Composition::pointer_jumping;
     sim->backend_->set_profiling(config.profile_passes);
     HMSM_TRY(sim->backend_->upload(*sim->data_));
 

@@ -25,7 +25,7 @@ void append_pass(std::vector<Dispatch>& program, const SceneData& d,
 
 /// The program of the passes from `first` on whose bit is set in `passes`, less the passes
 /// whose outputs the scene does not produce (outputs on demand). `walk_ahead`
-/// (Backend::walks_ahead): a path-walk step of a forest whose every instance is active
+/// (BackendCapabilities::walks_ahead): a path-walk step of a forest whose every instance is active
 /// composes by the walk that integrates ahead (gpu_layout.h HMSM_DISPATCH_WALK_AHEAD).
 std::vector<Dispatch> build_program(const SceneData& d, const std::vector<InstanceGroup>& groups,
                                     Composition composition, bool dispatches_are_expensive,

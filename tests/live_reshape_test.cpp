@@ -86,11 +86,13 @@ public:
     Status move_elements(detail::BufferId, std::span<const detail::ElementMove>) override {
         return {ErrorCode::internal, "UploadsAnew moves nothing"};
     }
-    bool reshapes_in_place() const override { return false; }
     void set_profiling(bool enabled) override { inner_->set_profiling(enabled); }
     PassTimes pass_times() const override { return inner_->pass_times(); }
-    bool dispatches_are_expensive() const override { return inner_->dispatches_are_expensive(); }
-    bool prefers_path_walk() const override { return inner_->prefers_path_walk(); }
+    detail::BackendCapabilities capabilities() const override {
+        detail::BackendCapabilities can = inner_->capabilities();
+        can.reshapes_in_place = false;
+        return can;
+    }
 
 private:
     std::unique_ptr<detail::Backend> inner_;

@@ -32,10 +32,14 @@ public:
     Status write(BufferId id, uint64_t first, uint64_t count, const void* src, Scalar as) override;
     Status move_elements(BufferId id, std::span<const ElementMove> moves) override;
     void set_profiling(bool enabled) override { profiling_ = enabled; }
-    bool prefers_path_walk() const override { return true; }
-    /// On unless HMSM_CUDA_WALK_AHEAD=0 (read when the backend is created; for A/B measurements
-    /// and tests).
-    bool walks_ahead() const override { return walk_ahead_; }
+    /// The path walk, integrating ahead unless HMSM_CUDA_WALK_AHEAD=0 (read when the backend is
+    /// created; for A/B measurements and tests).
+    BackendCapabilities capabilities() const override {
+        BackendCapabilities can;
+        can.walks_ahead = walk_ahead_;
+        can.prefers_path_walk = true;
+        return can;
+    }
     /// Steps run without their wind_force dispatches, taking the angles the step before
     /// integrated ahead (since the backend was created; for tests).
     uint64_t steps_taken_ahead() const { return steps_taken_ahead_; }

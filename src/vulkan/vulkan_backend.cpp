@@ -157,7 +157,7 @@ Status VulkanBackend::upload(const SceneData& scene) {
 
 Status VulkanBackend::move_elements(BufferId id, std::span<const ElementMove> moves) {
     HMSM_TRY(check_device_lost());
-    if (!reshapes_in_place())
+    if (!capabilities().reshapes_in_place)
         return {ErrorCode::unsupported, "vulkan: a scene split into windows cannot move state in place"};
     const uint64_t element_bytes = device_element_bytes(id);
     auto checked = largest_move_bytes(moves, element_bytes,

@@ -33,8 +33,6 @@ public:
     /// Each move copies through a device-local scratch buffer (vkCmdCopyBuffer forbids
     /// overlapping regions), all in one submission.
     Status move_elements(BufferId id, std::span<const ElementMove> moves) override;
-    /// Not for a scene split into windows: its ping-pong buffers are segment-major.
-    bool reshapes_in_place() const override { return plan_ && !plan_->split(); }
     void set_profiling(bool enabled) override { profiling_ = enabled; }
     PassTimes pass_times() const override { return times_; }
 
@@ -55,8 +53,15 @@ public:
     /// compute-shader copy between two scratch device-local buffers, each the median of
     /// timestamped runs, as (bytes read + bytes written) / seconds.
     Result<double> measure_copy_bandwidth(uint64_t bytes) override;
-    bool dispatches_are_expensive() const override { return true; }
-    bool prefers_path_walk() const override { return !device_->is_cpu(); }
+    /// Dispatches are expensive; the path walk on a GPU, not on a CPU driver; reshaping in place
+    /// but for a scene split into windows (its ping-pong buffers are segment-major).
+    BackendCapabilities capabilities() const override {
+        BackendCapabilities can;
+        can.reshapes_in_place = plan_ && !plan_->split();
+        can.dispatches_are_expensive = true;
+        can.prefers_path_walk = !device_->is_cpu();
+        return can;
+    }
 
 private:
     /// One command buffer in flight: its fence, timestamp pool and what it ran.

@@ -20,8 +20,12 @@ public:
     explicit CudaEmulationBackend(EmulatedAheadSteps* ahead) : ahead_(ahead) {}
     BackendKind kind() const override { return BackendKind::cuda; }
     std::string device_name() const override { return "CUDA kernels emulated on the host"; }
-    bool prefers_path_walk() const override { return true; }  // as the CUDA backend
-    bool walks_ahead() const override { return ahead_ != nullptr; }
+    detail::BackendCapabilities capabilities() const override {
+        detail::BackendCapabilities can;
+        can.walks_ahead = ahead_ != nullptr;
+        can.prefers_path_walk = true;  // as the CUDA backend
+        return can;
+    }
 
     /// Static buffers converted like an upload, state zero-filled; every buffer has at least
     /// one 16-byte element behind it, as on the device (an empty vertex_normal's placeholder).

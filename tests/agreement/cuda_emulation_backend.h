@@ -16,7 +16,7 @@ struct EmulatedAheadSteps {
     uint64_t taken = 0, plain = 0;
 };
 
-/// `ahead`: where not null, the backend can walk ahead (Backend::walks_ahead), keeping
+/// `ahead`: where not null, the backend can walk ahead (BackendCapabilities::walks_ahead), keeping
 /// chain_state's twin as the CUDA backend does, and counts its steps there.
 std::unique_ptr<detail::Backend> create_cuda_emulation_backend(EmulatedAheadSteps* ahead = nullptr);
 
