@@ -15,7 +15,6 @@ find_package(CUDAToolkit REQUIRED)
 hmsm_pass_sources(_hmsm_pass_kernels kernels/cuda cu)
 add_library(hmsm_cuda_objects OBJECT
   ${_hmsm_pass_kernels}
-  kernels/cuda/fused.cu
   src/cuda/cuda_backend.cpp
   src/cuda/cuda_error.cpp
   src/cuda/device_buffers.cpp

@@ -77,9 +77,8 @@ set(_hmsm_glsl_dir "${CMAKE_CURRENT_SOURCE_DIR}/shaders/glsl")
 set(_hmsm_spirv_dir "${CMAKE_CURRENT_BINARY_DIR}/hmsm_spirv")
 file(MAKE_DIRECTORY "${_hmsm_spirv_dir}")
 set(_hmsm_spirv_headers "")
-# copy_bandwidth is no pass: the device copy `hmsm bench` measures its roofline with; fused
-# runs passes 1-5 in one dispatch (Composition::fused).
-foreach(pass IN LISTS HMSM_PASSES ITEMS copy_bandwidth fused)
+# copy_bandwidth is no pass: the device copy `hmsm bench` measures its roofline with.
+foreach(pass IN LISTS HMSM_PASSES ITEMS copy_bandwidth)
   set(_out "${_hmsm_spirv_dir}/${pass}.h")
   add_custom_command(
     OUTPUT "${_out}"

@@ -17,8 +17,8 @@
 
 namespace hmsm::detail {
 
-/// One dispatch of the step program: a pass over one instance group. The integer fields of
-/// `constants` are final; `constants.wind.w` is replaced per step by the backend (see run()).
+/// One dispatch of the step program: a pass over one instance group. The fields of `constants`
+/// are final but `constants.wind_slot`, which the backend sets per step (see run()).
 /// A CPU backend takes dt, max_angle and fix_weight from SceneData (double), a GPU backend from
 /// the float copies in `constants`; every backend takes the wind from the wind table and
 /// instance_wind buffers (gpu_layout.h), which the simulation writes.
@@ -49,6 +49,47 @@ Result<uint64_t> largest_move_bytes(std::span<const ElementMove> moves, uint64_t
     return largest;
 }
 
+/// How one step of a program with the walk that integrates ahead (is_walk_ahead, gpu_layout.h
+/// HMSM_DISPATCH_WALK_AHEAD) runs. The step layer decides (step_program.h AheadSchedule, from
+/// the simulation's change flags); a backend that walks ahead runs what it is told.
+enum class AheadStep : uint8_t {
+    /// The program as built: the wind pair integrates from chain_state, the walk ahead writes
+    /// the next step's angles to chain_state's twin.
+    whole,
+    /// The angles the step before integrated ahead are this step's: the backend swaps the twin
+    /// in and runs the program without its wind_force dispatches.
+    take,
+    /// The plain walk (AheadVariants::plain): no top poses, and no next angles written.
+    plain,
+};
+
+/// One step of a run: the wind-table slot it reads (< HMSM_WIND_STEP_SLOTS, holding the step's
+/// reduced wind clock, gpu_layout.h) and, in a program with the walk ahead, how it runs.
+struct RunStep {
+    uint32_t wind_slot = 0;
+    AheadStep ahead = AheadStep::whole;
+};
+
+/// What a backend can do and prefers; the step layer (simulation.cpp, live_reshape.cpp,
+/// step_program.cpp) builds its programs and chooses its paths from it.
+struct BackendCapabilities {
+    /// Instances may be added and removed in place: buffers keep their allocation and layout,
+    /// state moves with move_elements and instance buffers are rewritten with write(). False (a
+    /// Vulkan scene split into windows) makes the simulation upload the scene anew.
+    bool reshapes_in_place = true;
+    /// Each dispatch costs much more than a CUDA graph node (Vulkan: a pipeline barrier and its
+    /// own command); the step program then runs pointer-jumping rounds in one dispatch for
+    /// somewhat larger models (step_program.cpp rounds_in_dispatch_pay).
+    bool dispatches_are_expensive = false;
+    /// The backend can run path-walk step programs of forests that integrate ahead
+    /// (gpu_layout.h HMSM_DISPATCH_WALK_AHEAD): it keeps chain_state's twin and runs each step
+    /// as run()'s RunStep::ahead says (src/cuda/cuda_backend.cpp).
+    bool walks_ahead = false;
+    /// Composition::automatic resolves to path_walk here (measured fastest on GPUs) rather than
+    /// pointer_jumping (the CPU backends, and Vulkan on a CPU driver).
+    bool prefers_path_walk = false;
+};
+
 class Backend {
 public:
     virtual ~Backend() = default;
@@ -65,11 +106,12 @@ public:
     /// not fit.
     virtual Status upload(const SceneData& scene) = 0;
 
-    /// Runs `program` wind_x.size() times, in order, one step each; step k runs every
-    /// wind_force dispatch with constants.wind.w = wind_x[k]: the wind-table slot (a small
-    /// integer < HMSM_WIND_STEP_SLOTS) holding that step's reduced wind clock.
-    /// Dispatches see the writes of all earlier dispatches. Returns when all work is complete.
-    virtual Status run(std::span<const Dispatch> program, std::span<const double> wind_x) = 0;
+    /// Runs `program` steps.size() times, in order, one step each; step k runs every dispatch
+    /// that reads the wind slot (reads_wind_slot) with constants.wind_slot = steps[k].wind_slot,
+    /// and, in a program with the walk ahead, as steps[k].ahead says (only a backend whose
+    /// capabilities().walks_ahead is true gets such programs). Dispatches see the writes of all
+    /// earlier dispatches. Returns when all work is complete.
+    virtual Status run(std::span<const Dispatch> program, std::span<const RunStep> steps) = 0;
 
     /// Copies elements [first, first+count) of `id` (count * shape_scalars scalars; integer
     /// buffers are read as their numeric values) into `dst` as float or double.
@@ -82,30 +124,14 @@ public:
     /// temporary (source and destination may overlap): the state of surviving instances when
     /// others are removed (live_control.cpp). Nothing goes through the host.
     virtual Status move_elements(BufferId id, std::span<const ElementMove> moves) = 0;
-    /// Whether instances may be added and removed in place: buffers keep their allocation and
-    /// layout, state moves with move_elements and instance buffers are rewritten with write().
-    /// False (a Vulkan scene split into windows) makes the simulation upload the scene anew.
-    virtual bool reshapes_in_place() const { return true; }
+    /// What the backend can do and prefers (BackendCapabilities); may change with upload()
+    /// (Vulkan: whether the scene is split into windows).
+    virtual BackendCapabilities capabilities() const { return {}; }
 
     /// Turns per-pass device timing on or off (off: pass_times() returns zeros).
     virtual void set_profiling(bool enabled) = 0;
     /// Device seconds per pass summed over the steps of the last run().
     virtual PassTimes pass_times() const = 0;
-
-    /// True where each dispatch costs much more than a CUDA graph node (Vulkan: a pipeline
-    /// barrier and its own command); the step program then runs pointer-jumping rounds in one
-    /// dispatch for somewhat larger models (simulation.cpp).
-    virtual bool dispatches_are_expensive() const { return false; }
-
-    /// Whether path-walk step programs of forests may integrate ahead (gpu_layout.h
-    /// HMSM_WALK_AHEAD; step_program.cpp): the backend then keeps the next step's angles and
-    /// skips a step's wind_force dispatches when nothing changed since the step before
-    /// (src/cuda/cuda_backend.cpp).
-    virtual bool walks_ahead() const { return false; }
-
-    /// Whether Composition::automatic resolves to path_walk here (measured fastest on GPUs) rather
-    /// than pointer_jumping (the CPU backends, and Vulkan on a CPU driver).
-    virtual bool prefers_path_walk() const { return false; }
 
     /// Optional, for `hmsm bench`'s roofline: copies `bytes` between two device scratch
     /// buffers (allocated and freed here) a few times and returns the median device copy
@@ -149,31 +175,20 @@ Result<std::unique_ptr<Backend>> create_backend(BackendKind kind, uint32_t cpu_t
 uint32_t pass_reads(Pass pass);
 uint32_t pass_writes(Pass pass);
 
-/// Whether `d` is the fused dispatch of Composition::fused (passes 1-5 in one, gpu_layout.h
-/// HMSM_MODE_FUSED); its `pass` is the first fused pass, under which its time is reported.
-inline bool runs_fused(const Dispatch& d) {
-    return d.pass == kFusedDispatchPass && d.constants.mode == HMSM_MODE_FUSED;
-}
-/// Whether `d` is a path-walk dispatch of Composition::path_walk (gpu_layout.h
-/// HMSM_MODE_PATH_WALK on a pass that leads one): it also runs its pass's walk partner.
-inline bool runs_path_walk(const Dispatch& d) {
-    return d.constants.mode == HMSM_MODE_PATH_WALK && walk_passes(d.pass) != 0;
-}
-/// The two dispatches of the walk that integrates ahead (gpu_layout.h HMSM_WALK_TOP_POSES,
-/// HMSM_WALK_AHEAD): path-walk compose dispatches told apart by their round.
-inline bool is_top_poses_walk(const Dispatch& d) {
-    return d.pass == Pass::compose && d.constants.mode == HMSM_MODE_PATH_WALK &&
-           d.constants.round == HMSM_WALK_TOP_POSES;
-}
-inline bool is_walk_ahead(const Dispatch& d) {
-    return d.pass == Pass::compose && d.constants.mode == HMSM_MODE_PATH_WALK && d.constants.round == HMSM_WALK_AHEAD;
-}
-/// Whether a dispatch reads the step's wind-table slot from constants.wind.w (Backend::run sets
-/// it): wind_force, and the top poses (which read the next step's, the slot after).
+/// What `d` runs (gpu_layout.h HMSM_DISPATCH_*; the step program sets only kinds that fit the
+/// dispatch's pass, pass_table.h kind_fits_pass).
+inline DispatchKind dispatch_kind(const Dispatch& d) { return DispatchKind(d.constants.kind); }
+/// Whether `d` is a path-walk dispatch of Composition::path_walk: it also runs its pass's walk
+/// partner (pass_table.h runs_walk_pair).
+inline bool runs_path_walk(const Dispatch& d) { return runs_walk_pair(dispatch_kind(d)); }
+/// The two dispatches of the walk that integrates ahead (gpu_layout.h).
+inline bool is_top_poses_walk(const Dispatch& d) { return dispatch_kind(d) == DispatchKind::walk_top_poses; }
+inline bool is_walk_ahead(const Dispatch& d) { return dispatch_kind(d) == DispatchKind::walk_ahead; }
+/// Whether a dispatch reads the step's wind-table slot from constants.wind_slot (Backend::run
+/// sets it): wind_force, and the top poses (which read the next step's, the slot after).
 inline bool reads_wind_slot(const Dispatch& d) { return d.pass == Pass::wind_force || is_top_poses_walk(d); }
-/// The passes a dispatch runs (bit i = Pass i): the fused passes, a path walk's two, or its own.
+/// The passes a dispatch runs (bit i = Pass i): a path walk's two, or its own.
 inline uint32_t dispatch_passes(const Dispatch& d) {
-    if (runs_fused(d)) return fused_passes();
     if (runs_path_walk(d)) return walk_passes(d.pass);
     return 1u << uint32_t(d.pass);
 }
@@ -190,35 +205,38 @@ inline uint32_t dispatch_writes(const Dispatch& d) {
     return runs_path_walk(d) ? pass_info(d.pass).walk_writes : writes_of_passes(dispatch_passes(d));
 }
 
-/// The most shared memory a GPU backend gives a fused workgroup (which keeps its rounds there
-/// when gpu::fused_shared_bytes(chains) fits): the environment variable
-/// HMSM_FUSED_SHARED_BYTES when it is a non-negative integer (0: always device memory; for
-/// tests and measurements; never above `device_limit`), else `device_limit` (the device's most
-/// per workgroup). Backends read it once, when they are created.
-uint64_t fused_shared_limit(uint64_t device_limit);
-
 /// Number of threads of a dispatch and the mapping shared by every backend.
 inline uint32_t dispatch_thread_count(const Dispatch& d) { return d.constants.element_count; }
+/// Threads per instance of the group (element_count / instances): the model's chains, nodes or
+/// vertices by the pass's domain, or the chains of one level (LEVEL) or of the top two levels
+/// (WALK_TOP_POSES).
+inline uint32_t threads_per_instance(const Dispatch& d) {
+    const gpu::PassConstants& c = d.constants;
+    switch (dispatch_kind(d)) {
+        case DispatchKind::level:
+        case DispatchKind::walk_top_poses: return c.level_count;
+        default: break;
+    }
+    const uint32_t per_domain[] = {c.model_chain_count, c.model_node_count, c.model_vertex_count};
+    return per_domain[uint32_t(pass_domain(d.pass))];
+}
 
-/// How a dispatch is launched: `workgroups` groups of `workgroup_size` threads. Every mode
-/// maps thread i to element i (gpu_layout.h) except HMSM_MODE_POINTER_JUMPING_IN_DISPATCH,
-/// whose workgroup k runs every round for group instance k, HMSM_MODE_FUSED, whose
-/// workgroup k runs passes 1-5 for group instance k, and a packed contour, whose thread
-/// places one model vertex in HMSM_PACKED_CONTOUR_INSTANCES instances.
+/// How a dispatch is launched: `workgroups` groups of `workgroup_size` threads. Every kind
+/// maps thread i to element i (gpu_layout.h) except JUMP_ROUNDS_IN_DISPATCH, whose workgroup k
+/// runs every round for group instance k, and CONTOUR_PACKED, whose thread places one model
+/// vertex in HMSM_PACKED_CONTOUR_INSTANCES instances.
 struct LaunchShape {
     uint64_t workgroups = 0;
     uint32_t workgroup_size = HMSM_WORKGROUP_SIZE;
 };
 inline bool runs_rounds_in_dispatch(const Dispatch& d) {
-    return is_hierarchical(d.pass) && d.constants.mode == HMSM_MODE_POINTER_JUMPING_IN_DISPATCH;
+    return dispatch_kind(d) == DispatchKind::jump_rounds_in_dispatch;
 }
-inline bool runs_packed_contour(const Dispatch& d) {
-    return d.pass == Pass::contour && d.constants.mode == HMSM_VERTEX_LAYOUT_PACKED;
-}
+inline bool runs_packed_contour(const Dispatch& d) { return dispatch_kind(d) == DispatchKind::contour_packed; }
 inline LaunchShape launch_shape(const Dispatch& d) {
     const uint32_t threads = dispatch_thread_count(d);
     if (threads == 0) return {};
-    if (runs_rounds_in_dispatch(d) || runs_fused(d))
+    if (runs_rounds_in_dispatch(d))
         return {threads / d.constants.model_chain_count, gpu::rounds_workgroup_size(d.constants.model_chain_count)};
     const uint64_t launched = runs_packed_contour(d) ? gpu::packed_contour_threads(d.constants) : threads;
     return {(launched + HMSM_WORKGROUP_SIZE - 1) / HMSM_WORKGROUP_SIZE, HMSM_WORKGROUP_SIZE};

@@ -82,6 +82,8 @@ std::vector<detail::InstanceGroup> active_groups(const detail::SceneData& d,
 
 Status Simulation::Impl::apply_pending() {
     using detail::BufferId;
+    if (header_dirty_ || instance_wind_dirty_ || !dirty_instances_.empty() || program_dirty_)
+        ahead_schedule_.live_change();
     if (header_dirty_) {
         wind_scratch_.assign(detail::kWindHeaderScalars, 0.0);
         detail::fill_wind_header(config_.wind, modes_, force_fields_, wind_scratch_.data());
@@ -138,8 +140,6 @@ Status Simulation::set_wind(const Wind& wind) {
     const bool profile_changed = wind.profile != old.profile;  // PassConstants.profile of the program
     s.config_.wind = wind;
     s.data_->profile = wind.profile;
-    s.data_->wind_vector = wind.strength * glm::normalize(wind.direction);
-    s.data_->wind_frequency = wind.frequency;
     if (turbulence_changed) s.modes_ = turbulent_modes(wind.turbulence, wind.seed);
     s.header_dirty_ = true;
     s.instance_wind_dirty_ = s.instance_wind_dirty_ || phases_changed;

@@ -78,7 +78,8 @@ Status Simulation::Impl::reshape(const std::vector<uint32_t>& survivors, std::sp
             break;
         }
 
-    if (backend_->reshapes_in_place() && data_->holds(*data)) {
+    ahead_schedule_.live_change();  // the state moves, the angles integrated ahead with it
+    if (backend_->capabilities().reshapes_in_place && data_->holds(*data)) {
         HMSM_TRY(reshape_in_place(std::move(data), survivors, old_chain, first_moved));
     } else {
         HMSM_TRY(reshape_anew(std::move(data), survivors, old_chain));
@@ -90,7 +91,7 @@ Status Simulation::Impl::reshape(const std::vector<uint32_t>& survivors, std::sp
     // Survivors whose state moved: node positions and vertices are a pure function of the
     // carried R and O (passes 4, 6, 7 map elements one to one), so recomputing them restores
     // them exactly. Added instances are posed at rest from S = V = 0.
-    const double no_wind[1] = {0.0};
+    const detail::RunStep at_rest[1] = {};
     const uint32_t first_added = uint32_t(survivors.size());
     std::vector<detail::InstanceGroup> moved;
     for (detail::InstanceGroup g : groups_from(*data_, first_moved)) {
@@ -100,9 +101,9 @@ Status Simulation::Impl::reshape(const std::vector<uint32_t>& survivors, std::sp
     }
     const uint32_t outputs = (1u << uint32_t(Pass::node_relative)) | (1u << uint32_t(Pass::node_world)) |
                              (1u << uint32_t(Pass::contour));
-    if (!moved.empty()) HMSM_TRY(backend_->run(program_for(moved, Pass::node_relative, outputs), no_wind));
+    if (!moved.empty()) HMSM_TRY(backend_->run(program_for(moved, Pass::node_relative, outputs), at_rest));
     if (!added.empty())
-        HMSM_TRY(backend_->run(program_for(groups_from(*data_, first_added), Pass::integrate), no_wind));
+        HMSM_TRY(backend_->run(program_for(groups_from(*data_, first_added), Pass::integrate), at_rest));
     return apply_pending();
 }
 
@@ -143,8 +144,9 @@ Status Simulation::Impl::reset(std::span<const uint32_t> indices) {
         HMSM_TRY(backend_->write(BufferId::chain_state, g.chain_begin, chains, zeros.data(), detail::Scalar::f64));
         HMSM_TRY(backend_->write(BufferId::chain_force, g.chain_begin, chains, zeros.data(), detail::Scalar::f64));
     }
-    const double no_wind[1] = {0.0};
-    return backend_->run(program_for(slices, Pass::integrate), no_wind);
+    ahead_schedule_.live_change();  // the reset angles replace any integrated ahead
+    const detail::RunStep at_rest[1] = {};
+    return backend_->run(program_for(slices, Pass::integrate), at_rest);
 }
 
 Status Simulation::Impl::reshape_in_place(std::unique_ptr<detail::SceneData> next,

@@ -3,23 +3,9 @@
 #include "backend.h"
 #include "pass_table.h"
 
-#include <charconv>
-#include <cstdlib>
-#include <string_view>
-
 namespace hmsm::detail {
 uint32_t pass_reads(Pass pass) { return pass_info(pass).reads; }
 uint32_t pass_writes(Pass pass) { return pass_info(pass).writes; }
-
-uint64_t fused_shared_limit(uint64_t device_limit) {
-    const char* value = std::getenv("HMSM_FUSED_SHARED_BYTES");
-    if (!value || !*value) return device_limit;
-    const std::string_view text(value);
-    uint64_t bytes = 0;
-    auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), bytes);
-    if (error != std::errc{} || end != text.data() + text.size()) return device_limit;
-    return bytes < device_limit ? bytes : device_limit;
-}
 
 uint64_t SceneData::element_count(BufferId id) const {
     switch (buffer_info(id).scope) {

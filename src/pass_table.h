@@ -23,7 +23,7 @@ constexpr uint32_t buffer_bit(BufferId id) { return 1u << static_cast<uint32_t>(
 // Shorthand for the access columns below: one bit per buffer (bit i = BufferId i).
 #define HMSM_B(name) buffer_bit(BufferId::name)
 
-/// X(name, domain, hierarchical, needed_for, fused, walk, reads, writes, walk_reads, walk_writes),
+/// X(name, domain, hierarchical, needed_for, walk, reads, writes, walk_reads, walk_writes),
 /// in execution order (the same order as HMSM_PASSES in <hmsm/pass.h>; a static_assert below
 /// keeps them equal). root_positions writes, with the final O_c, the joint matrix [R_c | O_c]
 /// (R_c from compose): the step's pose in 48 bytes, which contour reads (and every reader of a
@@ -31,9 +31,6 @@ constexpr uint32_t buffer_bit(BufferId id) { return 1u << static_cast<uint32_t>(
 /// needed_for: the least SimulationConfig::outputs for which a step runs the pass (outputs on
 /// demand: joint matrices need passes 1-5 only). A vertex-domain pass takes the vertex layout
 /// as its mode; in the packed layout contour's vertex_normal has no elements and is not written.
-/// fused: Composition::fused runs the pass inside its one fused dispatch per instance group (a
-/// workgroup per instance, barriers between the passes); the fused passes are consecutive from
-/// wind_force on, and the fused dispatch reads and writes the union of their buffers.
 /// walk: Composition::path_walk runs the pass and this later pass in one dispatch of the pass
 /// (none: the pass leads no such dispatch): wind_force with integrate per chain, compose with
 /// root_positions by the top-down walk per chain, node_relative with node_world per node.
@@ -46,18 +43,18 @@ constexpr uint32_t buffer_bit(BufferId id) { return 1u << static_cast<uint32_t>(
 /// and node pairs read R and O from the joint matrix. step_program.cpp pairs the wind passes
 /// only where the walk follows.
 #define HMSM_PASS_TABLE(X)                                                                        \
-    X(wind_force, chain, false, joints, true, integrate,                                          \
+    X(wind_force, chain, false, joints, integrate,                                          \
       (HMSM_B(chain_rotation) | HMSM_B(chain_origin) | HMSM_B(chain_constants) |                  \
        HMSM_B(instance_wind) | HMSM_B(wind_table)),                                               \
       (HMSM_B(chain_force)),                                                                      \
       (HMSM_B(joint_matrix) | HMSM_B(chain_constants) | HMSM_B(instance_wind) |                   \
        HMSM_B(wind_table) | HMSM_B(chain_state)),                                                 \
       (HMSM_B(chain_state)))                                                                      \
-    X(integrate, chain, false, joints, true, none,                                                \
+    X(integrate, chain, false, joints, none,                                                \
       (HMSM_B(chain_force) | HMSM_B(chain_state) | HMSM_B(chain_constants) |                      \
        HMSM_B(chain_rest_rotation) | HMSM_B(chain_parent) | HMSM_B(instance_yaw)),                \
       (HMSM_B(chain_state) | HMSM_B(chain_local)), 0u, 0u)                                        \
-    X(compose, chain, true, joints, true, root_positions,                                         \
+    X(compose, chain, true, joints, root_positions,                                         \
       (HMSM_B(chain_local) | HMSM_B(chain_rotation) | HMSM_B(chain_jump) |                        \
        HMSM_B(chain_parent)),                                                                     \
       (HMSM_B(chain_rotation)),                                                                   \
@@ -65,27 +62,27 @@ constexpr uint32_t buffer_bit(BufferId id) { return 1u << static_cast<uint32_t>(
        HMSM_B(chain_rest_rotation) | HMSM_B(node_local) | HMSM_B(instance_origin) |              \
        HMSM_B(instance_yaw)),                                                                     \
       (HMSM_B(joint_matrix)))                                                                     \
-    X(node_relative, node, false, joints, true, node_world,                                       \
+    X(node_relative, node, false, joints, node_world,                                       \
       (HMSM_B(chain_rotation) | HMSM_B(node_owner) | HMSM_B(node_local)),                         \
       (HMSM_B(node_relative)),                                                                    \
       (HMSM_B(joint_matrix) | HMSM_B(node_owner) | HMSM_B(node_local)),                           \
       (HMSM_B(node_world)))                                                                       \
-    X(root_positions, chain, true, joints, true, none,                                            \
+    X(root_positions, chain, true, joints, none,                                            \
       (HMSM_B(node_relative) | HMSM_B(chain_origin) | HMSM_B(chain_jump) |                        \
        HMSM_B(chain_parent) | HMSM_B(chain_attach) | HMSM_B(instance_origin) |                    \
        HMSM_B(chain_rotation)),                                                                   \
       (HMSM_B(chain_origin) | HMSM_B(joint_matrix)), 0u, 0u)                                      \
-    X(node_world, node, false, joints_and_nodes, false, none,                                     \
+    X(node_world, node, false, joints_and_nodes, none,                                     \
       (HMSM_B(chain_origin) | HMSM_B(node_relative) | HMSM_B(node_owner)),                        \
       (HMSM_B(node_world)), 0u, 0u)                                                               \
-    X(contour, vertex, false, all, false, none,                                                   \
+    X(contour, vertex, false, all, none,                                                   \
       (HMSM_B(joint_matrix) | HMSM_B(vertex_chain) |                                              \
        HMSM_B(vertex_rest_position) | HMSM_B(vertex_rest_normal) |                                \
        HMSM_B(vertex_parent_position) | HMSM_B(vertex_parent_normal)),                            \
       (HMSM_B(vertex_position) | HMSM_B(vertex_normal)), 0u, 0u)
 
-/// The two dispatches of the walk that integrates ahead (gpu_layout.h HMSM_WALK_TOP_POSES and
-/// HMSM_WALK_AHEAD, CUDA forests; step_program.cpp), each a compose walk with more to do: the
+/// The two dispatches of the walk that integrates ahead (gpu_layout.h HMSM_DISPATCH_WALK_TOP_POSES
+/// and HMSM_DISPATCH_WALK_AHEAD, CUDA forests; step_program.cpp), each a compose walk with more to do: the
 /// top poses also read the wind (the next step's profile value) and write the pose halves of
 /// the chains of depth 0 and 1; the walk ahead reads those and the wind, writes the joint
 /// matrix and the next step's angles (to chain_state's twin, which the backend swaps in: counted
@@ -98,6 +95,68 @@ inline constexpr uint32_t kWalkTopPosesWrites = HMSM_B(chain_rotation) | HMSM_B(
 inline constexpr uint32_t kWalkAheadReads =
     kWalkTopPosesReads | HMSM_B(chain_rotation) | HMSM_B(chain_origin) | HMSM_B(chain_constants);
 inline constexpr uint32_t kWalkAheadWrites = HMSM_B(joint_matrix) | HMSM_B(chain_state);
+
+/// What one dispatch runs (PassConstants.kind): X(name, NAME, passes) with NAME the suffix of its
+/// HMSM_DISPATCH_* number in gpu_layout.h (shared with CUDA and GLSL) and `passes` the passes
+/// whose dispatches may be of this kind (bit i = Pass i). Every backend switches on the kind.
+#define HMSM_DISPATCH_KINDS(X)                                                                          \
+    X(per_element, PER_ELEMENT,                                                                         \
+      HMSM_P(wind_force) | HMSM_P(integrate) | HMSM_P(node_relative) | HMSM_P(node_world))             \
+    X(jump_round, JUMP_ROUND, HMSM_P(compose) | HMSM_P(root_positions))                                 \
+    X(jump_rounds_in_dispatch, JUMP_ROUNDS_IN_DISPATCH, HMSM_P(compose) | HMSM_P(root_positions))       \
+    X(level, LEVEL, HMSM_P(compose) | HMSM_P(root_positions))                                           \
+    X(wind_pair, WIND_PAIR, HMSM_P(wind_force))                                                         \
+    X(pose_walk, POSE_WALK, HMSM_P(compose))                                                            \
+    X(pose_walk_from_records, POSE_WALK_FROM_RECORDS, HMSM_P(compose))                                  \
+    X(node_pair, NODE_PAIR, HMSM_P(node_relative))                                                      \
+    X(walk_top_poses, WALK_TOP_POSES, HMSM_P(compose))                                                  \
+    X(walk_ahead, WALK_AHEAD, HMSM_P(compose))                                                          \
+    X(contour_separate, CONTOUR_SEPARATE, HMSM_P(contour))                                              \
+    X(contour_packed, CONTOUR_PACKED, HMSM_P(contour))
+
+#define HMSM_P(name) (1u << uint32_t(Pass::name))
+enum class DispatchKind : uint32_t {
+#define HMSM_DISPATCH_KIND_ENUM(name, NAME, passes) name = HMSM_DISPATCH_##NAME,
+    HMSM_DISPATCH_KINDS(HMSM_DISPATCH_KIND_ENUM)
+#undef HMSM_DISPATCH_KIND_ENUM
+};
+
+struct DispatchKindInfo {
+    DispatchKind kind;
+    uint32_t passes;  ///< the passes whose dispatches may be of this kind (bit i = Pass i)
+};
+inline constexpr DispatchKindInfo kDispatchKinds[] = {
+#define HMSM_DISPATCH_KIND_INFO(name, NAME, passes) {DispatchKind::name, passes},
+    HMSM_DISPATCH_KINDS(HMSM_DISPATCH_KIND_INFO)
+#undef HMSM_DISPATCH_KIND_INFO
+};
+#undef HMSM_P
+
+/// The kinds are numbered 0, 1, ... in the order listed, as gpu_layout.h numbers them.
+constexpr bool dispatch_kinds_are_numbered_in_order() {
+    uint32_t i = 0;
+    for (const DispatchKindInfo& k : kDispatchKinds)
+        if (uint32_t(k.kind) != i++) return false;
+    return i == HMSM_DISPATCH_KIND_COUNT;
+}
+static_assert(dispatch_kinds_are_numbered_in_order(), "HMSM_DISPATCH_KINDS must list HMSM_DISPATCH_* 0, 1, ...");
+/// Whether a dispatch of `pass` may be of `kind` (an unknown kind fits no pass).
+constexpr bool kind_fits_pass(uint32_t kind, Pass pass) {
+    return kind < HMSM_DISPATCH_KIND_COUNT && (kDispatchKinds[kind].passes >> uint32_t(pass) & 1u);
+}
+/// The kinds of Composition::path_walk that run a pass and its walk partner in one dispatch
+/// (the walk ahead's two included: compose walks with more to do).
+constexpr bool runs_walk_pair(DispatchKind kind) {
+    switch (kind) {
+        case DispatchKind::wind_pair:
+        case DispatchKind::pose_walk:
+        case DispatchKind::pose_walk_from_records:
+        case DispatchKind::node_pair:
+        case DispatchKind::walk_top_poses:
+        case DispatchKind::walk_ahead: return true;
+        default: return false;
+    }
+}
 
 /// The pass column `walk` names: the pass a path-walk dispatch also runs, or none.
 enum class WalkPartner : int32_t {
@@ -112,7 +171,6 @@ struct PassInfo {
     PassDomain domain;
     bool hierarchical;
     Outputs needed_for;
-    bool fused;
     WalkPartner walk;
     uint32_t reads;
     uint32_t writes;
@@ -121,8 +179,8 @@ struct PassInfo {
 };
 
 inline constexpr std::array<PassInfo, kPassCount> kPassTable = {{
-#define HMSM_PASS_INFO(name, domain, hierarchical, needed_for, fused, walk, reads, writes, walk_reads, walk_writes) \
-    {Pass::name, PassDomain::domain, hierarchical, Outputs::needed_for, fused, WalkPartner::walk, reads, writes,  \
+#define HMSM_PASS_INFO(name, domain, hierarchical, needed_for, walk, reads, writes, walk_reads, walk_writes) \
+    {Pass::name, PassDomain::domain, hierarchical, Outputs::needed_for, WalkPartner::walk, reads, writes,        \
      walk_reads, walk_writes},
     HMSM_PASS_TABLE(HMSM_PASS_INFO)
 #undef HMSM_PASS_INFO
@@ -145,17 +203,8 @@ constexpr bool pass_runs_for(Pass pass, Outputs outputs) {
     return uint32_t(pass_info(pass).needed_for) <= uint32_t(outputs);
 }
 
-/// Composition::fused: whether `pass` runs inside the fused dispatch, and the passes it covers
-/// (bit i = Pass i).
-constexpr bool is_fused(Pass pass) { return pass_info(pass).fused; }
-constexpr uint32_t fused_passes() {
-    uint32_t bits = 0;
-    for (const PassInfo& p : kPassTable)
-        if (p.fused) bits |= 1u << uint32_t(p.pass);
-    return bits;
-}
 /// The buffers the passes `passes` (bit i = Pass i) read, resp. write, together: the access of a
-/// dispatch that runs several passes (the fused dispatch, a path-walk pair).
+/// dispatch that runs several passes (a path-walk pair).
 constexpr uint32_t reads_of_passes(uint32_t passes) {
     uint32_t bits = 0;
     for (const PassInfo& p : kPassTable)
@@ -168,16 +217,6 @@ constexpr uint32_t writes_of_passes(uint32_t passes) {
         if (passes >> uint32_t(p.pass) & 1u) bits |= p.writes;
     return bits;
 }
-/// The fused dispatch is a dispatch of the first fused pass (its `pass`, under which its time
-/// is reported) with mode HMSM_MODE_FUSED; the backends' fused kernels run wind_force first.
-inline constexpr Pass kFusedDispatchPass = Pass::wind_force;
-constexpr bool fused_passes_are_a_prefix() {
-    const uint32_t bits = fused_passes();
-    return bits != 0 && (bits & (bits + 1)) == 0 && (bits & 1u) &&
-           kPassTable[0].pass == kFusedDispatchPass;
-}
-static_assert(fused_passes_are_a_prefix(), "the fused passes must be consecutive from wind_force on");
-
 /// Composition::path_walk: the passes a path-walk dispatch of `pass` runs (bit i = Pass i): the
 /// pass and its walk partner; 0 where the pass leads no such dispatch.
 constexpr uint32_t walk_passes(Pass pass) {

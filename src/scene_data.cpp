@@ -30,13 +30,12 @@ gpu::PassConstants group_constants(const SceneData& d, const InstanceGroup& g, u
     pc.model_chain_count = m.chain_count;
     pc.model_node_count = m.node_count;
     pc.model_vertex_count = m.vertex_count;
-    pc.mode = HMSM_MODE_POINTER_JUMPING;
+    pc.kind = HMSM_DISPATCH_PER_ELEMENT;
     pc.profile = uint32_t(d.profile);
     pc.total_chains = uint32_t(d.chain_capacity);  // the stride between ping-pong halves
     pc.total_model_chains = d.total_model_chains();
     pc.src_half = final_half;
     pc.dst_half = final_half;
-    pc.wind = {float(d.wind_vector.x), float(d.wind_vector.y), float(d.wind_vector.z), 0.0f};
     pc.params = {float(d.dt), float(d.max_angle), float(d.fix_weight), g.covers_paused ? 1.0f : 0.0f};
     return pc;
 }
@@ -151,8 +150,6 @@ SceneData flatten_scene(const Scene& scene, const std::vector<Hierarchy>& hierar
     d.max_angle = parameters.max_angle;
     d.fix_weight = options.fix_weight;
     d.profile = wind.profile;
-    d.wind_vector = wind.strength * glm::normalize(wind.direction);
-    d.wind_frequency = wind.frequency;
     return d;
 }
 

@@ -90,8 +90,6 @@ struct SceneData {
     double max_angle = 0.8;
     double fix_weight = 0.5;
     WindProfile profile = WindProfile::none;
-    glm::dvec3 wind_vector{0.0};  // strength * normalized direction
-    double wind_frequency = 0.0;
     /// The contour pass's output layout; packed leaves vertex_normal without elements.
     VertexLayout vertex_layout = VertexLayout::separate;
     bool packed_vertices() const { return vertex_layout == VertexLayout::packed; }
@@ -119,8 +117,8 @@ SceneData flatten_scene(const Scene& scene, const std::vector<Hierarchy>& hierar
                         uint64_t max_group_elements = (1ull << 31));
 
 /// The constants every dispatch over `group` shares (offsets, counts, wind, parameters), with
-/// pointer jumping as the mode and `final_half` as both halves; a dispatch then sets its own
-/// element count, round, halves and level.
+/// kind per_element and `final_half` as both halves; a dispatch then sets its own kind, element
+/// count, round, halves and level.
 gpu::PassConstants group_constants(const SceneData& scene, const InstanceGroup& group,
                                    uint32_t final_half);
 

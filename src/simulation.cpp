@@ -39,8 +39,9 @@ Simulation::Simulation(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 
 std::vector<Dispatch> Simulation::Impl::program_for(const std::vector<detail::InstanceGroup>& groups,
                                                     Pass first, uint32_t passes) const {
-    return build_program(*data_, groups, config_.composition, backend_->dispatches_are_expensive(), first,
-                         passes, backend_->walks_ahead());
+    const detail::BackendCapabilities can = backend_->capabilities();
+    return build_program(*data_, groups, config_.composition, can.dispatches_are_expensive, first, passes,
+                         can.walks_ahead);
 }
 
 Status Simulation::Impl::check_size(std::span<const Instance> instances) const {
@@ -156,15 +157,15 @@ Result<std::unique_ptr<Simulation>> Simulation::Impl::create(const Scene& scene,
     if (config.composition == Composition::automatic) {
         int32_t deepest = 0;
         for (const Hierarchy& h : sim->hierarchies_) deepest = std::max(deepest, h.max_depth);
-        sim->config_.composition = detail::automatic_composition(sim->backend_->prefers_path_walk(), deepest);
+        sim->config_.composition = detail::automatic_composition(sim->backend_->capabilities().prefers_path_walk, deepest);
     }
     sim->backend_->set_profiling(config.profile_passes);
     HMSM_TRY(sim->backend_->upload(*sim->data_));
 
     // Pose at rest (every instance, active or not): with g = 0, integrate keeps S = V = 0 and
     // writes the rest transforms; the remaining passes then fill R, O, node positions and the mesh.
-    const double no_wind[1] = {0.0};
-    HMSM_TRY(sim->backend_->run(sim->program_for(sim->data_->groups, Pass::integrate), no_wind));
+    const detail::RunStep at_rest[1] = {};
+    HMSM_TRY(sim->backend_->run(sim->program_for(sim->data_->groups, Pass::integrate), at_rest));
     HMSM_TRY(sim->apply_pending());
     return created;
 }
@@ -180,10 +181,10 @@ Status Simulation::Impl::step(uint32_t count) {
     while (done < count) {
         // One wind-table slot per step of the run: tau mod 2 and the turbulent mode phases,
         // reduced on the host in double; and one for the step after the run, which a walk
-        // that integrates ahead reads (gpu_layout.h HMSM_WALK_AHEAD).
+        // that integrates ahead reads (gpu_layout.h HMSM_DISPATCH_WALK_AHEAD).
         const uint32_t steps = std::min<uint32_t>(count - done, HMSM_WIND_STEP_SLOTS - 1);
         wind_scratch_.resize(size_t(steps + 1) * detail::kWindStepScalars);
-        wind_phases_.resize(steps);
+        run_steps_.resize(steps);
         for (uint32_t k = 0; k <= steps; ++k) {
             const uint64_t n = steps_done_ + k + 1;  // steps_done_ counts the earlier chunks
             const double tau = clock_.tau(wind.frequency, dt, n);
@@ -194,12 +195,18 @@ Status Simulation::Impl::step(uint32_t count) {
             if (!(std::abs(tau) <= detail::kMaxWindPhase))  // f t past the clock's range
                 HMSM_TRY(detail::check_wind_clock(wind.frequency, double(n - 1) * dt, tau));
             detail::fill_wind_step(wind, modes_, tau, &wind_scratch_[size_t(k) * detail::kWindStepScalars]);
-            if (k < steps) wind_phases_[k] = double(k);
+            if (k < steps) run_steps_[k] = {k, detail::AheadStep::whole};
         }
         HMSM_TRY(backend_->write(detail::BufferId::wind_table, HMSM_WIND_STEPS,
                                  uint64_t(steps + 1) * HMSM_WIND_STEP_VEC4S, wind_scratch_.data(),
                                  detail::Scalar::f64));
-        HMSM_TRY(backend_->run(step_program_, wind_phases_));
+        // The walk that integrates ahead: the step layer says how each step runs.
+        const bool ahead = std::any_of(step_program_.begin(), step_program_.end(), detail::is_walk_ahead);
+        if (ahead) ahead_schedule_.plan(run_steps_);
+        if (Status run = backend_->run(step_program_, run_steps_); !run.ok() || !ahead) {
+            ahead_schedule_.forget();
+            HMSM_TRY(run);
+        }
         const PassTimes chunk = backend_->pass_times();
         for (size_t p = 0; p < chunk.seconds.size(); ++p) times_.seconds[p] += chunk.seconds[p];
         times_.steps += chunk.steps;

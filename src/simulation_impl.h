@@ -7,6 +7,7 @@
 #include "backend.h"
 #include "live_wind.h"
 #include "scene_data.h"
+#include "step_program.h"
 
 #include <memory>
 #include <mutex>
@@ -66,7 +67,10 @@ struct __attribute__((visibility("hidden"))) Simulation::Impl {
     TurbulentModes modes_{};
     bool program_dirty_ = true, header_dirty_ = true, instance_wind_dirty_ = true;
     std::vector<uint32_t> dirty_instances_;  // instance_wind elements to rewrite
-    std::vector<double> wind_phases_;  // scratch: the wind-table slot of each step of a run
+    std::vector<detail::RunStep> run_steps_;  // scratch: the wind-table slot of each step of a run
+    /// The walk that integrates ahead: whether a run's steps may take the angles integrated
+    /// ahead (live control calls live_change()).
+    detail::AheadSchedule ahead_schedule_;
     std::vector<double> wind_scratch_;
     // Scratch for read(): elements as the backend stores them, kept between calls so a
     // per-frame readback neither allocates nor zero-fills.

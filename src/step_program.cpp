@@ -13,7 +13,7 @@ namespace {
 constexpr uint32_t kMaxChainsForRoundsInDispatch = 16 * HMSM_MAX_ROUNDS_WORKGROUP_SIZE;
 
 /// Path walk: steps whose groups cover at most this many instances read the walk records whole (one
-/// round of loads, HMSM_WALK_FROM_RECORDS); larger ones follow chain_parent up: the records help
+/// round of loads, HMSM_DISPATCH_POSE_WALK_FROM_RECORDS); larger ones follow chain_parent up: the records help
 /// one tree, and in forests their 128 distinct bytes per thread cost more L2 sectors than the
 /// parent links siblings share (measured: docs/benchmarks/history/2026-11-26-nvidia-h100-4967ccd.md,
 /// analysis, change 3).
@@ -48,8 +48,8 @@ void append_pass(std::vector<Dispatch>& program, const SceneData& d,
             const uint32_t per_instance = per_domain[uint32_t(pass_domain(pass))];
             dispatch.constants.element_count = g.instance_count * per_instance;
             if (pass_domain(pass) == PassDomain::vertex)
-                dispatch.constants.mode = d.packed_vertices() ? HMSM_VERTEX_LAYOUT_PACKED
-                                                              : HMSM_VERTEX_LAYOUT_SEPARATE;
+                dispatch.constants.kind = d.packed_vertices() ? HMSM_DISPATCH_CONTOUR_PACKED
+                                                              : HMSM_DISPATCH_CONTOUR_SEPARATE;
             if (dispatch.constants.element_count > 0) program.push_back(dispatch);
         }
         return;
@@ -60,9 +60,7 @@ void append_pass(std::vector<Dispatch>& program, const SceneData& d,
         auto in_dispatch = [&](const InstanceGroup& g) {
             const uint32_t chains = d.models[g.model].chain_count;
             if (chains > kMaxChainsForRoundsInDispatch) return false;
-            // (Composition::fused reaches here only for programs of some passes: in dispatch.)
             return composition == Composition::pointer_jumping_in_dispatch ||
-                   composition == Composition::fused ||
                    (composition == Composition::pointer_jumping &&
                     rounds_in_dispatch_pay(g.instance_count, chains, dispatches_are_expensive));
         };
@@ -70,7 +68,7 @@ void append_pass(std::vector<Dispatch>& program, const SceneData& d,
             if (!in_dispatch(g)) continue;
             Dispatch dispatch{pass, group_constants(d, g, final_half)};
             dispatch.constants.element_count = g.instance_count * d.models[g.model].chain_count;
-            dispatch.constants.mode = HMSM_MODE_POINTER_JUMPING_IN_DISPATCH;
+            dispatch.constants.kind = HMSM_DISPATCH_JUMP_ROUNDS_IN_DISPATCH;
             dispatch.constants.round = d.jump_rounds;
             if (dispatch.constants.element_count > 0) program.push_back(dispatch);
         }
@@ -79,6 +77,7 @@ void append_pass(std::vector<Dispatch>& program, const SceneData& d,
                 if (in_dispatch(g)) continue;
                 Dispatch dispatch{pass, group_constants(d, g, final_half)};
                 dispatch.constants.element_count = g.instance_count * d.models[g.model].chain_count;
+                dispatch.constants.kind = HMSM_DISPATCH_JUMP_ROUND;
                 dispatch.constants.round = r;
                 dispatch.constants.src_half = HMSM_HALF_READ(r);  // unused in round 0
                 dispatch.constants.dst_half = HMSM_HALF_WRITTEN(r);
@@ -96,28 +95,12 @@ void append_pass(std::vector<Dispatch>& program, const SceneData& d,
             uint32_t count = m.level_begin[level + 1] - m.level_begin[level];
             if (count == 0) continue;
             Dispatch dispatch{pass, group_constants(d, g, final_half)};
-            dispatch.constants.mode = HMSM_MODE_LEVEL_BY_LEVEL;
-            dispatch.constants.round = uint32_t(level);
+            dispatch.constants.kind = HMSM_DISPATCH_LEVEL;
             dispatch.constants.level_begin = m.level_begin[level];
             dispatch.constants.level_count = count;
             dispatch.constants.element_count = g.instance_count * count;
             program.push_back(dispatch);
         }
-    }
-}
-
-/// Composition::fused: one dispatch per group runs the fused passes (1-5) for every instance of
-/// the group, a workgroup per instance (gpu_layout.h HMSM_MODE_FUSED). Its constants are those of
-/// an in-dispatch round dispatch: one element per chain, `round` the number of rounds, both
-/// halves the pose half (which wind_force reads and the last rounds write).
-void append_fused(std::vector<Dispatch>& program, const SceneData& d,
-                  const std::vector<InstanceGroup>& groups) {
-    for (const auto& g : groups) {
-        Dispatch dispatch{kFusedDispatchPass, group_constants(d, g, HMSM_FINAL_HALF(d.jump_rounds))};
-        dispatch.constants.element_count = g.instance_count * d.models[g.model].chain_count;
-        dispatch.constants.mode = HMSM_MODE_FUSED;
-        dispatch.constants.round = d.jump_rounds;
-        if (dispatch.constants.element_count > 0) program.push_back(dispatch);
     }
 }
 
@@ -127,14 +110,13 @@ namespace {
 /// chain of depth 0 and 1: the first level_count model chains, chains being stored by depth),
 /// then the walk ahead of every group.
 void append_walk_ahead(std::vector<Dispatch>& program, const SceneData& d, const std::vector<InstanceGroup>& groups) {
-    for (uint32_t round : {HMSM_WALK_TOP_POSES, HMSM_WALK_AHEAD}) {
+    for (uint32_t kind : {HMSM_DISPATCH_WALK_TOP_POSES, HMSM_DISPATCH_WALK_AHEAD}) {
         for (const auto& g : groups) {
             const auto& m = d.models[g.model];
             Dispatch dispatch{Pass::compose, group_constants(d, g, HMSM_FINAL_HALF(d.jump_rounds))};
-            dispatch.constants.mode = HMSM_MODE_PATH_WALK;
-            dispatch.constants.round = round;
+            dispatch.constants.kind = kind;
             dispatch.constants.level_count = m.level_begin[std::min<size_t>(2, m.level_begin.size() - 1)];
-            const uint32_t per_instance = round == HMSM_WALK_AHEAD ? m.chain_count : dispatch.constants.level_count;
+            const uint32_t per_instance = kind == HMSM_DISPATCH_WALK_AHEAD ? m.chain_count : dispatch.constants.level_count;
             dispatch.constants.element_count = g.instance_count * per_instance;
             if (dispatch.constants.element_count > 0) program.push_back(dispatch);
         }
@@ -190,11 +172,14 @@ std::vector<Dispatch> build_path_walk_program(const SceneData& d, const std::vec
             done |= pair;
             continue;
         }
+        const uint32_t kind = pass == Pass::wind_force ? HMSM_DISPATCH_WIND_PAIR
+                              : pass == Pass::node_relative ? HMSM_DISPATCH_NODE_PAIR
+                              : from_records                ? HMSM_DISPATCH_POSE_WALK_FROM_RECORDS
+                                                            : HMSM_DISPATCH_POSE_WALK;
         for (const auto& g : groups) {
             Dispatch dispatch{pass, group_constants(d, g, HMSM_FINAL_HALF(d.jump_rounds))};
             dispatch.constants.element_count = g.instance_count * per_domain(g);
-            dispatch.constants.mode = HMSM_MODE_PATH_WALK;
-            if (pass == Pass::compose && from_records) dispatch.constants.round = HMSM_WALK_FROM_RECORDS;
+            dispatch.constants.kind = kind;
             if (dispatch.constants.element_count > 0) program.push_back(dispatch);
         }
         done |= pair;
@@ -214,25 +199,11 @@ std::vector<Dispatch> build_program(const SceneData& d, const std::vector<Instan
                 wanted |= 1u << uint32_t(pass);
         return build_path_walk_program(d, groups, dispatches_are_expensive, wanted, walk_ahead);
     }
-    // Fused only where the program runs every fused pass (a step); programs of some passes (the
-    // rest pose from integrate on, the recomputation after a removal) run them one by one, with
-    // the rounds in one dispatch as in the fused dispatch.
-    bool fuse = false;
-    if (composition == Composition::fused) {
-        const uint32_t wanted = uint32_t(first) == 0 ? passes : 0u;
-        fuse = (wanted & fused_passes()) == fused_passes();
-        for (Pass pass : kAllPasses) fuse = fuse && (!is_fused(pass) || pass_runs_for(pass, d.outputs));
-        composition = Composition::pointer_jumping_in_dispatch;
-    }
     std::vector<Dispatch> program;
     for (Pass pass : kAllPasses) {
         if (uint32_t(pass) < uint32_t(first) || !(passes >> uint32_t(pass) & 1u)) continue;
         // Outputs on demand: passes whose outputs the step does not produce are not dispatched.
         if (!pass_runs_for(pass, d.outputs)) continue;
-        if (fuse && is_fused(pass)) {
-            if (pass == kFusedDispatchPass) append_fused(program, d, groups);
-            continue;
-        }
         append_pass(program, d, groups, pass, composition, dispatches_are_expensive);
     }
     return program;
@@ -241,6 +212,32 @@ std::vector<Dispatch> build_program(const SceneData& d, const std::vector<Instan
 Composition automatic_composition(bool backend_prefers_path_walk, int32_t deepest_chain_depth) {
     return backend_prefers_path_walk && deepest_chain_depth <= kPathWalkMaxDepth ? Composition::path_walk
                                                                                  : Composition::pointer_jumping;
+}
+
+AheadVariants ahead_variants(std::span<const Dispatch> program) {
+    AheadVariants v;
+    v.whole.assign(program.begin(), program.end());
+    for (Dispatch d : program) {
+        if (d.pass != Pass::wind_force) v.without_wind.push_back(d);
+        if (is_top_poses_walk(d)) continue;
+        if (is_walk_ahead(d)) {  // as build_path_walk_program builds the plain walk of a forest
+            d.constants.kind = HMSM_DISPATCH_POSE_WALK;
+            d.constants.level_count = 0;
+        }
+        v.plain.push_back(d);
+    }
+    return v;
+}
+
+void AheadSchedule::plan(std::span<RunStep> steps) {
+    const bool take = ready_;
+    changed_runs_ = changed_ ? changed_runs_ + 1 : 0;
+    const bool plain = !take && changed_runs_ >= kChangedRunsBeforePlain && changed_runs_ % kRetryWalkAhead != 0;
+    for (RunStep& step : steps) step.ahead = AheadStep::take;
+    steps[0].ahead = take ? AheadStep::take : plain ? AheadStep::plain : AheadStep::whole;
+    if (plain && steps.size() > 1) steps[1].ahead = AheadStep::whole;  // nothing was integrated ahead for it
+    changed_ = false;
+    ready_ = steps.size() > 1 || !plain;
 }
 
 }  // namespace hmsm::detail

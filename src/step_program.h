@@ -1,5 +1,5 @@
 // The step program: the dispatches of the seven passes over every instance group, in the
-// order of the pass table (pass_table.h), for one composition mode (docs/model.md 3.7).
+// order of the pass table (pass_table.h), for one composition (docs/model.md 3.7).
 #pragma once
 
 #include "backend.h"
@@ -9,6 +9,7 @@
 #include <hmsm/config.h>
 
 #include <cstdint>
+#include <span>
 #include <vector>
 
 namespace hmsm::detail {
@@ -24,8 +25,8 @@ void append_pass(std::vector<Dispatch>& program, const SceneData& d,
 
 /// The program of the passes from `first` on whose bit is set in `passes`, less the passes
 /// whose outputs the scene does not produce (outputs on demand). `walk_ahead`
-/// (Backend::walks_ahead): a path-walk step of a forest whose every instance is active
-/// composes by the walk that integrates ahead (gpu_layout.h HMSM_WALK_AHEAD).
+/// (BackendCapabilities::walks_ahead): a path-walk step of a forest whose every instance is active
+/// composes by the walk that integrates ahead (gpu_layout.h HMSM_DISPATCH_WALK_AHEAD).
 std::vector<Dispatch> build_program(const SceneData& d, const std::vector<InstanceGroup>& groups,
                                     Composition composition, bool dispatches_are_expensive,
                                     Pass first, uint32_t passes, bool walk_ahead = false);
@@ -39,5 +40,48 @@ inline constexpr int32_t kPathWalkMaxDepth = 64;
 /// What Composition::automatic resolves to: the path walk where the backend prefers it and no
 /// model is deeper than kPathWalkMaxDepth, else pointer jumping.
 Composition automatic_composition(bool backend_prefers_path_walk, int32_t deepest_chain_depth);
+
+/// What a backend runs for each AheadStep of a program with the walk ahead: `whole` the program,
+/// `without_wind` the program less its wind_force dispatches (AheadStep::take), `plain` the
+/// plain walk (no top poses, the walk ahead a plain pose walk: the dispatches build_program
+/// gives without walk_ahead).
+struct AheadVariants {
+    std::vector<Dispatch> whole, without_wind, plain;
+};
+AheadVariants ahead_variants(std::span<const Dispatch> program);
+
+/// The step layer's side of the walk that integrates ahead: from the simulation's change flags
+/// it decides how each step of a run of a walk-ahead program runs (AheadStep). The angles a run's
+/// last step integrated ahead are the next run's first step's where nothing changed in between
+/// (live_change() was not called): the wind table's step slots continue the clock, so the slot
+/// the walk ahead read is the one that step reads. Within a run, a step takes what the step
+/// before integrated ahead. A whole step costs a little more than the plain walk (the top poses,
+/// the next angles written), so after kChangedRunsBeforePlain runs in a row each preceded by a
+/// live change (a force field that follows a character), a run's first step walks plain, but
+/// every kRetryWalkAhead-th such run, which tries the walk ahead again; a run without a change
+/// before it ends the streak.
+class AheadSchedule {
+public:
+    static constexpr uint32_t kChangedRunsBeforePlain = 2;
+    static constexpr uint32_t kRetryWalkAhead = 8;
+
+    /// Anything a step reads changed (but the wind table's step slots), or the program did: the
+    /// angles integrated ahead are stale.
+    void live_change() {
+        ready_ = false;
+        changed_ = true;
+    }
+    /// Sets how each step of the next run of a walk-ahead program runs (RunStep::ahead; at
+    /// least one step).
+    void plan(std::span<RunStep> steps);
+    /// A run that failed, or that ran a program without the walk ahead: nothing is integrated
+    /// ahead.
+    void forget() { ready_ = false; }
+
+private:
+    bool ready_ = false;    // the last run's last step integrated ahead, nothing changed since
+    bool changed_ = true;   // a live change since the last run
+    uint32_t changed_runs_ = 0;  // runs in a row with a live change before them
+};
 
 }  // namespace hmsm::detail

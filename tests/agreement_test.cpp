@@ -134,7 +134,7 @@ TEST_P(Agreement, PackedVertexLayoutAfter300Steps) {
 
         // The contour dispatches carry the layout; the normal buffer has no elements.
         for (const auto& d : hmsm::detail::step_program_of(*packed))
-            if (d.pass == Pass::contour) EXPECT_EQ(d.constants.mode, HMSM_VERTEX_LAYOUT_PACKED);
+            if (d.pass == Pass::contour) EXPECT_EQ(d.constants.kind, HMSM_DISPATCH_CONTOUR_PACKED);
         EXPECT_EQ(hmsm::detail::scene_data_of(*packed).element_count(BufferId::vertex_normal), 0u);
         EXPECT_EQ(hmsm::detail::scene_data_of(*separate).element_count(BufferId::vertex_normal), separate->vertex_count());
         float unused[4];
@@ -222,7 +222,7 @@ TEST_P(Agreement, RoundsInOneDispatchMatchOneDispatchPerRound) {
         ASSERT_TRUE(one && per_round);
         uint32_t in_dispatch = 0;
         for (const auto& d : hmsm::detail::step_program_of(*one))
-            in_dispatch += d.constants.mode == HMSM_MODE_POINTER_JUMPING_IN_DISPATCH;
+            in_dispatch += d.constants.kind == HMSM_DISPATCH_JUMP_ROUNDS_IN_DISPATCH;
         EXPECT_GT(in_dispatch, 0u);
         ASSERT_TRUE(one->step(40).ok());
         ASSERT_TRUE(per_round->step(40).ok());

@@ -113,6 +113,7 @@ TEST_F(Cli, BadArgumentsExitTwoWithoutOutput) {
     expect_bad_input("simulate" + tree + " --fix-weight 2", "fix_weight");
     expect_bad_input("simulate" + tree + " --grouping height", "grouping");
     expect_bad_input("simulate" + tree + " --vertex-layout interleaved", "--vertex-layout");
+    expect_bad_input("simulate" + tree + " --composition fused", "--composition 'fused'");
     expect_bad_input("simulate" + tree + " --origin 1,2,x", "origin");
     expect_bad_input("simulate" + tree + " --no-such-flag", "no-such-flag");
     expect_bad_input("simulate --steps 3", "--tree");

@@ -116,7 +116,7 @@ TEST(CpuParallel, BitwiseEqualToSerialCpuInEveryCompositionAndLayout) {
     const Scene scene = mixed_forest(3);
     for (Composition composition : {Composition::pointer_jumping, Composition::pointer_jumping_per_round,
                                     Composition::pointer_jumping_in_dispatch, Composition::level_by_level,
-                                    Composition::fused, Composition::path_walk}) {
+                                    Composition::path_walk}) {
         for (VertexLayout layout : {VertexLayout::separate, VertexLayout::packed}) {
             SCOPED_TRACE(std::string(to_string(composition)) + ", " + to_string(layout));
             SimulationConfig config = windy(composition, layout);
@@ -157,7 +157,7 @@ TEST(CpuParallel, BitwiseEqualToSerialCpuWithEveryOtherInstancePaused) {
     // dispatches instead (src/cpu/step_plan.cpp).
     auto scene = grid_scene(test::small_tree(), 240, 6.0, 5);
     ASSERT_TRUE(scene.ok());
-    for (Composition composition : {Composition::pointer_jumping, Composition::fused}) {
+    for (Composition composition : {Composition::pointer_jumping, Composition::pointer_jumping_in_dispatch}) {
         SCOPED_TRACE(to_string(composition));
         SimulationConfig config = windy(composition, VertexLayout::separate);
         config.backend = BackendKind::cpu;

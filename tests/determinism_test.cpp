@@ -117,9 +117,6 @@ void expect_repeatable(BackendKind backend, Composition composition) {
 
 TEST_P(Determinism, LevelByLevelIsAlsoRepeatable) { expect_repeatable(GetParam(), Composition::level_by_level); }
 
-// Passes 1-5 fused into one dispatch, rounds in workgroup shared memory where they fit.
-TEST_P(Determinism, FusedIsAlsoRepeatable) { expect_repeatable(GetParam(), Composition::fused); }
-
 TEST_P(Determinism, PathWalkIsAlsoRepeatable) { expect_repeatable(GetParam(), Composition::path_walk); }
 
 INSTANTIATE_TEST_SUITE_P(Backends, Determinism,

@@ -74,8 +74,8 @@ public:
     BackendKind kind() const override { return inner_->kind(); }
     std::string device_name() const override { return inner_->device_name(); }
     Status upload(const detail::SceneData& scene) override { return inner_->upload(scene); }
-    Status run(std::span<const detail::Dispatch> program, std::span<const double> wind_x) override {
-        return inner_->run(program, wind_x);
+    Status run(std::span<const detail::Dispatch> program, std::span<const detail::RunStep> steps) override {
+        return inner_->run(program, steps);
     }
     Status read(detail::BufferId id, uint64_t first, uint64_t count, void* dst, detail::Scalar as) const override {
         return inner_->read(id, first, count, dst, as);
@@ -86,11 +86,13 @@ public:
     Status move_elements(detail::BufferId, std::span<const detail::ElementMove>) override {
         return {ErrorCode::internal, "UploadsAnew moves nothing"};
     }
-    bool reshapes_in_place() const override { return false; }
     void set_profiling(bool enabled) override { inner_->set_profiling(enabled); }
     PassTimes pass_times() const override { return inner_->pass_times(); }
-    bool dispatches_are_expensive() const override { return inner_->dispatches_are_expensive(); }
-    bool prefers_path_walk() const override { return inner_->prefers_path_walk(); }
+    detail::BackendCapabilities capabilities() const override {
+        detail::BackendCapabilities can = inner_->capabilities();
+        can.reshapes_in_place = false;
+        return can;
+    }
 
 private:
     std::unique_ptr<detail::Backend> inner_;

@@ -98,7 +98,7 @@ TEST_P(Joints, JointMatricesAreRotationsAndOriginsInEveryComposition) {
     const double height = scene_height(scene);
     for (Composition composition : {Composition::pointer_jumping, Composition::pointer_jumping_per_round,
                                     Composition::pointer_jumping_in_dispatch, Composition::level_by_level,
-                                    Composition::fused, Composition::path_walk}) {
+                                    Composition::path_walk}) {
         SCOPED_TRACE(to_string(composition));
         SimulationConfig config = windy();
         config.composition = composition;

@@ -46,7 +46,7 @@ TEST(StepProgram, RoundsInOneDispatchGiveOneDispatchPerPass) {
     for (Pass pass : {Pass::compose, Pass::root_positions}) {
         auto d = dispatches_of(*sim, pass);
         ASSERT_EQ(d.size(), 1u);
-        EXPECT_EQ(d[0].constants.mode, HMSM_MODE_POINTER_JUMPING_IN_DISPATCH);
+        EXPECT_EQ(d[0].constants.kind, HMSM_DISPATCH_JUMP_ROUNDS_IN_DISPATCH);
         EXPECT_EQ(d[0].constants.round, 3u);  // every round
         const detail::LaunchShape shape = detail::launch_shape(d[0]);
         EXPECT_EQ(shape.workgroups, 1u);  // one workgroup per instance
@@ -62,29 +62,29 @@ TEST(StepProgram, GridOfInstancesGetsOneWorkgroupPerInstance) {
     EXPECT_EQ(detail::launch_shape(d[0]).workgroups, 7u);
 }
 
-/// The modes pointer_jumping gives compose and root_positions for `instances` of `tree`.
-static std::vector<uint32_t> default_modes(const TreeModel& tree, uint32_t instances) {
+/// The kinds pointer_jumping gives compose and root_positions dispatches for `instances` of `tree`.
+static std::vector<uint32_t> default_kinds(const TreeModel& tree, uint32_t instances) {
     auto scene = grid_scene(tree, instances, 6.0, 42);
     EXPECT_TRUE(scene.ok());
     auto sim = cpu_simulation(*scene, Composition::pointer_jumping);
-    std::vector<uint32_t> modes;
-    if (!sim) return modes;
+    std::vector<uint32_t> kinds;
+    if (!sim) return kinds;
     for (Pass pass : {Pass::compose, Pass::root_positions})
-        for (const auto& d : dispatches_of(*sim, pass)) modes.push_back(d.constants.mode);
-    return modes;
+        for (const auto& d : dispatches_of(*sim, pass)) kinds.push_back(d.constants.kind);
+    return kinds;
 }
 
 TEST(StepProgram, PointerJumpingRunsRoundsInOneDispatchForForestsAndSmallModels) {
-    const std::vector<uint32_t> in_dispatch(2, HMSM_MODE_POINTER_JUMPING_IN_DISPATCH);
+    const std::vector<uint32_t> in_dispatch(2, HMSM_DISPATCH_JUMP_ROUNDS_IN_DISPATCH);
     // Models of at most 512 chains: always (one workgroup covers all chains in one go).
-    EXPECT_EQ(default_modes(test::small_tree(), 1), in_dispatch);
-    EXPECT_EQ(default_modes(test::broom(512), 1), in_dispatch);
+    EXPECT_EQ(default_kinds(test::small_tree(), 1), in_dispatch);
+    EXPECT_EQ(default_kinds(test::broom(512), 1), in_dispatch);
     // Larger models: from 64 instances up; with fewer, one dispatch per round (a depth-1 broom
     // has one round).
-    const std::vector<uint32_t> per_round(2, HMSM_MODE_POINTER_JUMPING);
-    EXPECT_EQ(default_modes(test::broom(513), 1), per_round);
-    EXPECT_EQ(default_modes(test::broom(1100), 63), per_round);
-    EXPECT_EQ(default_modes(test::broom(1100), 64), in_dispatch);
+    const std::vector<uint32_t> per_round(2, HMSM_DISPATCH_JUMP_ROUND);
+    EXPECT_EQ(default_kinds(test::broom(513), 1), per_round);
+    EXPECT_EQ(default_kinds(test::broom(1100), 63), per_round);
+    EXPECT_EQ(default_kinds(test::broom(1100), 64), in_dispatch);
 }
 
 TEST(StepProgram, PerRoundAndLevelByLevelIssueOneDispatchPerRoundOrLevel) {
@@ -96,11 +96,16 @@ TEST(StepProgram, PerRoundAndLevelByLevelIssueOneDispatchPerRoundOrLevel) {
         auto rounds = dispatches_of(*per_round, pass);
         ASSERT_EQ(rounds.size(), 3u);
         for (uint32_t r = 0; r < rounds.size(); ++r) {
-            EXPECT_EQ(rounds[r].constants.mode, HMSM_MODE_POINTER_JUMPING);
+            EXPECT_EQ(rounds[r].constants.kind, HMSM_DISPATCH_JUMP_ROUND);
             EXPECT_EQ(rounds[r].constants.round, r);
             EXPECT_EQ(rounds[r].constants.dst_half, r & 1);
         }
-        EXPECT_EQ(dispatches_of(*level, pass).size(), 7u);  // depths 0..6
+        const auto levels = dispatches_of(*level, pass);
+        EXPECT_EQ(levels.size(), 7u);  // depths 0..6
+        for (const auto& d : levels) {
+            EXPECT_EQ(d.constants.kind, HMSM_DISPATCH_LEVEL);
+            EXPECT_EQ(d.constants.round, 0u);  // round means only a pointer-jumping round
+        }
     }
     EXPECT_EQ(hmsm::detail::step_program_of(*per_round).size(), kPassCount - 2 + 2 * 3);
 }
@@ -124,10 +129,13 @@ TEST(StepProgram, PathWalkRunsThePairsInOneDispatchEachAndEqualsLevelByLevelBitw
                                                                         : walk->hierarchy(0).chains.size();
         EXPECT_EQ(program[i].constants.element_count, per_instance);
         if (leaders[i] != Pass::contour) {
-            EXPECT_EQ(program[i].constants.mode, HMSM_MODE_PATH_WALK);
             EXPECT_TRUE(hmsm::detail::runs_path_walk(program[i]));
+            EXPECT_EQ(program[i].constants.round, 0u);
         }
     }
+    EXPECT_EQ(program[0].constants.kind, HMSM_DISPATCH_WIND_PAIR);
+    EXPECT_EQ(program[2].constants.kind, HMSM_DISPATCH_NODE_PAIR);
+    EXPECT_EQ(program[3].constants.kind, HMSM_DISPATCH_CONTOUR_SEPARATE);
     EXPECT_EQ(program[1].constants.dst_half, HMSM_FINAL_HALF(walk->jump_rounds()));
     // A walk step stores no intermediate: the wind pair only the angles, the walk only the joint
     // matrices, which are the pose (T comes from the angles), the node pair only the world
@@ -154,10 +162,10 @@ TEST(StepProgram, PathWalkRunsThePairsInOneDispatchEachAndEqualsLevelByLevelBitw
     // it, whose program has the GPU walk follow chain_parent up instead of reading the records.
     const Scene deeper = single_tree_scene(test::deep_tree(HMSM_WALK_PATH_CAPACITY + 3), {0, 0, 1}, -0.3);
     const Scene forest = *grid_scene(test::deep_tree(HMSM_WALK_PATH_CAPACITY + 3), 20, 9.0, 3);
-    EXPECT_EQ(program[1].constants.round, HMSM_WALK_FROM_RECORDS);  // one instance: the records
+    EXPECT_EQ(program[1].constants.kind, HMSM_DISPATCH_POSE_WALK_FROM_RECORDS);  // one instance: the records
     auto walk_forest = cpu_simulation(forest, Composition::path_walk, storm);
     ASSERT_TRUE(walk_forest);
-    EXPECT_EQ(hmsm::detail::step_program_of(*walk_forest)[1].constants.round, 0u);
+    EXPECT_EQ(hmsm::detail::step_program_of(*walk_forest)[1].constants.kind, HMSM_DISPATCH_POSE_WALK);
     for (const Scene* s : {&scene, &deeper, &forest}) {
         auto w = cpu_simulation(*s, Composition::path_walk, storm);
         auto l = cpu_simulation(*s, Composition::level_by_level, storm);
@@ -219,7 +227,7 @@ TEST(StepProgram, PathWalkProgramsFollowTheOutputsAndThePassesAsked) {
     for (const auto& d : apart) EXPECT_FALSE(hmsm::detail::runs_path_walk(d)) << pass_name(d.pass);
 }
 
-// The walk that integrates ahead (gpu_layout.h HMSM_WALK_AHEAD): where a backend asks for it, a
+// The walk that integrates ahead (gpu_layout.h HMSM_DISPATCH_WALK_AHEAD): where a backend asks for it, a
 // step of a forest whose every instance is active runs the wind pair, the top poses (the chains
 // of depth 0 and 1 of each instance) and the walk ahead; a single tree, a forest with a paused
 // instance and programs without the wind pair keep the plain walk.
@@ -275,6 +283,72 @@ TEST(StepProgram, WalkAheadOnlyForStepsOfForestsWithEveryInstanceActive) {
               0);
 }
 
+// Every dispatch of every composition carries a kind that fits its pass (pass_table.h
+// HMSM_DISPATCH_KINDS), and `round` only where the kind is a pointer-jumping one.
+TEST(StepProgram, EveryDispatchKindFitsItsPassAndOnlyJumpsUseTheRound) {
+    const Scene forest = *grid_scene(test::deep_tree(5), 7, 6.0, 42);
+    for (Composition composition : {Composition::pointer_jumping, Composition::pointer_jumping_per_round,
+                                    Composition::pointer_jumping_in_dispatch, Composition::level_by_level,
+                                    Composition::path_walk}) {
+        auto sim = cpu_simulation(forest, composition);
+        ASSERT_TRUE(sim);
+        const auto& data = hmsm::detail::scene_data_of(*sim);
+        for (bool walk_ahead : {false, true}) {
+            for (const auto& d : detail::build_program(data, data.groups, composition, false, Pass::wind_force,
+                                                       (1u << kPassCount) - 1, walk_ahead)) {
+                SCOPED_TRACE(std::string(to_string(composition)) + " " + std::string(pass_name(d.pass)));
+                ASSERT_TRUE(detail::kind_fits_pass(d.constants.kind, d.pass))
+                    << "kind " << d.constants.kind;
+                const bool jumps = d.constants.kind == HMSM_DISPATCH_JUMP_ROUND ||
+                                   d.constants.kind == HMSM_DISPATCH_JUMP_ROUNDS_IN_DISPATCH;
+                if (!jumps) EXPECT_EQ(d.constants.round, 0u);
+            }
+        }
+    }
+    EXPECT_FALSE(detail::kind_fits_pass(HMSM_DISPATCH_KIND_COUNT, Pass::compose));
+    EXPECT_FALSE(detail::kind_fits_pass(HMSM_DISPATCH_WIND_PAIR, Pass::compose));
+}
+
+// The step layer's schedule of the walk that integrates ahead (AheadSchedule): a run's first step
+// takes the angles the last run integrated ahead unless a live change came in between, later
+// steps take the step before's; after two runs in a row each preceded by a change, a run's first
+// step walks plain (and the second runs whole), every eighth such run trying the walk ahead.
+TEST(StepProgram, AheadScheduleTakesWhereNothingChangedAndWalksPlainUnderSteadyChanges) {
+    using detail::AheadStep;
+    using Steps = std::vector<AheadStep>;
+    detail::AheadSchedule schedule;
+    Steps steps;
+    // The plan of a run of `count` steps, as AheadSteps.
+    auto plan = [&](uint32_t count, Steps& out) {
+        std::vector<detail::RunStep> run(count);
+        schedule.plan(run);
+        out.clear();
+        for (const detail::RunStep& step : run) out.push_back(step.ahead);
+    };
+    plan(3, steps);  // the first run: nothing integrated ahead yet
+    EXPECT_EQ(steps, (Steps{AheadStep::whole, AheadStep::take, AheadStep::take}));
+    plan(1, steps);  // nothing changed since
+    EXPECT_EQ(steps, Steps{AheadStep::take});
+    schedule.live_change();
+    plan(1, steps);  // the first run after a change
+    EXPECT_EQ(steps, Steps{AheadStep::whole});
+    for (uint32_t streak = 2; streak <= 9; ++streak) {
+        SCOPED_TRACE(streak);
+        schedule.live_change();
+        plan(2, steps);
+        if (streak == detail::AheadSchedule::kRetryWalkAhead) EXPECT_EQ(steps, (Steps{AheadStep::whole, AheadStep::take}));
+        else EXPECT_EQ(steps, (Steps{AheadStep::plain, AheadStep::whole}));
+    }
+    plan(1, steps);  // calm again: the last run's second step integrated ahead
+    EXPECT_EQ(steps, Steps{AheadStep::take});
+    schedule.forget();  // a failed run
+    plan(1, steps);
+    EXPECT_EQ(steps, Steps{AheadStep::whole});
+    schedule.live_change();
+    plan(1, steps);  // one change after a calm run: no streak
+    EXPECT_EQ(steps, Steps{AheadStep::whole});
+}
+
 TEST(StepProgram, ModelsBeyondTheRoundsLimitFallBackToOneDispatchPerRound) {
     // 16,385 chains: more than 16 per thread of the largest workgroup.
     auto sim = cpu_simulation(single_tree_scene(test::broom(16385)), Composition::pointer_jumping_in_dispatch);
@@ -283,13 +357,13 @@ TEST(StepProgram, ModelsBeyondTheRoundsLimitFallBackToOneDispatchPerRound) {
     for (Pass pass : {Pass::compose, Pass::root_positions}) {
         auto d = dispatches_of(*sim, pass);
         ASSERT_EQ(d.size(), sim->jump_rounds());
-        for (const auto& dispatch : d) EXPECT_EQ(dispatch.constants.mode, HMSM_MODE_POINTER_JUMPING);
+        for (const auto& dispatch : d) EXPECT_EQ(dispatch.constants.kind, HMSM_DISPATCH_JUMP_ROUND);
     }
     // And just under the limit the rounds stay in one dispatch.
     auto under = cpu_simulation(single_tree_scene(test::broom(16384)), Composition::pointer_jumping_in_dispatch);
     ASSERT_TRUE(under);
     ASSERT_EQ(under->hierarchy(0).chains.size(), 16384u);
-    EXPECT_EQ(dispatches_of(*under, Pass::compose)[0].constants.mode, HMSM_MODE_POINTER_JUMPING_IN_DISPATCH);
+    EXPECT_EQ(dispatches_of(*under, Pass::compose)[0].constants.kind, HMSM_DISPATCH_JUMP_ROUNDS_IN_DISPATCH);
 }
 
 TEST(StepProgram, RoundsWorkgroupSizeIsThePowerOfTwoThatCoversTheChains) {
@@ -305,9 +379,10 @@ TEST(StepProgram, RoundsWorkgroupSizeIsThePowerOfTwoThatCoversTheChains) {
 TEST(StepProgram, CompositionNamesRoundTrip) {
     for (Composition c : {Composition::pointer_jumping, Composition::pointer_jumping_per_round,
                           Composition::pointer_jumping_in_dispatch, Composition::level_by_level,
-                          Composition::fused, Composition::path_walk, Composition::automatic})
+                          Composition::path_walk, Composition::automatic})
         EXPECT_EQ(parse_composition(to_string(c)), c);
     EXPECT_FALSE(parse_composition("pointer-jumping").has_value());  // the CLI maps '-' to '_'
+    EXPECT_FALSE(parse_composition("fused").has_value());
 }
 
 // The default composition resolves by backend: pointer jumping on the CPU backends and on

@@ -34,8 +34,7 @@ HMSM_API std::optional<BackendKind> parse_backend_kind(std::string_view name);
 /// Backends compiled into this build (never `automatic`).
 HMSM_API std::vector<BackendKind> compiled_backends();
 
-/// How passes 3 and 5 accumulate down the hierarchy (and, for `fused`, how passes 1-5 are
-/// dispatched). All give the same poses.
+/// How passes 3 and 5 accumulate down the hierarchy. All give the same poses.
 enum class Composition {
     /// The paper's pointer jumping in ceil(log2(D+1)) rounds, per instance group in one
     /// dispatch per pass (as pointer_jumping_in_dispatch) or one dispatch per round (as
@@ -50,17 +49,6 @@ enum class Composition {
     pointer_jumping_in_dispatch,
     /// One dispatch per depth level, D+1 in all (for comparison).
     level_by_level,
-    /// Passes 1-5 (wind_force to root_positions) in ONE dispatch per instance group: one
-    /// workgroup per instance runs the wind force and integration of its chains, the compose
-    /// rounds, the node positions and the root-position rounds, with workgroup barriers in
-    /// between (pointer jumping inside the workgroup; the rounds' ping-pong halves are kept in
-    /// shared memory where an instance's chains fit, else in device memory). Passes 6 and 7
-    /// follow as usual. It removes most dependent launches and keeps the rounds on chip. On an
-    /// H100 (docs/benchmarks) it is the faster choice for forests on CUDA (1.2x with meshes,
-    /// 1.6x joints only, from 100 trees of 2,345 chains) and for small trees (a few hundred
-    /// chains) on CUDA and Vulkan; a single large tree is slower (one workgroup does it all),
-    /// and on Vulkan a tree whose rounds exceed the workgroup's shared memory gains nothing.
-    fused,
     /// Passes 3 and 5 in one dispatch in which every chain walks its ancestors from the trunk
     /// down (R = R_parent T, O = O_parent + R_parent l_attach: level by level's poses bit for
     /// bit, depth-many products per chain, no dependent dispatch or barrier inside); passes 1
@@ -72,7 +60,9 @@ enum class Composition {
     /// The default: the composition measured fastest on the backend the simulation runs on,
     /// `path_walk` on a GPU (CUDA, Vulkan on a GPU), `pointer_jumping` on the CPU backends and
     /// on Vulkan over a CPU driver (lavapipe), where the walk's depth-many products cost more
-    /// than the rounds. Simulation::config() reports the composition it resolved to.
+    /// than the rounds, and `pointer_jumping` on any backend for a hierarchy deeper than the
+    /// walk's break-even depth (docs/architecture.md). Simulation::config() reports the
+    /// composition it resolved to.
     automatic,
 };
 inline constexpr NamedValue<Composition> kCompositionNames[] = {
@@ -80,7 +70,6 @@ inline constexpr NamedValue<Composition> kCompositionNames[] = {
     {Composition::pointer_jumping_per_round, "pointer_jumping_per_round"},
     {Composition::pointer_jumping_in_dispatch, "pointer_jumping_in_dispatch"},
     {Composition::level_by_level, "level_by_level"},
-    {Composition::fused, "fused"},
     {Composition::path_walk, "path_walk"},
     {Composition::automatic, "automatic"},
 };

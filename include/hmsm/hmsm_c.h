@@ -62,7 +62,7 @@ enum { /* hmsm_config.composition */
     HMSM_COMPOSITION_POINTER_JUMPING_PER_ROUND = 1,
     HMSM_COMPOSITION_POINTER_JUMPING_IN_DISPATCH = 2,
     HMSM_COMPOSITION_LEVEL_BY_LEVEL = 3,
-    HMSM_COMPOSITION_FUSED = 4, /* passes 1-5 in one dispatch, a workgroup per instance */
+    /* value 4 is reserved: hmsm_simulation_create refuses it */
     HMSM_COMPOSITION_PATH_WALK = 5, /* each chain walks its ancestors: 4 dispatches per step */
     HMSM_COMPOSITION_AUTOMATIC = 6  /* the default: path walk on a GPU, else pointer jumping */
 };

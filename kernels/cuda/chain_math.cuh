@@ -1,12 +1,10 @@
 // The per-chain math of passes 1, 2, 3 and 5, written once for the separate pass kernels
-// (wind_force.cu, integrate.cu, compose.cu, root_positions.cu), the fused kernel (fused.cu,
-// Composition::fused) and the path walk (compose.cu, Composition::path_walk). Mirrors
-// src/cpu/NAME.cpp and shaders/glsl/chain_math.glsl.
+// (wind_force.cu, integrate.cu, compose.cu, root_positions.cu) and the path walk (compose.cu,
+// Composition::path_walk). Mirrors src/cpu/NAME.cpp and shaders/glsl/chain_math.glsl.
 //
 // Loads of state that a block may have written earlier in the same kernel are plain loads
 // (which __syncthreads() orders), never the read-only path: kWrittenInBlock marks the
-// ping-pong halves of in-dispatch rounds, kFused also T, u and the pose half R (the fused
-// kernel writes all of them before it reads them).
+// ping-pong halves of in-dispatch rounds.
 #pragma once
 
 #include "pass_math.cuh"
@@ -61,10 +59,10 @@ HMSM_HOST_DEVICE float instance_wind_scale(const BufferPointers& b, const gpu::P
 /// Pass 1 for model chain c of group instance k: the generalized force g = A (w_loc.z, -w_loc.x)
 /// with w_loc = R^T w in the chain's frame of the previous step (R, and the origin x at which
 /// the force fields act, loaded by the caller from the pose half), w = lambda_i s Y(tau + phi_i)
-/// d plus the force fields. pc.wind.w is the step's slot of the wind table (gpu_layout.h).
+/// d plus the force fields. pc.wind_slot is the step's slot of the wind table (gpu_layout.h).
 HMSM_HOST_DEVICE float2 chain_wind_force(const BufferPointers& b, const gpu::PassConstants& pc,
                                          uint32_t k, uint32_t c, float3 x, const Mat3& rotation) {
-    return chain_wind_force_at(b, pc, c, x, rotation, instance_wind_scale(b, pc, k, uint32_t(pc.wind.w)));
+    return chain_wind_force_at(b, pc, c, x, rotation, instance_wind_scale(b, pc, k, pc.wind_slot));
 }
 
 /// Pass 2, the step: symplectic Euler on S = (theta_x, theta_z) of static chain model_chain from
@@ -136,7 +134,7 @@ HMSM_HOST_DEVICE Mat3 chain_integrate(const BufferPointers& b, const gpu::PassCo
 
 /// One pass-3 pointer-jumping round for model chain c of group instance k in device memory:
 /// P = P(2^round-th ancestor) P, half src_half -> half dst_half (round 0 starts from T).
-template <bool kWrittenInBlock, bool kFused = false>
+template <bool kWrittenInBlock>
 HMSM_HOST_DEVICE void compose_jump(const BufferPointers& b, const gpu::PassConstants& pc, uint32_t k,
                                    uint32_t c, uint32_t round, uint32_t src_half, uint32_t dst_half) {
     const uint64_t chain = state_chain(pc, k, int32_t(c));
@@ -144,8 +142,7 @@ HMSM_HOST_DEVICE void compose_jump(const BufferPointers& b, const gpu::PassConst
         load(b.chain_jump + uint64_t(round) * pc.total_model_chains + pc.model_chain_begin + c);
     // The product accumulated so far: T itself before round 0, else the src half.
     auto product_so_far = [&](uint64_t state) {
-        if (round == 0)
-            return kFused ? load_mat3_written_in_block(b.chain_local, state) : load_mat3(b.chain_local, state);
+        if (round == 0) return load_mat3(b.chain_local, state);
         const uint64_t at = half_begin(pc, src_half) + state;
         return kWrittenInBlock ? load_mat3_written_in_block(b.chain_rotation, at)
                                : load_mat3(b.chain_rotation, at);
@@ -157,7 +154,6 @@ HMSM_HOST_DEVICE void compose_jump(const BufferPointers& b, const gpu::PassConst
 
 /// Pass 5: what chain c of group instance k contributes on its own: the instance origin for the
 /// trunk, else its attach node's position relative to the parent chain's origin.
-template <bool kFused = false>
 HMSM_HOST_DEVICE float4 own_offset(const BufferPointers& b, const gpu::PassConstants& pc, uint32_t k,
                                    int32_t c) {
     if (load(b.chain_parent + pc.model_chain_begin + c) < 0) {
@@ -165,7 +161,7 @@ HMSM_HOST_DEVICE float4 own_offset(const BufferPointers& b, const gpu::PassConst
         return make_float4(origin.x, origin.y, origin.z, 0.0f);
     }
     const float4* u = b.node_relative + state_node(pc, k, load(b.chain_attach + pc.model_chain_begin + c));
-    return kFused ? *u : load(u);
+    return load(u);
 }
 
 /// Joint matrix of state chain `chain` (gpu_layout.h): rows (R row i, O_i).
@@ -177,18 +173,15 @@ HMSM_HOST_DEVICE void store_joint_of(const BufferPointers& b, uint64_t chain, co
 }
 
 /// The same with R from `pose_half` of chain_rotation.
-template <bool kFused = false>
 HMSM_HOST_DEVICE void store_joint(const BufferPointers& b, const gpu::PassConstants& pc, uint64_t chain,
                                   uint32_t pose_half, float4 o) {
-    const uint64_t at = half_begin(pc, pose_half) + chain;
-    store_joint_of(b, chain, kFused ? load_mat3_written_in_block(b.chain_rotation, at)
-                                    : load_mat3(b.chain_rotation, at), o);
+    store_joint_of(b, chain, load_mat3(b.chain_rotation, half_begin(pc, pose_half) + chain), o);
 }
 
 /// One pass-5 pointer-jumping round for model chain c of group instance k in device memory:
 /// the partial sum of the 2^round-th ancestor added, src_half -> dst_half, round 0 starting
 /// from each chain's own offset; the joint matrix too where `write_joint`.
-template <bool kWrittenInBlock, bool kFused = false>
+template <bool kWrittenInBlock>
 HMSM_HOST_DEVICE void root_jump(const BufferPointers& b, const gpu::PassConstants& pc, uint32_t k,
                                 int32_t c, uint32_t round, uint32_t src_half, uint32_t dst_half,
                                 bool write_joint) {
@@ -196,14 +189,14 @@ HMSM_HOST_DEVICE void root_jump(const BufferPointers& b, const gpu::PassConstant
         load(b.chain_jump + uint64_t(round) * pc.total_model_chains + pc.model_chain_begin + c);
     const uint64_t src = half_begin(pc, src_half);
     auto sum_so_far = [&](int32_t chain) {
-        if (round == 0) return own_offset<kFused>(b, pc, k, chain);
+        if (round == 0) return own_offset(b, pc, k, chain);
         const float4* at = b.chain_origin + src + state_chain(pc, k, chain);
         return kWrittenInBlock ? *at : load(at);
     };
     float4 origin = sum_so_far(c);
     if (ancestor >= 0) origin = origin + sum_so_far(ancestor);
     b.chain_origin[half_begin(pc, dst_half) + state_chain(pc, k, c)] = origin;
-    if (write_joint) store_joint<kFused>(b, pc, state_chain(pc, k, c), dst_half, origin);
+    if (write_joint) store_joint(b, pc, state_chain(pc, k, c), dst_half, origin);
 }
 
 /// The chain `up` depth levels above model chain c, through the 2^round-th ancestors.
@@ -258,8 +251,8 @@ HMSM_HOST_DEVICE void prefetch_walk(const BufferPointers& b, const gpu::PassCons
 /// nodes from c's walk record `from` (load_walk_record). Else (a forest, where 128 bytes per
 /// thread would cost more than the dependent loads, which other warps hide): the ancestors
 /// gathered by following chain_parent up, the attach nodes looked up level by level.
-/// kFromTopPoses (HMSM_WALK_AHEAD): the walk starts from the pose of c's depth-1 ancestor (c's
-/// own at depth 0 or 1) as the HMSM_WALK_TOP_POSES dispatch stored it in half src_half: the
+/// kFromTopPoses (HMSM_DISPATCH_WALK_AHEAD): the walk starts from the pose of c's depth-1 ancestor
+/// (c's own at depth 0 or 1) as the HMSM_DISPATCH_WALK_TOP_POSES dispatch stored it in half src_half: the
 /// same operations on the same values, so the same pose bit for bit.
 template <bool kFromRecords, bool kFromTopPoses = false>
 HMSM_HOST_DEVICE void walk_pose(const BufferPointers& b, const gpu::PassConstants& pc, uint32_t k, int32_t c,
@@ -324,22 +317,22 @@ HMSM_HOST_DEVICE void path_walk(const BufferPointers& b, const gpu::PassConstant
     store_joint_of(b, state_chain(pc, k, c), rotation, origin);
 }
 
-/// HMSM_WALK_TOP_POSES for chain c (depth 0 or 1) of group instance k: its pose to half
+/// HMSM_DISPATCH_WALK_TOP_POSES for chain c (depth 0 or 1) of group instance k: its pose to half
 /// src_half of chain_rotation and chain_origin; the trunk's origin carries in w the wind scale
-/// lambda_i Y of the next step (wind-table slot wind.w + 1) for the walk that integrates ahead.
+/// lambda_i Y of the next step (wind-table slot wind_slot + 1) for the walk that integrates ahead.
 HMSM_HOST_DEVICE void walk_top_pose(const BufferPointers& b, const gpu::PassConstants& pc, uint32_t k, int32_t c) {
     Mat3 rotation;
     float4 origin;
     walk_pose<false>(b, pc, k, c, nullptr, rotation, origin);
     const uint64_t at = half_begin(pc, pc.src_half) + state_chain(pc, k, c);
     store_mat3(b.chain_rotation, at, rotation);
-    const uint32_t slot = uint32_t(pc.wind.w);
+    const uint32_t slot = pc.wind_slot;
     const uint32_t next_slot = slot + 1u < HMSM_WIND_STEP_SLOTS ? slot + 1u : slot;
     origin.w = c == 0 ? instance_wind_scale(b, pc, k, next_slot) : 0.0f;  // chain 0: the trunk
     b.chain_origin[at] = origin;
 }
 
-/// HMSM_WALK_AHEAD for chain c of group instance k: the path walk from the top poses, its pose
+/// HMSM_DISPATCH_WALK_AHEAD for chain c of group instance k: the path walk from the top poses, its pose
 /// to the joint matrix, then the next step's pass 1 at that pose (what the next step's
 /// wind_force would read back from the joint matrix, with the trunk's stored wind scale) and
 /// pass 2's integration, the new angles to chain_state_next.

@@ -2,42 +2,51 @@
 // Pointer jumping (the paper's M_temp): round r replaces each chain's partial product P by
 // P(2^r-th ancestor) P, reading half src_half of chain_rotation and writing half dst_half
 // (round 0 starts from T), so after ceil(log2(D+1)) rounds P is the full product (compose_jump,
-// chain_math.cuh). In-dispatch mode runs every round in one launch, one block per instance,
-// __syncthreads() between rounds. Level by level: one depth per dispatch, R = R_parent T in
+// chain_math.cuh). JUMP_ROUNDS_IN_DISPATCH runs every round in one launch, one block per
+// instance, __syncthreads() between rounds. LEVEL: one depth per dispatch, R = R_parent T in
 // place in the pose half (dst_half), the parent having been written by the previous dispatch.
-// Path walk: passes 3 and 5 together, each chain walking its ancestors from the trunk down
-// (chain_math.cuh path_walk).
+// The walk kinds (gpu_layout.h): passes 3 and 5 together, each chain walking its ancestors from
+// the trunk down (chain_math.cuh path_walk), and the walk that integrates ahead.
 #include "chain_math.cuh"
 
 namespace hmsm::detail::cuda {
 
 static HMSM_HOST_DEVICE void compose_element(const BufferPointers& b,
                                              const gpu::PassConstants& pc, uint32_t i) {
-#ifndef __CUDA_ARCH__  // the device runs walk_kernel instead (launch_compose)
-    if (pc.mode == HMSM_MODE_PATH_WALK && pc.round == HMSM_WALK_TOP_POSES) {
-        const Element e = element_of(i, pc.level_count);
-        return walk_top_pose(b, pc, e.instance, int32_t(e.index));
-    }
-    if (pc.mode == HMSM_MODE_PATH_WALK) {
-        const Element e = element_of(i, pc.model_chain_count);
-        if (pc.round == HMSM_WALK_AHEAD) return walk_ahead(b, pc, e.instance, int32_t(e.index));
-        if (instance_paused(b, pc, e.instance)) return;
-        if (pc.round == HMSM_WALK_FROM_RECORDS) return path_walk<true>(b, pc, e.instance, int32_t(e.index));
-        return path_walk<false>(b, pc, e.instance, int32_t(e.index));  // and root_positions
-    }
+    switch (pc.kind) {
+#ifndef __CUDA_ARCH__  // the device runs walk_kernel and walk_ahead_kernel instead (launch_compose)
+        case HMSM_DISPATCH_WALK_TOP_POSES: {
+            const Element e = element_of(i, pc.level_count);
+            return walk_top_pose(b, pc, e.instance, int32_t(e.index));
+        }
+        case HMSM_DISPATCH_WALK_AHEAD: {
+            const Element e = element_of(i, pc.model_chain_count);
+            return walk_ahead(b, pc, e.instance, int32_t(e.index));
+        }
+        case HMSM_DISPATCH_POSE_WALK_FROM_RECORDS:
+        case HMSM_DISPATCH_POSE_WALK: {
+            const Element e = element_of(i, pc.model_chain_count);
+            if (instance_paused(b, pc, e.instance)) return;
+            if (pc.kind == HMSM_DISPATCH_POSE_WALK_FROM_RECORDS)
+                return path_walk<true>(b, pc, e.instance, int32_t(e.index));
+            return path_walk<false>(b, pc, e.instance, int32_t(e.index));  // and root_positions
+        }
 #endif
-    if (pc.mode == HMSM_MODE_LEVEL_BY_LEVEL) {
-        const LevelChain l = level_chain(b, pc, i);
-        if (instance_paused(b, pc, l.instance)) return;
-        Mat3 rotation = load_mat3(b.chain_local, l.chain);
-        if (l.parent >= 0)
-            rotation = load_mat3(b.chain_rotation, l.dst + state_chain(pc, l.instance, l.parent)) * rotation;
-        store_mat3(b.chain_rotation, l.dst + l.chain, rotation);
-        return;
+        case HMSM_DISPATCH_LEVEL: {
+            const LevelChain l = level_chain(b, pc, i);
+            if (instance_paused(b, pc, l.instance)) return;
+            Mat3 rotation = load_mat3(b.chain_local, l.chain);
+            if (l.parent >= 0)
+                rotation = load_mat3(b.chain_rotation, l.dst + state_chain(pc, l.instance, l.parent)) * rotation;
+            store_mat3(b.chain_rotation, l.dst + l.chain, rotation);
+            return;
+        }
+        default: {  // HMSM_DISPATCH_JUMP_ROUND
+            const Element e = element_of(i, pc.model_chain_count);
+            if (instance_paused(b, pc, e.instance)) return;
+            compose_jump<false>(b, pc, e.instance, e.index, pc.round, pc.src_half, pc.dst_half);
+        }
     }
-    const Element e = element_of(i, pc.model_chain_count);
-    if (instance_paused(b, pc, e.instance)) return;
-    compose_jump<false>(b, pc, e.instance, e.index, pc.round, pc.src_half, pc.dst_half);
 }
 
 /// Path walk on the device: a kernel of its own per way of reading the walk records, so that
@@ -89,15 +98,19 @@ __global__ void __launch_bounds__(HMSM_WORKGROUP_SIZE)
 HMSM_CUDA_ROUNDS_PASS_TYPE(compose)
 
 cudaError_t launch_compose(const BufferPointers& b, const gpu::PassConstants& pc, cudaStream_t stream) {
-    if (pc.element_count == 0 || pc.mode != HMSM_MODE_PATH_WALK) return launch<compose_pass>(b, pc, stream);
+    if (pc.element_count == 0) return cudaSuccess;
     const unsigned blocks = launch_blocks(pc.element_count);
-    if (pc.round == HMSM_WALK_FROM_RECORDS)
-        return launch_pass(walk_kernel<true>, blocks, HMSM_WORKGROUP_SIZE, stream, b, pc);
-    if (pc.round == HMSM_WALK_TOP_POSES)
-        return launch_pass(walk_ahead_kernel<true>, blocks, HMSM_WORKGROUP_SIZE, stream, b, pc);
-    if (pc.round == HMSM_WALK_AHEAD)
-        return launch_pass(walk_ahead_kernel<false>, blocks, HMSM_WORKGROUP_SIZE, stream, b, pc);
-    return launch_pass(walk_kernel<false>, blocks, HMSM_WORKGROUP_SIZE, stream, b, pc);
+    switch (pc.kind) {
+        case HMSM_DISPATCH_POSE_WALK_FROM_RECORDS:
+            return launch_pass(walk_kernel<true>, blocks, HMSM_WORKGROUP_SIZE, stream, b, pc);
+        case HMSM_DISPATCH_POSE_WALK:
+            return launch_pass(walk_kernel<false>, blocks, HMSM_WORKGROUP_SIZE, stream, b, pc);
+        case HMSM_DISPATCH_WALK_TOP_POSES:
+            return launch_pass(walk_ahead_kernel<true>, blocks, HMSM_WORKGROUP_SIZE, stream, b, pc);
+        case HMSM_DISPATCH_WALK_AHEAD:
+            return launch_pass(walk_ahead_kernel<false>, blocks, HMSM_WORKGROUP_SIZE, stream, b, pc);
+        default: return launch<compose_pass>(b, pc, stream);  // JUMP_ROUND, JUMP_ROUNDS_IN_DISPATCH, LEVEL
+    }
 }
 
 void emulate_compose(const BufferPointers& b, const gpu::PassConstants& pc) { emulate<compose_pass>(b, pc); }

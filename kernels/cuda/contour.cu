@@ -4,7 +4,7 @@
 // of the same rest vertex carried by the parent chain, normal renormalized, so the joint stays
 // closed while the child swings. The outputs are written once,
 // coalesced: 32 bytes per vertex (position and normal), or 16 in the packed vertex layout
-// (pc.mode, gpu_layout.h), where the position's w carries the octahedral normal word
+// (HMSM_DISPATCH_CONTOUR_PACKED, gpu_layout.h), where the position's w carries the octahedral normal word
 // (src/common/octahedral.h) and vertex_normal is not written.
 //
 // The largest pass. In the packed layout it has a kernel of its own instead of the skeleton's
@@ -56,7 +56,7 @@ HMSM_HOST_DEVICE void contour_vertex(const BufferPointers& b, const gpu::PassCon
         normal = (1.0f / sqrtf(dot(normal, normal))) * normal;
     }
     const uint64_t out = pc.vertex_begin + i;
-    if (pc.mode == HMSM_VERTEX_LAYOUT_PACKED) {
+    if (pc.kind == HMSM_DISPATCH_CONTOUR_PACKED) {
         b.vertex_position[out] =
             with_w(position, packed_word_to_w<float>(encode_normal_word(normal.x, normal.y, normal.z)));
     } else {
@@ -137,7 +137,7 @@ struct contour_pass {
 cudaError_t launch_contour(const BufferPointers& b, const gpu::PassConstants& pc, cudaStream_t stream) {
     if (pc.element_count == 0) return cudaSuccess;
     const bool may_pause = pc.params.w != 0.0f;  // the kernel variant with the check
-    if (pc.mode != HMSM_VERTEX_LAYOUT_PACKED) {
+    if (pc.kind != HMSM_DISPATCH_CONTOUR_PACKED) {
         // Blocks of 256: a quarter of the blocks to schedule and drain (measured faster for one tree
         // and for forests: docs/benchmarks/history/2026-11-26-nvidia-h100-45f6584.md, analysis).
         constexpr unsigned kThreads = 256;
@@ -154,7 +154,7 @@ cudaError_t launch_contour(const BufferPointers& b, const gpu::PassConstants& pc
 /// items, so the tests that emulate it check the mapping the GPU runs).
 void emulate_contour(const BufferPointers& b, const gpu::PassConstants& pc) {
     if (pc.element_count == 0) return;
-    if (pc.mode != HMSM_VERTEX_LAYOUT_PACKED) return emulate<contour_pass>(b, pc);
+    if (pc.kind != HMSM_DISPATCH_CONTOUR_PACKED) return emulate<contour_pass>(b, pc);
     for (uint64_t w = 0; w < gpu::packed_contour_threads(pc); ++w) contour_packed_item(b, pc, w);
 }
 

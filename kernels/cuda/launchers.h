@@ -35,7 +35,7 @@ struct BufferPointers {
     HMSM_BUFFERS(HMSM_CUDA_POINTER)
 #undef HMSM_CUDA_POINTER
     /// CUDA only, not in the buffer table: as many elements as chain_state, where the walk that
-    /// integrates ahead (HMSM_WALK_AHEAD) writes the next step's angles. The backend swaps it
+    /// integrates ahead (HMSM_DISPATCH_WALK_AHEAD) writes the next step's angles. The backend swaps it
     /// with chain_state when a step takes them (src/cuda/cuda_backend.cpp).
     float4* chain_state_next = nullptr;
 };
@@ -46,16 +46,5 @@ struct BufferPointers {
     void emulate_##name(const BufferPointers& host_buffers, const gpu::PassConstants& pc);
 HMSM_PASSES(HMSM_CUDA_DECLARE_PASS)
 #undef HMSM_CUDA_DECLARE_PASS
-
-/// Composition::fused (kernels/cuda/fused.cu): passes 1-5 for one group instance per block, the
-/// rounds in shared memory where gpu::fused_shared_bytes(pc.model_chain_count) is at most
-/// `shared_limit` bytes, else in device memory.
-cudaError_t launch_fused(const BufferPointers& buffers, const gpu::PassConstants& pc,
-                         cudaStream_t stream, uint64_t shared_limit);
-void emulate_fused(const BufferPointers& host_buffers, const gpu::PassConstants& pc, uint64_t shared_limit);
-/// Lets the fused kernel take up to `shared_limit` bytes of dynamic shared memory on the current
-/// device (past the default 48 KiB a kernel must opt in). Called once per backend, outside any
-/// stream capture.
-cudaError_t allow_fused_shared(uint64_t shared_limit);
 
 }  // namespace hmsm::detail::cuda

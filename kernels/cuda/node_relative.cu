@@ -11,9 +11,9 @@ static HMSM_HOST_DEVICE void node_relative_element(const BufferPointers& b,
     const uint32_t model_node = pc.model_node_begin + e.index;
     const int32_t owner = load(b.node_owner + model_node);
     const float3 local = xyz(load(b.node_local + model_node));
-    // Path walk: node_world follows in the same launch (node_world.cu) with u in hand, which is
+    // The node pair (path walk): node_world follows in the same launch (node_world.cu) with u in hand, which is
     // not stored, and the pose is the joint matrix (pass_table.h walk_reads, walk_writes).
-    if (pc.mode == HMSM_MODE_PATH_WALK) {
+    if (pc.kind == HMSM_DISPATCH_NODE_PAIR) {
         const Pose pose = load_joint(b, state_chain(pc, e.instance, owner));
         b.node_world[pc.node_begin + i] = with_w(pose.origin + pose.rotation * local, 1.0f);
         return;

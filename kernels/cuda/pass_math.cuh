@@ -250,7 +250,7 @@ static __global__ void __launch_bounds__(kThreads)
         P::element(b, pc, i);
 }
 
-/// In-dispatch mode: one block per instance runs every round (run_rounds_in_block).
+/// JUMP_ROUNDS_IN_DISPATCH: one block per instance runs every round (run_rounds_in_block).
 template <class P, bool kMayPause = false>
 static __global__ void __launch_bounds__(HMSM_MAX_ROUNDS_WORKGROUP_SIZE)
     rounds_kernel(const BufferPointers b, const gpu::PassConstants pc_in) {
@@ -269,7 +269,7 @@ cudaError_t launch(const BufferPointers& b, const gpu::PassConstants& pc, cudaSt
     if (pc.element_count == 0) return cudaSuccess;
     const bool may_pause = pc.params.w != 0.0f;
     if constexpr (P::kRounds) {
-        if (pc.mode == HMSM_MODE_POINTER_JUMPING_IN_DISPATCH)
+        if (pc.kind == HMSM_DISPATCH_JUMP_ROUNDS_IN_DISPATCH)
             return launch_pass(may_pause ? rounds_kernel<P, true> : rounds_kernel<P, false>,
                                launch_blocks_per_instance(pc), gpu::rounds_workgroup_size(pc.model_chain_count),
                                stream, b, pc);
@@ -283,7 +283,7 @@ cudaError_t launch(const BufferPointers& b, const gpu::PassConstants& pc, cudaSt
 template <class P>
 void emulate(const BufferPointers& b, const gpu::PassConstants& pc) {
     if constexpr (P::kRounds) {
-        if (pc.mode == HMSM_MODE_POINTER_JUMPING_IN_DISPATCH) {
+        if (pc.kind == HMSM_DISPATCH_JUMP_ROUNDS_IN_DISPATCH) {
             emulate_rounds(b, pc, [&](uint32_t k, uint32_t c, uint32_t round, uint32_t src, uint32_t dst) {
                 P::template jump<false>(b, pc, k, c, round, src, dst);
             });

@@ -1,5 +1,5 @@
 // Pass 1: generalized wind force per chain (chain_math.cuh), R and O of the previous step read
-// from the pose half src_half (path walk: from the joint matrix); pc.wind.w is the step's slot
+// from the pose half src_half (path walk: from the joint matrix); pc.wind_slot is the step's slot
 // of the wind table (gpu_layout.h), which holds tau and the turbulent phases reduced on the host.
 #include "chain_math.cuh"
 
@@ -10,10 +10,10 @@ static HMSM_HOST_DEVICE void wind_force_element(const BufferPointers& b,
     const Element e = element_of(i, pc.model_chain_count);
     if (instance_paused(b, pc, e.instance)) return;
     const uint64_t chain = pc.chain_begin + i;
-    // Path walk: the previous pose is the joint matrix (the walk writes no R or O half), and
+    // The wind pair (path walk): the previous pose is the joint matrix (the walk writes no R or O half), and
     // integrate's step follows in the same launch with g in hand; only the angles are stored
     // (the walk computes T from them; pass_table.h walk_reads, walk_writes).
-    if (pc.mode == HMSM_MODE_PATH_WALK) {
+    if (pc.kind == HMSM_DISPATCH_WIND_PAIR) {
         const Pose pose = load_joint(b, chain);
         const float2 g = chain_wind_force(b, pc, e.instance, e.index, pose.origin, pose.rotation);
         integrate_angles(b, pc, pc.model_chain_begin + e.index, chain, g);

@@ -1,6 +1,6 @@
 // The per-chain math of passes 1, 2, 3 and 5, written once for the separate pass shaders
-// (wind_force.comp, integrate.comp, compose.comp, root_positions.comp), the fused one
-// (fused.comp, Composition::fused) and the path walk (compose.comp, Composition::path_walk).
+// (wind_force.comp, integrate.comp, compose.comp, root_positions.comp) and the path walk
+// (compose.comp, Composition::path_walk).
 // Mirrors src/cpu/NAME.cpp; include after common.glsl.
 #ifndef HMSM_CHAIN_MATH_GLSL
 #define HMSM_CHAIN_MATH_GLSL
@@ -10,7 +10,7 @@
 /// w = lambda_i s Y(tau + phi_i) d plus the force fields at the chain's previous origin x, R
 /// the chain's previous rotation (docs/model.md 3.5, 3.7, 3.9; table in gpu_layout.h).
 vec2 chain_wind_force(uint k, uint c, vec3 x, mat3 rotation) {
-    uint slot = HMSM_WIND_STEPS + HMSM_WIND_STEP_VEC4S * uint(pc.wind.w);
+    uint slot = HMSM_WIND_STEPS + HMSM_WIND_STEP_VEC4S * pc.wind_slot;
     uint instance = HMSM_INSTANCE_WIND_VEC4S * (pc.instance_begin + k);
     vec4 own = instance_wind[instance];  // (lambda, phi mod 2, 0, 0)
     float y;
@@ -161,7 +161,7 @@ uint walk_ancestor(uint c, uint up) {
 /// The attach node of the chain `up` levels above c (walk_record filled for c): from the record
 /// where the dispatch read it whole, else looked up.
 uint walk_attach(uint c, uint up) {
-    if (pc.round == HMSM_WALK_FROM_RECORDS && up < HMSM_WALK_ATTACH_CAPACITY)
+    if (pc.kind == HMSM_DISPATCH_POSE_WALK_FROM_RECORDS && up < HMSM_WALK_ATTACH_CAPACITY)
         return uint(walk_record[HMSM_WALK_ATTACH(up)]);
     return uint(chain_attach[pc.model_chain_begin + walk_ancestor(c, up)]);
 }
@@ -179,7 +179,7 @@ mat3 walk_local(uint k, uint x, bool trunk) {
 void path_walk(uint k, uint c) {
     // The record whole where the dispatch says so (a scene of one active instance), else the
     // ancestors gathered by following chain_parent up (kernels/cuda/chain_math.cuh says why).
-    if (pc.round == HMSM_WALK_FROM_RECORDS) {
+    if (pc.kind == HMSM_DISPATCH_POSE_WALK_FROM_RECORDS) {
         uint first = (pc.model_chain_begin + c) * (HMSM_WALK_RECORD_INTS / 4u);
         for (uint q = 0u; q < HMSM_WALK_RECORD_INTS / 4u; ++q) {
             ivec4 w = chain_walk[first + q];

@@ -9,8 +9,8 @@
 #include "octahedral.glsl"  // oct_encode / oct_decode for VertexLayout::packed
 
 #ifdef HMSM_SPECIALIZED_WORKGROUP_SIZE
-// compose, root_positions and fused: the size is specialization constant 0, set per pipeline
-// (HMSM_WORKGROUP_SIZE, or gpu::rounds_workgroup_size for in-dispatch rounds and fused).
+// compose and root_positions: the size is specialization constant 0, set per pipeline
+// (HMSM_WORKGROUP_SIZE, or gpu::rounds_workgroup_size for in-dispatch rounds).
 layout(local_size_x_id = 0, local_size_y = 1, local_size_z = 1) in;
 #else
 layout(local_size_x = HMSM_WORKGROUP_SIZE, local_size_y = 1, local_size_z = 1) in;
@@ -20,11 +20,6 @@ layout(local_size_x = HMSM_WORKGROUP_SIZE, local_size_y = 1, local_size_z = 1) i
 // invocations of it wrote (in-dispatch pointer-jumping rounds).
 #ifndef HMSM_POSE_COHERENCE
 #define HMSM_POSE_COHERENCE
-#endif
-// The same for T and u, which the fused dispatch (fused.comp) writes in one pass and reads,
-// after a barrier, in the next.
-#ifndef HMSM_STATE_COHERENCE
-#define HMSM_STATE_COHERENCE
 #endif
 
 layout(push_constant, std430) uniform PushBlock {
@@ -52,9 +47,9 @@ layout(set = 0, binding = HMSM_BINDING_INSTANCE_YAW, std430) readonly buffer Ins
 // State, one element per chain/node/vertex of every instance (ping-pong: two halves).
 layout(set = 0, binding = HMSM_BINDING_CHAIN_STATE, std430) buffer ChainState { vec4 chain_state[]; };
 layout(set = 0, binding = HMSM_BINDING_CHAIN_FORCE, std430) buffer ChainForce { vec2 chain_force[]; };
-layout(set = 0, binding = HMSM_BINDING_CHAIN_LOCAL, std430) HMSM_STATE_COHERENCE buffer ChainLocal { mat3x4 chain_local[]; };
+layout(set = 0, binding = HMSM_BINDING_CHAIN_LOCAL, std430) buffer ChainLocal { mat3x4 chain_local[]; };
 layout(set = 0, binding = HMSM_BINDING_CHAIN_ROTATION, std430) HMSM_POSE_COHERENCE buffer ChainRotation { mat3x4 chain_rotation[]; };
-layout(set = 0, binding = HMSM_BINDING_NODE_RELATIVE, std430) HMSM_STATE_COHERENCE buffer NodeRelative { vec4 node_relative[]; };
+layout(set = 0, binding = HMSM_BINDING_NODE_RELATIVE, std430) buffer NodeRelative { vec4 node_relative[]; };
 layout(set = 0, binding = HMSM_BINDING_CHAIN_ORIGIN, std430) HMSM_POSE_COHERENCE buffer ChainOrigin { vec4 chain_origin[]; };
 layout(set = 0, binding = HMSM_BINDING_NODE_WORLD, std430) buffer NodeWorld { vec4 node_world[]; };
 layout(set = 0, binding = HMSM_BINDING_VERTEX_POSITION, std430) buffer VertexPosition { vec4 vertex_position[]; };

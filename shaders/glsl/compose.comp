@@ -1,10 +1,11 @@
 #version 450
 // Pass 3: total rotation R_c = R_parent T_c (src/cpu/compose.cpp). Pointer jumping: round r
 // multiplies in the product held by the 2^round-th ancestor, reading half src_half and writing
-// half dst_half (round 0 reads T), so no thread reads what another writes. In-dispatch mode:
-// workgroup k runs every round for group instance k, a barrier between rounds. Level by level:
-// one depth per dispatch, in place in half dst_half. Path walk: passes 3 and 5 together, each
-// chain walking its ancestors from the trunk down (chain_math.glsl path_walk).
+// half dst_half (round 0 reads T), so no thread reads what another writes.
+// JUMP_ROUNDS_IN_DISPATCH: workgroup k runs every round for group instance k, a barrier between
+// rounds. LEVEL: one depth per dispatch, in place in half dst_half. POSE_WALK and
+// POSE_WALK_FROM_RECORDS: passes 3 and 5 together, each chain walking its ancestors from the
+// trunk down (chain_math.glsl path_walk). The kinds are gpu_layout.h's HMSM_DISPATCH_*.
 #extension GL_GOOGLE_include_directive : require
 #define HMSM_SPECIALIZED_WORKGROUP_SIZE
 #define HMSM_POSE_COHERENCE coherent
@@ -12,7 +13,7 @@
 #include "chain_math.glsl"  // compose_jump
 
 void main() {
-    if (pc.mode == HMSM_MODE_POINTER_JUMPING_IN_DISPATCH) {
+    if (pc.kind == HMSM_DISPATCH_JUMP_ROUNDS_IN_DISPATCH) {
         uint k = workgroup_index();
         if (k >= pc.element_count / pc.model_chain_count || instance_paused(k)) return;  // uniform per workgroup
         for (uint round = 0u; round < pc.round; ++round) {
@@ -25,12 +26,12 @@ void main() {
     }
     uint i = thread_index();
     if (i >= pc.element_count) return;
-    if (instance_paused(i / (pc.mode == HMSM_MODE_LEVEL_BY_LEVEL ? pc.level_count : pc.model_chain_count))) return;
-    if (pc.mode == HMSM_MODE_PATH_WALK) {
+    if (instance_paused(i / (pc.kind == HMSM_DISPATCH_LEVEL ? pc.level_count : pc.model_chain_count))) return;
+    if (pc.kind == HMSM_DISPATCH_POSE_WALK || pc.kind == HMSM_DISPATCH_POSE_WALK_FROM_RECORDS) {
         path_walk(i / pc.model_chain_count, i % pc.model_chain_count);  // and root_positions
         return;
     }
-    if (pc.mode == HMSM_MODE_LEVEL_BY_LEVEL) {
+    if (pc.kind == HMSM_DISPATCH_LEVEL) {
         uint dst = half_offset(pc.dst_half);
         uint k = i / pc.level_count;
         uint c = pc.level_begin + i % pc.level_count;
@@ -41,5 +42,5 @@ void main() {
         chain_rotation[dst + chain] = as_mat3x4(r);
         return;
     }
-    compose_jump(i / pc.model_chain_count, i % pc.model_chain_count, pc.round, pc.src_half, pc.dst_half);
+    compose_jump(i / pc.model_chain_count, i % pc.model_chain_count, pc.round, pc.src_half, pc.dst_half);  // JUMP_ROUND
 }

@@ -2,9 +2,9 @@
 // Pass 7: branch-mesh and leaf vertices rigid with their chain, v = O_c + R_c v_local, the pose
 // read from the joint matrix [R_c | O_c] that pass 5 writes in every composition. The base
 // ring of a child chain blends with the parent chain by fix_weight (the paper's contour fix-up)
-// so joints stay closed while the child swings (src/cpu/contour.cpp). pc.mode is the vertex
-// layout: separate writes vec4(position, 1) and vec4(normal, 0); packed writes only the position,
-// with the octahedral normal word (octahedral.glsl) as its w.
+// so joints stay closed while the child swings (src/cpu/contour.cpp). The dispatch kind is the
+// vertex layout: CONTOUR_SEPARATE writes vec4(position, 1) and vec4(normal, 0); CONTOUR_PACKED
+// writes only the position, with the octahedral normal word (octahedral.glsl) as its w.
 //
 // Separate: thread i places element i. Packed: thread w reads the model-scope inputs of model
 // vertex w % n once (its chains, rest position and normal) and places that vertex in the
@@ -30,7 +30,7 @@ void place_vertex(uint k, uint e, uint v, ivec2 chains, vec3 rest_position, vec3
         normal = normalize((1.0 - beta) * normal + beta * n);
     }
     uint out_index = pc.vertex_begin + k * pc.model_vertex_count + e;
-    if (pc.mode == HMSM_VERTEX_LAYOUT_PACKED) {
+    if (pc.kind == HMSM_DISPATCH_CONTOUR_PACKED) {
         vertex_position[out_index] = vec4(position, uintBitsToFloat(packSnorm2x16(oct_encode(normal))));
     } else {
         vertex_position[out_index] = vec4(position, 1.0);
@@ -41,7 +41,7 @@ void place_vertex(uint k, uint e, uint v, ivec2 chains, vec3 rest_position, vec3
 void main() {
     uint n = pc.model_vertex_count;
     uint w = thread_index();
-    if (pc.mode != HMSM_VERTEX_LAYOUT_PACKED) {
+    if (pc.kind != HMSM_DISPATCH_CONTOUR_PACKED) {
         if (w >= pc.element_count || instance_paused(w / n)) return;
         uint v = pc.model_vertex_begin + w % n;
         place_vertex(w / n, w % n, v, vertex_chain[v], vertex_rest_position[v].xyz, vertex_rest_normal[v].xyz);

@@ -12,9 +12,9 @@ void main() {
     uint n = i % pc.model_node_count;
     uint owner = uint(node_owner[pc.model_node_begin + n]);
     vec3 local = node_local[pc.model_node_begin + n].xyz;
-    // Path walk: node_world follows in the same dispatch (node_world.comp) with u in hand, which
+    // The node pair (path walk): node_world follows in the same dispatch (node_world.comp) with u in hand, which
     // is not stored, and the pose is the joint matrix (src/pass_table.h walk_reads, walk_writes).
-    if (pc.mode == HMSM_MODE_PATH_WALK) {
+    if (pc.kind == HMSM_DISPATCH_NODE_PAIR) {
         mat3x4 j = joint_matrix[state_chain(k, owner)];
         node_world[state_node(k, n)] = vec4(joint_origin(j) + joint_rotation(j) * local, 1.0);
         return;

@@ -2,8 +2,8 @@
 // Pass 5: chain origins O_c = O_parent + u_attach(c), O_trunk = instance origin
 // (src/cpu/root_positions.cpp). Pointer jumping adds the partial sum held by the 2^round-th
 // ancestor (round 0 starts from each chain's own offset), half src_half -> half dst_half;
-// in-dispatch mode: workgroup k runs every round for group instance k, a barrier between
-// rounds. Level by level: one depth per dispatch, in place in half dst_half.
+// JUMP_ROUNDS_IN_DISPATCH: workgroup k runs every round for group instance k, a barrier between
+// rounds. LEVEL: one depth per dispatch, in place in half dst_half.
 // Wherever O_c is written, the joint matrix [R_c | O_c] is written too, R_c from the same half
 // (compose left the final R there): level by level and the last in-dispatch round write final
 // values once; per-round dispatches write in every round and the last round (the final half)
@@ -15,7 +15,7 @@
 #include "chain_math.glsl"  // root_jump, own_offset, store_joint
 
 void main() {
-    if (pc.mode == HMSM_MODE_POINTER_JUMPING_IN_DISPATCH) {
+    if (pc.kind == HMSM_DISPATCH_JUMP_ROUNDS_IN_DISPATCH) {
         uint k = workgroup_index();
         if (k >= pc.element_count / pc.model_chain_count || instance_paused(k)) return;  // uniform per workgroup
         for (uint round = 0u; round < pc.round; ++round) {
@@ -28,7 +28,7 @@ void main() {
     }
     uint i = thread_index();
     if (i >= pc.element_count) return;
-    if (pc.mode == HMSM_MODE_LEVEL_BY_LEVEL) {
+    if (pc.kind == HMSM_DISPATCH_LEVEL) {
         uint dst = half_offset(pc.dst_half);
         uint k = i / pc.level_count;
         if (instance_paused(k)) return;
@@ -41,5 +41,5 @@ void main() {
         return;
     }
     if (instance_paused(i / pc.model_chain_count)) return;
-    root_jump(i / pc.model_chain_count, i % pc.model_chain_count, pc.round, pc.src_half, pc.dst_half, true);
+    root_jump(i / pc.model_chain_count, i % pc.model_chain_count, pc.round, pc.src_half, pc.dst_half, true);  // JUMP_ROUND
 }

@@ -13,10 +13,10 @@ void main() {
     if (instance_paused(k)) return;
     uint c = i % pc.model_chain_count;
     uint chain = state_chain(k, c);
-    // Path walk: the previous pose is the joint matrix (the walk writes no R or O half), and
+    // The wind pair (path walk): the previous pose is the joint matrix (the walk writes no R or O half), and
     // integrate's step follows in the same dispatch with g in hand; only the angles are stored
     // (the walk computes T from them; src/pass_table.h walk_reads, walk_writes).
-    if (pc.mode == HMSM_MODE_PATH_WALK) {
+    if (pc.kind == HMSM_DISPATCH_WIND_PAIR) {
         mat3x4 j = joint_matrix[chain];
         vec2 g = chain_wind_force(k, c, joint_origin(j), joint_rotation(j));
         chain_state[chain] = integrate_step(pc.model_chain_begin + c, chain_state[chain], g);

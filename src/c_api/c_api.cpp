@@ -3,6 +3,7 @@
 
 #include <array>
 #include <cstring>
+#include <optional>
 #include <string_view>
 
 namespace hmsm::c_api {
@@ -16,6 +17,18 @@ thread_local std::string last_message;
 constexpr std::array<Output, HMSM_OUTPUT_COUNT> kOutputs = {
     Output::node_positions, Output::vertex_positions, Output::vertex_normals,
     Output::chain_rotations, Output::chain_origins, Output::chain_angles, Output::joint_matrices};
+
+/// hmsm::Composition for each HMSM_COMPOSITION_* value; value 4 is reserved and maps to none.
+constexpr std::array<std::optional<Composition>, HMSM_COMPOSITION_AUTOMATIC + 1> kCompositions = {
+    Composition::pointer_jumping, Composition::pointer_jumping_per_round,
+    Composition::pointer_jumping_in_dispatch, Composition::level_by_level, std::nullopt,
+    Composition::path_walk, Composition::automatic};
+
+int32_t to_c(Composition composition) {
+    for (size_t i = 0; i < kCompositions.size(); ++i)
+        if (kCompositions[i] == composition) return int32_t(i);
+    return HMSM_COMPOSITION_AUTOMATIC;
+}
 
 }  // namespace
 
@@ -105,7 +118,7 @@ Status to_cpp(const hmsm_config& in, SimulationConfig& out) {
     if (in.backend < HMSM_BACKEND_CPU || in.backend > HMSM_BACKEND_CPU_PARALLEL)
         return bad("config.backend: unknown value " + std::to_string(in.backend));
     if (in.composition < HMSM_COMPOSITION_POINTER_JUMPING ||
-        in.composition > HMSM_COMPOSITION_AUTOMATIC)
+        in.composition > HMSM_COMPOSITION_AUTOMATIC || !kCompositions[size_t(in.composition)])
         return bad("config.composition: unknown value " + std::to_string(in.composition));
     if (in.vertex_layout != HMSM_VERTEX_LAYOUT_SEPARATE &&
         in.vertex_layout != HMSM_VERTEX_LAYOUT_PACKED)
@@ -117,7 +130,7 @@ Status to_cpp(const hmsm_config& in, SimulationConfig& out) {
     if (in.model.grouping != HMSM_GROUPING_DIRECTION && in.model.grouping != HMSM_GROUPING_WIDTH)
         return bad("config.model.grouping: unknown value " + std::to_string(in.model.grouping));
     config.backend = static_cast<BackendKind>(in.backend);
-    config.composition = static_cast<Composition>(in.composition);
+    config.composition = *kCompositions[size_t(in.composition)];
     config.vertex_layout = static_cast<VertexLayout>(in.vertex_layout);
     config.profile_passes = in.profile_passes == 1;
     config.outputs = static_cast<Outputs>(in.outputs);
@@ -178,7 +191,7 @@ void hmsm_config_init(hmsm_config* config) {
     const SimulationConfig defaults;
     std::memset(config, 0, sizeof *config);
     config->backend = static_cast<int32_t>(defaults.backend);
-    config->composition = static_cast<int32_t>(defaults.composition);
+    config->composition = to_c(defaults.composition);
     config->vertex_layout = static_cast<int32_t>(defaults.vertex_layout);
     config->profile_passes = defaults.profile_passes ? 1 : 0;
     config->outputs = static_cast<int32_t>(defaults.outputs);

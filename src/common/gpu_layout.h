@@ -67,7 +67,7 @@
 ///   [HMSM_WIND_FIELDS, +2 per field): (centre xyz, radius), (F xyz, kind) with kind 0 =
 ///       directional (force h F), 1 = radial (force h F.x unit(x - centre))
 ///   [HMSM_WIND_STEPS + 9 s, +9): step slot s: (tau mod 2, 0, 0, 0), then frac(m_k tau + u_k)
-///       as instance_wind's elements 1..8. A wind_force dispatch reads slot uint(pc.wind.w).
+///       as instance_wind's elements 1..8. A wind_force dispatch reads slot pc.wind_slot.
 #define HMSM_WIND_MODES 32
 #define HMSM_WIND_MODE_VEC4S 8
 #define HMSM_INSTANCE_WIND_VEC4S 9
@@ -96,35 +96,58 @@
 #define HMSM_HALF_WRITTEN(round) ((round) & 1u)
 #define HMSM_FINAL_HALF(rounds) (((rounds) - 1u) & 1u)
 
-/// composition modes (PassConstants.mode)
-#define HMSM_MODE_POINTER_JUMPING 0u
-#define HMSM_MODE_LEVEL_BY_LEVEL 1u
-/// Pointer jumping with every round in one dispatch: one workgroup per instance of the group
-/// loops over the instance's chains, round after round, with a workgroup barrier between rounds
-/// (PassConstants.round holds the number of rounds; round r still reads half (r+1)&1 and writes
-/// half r&1). Workgroups of this mode have a power-of-two size from 64 to
-/// HMSM_MAX_ROUNDS_WORKGROUP_SIZE (hmsm::gpu::rounds_workgroup_size).
-#define HMSM_MODE_POINTER_JUMPING_IN_DISPATCH 2u
+/// What a dispatch runs: PassConstants.kind (hmsm::detail::DispatchKind, src/pass_table.h, lists
+/// the same numbers). PassConstants.round means only what JUMP_ROUND and
+/// JUMP_ROUNDS_IN_DISPATCH say; every other kind leaves it 0.
+/// PER_ELEMENT: a flat pass (wind_force, integrate, node_relative, node_world), thread i on
+///   element i of the pass's domain.
+/// JUMP_ROUND: compose or root_positions, the pointer-jumping round PassConstants.round: chain c
+///   combines with its 2^round-th ancestor (chain_jump), reading half src_half (unused in round
+///   0) and writing half dst_half.
+/// JUMP_ROUNDS_IN_DISPATCH: compose or root_positions, every round in one dispatch: one
+///   workgroup per instance of the group loops over the instance's chains, round after round,
+///   with a workgroup barrier between rounds (PassConstants.round holds the number of rounds;
+///   round r reads half HMSM_HALF_READ(r) and writes half HMSM_HALF_WRITTEN(r)). Its workgroups
+///   have a power-of-two size from 64 to HMSM_MAX_ROUNDS_WORKGROUP_SIZE
+///   (hmsm::gpu::rounds_workgroup_size).
+/// LEVEL: compose or root_positions for the chains of one depth level (level_begin,
+///   level_count per instance), in place in half dst_half.
+/// Composition::path_walk runs a pass that leads a walk (the pass table's `walk` column) and its
+/// walk partner in one dispatch, thread i handling element i of the leader's domain:
+/// WIND_PAIR: wind_force then integrate for chain i (only the new angles are stored).
+/// POSE_WALK: compose then root_positions for chain i by the top-down walk (its ancestors from
+///   the trunk down: R = R_parent T, O = O_parent + R_parent l_attach, written to the joint
+///   matrix), the ancestors gathered by following chain_parent up.
+/// POSE_WALK_FROM_RECORDS: the same, the ancestors and attach nodes read whole from the walk
+///   records (beyond HMSM_WALK_PATH_CAPACITY through chain_jump and chain_attach).
+/// NODE_PAIR: node_relative then node_world for node i.
+/// The walk that integrates ahead (CUDA forests; docs/cuda.md), two compose dispatches:
+/// WALK_TOP_POSES: one thread per chain of depth 0 and 1 (the first level_count model chains)
+///   walks the pose from the angles of chain_state and stores it to half src_half of
+///   chain_rotation and chain_origin; the trunk's thread also stores the wind scale lambda_i Y
+///   of the next step (wind-table slot wind_slot + 1) of its instance in the w of its chain_origin.
+/// WALK_AHEAD: every chain walks from the stored pose of its depth-1 ancestor, writes its joint
+///   matrix, then runs the next step's wind_force and integrate with that pose and Y, writing
+///   the next angles to a second state buffer.
+/// CONTOUR_SEPARATE: contour writing vertex_position (x, y, z, 1) and vertex_normal
+///   (nx, ny, nz, 0), thread i on vertex i.
+/// CONTOUR_PACKED: contour writing only vertex_position, its w the bits of the octahedral normal
+///   word (src/common/octahedral.h); a thread per model vertex and group of
+///   HMSM_PACKED_CONTOUR_INSTANCES instances (below).
+#define HMSM_DISPATCH_PER_ELEMENT 0u
+#define HMSM_DISPATCH_JUMP_ROUND 1u
+#define HMSM_DISPATCH_JUMP_ROUNDS_IN_DISPATCH 2u
+#define HMSM_DISPATCH_LEVEL 3u
+#define HMSM_DISPATCH_WIND_PAIR 4u
+#define HMSM_DISPATCH_POSE_WALK 5u
+#define HMSM_DISPATCH_POSE_WALK_FROM_RECORDS 6u
+#define HMSM_DISPATCH_NODE_PAIR 7u
+#define HMSM_DISPATCH_WALK_TOP_POSES 8u
+#define HMSM_DISPATCH_WALK_AHEAD 9u
+#define HMSM_DISPATCH_CONTOUR_SEPARATE 10u
+#define HMSM_DISPATCH_CONTOUR_PACKED 11u
+#define HMSM_DISPATCH_KIND_COUNT 12u
 #define HMSM_MAX_ROUNDS_WORKGROUP_SIZE 1024
-/// Composition::fused: a wind_force dispatch in this mode runs passes 1-5 (the pass table's
-/// fused column) for one group instance per workgroup, workgroups sized as in-dispatch rounds:
-/// wind_force and integrate per chain, compose's pointer-jumping rounds (PassConstants.round
-/// holds the number of rounds, halves as in-dispatch), node_relative per node, root_positions'
-/// rounds, a workgroup barrier between any two. src_half = dst_half = the pose half. Only the
-/// pose half of chain_rotation and chain_origin is defined afterwards (the other is scratch).
-#define HMSM_MODE_FUSED 3u
-/// Floats of workgroup shared memory per chain when the fused dispatch keeps its rounds there:
-/// two halves of a 3x3 rotation (the origins' two halves of 3 floats reuse the half compose
-/// did not finish in). 72 bytes per chain.
-#define HMSM_FUSED_SHARED_FLOATS_PER_CHAIN 18u
-/// Composition::path_walk: a dispatch of a pass that leads a walk (the pass table's `walk`
-/// column) in this mode also runs the pass's walk partner, thread i handling element i of the
-/// pass's domain: wind_force then integrate for chain i; compose then root_positions for chain
-/// i by the top-down walk (its ancestors from the trunk down, from its walk record, beyond
-/// HMSM_WALK_PATH_CAPACITY through chain_jump and chain_attach: R = R_parent T,
-/// O = O_parent + R_parent l_attach, written to the joint matrix); node_relative then node_world
-/// for node i.
-#define HMSM_MODE_PATH_WALK 4u
 /// A chain's walk record (binding HMSM_BINDING_CHAIN_WALK, static, model-local indices): int 0
 /// its depth d; int u, 1 <= u <= HMSM_WALK_PATH_CAPACITY, its ancestor u levels up (-1 past the
 /// trunk); int HMSM_WALK_ATTACH(u), 0 <= u < HMSM_WALK_ATTACH_CAPACITY, the attach node of the chain
@@ -133,29 +156,11 @@
 /// walk thread makes one round of loads for its ancestors and their attach nodes, where
 /// following chain_parent up takes one dependent load per level.
 #define HMSM_WALK_RECORD_INTS 32u
-/// PassConstants.round of a walk dispatch (compose) that reads the records; 0: the walk
-/// gathers the same values by following chain_parent up (step_program.cpp chooses).
-#define HMSM_WALK_FROM_RECORDS 1u
-/// The walk that integrates ahead (CUDA, forests; docs/cuda.md): PassConstants.round of its two
-/// compose dispatches. HMSM_WALK_TOP_POSES: one thread per chain of depth 0 and 1 (the first
-/// level_count model chains) walks the pose from the angles of chain_state and stores it to
-/// half src_half of chain_rotation and chain_origin; the trunk's thread also stores the wind
-/// scale lambda_i Y of the next step (wind-table slot wind.w + 1) of its instance in the w of
-/// its chain_origin. HMSM_WALK_AHEAD: every chain walks from the stored pose of its depth-1
-/// ancestor, writes its joint matrix, then runs the next step's wind_force and integrate with
-/// that pose and Y, writing the next angles to a second state buffer.
-#define HMSM_WALK_TOP_POSES 2u
-#define HMSM_WALK_AHEAD 3u
 #define HMSM_WALK_PATH_CAPACITY 15u
 /// Index in the record of the attach node of the chain u levels up (u < HMSM_WALK_ATTACH_CAPACITY).
 #define HMSM_WALK_ATTACH_CAPACITY 16u
 #define HMSM_WALK_ATTACH(u) (HMSM_WALK_ATTACH_CAPACITY + (u))
 
-/// vertex layouts (PassConstants.mode of a contour dispatch; hmsm::VertexLayout values):
-/// separate writes vertex_position (x, y, z, 1) and vertex_normal (nx, ny, nz, 0); packed writes
-/// only vertex_position, its w the bits of the octahedral normal word (src/common/octahedral.h).
-#define HMSM_VERTEX_LAYOUT_SEPARATE 0u
-#define HMSM_VERTEX_LAYOUT_PACKED 1u
 /// A packed contour dispatch runs one thread per model vertex and group of this many consecutive
 /// group instances (the last group may be short): the thread reads the vertex's model-scope
 /// inputs once and places it in each instance of its group. Thread w handles model vertex
@@ -178,10 +183,8 @@ struct alignas(16) vec4 {
 /// Push constants of one dispatch (<= 128 bytes, std430). One dispatch covers one instance
 /// group: a run of consecutive instances of the same model. Thread i of a dispatch handles
 /// element (i % per_instance) of instance (i / per_instance) of the group, where per_instance is
-/// model_chain_count, model_node_count, model_vertex_count, or level_count for a level-by-level
-/// compose/root_positions dispatch. `mode` is per pass: the composition mode (HMSM_MODE_*) for
-/// compose and root_positions, the vertex layout (HMSM_VERTEX_LAYOUT_*) for contour, ignored
-/// by the other passes.
+/// model_chain_count, model_node_count, model_vertex_count, or level_count for a LEVEL or
+/// WALK_TOP_POSES dispatch. `kind` (HMSM_DISPATCH_*) says what the dispatch runs.
 struct PassConstants {
     uint element_count;       // threads: group instances x per_instance
     uint instance_begin;      // first global instance of the group
@@ -196,20 +199,23 @@ struct PassConstants {
     uint model_vertex_count;  // vertices per instance
     uint level_begin;         // level-by-level: first model chain of the level
     uint level_count;         // level-by-level: chains per instance in the level
-    uint round;               // pointer jumping: round r reads the 2^r-th ancestor (chain_jump); in-dispatch mode: number of rounds
-    uint mode;                // HMSM_MODE_* (compose, root_positions); HMSM_VERTEX_LAYOUT_* (contour)
+    uint round;               // JUMP_ROUND: round r reads the 2^r-th ancestor (chain_jump); JUMP_ROUNDS_IN_DISPATCH: number of rounds; else 0
+    uint kind;                // HMSM_DISPATCH_*: what the dispatch runs
     uint profile;             // hmsm::WindProfile value
     uint total_chains;        // allocated state chains: the stride between ping-pong halves
     uint total_model_chains;  // static chains of the scene: stride between chain_jump rounds
     uint src_half;            // ping-pong: half read (pose readers: the half holding R and O)
     uint dst_half;            // ping-pong: half written
-    vec4 wind;                // (strength * direction, wind-table step slot) for wind_force
+    uint wind_slot;           // the step's wind-table slot (Backend::run sets it where reads_wind_slot)
     vec4 params;              // (dt, max_angle, fix_weight, covers paused: 1 if the group has paused instances)
 };
 
 #ifdef __cplusplus
 static_assert(sizeof(PassConstants) == 112, "PassConstants must match std430");
-static_assert(offsetof(PassConstants, wind) == 80, "PassConstants must match std430");
+static_assert(offsetof(PassConstants, wind_slot) == 80 && offsetof(PassConstants, params) == 96,
+              "PassConstants must match std430");
+static_assert(offsetof(PassConstants, round) == 52 && offsetof(PassConstants, kind) == 56,
+              "PassConstants must match std430");
 static_assert(sizeof(PassConstants) <= 128, "push constants must fit the guaranteed 128 bytes");
 
 /// Threads of a packed contour dispatch (HMSM_PACKED_CONTOUR_INSTANCES): one per model vertex
@@ -230,11 +236,6 @@ constexpr uint32_t rounds_workgroup_size(uint32_t chains) {
     return size;
 }
 
-/// Bytes of workgroup shared memory a fused dispatch over `chains` chains per instance needs to
-/// keep its rounds there (HMSM_FUSED_SHARED_FLOATS_PER_CHAIN floats per chain).
-constexpr uint64_t fused_shared_bytes(uint32_t chains) {
-    return uint64_t(chains) * HMSM_FUSED_SHARED_FLOATS_PER_CHAIN * sizeof(float);
-}
 }  // namespace hmsm::gpu
 #endif
 

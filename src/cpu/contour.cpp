@@ -1,8 +1,8 @@
 // Pass 7: branch-mesh and leaf vertices rigid with their chain, v = O_c + R_c v_local (the pose
 // read from the joint matrix [R_c | O_c], which every composition writes); base-ring
 // vertices of child chains blend with the parent chain (the paper's contour fix-up) so joints
-// stay closed while the child swings. pc.mode is the vertex layout (gpu_layout.h): packed stores
-// the octahedral normal word in the position's w (src/common/octahedral.h) and no vertex_normal.
+// stay closed while the child swings. The dispatch kind is the vertex layout (gpu_layout.h):
+// CONTOUR_PACKED stores the octahedral normal word in the position's w (src/common/octahedral.h) and no vertex_normal.
 #include "cpu_state.h"
 
 #include "../common/octahedral.h"
@@ -33,7 +33,7 @@ void contour(State<T>& s, const gpu::PassConstants& pc, Range r) {
             normal = glm::normalize((T(1) - beta) * normal + beta * n);
         }
         uint64_t out = pc.vertex_begin + uint64_t(e.instance) * pc.model_vertex_count + e.index;
-        if (pc.mode == HMSM_VERTEX_LAYOUT_PACKED) {
+        if (pc.kind == HMSM_DISPATCH_CONTOUR_PACKED) {
             s.vertex_position[out] = {position, packed_word_to_w<T>(encode_normal_word(normal.x, normal.y, normal.z))};
         } else {
             s.vertex_position[out] = {position, T(1)};

@@ -103,9 +103,9 @@ public:
         return {};
     }
 
-    Status run(std::span<const Dispatch> program, std::span<const double> wind_x) override {
+    Status run(std::span<const Dispatch> program, std::span<const RunStep> steps) override {
         times_ = {};
-        if (pool_ && !wind_x.empty()) {
+        if (pool_ && !steps.empty()) {
             try {
                 if (!plan_ || !plan_->matches(program))
                     plan_ = std::make_unique<StepPlan>(program, pool_->threads(), min_chunk_elements_);
@@ -115,12 +115,13 @@ public:
         }
         using clock = std::chrono::steady_clock;
         if (pool_ && !profiling_) {
-            plan_->run(*pool_, wind_x.size(), [&](uint32_t d, size_t step, Range r) {
-                run_range(program[d], wind_x[step], r);
+            plan_->run(*pool_, steps.size(), [&](uint32_t d, size_t step, Range r) {
+                run_range(program[d], steps[step].wind_slot, r);
             });
             return {};
         }
-        for (double x : wind_x) {
+        for (const RunStep& step : steps) {
+            const uint32_t x = step.wind_slot;
             for (uint32_t i = 0; i < program.size(); ++i) {
                 const Dispatch& d = program[i];
                 auto start = profiling_ ? clock::now() : clock::time_point{};
@@ -138,7 +139,7 @@ public:
                         std::chrono::duration<double>(clock::now() - start).count();
             }
         }
-        times_.steps = profiling_ ? wind_x.size() : 0;
+        times_.steps = profiling_ ? steps.size() : 0;
         return {};
     }
 
@@ -220,34 +221,33 @@ private:
         s_.dt = T(d.dt);
         s_.max_angle = T(d.max_angle);
         s_.fix_weight = T(d.fix_weight);
-        s_.profile = uint32_t(d.profile);
-        s_.wind_vector = typename State<T>::vec3(d.wind_vector);
         s_.total_chains = d.chain_capacity;  // the stride between ping-pong halves
     }
 
-    /// Runs pass function `f` (src/cpu/NAME.cpp); only wind_force takes the step's wind.
+    /// Runs pass function `f` (src/cpu/NAME.cpp); only wind_force takes the step's wind slot.
     template <class F>
-    void call_pass(F f, const Dispatch& d, double wind_x, Range r) {
-        if constexpr (std::is_invocable_v<F, State<T>&, const gpu::PassConstants&, double, Range>)
-            f(s_, d.constants, wind_x, r);
+    void call_pass(F f, const Dispatch& d, uint32_t wind_slot, Range r) {
+        if constexpr (std::is_invocable_v<F, State<T>&, const gpu::PassConstants&, uint32_t, Range>)
+            f(s_, d.constants, wind_slot, r);
         else
             f(s_, d.constants, r);
     }
 
-    void run_range(const Dispatch& d, double wind_x, Range r) {
-        if (runs_fused(d)) return fused<T>(s_, d.constants, wind_x, r);
-        if (runs_path_walk(d)) {
-            // The pass and its walk partner over the same elements (pass_table.h `walk`).
-            switch (d.pass) {
-                case Pass::wind_force: return wind_force_and_integrate<T>(s_, d.constants, wind_x, r);
-                case Pass::compose: return path_walk<T>(s_, d.constants, r);
-                case Pass::node_relative: return node_relative_and_world<T>(s_, d.constants, r);
-                default: break;
-            }
+    void run_range(const Dispatch& d, uint32_t wind_slot, Range r) {
+        // A walk pair runs the pass and its walk partner over the same elements (pass_table.h
+        // `walk`); the other kinds run the pass's own function, which reads the kind.
+        switch (dispatch_kind(d)) {
+            case DispatchKind::wind_pair: return wind_force_and_integrate<T>(s_, d.constants, wind_slot, r);
+            case DispatchKind::pose_walk:
+            case DispatchKind::pose_walk_from_records: return path_walk<T>(s_, d.constants, r);
+            case DispatchKind::node_pair: return node_relative_and_world<T>(s_, d.constants, r);
+            case DispatchKind::walk_top_poses:
+            case DispatchKind::walk_ahead: return;  // never asked for (capabilities: no walk ahead)
+            default: break;
         }
         switch (d.pass) {
 #define HMSM_CPU_PASS_CASE(name) \
-    case Pass::name: return call_pass(name<T>, d, wind_x, r);
+    case Pass::name: return call_pass(name<T>, d, wind_slot, r);
             HMSM_PASSES(HMSM_CPU_PASS_CASE)
 #undef HMSM_CPU_PASS_CASE
         }

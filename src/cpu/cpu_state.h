@@ -48,8 +48,6 @@ struct State {
     std::vector<joint> joint_matrix;   // [R_c | O_c] by rows
     // Uniforms.
     T dt{}, max_angle{}, fix_weight{};
-    uint32_t profile = 0;
-    vec3 wind_vector{0};
     uint64_t total_chains = 0;
 };
 
@@ -82,10 +80,9 @@ typename State<T>::vec3 joint_origin(const State<T>& s, uint64_t chain) {
 }
 
 /// The work items [begin, end) of one dispatch that one call of a pass runs, in order. An item
-/// is a thread of the dispatch (element i, gpu_layout.h), except in
-/// HMSM_MODE_POINTER_JUMPING_IN_DISPATCH, where it is a group instance running every round
-/// (a workgroup on a GPU), and in HMSM_MODE_FUSED, where it is a group instance running passes
-/// 1-5 (fused.cpp). Distinct items of one dispatch write distinct elements and read
+/// is a thread of the dispatch (element i, gpu_layout.h), except in a
+/// HMSM_DISPATCH_JUMP_ROUNDS_IN_DISPATCH dispatch, where it is a group instance running every round
+/// (a workgroup on a GPU). Distinct items of one dispatch write distinct elements and read
 /// only what earlier dispatches (or, in-dispatch, earlier rounds of the same instance) wrote,
 /// so disjoint ranges may run concurrently (the cpu-parallel backend) with the same float
 /// results as one serial call over all items.
@@ -94,61 +91,60 @@ struct Range {
 };
 /// Whether a work item of a dispatch of `pass` is a group instance (see Range).
 inline bool items_are_instances(Pass pass, const gpu::PassConstants& pc) {
-    return (is_hierarchical(pass) && pc.mode == HMSM_MODE_POINTER_JUMPING_IN_DISPATCH) ||
-           (pass == kFusedDispatchPass && pc.mode == HMSM_MODE_FUSED);
+    return is_hierarchical(pass) && pc.kind == HMSM_DISPATCH_JUMP_ROUNDS_IN_DISPATCH;
 }
 /// Number of work items of a dispatch of `pass` (see Range).
 inline uint32_t work_items(Pass pass, const gpu::PassConstants& pc) {
     return items_are_instances(pass, pc) ? pc.element_count / pc.model_chain_count : pc.element_count;
 }
-/// Model elements (chains, nodes or vertices) one work item of `pass` touches, for chunking: a
-/// fused item runs two chain passes, two sets of rounds and a node pass.
+/// Model elements (chains, nodes or vertices) one work item of `pass` touches, for chunking: an
+/// instance item runs every round over its chains.
 inline uint32_t elements_per_item(Pass pass, const gpu::PassConstants& pc) {
-    if (!items_are_instances(pass, pc)) return 1;
-    if (is_hierarchical(pass)) return pc.model_chain_count * pc.round;
-    return pc.model_chain_count * (2 * pc.round + 2) + pc.model_node_count;
+    return items_are_instances(pass, pc) ? pc.model_chain_count * pc.round : 1;
 }
 
-/// The three ways a hierarchical pass (compose, root_positions) runs the work items `r` of one
-/// dispatch. Level by level: level(dst, instance, chain, parent) for each chain of one level, in
-/// place in half dst (an element offset). Every round in the dispatch: the work items are
-/// instances, and round(round, src_half, dst_half, chains, last) runs over all their chains,
-/// round after round. One pointer-jumping round: round(...) over `r` itself (last is true).
+/// The three kinds of dispatch of a hierarchical pass (compose, root_positions) running the work
+/// items `r`. LEVEL: level(dst, instance, chain, parent) for each chain of one level, in place in
+/// half dst (an element offset). JUMP_ROUNDS_IN_DISPATCH: the work items are instances, and
+/// round(round, src_half, dst_half, chains, last) runs over all their chains, round after round.
+/// JUMP_ROUND: round(...) over `r` itself (last is true). No other kind runs these passes apart
+/// (pass_table.h HMSM_DISPATCH_KINDS).
 template <class T, class Level, class Round>
 void run_hierarchical(const State<T>& s, const gpu::PassConstants& pc, Range r, Level level, Round round) {
-    if (pc.mode == HMSM_MODE_LEVEL_BY_LEVEL) {
-        const uint64_t dst = uint64_t(pc.dst_half) * s.total_chains;
-        for (uint32_t i = r.begin; i < r.end; ++i) {
-            const Element e = element_of(i, pc.level_count);
-            if (instance_paused(s, pc, e.instance)) continue;
-            const int32_t c = int32_t(pc.level_begin + e.index);
-            level(dst, e.instance, c, s.chain_parent[pc.model_chain_begin + c]);
+    switch (pc.kind) {
+        case HMSM_DISPATCH_LEVEL: {
+            const uint64_t dst = uint64_t(pc.dst_half) * s.total_chains;
+            for (uint32_t i = r.begin; i < r.end; ++i) {
+                const Element e = element_of(i, pc.level_count);
+                if (instance_paused(s, pc, e.instance)) continue;
+                const int32_t c = int32_t(pc.level_begin + e.index);
+                level(dst, e.instance, c, s.chain_parent[pc.model_chain_begin + c]);
+            }
+            return;
         }
-        return;
+        case HMSM_DISPATCH_JUMP_ROUNDS_IN_DISPATCH: {
+            const Range chains{r.begin * pc.model_chain_count, r.end * pc.model_chain_count};
+            for (uint32_t k = 0; k < pc.round; ++k)
+                round(k, HMSM_HALF_READ(k), HMSM_HALF_WRITTEN(k), chains, k + 1 == pc.round);
+            return;
+        }
+        case HMSM_DISPATCH_JUMP_ROUND: return round(pc.round, pc.src_half, pc.dst_half, r, true);
+        default: return;
     }
-    if (pc.mode == HMSM_MODE_POINTER_JUMPING_IN_DISPATCH) {
-        const Range chains{r.begin * pc.model_chain_count, r.end * pc.model_chain_count};
-        for (uint32_t k = 0; k < pc.round; ++k)
-            round(k, HMSM_HALF_READ(k), HMSM_HALF_WRITTEN(k), chains, k + 1 == pc.round);
-        return;
-    }
-    round(pc.round, pc.src_half, pc.dst_half, r, true);
 }
 
 // The seven passes; each runs the work items `r` of one dispatch serially.
-template <class T> void wind_force(State<T>& s, const gpu::PassConstants& pc, double wind_x, Range r);
+template <class T> void wind_force(State<T>& s, const gpu::PassConstants& pc, uint32_t wind_slot, Range r);
 template <class T> void integrate(State<T>& s, const gpu::PassConstants& pc, Range r);
 template <class T> void compose(State<T>& s, const gpu::PassConstants& pc, Range r);
 template <class T> void node_relative(State<T>& s, const gpu::PassConstants& pc, Range r);
 template <class T> void root_positions(State<T>& s, const gpu::PassConstants& pc, Range r);
 template <class T> void node_world(State<T>& s, const gpu::PassConstants& pc, Range r);
 template <class T> void contour(State<T>& s, const gpu::PassConstants& pc, Range r);
-/// Composition::fused: passes 1-5 for the group instances `r`, one instance after the other.
-template <class T> void fused(State<T>& s, const gpu::PassConstants& pc, double wind_x, Range r);
 /// Composition::path_walk: passes 3 and 5 for the chains `r` by the top-down walk (path_walk.cpp).
 template <class T> void path_walk(State<T>& s, const gpu::PassConstants& pc, Range r);
 /// Composition::path_walk's wind pair: passes 1 and 2 per chain, storing only the angles.
-template <class T> void wind_force_and_integrate(State<T>& s, const gpu::PassConstants& pc, double wind_x, Range r);
+template <class T> void wind_force_and_integrate(State<T>& s, const gpu::PassConstants& pc, uint32_t wind_slot, Range r);
 /// Composition::path_walk's node pair: passes 4 and 6 per node, storing only node_world.
 template <class T> void node_relative_and_world(State<T>& s, const gpu::PassConstants& pc, Range r);
 /// Pass 2's halves: the symplectic Euler step of state chain c of static chain model_chain under

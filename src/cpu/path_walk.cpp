@@ -1,4 +1,4 @@
-// Composition::path_walk on the CPU, passes 3 and 5 in one (gpu_layout.h HMSM_MODE_PATH_WALK):
+// Composition::path_walk on the CPU, passes 3 and 5 in one (gpu_layout.h HMSM_DISPATCH_POSE_WALK):
 // each chain of the work items walks its ancestors from the trunk down, R = R_parent T and
 // O = O_parent + R_parent l_attach, each T computed from the chain's new angles as integrate
 // computes it (a walk step stores no T); the pose goes to the joint matrix alone. These are
@@ -19,8 +19,9 @@ void path_walk(State<T>& s, const gpu::PassConstants& pc, Range r) {
         const int32_t c = int32_t(e.index);
         // The walk record (gpu_layout.h): depth, ancestors and attach nodes; further up than it
         // holds, through the 2^round-th ancestors of chain_jump and chain_attach. (The GPU kernels
-        // gather the same values from chain_parent in a forest, HMSM_WALK_FROM_RECORDS unset, where
-        // reading the records costs them L2 traffic; on the CPU the record is the cheaper way.)
+        // gather the same values from chain_parent in a forest, a POSE_WALK rather than a
+        // POSE_WALK_FROM_RECORDS dispatch, where reading the records costs them L2 traffic; on
+        // the CPU the record is the cheaper way for both kinds.)
         const int32_t* record = &s.chain_walk[uint64_t(HMSM_WALK_RECORD_INTS) * (pc.model_chain_begin + c)];
         const uint32_t depth = uint32_t(record[0]);
         auto ancestor = [&](uint32_t up) {

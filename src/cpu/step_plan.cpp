@@ -28,21 +28,12 @@ namespace hmsm::detail::cpu {
 namespace {
 
 /// Whether a dispatch reads anywhere within its instances (a hierarchical pass's parents and
-/// jump targets, or the fused dispatch's passes 1-5), so that its chunks are planned by
-/// instance, not by element.
-bool instance_wide(const Dispatch& d) { return is_hierarchical(d.pass) || runs_fused(d); }
+/// jump targets), so that its chunks are planned by instance, not by element.
+bool instance_wide(const Dispatch& d) { return is_hierarchical(d.pass); }
 
 /// Work items per instance of a dispatch (a dispatch covers whole instances of one group).
 uint32_t items_per_instance(const Dispatch& d) {
-    const gpu::PassConstants& pc = d.constants;
-    if (runs_fused(d)) return 1;
-    if (is_hierarchical(d.pass)) {
-        if (pc.mode == HMSM_MODE_POINTER_JUMPING_IN_DISPATCH) return 1;
-        if (pc.mode == HMSM_MODE_LEVEL_BY_LEVEL) return pc.level_count;
-        return pc.model_chain_count;
-    }
-    const uint32_t per_domain[] = {pc.model_chain_count, pc.model_node_count, pc.model_vertex_count};
-    return per_domain[uint32_t(pass_domain(d.pass))];
+    return runs_rounds_in_dispatch(d) ? 1 : threads_per_instance(d);
 }
 
 /// The first state element of a non-hierarchical dispatch's domain: its item i is element

@@ -13,9 +13,9 @@ namespace hmsm::detail::cpu {
 /// g for every chain of the work items, handed to use(state chain, static chain, g); the
 /// previous pose from the pose half src_half, or from the joint matrix (`from_joint`: a path walk).
 template <class T, class Use>
-void wind_forces(State<T>& s, const gpu::PassConstants& pc, double wind_x, Range r, bool from_joint, Use&& use) {
+void wind_forces(State<T>& s, const gpu::PassConstants& pc, uint32_t wind_slot, Range r, bool from_joint, Use&& use) {
     using vec3 = typename State<T>::vec3;
-    const uint32_t slot = uint32_t(wind_x);  // the step's slot of the wind table
+    const uint32_t slot = wind_slot;  // the step's slot of the wind table
     const auto* table = s.wind_table.data();
     const auto& step = table[HMSM_WIND_STEPS + HMSM_WIND_STEP_VEC4S * slot];
     const vec3 strength_direction(table[HMSM_WIND_VECTOR]);
@@ -52,8 +52,8 @@ void wind_forces(State<T>& s, const gpu::PassConstants& pc, double wind_x, Range
 }
 
 template <class T>
-void wind_force(State<T>& s, const gpu::PassConstants& pc, double wind_x, Range r) {
-    wind_forces(s, pc, wind_x, r, false,
+void wind_force(State<T>& s, const gpu::PassConstants& pc, uint32_t wind_slot, Range r) {
+    wind_forces(s, pc, wind_slot, r, false,
                 [&](uint64_t c, uint32_t, const typename State<T>::vec2& g) { s.chain_force[c] = g; });
 }
 
@@ -61,15 +61,15 @@ void wind_force(State<T>& s, const gpu::PassConstants& pc, double wind_x, Range 
 /// only the new angles are stored (the walk computes T from them). The previous pose is the
 /// joint matrix (a walk step writes no R or O half).
 template <class T>
-void wind_force_and_integrate(State<T>& s, const gpu::PassConstants& pc, double wind_x, Range r) {
-    wind_forces(s, pc, wind_x, r, true, [&](uint64_t c, uint32_t model_chain, const typename State<T>::vec2& g) {
+void wind_force_and_integrate(State<T>& s, const gpu::PassConstants& pc, uint32_t wind_slot, Range r) {
+    wind_forces(s, pc, wind_slot, r, true, [&](uint64_t c, uint32_t model_chain, const typename State<T>::vec2& g) {
         integrate_angles(s, model_chain, c, g);
     });
 }
 
-template void wind_force<float>(State<float>&, const gpu::PassConstants&, double, Range);
-template void wind_force<double>(State<double>&, const gpu::PassConstants&, double, Range);
-template void wind_force_and_integrate<float>(State<float>&, const gpu::PassConstants&, double, Range);
-template void wind_force_and_integrate<double>(State<double>&, const gpu::PassConstants&, double, Range);
+template void wind_force<float>(State<float>&, const gpu::PassConstants&, uint32_t, Range);
+template void wind_force<double>(State<double>&, const gpu::PassConstants&, uint32_t, Range);
+template void wind_force_and_integrate<float>(State<float>&, const gpu::PassConstants&, uint32_t, Range);
+template void wind_force_and_integrate<double>(State<double>&, const gpu::PassConstants&, uint32_t, Range);
 
 }  // namespace hmsm::detail::cpu

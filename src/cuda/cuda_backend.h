@@ -4,6 +4,7 @@
 #pragma once
 
 #include "../backend.h"
+#include "../step_program.h"
 #include "device_buffers.h"
 #include "step_graph.h"
 
@@ -25,21 +26,24 @@ public:
     /// Without profiling, each step is one replay of a captured step graph (captured on the
     /// first run() of a program); with profiling, the dispatches are launched one by one
     /// between events and every step is timed. A program of the walk that integrates ahead
-    /// runs its steps without wind_force where it may (cuda_backend.cpp).
-    Status run(std::span<const Dispatch> program, std::span<const double> wind_x) override;
+    /// runs each step as `ahead` says (cuda_backend.cpp).
+    Status run(std::span<const Dispatch> program, std::span<const RunStep> steps) override;
     Status read(BufferId id, uint64_t first, uint64_t count, void* dst, Scalar as) const override;
     Status write(BufferId id, uint64_t first, uint64_t count, const void* src, Scalar as) override;
     Status move_elements(BufferId id, std::span<const ElementMove> moves) override;
     void set_profiling(bool enabled) override { profiling_ = enabled; }
-    bool prefers_path_walk() const override { return true; }
-    /// On unless HMSM_CUDA_WALK_AHEAD=0 (read when the backend is created; for A/B measurements
-    /// and tests).
-    bool walks_ahead() const override { return walk_ahead_; }
+    /// The path walk, integrating ahead unless HMSM_CUDA_WALK_AHEAD=0 (read when the backend is
+    /// created; for A/B measurements and tests).
+    BackendCapabilities capabilities() const override {
+        BackendCapabilities can;
+        can.walks_ahead = walk_ahead_;
+        can.prefers_path_walk = true;
+        return can;
+    }
     /// Steps run without their wind_force dispatches, taking the angles the step before
     /// integrated ahead (since the backend was created; for tests).
     uint64_t steps_taken_ahead() const { return steps_taken_ahead_; }
-    /// Steps of a walk-ahead program run as the plain walk, after live changes before several
-    /// steps in a row (cuda_backend.cpp; for tests).
+    /// Steps of a walk-ahead program run as the plain walk (AheadStep::plain; for tests).
     uint64_t steps_walked_plain() const { return steps_walked_plain_; }
     PassTimes pass_times() const override { return times_; }
 
@@ -54,17 +58,11 @@ public:
     const BufferPointers& device_pointers() const { return buffers_.pointers(); }
 
 private:
-    CudaBackend(int device, std::string name, cudaStream_t own_stream, uint64_t fused_shared_limit)
-        : device_(device), device_name_(std::move(name)), own_stream_(own_stream), stream_(own_stream),
-          fused_shared_limit_(fused_shared_limit) {}
+    CudaBackend(int device, std::string name, cudaStream_t own_stream)
+        : device_(device), device_name_(std::move(name)), own_stream_(own_stream), stream_(own_stream) {}
     /// The captured graph of `program` over the current buffers, captured now if none of the
     /// last few is.
     Result<StepGraph*> graph_for(std::span<const Dispatch> program);
-    /// Whether wind-table step slot `slot` holds what the last run's next slot held (the one its
-    /// walk ahead read), as the host last wrote them.
-    bool next_slot_fits(uint32_t slot) const;
-    /// ahead_ for a program of the walk ahead.
-    void derive_ahead_variants(std::span<const Dispatch> program);
     /// One step of `program` launched dispatch by dispatch between events, its device times
     /// added to times_ (synchronizes).
     Status run_profiled(std::span<const Dispatch> program, uint32_t slot);
@@ -74,8 +72,6 @@ private:
     std::string device_name_;
     cudaStream_t own_stream_;
     cudaStream_t stream_;
-    /// Shared memory a fused block may take (backend.h fused_shared_limit, read at creation).
-    uint64_t fused_shared_limit_;
     DeviceBuffers buffers_;
     /// A program of the walk ahead replays up to three graphs (whole, without wind_force, as the
     /// plain walk), each over two buffer layouts (the state and its twin swapped or not): the
@@ -85,18 +81,10 @@ private:
     uint64_t graph_clock_ = 0;
     bool walk_ahead_ = true;
     /// The last program of the walk ahead that ran, and what its steps run instead where they
-    /// take the angles integrated ahead (without wind_force) or walk plain: derived once per
-    /// program (cuda_backend.cpp).
-    struct AheadVariants {
-        std::vector<Dispatch> whole, without_wind, plain;
-    } ahead_;
-    bool next_state_ready_ = false;        // chain_state_next holds what ahead_.whole's last run wrote
-    std::vector<float> ahead_slot_;        // the wind-table step slot it read, as it was then
-    std::vector<float> step_slots_;        // host copy of the wind table's step slots as written
-    uint64_t steps_taken_ahead_ = 0;       // steps that took the angles integrated ahead
-    uint64_t steps_walked_plain_ = 0;      // steps_walked_plain()
-    bool written_since_run_ = false;       // a write (but of the wind step slots) since the last run
-    uint32_t runs_changed_ = 0;            // runs in a row with such a write before them
+    /// take the angles integrated ahead or walk plain: derived once per program.
+    AheadVariants ahead_;
+    uint64_t steps_taken_ahead_ = 0;   // steps that took the angles integrated ahead
+    uint64_t steps_walked_plain_ = 0;  // steps_walked_plain()
     std::vector<cudaEvent_t> events_;  // profiling: one before and one after each dispatch
     bool profiling_ = false;
     PassTimes times_;

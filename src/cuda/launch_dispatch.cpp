@@ -22,18 +22,17 @@ uint32_t max_launch_blocks() {
     return blocks;
 }
 
-// The wind phase of the step reaches the dispatches that read it through their constants
+// The wind-table slot of the step reaches the dispatches that read it through their constants
 // (Backend::run).
-static gpu::PassConstants step_constants(const Dispatch& dispatch, float wind_x) {
+static gpu::PassConstants step_constants(const Dispatch& dispatch, uint32_t wind_slot) {
     gpu::PassConstants pc = dispatch.constants;
-    if (reads_wind_slot(dispatch)) pc.wind.w = wind_x;
+    if (reads_wind_slot(dispatch)) pc.wind_slot = wind_slot;
     return pc;
 }
 
-cudaError_t launch_dispatch(const Dispatch& dispatch, const BufferPointers& buffers, float wind_x,
-                            cudaStream_t stream, uint64_t fused_shared_limit) {
-    const gpu::PassConstants pc = step_constants(dispatch, wind_x);
-    if (runs_fused(dispatch)) return launch_fused(buffers, pc, stream, fused_shared_limit);
+cudaError_t launch_dispatch(const Dispatch& dispatch, const BufferPointers& buffers, uint32_t wind_slot,
+                            cudaStream_t stream) {
+    const gpu::PassConstants pc = step_constants(dispatch, wind_slot);
     switch (dispatch.pass) {
 #define HMSM_CUDA_LAUNCH_CASE(name) \
     case Pass::name: return launch_##name(buffers, pc, stream);
@@ -43,12 +42,8 @@ cudaError_t launch_dispatch(const Dispatch& dispatch, const BufferPointers& buff
     return cudaErrorInvalidValue;
 }
 
-uint64_t emulated_fused_shared_limit() { return fused_shared_limit(227 * 1024); }
-
-void emulate_dispatch(const Dispatch& dispatch, const BufferPointers& host_buffers, float wind_x,
-                      uint64_t fused_shared_limit) {
-    const gpu::PassConstants pc = step_constants(dispatch, wind_x);
-    if (runs_fused(dispatch)) return emulate_fused(host_buffers, pc, fused_shared_limit);
+void emulate_dispatch(const Dispatch& dispatch, const BufferPointers& host_buffers, uint32_t wind_slot) {
+    const gpu::PassConstants pc = step_constants(dispatch, wind_slot);
     switch (dispatch.pass) {
 #define HMSM_CUDA_EMULATE_CASE(name) \
     case Pass::name: emulate_##name(host_buffers, pc); return;

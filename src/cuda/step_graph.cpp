@@ -80,7 +80,7 @@ bool StepGraph::matches(std::span<const Dispatch> program, const BufferPointers&
 }
 
 Status StepGraph::capture(std::span<const Dispatch> program, const BufferPointers& buffers,
-                          cudaStream_t stream, uint64_t fused_shared_limit) {
+                          cudaStream_t stream) {
     release();
     // A dispatch that does not depend on the one before it (the path walk's node pair and contour,
     // both reading only the joint matrices) runs beside it: the graph forks after the dispatch
@@ -101,7 +101,7 @@ Status StepGraph::capture(std::span<const Dispatch> program, const BufferPointer
             on = fork.side;
             error = cudaStreamWaitEvent(fork.side, fork.before, 0);
         }
-        if (error == cudaSuccess) error = launch_dispatch(d, buffers, 0.0f, on, fused_shared_limit);
+        if (error == cudaSuccess) error = launch_dispatch(d, buffers, 0, on);
         if (error == cudaSuccess && reads_wind_slot(d) && d.constants.element_count > 0) {
             WindNode wind{};
             wind.constants = d.constants;
@@ -129,9 +129,9 @@ Status StepGraph::capture(std::span<const Dispatch> program, const BufferPointer
     return {};
 }
 
-Status StepGraph::replay(float wind_x, cudaStream_t stream) {
+Status StepGraph::replay(uint32_t wind_slot, cudaStream_t stream) {
     for (WindNode& wind : wind_nodes_) {
-        wind.constants.wind.w = wind_x;
+        wind.constants.wind_slot = wind_slot;
         void* arguments[] = {&buffers_, &wind.constants};
         cudaKernelNodeParams params = wind.launch;
         params.kernelParams = arguments;

@@ -2,7 +2,7 @@
 //
 // The program is captured once from the stream (every dispatch in order, so ordering replaces
 // barriers; a dispatch that does not depend on the one before it runs beside it, step_graph.cpp). Between replays only the step's wind-table
-// slot (gpu_layout.h) changes: it lives in the constants (pc.wind.w) of the dispatches that read
+// slot (gpu_layout.h) changes: it lives in the constants (pc.wind_slot) of the dispatches that read
 // it (backend.h reads_wind_slot: wind_force, the top poses of the walk ahead), so before
 // each replay every such kernel node gets new parameters through
 // cudaGraphExecKernelNodeSetParams. That is possible generically because every pass kernel
@@ -34,9 +34,9 @@ public:
     bool matches(std::span<const Dispatch> program, const BufferPointers& buffers) const;
     /// Captures `program` from `stream` and instantiates it (replacing any earlier graph).
     Status capture(std::span<const Dispatch> program, const BufferPointers& buffers,
-                   cudaStream_t stream, uint64_t fused_shared_limit);
-    /// Enqueues one step reading wind-table slot `wind_x` on `stream`.
-    Status replay(float wind_x, cudaStream_t stream);
+                   cudaStream_t stream);
+    /// Enqueues one step reading wind-table slot `wind_slot` on `stream`.
+    Status replay(uint32_t wind_slot, cudaStream_t stream);
 
 private:
     struct WindNode {

@@ -7,7 +7,6 @@
 // Generated at build time by cmake/HmsmVulkan.cmake (glslangValidator --vn hmsm_spirv_NAME).
 #include "hmsm_spirv/compose.h"
 #include "hmsm_spirv/contour.h"
-#include "hmsm_spirv/fused.h"
 #include "hmsm_spirv/integrate.h"
 #include "hmsm_spirv/node_relative.h"
 #include "hmsm_spirv/node_world.h"
@@ -45,7 +44,6 @@ Result<std::unique_ptr<Pipelines>> Pipelines::create(const Device& device) {
                                                   " invocations are not supported by " + device.name()};
 
     std::unique_ptr<Pipelines> p(new Pipelines(device));
-    p->fused_shared_bytes_ = fused_shared_limit(limits.max_shared_memory_bytes);
     const VolkDeviceTable& vk = device.vk();
     VkDevice dev = device.handle();
 
@@ -97,11 +95,11 @@ uint32_t size_index(uint32_t workgroup_size) {
 static_assert((64u << 4) == HMSM_MAX_ROUNDS_WORKGROUP_SIZE, "one rounds pipeline per power of two");
 
 Result<VkPipeline> Pipelines::create_pipeline(Pass pass, uint32_t workgroup_size) const {
-    return create_pipeline(pass_spirv(pass), has_specialized_workgroup_size(pass), workgroup_size, 0);
+    return create_pipeline(pass_spirv(pass), has_specialized_workgroup_size(pass), workgroup_size);
 }
 
 Result<VkPipeline> Pipelines::create_pipeline(std::span<const uint32_t> code, bool specialized,
-                                              uint32_t workgroup_size, uint32_t shared_floats) const {
+                                              uint32_t workgroup_size) const {
     const VolkDeviceTable& vk = device_.vk();
     VkDevice dev = device_.handle();
     VkShaderModuleCreateInfo module_info{VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};
@@ -109,10 +107,8 @@ Result<VkPipeline> Pipelines::create_pipeline(std::span<const uint32_t> code, bo
     module_info.pCode = code.data();
     VkShaderModule module;
     HMSM_VK_TRY(vk.vkCreateShaderModule(dev, &module_info, nullptr, &module));
-    const uint32_t values[2] = {workgroup_size, shared_floats};
-    const VkSpecializationMapEntry entries[2] = {{0, 0, sizeof(uint32_t)}, {1, sizeof(uint32_t), sizeof(uint32_t)}};
-    const uint32_t constants = shared_floats ? 2 : 1;
-    VkSpecializationInfo specialization{constants, entries, constants * sizeof(uint32_t), values};
+    const VkSpecializationMapEntry entry{0, 0, sizeof(uint32_t)};
+    VkSpecializationInfo specialization{1, &entry, sizeof(uint32_t), &workgroup_size};
     VkComputePipelineCreateInfo info{VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO};
     info.stage.sType = VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO;
     info.stage.stage = VK_SHADER_STAGE_COMPUTE_BIT;
@@ -137,18 +133,7 @@ uint32_t Pipelines::rounds_size(const Dispatch& dispatch) const {
     return size;
 }
 
-uint32_t Pipelines::fused_shared_floats(const Dispatch& dispatch) const {
-    const uint32_t chains = dispatch.constants.model_chain_count;
-    if (gpu::fused_shared_bytes(chains) > fused_shared_bytes_) return 1;
-    return chains * HMSM_FUSED_SHARED_FLOATS_PER_CHAIN;
-}
-
 Pipelines::Choice Pipelines::pipeline_for(const Dispatch& dispatch) const {
-    if (runs_fused(dispatch)) {
-        const FusedKey key = fused_key(dispatch);
-        const auto it = fused_pipelines_.find(key);
-        return {it == fused_pipelines_.end() ? VK_NULL_HANDLE : it->second, key.first};
-    }
     if (!runs_rounds_in_dispatch(dispatch)) return {pipeline(dispatch.pass), HMSM_WORKGROUP_SIZE};
     const uint32_t size = rounds_size(dispatch);
     return {rounds_pipelines_[rounds_slot(dispatch.pass)][size_index(size)], size};
@@ -156,14 +141,6 @@ Pipelines::Choice Pipelines::pipeline_for(const Dispatch& dispatch) const {
 
 Status Pipelines::prepare(std::span<const Dispatch> program) {
     for (const Dispatch& dispatch : program) {
-        if (runs_fused(dispatch)) {
-            const FusedKey key = fused_key(dispatch);
-            if (fused_pipelines_.count(key)) continue;
-            auto pipeline = create_pipeline(hmsm_spirv_fused, true, key.first, key.second);
-            if (!pipeline) return pipeline.status();
-            fused_pipelines_[key] = *pipeline;
-            continue;
-        }
         if (!runs_rounds_in_dispatch(dispatch)) continue;
         const uint32_t size = rounds_size(dispatch);
         VkPipeline& slot = rounds_pipelines_[rounds_slot(dispatch.pass)][size_index(size)];
@@ -183,7 +160,6 @@ Pipelines::~Pipelines() {
     for (const auto& sizes : rounds_pipelines_)
         for (VkPipeline pipeline : sizes)
             if (pipeline) vk.vkDestroyPipeline(dev, pipeline, nullptr);
-    for (const auto& [key, pipeline] : fused_pipelines_) vk.vkDestroyPipeline(dev, pipeline, nullptr);
     if (layout_) vk.vkDestroyPipelineLayout(dev, layout_, nullptr);
     if (set_layout_) vk.vkDestroyDescriptorSetLayout(dev, set_layout_, nullptr);
 }

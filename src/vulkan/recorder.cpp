@@ -15,9 +15,9 @@ WorkgroupGrid workgroup_grid(uint64_t groups, const DeviceLimits& limits) {
 
 void record_steps(const Device& device, const Pipelines& pipelines, const Windows& windows,
                   VkCommandBuffer cmd, std::span<const Dispatch> program,
-                  std::span<const double> wind_x, VkQueryPool timestamps) {
+                  std::span<const RunStep> steps, VkQueryPool timestamps) {
     const VolkDeviceTable& vk = device.vk();
-    const uint32_t queries = uint32_t(wind_x.size() * program.size() + 1);
+    const uint32_t queries = uint32_t(steps.size() * program.size() + 1);
     if (timestamps) vk.vkCmdResetQueryPool(cmd, timestamps, 0, queries);
     barrier_after_all_writes(device, cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
                              VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT);
@@ -32,7 +32,7 @@ void record_steps(const Device& device, const Pipelines& pipelines, const Window
     uint32_t written = 0, read = 0;  // buffers touched since the last barrier (bit = BufferId)
     VkPipeline bound = VK_NULL_HANDLE;
     uint32_t query = 1;
-    for (double x : wind_x) {
+    for (const RunStep& step : steps) {
         for (const WindowPlan::Part& part : parts) {
             const Dispatch& d = part.dispatch;
             const uint32_t reads = dispatch_reads(d), writes = dispatch_writes(d);
@@ -56,10 +56,10 @@ void record_steps(const Device& device, const Pipelines& pipelines, const Window
                 bound_set = set;
             }
             gpu::PassConstants constants = d.constants;
-            if (reads_wind_slot(d)) constants.wind.w = float(x);
+            if (reads_wind_slot(d)) constants.wind_slot = step.wind_slot;
             vk.vkCmdPushConstants(cmd, pipelines.layout(), VK_SHADER_STAGE_COMPUTE_BIT, 0,
                                   sizeof(constants), &constants);
-            // One workgroup per instance for in-dispatch rounds and fused dispatches, else one
+            // One workgroup per instance for in-dispatch rounds, else one
             // per HMSM_WORKGROUP_SIZE threads.
             WorkgroupGrid grid = workgroup_grid(launch_shape(d).workgroups, device.limits());
             if (grid.x) vk.vkCmdDispatch(cmd, grid.x, grid.y, 1);

@@ -23,15 +23,15 @@ struct WorkgroupGrid {
 };
 WorkgroupGrid workgroup_grid(uint64_t groups, const DeviceLimits& limits);
 
-/// Records wind_x.size() steps of `program` into `cmd` (already begun); `pipelines` must have
+/// Records steps.size() steps of `program` into `cmd` (already begun); `pipelines` must have
 /// been prepared for `program` (Pipelines::prepare). Starts with a barrier
 /// against all earlier shader and transfer writes. With a `timestamps` pool, writes timestamp 0
 /// before the first dispatch and timestamp j + 1 after dispatch j (the pool must hold
-/// wind_x.size() * program.size() + 1 queries; they are reset here). A dispatch of a split
+/// steps.size() * program.size() + 1 queries; they are reset here). A dispatch of a split
 /// scene is recorded as one part per segment it overlaps (windows.h), each with its segment's
 /// descriptor set; hazards are tracked per part, so the parts are separated by barriers.
 void record_steps(const Device& device, const Pipelines& pipelines, const Windows& windows,
                   VkCommandBuffer cmd, std::span<const Dispatch> program,
-                  std::span<const double> wind_x, VkQueryPool timestamps);
+                  std::span<const RunStep> steps, VkQueryPool timestamps);
 
 }  // namespace hmsm::detail::vk

@@ -157,7 +157,7 @@ Status VulkanBackend::upload(const SceneData& scene) {
 
 Status VulkanBackend::move_elements(BufferId id, std::span<const ElementMove> moves) {
     HMSM_TRY(check_device_lost());
-    if (!reshapes_in_place())
+    if (!capabilities().reshapes_in_place)
         return {ErrorCode::unsupported, "vulkan: a scene split into windows cannot move state in place"};
     const uint64_t element_bytes = device_element_bytes(id);
     auto checked = largest_move_bytes(moves, element_bytes,
@@ -213,15 +213,15 @@ Status VulkanBackend::ensure_timestamp_capacity(Slot& slot, uint32_t queries) {
 }
 
 Status VulkanBackend::submit_chunk(Slot& slot, std::span<const Dispatch> program,
-                                   std::span<const double> wind_x) {
+                                   std::span<const RunStep> steps) {
     const VolkDeviceTable& vk = device_->vk();
     const bool timed = profiling_ && device_->limits().timestamp_period_ns > 0.0;
-    if (timed) HMSM_TRY(ensure_timestamp_capacity(slot, uint32_t(wind_x.size() * program.size() + 1)));
+    if (timed) HMSM_TRY(ensure_timestamp_capacity(slot, uint32_t(steps.size() * program.size() + 1)));
     HMSM_VK_TRY(vk.vkResetCommandBuffer(slot.command_buffer, 0));
     VkCommandBufferBeginInfo begin{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
     begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
     HMSM_VK_TRY(vk.vkBeginCommandBuffer(slot.command_buffer, &begin));
-    record_steps(*device_, *pipelines_, Windows{*plan_, *sets_}, slot.command_buffer, program, wind_x,
+    record_steps(*device_, *pipelines_, Windows{*plan_, *sets_}, slot.command_buffer, program, steps,
                  timed ? slot.timestamps : VK_NULL_HANDLE);
     HMSM_VK_TRY(vk.vkEndCommandBuffer(slot.command_buffer));
     VkSubmitInfo submit{VK_STRUCTURE_TYPE_SUBMIT_INFO};
@@ -233,7 +233,7 @@ Status VulkanBackend::submit_chunk(Slot& slot, std::span<const Dispatch> program
     HMSM_TRY(check_device_lost());
     HMSM_VK_TRY(vk.vkQueueSubmit(device_->queue(), 1, &submit, slot.fence));
     slot.in_flight = true;
-    slot.steps = timed ? wind_x.size() : 0;
+    slot.steps = timed ? steps.size() : 0;
     return {};
 }
 
@@ -262,25 +262,25 @@ Status VulkanBackend::finish_slot(Slot& slot, std::span<const Dispatch> program)
     return {};
 }
 
-Status VulkanBackend::run(std::span<const Dispatch> program, std::span<const double> wind_x) {
+Status VulkanBackend::run(std::span<const Dispatch> program, std::span<const RunStep> steps) {
     times_ = {};
-    if (program.empty() || wind_x.empty()) return {};
+    if (program.empty() || steps.empty()) return {};
     if (!plan_ || !sets_) return {ErrorCode::internal, "vulkan: run() before upload()"};
     HMSM_TRY(pipelines_->prepare(program));
     if (record_target_) {
-        record_steps(*device_, *pipelines_, Windows{*plan_, *sets_}, record_target_, program, wind_x,
+        record_steps(*device_, *pipelines_, Windows{*plan_, *sets_}, record_target_, program, steps,
                      VK_NULL_HANDLE);
         return device_->take_validation_messages();
     }
     const size_t steps_per_chunk = std::max<size_t>(1, kDispatchesPerChunk / program.size());
     Status status;
     size_t chunk = 0;
-    for (size_t first = 0; first < wind_x.size() && status.ok(); first += steps_per_chunk, ++chunk) {
+    for (size_t first = 0; first < steps.size() && status.ok(); first += steps_per_chunk, ++chunk) {
         Slot& slot = slots_[chunk % slots_.size()];
         status = finish_slot(slot, program);
         if (status.ok())
             status = submit_chunk(slot, program,
-                                  wind_x.subspan(first, std::min(steps_per_chunk, wind_x.size() - first)));
+                                  steps.subspan(first, std::min(steps_per_chunk, steps.size() - first)));
     }
     // Oldest first; after a failure still wait for whatever was submitted.
     for (size_t k = 0; k < slots_.size(); ++k) {
@@ -288,7 +288,7 @@ Status VulkanBackend::run(std::span<const Dispatch> program, std::span<const dou
         if (status.ok()) status = finished;
     }
     HMSM_TRY(status);
-    if (profiling_ && device_->limits().timestamp_period_ns > 0.0) times_.steps = wind_x.size();
+    if (profiling_ && device_->limits().timestamp_period_ns > 0.0) times_.steps = steps.size();
     return device_->take_validation_messages();
 }
 

@@ -27,14 +27,12 @@ public:
     BackendKind kind() const override { return BackendKind::vulkan; }
     std::string device_name() const override { return device_->name(); }
     Status upload(const SceneData& scene) override;
-    Status run(std::span<const Dispatch> program, std::span<const double> wind_x) override;
+    Status run(std::span<const Dispatch> program, std::span<const RunStep> steps) override;
     Status read(BufferId id, uint64_t first, uint64_t count, void* dst, Scalar as) const override;
     Status write(BufferId id, uint64_t first, uint64_t count, const void* src, Scalar as) override;
     /// Each move copies through a device-local scratch buffer (vkCmdCopyBuffer forbids
     /// overlapping regions), all in one submission.
     Status move_elements(BufferId id, std::span<const ElementMove> moves) override;
-    /// Not for a scene split into windows: its ping-pong buffers are segment-major.
-    bool reshapes_in_place() const override { return plan_ && !plan_->split(); }
     void set_profiling(bool enabled) override { profiling_ = enabled; }
     PassTimes pass_times() const override { return times_; }
 
@@ -55,8 +53,15 @@ public:
     /// compute-shader copy between two scratch device-local buffers, each the median of
     /// timestamped runs, as (bytes read + bytes written) / seconds.
     Result<double> measure_copy_bandwidth(uint64_t bytes) override;
-    bool dispatches_are_expensive() const override { return true; }
-    bool prefers_path_walk() const override { return !device_->is_cpu(); }
+    /// Dispatches are expensive; the path walk on a GPU, not on a CPU driver; reshaping in place
+    /// but for a scene split into windows (its ping-pong buffers are segment-major).
+    BackendCapabilities capabilities() const override {
+        BackendCapabilities can;
+        can.reshapes_in_place = plan_ && !plan_->split();
+        can.dispatches_are_expensive = true;
+        can.prefers_path_walk = !device_->is_cpu();
+        return can;
+    }
 
 private:
     /// One command buffer in flight: its fence, timestamp pool and what it ran.
@@ -77,7 +82,7 @@ private:
     /// Static model buffers within maxStorageBufferRange; the segments of the state buffers.
     Status plan_windows(const SceneData& scene);
     Status upload_static(BufferId id, const SceneData& scene);
-    Status submit_chunk(Slot& slot, std::span<const Dispatch> program, std::span<const double> wind_x);
+    Status submit_chunk(Slot& slot, std::span<const Dispatch> program, std::span<const RunStep> steps);
     /// Waits for `slot` and adds its timestamps to times_ (program = what it ran).
     Status finish_slot(Slot& slot, std::span<const Dispatch> program);
     Status ensure_timestamp_capacity(Slot& slot, uint32_t queries);

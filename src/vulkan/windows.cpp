@@ -219,11 +219,9 @@ WindowPlan::Range WindowPlan::window(BufferId id, uint32_t index) const {
 
 uint32_t WindowPlan::dispatch_instances(const Dispatch& d) const {
     const gpu::PassConstants& c = d.constants;
-    // Threads per instance by pass and mode. A dispatch may cover part of a group (the runs of
+    // Threads per instance by pass and kind. A dispatch may cover part of a group (the runs of
     // active instances, tests), so the group's own count holds only where the threads match it.
-    const uint32_t per_domain[] = {c.model_chain_count, c.model_node_count, c.model_vertex_count};
-    uint32_t per = per_domain[uint32_t(pass_domain(d.pass))];
-    if (is_hierarchical(d.pass) && c.mode == HMSM_MODE_LEVEL_BY_LEVEL) per = c.level_count;
+    const uint32_t per = threads_per_instance(d);
     if (auto it = group_instances_.find(c.instance_begin);
         it != group_instances_.end() && uint64_t(it->second) * per == c.element_count)
         return it->second;

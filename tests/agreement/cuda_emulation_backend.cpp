@@ -2,7 +2,9 @@
 
 #include "cuda/launch_dispatch.h"
 #include "device_words.h"
+#include "step_program.h"
 
+#include <algorithm>
 #include <cstring>
 #include <array>
 #include <string>
@@ -15,9 +17,15 @@ using detail::BufferId;
 
 class CudaEmulationBackend final : public detail::Backend {
 public:
+    explicit CudaEmulationBackend(EmulatedAheadSteps* ahead) : ahead_(ahead) {}
     BackendKind kind() const override { return BackendKind::cuda; }
     std::string device_name() const override { return "CUDA kernels emulated on the host"; }
-    bool prefers_path_walk() const override { return true; }  // as the CUDA backend
+    detail::BackendCapabilities capabilities() const override {
+        detail::BackendCapabilities can;
+        can.walks_ahead = ahead_ != nullptr;
+        can.prefers_path_walk = true;  // as the CUDA backend
+        return can;
+    }
 
     /// Static buffers converted like an upload, state zero-filled; every buffer has at least
     /// one 16-byte element behind it, as on the device (an empty vertex_normal's placeholder).
@@ -33,13 +41,31 @@ public:
     pointers_.name = reinterpret_cast<detail::cuda::DeviceType_##shape*>(bytes_[binding].data());
         HMSM_BUFFERS(HMSM_EMULATION_BIND)
 #undef HMSM_EMULATION_BIND
+        next_state_.assign(bytes_[uint32_t(BufferId::chain_state)].size(), std::byte{0});
+        pointers_.chain_state_next = reinterpret_cast<float4*>(next_state_.data());
         return {};
     }
 
-    /// The CUDA backend hands each step's wind phase to the kernels as a float.
-    Status run(std::span<const detail::Dispatch> program, std::span<const double> wind_x) override {
-        for (double x : wind_x)
-            for (const detail::Dispatch& d : program) detail::cuda::emulate_dispatch(d, pointers_, float(x));
+    /// The CUDA backend hands each step's wind-table slot to the kernels, and runs each
+    /// step of a walk-ahead program as `ahead` says (src/cuda/cuda_backend.cpp).
+    Status run(std::span<const detail::Dispatch> program, std::span<const detail::RunStep> steps) override {
+        const bool walks = ahead_ && std::any_of(program.begin(), program.end(), detail::is_walk_ahead);
+        const detail::AheadVariants variants = walks ? detail::ahead_variants(program) : detail::AheadVariants{};
+        for (const detail::RunStep& run_step : steps) {
+            const detail::AheadStep how = walks ? run_step.ahead : detail::AheadStep::whole;
+            std::span<const detail::Dispatch> step = program;
+            if (how == detail::AheadStep::take) {
+                std::swap(bytes_[uint32_t(BufferId::chain_state)], next_state_);
+                pointers_.chain_state = reinterpret_cast<float4*>(bytes_[uint32_t(BufferId::chain_state)].data());
+                pointers_.chain_state_next = reinterpret_cast<float4*>(next_state_.data());
+                step = variants.without_wind;
+                ++ahead_->taken;
+            } else if (how == detail::AheadStep::plain) {
+                step = variants.plain;
+                ++ahead_->plain;
+            }
+            for (const detail::Dispatch& d : step) detail::cuda::emulate_dispatch(d, pointers_, run_step.wind_slot);
+        }
         return {};
     }
 
@@ -81,6 +107,8 @@ private:
                                                  std::string(detail::buffer_info(id).name) + " are out of range"};
     }
 
+    EmulatedAheadSteps* ahead_;
+    std::vector<std::byte> next_state_;  // chain_state's twin (BufferPointers::chain_state_next)
     std::array<std::vector<std::byte>, detail::kBufferCount> bytes_;
     std::array<uint64_t, detail::kBufferCount> counts_{};
     detail::cuda::BufferPointers pointers_;
@@ -88,8 +116,8 @@ private:
 
 }  // namespace
 
-std::unique_ptr<detail::Backend> create_cuda_emulation_backend() {
-    return std::make_unique<CudaEmulationBackend>();
+std::unique_ptr<detail::Backend> create_cuda_emulation_backend(EmulatedAheadSteps* ahead) {
+    return std::make_unique<CudaEmulationBackend>(ahead);
 }
 
 }  // namespace hmsm::test

@@ -6,10 +6,18 @@
 
 #include "backend.h"
 
+#include <cstdint>
 #include <memory>
 
 namespace hmsm::test {
 
-std::unique_ptr<detail::Backend> create_cuda_emulation_backend();
+/// What an emulated run did with the walk that integrates ahead (AheadStep), step by step.
+struct EmulatedAheadSteps {
+    uint64_t taken = 0, plain = 0;
+};
+
+/// `ahead`: where not null, the backend can walk ahead (BackendCapabilities::walks_ahead), keeping
+/// chain_state's twin as the CUDA backend does, and counts its steps there.
+std::unique_ptr<detail::Backend> create_cuda_emulation_backend(EmulatedAheadSteps* ahead = nullptr);
 
 }  // namespace hmsm::test

@@ -50,11 +50,9 @@ double nmse(const std::vector<double>& expected, const std::vector<double>& actu
 }
 
 std::vector<Composition> compositions_of(Pass pass) {
-    // The fused dispatch (passes 1-5) is a dispatch of the first fused pass.
     // A path-walk dispatch of a pass that leads one also runs its walk partner.
-    if (pass == detail::kFusedDispatchPass)
-        return {Composition::pointer_jumping_per_round, Composition::fused, Composition::path_walk};
-    if (pass == Pass::node_relative) return {Composition::pointer_jumping_per_round, Composition::path_walk};
+    if (pass == Pass::wind_force || pass == Pass::node_relative)
+        return {Composition::pointer_jumping_per_round, Composition::path_walk};
     if (pass == Pass::compose)
         return {Composition::pointer_jumping_per_round, Composition::pointer_jumping_in_dispatch,
                 Composition::level_by_level, Composition::path_walk};

@@ -60,22 +60,15 @@ TEST_P(PassAgreement, EachDispatchMatchesCpu64OnRandomStates) {
         for (size_t v = 0; v < variants.size(); ++v) {
             SCOPED_TRACE("variant " + std::to_string(v));
             randomize_state(data, *backend.value(), *oracle.value(), rng);
-            const double wind_x[1] = {uniform_wind_phase(rng)};
-            const Status run = backend.value()->run(variants[v], wind_x);
+            const detail::RunStep step[1] = {{uniform_wind_slot(rng)}};
+            const Status run = backend.value()->run(variants[v], step);
             ASSERT_TRUE(run.ok()) << run.message();
-            ASSERT_TRUE(oracle.value()->run(variants[v], wind_x).ok());
-            const bool fused = composition == Composition::fused;
-            uint32_t writes = 0;  // of the passes the dispatches run (a fused or path-walk one runs several)
+            ASSERT_TRUE(oracle.value()->run(variants[v], step).ok());
+            uint32_t writes = 0;  // of the passes the dispatches run (a path-walk one runs two)
             for (const detail::Dispatch& dispatch : variants[v]) writes |= detail::dispatch_writes(dispatch);
             for (const auto& info : detail::kBufferTable) {
                 if (!(writes & (1u << uint32_t(info.id)))) continue;
                 uint64_t first = 0, count = data.element_count(info.id);
-                if (fused && info.scope == detail::Scope::chain_halves) {
-                    // The fused dispatch leaves only the pose half defined (the other is scratch,
-                    // in shared memory on a GPU).
-                    count = data.chain_capacity;
-                    first = HMSM_FINAL_HALF(data.jump_rounds) * count;
-                }
                 std::vector<double> expected(count * detail::shape_scalars(info.shape)), actual(expected.size());
                 ASSERT_TRUE(oracle.value()->read(info.id, first, count, expected.data(), detail::Scalar::f64).ok());
                 ASSERT_TRUE(backend.value()->read(info.id, first, count, actual.data(), detail::Scalar::f64).ok());
@@ -95,8 +88,7 @@ std::vector<PassCase> pass_cases() {
 
 std::string case_name(const ::testing::TestParamInfo<PassCase>& info) {
     std::string name = info.param.backend->name + "_" + std::string(pass_name(info.param.pass));
-    if (detail::is_hierarchical(info.param.pass) || info.param.composition == Composition::fused ||
-        info.param.composition == Composition::path_walk)
+    if (detail::is_hierarchical(info.param.pass) || info.param.composition == Composition::path_walk)
         name += "_" + std::string(to_string(info.param.composition));
     return name;
 }

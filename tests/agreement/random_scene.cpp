@@ -137,8 +137,6 @@ detail::SceneData random_scene_data(std::mt19937& rng, const std::vector<ModelSh
     d.max_angle = 0.8;
     d.fix_weight = 0.4;
     d.profile = uniform(rng, 0, 1) < 0.5 ? WindProfile::y1 : WindProfile::turbulent;
-    d.wind_vector = {3.0, 0.5, -2.0};
-    d.wind_frequency = 0.1;
     return d;
 }
 
@@ -146,18 +144,6 @@ std::vector<std::vector<detail::Dispatch>> pass_variants(const detail::SceneData
                                                          Composition composition, std::mt19937& rng) {
     std::vector<std::vector<detail::Dispatch>> variants;
     const bool hierarchical = pass == Pass::compose || pass == Pass::root_positions;
-    if (composition == Composition::fused) {
-        std::vector<detail::Dispatch> list;  // passes 1-5 in one dispatch per group
-        for (const auto& g : d.groups) {
-            detail::Dispatch dispatch{pass, detail::group_constants(d, g, HMSM_FINAL_HALF(d.jump_rounds))};
-            dispatch.constants.element_count = g.instance_count * d.models[g.model].chain_count;
-            dispatch.constants.mode = HMSM_MODE_FUSED;
-            dispatch.constants.round = d.jump_rounds;
-            list.push_back(dispatch);
-        }
-        variants.push_back(list);
-        return variants;
-    }
     if (composition == Composition::path_walk) {
         // One dispatch per group running the pass and its walk partner; the walk both ways: from
         // the records and by following chain_parent up.
@@ -170,8 +156,10 @@ std::vector<std::vector<detail::Dispatch>> pass_variants(const detail::SceneData
                 const auto& m = d.models[g.model];
                 dispatch.constants.element_count =
                     g.instance_count * (pass == Pass::node_relative ? m.node_count : m.chain_count);
-                dispatch.constants.mode = HMSM_MODE_PATH_WALK;
-                dispatch.constants.round = from_records ? HMSM_WALK_FROM_RECORDS : 0u;
+                dispatch.constants.kind = pass == Pass::wind_force      ? HMSM_DISPATCH_WIND_PAIR
+                                          : pass == Pass::node_relative ? HMSM_DISPATCH_NODE_PAIR
+                                          : from_records                ? HMSM_DISPATCH_POSE_WALK_FROM_RECORDS
+                                                                        : HMSM_DISPATCH_POSE_WALK;
                 list.push_back(dispatch);
             }
             variants.push_back(list);
@@ -188,6 +176,8 @@ std::vector<std::vector<detail::Dispatch>> pass_variants(const detail::SceneData
                                     : pass == Pass::contour                              ? m.vertex_count
                                                                                          : m.chain_count;
             dispatch.constants.element_count = g.instance_count * per_instance;
+            if (pass == Pass::contour)
+                dispatch.constants.kind = d.packed_vertices() ? HMSM_DISPATCH_CONTOUR_PACKED : HMSM_DISPATCH_CONTOUR_SEPARATE;
             dispatch.constants.src_half = dispatch.constants.dst_half = half;
             list.push_back(dispatch);
         }
@@ -199,7 +189,7 @@ std::vector<std::vector<detail::Dispatch>> pass_variants(const detail::SceneData
         for (const auto& g : d.groups) {
             detail::Dispatch dispatch{pass, detail::group_constants(d, g, 0)};
             dispatch.constants.element_count = g.instance_count * d.models[g.model].chain_count;
-            dispatch.constants.mode = HMSM_MODE_POINTER_JUMPING_IN_DISPATCH;
+            dispatch.constants.kind = HMSM_DISPATCH_JUMP_ROUNDS_IN_DISPATCH;
             dispatch.constants.round = d.jump_rounds;
             list.push_back(dispatch);
         }
@@ -213,6 +203,7 @@ std::vector<std::vector<detail::Dispatch>> pass_variants(const detail::SceneData
             for (const auto& g : d.groups) {
                 detail::Dispatch dispatch{pass, detail::group_constants(d, g, 0)};
                 dispatch.constants.element_count = g.instance_count * d.models[g.model].chain_count;
+                dispatch.constants.kind = HMSM_DISPATCH_JUMP_ROUND;
                 dispatch.constants.round = r;
                 dispatch.constants.src_half = src;
                 dispatch.constants.dst_half = 1 - src;
@@ -233,8 +224,7 @@ std::vector<std::vector<detail::Dispatch>> pass_variants(const detail::SceneData
             uint32_t count = m.level_begin[level + 1] - m.level_begin[level];
             if (count == 0) continue;
             detail::Dispatch dispatch{pass, detail::group_constants(d, g, 0)};
-            dispatch.constants.mode = HMSM_MODE_LEVEL_BY_LEVEL;
-            dispatch.constants.round = uint32_t(level);
+            dispatch.constants.kind = HMSM_DISPATCH_LEVEL;
             dispatch.constants.level_begin = m.level_begin[level];
             dispatch.constants.level_count = count;
             dispatch.constants.element_count = g.instance_count * count;
@@ -246,8 +236,8 @@ std::vector<std::vector<detail::Dispatch>> pass_variants(const detail::SceneData
     return variants;
 }
 
-double uniform_wind_phase(std::mt19937& rng) {
-    return std::floor(uniform(rng, 0.0, double(HMSM_WIND_STEP_SLOTS) - 1e-9));  // a wind-table slot
+uint32_t uniform_wind_slot(std::mt19937& rng) {
+    return uint32_t(std::floor(uniform(rng, 0.0, double(HMSM_WIND_STEP_SLOTS) - 1e-9)));
 }
 
 void randomize_state(const detail::SceneData& d, detail::Backend& a, detail::Backend& b,

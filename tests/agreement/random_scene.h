@@ -23,15 +23,14 @@ detail::SceneData random_scene_data(std::mt19937& rng, const std::vector<ModelSh
 
 /// Every variant of `pass` as separate dispatch lists (one dispatch per group each): one list
 /// for a flat pass; for compose and root_positions one per pointer-jumping round, one with every
-/// round in one dispatch (pointer_jumping_in_dispatch), or one per level; for fused (`pass` the
-/// fused dispatch's) one fused dispatch per group. Ping-pong halves of
+/// round in one dispatch (pointer_jumping_in_dispatch), or one per level. Ping-pong halves of
 /// single rounds and levels are drawn from `rng`.
 std::vector<std::vector<detail::Dispatch>> pass_variants(const detail::SceneData& d, Pass pass,
                                                          Composition composition, std::mt19937& rng);
 
-/// A wind phase f*t mod 2 in [0, 2).
+/// A wind-table step slot, uniform in [0, HMSM_WIND_STEP_SLOTS).
 /// A random wind-table step slot (Backend::run's per-step argument).
-double uniform_wind_phase(std::mt19937& rng);
+uint32_t uniform_wind_slot(std::mt19937& rng);
 
 /// Writes the same random state (angles in range, rotations, positions) to both backends.
 void randomize_state(const detail::SceneData& d, detail::Backend& a, detail::Backend& b,

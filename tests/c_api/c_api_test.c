@@ -290,6 +290,8 @@ static void test_bad_configs(void) {
     CHECK_CONFIG_FAILS(backend, -1);
     CHECK_CONFIG_FAILS(composition, HMSM_COMPOSITION_AUTOMATIC + 1);
     CHECK_CONFIG_FAILS(composition, -1);
+    CHECK_CONFIG_FAILS(composition, 4); /* reserved */
+    CHECK(strstr(hmsm_status_message(), "config.composition: unknown value 4") != NULL);
     /* The default is automatic, and the last two compositions are accepted. */
     hmsm_config_init(&config);
     CHECK(config.composition == HMSM_COMPOSITION_AUTOMATIC);

@@ -148,7 +148,7 @@ TEST_P(CudaSimulation, PresetForestAgreesWithCpu64) {
 
 INSTANTIATE_TEST_SUITE_P(Compositions, CudaSimulation,
                          ::testing::Values(Composition::pointer_jumping_per_round, Composition::pointer_jumping_in_dispatch,
-                                           Composition::level_by_level, Composition::fused, Composition::path_walk),
+                                           Composition::level_by_level, Composition::path_walk),
                          [](const auto& info) { return std::string(to_string(info.param)); });
 
 TEST(CudaGraph, ReplayEqualsDirectLaunchesBitwise) {

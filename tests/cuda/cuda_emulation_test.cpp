@@ -90,7 +90,7 @@ void emulate_steps(const Simulation& sim, HostImage& image, uint32_t steps) {
     for (uint32_t k = 0; k < steps; ++k) {
         detail::fill_wind_step(wind, modes, (wind.frequency * dt) * double(k), slot);
         for (uint32_t i = 0; i < detail::kWindStepScalars; ++i) table[4 * HMSM_WIND_STEPS + i] = float(slot[i]);
-        for (const detail::Dispatch& d : hmsm::detail::step_program_of(sim)) detail::cuda::emulate_dispatch(d, image.pointers, 0.0f);
+        for (const detail::Dispatch& d : hmsm::detail::step_program_of(sim)) detail::cuda::emulate_dispatch(d, image.pointers, 0);
     }
 }
 
@@ -183,18 +183,6 @@ TEST_P(CudaEmulation, PausedInstanceInsideADispatchIsSkipped) {
     }
 }
 
-// The fused kernel with its rounds in device memory instead of shared memory (the
-// parameterized case above keeps them in shared memory: the emulation grants an H100's 227 KiB).
-TEST(CudaEmulationFused, DeviceMemoryRoundsFollowCpu64OverManySteps) {
-    const char* old = std::getenv("HMSM_FUSED_SHARED_BYTES");
-    const std::string saved = old ? old : "";
-    setenv("HMSM_FUSED_SHARED_BYTES", "0", 1);
-    ASSERT_EQ(detail::cuda::emulated_fused_shared_limit(), 0u);
-    expect_kernel_bodies_follow_cpu64(Composition::fused);
-    if (old) setenv("HMSM_FUSED_SHARED_BYTES", saved.c_str(), 1);
-    else unsetenv("HMSM_FUSED_SHARED_BYTES");
-}
-
 TEST(CudaEmulationLive, TurbulentWindAndForceFieldsFollowCpu64) {
     // The wind_force kernel with the turbulent profile, a front, per-instance wind scale and
     // phase, and force fields of both kinds (docs/model.md 3.5, 3.9).
@@ -283,7 +271,7 @@ bool same_buffer(const HostImage& a, const HostImage& b, BufferId id) {
     return a.bytes[uint32_t(id)] == b.bytes[uint32_t(id)];
 }
 
-// The walk that integrates ahead (gpu_layout.h HMSM_WALK_AHEAD), as the CUDA backend runs it:
+// The walk that integrates ahead (gpu_layout.h HMSM_DISPATCH_WALK_AHEAD), as the CUDA backend runs it:
 // the first step whole, then each step without its wind_force dispatches, taking the angles the
 // step before wrote to chain_state_next. Its joint matrices and angles equal the plain path
 // walk's bit for bit, with the turbulent profile (whose value the top poses hoist per instance)
@@ -316,7 +304,7 @@ TEST(CudaEmulationWalkAhead, EqualsThePathWalkBitForBit) {
 
     HostImage walked = image_of(sim), walked_ahead = image_of(sim), stale = image_of(sim);
     auto run = [](const std::vector<Dispatch>& program, HostImage& image) {
-        for (const Dispatch& d : program) detail::cuda::emulate_dispatch(d, image.pointers, 0.0f);
+        for (const Dispatch& d : program) detail::cuda::emulate_dispatch(d, image.pointers, 0);
     };
     auto take_next_state = [](HostImage& image) {
         std::swap(image.bytes[uint32_t(BufferId::chain_state)], image.next_state);
@@ -351,7 +339,7 @@ TEST(CudaEmulationWalkAhead, EqualsThePathWalkBitForBit) {
 
 INSTANTIATE_TEST_SUITE_P(Compositions, CudaEmulation,
                          ::testing::Values(Composition::pointer_jumping_per_round, Composition::pointer_jumping_in_dispatch,
-                                           Composition::level_by_level, Composition::fused, Composition::path_walk),
+                                           Composition::level_by_level, Composition::path_walk),
                          [](const auto& info) { return std::string(to_string(info.param)); });
 
 }  // namespace

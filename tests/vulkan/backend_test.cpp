@@ -51,10 +51,10 @@ TEST_F(VulkanTest, RoundsRunInOneDispatchForModelsOfUpTo1024Chains) {
     if (!skip.empty()) GTEST_SKIP() << skip;
     auto cpu = create_simulation_or_skip(scene, config, BackendKind::cpu, skip);
     ASSERT_TRUE(vulkan && cpu);
-    for (const auto& [sim, mode] : {std::pair{vulkan.get(), HMSM_MODE_POINTER_JUMPING_IN_DISPATCH},
-                                    std::pair{cpu.get(), HMSM_MODE_POINTER_JUMPING}})
+    for (const auto& [sim, kind] : {std::pair{vulkan.get(), HMSM_DISPATCH_JUMP_ROUNDS_IN_DISPATCH},
+                                    std::pair{cpu.get(), HMSM_DISPATCH_JUMP_ROUND}})
         for (const auto& d : hmsm::detail::step_program_of(*sim))
-            if (d.pass == Pass::compose || d.pass == Pass::root_positions) EXPECT_EQ(d.constants.mode, mode);
+            if (d.pass == Pass::compose || d.pass == Pass::root_positions) EXPECT_EQ(d.constants.kind, kind);
     ASSERT_TRUE(vulkan->step(20).ok());
     ASSERT_TRUE(cpu->step(20).ok());
     std::vector<double> a, b;
@@ -216,9 +216,9 @@ TEST_F(VulkanTest, DispatchBeyondTheWorkgroupCountLimitMatchesCpu64) {
     auto variants = pass_variants(data, Pass::contour, Composition::pointer_jumping, rng);
     ASSERT_EQ(variants.size(), 1u);
     ASSERT_GT(variants[0][0].constants.element_count, 65535u * HMSM_WORKGROUP_SIZE);
-    const double wind_x[1] = {0.0};
-    ASSERT_TRUE(vulkan->run(variants[0], wind_x).ok());
-    ASSERT_TRUE(oracle.value()->run(variants[0], wind_x).ok());
+    const detail::RunStep step[1] = {};
+    ASSERT_TRUE(vulkan->run(variants[0], step).ok());
+    ASSERT_TRUE(oracle.value()->run(variants[0], step).ok());
     const uint64_t tail = 300000, first = data.total_vertices - tail;
     std::vector<double> a(tail * 4), b(tail * 4);
     ASSERT_TRUE(vulkan->read(BufferId::vertex_position, first, tail, a.data(), detail::Scalar::f64).ok());

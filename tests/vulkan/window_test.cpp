@@ -86,7 +86,7 @@ constexpr Output kOutputs[] = {Output::node_positions, Output::vertex_positions,
 TEST_F(VulkanTest, SplitScenesMatchTheUnsplitRunBitwise) {
     const Scene scenes[] = {two_model_scene(), *grid_scene(small_tree(), 11, 5.0, 3)};
     for (Composition composition : {Composition::pointer_jumping_per_round, Composition::pointer_jumping_in_dispatch,
-                                    Composition::level_by_level, Composition::fused, Composition::path_walk}) {
+                                    Composition::level_by_level, Composition::path_walk}) {
         for (const Scene& scene : scenes) {
             SCOPED_TRACE(std::string(to_string(composition)) +
                          " models " + std::to_string(scene.models.size()));

@@ -43,7 +43,7 @@ int joint_forest_cases(BackendKind backend, const std::vector<JointForestCase>& 
         SimulationConfig config;
         config.backend = backend;
         config.outputs = Outputs::joints;
-        config.composition = Composition::pointer_jumping;  // the first columns; then fused, path walk
+        config.composition = Composition::pointer_jumping;  // the first columns; then the path walk
         // Host memory: the state of one instance, from a one-instance simulation on the CPU.
         auto probe = Simulation::create(single_tree_scene(c.tree), [&] {
             SimulationConfig p = config;
@@ -110,9 +110,8 @@ int joint_forest_cases(BackendKind backend, const std::vector<JointForestCase>& 
         put(row, "steps_per_second_profiled", r.profiled);
         if (r.has_passes) put(row, "device_seconds_per_step", r.device_seconds);
         sim->reset();
-        // The same forest with passes 1-5 fused into one dispatch (Composition::fused), which
-        // is all a joints-only step runs, and with passes 3 and 5 as path walks.
-        for (Composition other : {Composition::fused, Composition::path_walk}) {
+        // The same forest with passes 3 and 5 as path walks.
+        for (Composition other : {Composition::path_walk}) {
             const std::string key = to_string(other);
             config.composition = other;
             auto other_sim = Simulation::create(*scene, config);
@@ -142,28 +141,25 @@ std::string render_joint_forest(const json& rows) {
     if (!rows.is_array() || rows.empty()) return "";
     std::string out =
         "\n### Forest scaling, joints only (passes 1-5)\n\n"
-        "Pointer jumping; fused: passes 1-5 in one dispatch, a workgroup per instance; path walk: "
-        "passes 3 and 5 in one dispatch each, every chain walking up its path to the root.\n\n"
+        "Pointer jumping; path walk: passes 3 and 5 in one dispatch each, every chain walking up its "
+        "path to the root.\n\n"
         "| backend | model | instances | chains | joint bytes | ms per step | device ms per step | Mchains/s "
-        "| fused ms per step | fused device ms per step | fused Mchains/s "
         "| path walk ms per step | path walk device ms per step | path walk Mchains/s |\n"
-        "|---|---|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|\n";
+        "|---|---|--:|--:|--:|--:|--:|--:|--:|--:|--:|\n";
     char line[500];
     for (const json& r : rows) {
         auto number_in = [](const json& j, const char* key, double scale) {
             return j.is_object() && j.contains(key) ? j[key].get<double>() * scale : 0.0;
         };
         auto number = [&](const char* key, double scale) { return number_in(r, key, scale); };
-        const json fused = r.value("fused", json::object());
         const json walk = r.value("path_walk", json::object());
         std::snprintf(line, sizeof line,
-                      "| %s | %s | %llu | %llu | %llu | %.3f | %.3f | %.1f | %.3f | %.3f | %.1f | %.3f | %.3f | %.1f |\n",
+                      "| %s | %s | %llu | %llu | %llu | %.3f | %.3f | %.1f | %.3f | %.3f | %.1f |\n",
                       r.value("backend", "").c_str(), r.value("model", "").c_str(),
                       (unsigned long long)r.value("instances", 0ull), (unsigned long long)r.value("chains", 0ull),
                       (unsigned long long)r.value("joint_bytes", 0ull), number("seconds_per_step", 1e3),
                       number("device_seconds_per_step", 1e3), number("chains_per_second", 1e-6),
-                      number_in(fused, "seconds_per_step", 1e3), number_in(fused, "device_seconds_per_step", 1e3),
-                      number_in(fused, "chains_per_second", 1e-6), number_in(walk, "seconds_per_step", 1e3),
+                      number_in(walk, "seconds_per_step", 1e3),
                       number_in(walk, "device_seconds_per_step", 1e3), number_in(walk, "chains_per_second", 1e-6));
         out += line;
     }

@@ -51,9 +51,8 @@ bool is_state_scope(Scope s) {
 
 Traffic step_traffic(const Simulation& sim) {
     const detail::SceneData& d = hmsm::detail::scene_data_of(sim);
-    // The buffers each pass touches in the simulation's step program: its own reads and writes
-    // (also inside the fused dispatch, whose passes still pass T and u through memory), or, for
-    // a path-walk dispatch, the dispatch's (counted under its leader), which leave out what the
+    // The buffers each pass touches in the simulation's step program: its own reads and writes,
+    // or, for a path-walk dispatch, the dispatch's (counted under its leader), which leave out what the
     // walk keeps in registers.
     // A program of the walk that integrates ahead (CUDA forests) is counted as its steps run
     // when nothing changes: without the wind pair, whose work the walk ahead does with the pose

@@ -152,42 +152,38 @@ std::string render_markdown(const json& d) {
         }
 
         out += "\n### Passes 3 and 5: pointer jumping vs all rounds in one dispatch vs level by level vs "
-               "fused vs path walk\n\n";
+               "path walk\n\n";
         out += "µs per step with device timers on; batched/s with them off. W is the default on a GPU "
                "(Composition::automatic), PJ on the CPU. PJ: Composition::pointer_jumping (one dispatch "
                "per round, or all rounds in one dispatch for models "
                "of at most 512 chains, 1,024 on Vulkan; docs/architecture.md); PJ/1: every round in "
                "one dispatch per pass, a workgroup per instance; LbL: one dispatch per depth level; "
-               "F: passes 1-5 in one dispatch, a workgroup per instance (fused(1-5): its time); W: path "
-               "walk, passes 3 and 5 in one dispatch in which every chain walks its ancestors from the trunk "
+               "W: path walk, passes 3 and 5 in one dispatch in which every chain walks its ancestors from the trunk "
                "down (wind_force with integrate and node_relative with node_world in one dispatch each "
                "too: four dispatches per step).\n\n";
         out += row({"preset", "backend", "rounds / levels", "compose PJ", "compose PJ/1", "compose LbL",
                     "root_positions PJ", "root_positions PJ/1", "root_positions LbL",
-                    "compose+root_positions W", "fused(1-5) F", "all passes PJ", "all passes PJ/1", "all passes LbL",
-                    "all passes F", "all passes W", "batched/s PJ", "batched/s PJ/1", "batched/s LbL",
-                    "batched/s F", "batched/s W"});
-        out += "|---|---|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|\n";
+                    "compose+root_positions W", "all passes PJ", "all passes PJ/1", "all passes LbL",
+                    "all passes W", "batched/s PJ", "batched/s PJ/1", "batched/s LbL", "batched/s W"});
+        out += "|---|---|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:\n";
         for (const json& p : presets) {
             const json& pj = member(p, "pointer_jumping");
             const json& in_dispatch = member(p, "pointer_jumping_in_dispatch");
             const json& lbl = member(p, "level_by_level");
-            const json& fused = member(p, "fused");
             const json& ps = member(pj, "pass_seconds_per_step");
             const json& rs = member(in_dispatch, "pass_seconds_per_step");
             const json& ls = member(lbl, "pass_seconds_per_step");
-            const json& fs = member(fused, "pass_seconds_per_step");
             const json& walk = member(p, "path_walk");
             const json& ws = member(walk, "pass_seconds_per_step");
             out += row({text(p, "preset"), text(p, "backend"), text(pj, "rounds") + " / " + text(lbl, "levels"),
                         num(ps, "compose", 1e6), num(rs, "compose", 1e6), num(ls, "compose", 1e6),
                         num(ps, "root_positions", 1e6), num(rs, "root_positions", 1e6),
-                        num(ls, "root_positions", 1e6), num(ws, "compose+root_positions", 1e6), num(fs, "fused(1-5)", 1e6),
+                        num(ls, "root_positions", 1e6), num(ws, "compose+root_positions", 1e6),
                         num(pj, "device_seconds_per_step", 1e6), num(in_dispatch, "device_seconds_per_step", 1e6),
-                        num(lbl, "device_seconds_per_step", 1e6), num(fused, "device_seconds_per_step", 1e6),
+                        num(lbl, "device_seconds_per_step", 1e6),
                         num(walk, "device_seconds_per_step", 1e6), num(pj, "steps_per_second_batched"),
                         num(in_dispatch, "steps_per_second_batched"), num(lbl, "steps_per_second_batched"),
-                        num(fused, "steps_per_second_batched"), num(walk, "steps_per_second_batched")});
+                        num(walk, "steps_per_second_batched")});
         }
     }
 

@@ -43,17 +43,15 @@ bool is_skip(const Status& s) {
 }
 
 /// Device seconds per pass. A dispatch that runs several passes reports its time under its first
-/// pass (docs/architecture.md): under Composition::fused that is the entry "fused(1-5)", under
-/// Composition::path_walk a pair's "LEADER+PARTNER"; the passes that run on their own follow.
+/// pass (docs/architecture.md): under Composition::path_walk a pair's "LEADER+PARTNER"; the
+/// passes that run on their own follow.
 json pass_seconds_json(const CaseResult& r, Composition composition = Composition::pointer_jumping) {
     json seconds = json::object();
     uint32_t partners = 0;
     for (Pass p : kAllPasses) {
         const double s = r.pass_seconds[uint32_t(p)];
         const uint32_t walk = hmsm::detail::walk_passes(p);
-        if (composition == Composition::fused && hmsm::detail::is_fused(p)) {
-            if (p == hmsm::detail::kFusedDispatchPass) seconds["fused(1-5)"] = s;
-        } else if (composition == Composition::path_walk && walk != 0) {
+        if (composition == Composition::path_walk && walk != 0) {
             const Pass partner = Pass(hmsm::detail::pass_info(p).walk);
             seconds[std::string(pass_name(p)) + "+" + std::string(pass_name(partner))] = s;
             partners |= 1u << uint32_t(partner);
@@ -170,7 +168,6 @@ void BenchRun::preset_case(const Model& m, BackendRun& b) {
     for (auto [composition, count_key, count] :
          {std::tuple{Composition::pointer_jumping_in_dispatch, "rounds", rounds},
           std::tuple{Composition::level_by_level, "levels", levels},
-          std::tuple{Composition::fused, "rounds", rounds},
           std::tuple{Composition::path_walk, "levels", levels}}) {
         const std::string name = to_string(composition);
         progress_.begin(m.name + " on " + backend + ", " + name);

@@ -1,0 +1,69 @@
+// The walk that integrates ahead, decided by the step layer (src/step_program.h AheadSchedule)
+// and run through the CUDA kernel bodies on the host (tests/agreement/cuda_emulation_backend.h):
+// no GPU needed.
+#include "simulation_access.h"
+#include "cuda_emulation_backend.h"
+#include "cuda_test_support.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <vector>
+
+namespace hmsm::cuda_test {
+namespace {
+
+// Stepped call by call with live changes in between (the wind, a force field, an instance's wind
+// scale, one paused and resumed, one added, a field moved before every call for a while) and one
+// call of many steps, a simulation whose backend integrates ahead leaves the same joint matrices
+// and angles, bit for bit, as one whose backend does not. It takes the angles integrated ahead
+// where nothing changed, and walks plain while the field moves before every call.
+TEST(CudaEmulationWalkAhead, StepLayerDecidesFromLiveChangesBitForBit) {
+    const Scene scene = forest_scene(7);
+    const SimulationConfig config = test_config(BackendKind::cuda, Composition::path_walk, false);
+    test::EmulatedAheadSteps steps;
+    auto plain = detail::SimulationAccess::create(scene, config, test::create_cuda_emulation_backend());
+    auto ahead = detail::SimulationAccess::create(scene, config, test::create_cuda_emulation_backend(&steps));
+    ASSERT_TRUE(plain.ok() && ahead.ok());
+    bool walked_ahead = false;
+    uint64_t taken_before_calm = 0, plain_before_field = 0;
+    for (uint32_t k = 0; k < 44; ++k) {
+        if (k == 22) plain_before_field = steps.plain;
+        if (k == 40) taken_before_calm = steps.taken;
+        for (Simulation* sim : {plain->get(), ahead->get()}) {
+            Wind wind = sim->wind();
+            wind.strength *= 1.5;
+            ForceField field;
+            field.center = {2, 3, 1};
+            field.radius = 15.0;
+            field.directional = {4, 0, 2};
+            if (k == 4) ASSERT_TRUE(sim->set_wind(wind).ok());
+            if (k == 8) ASSERT_TRUE(sim->set_force_fields({&field, 1}).ok());
+            if (k == 10) ASSERT_TRUE(sim->set_instance_wind_scale(1, 0.3).ok());
+            if (k == 12) ASSERT_TRUE(sim->set_instance_active(1, false).ok());
+            if (k == 14) ASSERT_TRUE(sim->set_instance_active(1, true).ok());
+            if (k == 16) ASSERT_TRUE(sim->add_instances({&scene.instances[0], 1}).ok());
+            // A field that moves before every call (a character walking), then calm again.
+            field.center.x = double(k);
+            if (k > 22 && k < 40) ASSERT_TRUE(sim->set_force_fields({&field, 1}).ok());
+            ASSERT_TRUE(sim->step(k == 20 ? 12 : k % 4 == 3 ? 3 : 1).ok());
+        }
+        const auto& program = detail::step_program_of(**ahead);
+        walked_ahead = walked_ahead || std::any_of(program.begin(), program.end(), detail::is_walk_ahead);
+        for (Output output : {Output::joint_matrices, Output::chain_angles}) {
+            std::vector<double> expected, actual;
+            ASSERT_TRUE((*plain)->read(output, expected).ok());
+            ASSERT_TRUE((*ahead)->read(output, actual).ok());
+            ASSERT_EQ(actual, expected) << "output " << int(output) << " after call " << k;
+        }
+    }
+    EXPECT_TRUE(walked_ahead);
+    EXPECT_GE(steps.taken, 20u);
+    // The moving field (17 calls, each after a change): all but the first two and every eighth
+    // walked plain; after it, the walk ahead again.
+    EXPECT_GE(steps.plain - plain_before_field, 12u);
+    EXPECT_GE(steps.taken - taken_before_calm, 2u);
+}
+
+}  // namespace
+}  // namespace hmsm::cuda_test
