@@ -55,8 +55,8 @@ int main(int argc, char** argv) {
     /* One instance of the tree at the origin. */
     uint32_t model = 0;
     hmsm_instance instance;
-    hmsm_instance_init(&instance);
-    if (!ok(hmsm_scene_create(&scene), "hmsm_scene_create") ||
+    if (!ok(HMSM_INIT(hmsm_instance_init, &instance), "hmsm_instance_init") ||
+        !ok(hmsm_scene_create(&scene), "hmsm_scene_create") ||
         !ok(hmsm_scene_add_model(scene, tree, argc == 2 ? argv[1] : "paper-1", &model), "hmsm_scene_add_model"))
         goto done;
     instance.model = model;
@@ -64,7 +64,7 @@ int main(int argc, char** argv) {
 
     /* The CPU backend (runs everywhere), Y1 wind along +x. */
     hmsm_config config;
-    hmsm_config_init(&config);
+    if (!ok(HMSM_INIT(hmsm_config_init, &config), "hmsm_config_init")) goto done;
     config.backend = HMSM_BACKEND_CPU;
     config.wind.profile = HMSM_WIND_Y1;
     config.wind.direction[0] = 1.0;
@@ -99,7 +99,8 @@ int main(int argc, char** argv) {
 
     hmsm_counts counts;
     uint32_t joint_components = 0;
-    if (!ok(hmsm_simulation_counts(simulation, &counts), "hmsm_simulation_counts") ||
+    if (!ok(HMSM_INIT(hmsm_counts_init, &counts), "hmsm_counts_init") ||
+        !ok(hmsm_simulation_counts(simulation, &counts), "hmsm_simulation_counts") ||
         !ok(hmsm_output_components(HMSM_OUTPUT_JOINT_MATRICES, &joint_components), "hmsm_output_components"))
         goto done;
 
