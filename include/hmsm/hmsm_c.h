@@ -279,6 +279,38 @@ HMSM_API hmsm_status hmsm_simulation_instances(const hmsm_simulation* simulation
                                                hmsm_instance* instances, size_t capacity,
                                                size_t* count);
 
+/* --- skins (docs/skinning.md): a model's skinned mesh, for engines that draw trees from the
+ * joint matrices (HMSM_OUTPUT_JOINT_MATRICES) as a bone palette. Vertex order and triangles are those of hmsm_simulation_mesh_indices.
+ * Instance i's joints start at chain_base(i) = the sum of the chain counts of the instances
+ * before it (a forest of one model: i x chains). */
+typedef struct hmsm_skin hmsm_skin; /* the skin of one model (hmsm::SkinTemplate) */
+/* What hmsm_skin_read_* returns, components per element in brackets. */
+enum {
+    HMSM_SKIN_BIND_POSITIONS = 0, /* per vertex [3]: rest pose of an instance at the origin, yaw 0 */
+    HMSM_SKIN_BIND_NORMALS = 1,   /* per vertex [3]: unit rest normals */
+    HMSM_SKIN_JOINTS = 2,         /* per vertex [2], integers: chains of the model; -1 = unused */
+    HMSM_SKIN_WEIGHTS = 3,        /* per vertex [2]: sum 1; 0 for an unused joint */
+    HMSM_SKIN_INVERSE_BIND = 4,   /* per chain [12]: [B^T | -B^T p] row by row */
+    HMSM_SKIN_BIND_MATRICES = 5,  /* per chain [12]: the rest joint matrix [B | p] row by row */
+    HMSM_SKIN_CHAIN_PARENTS = 6,  /* per chain [1], integers: the parent chain, -1 for the trunk */
+    HMSM_SKIN_DATA_COUNT = 7
+};
+/* The skin of model `model` of the simulation (hmsm::build_skin); one skin serves every
+ * instance of the model, including instances added later. */
+HMSM_API hmsm_status hmsm_skin_create(const hmsm_simulation* simulation, uint32_t model,
+                                      hmsm_skin** skin);
+HMSM_API void hmsm_skin_destroy(hmsm_skin* skin);
+HMSM_API hmsm_status hmsm_skin_sizes(const hmsm_skin* skin, uint64_t* vertices, uint64_t* chains);
+/* Reads `data` (HMSM_SKIN_*) into values[capacity]; *count = elements x components. The
+ * integer data (JOINTS, CHAIN_PARENTS) is read with _i32, the rest with _f32 or _f64; the other
+ * type fails with HMSM_INVALID_ARGUMENT. */
+HMSM_API hmsm_status hmsm_skin_read_f32(const hmsm_skin* skin, int32_t data, float* values,
+                                        size_t capacity, size_t* count);
+HMSM_API hmsm_status hmsm_skin_read_f64(const hmsm_skin* skin, int32_t data, double* values,
+                                        size_t capacity, size_t* count);
+HMSM_API hmsm_status hmsm_skin_read_i32(const hmsm_skin* skin, int32_t data, int32_t* values,
+                                        size_t capacity, size_t* count);
+
 #ifdef __cplusplus
 }
 #endif

@@ -37,6 +37,8 @@ struct SkinTemplate {
     std::vector<std::array<double, 12>> inverse_bind;
     /// Per chain, the bind (rest) joint matrix [B_c | p̄_attach(c)], row by row.
     std::vector<std::array<double, 12>> bind;
+    /// Per chain, its parent chain (-1 for the trunk): the joint hierarchy.
+    std::vector<int32_t> parents;
 };
 
 /// Builds the skin of `mesh` (build_mesh(tree, hierarchy, options)).

@@ -10,23 +10,6 @@ using namespace hmsm::c_api;
 
 namespace {
 
-/// The common shape of a read into a caller buffer: `*count` always receives the size needed;
-/// values == NULL with capacity 0 is a size query.
-template <class T>
-Status copy_out(const char* fn, const std::vector<T>& source, T* values, size_t capacity,
-                size_t* count) {
-    if (!count) return bad(std::string(fn) + ": count is NULL");
-    *count = source.size();
-    if (!values && capacity == 0) return {};
-    if (!values)
-        return bad(std::string(fn) + ": values is NULL with capacity " + std::to_string(capacity));
-    if (capacity < source.size())
-        return bad(std::string(fn) + ": capacity " + std::to_string(capacity) + " is too small, " +
-                   std::to_string(source.size()) + " needed");
-    if (!source.empty()) std::memcpy(values, source.data(), source.size() * sizeof(T));
-    return {};
-}
-
 template <class T>
 hmsm_status read_output(const char* fn, const hmsm_simulation* simulation, int32_t output,
                         T* values, size_t capacity, size_t* count) {

@@ -1,0 +1,112 @@
+// The C ABI's skins: a model's skin data (hmsm::build_skin) read into caller buffers.
+#include "c_api_internal.h"
+
+#include <type_traits>
+#include <vector>
+
+using namespace hmsm;
+using namespace hmsm::c_api;
+
+namespace {
+
+bool is_integer_data(int32_t data) { return data == HMSM_SKIN_JOINTS || data == HMSM_SKIN_CHAIN_PARENTS; }
+
+/// Skin data `data` flattened (elements x components) as T.
+template <class T>
+void flatten(const SkinTemplate& skin, int32_t data, std::vector<T>& out) {
+    out.clear();
+    auto put = [&](auto value) { out.push_back(static_cast<T>(value)); };
+    switch (data) {
+        case HMSM_SKIN_BIND_POSITIONS:
+            for (const SkinVertex& v : skin.vertices) put(v.position.x), put(v.position.y), put(v.position.z);
+            break;
+        case HMSM_SKIN_BIND_NORMALS:
+            for (const SkinVertex& v : skin.vertices) put(v.normal.x), put(v.normal.y), put(v.normal.z);
+            break;
+        case HMSM_SKIN_JOINTS:
+            for (const SkinVertex& v : skin.vertices) put(v.joints[0]), put(v.joints[1]);
+            break;
+        case HMSM_SKIN_WEIGHTS:
+            for (const SkinVertex& v : skin.vertices) put(v.weights[0]), put(v.weights[1]);
+            break;
+        case HMSM_SKIN_INVERSE_BIND:
+            for (const auto& m : skin.inverse_bind)
+                for (double x : m) put(x);
+            break;
+        case HMSM_SKIN_BIND_MATRICES:
+            for (const auto& m : skin.bind)
+                for (double x : m) put(x);
+            break;
+        default:  // HMSM_SKIN_CHAIN_PARENTS
+            for (int32_t parent : skin.parents) put(parent);
+            break;
+    }
+}
+
+template <class T>
+hmsm_status read_skin(const char* fn, const hmsm_skin* skin, int32_t data, T* values, size_t capacity,
+                      size_t* count) {
+    return guarded([&]() -> Status {
+        if (!skin) return bad(std::string(fn) + ": skin is NULL");
+        if (!count) return bad(std::string(fn) + ": count is NULL");
+        if (data < 0 || data >= HMSM_SKIN_DATA_COUNT)
+            return bad(std::string(fn) + ": data: unknown value " + std::to_string(data));
+        constexpr bool reads_integers = std::is_same_v<T, int32_t>;
+        if (is_integer_data(data) != reads_integers)
+            return bad(std::string(fn) + ": data " + std::to_string(data) + " is " +
+                       (reads_integers ? "floating-point: read it with hmsm_skin_read_f32 or _f64"
+                                       : "integer: read it with hmsm_skin_read_i32"));
+        std::vector<T> flat;
+        flatten(skin->skin, data, flat);
+        return copy_out(fn, flat, values, capacity, count);
+    });
+}
+
+}  // namespace
+
+extern "C" {
+
+hmsm_status hmsm_skin_create(const hmsm_simulation* simulation, uint32_t model, hmsm_skin** skin) {
+    return guarded([&]() -> Status {
+        const char* fn = "hmsm_skin_create";
+        if (!simulation) return bad(std::string(fn) + ": simulation is NULL");
+        if (!skin) return bad(std::string(fn) + ": skin is NULL");
+        const Simulation& sim = *simulation->simulation;
+        const size_t models = sim.scene().models.size();
+        if (model >= models)
+            return bad(std::string(fn) + ": model " + std::to_string(model) + " does not exist (" +
+                       std::to_string(models) + " models)");
+        *skin = new hmsm_skin{build_skin(sim.scene().models[model], sim.hierarchy(model), sim.mesh(model),
+                                         sim.config().model)};
+        return {};
+    });
+}
+
+void hmsm_skin_destroy(hmsm_skin* skin) { delete skin; }
+
+hmsm_status hmsm_skin_sizes(const hmsm_skin* skin, uint64_t* vertices, uint64_t* chains) {
+    return guarded([&]() -> Status {
+        if (!skin) return bad("hmsm_skin_sizes: skin is NULL");
+        if (!vertices || !chains) return bad("hmsm_skin_sizes: vertices and chains must not be NULL");
+        *vertices = skin->skin.vertices.size();
+        *chains = skin->skin.inverse_bind.size();
+        return {};
+    });
+}
+
+hmsm_status hmsm_skin_read_f32(const hmsm_skin* skin, int32_t data, float* values, size_t capacity,
+                               size_t* count) {
+    return read_skin("hmsm_skin_read_f32", skin, data, values, capacity, count);
+}
+
+hmsm_status hmsm_skin_read_f64(const hmsm_skin* skin, int32_t data, double* values, size_t capacity,
+                               size_t* count) {
+    return read_skin("hmsm_skin_read_f64", skin, data, values, capacity, count);
+}
+
+hmsm_status hmsm_skin_read_i32(const hmsm_skin* skin, int32_t data, int32_t* values, size_t capacity,
+                               size_t* count) {
+    return read_skin("hmsm_skin_read_i32", skin, data, values, capacity, count);
+}
+
+}  // extern "C"
