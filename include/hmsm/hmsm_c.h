@@ -280,7 +280,8 @@ HMSM_API hmsm_status hmsm_simulation_instances(const hmsm_simulation* simulation
                                                size_t* count);
 
 /* --- skins (docs/skinning.md): a model's skinned mesh, for engines that draw trees from the
- * joint matrices (HMSM_OUTPUT_JOINT_MATRICES) as a bone palette. Vertex order and triangles are those of hmsm_simulation_mesh_indices.
+ * joint matrices (HMSM_OUTPUT_JOINT_MATRICES) as a bone palette, on the GPU or with
+ * hmsm_skin_vertices. Vertex order and triangles are those of hmsm_simulation_mesh_indices.
  * Instance i's joints start at chain_base(i) = the sum of the chain counts of the instances
  * before it (a forest of one model: i x chains). */
 typedef struct hmsm_skin hmsm_skin; /* the skin of one model (hmsm::SkinTemplate) */
@@ -310,6 +311,14 @@ HMSM_API hmsm_status hmsm_skin_read_f64(const hmsm_skin* skin, int32_t data, dou
                                         size_t capacity, size_t* count);
 HMSM_API hmsm_status hmsm_skin_read_i32(const hmsm_skin* skin, int32_t data, int32_t* values,
                                         size_t capacity, size_t* count);
+/* Linear-blend skinning of one instance on the CPU (hmsm::skin_vertices): joint_matrices points
+ * at that instance's first joint matrix in HMSM_OUTPUT_JOINT_MATRICES, with joint_values >= 12 x
+ * chains floats readable there. positions (and normals, unless NULL) receive xyz per vertex:
+ * capacity in floats each, *count = 3 x vertices (positions = NULL with capacity 0 only queries
+ * it). threads: 1 the calling thread, 0 every hardware thread, n at most n. */
+HMSM_API hmsm_status hmsm_skin_vertices(const hmsm_skin* skin, const float* joint_matrices,
+                                        size_t joint_values, float* positions, float* normals,
+                                        size_t capacity, size_t* count, uint32_t threads);
 
 #ifdef __cplusplus
 }

@@ -1,6 +1,8 @@
-// The C ABI's skins: a model's skin data (hmsm::build_skin) read into caller buffers.
+// The C ABI's skins: a model's skin data read into caller buffers, and CPU skinning of one
+// instance from its joint matrices (hmsm::build_skin, hmsm::skin_vertices).
 #include "c_api_internal.h"
 
+#include <span>
 #include <type_traits>
 #include <vector>
 
@@ -107,6 +109,31 @@ hmsm_status hmsm_skin_read_f64(const hmsm_skin* skin, int32_t data, double* valu
 hmsm_status hmsm_skin_read_i32(const hmsm_skin* skin, int32_t data, int32_t* values, size_t capacity,
                                size_t* count) {
     return read_skin("hmsm_skin_read_i32", skin, data, values, capacity, count);
+}
+
+hmsm_status hmsm_skin_vertices(const hmsm_skin* skin, const float* joint_matrices, size_t joint_values,
+                               float* positions, float* normals, size_t capacity, size_t* count,
+                               uint32_t threads) {
+    return guarded([&]() -> Status {
+        const std::string fn = "hmsm_skin_vertices";
+        if (!skin) return bad(fn + ": skin is NULL");
+        if (!count) return bad(fn + ": count is NULL");
+        const size_t needed = 3 * skin->skin.vertices.size();
+        *count = needed;
+        if (!positions && capacity == 0) return {};
+        if (!positions) return bad(fn + ": positions is NULL with capacity " + std::to_string(capacity));
+        if (capacity < needed)
+            return bad(fn + ": capacity " + std::to_string(capacity) + " is too small, " +
+                       std::to_string(needed) + " needed");
+        if (!joint_matrices) return bad(fn + ": joint_matrices is NULL");
+        const size_t chains = skin->skin.inverse_bind.size();
+        if (joint_values < 12 * chains)
+            return bad(fn + ": joint_values " + std::to_string(joint_values) + " is too small, 12 x " +
+                       std::to_string(chains) + " chains needed");
+        return skin_vertices(skin->skin, std::span<const float>(joint_matrices, 12 * chains),
+                             std::span<float>(positions, needed),
+                             normals ? std::span<float>(normals, needed) : std::span<float>(), threads);
+    });
 }
 
 }  // extern "C"

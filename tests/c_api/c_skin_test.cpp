@@ -1,5 +1,7 @@
-// Skins through the C ABI (include/hmsm/hmsm_c.h "skins"): the C reads give exactly
-// hmsm::build_skin()'s data; bad arguments fail with a message and write nothing.
+// Skins through the C ABI and CPU skinning (include/hmsm/hmsm_c.h "skins", hmsm::skin_vertices):
+// the C reads give exactly hmsm::build_skin()'s data; skinning paper-1's bind mesh with a
+// simulation's joint matrices reproduces the simulation's own pass-7 vertices; bad arguments
+// fail with a message and write nothing.
 #include <hmsm/hmsm.h>
 #include <hmsm/hmsm_c.h>
 #include <hmsm/skin.h>
@@ -44,6 +46,14 @@ void make_paper1(Paper1& out) {
     hmsm_scene_destroy(scene);
     hmsm_tree_destroy(tree);
     ASSERT_EQ(hmsm_skin_create(out.c, 0, &out.skin), HMSM_OK) << hmsm_status_message();
+}
+
+std::vector<float> read_f32(const hmsm_simulation* sim, int32_t output) {
+    size_t count = 0;
+    EXPECT_EQ(hmsm_simulation_read_f32(sim, output, nullptr, 0, &count), HMSM_OK);
+    std::vector<float> values(count);
+    EXPECT_EQ(hmsm_simulation_read_f32(sim, output, values.data(), count, &count), HMSM_OK);
+    return values;
 }
 
 template <class T, class Read>
@@ -147,6 +157,134 @@ TEST(CSkin, BadArgumentsFailAndWriteNothing) {
     EXPECT_EQ(hmsm_skin_read_i32(nullptr, HMSM_SKIN_JOINTS, ints, 4, &count), HMSM_INVALID_ARGUMENT);
     EXPECT_EQ(hmsm_skin_read_i32(paper.skin, HMSM_SKIN_JOINTS, ints, 4, nullptr), HMSM_INVALID_ARGUMENT);
     EXPECT_EQ(ints[0], 5);
+
+    // Skinning: sizes, NULLs, a short palette, a non-finite joint matrix.
+    std::vector<float> joints = read_f32(paper.c, HMSM_OUTPUT_JOINT_MATRICES);
+    size_t needed = 0;
+    ASSERT_EQ(hmsm_skin_vertices(paper.skin, nullptr, 0, nullptr, nullptr, 0, &needed, 1), HMSM_OK);
+    std::vector<float> positions(needed, 42.0f), normals(needed, 42.0f);
+    const std::vector<float> untouched(needed, 42.0f);
+    EXPECT_EQ(hmsm_skin_vertices(paper.skin, joints.data(), joints.size(), positions.data(), normals.data(),
+                                 needed - 1, &count, 1),
+              HMSM_INVALID_ARGUMENT);
+    EXPECT_EQ(hmsm_skin_vertices(paper.skin, nullptr, joints.size(), positions.data(), nullptr, needed, &count, 1),
+              HMSM_INVALID_ARGUMENT);
+    EXPECT_EQ(hmsm_skin_vertices(paper.skin, joints.data(), 12 * 2345 - 1, positions.data(), nullptr, needed,
+                                 &count, 1),
+              HMSM_INVALID_ARGUMENT);
+    EXPECT_NE(std::string(hmsm_status_message()).find("joint_values"), std::string::npos);
+    EXPECT_EQ(hmsm_skin_vertices(nullptr, joints.data(), joints.size(), positions.data(), nullptr, needed,
+                                 &count, 1),
+              HMSM_INVALID_ARGUMENT);
+    EXPECT_EQ(hmsm_skin_vertices(paper.skin, joints.data(), joints.size(), positions.data(), nullptr, needed,
+                                 nullptr, 1),
+              HMSM_INVALID_ARGUMENT);
+    joints[12 * 100 + 5] = NAN;
+    EXPECT_EQ(hmsm_skin_vertices(paper.skin, joints.data(), joints.size(), positions.data(), normals.data(),
+                                 needed, &count, 0),
+              HMSM_INVALID_ARGUMENT);
+    EXPECT_NE(std::string(hmsm_status_message()).find("chain 100"), std::string::npos);
+    EXPECT_EQ(positions, untouched);
+    EXPECT_EQ(normals, untouched);
+}
+
+/// |a - b| over xyz triples, the largest.
+double largest_distance(const std::vector<float>& a, const std::vector<float>& b, size_t offset = 0) {
+    double largest = 0.0;
+    for (size_t v = 0; v + 2 < a.size(); v += 3) {
+        const double dx = a[v] - b[offset + v], dy = a[v + 1] - b[offset + v + 1], dz = a[v + 2] - b[offset + v + 2];
+        largest = std::max(largest, std::sqrt(dx * dx + dy * dy + dz * dz));
+    }
+    return largest;
+}
+
+/// Pass 7 and the skin are the same formula (docs/model.md 3.10), so skinning the bind mesh
+/// with the simulation's joint matrices gives its vertices up to float rounding: the joint
+/// matrices are floats (relative 6e-8 of coordinates up to the tree's height, through two
+/// affine products), and pass 7 accumulates in float along each chain, which the existing skin
+/// tests bound by 1e-5 of the height. At rest the skin reproduces the bind pose itself.
+TEST(CSkin, SkinningReproducesTheSimulationsVertices) {
+    Paper1 paper;
+    make_paper1(paper);
+    ASSERT_NE(paper.skin, nullptr);
+    uint64_t vertices = 0, chains = 0;
+    ASSERT_EQ(hmsm_skin_sizes(paper.skin, &vertices, &chains), HMSM_OK);
+    const double height = tree_height(*generate_preset("paper-1", 0));
+    const double tolerance = 1e-5 * height;
+
+    // Rest: the bind matrices as the palette give the bind positions (float rounding only).
+    const auto bind = read_skin<float>(hmsm_skin_read_f32, paper.skin, HMSM_SKIN_BIND_MATRICES);
+    const auto bind_positions = read_skin<float>(hmsm_skin_read_f32, paper.skin, HMSM_SKIN_BIND_POSITIONS);
+    std::vector<float> positions(3 * vertices), normals(3 * vertices);
+    size_t count = 0;
+    ASSERT_EQ(hmsm_skin_vertices(paper.skin, bind.data(), bind.size(), positions.data(), nullptr,
+                                 positions.size(), &count, 1),
+              HMSM_OK);
+    EXPECT_LT(largest_distance(positions, bind_positions), 1e-6 * height);
+    const std::vector<float> rest = read_f32(paper.c, HMSM_OUTPUT_VERTEX_POSITIONS);
+    const std::vector<float> rest_joints = read_f32(paper.c, HMSM_OUTPUT_JOINT_MATRICES);
+    ASSERT_EQ(hmsm_skin_vertices(paper.skin, rest_joints.data(), rest_joints.size(), positions.data(), nullptr,
+                                 positions.size(), &count, 1),
+              HMSM_OK);
+    EXPECT_LT(largest_distance(positions, rest), tolerance);
+
+    // Moved: 40 steps of wind; both instances, the second from its chain base on.
+    ASSERT_EQ(hmsm_simulation_step(paper.c, 40), HMSM_OK);
+    const std::vector<float> joints = read_f32(paper.c, HMSM_OUTPUT_JOINT_MATRICES);
+    const std::vector<float> simulated = read_f32(paper.c, HMSM_OUTPUT_VERTEX_POSITIONS);
+    const std::vector<float> simulated_normals = read_f32(paper.c, HMSM_OUTPUT_VERTEX_NORMALS);
+    ASSERT_GT(largest_distance(simulated, rest), 1e3 * tolerance) << "the wind must move the tree";
+    for (uint64_t instance = 0; instance < 2; ++instance) {
+        SCOPED_TRACE(instance);
+        const size_t chain_base = instance * chains;
+        ASSERT_EQ(hmsm_skin_vertices(paper.skin, joints.data() + 12 * chain_base, joints.size() - 12 * chain_base,
+                                     positions.data(), normals.data(), positions.size(), &count, 1),
+                  HMSM_OK);
+        EXPECT_LT(largest_distance(positions, simulated, 3 * instance * vertices), tolerance);
+        EXPECT_LT(largest_distance(normals, simulated_normals, 3 * instance * vertices), 1e-4);
+        // Threaded: the same arithmetic per vertex, so the same bits.
+        std::vector<float> threaded(positions.size()), threaded_normals(normals.size());
+        ASSERT_EQ(hmsm_skin_vertices(paper.skin, joints.data() + 12 * chain_base, joints.size() - 12 * chain_base,
+                                     threaded.data(), threaded_normals.data(), threaded.size(), &count, 0),
+                  HMSM_OK);
+        EXPECT_EQ(threaded, positions);
+        EXPECT_EQ(threaded_normals, normals);
+    }
+}
+
+/// The C++ entry point directly: a straightforward double reference of docs/skinning.md's
+/// formula agrees, and short spans are refused.
+TEST(CSkin, CppSkinVerticesMatchesTheFormula) {
+    std::unique_ptr<Simulation> sim;
+    const SkinTemplate skin = cpp_skin(sim);
+    ASSERT_TRUE(sim->step(30).ok());
+    std::vector<float> joints;
+    ASSERT_TRUE(sim->read(Output::joint_matrices, joints).ok());
+    std::vector<float> positions(3 * skin.vertices.size());
+    ASSERT_TRUE(skin_vertices(skin, joints, positions, {}, 3).ok());
+    double largest = 0.0;
+    for (size_t v = 0; v < skin.vertices.size(); ++v) {
+        const SkinVertex& s = skin.vertices[v];
+        double p[3] = {0, 0, 0};
+        for (int j = 0; j < 2; ++j) {
+            if (s.joints[j] < 0) continue;
+            const float* m = &joints[12 * size_t(s.joints[j])];
+            const auto& inv = skin.inverse_bind[size_t(s.joints[j])];
+            double local[3];
+            for (int i = 0; i < 3; ++i)
+                local[i] = inv[4 * i] * s.position.x + inv[4 * i + 1] * s.position.y + inv[4 * i + 2] * s.position.z +
+                           inv[4 * i + 3];
+            for (int i = 0; i < 3; ++i)
+                p[i] += s.weights[j] * (m[4 * i] * local[0] + m[4 * i + 1] * local[1] + m[4 * i + 2] * local[2] +
+                                        m[4 * i + 3]);
+        }
+        for (int i = 0; i < 3; ++i) largest = std::max(largest, std::abs(p[i] - positions[3 * v + i]));
+    }
+    EXPECT_LT(largest, 1e-6 * tree_height(sim->scene().models[0]));
+    std::vector<float> short_positions(positions.size() - 1);
+    EXPECT_EQ(skin_vertices(skin, joints, short_positions).code(), ErrorCode::invalid_argument);
+    EXPECT_EQ(skin_vertices(skin, std::span<const float>(joints).first(11), positions).code(),
+              ErrorCode::invalid_argument);
 }
 
 }  // namespace
