@@ -3,8 +3,8 @@
 
 Usage: hmsm_example.py [path/to/libhmsm.so]   (default: the HMSM_LIBRARY variable, else
 "libhmsm.so" on the loader's path). Generates the paper-1 preset, places a small forest,
-simulates one second of wind on the CPU, reads the skeleton and the mesh, changes the wind and
-shows how errors come back. Exits non-zero if anything is not as expected (CTest runs it).
+simulates one second of wind on the CPU, reads the skeleton and the mesh, skins one tree on the
+CPU from the joint matrices, changes the wind and shows how errors come back. Exits non-zero if anything is not as expected (CTest runs it).
 """
 import ctypes as C
 import math
@@ -16,7 +16,7 @@ HMSM_C_ABI_VERSION = 2
 OK, INVALID_ARGUMENT = 0, 1
 BACKEND_CPU = 0
 WIND_CONSTANT, WIND_Y1 = 1, 2
-OUTPUT_NODE_POSITIONS, OUTPUT_VERTEX_POSITIONS = 0, 1
+OUTPUT_NODE_POSITIONS, OUTPUT_VERTEX_POSITIONS, OUTPUT_JOINT_MATRICES = 0, 1, 6
 
 
 class ModelOptions(C.Structure):
@@ -88,6 +88,12 @@ def load(path):
         "hmsm_simulation_mesh_indices": (C.c_int32, [P, C.c_uint32, C.POINTER(C.c_uint32),
                                                      C.c_size_t, C.POINTER(C.c_size_t)]),
         "hmsm_simulation_set_wind": (C.c_int32, [P, C.POINTER(Wind)]),
+        "hmsm_skin_create": (C.c_int32, [P, C.c_uint32, C.POINTER(P)]),
+        "hmsm_skin_destroy": (None, [P]),
+        "hmsm_skin_sizes": (C.c_int32, [P, C.POINTER(C.c_uint64), C.POINTER(C.c_uint64)]),
+        "hmsm_skin_vertices": (C.c_int32, [P, C.POINTER(C.c_float), C.c_size_t, C.POINTER(C.c_float),
+                                           C.POINTER(C.c_float), C.c_size_t, C.POINTER(C.c_size_t),
+                                           C.c_uint32]),
     }
     for name, (restype, argtypes) in sigs.items():
         fn = getattr(lib, name)
@@ -160,6 +166,24 @@ def main():
           % (counts.instances, counts.nodes, counts.vertices, index_count.value // 3,
              counts.time, moved, drift_x))
     assert moved > 1e-3 and drift_x > 0.0, "the wind did not move the trees downwind"
+
+    # CPU skinning of the second tree from its joint matrices (docs/skinning.md): it starts at
+    # chain base 1 x chains in the palette and at vertex 1 x vertices-per-tree in the output.
+    skin = C.c_void_p()
+    check(lib, lib.hmsm_skin_create(sim, 0, C.byref(skin)))
+    skin_vertices, skin_chains = C.c_uint64(), C.c_uint64()
+    check(lib, lib.hmsm_skin_sizes(skin, C.byref(skin_vertices), C.byref(skin_chains)))
+    palette = read_f32(lib, sim, OUTPUT_JOINT_MATRICES)
+    base = 12 * skin_chains.value
+    floats = 3 * skin_vertices.value
+    skinned, normals, count = (C.c_float * floats)(), (C.c_float * floats)(), C.c_size_t()
+    check(lib, lib.hmsm_skin_vertices(skin, C.cast(C.addressof(palette) + 4 * base, C.POINTER(C.c_float)),
+                                      len(palette) - base, skinned, normals, floats, C.byref(count), 0))
+    lib.hmsm_skin_destroy(skin)
+    skin_error = max(abs(a - b) for a, b in zip(skinned, vertices[floats:2 * floats]))
+    print("tree 1 skinned on the CPU: %d vertices from %d joints, within %.1e m of the simulation"
+          % (skin_vertices.value, skin_chains.value, skin_error))
+    assert count.value == floats and skin_error < 1e-3, "CPU skinning disagrees with the simulation"
 
     # Errors come back as codes with a message naming the argument; nothing is changed.
     wind = Wind().init(lib, "hmsm_wind_init")
