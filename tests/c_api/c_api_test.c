@@ -440,6 +440,39 @@ static void test_live_control(void) {
     hmsm_simulation_destroy(simulation);
 }
 
+/* Skins from C: sizes, the joints of every vertex, and CPU skinning of instance 1 (from its chain
+ * base) against the simulation's own vertices; tests/c_api/c_skin_test.cpp compares every value
+ * with hmsm::build_skin(). */
+static void test_skin(void) {
+    hmsm_simulation* simulation = small_simulation();
+    hmsm_skin* skin = NULL;
+    uint64_t vertices = 0, chains = 0;
+    size_t count = 0, i;
+    int32_t joints[4096];
+    float palette[48], simulated[6144], skinned[3072];
+    if (!simulation) return;
+    CHECK_OK(hmsm_simulation_step(simulation, 30));
+    CHECK_OK(hmsm_skin_create(simulation, 0, &skin));
+    CHECK_FAILS(HMSM_INVALID_ARGUMENT, hmsm_skin_create(simulation, 1, &skin));
+    CHECK_OK(hmsm_skin_sizes(skin, &vertices, &chains));
+    CHECK(chains == 1 && vertices > 0 && 2 * vertices <= 4096); /* one chain per tree */
+    CHECK_OK(hmsm_skin_read_i32(skin, HMSM_SKIN_JOINTS, joints, 4096, &count));
+    CHECK(count == 2 * vertices);
+    for (i = 0; i < count; ++i) CHECK(joints[i] >= -1 && joints[i] < (int32_t)chains);
+    CHECK_FAILS(HMSM_INVALID_ARGUMENT, hmsm_skin_read_f32(skin, HMSM_SKIN_JOINTS, skinned, 3072, &count));
+    CHECK_OK(hmsm_simulation_read_f32(simulation, HMSM_OUTPUT_JOINT_MATRICES, palette, 48, &count));
+    CHECK(count == 2 * 12 * chains);
+    CHECK_OK(hmsm_simulation_read_f32(simulation, HMSM_OUTPUT_VERTEX_POSITIONS, simulated, 6144, &count));
+    CHECK_OK(hmsm_skin_vertices(skin, palette + 12 * chains, 12 * chains, skinned, NULL, 3072, &count, 1));
+    CHECK(count == 3 * vertices);
+    for (i = 0; i < count; ++i) CHECK(fabs(skinned[i] - simulated[3 * vertices + i]) < 1e-4);
+    CHECK_FAILS(HMSM_INVALID_ARGUMENT,
+                hmsm_skin_vertices(skin, palette, 12 * chains - 1, skinned, NULL, 3072, &count, 1));
+    hmsm_skin_destroy(skin);
+    hmsm_skin_destroy(NULL);
+    hmsm_simulation_destroy(simulation);
+}
+
 int main(int argc, char** argv) {
     if (argc > 1 && strcmp(argv[1], "live") == 0) {
         test_live_control();
@@ -450,6 +483,7 @@ int main(int argc, char** argv) {
         test_simulation();
         test_bad_configs();
         test_live_control_arguments();
+        test_skin();
     }
     if (failures) fprintf(stderr, "%d check(s) failed\n", failures);
     else printf("all checks passed\n");
