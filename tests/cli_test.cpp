@@ -208,3 +208,19 @@ TEST_F(Cli, PresetInfoAndSimulateAcceptance) {
     EXPECT_NE(r.err.find("paper-9"), std::string::npos) << r.err;
     EXPECT_FALSE(fs::exists(path("p9.json")));
 }
+
+/// Every command that can run long takes --no-progress (render and bench: in their own tests);
+/// the progress itself is drawn only on a terminal, never into a redirected stderr.
+TEST_F(Cli, LongRunningCommandsAcceptNoProgress) {
+    CliRun r = run("simulate --tree " + path("small.json") + " --backend cpu --steps 5 --no-progress");
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    r = run("export --gltf " + path("clip.glb") + " --tree " + path("small.json") +
+            " --seconds 0.2 --fps 10 --no-progress");
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_TRUE(fs::exists(path("clip.glb")));
+    EXPECT_EQ(r.err.find('\r'), std::string::npos) << r.err;
+    r = run("analyze --tree " + path("small.json") + " --step-seconds 1 --spectrum-seconds 1 --no-progress --json");
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_NE(r.out.find("\"models\""), std::string::npos);
+    EXPECT_EQ(r.err.find('\r'), std::string::npos) << r.err;
+}

@@ -18,8 +18,21 @@
  * - Threading: as in C++ (include/hmsm/simulation.h): one thread at a time per simulation;
  *   functions taking a const handle may run concurrently with each other; distinct handles
  *   concurrently. The last-status message is per thread.
- * - The structs below change only together with HMSM_C_ABI_VERSION; fill them with the
- *   hmsm_*_init functions, which set hmsm's defaults, then change what you need.
+ * - Sized structs: every struct that crosses this boundary (hmsm_config, hmsm_wind,
+ *   hmsm_instance, hmsm_force_field, hmsm_counts) begins with `uint32_t struct_size`, the size
+ *   of the caller's definition of it. Fill a struct with its hmsm_*_init function and the
+ *   caller's size, HMSM_INIT(hmsm_config_init, &config), which sets struct_size and hmsm's
+ *   defaults; then change what you need. Every call that reads or fills a struct checks
+ *   struct_size first. Fields are only ever appended, so every earlier layout of a struct is a
+ *   prefix of the current one: a struct_size equal to the size of such a prefix (a struct from
+ *   an older header) is served with only its fields read or written, the later ones taking
+ *   hmsm's defaults. A struct_size of 0, smaller than the first field, larger than this
+ *   library's struct (a newer header) or between two layouts fails with HMSM_INVALID_ARGUMENT,
+ *   a message naming the struct and the sizes, and writes nothing. In an array, element 0's
+ *   struct_size is the stride and every element must carry it (for an array that hmsm fills,
+ *   initialise at least element 0). hmsm_model_options, hmsm_parameters and the hmsm_wind
+ *   inside hmsm_config are parts of hmsm_config and covered by its size; the nested wind's own
+ *   struct_size is set by hmsm_config_init and not read.
  */
 #ifndef HMSM_HMSM_C_H
 #define HMSM_HMSM_C_H
@@ -34,7 +47,11 @@ extern "C" {
 #endif
 
 /** Bumped whenever a struct or a signature below changes incompatibly. */
-#define HMSM_C_ABI_VERSION 1
+#define HMSM_C_ABI_VERSION 2
+
+/* Fills *object (a pointer to a sized struct) with hmsm's defaults for the caller's layout:
+ * HMSM_INIT(hmsm_config_init, &config) is hmsm_config_init(&config, sizeof config). */
+#define HMSM_INIT(init_function, object) init_function((object), sizeof *(object))
 
 typedef int32_t hmsm_status;
 enum {
@@ -121,6 +138,7 @@ typedef struct hmsm_parameters {
 
 /* hmsm::Wind (docs/model.md 3.5) */
 typedef struct hmsm_wind {
+    uint32_t struct_size;
     int32_t profile;
     double direction[3];
     double strength;
@@ -132,6 +150,7 @@ typedef struct hmsm_wind {
 
 /* hmsm::SimulationConfig */
 typedef struct hmsm_config {
+    uint32_t struct_size;
     int32_t backend;
     int32_t composition;
     int32_t vertex_layout;
@@ -144,6 +163,7 @@ typedef struct hmsm_config {
 
 /* hmsm::Instance: a placed copy of model `model` (docs/model.md 3.6, 3.9) */
 typedef struct hmsm_instance {
+    uint32_t struct_size;
     uint32_t model;
     double origin[3];
     double yaw;
@@ -154,6 +174,7 @@ typedef struct hmsm_instance {
 
 /* hmsm::ForceField (docs/model.md 3.9) */
 typedef struct hmsm_force_field {
+    uint32_t struct_size;
     int32_t kind;
     double center[3];
     double radius;
@@ -163,6 +184,7 @@ typedef struct hmsm_force_field {
 
 /* Sizes of a simulation, over all instances. */
 typedef struct hmsm_counts {
+    uint32_t struct_size;
     uint64_t instances;
     uint64_t chains;
     uint64_t nodes;
@@ -177,10 +199,13 @@ HMSM_API uint32_t hmsm_abi_version(void);
 HMSM_API const char* hmsm_status_message(void);
 /* "ok", "invalid_argument", ...; "unknown" for other values. */
 HMSM_API const char* hmsm_status_name(hmsm_status status);
-HMSM_API void hmsm_config_init(hmsm_config* config);
-HMSM_API void hmsm_wind_init(hmsm_wind* wind);
-HMSM_API void hmsm_instance_init(hmsm_instance* instance);
-HMSM_API void hmsm_force_field_init(hmsm_force_field* field);
+/* Each sets struct_size = `struct_size` (the caller's sizeof) and hmsm's defaults in the
+ * fields of that layout; a NULL pointer or an unknown size fails and writes nothing. */
+HMSM_API hmsm_status hmsm_config_init(hmsm_config* config, size_t struct_size);
+HMSM_API hmsm_status hmsm_wind_init(hmsm_wind* wind, size_t struct_size);
+HMSM_API hmsm_status hmsm_instance_init(hmsm_instance* instance, size_t struct_size);
+HMSM_API hmsm_status hmsm_force_field_init(hmsm_force_field* field, size_t struct_size);
+HMSM_API hmsm_status hmsm_counts_init(hmsm_counts* counts, size_t struct_size); /* zeros */
 HMSM_API hmsm_status hmsm_output_components(int32_t output, uint32_t* components);
 
 /* --- trees -------------------------------------------------------------------------------- */
@@ -217,6 +242,7 @@ HMSM_API hmsm_status hmsm_simulation_read_f32(const hmsm_simulation* simulation,
                                               float* values, size_t capacity, size_t* count);
 HMSM_API hmsm_status hmsm_simulation_read_f64(const hmsm_simulation* simulation, int32_t output,
                                               double* values, size_t capacity, size_t* count);
+/* counts->struct_size must be set (hmsm_counts_init). */
 HMSM_API hmsm_status hmsm_simulation_counts(const hmsm_simulation* simulation, hmsm_counts* counts);
 /* The backend it runs on (HMSM_BACKEND_*, never AUTOMATIC). */
 HMSM_API hmsm_status hmsm_simulation_backend(const hmsm_simulation* simulation, int32_t* backend);
@@ -252,10 +278,52 @@ HMSM_API hmsm_status hmsm_simulation_remove_instances(hmsm_simulation* simulatio
    nothing. */
 HMSM_API hmsm_status hmsm_simulation_reset_instances(hmsm_simulation* simulation,
                                                      const uint32_t* indices, size_t count);
-/* The current instance list into instances[capacity]; *count = the number of instances. */
+/* The current instance list into instances[capacity]; *count = the number of instances.
+ * instances[0].struct_size gives the layout of every element written. */
 HMSM_API hmsm_status hmsm_simulation_instances(const hmsm_simulation* simulation,
                                                hmsm_instance* instances, size_t capacity,
                                                size_t* count);
+
+/* --- skins (docs/skinning.md): a model's skinned mesh, for engines that draw trees from the
+ * joint matrices (HMSM_OUTPUT_JOINT_MATRICES) as a bone palette, on the GPU or with
+ * hmsm_skin_vertices. Vertex order and triangles are those of hmsm_simulation_mesh_indices.
+ * Instance i's joints start at chain_base(i) = the sum of the chain counts of the instances
+ * before it (a forest of one model: i x chains). */
+typedef struct hmsm_skin hmsm_skin; /* the skin of one model (hmsm::SkinTemplate) */
+/* What hmsm_skin_read_* returns, components per element in brackets. */
+enum {
+    HMSM_SKIN_BIND_POSITIONS = 0, /* per vertex [3]: rest pose of an instance at the origin, yaw 0 */
+    HMSM_SKIN_BIND_NORMALS = 1,   /* per vertex [3]: unit rest normals */
+    HMSM_SKIN_JOINTS = 2,         /* per vertex [2], integers: chains of the model; -1 = unused */
+    HMSM_SKIN_WEIGHTS = 3,        /* per vertex [2]: sum 1; 0 for an unused joint */
+    HMSM_SKIN_INVERSE_BIND = 4,   /* per chain [12]: [B^T | -B^T p] row by row */
+    HMSM_SKIN_BIND_MATRICES = 5,  /* per chain [12]: the rest joint matrix [B | p] row by row */
+    HMSM_SKIN_CHAIN_PARENTS = 6,  /* per chain [1], integers: the parent chain, -1 for the trunk */
+    HMSM_SKIN_DATA_COUNT = 7
+};
+/* The skin of model `model` of the simulation (hmsm::build_skin); one skin serves every
+ * instance of the model, including instances added later. */
+HMSM_API hmsm_status hmsm_skin_create(const hmsm_simulation* simulation, uint32_t model,
+                                      hmsm_skin** skin);
+HMSM_API void hmsm_skin_destroy(hmsm_skin* skin);
+HMSM_API hmsm_status hmsm_skin_sizes(const hmsm_skin* skin, uint64_t* vertices, uint64_t* chains);
+/* Reads `data` (HMSM_SKIN_*) into values[capacity]; *count = elements x components. The
+ * integer data (JOINTS, CHAIN_PARENTS) is read with _i32, the rest with _f32 or _f64; the other
+ * type fails with HMSM_INVALID_ARGUMENT. */
+HMSM_API hmsm_status hmsm_skin_read_f32(const hmsm_skin* skin, int32_t data, float* values,
+                                        size_t capacity, size_t* count);
+HMSM_API hmsm_status hmsm_skin_read_f64(const hmsm_skin* skin, int32_t data, double* values,
+                                        size_t capacity, size_t* count);
+HMSM_API hmsm_status hmsm_skin_read_i32(const hmsm_skin* skin, int32_t data, int32_t* values,
+                                        size_t capacity, size_t* count);
+/* Linear-blend skinning of one instance on the CPU (hmsm::skin_vertices): joint_matrices points
+ * at that instance's first joint matrix in HMSM_OUTPUT_JOINT_MATRICES, with joint_values >= 12 x
+ * chains floats readable there. positions (and normals, unless NULL) receive xyz per vertex:
+ * capacity in floats each, *count = 3 x vertices (positions = NULL with capacity 0 only queries
+ * it). threads: 1 the calling thread, 0 every hardware thread, n at most n. */
+HMSM_API hmsm_status hmsm_skin_vertices(const hmsm_skin* skin, const float* joint_matrices,
+                                        size_t joint_values, float* positions, float* normals,
+                                        size_t capacity, size_t* count, uint32_t threads);
 
 #ifdef __cplusplus
 }

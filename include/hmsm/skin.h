@@ -7,10 +7,12 @@
 #include <hmsm/hierarchy.h>
 #include <hmsm/mesh.h>
 #include <hmsm/options.h>
+#include <hmsm/status.h>
 #include <hmsm/tree.h>
 
 #include <array>
 #include <cstdint>
+#include <span>
 #include <vector>
 
 namespace hmsm {
@@ -37,10 +39,26 @@ struct SkinTemplate {
     std::vector<std::array<double, 12>> inverse_bind;
     /// Per chain, the bind (rest) joint matrix [B_c | p̄_attach(c)], row by row.
     std::vector<std::array<double, 12>> bind;
+    /// Per chain, its parent chain (-1 for the trunk): the joint hierarchy.
+    std::vector<int32_t> parents;
 };
 
 /// Builds the skin of `mesh` (build_mesh(tree, hierarchy, options)).
 HMSM_API SkinTemplate build_skin(const TreeModel& tree, const Hierarchy& hierarchy, const MeshTemplate& mesh,
                         const ModelOptions& options);
+
+/// Linear-blend skinning on the CPU of one instance of `skin`'s model (docs/skinning.md), for
+/// engines that cannot skin on the GPU: per vertex
+///   v = Σ_j w_j M_j (inverse_bind_j (v_bind, 1)),  n = normalize(Σ_j w_j R_j (B_jᵀ n_bind)).
+/// `joint_matrices` holds the instance's 12 floats per chain ([R | O] row by row, the layout of
+/// Output::joint_matrices from the instance's first chain on; values past its chains are not
+/// read). `positions_out` (and `normals_out` unless empty) receive xyz per vertex, in the
+/// vertex order of the skin; spans longer than 3 × vertices keep their tail. `threads`: 1
+/// runs on the calling thread, 0 on every hardware thread, n on at most n threads.
+/// Fails with invalid_argument (naming the span or the chain) for a span too short or a
+/// non-finite joint matrix, writing nothing.
+HMSM_API Status skin_vertices(const SkinTemplate& skin, std::span<const float> joint_matrices,
+                              std::span<float> positions_out, std::span<float> normals_out = {},
+                              unsigned threads = 1);
 
 }  // namespace hmsm

@@ -1,5 +1,6 @@
 // The C ABI's status reporting, defaults, enumerations and struct conversions, and trees.
 #include "c_api_internal.h"
+#include "c_struct.h"
 
 #include <array>
 #include <cstring>
@@ -148,6 +149,56 @@ Status to_cpp(const hmsm_config& in, SimulationConfig& out) {
     return {};
 }
 
+void set_defaults(hmsm_wind& out) {
+    std::memset(&out, 0, sizeof out);
+    out.struct_size = sizeof out;
+    to_c(Wind{}, out);
+}
+
+void set_defaults(hmsm_config& out) {
+    const SimulationConfig defaults;
+    std::memset(&out, 0, sizeof out);
+    out.struct_size = sizeof out;
+    out.backend = static_cast<int32_t>(defaults.backend);
+    out.composition = to_c(defaults.composition);
+    out.vertex_layout = static_cast<int32_t>(defaults.vertex_layout);
+    out.profile_passes = defaults.profile_passes ? 1 : 0;
+    out.outputs = static_cast<int32_t>(defaults.outputs);
+    out.model.grouping = static_cast<int32_t>(defaults.model.grouping);
+    out.model.max_chain_segments = defaults.model.max_chain_segments;
+    out.model.ring_sides = defaults.model.ring_sides;
+    out.model.fix_weight = defaults.model.fix_weight;
+    const Parameters& p = defaults.parameters;
+    out.parameters = {p.density, p.stiffness, p.damping_ratio, p.wind_gain,
+                      p.max_angle, p.dt, p.max_frequency};
+    set_defaults(out.wind);
+    to_c(defaults.wind, out.wind);
+}
+
+void set_defaults(hmsm_instance& out) {
+    std::memset(&out, 0, sizeof out);
+    out.struct_size = sizeof out;
+    to_c(Instance{}, out);
+}
+
+void set_defaults(hmsm_force_field& out) {
+    const ForceField defaults;
+    std::memset(&out, 0, sizeof out);
+    out.struct_size = sizeof out;
+    out.kind = static_cast<int32_t>(defaults.kind);
+    for (int i = 0; i < 3; ++i) {
+        out.center[i] = defaults.center[i];
+        out.directional[i] = defaults.directional[i];
+    }
+    out.radius = defaults.radius;
+    out.radial = defaults.radial;
+}
+
+void set_defaults(hmsm_counts& out) {
+    std::memset(&out, 0, sizeof out);
+    out.struct_size = sizeof out;
+}
+
 }  // namespace hmsm::c_api
 
 using namespace hmsm;
@@ -158,6 +209,21 @@ Status hand_out(Result<TreeModel> tree, hmsm_tree** out) {
     if (!tree) return tree.status();
     *out = new hmsm_tree{std::move(*tree)};
     return {};
+}
+
+/// The body of every hmsm_*_init: hmsm's defaults in the caller's layout of T.
+template <class T>
+hmsm_status init_struct(const char* fn, T* out, size_t struct_size) {
+    return guarded([&]() -> Status {
+        const std::string what = std::string(fn) + ": " + CStruct<T>::name;
+        if (!out) return bad(what + " is NULL");
+        size_t bytes = 0;
+        HMSM_TRY(field_bytes<T>(what, struct_size, bytes));
+        T full;
+        set_defaults(full);
+        write_struct(full, out, static_cast<uint32_t>(struct_size), bytes);
+        return {};
+    });
 }
 }  // namespace
 
@@ -182,43 +248,24 @@ const char* hmsm_status_name(hmsm_status status) {
     }
 }
 
-void hmsm_wind_init(hmsm_wind* wind) {
-    if (wind) to_c(Wind{}, *wind);
+hmsm_status hmsm_wind_init(hmsm_wind* wind, size_t struct_size) {
+    return init_struct("hmsm_wind_init", wind, struct_size);
 }
 
-void hmsm_config_init(hmsm_config* config) {
-    if (!config) return;
-    const SimulationConfig defaults;
-    std::memset(config, 0, sizeof *config);
-    config->backend = static_cast<int32_t>(defaults.backend);
-    config->composition = to_c(defaults.composition);
-    config->vertex_layout = static_cast<int32_t>(defaults.vertex_layout);
-    config->profile_passes = defaults.profile_passes ? 1 : 0;
-    config->outputs = static_cast<int32_t>(defaults.outputs);
-    config->model.grouping = static_cast<int32_t>(defaults.model.grouping);
-    config->model.max_chain_segments = defaults.model.max_chain_segments;
-    config->model.ring_sides = defaults.model.ring_sides;
-    config->model.fix_weight = defaults.model.fix_weight;
-    const Parameters& p = defaults.parameters;
-    config->parameters = {p.density, p.stiffness, p.damping_ratio, p.wind_gain,
-                          p.max_angle, p.dt, p.max_frequency};
-    to_c(defaults.wind, config->wind);
+hmsm_status hmsm_config_init(hmsm_config* config, size_t struct_size) {
+    return init_struct("hmsm_config_init", config, struct_size);
 }
 
-void hmsm_instance_init(hmsm_instance* instance) {
-    if (instance) to_c(Instance{}, *instance);
+hmsm_status hmsm_instance_init(hmsm_instance* instance, size_t struct_size) {
+    return init_struct("hmsm_instance_init", instance, struct_size);
 }
 
-void hmsm_force_field_init(hmsm_force_field* field) {
-    if (!field) return;
-    const ForceField defaults;
-    field->kind = static_cast<int32_t>(defaults.kind);
-    for (int i = 0; i < 3; ++i) {
-        field->center[i] = defaults.center[i];
-        field->directional[i] = defaults.directional[i];
-    }
-    field->radius = defaults.radius;
-    field->radial = defaults.radial;
+hmsm_status hmsm_force_field_init(hmsm_force_field* field, size_t struct_size) {
+    return init_struct("hmsm_force_field_init", field, struct_size);
+}
+
+hmsm_status hmsm_counts_init(hmsm_counts* counts, size_t struct_size) {
+    return init_struct("hmsm_counts_init", counts, struct_size);
 }
 
 hmsm_status hmsm_output_components(int32_t output, uint32_t* components) {

@@ -5,11 +5,14 @@
 
 #include <hmsm/hmsm.h>
 #include <hmsm/hmsm_c.h>
+#include <hmsm/skin.h>
 
 #include <cmath>
+#include <cstring>
 #include <memory>
 #include <new>
 #include <string>
+#include <vector>
 
 struct hmsm_tree {
     hmsm::TreeModel model;
@@ -19,6 +22,9 @@ struct hmsm_scene {
 };
 struct hmsm_simulation {
     std::unique_ptr<hmsm::Simulation> simulation;
+};
+struct hmsm_skin {
+    hmsm::SkinTemplate skin;
 };
 
 namespace hmsm::c_api {
@@ -38,6 +44,23 @@ hmsm_status guarded(Body&& body) noexcept {
     } catch (...) {
         return report({ErrorCode::internal, "unexpected exception inside hmsm"});
     }
+}
+
+/// The common shape of a read into a caller buffer: `*count` always receives the size needed;
+/// values == NULL with capacity 0 is a size query.
+template <class T>
+inline Status copy_out(const char* fn, const std::vector<T>& source, T* values, size_t capacity,
+                size_t* count) {
+    if (!count) return bad(std::string(fn) + ": count is NULL");
+    *count = source.size();
+    if (!values && capacity == 0) return {};
+    if (!values)
+        return bad(std::string(fn) + ": values is NULL with capacity " + std::to_string(capacity));
+    if (capacity < source.size())
+        return bad(std::string(fn) + ": capacity " + std::to_string(capacity) + " is too small, " +
+                   std::to_string(source.size()) + " needed");
+    if (!source.empty()) std::memcpy(values, source.data(), source.size() * sizeof(T));
+    return {};
 }
 
 inline bool finite3(const double v[3]) {

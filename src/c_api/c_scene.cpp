@@ -1,5 +1,6 @@
 // The C ABI's scenes: models and instances, assembled by the caller or read from a forest file.
 #include "c_api_internal.h"
+#include "c_struct.h"
 
 using namespace hmsm;
 using namespace hmsm::c_api;
@@ -45,8 +46,10 @@ hmsm_status hmsm_scene_add_instance(hmsm_scene* scene, const hmsm_instance* inst
     return guarded([&]() -> Status {
         if (!scene) return bad("hmsm_scene_add_instance: scene is NULL");
         if (!instance) return bad("hmsm_scene_add_instance: instance is NULL");
+        hmsm_instance full;
+        HMSM_TRY(read_struct("hmsm_scene_add_instance: instance", instance, full));
         Instance converted;
-        HMSM_TRY(to_cpp(*instance, converted, "hmsm_scene_add_instance: instance"));
+        HMSM_TRY(to_cpp(full, converted, "hmsm_scene_add_instance: instance"));
         if (converted.model >= scene->scene.models.size())
             return bad("hmsm_scene_add_instance: instance.model " +
                        std::to_string(converted.model) +

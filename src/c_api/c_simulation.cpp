@@ -1,5 +1,6 @@
 // The C ABI's simulations: create, step, read into caller buffers, live control, destroy.
 #include "c_api_internal.h"
+#include "c_struct.h"
 #include "model/input_limits.h"
 
 #include <cstring>
@@ -9,23 +10,6 @@ using namespace hmsm;
 using namespace hmsm::c_api;
 
 namespace {
-
-/// The common shape of a read into a caller buffer: `*count` always receives the size needed;
-/// values == NULL with capacity 0 is a size query.
-template <class T>
-Status copy_out(const char* fn, const std::vector<T>& source, T* values, size_t capacity,
-                size_t* count) {
-    if (!count) return bad(std::string(fn) + ": count is NULL");
-    *count = source.size();
-    if (!values && capacity == 0) return {};
-    if (!values)
-        return bad(std::string(fn) + ": values is NULL with capacity " + std::to_string(capacity));
-    if (capacity < source.size())
-        return bad(std::string(fn) + ": capacity " + std::to_string(capacity) + " is too small, " +
-                   std::to_string(source.size()) + " needed");
-    if (!source.empty()) std::memcpy(values, source.data(), source.size() * sizeof(T));
-    return {};
-}
 
 template <class T>
 hmsm_status read_output(const char* fn, const hmsm_simulation* simulation, int32_t output,
@@ -60,8 +44,10 @@ hmsm_status hmsm_simulation_create(const hmsm_scene* scene, const hmsm_config* c
         if (!scene) return bad("hmsm_simulation_create: scene is NULL");
         if (!config) return bad("hmsm_simulation_create: config is NULL");
         if (!simulation) return bad("hmsm_simulation_create: simulation is NULL");
+        hmsm_config full;
+        HMSM_TRY(read_struct("hmsm_simulation_create: config", config, full));
         SimulationConfig converted;
-        HMSM_TRY(to_cpp(*config, converted));
+        HMSM_TRY(to_cpp(full, converted));
         auto created = Simulation::create(scene->scene, converted);
         if (!created) return created.status();
         *simulation = new hmsm_simulation{std::move(*created)};
@@ -92,9 +78,12 @@ hmsm_status hmsm_simulation_counts(const hmsm_simulation* simulation, hmsm_count
     return guarded([&]() -> Status {
         if (!simulation) return bad("hmsm_simulation_counts: simulation is NULL");
         if (!counts) return bad("hmsm_simulation_counts: counts is NULL");
+        size_t bytes = 0;
+        HMSM_TRY(field_bytes<hmsm_counts>("hmsm_simulation_counts: counts", counts->struct_size, bytes));
         const Simulation& sim = *simulation->simulation;
-        *counts = {sim.instance_count(), sim.chain_count(), sim.node_count(),
-                   sim.vertex_count(), sim.steps_done(), sim.time()};
+        const hmsm_counts full = {static_cast<uint32_t>(sizeof(hmsm_counts)), sim.instance_count(), sim.chain_count(),
+                                  sim.node_count(), sim.vertex_count(), sim.steps_done(), sim.time()};
+        write_struct(full, counts, counts->struct_size, bytes);
         return {};
     });
 }
@@ -139,8 +128,10 @@ hmsm_status hmsm_simulation_set_wind(hmsm_simulation* simulation, const hmsm_win
     return guarded([&]() -> Status {
         if (!simulation) return bad("hmsm_simulation_set_wind: simulation is NULL");
         if (!wind) return bad("hmsm_simulation_set_wind: wind is NULL");
+        hmsm_wind full;
+        HMSM_TRY(read_struct("hmsm_simulation_set_wind: wind", wind, full));
         Wind converted;
-        HMSM_TRY(to_cpp(*wind, converted));
+        HMSM_TRY(to_cpp(full, converted));
         return simulation->simulation->set_wind(converted);
     });
 }
@@ -149,7 +140,12 @@ hmsm_status hmsm_simulation_get_wind(const hmsm_simulation* simulation, hmsm_win
     return guarded([&]() -> Status {
         if (!simulation) return bad("hmsm_simulation_get_wind: simulation is NULL");
         if (!wind) return bad("hmsm_simulation_get_wind: wind is NULL");
-        to_c(simulation->simulation->wind(), *wind);
+        size_t bytes = 0;
+        HMSM_TRY(field_bytes<hmsm_wind>("hmsm_simulation_get_wind: wind", wind->struct_size, bytes));
+        hmsm_wind full;
+        set_defaults(full);
+        to_c(simulation->simulation->wind(), full);
+        write_struct(full, wind, wind->struct_size, bytes);
         return {};
     });
 }
@@ -163,10 +159,12 @@ hmsm_status hmsm_simulation_set_force_fields(hmsm_simulation* simulation,
         if (count > kMaxForceFields)
             return bad(std::string(fn) + ": " + std::to_string(count) + " fields, at most " +
                        std::to_string(kMaxForceFields));
+        std::vector<hmsm_force_field> full;
+        HMSM_TRY(read_array(std::string(fn) + ": fields", fields, count, full));
         std::vector<ForceField> converted(count);
         for (size_t i = 0; i < count; ++i) {
             const std::string what = std::string(fn) + ": field " + std::to_string(i);
-            HMSM_TRY(to_cpp(fields[i], converted[i], what.c_str()));
+            HMSM_TRY(to_cpp(full[i], converted[i], what.c_str()));
         }
         HMSM_TRY(validate_force_fields(converted));
         return simulation->simulation->set_force_fields(converted);
@@ -211,10 +209,12 @@ hmsm_status hmsm_simulation_add_instances(hmsm_simulation* simulation,
         if (!simulation) return bad(std::string(fn) + ": simulation is NULL");
         if (!instances && count > 0)
             return bad(std::string(fn) + ": instances is NULL with count > 0");
+        std::vector<hmsm_instance> full;
+        HMSM_TRY(read_array(std::string(fn) + ": instances", instances, count, full));
         std::vector<Instance> converted(count);
         for (size_t i = 0; i < count; ++i) {
             const std::string what = std::string(fn) + ": instance " + std::to_string(i);
-            HMSM_TRY(to_cpp(instances[i], converted[i], what.c_str()));
+            HMSM_TRY(to_cpp(full[i], converted[i], what.c_str()));
         }
         return simulation->simulation->add_instances(converted);
     });
@@ -247,10 +247,26 @@ hmsm_status hmsm_simulation_instances(const hmsm_simulation* simulation, hmsm_in
     return guarded([&]() -> Status {
         const char* fn = "hmsm_simulation_instances";
         if (!simulation) return bad(std::string(fn) + ": simulation is NULL");
+        if (!count) return bad(std::string(fn) + ": count is NULL");
         const auto list = simulation->simulation->instances();
-        std::vector<hmsm_instance> converted(list.size());
-        for (size_t i = 0; i < list.size(); ++i) to_c(list[i], converted[i]);
-        return copy_out(fn, converted, instances, capacity, count);
+        *count = list.size();
+        if (!instances && capacity == 0) return {};
+        if (!instances)
+            return bad(std::string(fn) + ": instances is NULL with capacity " + std::to_string(capacity));
+        if (capacity < list.size())
+            return bad(std::string(fn) + ": capacity " + std::to_string(capacity) + " is too small, " +
+                       std::to_string(list.size()) + " needed");
+        const uint32_t stride = instances[0].struct_size;
+        size_t bytes = 0;
+        HMSM_TRY(field_bytes<hmsm_instance>(std::string(fn) + ": instances[0]", stride, bytes));
+        auto* base = reinterpret_cast<unsigned char*>(instances);
+        for (size_t i = 0; i < list.size(); ++i) {
+            hmsm_instance full;
+            set_defaults(full);
+            to_c(list[i], full);
+            write_struct(full, base + i * stride, stride, bytes);
+        }
+        return {};
     });
 }
 

@@ -30,6 +30,7 @@ SkinTemplate build_skin(const TreeModel& tree, const Hierarchy& h, const MeshTem
         attach[c] = glm::dvec3(tree.nodes[h.chains[c].attach_node].position) - root;
         skin.bind.push_back(rows(frame, attach[c]));
         skin.inverse_bind.push_back(rows(glm::transpose(frame), -(glm::transpose(frame) * attach[c])));
+        skin.parents.push_back(h.chains[c].parent);
     }
     const double beta = options.fix_weight;
     skin.vertices.reserve(mesh.vertices.size());

@@ -60,17 +60,17 @@ static void test_status_and_defaults(void) {
     CHECK(strcmp(hmsm_status_name(HMSM_OK), "ok") == 0);
     CHECK(strcmp(hmsm_status_name(HMSM_NO_DEVICE), "no_device") == 0);
     CHECK(strcmp(hmsm_status_name(12345), "unknown") == 0);
-    hmsm_config_init(&config);
+    HMSM_INIT(hmsm_config_init, &config);
     CHECK(config.backend == HMSM_BACKEND_AUTOMATIC);
     CHECK(config.model.ring_sides == 8);
     CHECK(fabs(config.parameters.dt - 1.0 / 120.0) < 1e-15);
     CHECK(config.wind.profile == HMSM_WIND_Y1 && config.wind.direction[0] == 1.0);
-    hmsm_instance_init(&instance);
+    HMSM_INIT(hmsm_instance_init, &instance);
     CHECK(instance.wind_scale == 1.0 && instance.active == 1);
-    hmsm_force_field_init(&field);
+    HMSM_INIT(hmsm_force_field_init, &field);
     CHECK(field.radius == 1.0);
-    hmsm_config_init(NULL); /* the init functions accept NULL */
-    hmsm_wind_init(NULL);
+    CHECK_FAILS(HMSM_INVALID_ARGUMENT, hmsm_config_init(NULL, sizeof config));
+    CHECK_FAILS(HMSM_INVALID_ARGUMENT, hmsm_wind_init(NULL, sizeof(hmsm_wind)));
     CHECK_OK(hmsm_output_components(HMSM_OUTPUT_CHAIN_ROTATIONS, &components));
     CHECK(components == 9);
     CHECK_FAILS(HMSM_INVALID_ARGUMENT, hmsm_output_components(HMSM_OUTPUT_COUNT, &components));
@@ -135,7 +135,7 @@ static void test_scenes(void) {
     CHECK_FAILS(HMSM_INVALID_ARGUMENT, hmsm_scene_add_model(scene, NULL, "x", NULL));
     CHECK_FAILS(HMSM_INVALID_ARGUMENT, hmsm_scene_add_model(scene, tree, NULL, NULL));
 
-    hmsm_instance_init(&instance);
+    HMSM_INIT(hmsm_instance_init, &instance);
     instance.origin[0] = 5.0;
     CHECK_OK(hmsm_scene_add_instance(scene, &instance));
     instance.model = 2;
@@ -177,12 +177,12 @@ static hmsm_simulation* small_simulation(void) {
     hmsm_simulation* simulation = NULL;
     CHECK_OK(hmsm_scene_create(&scene));
     CHECK_OK(hmsm_scene_add_model(scene, tree, "small", NULL));
-    hmsm_instance_init(&instance);
+    HMSM_INIT(hmsm_instance_init, &instance);
     CHECK_OK(hmsm_scene_add_instance(scene, &instance));
     instance.origin[0] = 10.0;
     instance.yaw = 0.5;
     CHECK_OK(hmsm_scene_add_instance(scene, &instance));
-    hmsm_config_init(&config);
+    HMSM_INIT(hmsm_config_init, &config);
     config.backend = HMSM_BACKEND_CPU;
     config.wind.profile = HMSM_WIND_CONSTANT;
     CHECK_OK(hmsm_simulation_create(scene, &config, &simulation));
@@ -206,6 +206,7 @@ static void test_simulation(void) {
 
     CHECK(simulation != NULL);
     if (!simulation) return;
+    CHECK_OK(HMSM_INIT(hmsm_counts_init, &counts));
     CHECK_OK(hmsm_simulation_counts(simulation, &counts));
     CHECK(counts.instances == 2 && counts.nodes == 6 && counts.chains == 2);
     CHECK(counts.vertices > 0 && counts.steps_done == 0);
@@ -275,12 +276,12 @@ static void test_bad_configs(void) {
     hmsm_simulation* simulation = NULL;
     CHECK_OK(hmsm_scene_create(&scene));
     CHECK_OK(hmsm_scene_add_model(scene, tree, "small", NULL));
-    hmsm_instance_init(&instance);
+    HMSM_INIT(hmsm_instance_init, &instance);
     CHECK_OK(hmsm_scene_add_instance(scene, &instance));
 
 #define CHECK_CONFIG_FAILS(field, value)                                                       \
     do {                                                                                       \
-        hmsm_config_init(&config);                                                             \
+        HMSM_INIT(hmsm_config_init, &config);                                                             \
         config.backend = HMSM_BACKEND_CPU;                                                     \
         config.field = (value);                                                                \
         CHECK_FAILS(HMSM_INVALID_ARGUMENT, hmsm_simulation_create(scene, &config, &simulation)); \
@@ -293,7 +294,7 @@ static void test_bad_configs(void) {
     CHECK_CONFIG_FAILS(composition, 4); /* reserved */
     CHECK(strstr(hmsm_status_message(), "config.composition: unknown value 4") != NULL);
     /* The default is automatic, and the last two compositions are accepted. */
-    hmsm_config_init(&config);
+    HMSM_INIT(hmsm_config_init, &config);
     CHECK(config.composition == HMSM_COMPOSITION_AUTOMATIC);
     config.backend = HMSM_BACKEND_CPU;
     config.composition = HMSM_COMPOSITION_PATH_WALK;
@@ -316,7 +317,7 @@ static void test_bad_configs(void) {
     CHECK_CONFIG_FAILS(wind.direction[0], 0.0);
 #undef CHECK_CONFIG_FAILS
 
-    hmsm_config_init(&config);
+    HMSM_INIT(hmsm_config_init, &config);
     config.backend = HMSM_BACKEND_CPU;
     CHECK_FAILS(HMSM_INVALID_ARGUMENT, hmsm_simulation_create(NULL, &config, &simulation));
     CHECK_FAILS(HMSM_INVALID_ARGUMENT, hmsm_simulation_create(scene, NULL, &simulation));
@@ -335,12 +336,12 @@ static void test_live_control_arguments(void) {
     size_t count = 0, i;
     if (!simulation) return;
 
-    hmsm_wind_init(&wind);
+    HMSM_INIT(hmsm_wind_init, &wind);
     CHECK_FAILS(HMSM_INVALID_ARGUMENT, hmsm_simulation_set_wind(NULL, &wind));
     CHECK_FAILS(HMSM_INVALID_ARGUMENT, hmsm_simulation_set_wind(simulation, NULL));
     wind.profile = -3;
     CHECK_FAILS(HMSM_INVALID_ARGUMENT, hmsm_simulation_set_wind(simulation, &wind));
-    hmsm_wind_init(&wind);
+    HMSM_INIT(hmsm_wind_init, &wind);
     wind.frequency = NAN;
     CHECK_FAILS(HMSM_INVALID_ARGUMENT, hmsm_simulation_set_wind(simulation, &wind));
     CHECK_OK(hmsm_simulation_get_wind(simulation, &wind));
@@ -348,7 +349,7 @@ static void test_live_control_arguments(void) {
     CHECK_FAILS(HMSM_INVALID_ARGUMENT, hmsm_simulation_get_wind(NULL, &wind));
     CHECK_FAILS(HMSM_INVALID_ARGUMENT, hmsm_simulation_get_wind(simulation, NULL));
 
-    for (i = 0; i < 17; ++i) hmsm_force_field_init(&fields[i]);
+    for (i = 0; i < 17; ++i) HMSM_INIT(hmsm_force_field_init, &fields[i]);
     CHECK_FAILS(HMSM_INVALID_ARGUMENT, hmsm_simulation_set_force_fields(simulation, fields, 17));
     CHECK_FAILS(HMSM_INVALID_ARGUMENT, hmsm_simulation_set_force_fields(simulation, NULL, 1));
     CHECK_FAILS(HMSM_INVALID_ARGUMENT, hmsm_simulation_set_force_fields(NULL, fields, 1));
@@ -372,7 +373,7 @@ static void test_live_control_arguments(void) {
     CHECK_FAILS(HMSM_INVALID_ARGUMENT, hmsm_simulation_set_instance_active(simulation, 5, 1));
     CHECK_FAILS(HMSM_INVALID_ARGUMENT, hmsm_simulation_set_instance_active(NULL, 0, 1));
 
-    hmsm_instance_init(&instance);
+    HMSM_INIT(hmsm_instance_init, &instance);
     instance.yaw = NAN;
     CHECK_FAILS(HMSM_INVALID_ARGUMENT, hmsm_simulation_add_instances(simulation, &instance, 1));
     CHECK_FAILS(HMSM_INVALID_ARGUMENT, hmsm_simulation_add_instances(simulation, NULL, 1));
@@ -396,11 +397,13 @@ static void test_live_control(void) {
     float before[18], after[18];
     if (!simulation) return;
 
+    CHECK_OK(HMSM_INIT(hmsm_counts_init, &counts));
+    CHECK_OK(HMSM_INIT(hmsm_instance_init, &list[0]));
     CHECK_OK(hmsm_simulation_instances(simulation, list, 4, &count));
     CHECK(count == 2 && list[1].origin[0] == 10.0 && list[1].yaw == 0.5);
     CHECK_FAILS(HMSM_INVALID_ARGUMENT, hmsm_simulation_instances(simulation, list, 1, &count));
 
-    hmsm_wind_init(&wind);
+    HMSM_INIT(hmsm_wind_init, &wind);
     wind.profile = HMSM_WIND_CONSTANT;
     wind.direction[0] = 0.0;
     wind.direction[2] = 1.0;
@@ -418,14 +421,14 @@ static void test_live_control(void) {
     CHECK_OK(hmsm_simulation_read_f32(simulation, HMSM_OUTPUT_NODE_POSITIONS, after, 18, &count));
     CHECK(memcmp(before, after, 9 * sizeof(float)) == 0); /* inactive: frozen */
 
-    hmsm_force_field_init(&field);
+    HMSM_INIT(hmsm_force_field_init, &field);
     field.kind = HMSM_FORCE_FIELD_RADIAL;
     field.radius = 3.0;
     field.radial = 5.0;
     CHECK_OK(hmsm_simulation_set_force_fields(simulation, &field, 1));
     CHECK_OK(hmsm_simulation_set_force_fields(simulation, NULL, 0));
 
-    hmsm_instance_init(&list[0]);
+    HMSM_INIT(hmsm_instance_init, &list[0]);
     list[0].origin[2] = -7.0;
     CHECK_OK(hmsm_simulation_add_instances(simulation, list, 1));
     CHECK_OK(hmsm_simulation_counts(simulation, &counts));
@@ -439,6 +442,39 @@ static void test_live_control(void) {
     hmsm_simulation_destroy(simulation);
 }
 
+/* Skins from C: sizes, the joints of every vertex, and CPU skinning of instance 1 (from its chain
+ * base) against the simulation's own vertices; tests/c_api/c_skin_test.cpp compares every value
+ * with hmsm::build_skin(). */
+static void test_skin(void) {
+    hmsm_simulation* simulation = small_simulation();
+    hmsm_skin* skin = NULL;
+    uint64_t vertices = 0, chains = 0;
+    size_t count = 0, i;
+    int32_t joints[4096];
+    float palette[48], simulated[6144], skinned[3072];
+    if (!simulation) return;
+    CHECK_OK(hmsm_simulation_step(simulation, 30));
+    CHECK_OK(hmsm_skin_create(simulation, 0, &skin));
+    CHECK_FAILS(HMSM_INVALID_ARGUMENT, hmsm_skin_create(simulation, 1, &skin));
+    CHECK_OK(hmsm_skin_sizes(skin, &vertices, &chains));
+    CHECK(chains == 1 && vertices > 0 && 2 * vertices <= 4096); /* one chain per tree */
+    CHECK_OK(hmsm_skin_read_i32(skin, HMSM_SKIN_JOINTS, joints, 4096, &count));
+    CHECK(count == 2 * vertices);
+    for (i = 0; i < count; ++i) CHECK(joints[i] >= -1 && joints[i] < (int32_t)chains);
+    CHECK_FAILS(HMSM_INVALID_ARGUMENT, hmsm_skin_read_f32(skin, HMSM_SKIN_JOINTS, skinned, 3072, &count));
+    CHECK_OK(hmsm_simulation_read_f32(simulation, HMSM_OUTPUT_JOINT_MATRICES, palette, 48, &count));
+    CHECK(count == 2 * 12 * chains);
+    CHECK_OK(hmsm_simulation_read_f32(simulation, HMSM_OUTPUT_VERTEX_POSITIONS, simulated, 6144, &count));
+    CHECK_OK(hmsm_skin_vertices(skin, palette + 12 * chains, 12 * chains, skinned, NULL, 3072, &count, 1));
+    CHECK(count == 3 * vertices);
+    for (i = 0; i < count; ++i) CHECK(fabs(skinned[i] - simulated[3 * vertices + i]) < 1e-4);
+    CHECK_FAILS(HMSM_INVALID_ARGUMENT,
+                hmsm_skin_vertices(skin, palette, 12 * chains - 1, skinned, NULL, 3072, &count, 1));
+    hmsm_skin_destroy(skin);
+    hmsm_skin_destroy(NULL);
+    hmsm_simulation_destroy(simulation);
+}
+
 int main(int argc, char** argv) {
     if (argc > 1 && strcmp(argv[1], "live") == 0) {
         test_live_control();
@@ -449,6 +485,7 @@ int main(int argc, char** argv) {
         test_simulation();
         test_bad_configs();
         test_live_control_arguments();
+        test_skin();
     }
     if (failures) fprintf(stderr, "%d check(s) failed\n", failures);
     else printf("all checks passed\n");

@@ -43,11 +43,11 @@ static hmsm_simulation* simulation_of_two(void) {
     CHECK_STATUS(HMSM_OK, hmsm_tree_from_nodes(parents, positions, radii, 3, &tree));
     CHECK_STATUS(HMSM_OK, hmsm_scene_create(&scene));
     CHECK_STATUS(HMSM_OK, hmsm_scene_add_model(scene, tree, "small", NULL));
-    hmsm_instance_init(&instance);
+    HMSM_INIT(hmsm_instance_init, &instance);
     CHECK_STATUS(HMSM_OK, hmsm_scene_add_instance(scene, &instance));
     instance.origin[0] = 10.0;
     CHECK_STATUS(HMSM_OK, hmsm_scene_add_instance(scene, &instance));
-    hmsm_config_init(&config);
+    HMSM_INIT(hmsm_config_init, &config);
     config.backend = HMSM_BACKEND_CPU;
     config.wind.profile = HMSM_WIND_CONSTANT;
     config.wind.strength = 40.0;
@@ -67,7 +67,7 @@ static void read_angles(hmsm_simulation* simulation, float* angles) {
 static void test_values_beyond_float_range(hmsm_simulation* simulation) {
     hmsm_force_field field;
     hmsm_wind wind;
-    hmsm_force_field_init(&field);
+    HMSM_INIT(hmsm_force_field_init, &field);
     field.kind = HMSM_FORCE_FIELD_RADIAL;
     field.radius = 5.0;
     field.radial = 1e39; /* finite in double, inf in float */
@@ -79,6 +79,7 @@ static void test_values_beyond_float_range(hmsm_simulation* simulation) {
     CHECK(strstr(hmsm_status_message(), "center") != NULL);
     CHECK_STATUS(HMSM_INVALID_ARGUMENT, hmsm_simulation_set_instance_wind_scale(simulation, 0, 1e28));
     CHECK(strstr(hmsm_status_message(), "wind_scale") != NULL);
+    CHECK_STATUS(HMSM_OK, HMSM_INIT(hmsm_wind_init, &wind));
     CHECK_STATUS(HMSM_OK, hmsm_simulation_get_wind(simulation, &wind));
     wind.frequency = 1e308;
     CHECK_STATUS(HMSM_INVALID_ARGUMENT, hmsm_simulation_set_wind(simulation, &wind));

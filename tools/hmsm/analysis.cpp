@@ -57,6 +57,7 @@ Result<std::vector<double>> trace_top(const TreeModel& tree, int32_t top, const 
     std::vector<double> xyz;
     for (uint64_t k = 0; k < steps; ++k) {
         HMSM_TRY((*sim)->step(1));
+        if (s.on_step) s.on_step();
         HMSM_TRY((*sim)->read(Output::node_positions, xyz));
         const glm::dvec3 p(xyz[3 * size_t(top)], xyz[3 * size_t(top) + 1], xyz[3 * size_t(top) + 2]);
         out.push_back(glm::dot(p - rest, along));

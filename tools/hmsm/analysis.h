@@ -5,6 +5,7 @@
 
 #include <hmsm/hmsm.h>
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -18,6 +19,7 @@ struct AnalysisSettings {
     double step_seconds = 30.0;
     Wind spectrum_wind;                    ///< strength set from wind_speed by the caller
     double spectrum_seconds = 60.0;
+    std::function<void()> on_step;         ///< called after every simulated step (progress)
 };
 
 struct ChainAnalysis {

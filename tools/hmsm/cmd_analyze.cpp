@@ -5,6 +5,7 @@
 // Text or JSON on stdout; PNG plots with --plot-step, --plot-spectrum, --plot-chains.
 #include "analysis.h"
 #include "cli_common.h"
+#include "step_progress.h"
 #ifdef HMSM_HAVE_PLOTS
 #include "plot.h"
 #endif
@@ -24,7 +25,7 @@ struct AnalyzeFlags {
     double wind_speed = 6.0;
     std::string wind_dir = "1,0,0";
     double step_seconds = 30.0, spectrum_seconds = 60.0;
-    bool json = false;
+    bool json = false, no_progress = false;
     std::string plot_step, plot_spectrum, plot_chains;
     bool shared_speed = false;  // --wind-speed was registered by add_wind_flags
 } flags;
@@ -175,6 +176,7 @@ void register_analyze_flags(CLI::App& app) {
     app.add_option("--step-seconds", flags.step_seconds, "length of the step-response run (default 30)");
     app.add_option("--spectrum-seconds", flags.spectrum_seconds, "length of the spectrum run (default 60)");
     app.add_flag("--json", flags.json, "print JSON instead of text");
+    app.add_flag("--no-progress", flags.no_progress, "no progress on stderr");
     app.add_option("--plot-step", flags.plot_step, "PNG: the top node's step response");
     app.add_option("--plot-spectrum", flags.plot_spectrum, "PNG: the top node's sway spectrum (log-log)");
     app.add_option("--plot-chains", flags.plot_chains, "PNG: histogram of chain frequencies by depth");
@@ -213,12 +215,26 @@ int run_analyze(CLI::App& app) {
         if (!staged) return fail(staged.status());
         files.emplace_back(*staged, k);
     }
+    // Both runs (step response, spectrum) of every model, as trace_top counts their steps.
+    const double dt = settings.parameters.dt;
+    const bool counted = std::isfinite(dt) && dt > 0.0 && settings.step_seconds <= 3600 &&
+                         settings.spectrum_seconds <= 3600;
+    const uint64_t steps_per_model =
+        counted ? uint64_t(std::ceil(settings.step_seconds / dt)) + uint64_t(std::ceil(settings.spectrum_seconds / dt))
+                : 0;
+    StepProgress progress(steps_per_model * scene->models.size(), !flags.no_progress && counted);
+    uint64_t steps_done = 0;
+    settings.on_step = [&] { progress.update(++steps_done); };
     std::vector<ModelAnalysis> analyses;
     for (size_t m = 0; m < scene->models.size(); ++m) {
         auto analysis = analyze_model(scene->models[m], scene->model_names[m], settings);
-        if (!analysis) return fail(analysis.status());
+        if (!analysis) {
+            progress.finish();
+            return fail(analysis.status());
+        }
         analyses.push_back(std::move(analysis).value());
     }
+    progress.finish();
     // Plots show the first model (the tree, or the forest's first).
     Status plotted = write_plots(analyses[0], outputs, files, settings.spectrum_wind);
     if (!plotted) return fail(plotted);

@@ -2,6 +2,7 @@
 // (docs/model.md 3.10 and 5).
 #include "cli_common.h"
 #include "export_gltf.h"
+#include "step_progress.h"
 
 #include <algorithm>
 #include <cinttypes>
@@ -18,6 +19,7 @@ struct ExportFlags {
     std::string backend = "cpu64";
     double seconds = 0.0;
     double fps = 0.0;
+    bool no_progress = false;
 } flags;
 }  // namespace
 
@@ -34,6 +36,7 @@ void register_export_flags(CLI::App& app) {
     app.add_option("--seconds", flags.seconds, "clip length T in seconds")->required();
     app.add_option("--fps", flags.fps, "key frames per second F (frame k = 0 ... T*F)")->required();
     app.add_option("--backend", flags.backend, backend_choices(BackendKind::cpu64));
+    app.add_flag("--no-progress", flags.no_progress, "no progress on stderr");
 }
 
 int run_export(CLI::App& app) {
@@ -87,6 +90,7 @@ int run_export(CLI::App& app) {
     clip.fps = flags.fps;
     std::vector<double> rotations;
     uint64_t done = 0;
+    StepProgress progress(frames, !flags.no_progress, "frame");
     for (uint64_t k = 0; k < frames; ++k) {
         const uint64_t target = export_frame_steps(k, flags.fps, config.parameters.dt);
         while (done < target) {
@@ -103,7 +107,9 @@ int run_export(CLI::App& app) {
         Status read = sim.read(Output::chain_rotations, rotations);
         if (!read) return fail(read);
         append_clip_frame(clip, hierarchy, rotations);
+        progress.update(k + 1);
     }
+    progress.finish();
 
     const std::string name = flags.source.preset.empty() ? "tree" : flags.source.preset;
     auto glb = build_glb(hierarchy, mesh, *skin, clip, glm::dvec3(scene->instances[0].origin), name);

@@ -1,6 +1,7 @@
 // hmsm simulate: runs the seven passes for --steps steps, driven by the wind flags and an optional
 // schedule, and writes the requested dumps and trace (docs/model.md 5).
 #include "cli_common.h"
+#include "step_progress.h"
 
 #include <nlohmann/json.hpp>
 
@@ -8,7 +9,6 @@
 #include <chrono>
 #include <cinttypes>
 #include <cstdio>
-#include <unistd.h>
 
 namespace hmsm::cli {
 namespace {
@@ -138,34 +138,6 @@ void append_trace(std::string& csv, uint64_t step, const Simulation& sim, const 
         }
 }
 
-/// Steps done / total on stderr, once a run has taken more than a few seconds, on a terminal.
-class Progress {
-public:
-    Progress(uint64_t total, bool enabled) : total_(total), enabled_(enabled && isatty(2)) {}
-    void update(uint64_t done) {
-        if (!enabled_) return;
-        const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
-        if (seconds < 3.0 || seconds - shown_ < 0.25) return;
-        shown_ = seconds;
-        const double rate = double(done) / seconds;
-        std::fprintf(stderr, "\rhmsm: step %" PRIu64 "/%" PRIu64 "  %.0f steps/s  eta %.0f s   ", done, total_,
-                     rate, rate > 0.0 ? double(total_ - done) / rate : 0.0);
-        std::fflush(stderr);
-        drawn_ = true;
-    }
-    void finish() {
-        if (drawn_) std::fputc('\n', stderr);
-        drawn_ = false;
-    }
-
-private:
-    uint64_t total_;
-    bool enabled_;
-    bool drawn_ = false;
-    double shown_ = 0.0;
-    std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
-};
-
 }  // namespace
 
 void register_simulate_flags(CLI::App& app) {
@@ -262,7 +234,7 @@ int run_simulate(CLI::App& app) {
     // rows) run as one batch.
     const uint64_t steps = uint64_t(flags.steps);
     PassTimes total;
-    Progress progress(steps, !flags.no_progress);
+    StepProgress progress(steps, !flags.no_progress);
     std::string trace_csv = trace_file ? "step,instance,node,x,y,z\n" : "";
     std::vector<double> xyz;
     const auto start = std::chrono::steady_clock::now();

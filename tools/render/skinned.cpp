@@ -7,8 +7,6 @@
 #include "render/renderer_state.h"
 #include "render/skinned.h"
 
-#include <glm/glm.hpp>
-
 #include <algorithm>
 #include <cstring>
 #include <string>
@@ -27,16 +25,6 @@ struct GpuSkinVertex {
 };
 static_assert(sizeof(GpuSkinVertex) == 48, "std430 layout of SkinVertex in skinned.vert");
 
-/// M (p, w) for 12 numbers row by row (R row i, O_i); w = 1 for a point, 0 for a vector.
-template <typename T>
-glm::dvec3 apply(const T* m, const glm::dvec3& p, double w) {
-    glm::dvec3 out;
-    for (int i = 0; i < 3; ++i)
-        out[i] = double(m[4 * i]) * p.x + double(m[4 * i + 1]) * p.y + double(m[4 * i + 2]) * p.z +
-                 double(m[4 * i + 3]) * w;
-    return out;
-}
-
 }  // namespace
 
 std::vector<SkinTemplate> build_skins(const Simulation& simulation) {
@@ -54,22 +42,19 @@ Status skin_on_host(const Simulation& simulation, const std::vector<SkinTemplate
         return {ErrorCode::invalid_argument, "skin: " + std::to_string(joints.size() / 12) +
                                                  " joint matrices for " +
                                                  std::to_string(simulation.chain_count()) + " chains"};
-    xyz.clear();
-    size_t chain_base = 0;
-    for (const Instance& instance : simulation.scene().instances) {
+    const auto& instances = simulation.scene().instances;
+    size_t vertices = 0;
+    for (const Instance& instance : instances) vertices += skins.at(instance.model).vertices.size();
+    std::vector<float> skinned(3 * vertices);
+    size_t chain_base = 0, vertex_base = 0;
+    for (const Instance& instance : instances) {
         const SkinTemplate& skin = skins.at(instance.model);
-        for (const SkinVertex& v : skin.vertices) {
-            glm::dvec3 p(0.0);
-            for (int j = 0; j < 2; ++j) {
-                if (v.joints[j] < 0 || v.weights[j] == 0.0) continue;
-                const auto& inverse_bind = skin.inverse_bind.at(size_t(v.joints[j]));
-                const float* joint = &joints[12 * (chain_base + size_t(v.joints[j]))];
-                p += v.weights[j] * apply(joint, apply(inverse_bind.data(), v.position, 1.0), 1.0);
-            }
-            xyz.insert(xyz.end(), {float(p.x), float(p.y), float(p.z)});
-        }
+        HMSM_TRY(skin_vertices(skin, joints.subspan(12 * chain_base),
+                               std::span<float>(skinned).subspan(3 * vertex_base, 3 * skin.vertices.size())));
         chain_base += skin.inverse_bind.size();
+        vertex_base += skin.vertices.size();
     }
+    xyz = std::move(skinned);
     return {};
 }
 

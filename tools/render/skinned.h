@@ -17,8 +17,8 @@ std::vector<SkinTemplate> build_skins(const Simulation& simulation);
 
 /// Skins every instance's bind mesh with `joints` (Output::joint_matrices: 12 floats per
 /// chain, instance-major) into `xyz` (3 floats per vertex, in Simulation::read()'s order):
-/// v = Σ_j w_j M_j (inverse_bind_j (v_bind, 1)), in double. invalid_argument when the joint
-/// count is not the simulation's chain count.
+/// hmsm::skin_vertices per instance. invalid_argument when the joint count is not the
+/// simulation's chain count.
 Status skin_on_host(const Simulation& simulation, const std::vector<SkinTemplate>& skins,
                     std::span<const float> joints, std::vector<float>& xyz);
 
