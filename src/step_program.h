@@ -31,11 +31,13 @@ std::vector<Dispatch> build_program(const SceneData& d, const std::vector<Instan
                                     Composition composition, bool dispatches_are_expensive,
                                     Pass first, uint32_t passes, bool walk_ahead = false);
 
-/// Deepest hierarchy (chain depth levels below the trunk) for which Composition::automatic keeps
-/// the path walk on a backend that prefers it: the walk costs depth-many products per chain, the
-/// rounds of pointer jumping log2 of the depth, so past a break-even depth the rounds win. A
-/// conservative first value, to be measured on the H100 (`hmsm bench --composition-depths`).
-inline constexpr int32_t kPathWalkMaxDepth = 64;
+/// Deepest chain depth (levels below the trunk) for which Composition::automatic keeps the path
+/// walk on a backend that prefers it: the walk costs depth-many dependent products per chain, the
+/// rounds of pointer jumping log2 of the depth, so past a break-even depth the rounds win. On the
+/// H100 the walk is even with the rounds at depth 15 and twice as slow at 31 on CUDA (`hmsm bench
+/// --composition-depths`: docs/benchmarks/nvidia-h100.md); 15 is also the deepest path a walk
+/// record holds (HMSM_WALK_PATH_CAPACITY).
+inline constexpr int32_t kPathWalkMaxDepth = HMSM_WALK_PATH_CAPACITY;
 
 /// What Composition::automatic resolves to: the path walk where the backend prefers it and no
 /// model is deeper than kPathWalkMaxDepth, else pointer jumping.
