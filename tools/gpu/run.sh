@@ -74,7 +74,7 @@ SANITIZER_FILTER='-CudaErrors.OutOfMemory*:CudaErrorsStickyDeathTest.*'
 # --- suites ----------------------------------------------------------------------------
 # From the core suite the backend agreement tests (every backend against cpu64); the rest of
 # it needs no GPU (and its CLI tests run the CLI by its build-machine path).
-[[ -x $CORE_TESTS ]] && run_step 120 "$OUT/core_tests.log" "$CORE_TESTS" --gtest_filter='*Agreement*:*Determinism*:*LiveControl*:*LiveReshape*:*Joints*:*Golden*:CpuParallel.*:Threading.*:PassTable.*:-*Cli*'
+[[ -x $CORE_TESTS ]] && run_step 120 "$OUT/core_tests.log" "$CORE_TESTS" --gtest_filter='*Agreement*:*Determinism*:*LiveControl*:*LiveReshape*:*Joints*:*Golden*:CpuParallel.*:Threading.*:PassTable.*:*ResetInstances*:Limits.*:CSkin.*:-*Cli*'
 [[ -x $VULKAN_TESTS ]] && run_step 90 "$OUT/vulkan_tests.log" "$VULKAN_TESTS"
 # The renderer on the NVIDIA driver (its CLI tests run the CLI by its build-machine path).
 [[ -x $RENDER_TESTS ]] && run_step 60 "$OUT/vulkan_tests.log" "$RENDER_TESTS" --gtest_filter='-RenderCli.*'
