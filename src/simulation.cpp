@@ -41,7 +41,7 @@ std::vector<Dispatch> Simulation::Impl::program_for(const std::vector<detail::In
                                                     Pass first, uint32_t passes) const {
     const detail::BackendCapabilities can = backend_->capabilities();
     return build_program(*data_, groups, config_.composition, can.dispatches_are_expensive, first, passes,
-                         can.walks_ahead);
+                         can.walks_ahead, jumping_form_);
 }
 
 Status Simulation::Impl::check_size(std::span<const Instance> instances) const {
@@ -102,7 +102,8 @@ Status Simulation::Impl::check_wind(const Wind& wind, std::span<const Instance> 
 
 Result<std::unique_ptr<Simulation>> Simulation::Impl::create(const Scene& scene,
                                                              const SimulationConfig& config,
-                                                             std::unique_ptr<detail::Backend> backend) {
+                                                             std::unique_ptr<detail::Backend> backend,
+                                                             detail::JumpingForm jumping_form) {
     HMSM_TRY(validate(config.model));
     HMSM_TRY(validate(config.parameters));
     HMSM_TRY(validate(config.wind));
@@ -121,6 +122,7 @@ Result<std::unique_ptr<Simulation>> Simulation::Impl::create(const Scene& scene,
     std::unique_ptr<Simulation> created(new Simulation(std::make_unique<Impl>()));
     Impl* sim = created->impl_.get();
     sim->config_ = config;
+    sim->jumping_form_ = jumping_form;
     sim->scene_ = scene;
     for (size_t m = 0; m < scene.models.size(); ++m) {
         auto hierarchy = build_hierarchy(scene.models[m], config.model, config.parameters);

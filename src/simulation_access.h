@@ -1,6 +1,6 @@
-// Internal access to a Simulation's backend, step program and flattened scene, for hmsm's own
-// interop code, tools and tests (an attorney: the public header declares Simulation::Access,
-// a nested type and so a friend, and only this header defines it).
+// Internal access to a Simulation's backend, step program, flattened scene and pointer jumping's
+// dispatch form, for hmsm's own interop code, tools and tests (an attorney: the public header
+// declares Simulation::Access, a nested type and so a friend, and only this header defines it).
 #pragma once
 
 #include "simulation_impl.h"
@@ -16,8 +16,16 @@ struct __attribute__((visibility("hidden"))) hmsm::Simulation::Access {
     /// config.backend is ignored.
     static Result<std::unique_ptr<Simulation>> create(const Scene& scene,
                                                       const SimulationConfig& config,
-                                                      std::unique_ptr<detail::Backend> backend) {
-        return Simulation::Impl::create(scene, config, std::move(backend));
+                                                      std::unique_ptr<detail::Backend> backend,
+                                                      detail::JumpingForm jumping_form = detail::JumpingForm::by_size) {
+        return Simulation::Impl::create(scene, config, std::move(backend), jumping_form);
+    }
+    /// Simulation::create with pointer jumping's dispatch form forced (tests of both kernels,
+    /// the bench's comparison of them); on a composition other than pointer jumping the form
+    /// has no effect.
+    static Result<std::unique_ptr<Simulation>> create(const Scene& scene, const SimulationConfig& config,
+                                                      detail::JumpingForm jumping_form) {
+        return Simulation::Impl::create(scene, config, nullptr, jumping_form);
     }
 };
 

@@ -19,7 +19,8 @@ namespace hmsm {
 struct __attribute__((visibility("hidden"))) Simulation::Impl {
     static Result<std::unique_ptr<Simulation>> create(const Scene& scene,
                                                       const SimulationConfig& config,
-                                                      std::unique_ptr<detail::Backend> backend);
+                                                      std::unique_ptr<detail::Backend> backend,
+                                                      detail::JumpingForm jumping_form = detail::JumpingForm::by_size);
 
     Status step(uint32_t count);
     /// Uploads what live control changed (wind table header, instance winds) and rebuilds the
@@ -54,6 +55,9 @@ struct __attribute__((visibility("hidden"))) Simulation::Impl {
     Status read_packed_normals(std::vector<double>* as_double, std::vector<float>* as_float) const;
 
     SimulationConfig config_;
+    /// The dispatch form of Composition::pointer_jumping (by size unless a test or the bench
+    /// forces one through Simulation::Access).
+    detail::JumpingForm jumping_form_ = detail::JumpingForm::by_size;
     Scene scene_;
     std::vector<Hierarchy> hierarchies_;
     std::vector<MeshTemplate> meshes_;

@@ -38,7 +38,7 @@ bool rounds_in_dispatch_pay(uint32_t instances, uint32_t chains, bool dispatches
 /// writes final_half in place, one depth per dispatch.
 void append_pass(std::vector<Dispatch>& program, const SceneData& d,
                  const std::vector<InstanceGroup>& groups, Pass pass,
-                 Composition composition, bool dispatches_are_expensive) {
+                 Composition composition, bool dispatches_are_expensive, JumpingForm jumping_form) {
     const uint32_t final_half = HMSM_FINAL_HALF(d.jump_rounds);
     if (!is_hierarchical(pass)) {
         for (const auto& g : groups) {
@@ -60,9 +60,12 @@ void append_pass(std::vector<Dispatch>& program, const SceneData& d,
         auto in_dispatch = [&](const InstanceGroup& g) {
             const uint32_t chains = d.models[g.model].chain_count;
             if (chains > kMaxChainsForRoundsInDispatch) return false;
-            return composition == Composition::pointer_jumping_in_dispatch ||
-                   (composition == Composition::pointer_jumping &&
-                    rounds_in_dispatch_pay(g.instance_count, chains, dispatches_are_expensive));
+            switch (jumping_form) {
+            case JumpingForm::per_round: return false;
+            case JumpingForm::in_dispatch: return true;
+            case JumpingForm::by_size: break;
+            }
+            return rounds_in_dispatch_pay(g.instance_count, chains, dispatches_are_expensive);
         };
         for (const auto& g : groups) {
             if (!in_dispatch(g)) continue;
@@ -191,7 +194,7 @@ std::vector<Dispatch> build_path_walk_program(const SceneData& d, const std::vec
 
 std::vector<Dispatch> build_program(const SceneData& d, const std::vector<InstanceGroup>& groups,
                                     Composition composition, bool dispatches_are_expensive, Pass first,
-                                    uint32_t passes, bool walk_ahead) {
+                                    uint32_t passes, bool walk_ahead, JumpingForm jumping_form) {
     if (composition == Composition::path_walk) {
         uint32_t wanted = 0;
         for (Pass pass : kAllPasses)
@@ -204,7 +207,7 @@ std::vector<Dispatch> build_program(const SceneData& d, const std::vector<Instan
         if (uint32_t(pass) < uint32_t(first) || !(passes >> uint32_t(pass) & 1u)) continue;
         // Outputs on demand: passes whose outputs the step does not produce are not dispatched.
         if (!pass_runs_for(pass, d.outputs)) continue;
-        append_pass(program, d, groups, pass, composition, dispatches_are_expensive);
+        append_pass(program, d, groups, pass, composition, dispatches_are_expensive, jumping_form);
     }
     return program;
 }

@@ -18,10 +18,19 @@ namespace hmsm::detail {
 /// gives the measurements behind the rule).
 bool rounds_in_dispatch_pay(uint32_t instances, uint32_t chains, bool dispatches_are_expensive);
 
+/// The dispatch form of Composition::pointer_jumping: chosen per group by size
+/// (rounds_in_dispatch_pay), or forced, for tests that cover both kernels and for the bench that
+/// compares them. Models of more than 16,384 chains take one dispatch per round in every form.
+enum class JumpingForm {
+    by_size,
+    per_round,    // one dispatch per round over every chain of every instance
+    in_dispatch,  // every round in one dispatch per pass: one workgroup per instance
+};
+
 /// Appends the dispatches of `pass` for every group.
 void append_pass(std::vector<Dispatch>& program, const SceneData& d,
                  const std::vector<InstanceGroup>& groups, Pass pass, Composition composition,
-                 bool dispatches_are_expensive);
+                 bool dispatches_are_expensive, JumpingForm jumping_form = JumpingForm::by_size);
 
 /// The program of the passes from `first` on whose bit is set in `passes`, less the passes
 /// whose outputs the scene does not produce (outputs on demand). `walk_ahead`
@@ -29,7 +38,8 @@ void append_pass(std::vector<Dispatch>& program, const SceneData& d,
 /// composes by the walk that integrates ahead (gpu_layout.h HMSM_DISPATCH_WALK_AHEAD).
 std::vector<Dispatch> build_program(const SceneData& d, const std::vector<InstanceGroup>& groups,
                                     Composition composition, bool dispatches_are_expensive,
-                                    Pass first, uint32_t passes, bool walk_ahead = false);
+                                    Pass first, uint32_t passes, bool walk_ahead = false,
+                                    JumpingForm jumping_form = JumpingForm::by_size);
 
 /// Deepest chain depth (levels below the trunk) for which Composition::automatic keeps the path
 /// walk on a backend that prefers it: the walk costs depth-many dependent products per chain, the

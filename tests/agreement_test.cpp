@@ -3,6 +3,7 @@
 // agreement/pass_agreement_test.cpp. A backend that is not compiled in or has no device is
 // skipped with the reason.
 #include "simulation_access.h"
+#include "test_compositions.h"
 #include "test_trees.h"
 
 #include "backend.h"
@@ -213,12 +214,11 @@ TEST_P(Agreement, RoundsInOneDispatchMatchOneDispatchPerRound) {
         SCOPED_TRACE(name);
         SimulationConfig config;
         config.wind.strength = 8.0;
-        config.composition = Composition::pointer_jumping_in_dispatch;
+        config.composition = Composition::pointer_jumping;
         std::string skip;
-        auto one = test::create_simulation_or_skip(scene, config, GetParam(), skip);
+        auto one = test::create_simulation_or_skip(scene, config, GetParam(), skip, detail::JumpingForm::in_dispatch);
         if (!skip.empty()) GTEST_SKIP() << skip;
-        config.composition = Composition::pointer_jumping_per_round;
-        auto per_round = test::create_simulation_or_skip(scene, config, GetParam(), skip);
+        auto per_round = test::create_simulation_or_skip(scene, config, GetParam(), skip, detail::JumpingForm::per_round);
         ASSERT_TRUE(one && per_round);
         uint32_t in_dispatch = 0;
         for (const auto& d : hmsm::detail::step_program_of(*one))

@@ -124,7 +124,10 @@ TEST_F(Cli, BadArgumentsExitTwoWithoutOutput) {
 TEST_F(Cli, ChoiceErrorsListTheNameTables) {
     const std::string tree = " --tree " + path("small.json");
     expect_bad_input("simulate" + tree + " --composition rounds",
-                     "expected pointer-jumping, pointer-jumping-per-round, pointer-jumping-in-dispatch");
+                     "expected pointer-jumping, level-by-level, path-walk or automatic");
+    // Pointer jumping chooses its dispatch form by size: the forms are not compositions.
+    for (const char* form : {"pointer-jumping-per-round", "pointer_jumping_in_dispatch"})
+        expect_bad_input("simulate" + tree + " --composition " + form, std::string("--composition '") + form + "'");
     expect_bad_input("simulate" + tree + " --outputs vertices", "expected joints, nodes or all");
     expect_bad_input("simulate" + tree + " --wind gale", "expected none, constant, y1, y2, y3, y4 or turbulent");
     CliFixture::expect_bad_input("bench --no-progress --forest-composition rounds",

@@ -5,6 +5,7 @@
 // `automatic`'s choice. Agreement with cpu64 and run-to-run determinism are in
 // agreement_test.cpp and determinism_test.cpp.
 #include "simulation_access.h"
+#include "test_compositions.h"
 #include "test_trees.h"
 
 #include "backend.h"
@@ -59,11 +60,12 @@ SimulationConfig windy(Composition composition, VertexLayout layout) {
 }
 
 std::unique_ptr<Simulation> create_parallel(const Scene& scene, const SimulationConfig& config,
-                                            uint32_t threads, uint32_t min_chunk) {
+                                            uint32_t threads, uint32_t min_chunk,
+                                            detail::JumpingForm jumping_form = detail::JumpingForm::by_size) {
     auto backend = detail::create_cpu_parallel_backend(threads, min_chunk);
     EXPECT_TRUE(backend.ok()) << backend.status().message();
     if (!backend) return nullptr;
-    auto sim = detail::SimulationAccess::create(scene, config, std::move(backend).value());
+    auto sim = detail::SimulationAccess::create(scene, config, std::move(backend).value(), jumping_form);
     EXPECT_TRUE(sim.ok()) << sim.status().message();
     return sim ? std::move(sim).value() : nullptr;
 }
@@ -114,17 +116,15 @@ uint32_t process_threads_settled(uint32_t expected) {
 
 TEST(CpuParallel, BitwiseEqualToSerialCpuInEveryCompositionAndLayout) {
     const Scene scene = mixed_forest(3);
-    for (Composition composition : {Composition::pointer_jumping, Composition::pointer_jumping_per_round,
-                                    Composition::pointer_jumping_in_dispatch, Composition::level_by_level,
-                                    Composition::path_walk}) {
+    for (test::TestComposition composition : test::kEveryComposition) {
         for (VertexLayout layout : {VertexLayout::separate, VertexLayout::packed}) {
-            SCOPED_TRACE(std::string(to_string(composition)) + ", " + to_string(layout));
-            SimulationConfig config = windy(composition, layout);
+            SCOPED_TRACE(test::name_of(composition) + ", " + to_string(layout));
+            SimulationConfig config = windy(composition.composition, layout);
             config.backend = BackendKind::cpu;
-            auto serial = Simulation::create(scene, config);
+            auto serial = test::create_simulation(scene, config, composition);
             ASSERT_TRUE(serial.ok()) << serial.status().message();
             // A chunk of one element: every dispatch of more than one item is split over 3 threads.
-            auto parallel = create_parallel(scene, config, 3, 1);
+            auto parallel = create_parallel(scene, config, 3, 1, composition.jumping_form);
             ASSERT_TRUE(parallel);
             EXPECT_EQ(parallel->backend_kind(), BackendKind::cpu_parallel);
             expect_bitwise_equal_runs(**serial, *parallel, 80);
@@ -137,14 +137,15 @@ TEST(CpuParallel, BitwiseEqualToSerialCpuWithDefaultChunksOnAForest) {
     // boundaries (at least four instances per chunk).
     auto scene = grid_scene(test::small_tree(), 120, 6.0, 5);
     ASSERT_TRUE(scene.ok());
-    for (Composition composition : {Composition::pointer_jumping, Composition::pointer_jumping_per_round,
-                                    Composition::level_by_level}) {
-        SCOPED_TRACE(to_string(composition));
-        SimulationConfig config = windy(composition, VertexLayout::separate);
+    for (test::TestComposition composition :
+         {test::TestComposition(Composition::pointer_jumping), test::kJumpingPerRound,
+          test::TestComposition(Composition::level_by_level)}) {
+        SCOPED_TRACE(test::name_of(composition));
+        SimulationConfig config = windy(composition.composition, VertexLayout::separate);
         config.backend = BackendKind::cpu;
-        auto serial = Simulation::create(*scene, config);
+        auto serial = test::create_simulation(*scene, config, composition);
         ASSERT_TRUE(serial.ok());
-        auto parallel = create_parallel(*scene, config, 4, detail::kCpuMinChunkElements);
+        auto parallel = create_parallel(*scene, config, 4, detail::kCpuMinChunkElements, composition.jumping_form);
         ASSERT_TRUE(parallel);
         ASSERT_GT(uint64_t((*serial)->vertex_count()), 2ull * detail::kCpuMinChunkElements);
         expect_bitwise_equal_runs(**serial, *parallel, 60);
@@ -157,13 +158,13 @@ TEST(CpuParallel, BitwiseEqualToSerialCpuWithEveryOtherInstancePaused) {
     // dispatches instead (src/cpu/step_plan.cpp).
     auto scene = grid_scene(test::small_tree(), 240, 6.0, 5);
     ASSERT_TRUE(scene.ok());
-    for (Composition composition : {Composition::pointer_jumping, Composition::pointer_jumping_in_dispatch}) {
-        SCOPED_TRACE(to_string(composition));
-        SimulationConfig config = windy(composition, VertexLayout::separate);
+    for (test::TestComposition composition : {test::TestComposition(Composition::pointer_jumping), test::kJumpingInDispatch}) {
+        SCOPED_TRACE(test::name_of(composition));
+        SimulationConfig config = windy(composition.composition, VertexLayout::separate);
         config.backend = BackendKind::cpu;
-        auto serial = Simulation::create(*scene, config);
+        auto serial = test::create_simulation(*scene, config, composition);
         ASSERT_TRUE(serial.ok());
-        auto parallel = create_parallel(*scene, config, 3, 1);
+        auto parallel = create_parallel(*scene, config, 3, 1, composition.jumping_form);
         ASSERT_TRUE(parallel);
         for (uint64_t i = 0; i < scene->instances.size(); i += 2) {
             ASSERT_TRUE((*serial)->set_instance_active(i, false).ok());
@@ -175,13 +176,13 @@ TEST(CpuParallel, BitwiseEqualToSerialCpuWithEveryOtherInstancePaused) {
 
 TEST(CpuParallel, StepPlanWaitsOnlyWhereAChunkReadsAnotherThreadsWrites) {
     using detail::cpu::StepPlan;
-    SimulationConfig config = windy(Composition::pointer_jumping_per_round, VertexLayout::separate);
+    SimulationConfig config = windy(Composition::pointer_jumping, VertexLayout::separate);
     config.backend = BackendKind::cpu;
     Scene tree;
     tree.models = {test::deep_tree(5)};
     tree.model_names = {"deep"};
     tree.instances = {{0, {0, 0, 0}, 0.0}};
-    auto single = Simulation::create(tree, config);
+    auto single = test::create_simulation(tree, config, test::kJumpingPerRound);
     ASSERT_TRUE(single.ok()) << single.status().message();
     const auto& program = detail::step_program_of(**single);
     const StepPlan plan(program, 4, 1);

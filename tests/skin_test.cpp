@@ -3,6 +3,7 @@
 // CPU from the joint matrices and build_skin() reproduces pass 7's vertices and normals; outputs
 // on demand skip passes 6 and 7 without changing the joints.
 #include "simulation_access.h"
+#include "test_compositions.h"
 #include "test_trees.h"
 
 #include "backend.h"
@@ -96,14 +97,12 @@ class Joints : public ::testing::TestWithParam<BackendKind> {};
 TEST_P(Joints, JointMatricesAreRotationsAndOriginsInEveryComposition) {
     const Scene scene = mixed_scene();
     const double height = scene_height(scene);
-    for (Composition composition : {Composition::pointer_jumping, Composition::pointer_jumping_per_round,
-                                    Composition::pointer_jumping_in_dispatch, Composition::level_by_level,
-                                    Composition::path_walk}) {
-        SCOPED_TRACE(to_string(composition));
+    for (test::TestComposition composition : test::kEveryComposition) {
+        SCOPED_TRACE(test::name_of(composition));
         SimulationConfig config = windy();
-        config.composition = composition;
+        config.composition = composition.composition;
         std::string skip;
-        auto sim = test::create_simulation_or_skip(scene, config, GetParam(), skip);
+        auto sim = test::create_simulation_or_skip(scene, config, GetParam(), skip, composition.jumping_form);
         if (!skip.empty()) GTEST_SKIP() << skip;
         auto oracle = test::create_simulation_or_skip(scene, config, BackendKind::cpu64, skip);
         ASSERT_TRUE(sim && oracle);

@@ -1,6 +1,7 @@
 // The step program (src/step_program.cpp): which dispatches one step issues for each way of
 // composing passes 3 and 5.
 #include "simulation_access.h"
+#include "test_compositions.h"
 #include "test_trees.h"
 
 #include "backend.h"
@@ -18,12 +19,12 @@ using namespace hmsm;
 
 namespace {
 
-std::unique_ptr<Simulation> cpu_simulation(const Scene& scene, Composition composition, double wind_gain = 0.2) {
+std::unique_ptr<Simulation> cpu_simulation(const Scene& scene, test::TestComposition composition,
+                                           double wind_gain = 0.2) {
     SimulationConfig config;
     config.backend = BackendKind::cpu;
     config.parameters.wind_gain = wind_gain;
-    config.composition = composition;
-    auto sim = Simulation::create(scene, config);
+    auto sim = test::create_simulation(scene, config, composition);
     EXPECT_TRUE(sim.ok()) << sim.status().message();
     return sim.ok() ? std::move(sim).value() : nullptr;
 }
@@ -39,7 +40,7 @@ std::vector<detail::Dispatch> dispatches_of(const Simulation& sim, Pass pass) {
 }  // namespace
 
 TEST(StepProgram, RoundsInOneDispatchGiveOneDispatchPerPass) {
-    auto sim = cpu_simulation(single_tree_scene(test::deep_tree(6)), Composition::pointer_jumping_in_dispatch);
+    auto sim = cpu_simulation(single_tree_scene(test::deep_tree(6)), test::kJumpingInDispatch);
     ASSERT_TRUE(sim);
     ASSERT_EQ(sim->jump_rounds(), 3u);
     EXPECT_EQ(hmsm::detail::step_program_of(*sim).size(), kPassCount);  // the seven passes, one dispatch each
@@ -55,7 +56,7 @@ TEST(StepProgram, RoundsInOneDispatchGiveOneDispatchPerPass) {
 }
 
 TEST(StepProgram, GridOfInstancesGetsOneWorkgroupPerInstance) {
-    auto sim = cpu_simulation(*grid_scene(test::small_tree(), 7, 6.0, 42), Composition::pointer_jumping_in_dispatch);
+    auto sim = cpu_simulation(*grid_scene(test::small_tree(), 7, 6.0, 42), test::kJumpingInDispatch);
     ASSERT_TRUE(sim);
     auto d = dispatches_of(*sim, Pass::compose);
     ASSERT_EQ(d.size(), 1u);
@@ -89,7 +90,7 @@ TEST(StepProgram, PointerJumpingRunsRoundsInOneDispatchForForestsAndSmallModels)
 
 TEST(StepProgram, PerRoundAndLevelByLevelIssueOneDispatchPerRoundOrLevel) {
     const Scene scene = single_tree_scene(test::deep_tree(6));
-    auto per_round = cpu_simulation(scene, Composition::pointer_jumping_per_round);
+    auto per_round = cpu_simulation(scene, test::kJumpingPerRound);
     auto level = cpu_simulation(scene, Composition::level_by_level);
     ASSERT_TRUE(per_round && level);
     for (Pass pass : {Pass::compose, Pass::root_positions}) {
@@ -287,16 +288,15 @@ TEST(StepProgram, WalkAheadOnlyForStepsOfForestsWithEveryInstanceActive) {
 // HMSM_DISPATCH_KINDS), and `round` only where the kind is a pointer-jumping one.
 TEST(StepProgram, EveryDispatchKindFitsItsPassAndOnlyJumpsUseTheRound) {
     const Scene forest = *grid_scene(test::deep_tree(5), 7, 6.0, 42);
-    for (Composition composition : {Composition::pointer_jumping, Composition::pointer_jumping_per_round,
-                                    Composition::pointer_jumping_in_dispatch, Composition::level_by_level,
-                                    Composition::path_walk}) {
+    for (test::TestComposition composition : test::kEveryComposition) {
         auto sim = cpu_simulation(forest, composition);
         ASSERT_TRUE(sim);
         const auto& data = hmsm::detail::scene_data_of(*sim);
         for (bool walk_ahead : {false, true}) {
-            for (const auto& d : detail::build_program(data, data.groups, composition, false, Pass::wind_force,
-                                                       (1u << kPassCount) - 1, walk_ahead)) {
-                SCOPED_TRACE(std::string(to_string(composition)) + " " + std::string(pass_name(d.pass)));
+            for (const auto& d : detail::build_program(data, data.groups, composition.composition, false,
+                                                       Pass::wind_force, (1u << kPassCount) - 1, walk_ahead,
+                                                       composition.jumping_form)) {
+                SCOPED_TRACE(test::name_of(composition) + " " + std::string(pass_name(d.pass)));
                 ASSERT_TRUE(detail::kind_fits_pass(d.constants.kind, d.pass))
                     << "kind " << d.constants.kind;
                 const bool jumps = d.constants.kind == HMSM_DISPATCH_JUMP_ROUND ||
@@ -351,7 +351,7 @@ TEST(StepProgram, AheadScheduleTakesWhereNothingChangedAndWalksPlainUnderSteadyC
 
 TEST(StepProgram, ModelsBeyondTheRoundsLimitFallBackToOneDispatchPerRound) {
     // 16,385 chains: more than 16 per thread of the largest workgroup.
-    auto sim = cpu_simulation(single_tree_scene(test::broom(16385)), Composition::pointer_jumping_in_dispatch);
+    auto sim = cpu_simulation(single_tree_scene(test::broom(16385)), test::kJumpingInDispatch);
     ASSERT_TRUE(sim);
     ASSERT_EQ(sim->hierarchy(0).chains.size(), 16385u);
     for (Pass pass : {Pass::compose, Pass::root_positions}) {
@@ -360,7 +360,7 @@ TEST(StepProgram, ModelsBeyondTheRoundsLimitFallBackToOneDispatchPerRound) {
         for (const auto& dispatch : d) EXPECT_EQ(dispatch.constants.kind, HMSM_DISPATCH_JUMP_ROUND);
     }
     // And just under the limit the rounds stay in one dispatch.
-    auto under = cpu_simulation(single_tree_scene(test::broom(16384)), Composition::pointer_jumping_in_dispatch);
+    auto under = cpu_simulation(single_tree_scene(test::broom(16384)), test::kJumpingInDispatch);
     ASSERT_TRUE(under);
     ASSERT_EQ(under->hierarchy(0).chains.size(), 16384u);
     EXPECT_EQ(dispatches_of(*under, Pass::compose)[0].constants.kind, HMSM_DISPATCH_JUMP_ROUNDS_IN_DISPATCH);
@@ -377,10 +377,12 @@ TEST(StepProgram, RoundsWorkgroupSizeIsThePowerOfTwoThatCoversTheChains) {
 }
 
 TEST(StepProgram, CompositionNamesRoundTrip) {
-    for (Composition c : {Composition::pointer_jumping, Composition::pointer_jumping_per_round,
-                          Composition::pointer_jumping_in_dispatch, Composition::level_by_level,
-                          Composition::path_walk, Composition::automatic})
+    for (Composition c : {Composition::pointer_jumping, Composition::level_by_level, Composition::path_walk,
+                          Composition::automatic})
         EXPECT_EQ(parse_composition(to_string(c)), c);
+    // Pointer jumping chooses its dispatch form by size; the forms have no public names.
+    EXPECT_FALSE(parse_composition("pointer_jumping_per_round").has_value());
+    EXPECT_FALSE(parse_composition("pointer_jumping_in_dispatch").has_value());
     EXPECT_FALSE(parse_composition("pointer-jumping").has_value());  // the CLI maps '-' to '_'
     EXPECT_FALSE(parse_composition("fused").has_value());
 }

@@ -36,18 +36,13 @@ HMSM_API std::vector<BackendKind> compiled_backends();
 
 /// How passes 3 and 5 accumulate down the hierarchy. All give the same poses.
 enum class Composition {
-    /// The paper's pointer jumping in ceil(log2(D+1)) rounds, per instance group in one
-    /// dispatch per pass (as pointer_jumping_in_dispatch) or one dispatch per round (as
-    /// pointer_jumping_per_round), whichever measured faster: in one dispatch for 64 or more
-    /// instances, or models of at most 512 chains (1,024 on Vulkan).
+    /// The paper's pointer jumping in ceil(log2(D+1)) rounds. It chooses its dispatch form per
+    /// instance group by size: every round in one dispatch per pass (one workgroup per instance
+    /// runs round after round with a barrier in between) for 64 or more instances, or models of
+    /// at most 512 chains (1,024 on Vulkan), else one dispatch per round over every chain of
+    /// every instance; models of more than 16,384 chains always take one dispatch per round.
     pointer_jumping,
-    /// Pointer jumping with one dispatch per round over every chain of every instance.
-    pointer_jumping_per_round,
-    /// Pointer jumping with every round in one dispatch per pass: one workgroup per instance
-    /// runs round after round with a barrier in between (models of more than 16,384 chains
-    /// still take one dispatch per round).
-    pointer_jumping_in_dispatch,
-    /// One dispatch per depth level, D+1 in all (for comparison).
+    /// One dispatch per depth level, D+1 in all (a reference for comparison).
     level_by_level,
     /// Passes 3 and 5 in one dispatch in which every chain walks its ancestors from the trunk
     /// down (R = R_parent T, O = O_parent + R_parent l_attach: level by level's poses bit for
@@ -67,8 +62,6 @@ enum class Composition {
 };
 inline constexpr NamedValue<Composition> kCompositionNames[] = {
     {Composition::pointer_jumping, "pointer_jumping"},
-    {Composition::pointer_jumping_per_round, "pointer_jumping_per_round"},
-    {Composition::pointer_jumping_in_dispatch, "pointer_jumping_in_dispatch"},
     {Composition::level_by_level, "level_by_level"},
     {Composition::path_walk, "path_walk"},
     {Composition::automatic, "automatic"},

@@ -75,11 +75,9 @@ enum { /* hmsm_config.backend */
     HMSM_BACKEND_CPU_PARALLEL = 5  /* the float passes over every host thread */
 };
 enum { /* hmsm_config.composition */
-    HMSM_COMPOSITION_POINTER_JUMPING = 0,
-    HMSM_COMPOSITION_POINTER_JUMPING_PER_ROUND = 1,
-    HMSM_COMPOSITION_POINTER_JUMPING_IN_DISPATCH = 2,
+    HMSM_COMPOSITION_POINTER_JUMPING = 0, /* its dispatch form (rounds in one dispatch or one per round) by size */
+    /* values 1, 2 and 4 are reserved: hmsm_simulation_create refuses them */
     HMSM_COMPOSITION_LEVEL_BY_LEVEL = 3,
-    /* value 4 is reserved: hmsm_simulation_create refuses it */
     HMSM_COMPOSITION_PATH_WALK = 5, /* each chain walks its ancestors: 4 dispatches per step */
     HMSM_COMPOSITION_AUTOMATIC = 6  /* the default: path walk on a GPU, else pointer jumping */
 };

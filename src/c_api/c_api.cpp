@@ -19,10 +19,10 @@ constexpr std::array<Output, HMSM_OUTPUT_COUNT> kOutputs = {
     Output::node_positions, Output::vertex_positions, Output::vertex_normals,
     Output::chain_rotations, Output::chain_origins, Output::chain_angles, Output::joint_matrices};
 
-/// hmsm::Composition for each HMSM_COMPOSITION_* value; value 4 is reserved and maps to none.
+/// hmsm::Composition for each HMSM_COMPOSITION_* value; values 1, 2 and 4 are reserved and map
+/// to none.
 constexpr std::array<std::optional<Composition>, HMSM_COMPOSITION_AUTOMATIC + 1> kCompositions = {
-    Composition::pointer_jumping, Composition::pointer_jumping_per_round,
-    Composition::pointer_jumping_in_dispatch, Composition::level_by_level, std::nullopt,
+    Composition::pointer_jumping, std::nullopt, std::nullopt, Composition::level_by_level, std::nullopt,
     Composition::path_walk, Composition::automatic};
 
 int32_t to_c(Composition composition) {
@@ -118,9 +118,11 @@ Status to_cpp(const hmsm_config& in, SimulationConfig& out) {
     SimulationConfig config;
     if (in.backend < HMSM_BACKEND_CPU || in.backend > HMSM_BACKEND_CPU_PARALLEL)
         return bad("config.backend: unknown value " + std::to_string(in.backend));
-    if (in.composition < HMSM_COMPOSITION_POINTER_JUMPING ||
-        in.composition > HMSM_COMPOSITION_AUTOMATIC || !kCompositions[size_t(in.composition)])
+    if (in.composition < HMSM_COMPOSITION_POINTER_JUMPING || in.composition > HMSM_COMPOSITION_AUTOMATIC)
         return bad("config.composition: unknown value " + std::to_string(in.composition));
+    if (!kCompositions[size_t(in.composition)])
+        return bad("config.composition: unknown value " + std::to_string(in.composition) +
+                   " (values 1, 2 and 4 are reserved)");
     if (in.vertex_layout != HMSM_VERTEX_LAYOUT_SEPARATE &&
         in.vertex_layout != HMSM_VERTEX_LAYOUT_PACKED)
         return bad("config.vertex_layout: unknown value " + std::to_string(in.vertex_layout));

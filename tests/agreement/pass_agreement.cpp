@@ -49,17 +49,14 @@ double nmse(const std::vector<double>& expected, const std::vector<double>& actu
     return error / norm;
 }
 
-std::vector<Composition> compositions_of(Pass pass) {
+std::vector<PassForm> forms_of(Pass pass) {
     // A path-walk dispatch of a pass that leads one also runs its walk partner.
-    if (pass == Pass::wind_force || pass == Pass::node_relative)
-        return {Composition::pointer_jumping_per_round, Composition::path_walk};
+    if (pass == Pass::wind_force || pass == Pass::node_relative) return {PassForm::jump_per_round, PassForm::path_walk};
     if (pass == Pass::compose)
-        return {Composition::pointer_jumping_per_round, Composition::pointer_jumping_in_dispatch,
-                Composition::level_by_level, Composition::path_walk};
+        return {PassForm::jump_per_round, PassForm::jump_in_dispatch, PassForm::level_by_level, PassForm::path_walk};
     if (pass == Pass::root_positions)
-        return {Composition::pointer_jumping_per_round, Composition::pointer_jumping_in_dispatch,
-                Composition::level_by_level};
-    return {Composition::pointer_jumping_per_round};
+        return {PassForm::jump_per_round, PassForm::jump_in_dispatch, PassForm::level_by_level};
+    return {PassForm::jump_per_round};
 }
 
 }  // namespace hmsm::test

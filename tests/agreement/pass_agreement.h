@@ -4,6 +4,7 @@
 #pragma once
 
 #include "backend.h"
+#include "random_scene.h"
 
 #include <hmsm/pass.h>
 #include <hmsm/simulation.h>
@@ -36,9 +37,9 @@ double nmse(const std::vector<double>& expected, const std::vector<double>& actu
 /// amplifies it); a wrong index or operand moves whole elements, about 1 / (elements) or more.
 inline constexpr double kMaxPassNmse = 1e-8;
 
-/// The compositions a pass is checked under: one for a flat pass (its dispatches do not
+/// The forms a pass is checked under: one for a flat pass (its dispatches do not
 /// depend on it); every round alone, every round in one dispatch and level by level for
 /// compose and root_positions.
-std::vector<Composition> compositions_of(Pass pass);
+std::vector<PassForm> forms_of(Pass pass);
 
 }  // namespace hmsm::test

@@ -28,20 +28,20 @@ std::vector<SceneSpec> scene_specs() {
 struct PassCase {
     const BackendUnderTest* backend;
     Pass pass;
-    Composition composition;
+    PassForm form;
 };
 
 /// Failure messages name the case, not its bytes.
 void PrintTo(const PassCase& c, std::ostream* os) {
-    *os << c.backend->name << " " << pass_name(c.pass) << " " << to_string(c.composition);
+    *os << c.backend->name << " " << pass_name(c.pass) << " " << name_of(c.form);
 }
 
 class PassAgreement : public ::testing::TestWithParam<PassCase> {};
 
 TEST_P(PassAgreement, EachDispatchMatchesCpu64OnRandomStates) {
-    const auto [backend_under_test, pass, composition] = GetParam();
+    const auto [backend_under_test, pass, form] = GetParam();
     // The same seed for every backend: all see the same scenes, states and wind phases.
-    std::mt19937 rng(1000 + 17 * uint32_t(pass) + uint32_t(composition));
+    std::mt19937 rng(1000 + 17 * uint32_t(pass) + uint32_t(form));
     for (const SceneSpec& spec : scene_specs()) {
         SCOPED_TRACE(spec.name);
         detail::SceneData data = random_scene_data(rng, spec.models, spec.instance_models,
@@ -55,7 +55,7 @@ TEST_P(PassAgreement, EachDispatchMatchesCpu64OnRandomStates) {
         ASSERT_TRUE(backend.value()->upload(data).ok());
         ASSERT_TRUE(oracle.value()->upload(data).ok());
 
-        const auto variants = pass_variants(data, pass, composition, rng);
+        const auto variants = pass_variants(data, pass, form, rng);
         ASSERT_FALSE(variants.empty());
         for (size_t v = 0; v < variants.size(); ++v) {
             SCOPED_TRACE("variant " + std::to_string(v));
@@ -82,14 +82,14 @@ std::vector<PassCase> pass_cases() {
     std::vector<PassCase> cases;
     for (const BackendUnderTest& backend : backends_under_test())
         for (Pass pass : kAllPasses)
-            for (Composition composition : compositions_of(pass)) cases.push_back({&backend, pass, composition});
+            for (PassForm form : forms_of(pass)) cases.push_back({&backend, pass, form});
     return cases;
 }
 
 std::string case_name(const ::testing::TestParamInfo<PassCase>& info) {
     std::string name = info.param.backend->name + "_" + std::string(pass_name(info.param.pass));
-    if (detail::is_hierarchical(info.param.pass) || info.param.composition == Composition::path_walk)
-        name += "_" + std::string(to_string(info.param.composition));
+    if (detail::is_hierarchical(info.param.pass) || info.param.form == PassForm::path_walk)
+        name += "_" + std::string(name_of(info.param.form));
     return name;
 }
 

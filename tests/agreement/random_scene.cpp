@@ -140,11 +140,21 @@ detail::SceneData random_scene_data(std::mt19937& rng, const std::vector<ModelSh
     return d;
 }
 
-std::vector<std::vector<detail::Dispatch>> pass_variants(const detail::SceneData& d, Pass pass,
-                                                         Composition composition, std::mt19937& rng) {
+const char* name_of(PassForm form) {
+    switch (form) {
+    case PassForm::jump_per_round: return "pointer_jumping_per_round";
+    case PassForm::jump_in_dispatch: return "pointer_jumping_in_dispatch";
+    case PassForm::level_by_level: return "level_by_level";
+    case PassForm::path_walk: return "path_walk";
+    }
+    return "unknown";
+}
+
+std::vector<std::vector<detail::Dispatch>> pass_variants(const detail::SceneData& d, Pass pass, PassForm form,
+                                                         std::mt19937& rng) {
     std::vector<std::vector<detail::Dispatch>> variants;
     const bool hierarchical = pass == Pass::compose || pass == Pass::root_positions;
-    if (composition == Composition::path_walk) {
+    if (form == PassForm::path_walk) {
         // One dispatch per group running the pass and its walk partner; the walk both ways: from
         // the records and by following chain_parent up.
         for (uint32_t from_records : {0u, 1u}) {
@@ -184,7 +194,7 @@ std::vector<std::vector<detail::Dispatch>> pass_variants(const detail::SceneData
         variants.push_back(list);
         return variants;
     }
-    if (composition == Composition::pointer_jumping_in_dispatch) {
+    if (form == PassForm::jump_in_dispatch) {
         std::vector<detail::Dispatch> list;  // every round in one dispatch per group
         for (const auto& g : d.groups) {
             detail::Dispatch dispatch{pass, detail::group_constants(d, g, 0)};
@@ -196,7 +206,7 @@ std::vector<std::vector<detail::Dispatch>> pass_variants(const detail::SceneData
         variants.push_back(list);
         return variants;
     }
-    if (composition != Composition::level_by_level) {  // one dispatch list per round
+    if (form != PassForm::level_by_level) {  // one dispatch list per round
         for (uint32_t r = 0; r < d.jump_rounds; ++r) {
             std::vector<detail::Dispatch> list;
             uint32_t src = pick(rng, 0, 1);

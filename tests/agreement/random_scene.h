@@ -21,12 +21,19 @@ detail::SceneData random_scene_data(std::mt19937& rng, const std::vector<ModelSh
                                     const std::vector<uint32_t>& instance_models,
                                     uint32_t max_group_instances);
 
+/// How a pass's dispatches are composed in a per-dispatch check: pointer jumping in its two
+/// dispatch forms (detail::JumpingForm), level by level, or the path walk. The values seed each
+/// case's random scenes.
+enum class PassForm : uint32_t { jump_per_round = 1, jump_in_dispatch = 2, level_by_level = 3, path_walk = 4 };
+/// "pointer_jumping_per_round", "pointer_jumping_in_dispatch", "level_by_level", "path_walk".
+const char* name_of(PassForm form);
+
 /// Every variant of `pass` as separate dispatch lists (one dispatch per group each): one list
 /// for a flat pass; for compose and root_positions one per pointer-jumping round, one with every
-/// round in one dispatch (pointer_jumping_in_dispatch), or one per level. Ping-pong halves of
+/// round in one dispatch (PassForm::jump_in_dispatch), or one per level. Ping-pong halves of
 /// single rounds and levels are drawn from `rng`.
-std::vector<std::vector<detail::Dispatch>> pass_variants(const detail::SceneData& d, Pass pass,
-                                                         Composition composition, std::mt19937& rng);
+std::vector<std::vector<detail::Dispatch>> pass_variants(const detail::SceneData& d, Pass pass, PassForm form,
+                                                         std::mt19937& rng);
 
 /// A wind-table step slot, uniform in [0, HMSM_WIND_STEP_SLOTS).
 /// A random wind-table step slot (Backend::run's per-step argument).

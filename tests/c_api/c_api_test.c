@@ -293,6 +293,11 @@ static void test_bad_configs(void) {
     CHECK_CONFIG_FAILS(composition, -1);
     CHECK_CONFIG_FAILS(composition, 4); /* reserved */
     CHECK(strstr(hmsm_status_message(), "config.composition: unknown value 4") != NULL);
+    /* 1 and 2 are reserved too: pointer jumping chooses its dispatch form by size */
+    CHECK_CONFIG_FAILS(composition, 1);
+    CHECK(strstr(hmsm_status_message(), "config.composition: unknown value 1 (values 1, 2 and 4 are reserved)") != NULL);
+    CHECK_CONFIG_FAILS(composition, 2);
+    CHECK(strstr(hmsm_status_message(), "config.composition: unknown value 2") != NULL);
     /* The default is automatic, and the last two compositions are accepted. */
     HMSM_INIT(hmsm_config_init, &config);
     CHECK(config.composition == HMSM_COMPOSITION_AUTOMATIC);

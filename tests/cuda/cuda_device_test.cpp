@@ -4,6 +4,7 @@
 // no CUDA device.
 #include "simulation_access.h"
 #include "cuda_test_support.h"
+#include "test_compositions.h"
 
 #include <hmsm/cuda.h>
 
@@ -23,8 +24,9 @@ namespace {
 using detail::BufferId;
 using detail::Scalar;
 
-std::unique_ptr<Simulation> create_or_fail(const Scene& scene, const SimulationConfig& config) {
-    auto sim = Simulation::create(scene, config);
+std::unique_ptr<Simulation> create_or_fail(const Scene& scene, const SimulationConfig& config,
+                                           detail::JumpingForm jumping_form = detail::JumpingForm::by_size) {
+    auto sim = detail::SimulationAccess::create(scene, config, jumping_form);
     EXPECT_TRUE(sim.ok()) << sim.status().message();
     return sim.ok() ? std::move(sim).value() : nullptr;
 }
@@ -44,10 +46,12 @@ TEST(CudaNoDevice, CreatingTheBackendReportsNoDevice) {
 
 // --- whole simulations -------------------------------------------------------------------
 
-void expect_agreement(const Scene& scene, Composition composition, bool profile,
+void expect_agreement(const Scene& scene, test::TestComposition composition, bool profile,
                       std::initializer_list<uint32_t> step_calls) {
-    auto reference = create_or_fail(scene, test_config(BackendKind::cpu64, composition, false));
-    auto device = create_or_fail(scene, test_config(BackendKind::cuda, composition, profile));
+    auto reference = create_or_fail(scene, test_config(BackendKind::cpu64, composition.composition, false),
+                                    composition.jumping_form);
+    auto device = create_or_fail(scene, test_config(BackendKind::cuda, composition.composition, profile),
+                                 composition.jumping_form);
     ASSERT_TRUE(reference && device);
     for (uint32_t steps : step_calls) {
         ASSERT_TRUE(reference->step(steps).ok());
@@ -125,7 +129,7 @@ TEST(CudaWalkAhead, StepByStepWithLiveChangesEqualsThePlainWalkBitForBit) {
     EXPECT_GE(backend.steps_taken_ahead() - taken_before_calm, 3u);
 }
 
-class CudaSimulation : public ::testing::TestWithParam<Composition> {};
+class CudaSimulation : public ::testing::TestWithParam<test::TestComposition> {};
 
 TEST_P(CudaSimulation, ForestAgreesWithCpu64AfterManySteps) {
     HMSM_SKIP_WITHOUT_CUDA();
@@ -147,9 +151,10 @@ TEST_P(CudaSimulation, PresetForestAgreesWithCpu64) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Compositions, CudaSimulation,
-                         ::testing::Values(Composition::pointer_jumping_per_round, Composition::pointer_jumping_in_dispatch,
-                                           Composition::level_by_level, Composition::path_walk),
-                         [](const auto& info) { return std::string(to_string(info.param)); });
+                         ::testing::Values(test::kJumpingPerRound, test::kJumpingInDispatch,
+                                           test::TestComposition(Composition::level_by_level),
+                                           test::TestComposition(Composition::path_walk)),
+                         [](const auto& info) { return test::name_of(info.param); });
 
 TEST(CudaGraph, ReplayEqualsDirectLaunchesBitwise) {
     HMSM_SKIP_WITHOUT_CUDA();

@@ -4,6 +4,7 @@
 // cuda_device_test.cpp check the same on the device.
 #include "simulation_access.h"
 #include "cuda_test_support.h"
+#include "test_compositions.h"
 
 #include "device_words.h"
 #include "live_wind.h"
@@ -76,7 +77,7 @@ void poison(HostImage& image, BufferId id) {
     for (size_t i = 0; i < n; ++i) words[i] = std::numeric_limits<float>::quiet_NaN();
 }
 
-class CudaEmulation : public ::testing::TestWithParam<Composition> {};
+class CudaEmulation : public ::testing::TestWithParam<test::TestComposition> {};
 
 /// Runs the first `steps` steps of `sim`'s step program through the kernel bodies on the host,
 /// with the wind clock of each step as Simulation::step computes it (tau = f t, reduced on the
@@ -95,9 +96,10 @@ void emulate_steps(const Simulation& sim, HostImage& image, uint32_t steps) {
 }
 
 /// The step program of `composition` through the kernel bodies, against cpu64, 240 steps.
-void expect_kernel_bodies_follow_cpu64(Composition composition) {
+void expect_kernel_bodies_follow_cpu64(test::TestComposition composition) {
     const Scene scene = forest_scene(11);
-    auto reference = Simulation::create(scene, test_config(BackendKind::cpu64, composition, false));
+    auto reference =
+        test::create_simulation(scene, test_config(BackendKind::cpu64, composition.composition, false), composition);
     ASSERT_TRUE(reference.ok()) << reference.status().message();
     Simulation& sim = **reference;
     HostImage image = image_of(sim);
@@ -105,7 +107,7 @@ void expect_kernel_bodies_follow_cpu64(Composition composition) {
         poison(image, id);
     // A path-walk step's pose is its joint matrix, which the next step reads: there the R and O
     // halves, which no path-walk kernel reads, are poisoned instead.
-    if (composition == Composition::path_walk) {
+    if (composition.composition == Composition::path_walk) {
         poison(image, BufferId::chain_rotation);
         poison(image, BufferId::chain_origin);
     } else {
@@ -141,7 +143,8 @@ void expect_kernel_bodies_follow_cpu64(Composition composition) {
     EXPECT_LE(max_abs_difference(emulated, joints) / std::max(1.0, height), 1e-4);
     // The wind must have moved the trees, or the comparison above proves little.
     std::vector<double> rest, now;
-    auto at_rest = Simulation::create(scene, test_config(BackendKind::cpu64, composition, false));
+    auto at_rest =
+        test::create_simulation(scene, test_config(BackendKind::cpu64, composition.composition, false), composition);
     ASSERT_TRUE(at_rest.ok());
     ASSERT_TRUE((*at_rest)->read(Output::node_positions, rest).ok());
     ASSERT_TRUE(sim.read(Output::node_positions, now).ok());
@@ -157,7 +160,8 @@ TEST_P(CudaEmulation, PausedInstanceInsideADispatchIsSkipped) {
     Scene scene = forest_scene(11);
     for (Instance& instance : scene.instances) instance.model = 0;  // one group of five
     scene.instances[2].active = false;
-    auto reference = Simulation::create(scene, test_config(BackendKind::cpu64, GetParam(), false));
+    auto reference = test::create_simulation(
+        scene, test_config(BackendKind::cpu64, GetParam().composition, false), GetParam());
     ASSERT_TRUE(reference.ok()) << reference.status().message();
     Simulation& sim = **reference;
     ASSERT_TRUE(sim.step(0).ok());  // writes the paused flag
@@ -338,9 +342,10 @@ TEST(CudaEmulationWalkAhead, EqualsThePathWalkBitForBit) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Compositions, CudaEmulation,
-                         ::testing::Values(Composition::pointer_jumping_per_round, Composition::pointer_jumping_in_dispatch,
-                                           Composition::level_by_level, Composition::path_walk),
-                         [](const auto& info) { return std::string(to_string(info.param)); });
+                         ::testing::Values(test::kJumpingPerRound, test::kJumpingInDispatch,
+                                           test::TestComposition(Composition::level_by_level),
+                                           test::TestComposition(Composition::path_walk)),
+                         [](const auto& info) { return test::name_of(info.param); });
 
 }  // namespace
 }  // namespace hmsm::cuda_test

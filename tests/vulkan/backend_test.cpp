@@ -213,7 +213,7 @@ TEST_F(VulkanTest, DispatchBeyondTheWorkgroupCountLimitMatchesCpu64) {
     ASSERT_TRUE(vulkan->upload(data).ok());
     ASSERT_TRUE(oracle.value()->upload(data).ok());
     randomize_state(data, *vulkan, *oracle.value(), rng);
-    auto variants = pass_variants(data, Pass::contour, Composition::pointer_jumping, rng);
+    auto variants = pass_variants(data, Pass::contour, PassForm::jump_per_round, rng);
     ASSERT_EQ(variants.size(), 1u);
     ASSERT_GT(variants[0][0].constants.element_count, 65535u * HMSM_WORKGROUP_SIZE);
     const detail::RunStep step[1] = {};

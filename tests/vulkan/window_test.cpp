@@ -4,6 +4,7 @@
 // cross segment boundaries; and a scene beyond lavapipe's real maxStorageBufferRange runs.
 #include "simulation_access.h"
 #include "random_scene.h"
+#include "test_compositions.h"
 #include "test_trees.h"
 #include "vulkan_test_support.h"
 
@@ -85,14 +86,13 @@ constexpr Output kOutputs[] = {Output::node_positions, Output::vertex_positions,
 
 TEST_F(VulkanTest, SplitScenesMatchTheUnsplitRunBitwise) {
     const Scene scenes[] = {two_model_scene(), *grid_scene(small_tree(), 11, 5.0, 3)};
-    for (Composition composition : {Composition::pointer_jumping_per_round, Composition::pointer_jumping_in_dispatch,
-                                    Composition::level_by_level, Composition::path_walk}) {
+    for (TestComposition composition : {kJumpingPerRound, kJumpingInDispatch, TestComposition(Composition::level_by_level),
+                                        TestComposition(Composition::path_walk)}) {
         for (const Scene& scene : scenes) {
-            SCOPED_TRACE(std::string(to_string(composition)) +
-                         " models " + std::to_string(scene.models.size()));
-            const SimulationConfig config = windy_config(composition);
+            SCOPED_TRACE(name_of(composition) + " models " + std::to_string(scene.models.size()));
+            const SimulationConfig config = windy_config(composition.composition);
             std::string skip;
-            auto whole = create_simulation_or_skip(scene, config, BackendKind::vulkan, skip);
+            auto whole = create_simulation_or_skip(scene, config, BackendKind::vulkan, skip, composition.jumping_form);
             if (!skip.empty()) GTEST_SKIP() << skip;
             ASSERT_TRUE(whole);
             ASSERT_EQ(vulkan_of(*whole).window_plan().segments().size(), 1u);
@@ -113,7 +113,7 @@ TEST_F(VulkanTest, SplitScenesMatchTheUnsplitRunBitwise) {
                 std::unique_ptr<Simulation> split;
                 {
                     ForcedWindow forced(window, alignment);
-                    split = create_simulation_or_skip(scene, config, BackendKind::vulkan, skip);
+                    split = create_simulation_or_skip(scene, config, BackendKind::vulkan, skip, composition.jumping_form);
                 }
                 ASSERT_TRUE(split);
                 const auto& segments = vulkan_of(*split).window_plan().segments();

@@ -69,13 +69,13 @@ void put(json& j, const char* key, double value) {
 }
 
 std::unique_ptr<Simulation> BenchRun::create(const Scene& scene, BackendRun& b, Composition composition,
-                                             json where, VertexLayout layout) {
+                                             json where, VertexLayout layout, detail::JumpingForm jumping_form) {
     SimulationConfig config;
     config.backend = b.kind;
     config.composition = composition;
     config.vertex_layout = layout;
     config.profile_passes = false;
-    auto sim = Simulation::create(scene, config);
+    auto sim = detail::SimulationAccess::create(scene, config, jumping_form);
     if (sim) {
         b.device = (*sim)->device_name();
         return std::move(sim).value();
@@ -165,14 +165,17 @@ void BenchRun::preset_case(const Model& m, BackendRun& b) {
     copy_bandwidth(b, *sim);
     sim.reset();
 
-    for (auto [composition, count_key, count] :
-         {std::tuple{Composition::pointer_jumping_in_dispatch, "rounds", rounds},
-          std::tuple{Composition::level_by_level, "levels", levels},
-          std::tuple{Composition::path_walk, "levels", levels}}) {
-        const std::string name = to_string(composition);
+    // Pointer jumping with every round in one dispatch (its internal form, whatever the size),
+    // then the other compositions.
+    using detail::JumpingForm;
+    for (auto [composition, jumping_form, name, count_key, count] :
+         {std::tuple{Composition::pointer_jumping, JumpingForm::in_dispatch, "pointer_jumping_in_dispatch", "rounds",
+                     rounds},
+          std::tuple{Composition::level_by_level, JumpingForm::by_size, "level_by_level", "levels", levels},
+          std::tuple{Composition::path_walk, JumpingForm::by_size, "path_walk", "levels", levels}}) {
         progress_.begin(m.name + " on " + backend + ", " + name);
         json where = {{"section", "presets"}, {"preset", m.name}, {"backend", backend}, {"composition", name}};
-        auto other = create(scene, b, composition, where);
+        auto other = create(scene, b, composition, where, VertexLayout::separate, jumping_form);
         if (!other) continue;
         auto measured_other = measure(*other, settings_, kBatched | kPasses);
         if (!measured_other) {

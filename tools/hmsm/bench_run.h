@@ -5,6 +5,7 @@
 
 #include "bench_measure.h"
 #include "bench_model.h"
+#include "step_program.h"
 
 #include <hmsm/hmsm.h>
 
@@ -52,10 +53,11 @@ public:
                    skipped = nlohmann::json::array();
     int failures = 0;
 
-    /// Creates a simulation; on failure records why (a skip, an unavailable backend or a
-    /// failure) under `where` and returns null.
+    /// Creates a simulation (pointer jumping in `jumping_form`); on failure records why (a skip,
+    /// an unavailable backend or a failure) under `where` and returns null.
     std::unique_ptr<Simulation> create(const Scene& scene, BackendRun& b, Composition composition,
-                                       nlohmann::json where, VertexLayout layout = VertexLayout::separate);
+                                       nlohmann::json where, VertexLayout layout = VertexLayout::separate,
+                                       detail::JumpingForm jumping_form = detail::JumpingForm::by_size);
     void record_failure(nlohmann::json where, const Status& s);
     /// Measures b's roofline once (again on a larger scene when the first was a host-transfer
     /// estimate over a smaller block).
