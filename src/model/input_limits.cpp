@@ -1,5 +1,7 @@
 #include "input_limits.h"
 
+#include "json_util.h"
+
 #include <cmath>
 #include <cstdio>
 
@@ -50,16 +52,7 @@ std::string quote_input(std::string_view text) {
     for (unsigned char ch : text) {
         if (out.size() >= kShown) break;
         ++used;
-        if (ch == '\n') out += "\\n";
-        else if (ch == '\r') out += "\\r";
-        else if (ch == '\t') out += "\\t";
-        else if (ch < 0x20 || ch == 0x7f) {
-            char buf[8];
-            std::snprintf(buf, sizeof buf, "\\x%02x", ch);
-            out += buf;
-        } else {
-            out += char(ch);
-        }
+        append_escaped(out, ch);
     }
     if (used < text.size()) out += "... (" + std::to_string(text.size()) + " bytes)";
     return out;

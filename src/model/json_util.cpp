@@ -38,21 +38,23 @@ int nesting_depth(std::string_view text) {
 
 }  // namespace
 
+void append_escaped(std::string& out, unsigned char ch) {
+    if (ch == '\n') out += "\\n";
+    else if (ch == '\r') out += "\\r";
+    else if (ch == '\t') out += "\\t";
+    else if (ch < 0x20 || ch == 0x7f) {
+        char buf[8];
+        std::snprintf(buf, sizeof buf, "\\x%02x", ch);
+        out += buf;
+    } else {
+        out += char(ch);
+    }
+}
+
 std::string one_line(std::string_view text) {
     std::string out;
     out.reserve(text.size());
-    for (unsigned char ch : text) {
-        if (ch == '\n') out += "\\n";
-        else if (ch == '\r') out += "\\r";
-        else if (ch == '\t') out += "\\t";
-        else if (ch < 0x20 || ch == 0x7f) {
-            char buf[8];
-            std::snprintf(buf, sizeof buf, "\\x%02x", ch);
-            out += buf;
-        } else {
-            out += char(ch);
-        }
-    }
+    for (unsigned char ch : text) append_escaped(out, ch);
     return out;
 }
 

@@ -15,6 +15,8 @@ namespace hmsm::detail {
 
 /// Deepest nesting accepted; deeper documents are rejected before parsing.
 inline constexpr int kMaxJsonDepth = 64;
+/// Appends `ch` to `out`, a control character escaped (\n, \r, \t, \xNN).
+void append_escaped(std::string& out, unsigned char ch);
 /// `text` with control characters escaped (\n, \t, \xNN), so that names taken from a file
 /// (object keys, strings) cannot split an error message over several lines.
 std::string one_line(std::string_view text);
