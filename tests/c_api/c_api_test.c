@@ -2,22 +2,14 @@
  * arguments (NULL handles and outputs, too-small buffers, unknown enumerations, NaN), and a
  * simulation whose outputs are read back and checked. `c_api_test live` runs the live-control
  * part instead: it passes once hmsm::Simulation implements live control. */
+#include "c_check.h"
+
 #include <hmsm/hmsm_c.h>
 
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-
-static int failures = 0;
-
-#define CHECK(cond)                                                            \
-    do {                                                                       \
-        if (!(cond)) {                                                         \
-            fprintf(stderr, "%s:%d: CHECK failed: %s\n", __FILE__, __LINE__, #cond); \
-            ++failures;                                                        \
-        }                                                                      \
-    } while (0)
 
 /* A call that must fail with `code` and leave a message naming something. */
 #define CHECK_FAILS(code, call)                                                        \

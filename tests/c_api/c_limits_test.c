@@ -1,32 +1,13 @@
 /* The C ABI's input limits (docs/model.md 3.11) and hmsm_simulation_reset_instances: values
    beyond float range are refused where they enter and change nothing; a reset instance returns
    exactly to the rest state of a fresh one, the others untouched. */
+#include "c_check.h"
+
 #include <hmsm/hmsm_c.h>
 
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
-
-static int failures = 0;
-
-#define CHECK(cond)                                                                  \
-    do {                                                                             \
-        if (!(cond)) {                                                               \
-            fprintf(stderr, "%s:%d: CHECK failed: %s\n", __FILE__, __LINE__, #cond); \
-            ++failures;                                                              \
-        }                                                                            \
-    } while (0)
-
-#define CHECK_STATUS(code, call)                                                             \
-    do {                                                                                     \
-        hmsm_status status_ = (call);                                                        \
-        if (status_ != (code)) {                                                             \
-            fprintf(stderr, "%s:%d: %s gave %s (%s), expected %s\n", __FILE__, __LINE__,     \
-                    #call, hmsm_status_name(status_), hmsm_status_message(),                 \
-                    hmsm_status_name(code));                                                 \
-            ++failures;                                                                      \
-        }                                                                                    \
-    } while (0)
 
 enum { kCapacity = 64, kInstances = 2 };
 static size_t angles_per_instance = 0; /* 4 per chain */

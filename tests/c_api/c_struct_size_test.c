@@ -3,21 +3,12 @@
  * that reads or fills it, and nothing past its end is written (guard bytes); a zero, too small,
  * too large or unknown struct_size is refused with a message naming the struct and changes
  * nothing. */
+#include "c_check.h"
+
 #include <hmsm/hmsm_c.h>
 
 #include <stdio.h>
 #include <string.h>
-
-static int failures = 0;
-
-#define CHECK(cond)                                                                  \
-    do {                                                                             \
-        if (!(cond)) {                                                               \
-            fprintf(stderr, "%s:%d: CHECK failed: %s (last message: %s)\n", __FILE__, \
-                    __LINE__, #cond, hmsm_status_message());                         \
-            ++failures;                                                              \
-        }                                                                            \
-    } while (0)
 
 /* A refusal: HMSM_INVALID_ARGUMENT with a message naming `name` and "struct_size". */
 #define CHECK_REFUSED(call, name)                                                         \
