@@ -33,16 +33,6 @@
         }                                                                               \
     } while (0)
 
-/* A three-node tree as arrays: the C way to hand hmsm an engine's own skeleton. */
-static hmsm_tree* small_tree(void) {
-    const int32_t parents[3] = {-1, 0, 1};
-    const double positions[9] = {0, 0, 0, 0, 2, 0, 0.3, 4, 0};
-    const double radii[3] = {0.2, 0.15, 0.1};
-    hmsm_tree* tree = NULL;
-    CHECK_OK(hmsm_tree_from_nodes(parents, positions, radii, 3, &tree));
-    return tree;
-}
-
 static void test_status_and_defaults(void) {
     hmsm_config config;
     hmsm_instance instance;

@@ -30,4 +30,15 @@ static int failures = 0;
         }                                                                                    \
     } while (0)
 
+/* A three-node tree as arrays, the C way to hand hmsm an engine's own skeleton: a trunk and a
+   bent branch above it, 4 m tall. */
+static inline hmsm_tree* small_tree(void) {
+    const int32_t parents[3] = {-1, 0, 1};
+    const double positions[9] = {0, 0, 0, 0, 2, 0, 0.3, 4, 0};
+    const double radii[3] = {0.2, 0.15, 0.1};
+    hmsm_tree* tree = NULL;
+    CHECK_STATUS(HMSM_OK, hmsm_tree_from_nodes(parents, positions, radii, 3, &tree));
+    return tree;
+}
+
 #endif

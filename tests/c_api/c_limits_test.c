@@ -13,15 +13,11 @@ enum { kCapacity = 64, kInstances = 2 };
 static size_t angles_per_instance = 0; /* 4 per chain */
 
 static hmsm_simulation* simulation_of_two(void) {
-    const int32_t parents[3] = {-1, 0, 1};
-    const double positions[9] = {0, 0, 0, 0, 2, 0, 0.3, 4, 0};
-    const double radii[3] = {0.2, 0.15, 0.1};
-    hmsm_tree* tree = NULL;
+    hmsm_tree* tree = small_tree();
     hmsm_scene* scene = NULL;
     hmsm_instance instance;
     hmsm_config config;
     hmsm_simulation* simulation = NULL;
-    CHECK_STATUS(HMSM_OK, hmsm_tree_from_nodes(parents, positions, radii, 3, &tree));
     CHECK_STATUS(HMSM_OK, hmsm_scene_create(&scene));
     CHECK_STATUS(HMSM_OK, hmsm_scene_add_model(scene, tree, "small", NULL));
     HMSM_INIT(hmsm_instance_init, &instance);

@@ -73,13 +73,9 @@ static int guard_intact(const unsigned char* guard) {
 }
 
 static hmsm_scene* one_tree_scene(void) {
-    const int32_t parents[3] = {-1, 0, 1};
-    const double positions[9] = {0, 0, 0, 0, 2, 0, 0.3, 4, 0};
-    const double radii[3] = {0.2, 0.15, 0.1};
-    hmsm_tree* tree = NULL;
+    hmsm_tree* tree = small_tree();
     hmsm_scene* scene = NULL;
     hmsm_instance instance;
-    CHECK(hmsm_tree_from_nodes(parents, positions, radii, 3, &tree) == HMSM_OK);
     CHECK(hmsm_scene_create(&scene) == HMSM_OK);
     CHECK(hmsm_scene_add_model(scene, tree, "small", NULL) == HMSM_OK);
     CHECK(HMSM_INIT(hmsm_instance_init, &instance) == HMSM_OK);
