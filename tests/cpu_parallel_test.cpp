@@ -22,6 +22,9 @@
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
+#include <map>
+#include <mutex>
+#include <tuple>
 #include <string>
 #include <thread>
 #include <vector>
@@ -249,20 +252,103 @@ TEST(CpuParallel, ThreadPoolCoversEveryItemOnceInContiguousRanges) {
     EXPECT_EQ(values[63], 1000u);
 }
 
-TEST(CpuParallel, ThreadPoolRunsOneBodyPerThreadConcurrently) {
+TEST(CpuParallel, ThreadPoolSharesAJobAmongTheThreadsThatCome) {
     detail::cpu::ThreadPool pool(4);
-    for (uint32_t participants : {1u, 3u, 4u, 9u}) {
-        const uint32_t expected = std::min(participants, 4u);
-        std::vector<std::atomic<uint32_t>> calls(expected);
-        std::atomic<uint32_t> arrived{0};
-        pool.run_on_all(participants, [&](uint32_t k) {
-            ASSERT_LT(k, expected);
-            calls[k].fetch_add(1);
-            // Every body waits for all the others: they must run at the same time.
-            arrived.fetch_add(1);
-            while (arrived.load() < expected) std::this_thread::yield();
+    for (uint32_t count : {0u, 1u, 2u, 7u, 1000u}) {
+        std::vector<std::atomic<uint32_t>> hits(count);
+        pool.for_each(count, [&](uint32_t k) { hits[k].fetch_add(1); });
+        for (uint32_t k = 0; k < count; ++k) ASSERT_EQ(hits[k].load(), 1u) << count << " " << k;
+    }
+    // share(): the caller is thread 0 and always comes; each worker comes at most once, with
+    // its own index; the caller's body alone may finish the work (here it claims every item).
+    for (uint32_t job = 0; job < 200; ++job) {
+        std::vector<std::atomic<uint32_t>> calls(4);
+        std::atomic<uint32_t> next{0}, items{0};
+        pool.share([&](uint32_t thread) {
+            ASSERT_LT(thread, 4u);
+            calls[thread].fetch_add(1);
+            while (next.fetch_add(1) < 64) items.fetch_add(1);
         });
-        for (uint32_t k = 0; k < expected; ++k) EXPECT_EQ(calls[k].load(), 1u) << participants << " " << k;
+        EXPECT_EQ(calls[0].load(), 1u);
+        for (uint32_t t = 1; t < 4; ++t) EXPECT_LE(calls[t].load(), 1u);
+        EXPECT_EQ(items.load(), 64u);
+    }
+}
+
+namespace {
+
+/// Runs `steps` steps of `plan` on `pool` and checks that every chunk ran once per step and
+/// started only after every chunk it waits for had finished.
+void expect_plan_runs_in_order(const detail::cpu::StepPlan& const_plan, detail::cpu::ThreadPool& pool,
+                               uint32_t steps) {
+    using detail::cpu::StepPlan;
+    auto& plan = const_cast<StepPlan&>(const_plan);
+    // Sequence t's task j of step s has the key (s, t, j); its start and finish on one clock.
+    std::map<std::tuple<size_t, uint32_t, size_t>, std::pair<uint64_t, uint64_t>> times;
+    std::mutex mutex;
+    std::atomic<uint64_t> clock{0};
+    plan.run(pool, steps, [&](uint32_t dispatch, size_t step, detail::cpu::Range items) {
+        const uint64_t start = clock.fetch_add(1);
+        std::this_thread::yield();
+        const uint64_t finish = clock.fetch_add(1);
+        std::lock_guard lock(mutex);
+        for (uint32_t t = 0; t < plan.threads(); ++t) {
+            const auto tasks = plan.tasks(t);
+            for (size_t j = 0; j < tasks.size(); ++j)
+                if (tasks[j].dispatch == dispatch && tasks[j].items.begin == items.begin &&
+                    tasks[j].items.end == items.end) {
+                    EXPECT_TRUE(times.emplace(std::tuple{step, t, j}, std::pair{start, finish}).second);
+                    return;
+                }
+        }
+        ADD_FAILURE() << "a chunk that is in no sequence ran";
+    });
+    for (uint32_t t = 0; t < plan.threads(); ++t) {
+        const auto tasks = plan.tasks(t);
+        for (size_t s = 0; s < steps; ++s) {
+            for (size_t j = 0; j < tasks.size(); ++j) {
+                auto self = times.find(std::tuple{s, t, j});
+                ASSERT_NE(self, times.end()) << "step " << s << " sequence " << t << " task " << j;
+                if (j > 0) {
+                    const auto before = times.find(std::tuple{s, t, j - 1});
+                    ASSERT_NE(before, times.end());
+                    EXPECT_GT(self->second.first, before->second.second);
+                }
+                for (const StepPlan::Wait& w : plan.waits(tasks[j])) {
+                    const size_t n = plan.tasks(w.thread).size();
+                    const int64_t target = int64_t(s * n) + w.done;  // tasks of w.thread finished
+                    if (target <= 0) continue;
+                    const size_t last = size_t(target - 1);
+                    auto waited = times.find(std::tuple{last / n, w.thread, last % n});
+                    ASSERT_NE(waited, times.end());
+                    EXPECT_GT(self->second.first, waited->second.second)
+                        << "step " << s << " sequence " << t << " task " << j;
+                }
+            }
+        }
+    }
+}
+
+}  // namespace
+
+TEST(CpuParallel, StepPlanRunsOnAnyNumberOfThreadsInWaitOrder) {
+    SimulationConfig config = windy(Composition::pointer_jumping, VertexLayout::separate);
+    config.backend = BackendKind::cpu;
+    Scene tree;
+    tree.models = {test::deep_tree(5)};
+    tree.model_names = {"deep"};
+    tree.instances = {{0, {0, 0, 0}, 0.0}};
+    auto single = test::create_simulation(tree, config, test::kJumpingPerRound);
+    ASSERT_TRUE(single.ok()) << single.status().message();
+    const detail::cpu::StepPlan plan(detail::step_program_of(**single), 4, 1);
+    ASSERT_EQ(plan.threads(), 4u);
+    // One thread: the caller claims every sequence and interleaves them (no worker to wait for).
+    detail::cpu::ThreadPool alone(1);
+    expect_plan_runs_in_order(plan, alone, 3);
+    for (uint32_t threads : {2u, 4u, 9u}) {
+        SCOPED_TRACE(std::to_string(threads) + " threads");
+        detail::cpu::ThreadPool pool(threads);
+        for (int repeat = 0; repeat < 20; ++repeat) expect_plan_runs_in_order(plan, pool, 3);
     }
 }
 

@@ -130,7 +130,7 @@ public:
                 } else {
                     // Profiled: one fork-join per dispatch over the plan's chunks, timed here.
                     const std::span<const Range> chunks = plan_->chunks(i);
-                    pool_->run_on_all(uint32_t(chunks.size()), [&](uint32_t k) {
+                    pool_->for_each(uint32_t(chunks.size()), [&](uint32_t k) {
                         if (chunks[k].begin < chunks[k].end) run_range(d, x, chunks[k]);
                     });
                 }

@@ -1,5 +1,5 @@
-// Building the step plan: chunk sizes from per-pass cost weights, chunk k of every dispatch on
-// thread k, and the waits between chunks of different threads, derived from the pass table.
+// Building the step plan: chunk sizes from per-pass cost weights, chunk k of every dispatch in
+// sequence k (which one thread runs at a time), and the waits between chunks of different threads, derived from the pass table.
 //
 // What makes two chunks independent (docs/model.md 3.7): every pass reads and writes only the
 // state of the instance its work item belongs to (an instance's ancestors are its own), so
@@ -20,9 +20,6 @@
 #include <thread>
 #include <tuple>
 
-#if defined(__x86_64__) || defined(__i386__)
-#include <immintrin.h>
-#endif
 
 namespace hmsm::detail::cpu {
 namespace {
@@ -84,15 +81,6 @@ bool conflict(const Dispatch& dx, const Footprint& x, const Dispatch& dy, const 
         (shared & ~domain_state_buffers(domain)) == 0)
         return overlap(x.element_begin, x.element_end, y.element_begin, y.element_end);
     return true;
-}
-
-/// A pause between polls of a spinning thread (no-op where the architecture has none).
-inline void cpu_relax() {
-#if defined(__x86_64__) || defined(__i386__)
-    _mm_pause();
-#elif defined(__aarch64__)
-    asm volatile("yield");
-#endif
 }
 
 }  // namespace
@@ -245,13 +233,34 @@ bool StepPlan::matches(std::span<const Dispatch> program) const {
     return true;
 }
 
-void StepPlan::wait_until(const std::atomic<uint64_t>& done, uint64_t target) {
-    // The chunks waited for are microseconds long: spin, yielding now and then so that a
-    // thread waited for still gets a core where threads outnumber cores.
-    for (uint32_t i = 1; done.load(std::memory_order_acquire) < target; ++i) {
-        if ((i & 63) == 0) std::this_thread::yield();
-        else cpu_relax();
+bool StepPlan::ready(uint32_t t, uint64_t done) const {
+    const std::vector<Task>& tasks = tasks_[t];
+    const Task& task = tasks[done % tasks.size()];
+    const int64_t step = int64_t(done / tasks.size());
+    for (uint32_t w = task.wait_begin; w < task.wait_end; ++w) {
+        const Wait& wait = waits_[w];
+        const int64_t target = step * int64_t(tasks_[wait.thread].size()) + wait.done;
+        if (target > 0 && progress_[wait.thread].done.load(std::memory_order_acquire) < uint64_t(target)) return false;
     }
+    return true;
+}
+
+bool StepPlan::claim(uint32_t t, uint32_t thread) {
+    if (t >= threads_) return false;
+    uint32_t unclaimed = kUnclaimed;
+    return progress_[t].owner.load(std::memory_order_relaxed) == kUnclaimed &&
+           progress_[t].owner.compare_exchange_strong(unclaimed, thread, std::memory_order_acq_rel);
+}
+
+bool StepPlan::claim_any(uint32_t thread) {
+    for (uint32_t t = 0; t < threads_; ++t)
+        if (claim(t, thread)) return true;
+    return false;
+}
+
+void StepPlan::pause(uint32_t idle) {
+    if ((idle & 63) == 0) std::this_thread::yield();
+    else cpu_relax();
 }
 
 }  // namespace hmsm::detail::cpu

@@ -1,11 +1,15 @@
-// Fork-join over a fixed set of threads. Jobs follow each other within microseconds (the steps
+// Shared jobs over a fixed set of threads. Jobs follow each other within microseconds (the steps
 // of a stepping loop, the dispatches of a profiled step), so a worker spins briefly on the job
-// counter before it sleeps on the condition variable; a caller likewise spins briefly before it
-// sleeps waiting for the last body.
+// word before it sleeps on the condition variable; the caller wakes sleeping workers only when
+// there are any, and never waits for one to wake: the work is claimed, not assigned.
 #include "thread_pool.h"
 
 #include <algorithm>
 #include <chrono>
+
+#if defined(__x86_64__) || defined(__i386__)
+#include <immintrin.h>
+#endif
 
 namespace hmsm::detail::cpu {
 namespace {
@@ -22,11 +26,23 @@ bool spin_until(Done done) {
         if ((i & 63) == 63) {
             if (std::chrono::steady_clock::now() >= until) return false;
             std::this_thread::yield();
+        } else {
+            cpu_relax();
         }
     }
 }
 
+constexpr uint64_t kOpen = 1;
+
 }  // namespace
+
+void cpu_relax() {
+#if defined(__x86_64__) || defined(__i386__)
+    _mm_pause();
+#elif defined(__aarch64__)
+    asm volatile("yield");
+#endif
+}
 
 ThreadPool::~ThreadPool() {
     {
@@ -47,41 +63,54 @@ void ThreadPool::start_workers() {
     for (uint32_t i = 1; i < threads_; ++i) workers_.emplace_back([this, i] { worker(i); });
 }
 
-void ThreadPool::run(uint32_t participants, Trampoline call, void* body) {
+void ThreadPool::run(Trampoline call, void* body) {
     if (workers_.empty()) start_workers();
-    {
+    call_ = call;
+    body_ = body;
+    const uint64_t closed = job_.load(std::memory_order_relaxed) + 2;  // the next generation, closed
+    job_.store(closed | kOpen, std::memory_order_seq_cst);
+    // A worker registers in sleepers_ before it checks job_ under the mutex: either it sees the
+    // open job, or this load sees it and the notify (under the mutex) reaches its wait.
+    if (sleepers_.load(std::memory_order_seq_cst) > 0) {
         std::lock_guard<std::mutex> lock(mutex_);
-        call_ = call;
-        body_ = body;
-        participants_ = participants;
-        // Every worker acknowledges every job, those without a body too: then none can still
-        // be reading this job's fields when the next one is written.
-        pending_.store(uint32_t(workers_.size()), std::memory_order_relaxed);
-        generation_.fetch_add(1, std::memory_order_release);
+        wake_.notify_all();
     }
-    wake_.notify_all();
     call(body, 0);
-    auto done = [this] { return pending_.load(std::memory_order_acquire) == 0; };
-    if (spin_until(done)) return;
+    job_.store(closed, std::memory_order_seq_cst);
+    // Workers that joined are finishing work they claimed; a worker that joins from now on sees
+    // the job closed and leaves without touching it.
+    auto none_inside = [this] { return inside_.load(std::memory_order_seq_cst) == 0; };
+    if (spin_until(none_inside)) return;
     std::unique_lock<std::mutex> lock(mutex_);
-    finished_.wait(lock, done);
+    caller_asleep_.store(true, std::memory_order_seq_cst);
+    left_.wait(lock, none_inside);
+    caller_asleep_.store(false, std::memory_order_relaxed);
 }
 
 void ThreadPool::worker(uint32_t index) {
-    uint64_t seen = 0;
+    uint64_t seen = 0;  // the last job word this worker joined or passed
+    auto fresh = [&] {
+        const uint64_t job = job_.load(std::memory_order_seq_cst);
+        return (job & kOpen) && job != seen;
+    };
     for (;;) {
-        auto fresh = [&] { return generation_.load(std::memory_order_acquire) != seen; };
         if (!spin_until(fresh)) {
             std::unique_lock<std::mutex> lock(mutex_);
+            sleepers_.fetch_add(1, std::memory_order_seq_cst);
             wake_.wait(lock, [&] { return stop_ || fresh(); });
+            sleepers_.fetch_sub(1, std::memory_order_relaxed);
             if (stop_) return;
         }
-        seen = generation_.load(std::memory_order_acquire);
-        if (index < participants_) call_(body_, index);
-        if (pending_.fetch_sub(1, std::memory_order_acq_rel) == 1) {
+        const uint64_t job = job_.load(std::memory_order_seq_cst);
+        if (!(job & kOpen)) continue;
+        seen = job;
+        inside_.fetch_add(1, std::memory_order_seq_cst);
+        if (job_.load(std::memory_order_seq_cst) == job) call_(body_, index);
+        if (inside_.fetch_sub(1, std::memory_order_seq_cst) == 1 &&
+            caller_asleep_.load(std::memory_order_seq_cst)) {
             // Taking the mutex orders this notify after the caller's check-then-wait.
             std::lock_guard<std::mutex> lock(mutex_);
-            finished_.notify_one();
+            left_.notify_one();
         }
     }
 }
