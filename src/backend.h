@@ -88,7 +88,14 @@ struct BackendCapabilities {
     /// Composition::automatic resolves to path_walk here (measured fastest on GPUs) rather than
     /// pointer_jumping (the CPU backends, and Vulkan on a CPU driver).
     bool prefers_path_walk = false;
+    /// The backend copies outputs to host memory of its own asynchronously (request_read and
+    /// take_read below); otherwise the simulation reads them at the request.
+    bool reads_async = false;
 };
+
+/// Read slots of request_read/take_read: one per Output, and one for Simulation::read().
+inline constexpr uint32_t kReadSlots = 8;
+inline constexpr uint32_t kSyncReadSlot = kReadSlots - 1;
 
 class Backend {
 public:
@@ -132,6 +139,21 @@ public:
     virtual void set_profiling(bool enabled) = 0;
     /// Device seconds per pass summed over the steps of the last run().
     virtual PassTimes pass_times() const = 0;
+
+    /// Only where capabilities().reads_async: starts copying elements [first, first + count) of
+    /// the float buffer `id`, as the work submitted so far leaves them, into host memory the
+    /// backend owns for `slot` (< kReadSlots), replacing what the slot held, and returns
+    /// without waiting for the copy. Calls on one slot are not concurrent.
+    virtual Status request_read(uint32_t slot, BufferId id, uint64_t first, uint64_t count) const {
+        (void)slot, (void)id, (void)first, (void)count;
+        return {ErrorCode::internal, "this backend has no asynchronous read"};
+    }
+    /// Waits for the copy request_read started on `slot` and returns its elements as the
+    /// buffer's float words (shape_scalars floats each); valid until the slot's next request.
+    virtual Result<const float*> take_read(uint32_t slot) const {
+        (void)slot;
+        return Status{ErrorCode::internal, "this backend has no asynchronous read"};
+    }
 
     /// Optional, for `hmsm bench`'s roofline: copies `bytes` between two device scratch
     /// buffers (allocated and freed here) a few times and returns the median device copy

@@ -3,7 +3,6 @@
 #include <hmsm/simulation.h>
 
 #include "backend.h"
-#include "common/octahedral.h"
 #include "model/input_limits.h"
 #include "scene_data.h"
 #include "simulation_impl.h"
@@ -241,114 +240,5 @@ uint32_t Simulation::capped_chain_count() const {
 const Wind& Simulation::wind() const { return impl_->config_.wind; }
 std::span<const ForceField> Simulation::force_fields() const { return impl_->force_fields_; }
 std::span<const Instance> Simulation::instances() const { return impl_->instances_; }
-
-Status Simulation::Impl::read_elements(Output output, std::vector<double>* as_double,
-                                 std::vector<float>* as_float) const {
-    std::lock_guard lock(read_mutex_);
-    using detail::BufferId;
-    const bool vertex_output = output == Output::vertex_positions || output == Output::vertex_normals;
-    if ((vertex_output && !data_->produces_vertices()) ||
-        (output == Output::node_positions && !data_->produces_nodes()))
-        return Status{ErrorCode::invalid_argument,
-                      std::string("read: output ") +
-                          (vertex_output ? (output == Output::vertex_positions ? "vertex_positions" : "vertex_normals")
-                                         : "node_positions") +
-                          " is not produced by this simulation (SimulationConfig::outputs = " +
-                          to_string(config_.outputs) + ")"};
-    if (output == Output::vertex_normals && data_->packed_vertices())
-        return read_packed_normals(as_double, as_float);
-    BufferId id = BufferId::node_world;
-    uint64_t first = 0, count = data_->total_nodes;
-    switch (output) {
-        case Output::node_positions: break;
-        case Output::vertex_positions: id = BufferId::vertex_position; count = data_->total_vertices; break;
-        case Output::vertex_normals: id = BufferId::vertex_normal; count = data_->total_vertices; break;
-        // The pose of a step is its joint matrix [R | O] by rows (the path walk writes no R or
-        // O half; every composition writes the joint matrix).
-        case Output::chain_rotations:
-        case Output::chain_origins: id = BufferId::joint_matrix; count = data_->total_chains; break;
-        case Output::chain_angles: id = BufferId::chain_state; count = data_->total_chains; break;
-        case Output::joint_matrices: id = BufferId::joint_matrix; count = data_->total_chains; break;
-        default:  // a value cast from an integer (the C ABI checks its own)
-            return {ErrorCode::invalid_argument,
-                    "read: unknown output " + std::to_string(static_cast<int>(output))};
-    }
-    const uint32_t stored = detail::shape_scalars(detail::buffer_info(id).shape);
-    const uint32_t wanted = output_components(output);
-    // Output component k -> its scalar in the stored element: from a joint matrix's rows
-    // (r00 r01 r02 ox, r10 ...) R column by column or O; else xyz of a vec4 or all.
-    auto source = [output](uint32_t k) {
-        if (output == Output::chain_rotations) return (k % 3) * 4 + k / 3;
-        if (output == Output::chain_origins) return k * 4 + 3;
-        return k;
-    };
-    auto repack = [&](const auto& raw, auto& out) {
-        out.resize(count * wanted);
-        if (stored == 4 && wanted == 3) {  // positions and normals: the per-frame hot path
-            for (uint64_t i = 0; i < count; ++i) {
-                out[3 * i] = raw[4 * i];
-                out[3 * i + 1] = raw[4 * i + 1];
-                out[3 * i + 2] = raw[4 * i + 2];
-            }
-            return;
-        }
-        for (uint64_t i = 0; i < count; ++i)
-            for (uint32_t k = 0; k < wanted; ++k)
-                out[i * wanted + k] = raw[i * stored + source(k)];
-    };
-    if (as_double) {
-        stored_f64_.resize(count * stored);
-        HMSM_TRY(backend_->read(id, first, count, stored_f64_.data(), detail::Scalar::f64));
-        repack(stored_f64_, *as_double);
-    } else {
-        stored_f32_.resize(count * stored);
-        HMSM_TRY(backend_->read(id, first, count, stored_f32_.data(), detail::Scalar::f32));
-        repack(stored_f32_, *as_float);
-    }
-    return {};
-}
-
-Status Simulation::Impl::read_packed_normals(std::vector<double>* as_double,
-                                       std::vector<float>* as_float) const {
-    // VertexLayout::packed: each normal is the octahedral word in its position's w. The double
-    // CPU oracle holds the word as an integer value, every other backend as float bits
-    // (detail::packed_word_to_w), so the positions are read in the precision they are stored in.
-    const uint64_t count = data_->total_vertices;
-    auto decode = [count](const auto& positions, auto& normals) {
-        using Stored = typename std::decay_t<decltype(positions)>::value_type;
-        using Decoded = typename std::decay_t<decltype(normals)>::value_type;
-        normals.resize(count * 3);
-        for (uint64_t i = 0; i < count; ++i) {
-            const auto n = detail::decode_normal_word<Decoded>(
-                detail::packed_word_from_w<Stored>(positions[4 * i + 3]));
-            normals[3 * i] = n.x;
-            normals[3 * i + 1] = n.y;
-            normals[3 * i + 2] = n.z;
-        }
-    };
-    auto decode_into_request = [&](const auto& positions) {
-        if (as_double) decode(positions, *as_double);
-        else decode(positions, *as_float);
-    };
-    if (backend_->kind() == BackendKind::cpu64) {
-        stored_f64_.resize(count * 4);
-        HMSM_TRY(backend_->read(detail::BufferId::vertex_position, 0, count, stored_f64_.data(),
-                                detail::Scalar::f64));
-        decode_into_request(stored_f64_);
-    } else {
-        stored_f32_.resize(count * 4);
-        HMSM_TRY(backend_->read(detail::BufferId::vertex_position, 0, count, stored_f32_.data(),
-                                detail::Scalar::f32));
-        decode_into_request(stored_f32_);
-    }
-    return {};
-}
-
-Status Simulation::read(Output output, std::vector<float>& values) const {
-    return impl_->read_elements(output, nullptr, &values);
-}
-Status Simulation::read(Output output, std::vector<double>& values) const {
-    return impl_->read_elements(output, &values, nullptr);
-}
 
 }  // namespace hmsm

@@ -9,6 +9,7 @@
 #include "scene_data.h"
 #include "step_program.h"
 
+#include <array>
 #include <memory>
 #include <mutex>
 #include <vector>
@@ -50,9 +51,25 @@ struct __attribute__((visibility("hidden"))) Simulation::Impl {
     Status reset(std::span<const uint32_t> indices);
     /// Checks that the wind keeps every force and phase finite for `instances`.
     Status check_wind(const Wind& wind, std::span<const Instance> instances) const;
-    Status read_elements(Output output, std::vector<double>* as_double,
-                         std::vector<float>* as_float) const;
-    Status read_packed_normals(std::vector<double>* as_double, std::vector<float>* as_float) const;
+    /// Where an output comes from (simulation_read.cpp).
+    struct ReadSource {
+        Output output = Output::node_positions;
+        detail::BufferId id = detail::BufferId::node_world;
+        uint64_t count = 0;          // elements
+        uint32_t stored = 4;         // scalars per stored element
+        bool packed_normals = false;  // normals decoded from the positions' w words
+    };
+    /// The source of `output`, or invalid_argument (message starting with `fn`) when the
+    /// simulation does not produce it.
+    Result<ReadSource> read_source(Output output, const char* fn) const;
+    /// The output's values from its stored elements `raw`, into `out`.
+    template <class Stored, class Out>
+    static void unpack(const ReadSource& source, const Stored* raw, std::vector<Out>& out);
+    template <class Out>
+    Status read_into(Output output, std::vector<Out>& out) const;
+    Status request_read(Output output);
+    template <class Out>
+    Status take_read(Output output, std::vector<Out>& out);
 
     SimulationConfig config_;
     /// The dispatch form of Composition::pointer_jumping (by size unless a test or the bench
@@ -84,6 +101,15 @@ struct __attribute__((visibility("hidden"))) Simulation::Impl {
     // and a queue submission on Vulkan, pinned memory on CUDA) are shared, and const calls may
     // run concurrently (the threading contract in include/hmsm/simulation.h).
     mutable std::mutex read_mutex_;
+    /// request_read's requests, one per Output: what was requested and, where the backend does
+    /// not read asynchronously, the elements read at the request.
+    struct PendingRead {
+        bool requested = false;
+        ReadSource source;
+        std::vector<float> f32;
+        std::vector<double> f64;
+    };
+    std::array<PendingRead, detail::kSyncReadSlot> pending_reads_;
     PassTimes times_;  // over the chunks of the last step() call
     uint64_t steps_done_ = 0;
     /// Times add/remove re-uploaded the whole scene (capacity outgrown, or a backend that

@@ -240,6 +240,16 @@ HMSM_API hmsm_status hmsm_simulation_read_f32(const hmsm_simulation* simulation,
                                               float* values, size_t capacity, size_t* count);
 HMSM_API hmsm_status hmsm_simulation_read_f64(const hmsm_simulation* simulation, int32_t output,
                                               double* values, size_t capacity, size_t* count);
+/* Asynchronous readback (Simulation::request_read / take_read): request_read starts copying
+ * `output` as the steps so far leave it and returns at once; take_read_* waits for that copy and
+ * returns those values, as read_* (size query with values NULL and capacity 0 included). A
+ * request stays until the next request of the same output, so a failed or repeated take_read
+ * changes nothing. take_read without a request fails with HMSM_INVALID_ARGUMENT. */
+HMSM_API hmsm_status hmsm_simulation_request_read(hmsm_simulation* simulation, int32_t output);
+HMSM_API hmsm_status hmsm_simulation_take_read_f32(hmsm_simulation* simulation, int32_t output,
+                                                   float* values, size_t capacity, size_t* count);
+HMSM_API hmsm_status hmsm_simulation_take_read_f64(hmsm_simulation* simulation, int32_t output,
+                                                   double* values, size_t capacity, size_t* count);
 /* counts->struct_size must be set (hmsm_counts_init). */
 HMSM_API hmsm_status hmsm_simulation_counts(const hmsm_simulation* simulation, hmsm_counts* counts);
 /* The backend it runs on (HMSM_BACKEND_*, never AUTOMATIC). */

@@ -80,6 +80,21 @@ public:
     Status read(Output output, std::vector<float>& values) const;
     Status read(Output output, std::vector<double>& values) const;
 
+    /// Asynchronous readback, for a frame loop that should not wait for the copy: request_read
+    /// starts copying `output` as the steps so far leave it and returns at once; take_read, in
+    /// this frame or a later one, waits for that copy (if it has not finished) and returns the
+    /// values read() would have returned at the request, whatever ran since (steps, live
+    /// changes, instances added or removed: the values keep the request's instance list). A
+    /// request stays until the next request_read of the same output, so take_read may be
+    /// called again for the same values; each output has its own request. CUDA copies into
+    /// pinned host memory the simulation keeps (grown to the largest request) with one
+    /// device-to-host copy on its stream; the other backends read at the request. Threading:
+    /// as step() (non-const: not concurrent with any other call on this simulation). Units and
+    /// layout as read(). take_read without a request is invalid_argument.
+    Status request_read(Output output);
+    Status take_read(Output output, std::vector<float>& values);
+    Status take_read(Output output, std::vector<double>& values);
+
     /// Device time per pass over the last step() call.
     PassTimes pass_times() const;
 

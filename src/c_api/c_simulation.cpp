@@ -25,6 +25,20 @@ hmsm_status read_output(const char* fn, const hmsm_simulation* simulation, int32
     });
 }
 
+template <class T>
+hmsm_status take_output(const char* fn, hmsm_simulation* simulation, int32_t output, T* values, size_t capacity,
+                        size_t* count) {
+    return guarded([&]() -> Status {
+        if (!simulation) return bad(std::string(fn) + ": simulation is NULL");
+        if (!count) return bad(std::string(fn) + ": count is NULL");
+        Output which;
+        HMSM_TRY(to_output(output, which));
+        std::vector<T> data;
+        HMSM_TRY(simulation->simulation->take_read(which, data));
+        return copy_out(fn, data, values, capacity, count);
+    });
+}
+
 Status check_instance(const char* fn, const hmsm_simulation* simulation, uint64_t instance) {
     if (!simulation) return bad(std::string(fn) + ": simulation is NULL");
     const uint64_t n = simulation->simulation->instance_count();
@@ -72,6 +86,25 @@ hmsm_status hmsm_simulation_read_f32(const hmsm_simulation* simulation, int32_t 
 hmsm_status hmsm_simulation_read_f64(const hmsm_simulation* simulation, int32_t output,
                                      double* values, size_t capacity, size_t* count) {
     return read_output("hmsm_simulation_read_f64", simulation, output, values, capacity, count);
+}
+
+hmsm_status hmsm_simulation_request_read(hmsm_simulation* simulation, int32_t output) {
+    return guarded([&]() -> Status {
+        if (!simulation) return bad("hmsm_simulation_request_read: simulation is NULL");
+        Output which;
+        HMSM_TRY(to_output(output, which));
+        return simulation->simulation->request_read(which);
+    });
+}
+
+hmsm_status hmsm_simulation_take_read_f32(hmsm_simulation* simulation, int32_t output, float* values,
+                                          size_t capacity, size_t* count) {
+    return take_output("hmsm_simulation_take_read_f32", simulation, output, values, capacity, count);
+}
+
+hmsm_status hmsm_simulation_take_read_f64(hmsm_simulation* simulation, int32_t output, double* values,
+                                          size_t capacity, size_t* count) {
+    return take_output("hmsm_simulation_take_read_f64", simulation, output, values, capacity, count);
 }
 
 hmsm_status hmsm_simulation_counts(const hmsm_simulation* simulation, hmsm_counts* counts) {

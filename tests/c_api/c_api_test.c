@@ -221,6 +221,20 @@ static void test_simulation(void) {
     CHECK_OK(hmsm_simulation_read_f32(simulation, HMSM_OUTPUT_CHAIN_ANGLES, NULL, 0, &count));
     CHECK(count == counts.chains * 4);
 
+    /* asynchronous read: the values at the request, though the simulation stepped since */
+    CHECK_FAILS(HMSM_INVALID_ARGUMENT,
+                hmsm_simulation_take_read_f32(simulation, HMSM_OUTPUT_NODE_POSITIONS, nodes, needed, &count));
+    CHECK_OK(hmsm_simulation_request_read(simulation, HMSM_OUTPUT_NODE_POSITIONS));
+    CHECK_FAILS(HMSM_INVALID_ARGUMENT, hmsm_simulation_request_read(simulation, HMSM_OUTPUT_COUNT));
+    CHECK_OK(hmsm_simulation_step(simulation, 5));
+    CHECK_FAILS(HMSM_INVALID_ARGUMENT,
+                hmsm_simulation_take_read_f32(simulation, HMSM_OUTPUT_NODE_POSITIONS, small, 4, &count));
+    CHECK(count == needed);
+    CHECK_OK(hmsm_simulation_take_read_f64(simulation, HMSM_OUTPUT_NODE_POSITIONS, nodes64, needed, &count));
+    for (i = 0; i < needed; ++i) CHECK(nodes64[i] == (double)nodes[i]);
+    CHECK_OK(hmsm_simulation_read_f64(simulation, HMSM_OUTPUT_NODE_POSITIONS, nodes64, needed, &count));
+    CHECK(nodes64[6] != (double)nodes[6]); /* the tip moved in those 5 steps */
+
     CHECK_OK(hmsm_simulation_backend(simulation, &backend));
     CHECK(backend == HMSM_BACKEND_CPU);
     CHECK_FAILS(HMSM_INVALID_ARGUMENT, hmsm_simulation_backend(simulation, NULL));
