@@ -18,6 +18,7 @@ add_library(hmsm_cuda_objects OBJECT
   src/cuda/cuda_backend.cpp
   src/cuda/cuda_error.cpp
   src/cuda/device_buffers.cpp
+  src/cuda/host_slot.cpp
   src/cuda/cuda_interop.cpp
   src/cuda/launch_dispatch.cpp
   src/cuda/step_graph.cpp)

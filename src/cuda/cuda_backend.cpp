@@ -37,6 +37,7 @@ Result<std::unique_ptr<Backend>> CudaBackend::create() {
 
 CudaBackend::~CudaBackend() {
     (void)cudaSetDevice(device_);
+    (void)cudaStreamSynchronize(stream_);  // nothing enqueued may outlive the buffers
     for (cudaEvent_t event : events_) (void)cudaEventDestroy(event);
     if (own_stream_) (void)cudaStreamDestroy(own_stream_);
     // buffers_ and graphs_ release themselves.
@@ -49,13 +50,16 @@ Status CudaBackend::make_current() const {
 
 Status CudaBackend::set_stream(cudaStream_t stream) {
     HMSM_TRY(make_current());
+    const cudaStream_t next = stream ? stream : own_stream_;
+    if (next == stream_) return {};
     CUDA_TRY(cudaStreamSynchronize(stream_));  // finish what ran on the previous stream
-    stream_ = stream ? stream : own_stream_;
+    stream_ = next;
     return {};
 }
 
 Status CudaBackend::upload(const SceneData& scene) {
     HMSM_TRY(make_current());
+    CUDA_TRY(cudaStreamSynchronize(stream_));  // enqueued work may still use the old buffers
     HMSM_TRY(buffers_.allocate(scene));
     return buffers_.upload(scene, stream_);
 }
@@ -68,6 +72,16 @@ Status CudaBackend::read(BufferId id, uint64_t first, uint64_t count, void* dst,
 Status CudaBackend::write(BufferId id, uint64_t first, uint64_t count, const void* src, Scalar as) {
     HMSM_TRY(make_current());
     return buffers_.write(id, first, count, src, as, stream_);
+}
+
+Status CudaBackend::request_read(uint32_t slot, BufferId id, uint64_t first, uint64_t count) const {
+    HMSM_TRY(make_current());
+    return buffers_.request_read(slot, id, first, count, stream_);
+}
+
+Result<const float*> CudaBackend::take_read(uint32_t slot) const {
+    HMSM_TRY(make_current());
+    return buffers_.take_read(slot);
 }
 
 Status CudaBackend::move_elements(BufferId id, std::span<const ElementMove> moves) {

@@ -31,6 +31,8 @@ public:
     Status read(BufferId id, uint64_t first, uint64_t count, void* dst, Scalar as) const override;
     Status write(BufferId id, uint64_t first, uint64_t count, const void* src, Scalar as) override;
     Status move_elements(BufferId id, std::span<const ElementMove> moves) override;
+    Status request_read(uint32_t slot, BufferId id, uint64_t first, uint64_t count) const override;
+    Result<const float*> take_read(uint32_t slot) const override;
     void set_profiling(bool enabled) override { profiling_ = enabled; }
     /// The path walk, integrating ahead unless HMSM_CUDA_WALK_AHEAD=0 (read when the backend is
     /// created; for A/B measurements and tests).
@@ -38,6 +40,7 @@ public:
         BackendCapabilities can;
         can.walks_ahead = walk_ahead_;
         can.prefers_path_walk = true;
+        can.reads_async = true;
         return can;
     }
     /// Steps run without their wind_force dispatches, taking the angles the step before
@@ -51,9 +54,10 @@ public:
     /// between two scratch buffers, as (bytes read + bytes written) / device seconds.
     Result<double> measure_copy_bandwidth(uint64_t bytes) override;
 
-    /// Later work runs on `stream` (nullptr: the backend's own). run() still returns only when
-    /// its work on that stream is complete.
+    /// Later work runs on `stream` (nullptr: the backend's own), after the work on the previous
+    /// stream has finished (waited for here when the stream changes).
     Status set_stream(cudaStream_t stream);
+
     int device() const { return device_; }
     const BufferPointers& device_pointers() const { return buffers_.pointers(); }
 

@@ -203,6 +203,29 @@ Status DeviceBuffers::read(BufferId id, uint64_t first, uint64_t count, void* ds
     return {};
 }
 
+Status DeviceBuffers::request_read(uint32_t slot, BufferId id, uint64_t first, uint64_t count,
+                                   cudaStream_t stream) const {
+    HMSM_TRY(check_range(id, first, count));
+    if (slot >= kReadSlots || shape_is_integer(buffer_info(id).shape))
+        return {ErrorCode::internal, "cuda: read slot " + std::to_string(slot) + " of buffer " +
+                                         std::string(buffer_info(id).name) + " is not an output read"};
+    const uint64_t bytes = count * device_element_bytes(id);
+    HostSlot& host = read_slots_[slot];
+    auto target = host.acquire(bytes);
+    if (!target) return target.status();
+    if (bytes > 0) {
+        const auto* base = static_cast<const std::byte*>(bases_[uint32_t(id)]) + first * device_element_bytes(id);
+        CUDA_TRY(cudaMemcpyAsync(*target, base, bytes, cudaMemcpyDeviceToHost, stream));
+    }
+    return host.mark(stream);
+}
+
+Result<const float*> DeviceBuffers::take_read(uint32_t slot) const {
+    if (slot >= kReadSlots) return Status{ErrorCode::internal, "cuda: no read slot " + std::to_string(slot)};
+    HMSM_TRY(read_slots_[slot].wait());
+    return reinterpret_cast<const float*>(read_slots_[slot].data());
+}
+
 Status DeviceBuffers::write(BufferId id, uint64_t first, uint64_t count, const void* src,
                             Scalar as, cudaStream_t stream) {
     HMSM_TRY(check_range(id, first, count));

@@ -1,11 +1,12 @@
 // The device buffers of the buffer table (buffers.h), one cudaMalloc each, sized from a
 // SceneData; uploads converted to float (src/device_words.h) and the typed read/write hooks, which
-// move data through a pinned host staging buffer (device-to-host copies into pageable memory
-// run at a fraction of the PCIe/NVLink rate).
+// move data through pinned host memory (copies from or into pageable memory run at a fraction
+// of the PCIe/NVLink rate): output reads with one copy into a slot per output (host_slot.h).
 #pragma once
 
 #include "../backend.h"
 #include "../../kernels/cuda/launchers.h"
+#include "host_slot.h"
 
 #include <array>
 #include <cstdint>
@@ -30,6 +31,11 @@ public:
                 cudaStream_t stream) const;
     Status write(BufferId id, uint64_t first, uint64_t count, const void* src, Scalar as,
                  cudaStream_t stream);
+
+    /// Backend::request_read / take_read: elements [first, first + count) of the float buffer
+    /// `id` copied into read slot `slot` with one device-to-host copy on `stream`.
+    Status request_read(uint32_t slot, BufferId id, uint64_t first, uint64_t count, cudaStream_t stream) const;
+    Result<const float*> take_read(uint32_t slot) const;
 
     /// Backend::move_elements: each move device-to-device through a scratch buffer (the ranges
     /// may overlap), in stream order; complete on return.
@@ -56,6 +62,7 @@ private:
     void* next_state_ = nullptr;  // chain_state's twin (BufferPointers::chain_state_next)
     void* move_scratch_ = nullptr;  // move(), grown on demand
     uint64_t move_scratch_bytes_ = 0;
+    mutable std::array<HostSlot, kReadSlots> read_slots_;
     mutable std::byte* pinned_ = nullptr;
     mutable bool pinned_refused_ = false;
     std::array<uint64_t, kBufferCount> counts_{};

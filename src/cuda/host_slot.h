@@ -1,0 +1,43 @@
+// Host memory for copies the host does not wait for: a pinned (page-locked) buffer, grown as
+// needed and kept, and an event marking the last copy that uses it. A slot is reused only
+// after that copy has run (acquire() waits for it), so a buffer an upload reads is never
+// overwritten under the copy, and a buffer a readback fills is never handed out before the
+// copy has finished.
+#pragma once
+
+#include <hmsm/status.h>
+
+#include <cuda_runtime_api.h>
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+namespace hmsm::detail::cuda {
+
+class HostSlot {
+public:
+    HostSlot() = default;
+    ~HostSlot();
+    HostSlot(const HostSlot&) = delete;
+    HostSlot& operator=(const HostSlot&) = delete;
+
+    /// Waits for the copy that last used the slot, then returns at least `bytes` of host
+    /// memory: pinned, or pageable where pinned memory is refused (copies then run at
+    /// pageable speed; still correct, the CUDA runtime stages them).
+    Result<std::byte*> acquire(uint64_t bytes);
+    /// Marks the slot as used by the copies enqueued on `stream` so far.
+    Status mark(cudaStream_t stream);
+    /// Waits for the marked copies; the memory acquire() returned then holds their result.
+    Status wait();
+    const std::byte* data() const { return pinned_ ? pinned_ : pageable_.data(); }
+
+private:
+    std::byte* pinned_ = nullptr;
+    uint64_t capacity_ = 0;
+    std::vector<std::byte> pageable_;
+    cudaEvent_t event_ = nullptr;
+    bool in_flight_ = false;
+};
+
+}  // namespace hmsm::detail::cuda
