@@ -117,7 +117,8 @@ public:
     /// that reads the wind slot (reads_wind_slot) with constants.wind_slot = steps[k].wind_slot,
     /// and, in a program with the walk ahead, as steps[k].ahead says (only a backend whose
     /// capabilities().walks_ahead is true gets such programs). Dispatches see the writes of all
-    /// earlier dispatches. Returns when all work is complete.
+    /// earlier dispatches. Returns when all work is complete (CUDA under enqueue_steps: once it
+    /// is enqueued on the backend's stream).
     virtual Status run(std::span<const Dispatch> program, std::span<const RunStep> steps) = 0;
 
     /// Copies elements [first, first+count) of `id` (count * shape_scalars scalars; integer

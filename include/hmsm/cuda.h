@@ -17,7 +17,7 @@ namespace hmsm::cuda {
 
 /// Device pointers of a simulation's outputs, valid until the Simulation is destroyed or its
 /// instances are added or removed (which moves state and may reallocate), and current after each step()
-/// returns; nullptr (count 0) for outputs the simulation does not produce
+/// returns (after enqueue_steps: in stream order); nullptr (count 0) for outputs the simulation does not produce
 /// (SimulationConfig::outputs). Every element is 4 floats (a CUDA float4, 16-byte
 /// aligned), instance-major, in the order of Simulation::read.
 struct DeviceOutputs {
@@ -42,9 +42,22 @@ struct DeviceOutputs {
 /// The outputs on the device; invalid_argument when `simulation` does not run on CUDA.
 HMSM_API Result<DeviceOutputs> device_outputs(const Simulation& simulation);
 
-/// Runs later steps of `simulation` on `stream` (nullptr: hmsm's own stream). step() still
-/// returns when the step is complete, so the outputs are ready for work enqueued after it.
+/// Runs later work of `simulation` (steps, uploads of live changes, readbacks) on `stream`
+/// (nullptr: hmsm's own stream), after waiting for what ran on the previous one if it differs.
+/// step() still returns when the step is complete, so the outputs are ready for work enqueued
+/// after it. `stream` must stay valid while the simulation uses it.
 HMSM_API Status set_stream(Simulation& simulation, CUstream_st* stream);
+
+/// A frame's step without waiting for the GPU: makes `stream` the simulation's stream (as
+/// set_stream), enqueues `count` steps on it and returns once they are enqueued. The outputs
+/// (device_outputs) are then ready for work the engine enqueues on `stream` after this call;
+/// work on another stream must wait for an event recorded on `stream` after it. Live changes
+/// made before the call (set_wind, set_force_fields, instance settings) are copied from pinned
+/// host memory in stream order, so the host may change them again at once (docs/cuda.md).
+/// Simulation::step(), read() and take_read() wait for everything enqueued before them;
+/// request_read() is enqueued behind the steps. Blocks like step() when profile_passes is on.
+/// Same threading as Simulation::step().
+HMSM_API Status enqueue_steps(Simulation& simulation, CUstream_st* stream, uint32_t count = 1);
 
 #else
 
@@ -52,6 +65,9 @@ inline Result<DeviceOutputs> device_outputs(const Simulation&) {
     return Status{ErrorCode::no_device, "cuda: this build of hmsm has no CUDA backend"};
 }
 inline Status set_stream(Simulation&, CUstream_st*) {
+    return {ErrorCode::no_device, "cuda: this build of hmsm has no CUDA backend"};
+}
+inline Status enqueue_steps(Simulation&, CUstream_st*, uint32_t = 1) {
     return {ErrorCode::no_device, "cuda: this build of hmsm has no CUDA backend"};
 }
 

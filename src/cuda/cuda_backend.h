@@ -1,6 +1,7 @@
 // The CUDA backend: device buffers, one stream (its own, or one an engine hands in through
 // include/hmsm/cuda.h), the step program replayed as a CUDA graph, and per-pass device times
-// from CUDA events when profiling.
+// from CUDA events when profiling. Every copy and launch goes on that stream in call order;
+// the host waits for it only in run() (unless enqueuing), reads, moves and uploads.
 #pragma once
 
 #include "../backend.h"
@@ -57,7 +58,9 @@ public:
     /// Later work runs on `stream` (nullptr: the backend's own), after the work on the previous
     /// stream has finished (waited for here when the stream changes).
     Status set_stream(cudaStream_t stream);
-
+    /// false: run() returns once its steps are enqueued (include/hmsm/cuda.h enqueue_steps);
+    /// true (the default): once they are complete.
+    void set_waits_for_steps(bool wait) { waits_for_steps_ = wait; }
     int device() const { return device_; }
     const BufferPointers& device_pointers() const { return buffers_.pointers(); }
 
@@ -91,6 +94,7 @@ private:
     uint64_t steps_walked_plain_ = 0;  // steps_walked_plain()
     std::vector<cudaEvent_t> events_;  // profiling: one before and one after each dispatch
     bool profiling_ = false;
+    bool waits_for_steps_ = true;
     PassTimes times_;
 };
 

@@ -50,4 +50,14 @@ Status set_stream(Simulation& simulation, CUstream_st* stream) {
     return (*backend)->set_stream(stream);
 }
 
+Status enqueue_steps(Simulation& simulation, CUstream_st* stream, uint32_t count) {
+    auto backend = cuda_backend_of(simulation);
+    if (!backend) return backend.status();
+    HMSM_TRY((*backend)->set_stream(stream));
+    (*backend)->set_waits_for_steps(false);
+    const Status stepped = simulation.step(count);
+    (*backend)->set_waits_for_steps(true);
+    return stepped;
+}
+
 }  // namespace hmsm::cuda

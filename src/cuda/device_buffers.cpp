@@ -17,6 +17,9 @@ namespace {
 /// the previous one; bounded host memory for any buffer size.
 constexpr uint64_t kStagingBytes = 16ull << 20;
 constexpr uint64_t kHalfStagingBytes = kStagingBytes / 2;
+/// The largest write that goes through the upload ring: every per-step and live-control upload
+/// (wind table, force fields, instance settings), not a scene-sized state write-back.
+constexpr uint64_t kUploadSlotBytes = 4ull << 20;
 
 std::string human_bytes(uint64_t bytes) {
     char text[64];
@@ -234,6 +237,18 @@ Status DeviceBuffers::write(BufferId id, uint64_t first, uint64_t count, const v
     auto* base = static_cast<std::byte*>(bases_[uint32_t(id)]) + first * element_bytes;
     const uint64_t scalars = shape_scalars(shape);
     const uint64_t scalar_bytes = as == Scalar::f64 ? 8 : 4;
+    if (count == 0) return {};
+    if (count * element_bytes <= kUploadSlotBytes) {
+        // The next slot of the ring: its previous copy has long run unless four writes were
+        // enqueued since (acquire waits for it then).
+        HostSlot& slot = upload_slots_[next_upload_];
+        next_upload_ = (next_upload_ + 1) % kUploadSlots;
+        auto staging = slot.acquire(count * element_bytes);
+        if (!staging) return staging.status();
+        scalars_to_words(shape, src, count * scalars, *staging, as);
+        CUDA_TRY(cudaMemcpyAsync(base, *staging, count * element_bytes, cudaMemcpyHostToDevice, stream));
+        return slot.mark(stream);
+    }
     const uint64_t chunk = std::max<uint64_t>(1, kHalfStagingBytes / element_bytes);
     std::byte* pinned = pinned_staging();
     std::vector<std::byte> pageable(pinned ? 0 : std::min(count, chunk) * element_bytes);

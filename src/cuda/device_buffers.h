@@ -1,7 +1,8 @@
 // The device buffers of the buffer table (buffers.h), one cudaMalloc each, sized from a
 // SceneData; uploads converted to float (src/device_words.h) and the typed read/write hooks, which
 // move data through pinned host memory (copies from or into pageable memory run at a fraction
-// of the PCIe/NVLink rate): output reads with one copy into a slot per output (host_slot.h).
+// of the PCIe/NVLink rate): writes through a ring of upload slots without waiting for the copy,
+// output reads with one copy into a slot per output (host_slot.h).
 #pragma once
 
 #include "../backend.h"
@@ -29,6 +30,9 @@ public:
     /// Backend::read / Backend::write over elements [first, first + count) of `id`.
     Status read(BufferId id, uint64_t first, uint64_t count, void* dst, Scalar as,
                 cudaStream_t stream) const;
+    /// Up to 4 MiB (kUploadSlotBytes), a write is converted into the next slot of the upload ring and
+    /// copied in stream order without waiting (a later kernel on `stream` sees it; `src` may be
+    /// reused at once); larger ones go through the staging buffer and are complete on return.
     Status write(BufferId id, uint64_t first, uint64_t count, const void* src, Scalar as,
                  cudaStream_t stream);
 
@@ -63,6 +67,9 @@ private:
     void* move_scratch_ = nullptr;  // move(), grown on demand
     uint64_t move_scratch_bytes_ = 0;
     mutable std::array<HostSlot, kReadSlots> read_slots_;
+    static constexpr uint32_t kUploadSlots = 4;
+    std::array<HostSlot, kUploadSlots> upload_slots_;
+    uint32_t next_upload_ = 0;
     mutable std::byte* pinned_ = nullptr;
     mutable bool pinned_refused_ = false;
     std::array<uint64_t, kBufferCount> counts_{};
