@@ -341,3 +341,40 @@ TEST_F(BenchCli, CompositionDepthsTimesWalkAndJumping) {
     EXPECT_EQ(rows[2]["depth"], 24);
     EXPECT_NE(r.out.find("walk / jumping"), std::string::npos);
 }
+
+// The frame table on the CPU backends: per backend and forest size one row per change, in
+// order, each with the frames run and call and frame times (median <= p99, call <= frame for a
+// blocking step), and the markdown table.
+TEST_F(BenchCli, FramesTableHasARowPerBackendSizeAndChange) {
+    const std::string file = path("frames.json");
+    const CliRun r = run("bench --no-progress --backends cpu,cpu-parallel --presets none --instances none "
+                         "--joint-instances none --frames 12 --frame-instances 1,4 --case-budget 20 --json " + file);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const json d = json::parse(read_text(file), nullptr, false);
+    ASSERT_TRUE(d.contains("frames"));
+    const json& rows = d["frames"];
+    // backends x sizes x (4 changes + 2 readbacks)
+    ASSERT_EQ(rows.size(), 2u * 2u * 6u) << rows.dump();
+    const char* changes[] = {"none", "set_wind", "moving_field", "stream_10", "readback_read", "readback_request_take"};
+    for (size_t i = 0; i < rows.size(); ++i) {
+        const json& row = rows[i];
+        SCOPED_TRACE(row.dump());
+        EXPECT_EQ(row["backend"], i < 12 ? "cpu" : "cpu-parallel");
+        EXPECT_EQ(row["path"], "step");
+        EXPECT_EQ(row["instances"], (i / 6) % 2 == 0 ? 1 : 4);
+        EXPECT_EQ(row["change"], changes[i % 6]);
+        ASSERT_FALSE(row.contains("skipped") || row.contains("failed"));
+        EXPECT_GE(row.value("frames", 0), 10);
+        EXPECT_LE(row.value("frames", 0), 12);
+        for (const char* key : {"call_median_seconds", "call_p99_seconds", "frame_median_seconds", "frame_p99_seconds"})
+            expect_figures_positive(row[key], key);
+        EXPECT_LE(row["call_median_seconds"].get<double>(), row["call_p99_seconds"].get<double>());
+        EXPECT_LE(row["frame_median_seconds"].get<double>(), row["frame_p99_seconds"].get<double>());
+        EXPECT_LE(row["call_median_seconds"].get<double>(), row["frame_median_seconds"].get<double>());
+        if (i % 6 == 3) EXPECT_EQ(row["streamed"], (i / 6) % 2 == 0 ? 1 : 4);  // all of a forest under 10
+        if (i % 6 >= 4) EXPECT_GT(row.value("bytes", 0), 0);
+    }
+    EXPECT_NE(r.out.find("### Frames: one step per frame"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("| cpu-parallel | step | 4 | stream_10 |"), std::string::npos) << r.out;
+    expect_bad_input("bench --quick --backends cpu --frames -1", "--frames");
+}

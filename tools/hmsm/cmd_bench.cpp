@@ -2,6 +2,7 @@
 // vs level by level, and forest scaling against the copy-bandwidth roofline. Markdown on stdout,
 // JSON with --json (schema: docs/benchmarks/README.md), both as a device's page with --out.
 #include "bench_depth.h"
+#include "bench_frames.h"
 #include "bench_joints.h"
 #include "bench_report.h"
 #include "bench_run.h"
@@ -35,7 +36,9 @@ struct BenchFlags {
     int64_t steps = 100, warmup = 20, repeats = 5;
     std::string instances = "1,10,100,1000,10000";
     std::string joint_instances = "1,10,100,1000,10000";  // joints-only forest (bench_joints.h)
-    std::string composition_depths = "none";  // path walk against pointer jumping (bench_depth.h)
+    std::string composition_depths = "none";
+    int64_t frames = 0;  // frame table (bench_frames.h): frames per change; 0: no table
+    std::string frame_instances = "1,100,1000,10000";  // path walk against pointer jumping (bench_depth.h)
     double spacing = 25.0;
     double case_budget = 20.0;
     std::string forest_composition = "automatic";
@@ -83,7 +86,8 @@ std::string utc_now() {
 std::string render_tables(const json& document) {
     return render_markdown(document) + bench::render_joint_forest(document.value("forest_joints", json::array())) +
            bench::render_live_control(document.value("live_control", json::array())) +
-           bench::render_composition_depths(document.value("composition_depths", json::array()));
+           bench::render_composition_depths(document.value("composition_depths", json::array())) +
+           bench::render_frames(document.value("frames", json::array()));
 }
 
 /// The device page `--out STEM` writes as STEM.md: a header naming the device (the stem's file
@@ -150,6 +154,11 @@ void register_bench_flags(CLI::App& app) {
     app.add_option("--composition-depths", flags.composition_depths,
                    "path_walk against pointer_jumping per step on synthetic chains of these depths, "
                    "1 and 100 instances, e.g. 16,32,64,128,256,1024 (default none)");
+    add_integer_option(app, "--frames", flags.frames,
+                       "also time one step per frame as an engine calls it (frame table): this many frames "
+                       "per change, fewer where --case-budget says (default 0: no table)");
+    app.add_option("--frame-instances", flags.frame_instances,
+                   "joints-only paper-1 forest sizes of the frame table (default 1,100,1000,10000)");
     app.add_option("--spacing", flags.spacing, "forest grid spacing in metres (default 25)");
     app.add_option("--forest-composition", flags.forest_composition,
                    "composition of the forest rows: " +
@@ -195,6 +204,8 @@ int run_bench(CLI::App& app) {
         return fail_input("--warmup " + std::to_string(flags.warmup) + ": must be in [0, 1000000]");
     if (flags.repeats < 1 || flags.repeats > 1000)
         return fail_input("--repeats " + std::to_string(flags.repeats) + ": must be in [1, 1000]");
+    if (flags.frames < 0 || flags.frames > 100000)
+        return fail_input("--frames " + std::to_string(flags.frames) + ": must be in [0, 100000]");
     if (!(flags.case_budget > 0.0) || !std::isfinite(flags.case_budget))
         return fail_input("--case-budget: must be a positive number of seconds");
     const auto forest_composition =
@@ -227,6 +238,9 @@ int run_bench(CLI::App& app) {
     auto parsed_joint_counts = count_list(flags.joint_instances, "--joint-instances", 1000000, "counts");
     if (!parsed_joint_counts) return fail(parsed_joint_counts.status());
     const std::vector<uint32_t> joint_counts = std::move(parsed_joint_counts).value();
+
+    auto parsed_frame_counts = count_list(flags.frame_instances, "--frame-instances", 1000000, "counts");
+    if (!parsed_frame_counts) return fail(parsed_frame_counts.status());
 
     auto parsed_depths = count_list(flags.composition_depths, "--composition-depths", 4096, "depths");
     if (!parsed_depths) return fail(parsed_depths.status());
@@ -324,6 +338,14 @@ int run_bench(CLI::App& app) {
         depths.empty() ? json::array()
                        : measure_composition_depths(live_backends, depths, settings.steps, settings.warmup,
                                                     settings.case_budget);
+    json frames = json::array();
+    if (flags.frames > 0) {
+        auto tree = flags.tree.empty() ? generate_preset("paper-1") : load_tree(flags.tree);
+        if (!tree) return fail(tree.status());
+        bench::FrameSettings frame_settings{*parsed_frame_counts, uint32_t(flags.frames), settings.case_budget,
+                                            flags.spacing};
+        frames = bench::measure_frames(*tree, live_backends, frame_settings);
+    }
     progress.finish();
 
     add_speedups(run.presets, run.forest);
@@ -385,6 +407,7 @@ int run_bench(CLI::App& app) {
         {"forest", run.forest},
         {"forest_joints", forest_joints},
         {"live_control", live_control},
+        {"frames", frames},
         {"composition_depths", composition_depths},
         {"copy_bandwidth", copy},
         {"skipped", run.skipped},

@@ -1,0 +1,51 @@
+// hmsm bench --frames: what an engine sees once per frame. One step per frame on a joints-only
+// forest, with nothing changed, a wind change, a moving force field or ten instances streamed
+// in and out before it; per frame the wall time of the engine's hmsm calls (the change and the
+// step call) and of the whole frame until the outputs are ready, median and p99. Each backend
+// runs its blocking step(); CUDA also enqueues on an engine stream (hmsm/cuda.h
+// enqueue_steps) and Vulkan records into an engine command buffer (hmsm/vulkan.h
+// record_steps), where this build can.
+#pragma once
+
+#include <hmsm/hmsm.h>
+
+#include <nlohmann/json.hpp>
+
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace hmsm::cli::bench {
+
+/// How an engine issues one frame's step on a simulation and waits for its outputs.
+class FrameDriver {
+public:
+    virtual ~FrameDriver() = default;
+    /// "step" (Simulation::step, blocking), "enqueue" (CUDA), "record" (Vulkan).
+    virtual const char* path() const = 0;
+    /// The frame's step call: what the engine's thread spends in hmsm for it.
+    virtual Status call(Simulation& simulation) = 0;
+    /// Waits until the outputs of the call are ready (nothing for a blocking step).
+    virtual Status finish(Simulation& simulation) = 0;
+};
+
+/// The engine paths of a simulation of `kind` this build can drive (CUDA: an engine stream;
+/// Vulkan: an engine command buffer); empty where there is none.
+std::vector<std::unique_ptr<FrameDriver>> engine_drivers(Simulation& simulation);
+
+struct FrameSettings {
+    std::vector<uint32_t> counts;  // forest sizes
+    uint32_t frames = 200;         // frames per change, fewer where the case budget says so
+    double case_budget = 20.0;     // seconds per (backend, path, size) over all changes
+    double spacing = 25.0;
+};
+
+/// The frame table: one JSON row per backend, path, forest size and change (or one skipped
+/// row per backend, path and size that does not fit the budget or the device).
+nlohmann::json measure_frames(const TreeModel& model, const std::vector<BackendKind>& backends,
+                              const FrameSettings& settings);
+
+/// The markdown table of measure_frames' rows ("" when there are none).
+std::string render_frames(const nlohmann::json& rows);
+
+}  // namespace hmsm::cli::bench
