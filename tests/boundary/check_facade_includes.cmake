@@ -8,6 +8,7 @@ set(_allowed
   src/simulation.cpp          # Simulation's members
   src/simulation_impl.h       # Simulation::Impl, shared by the façade's sources
   src/live_control.cpp        # Simulation's live-control members
+  src/simulation_read.cpp     # Simulation's read members
   src/c_api/c_api_internal.h  # the C ABI over Simulation
 )
 if(NOT ROOT)
