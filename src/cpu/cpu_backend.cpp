@@ -128,7 +128,7 @@ public:
                 if (!pool_) {
                     run_range(d, x, {0, work_items(d.pass, d.constants)});
                 } else {
-                    // Profiled: one fork-join per dispatch over the plan's chunks, timed here.
+                    // Profiled: one job per dispatch over the plan's chunks, timed here.
                     const std::span<const Range> chunks = plan_->chunks(i);
                     pool_->for_each(uint32_t(chunks.size()), [&](uint32_t k) {
                         if (chunks[k].begin < chunks[k].end) run_range(d, x, chunks[k]);

@@ -2,9 +2,9 @@
 // into chunks of work items, which sequence of chunks each belongs to, and which chunks of other
 // sequences a chunk must wait for. A sequence holds one chunk of every dispatch in program
 // order, step after step; one thread runs it inside one job of the pool per batch of steps:
-// there is no fork-join per dispatch, and a sequence waits only where a chunk reads (or
-// overwrites) what a chunk of another sequence writes (or reads) — derived from the pass table's reads and writes and the chunks' instances
-// and elements. Each element still gets the float operations of `cpu`, so the results are
+// there is no job per dispatch, and a sequence waits only where a chunk reads (or
+// overwrites) what a chunk of another sequence writes (or reads) — derived from the pass
+// table's reads and writes and the chunks' instances and elements. Each element still gets the float operations of `cpu`, so the results are
 // bitwise those of `cpu`.
 #pragma once
 
