@@ -264,7 +264,7 @@ TEST(CpuParallel, ThreadPoolSharesAJobAmongTheThreadsThatCome) {
     for (uint32_t job = 0; job < 200; ++job) {
         std::vector<std::atomic<uint32_t>> calls(4);
         std::atomic<uint32_t> next{0}, items{0};
-        pool.share([&](uint32_t thread) {
+        pool.share(3, [&](uint32_t thread) {
             ASSERT_LT(thread, 4u);
             calls[thread].fetch_add(1);
             while (next.fetch_add(1) < 64) items.fetch_add(1);

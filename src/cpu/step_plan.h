@@ -96,7 +96,7 @@ public:
             }
         };
         if (threads_ <= 1) share(0);  // no worker is woken (or started) for a plan of one sequence
-        else pool.share(share);
+        else pool.share(threads_ - 1, share);
     }
 
 private:

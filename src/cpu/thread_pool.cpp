@@ -63,7 +63,7 @@ void ThreadPool::start_workers() {
     for (uint32_t i = 1; i < threads_; ++i) workers_.emplace_back([this, i] { worker(i); });
 }
 
-void ThreadPool::run(Trampoline call, void* body) {
+void ThreadPool::run(Trampoline call, void* body, uint32_t helpers) {
     if (workers_.empty()) start_workers();
     call_ = call;
     body_ = body;
@@ -71,9 +71,13 @@ void ThreadPool::run(Trampoline call, void* body) {
     job_.store(closed | kOpen, std::memory_order_seq_cst);
     // A worker registers in sleepers_ before it checks job_ under the mutex: either it sees the
     // open job, or this load sees it and the notify (under the mutex) reaches its wait.
-    if (sleepers_.load(std::memory_order_seq_cst) > 0) {
+    if (const uint32_t asleep = sleepers_.load(std::memory_order_seq_cst); asleep > 0 && helpers > 0) {
         std::lock_guard<std::mutex> lock(mutex_);
-        wake_.notify_all();
+        if (helpers >= asleep) {
+            wake_.notify_all();
+        } else {
+            for (uint32_t k = 0; k < helpers; ++k) wake_.notify_one();
+        }
     }
     call(body, 0);
     job_.store(closed, std::memory_order_seq_cst);

@@ -61,7 +61,7 @@ public:
             return;
         }
         std::atomic<uint32_t> next{0};
-        share([&](uint32_t) {
+        share(count - 1, [&](uint32_t) {
             for (uint32_t k; (k = next.fetch_add(1, std::memory_order_relaxed)) < count;) body(k);
         });
     }
@@ -71,15 +71,17 @@ public:
     /// share() returns once every worker that joined has returned. A worker may join late or
     /// not at all, so the bodies must divide the work among themselves as they come (claim it)
     /// such that the caller's call alone can finish it, and a body may wait for another only
-    /// for work that body has claimed. Not reentrant; `body` must not throw.
+    /// for work that body has claimed. At most `helpers` sleeping workers are woken (those
+    /// spinning join anyway): more could find nothing to claim and only take cores from the
+    /// others where threads outnumber cores. Not reentrant; `body` must not throw.
     template <class F>
-    void share(F&& body) {
+    void share(uint32_t helpers, F&& body) {
         if (threads_ <= 1) {
             body(0u);
             return;
         }
         using Body = std::remove_reference_t<F>;
-        run(+[](void* f, uint32_t k) { (*static_cast<Body*>(f))(k); }, &body);
+        run(+[](void* f, uint32_t k) { (*static_cast<Body*>(f))(k); }, &body, helpers);
     }
 
     /// How many ranges parallel_for(count, min_chunk) uses.
@@ -87,7 +89,7 @@ public:
 
 private:
     using Trampoline = void (*)(void*, uint32_t);
-    void run(Trampoline call, void* body);
+    void run(Trampoline call, void* body, uint32_t helpers);
     void start_workers();
     void worker(uint32_t index);
 
