@@ -179,6 +179,7 @@ Status Transfer::submit(const std::function<void(VkCommandBuffer)>& commands) {
     submit.pCommandBuffers = &command_buffer_;
     HMSM_VK_TRY(vk.vkResetFences(device_.handle(), 1, &fence_));
     HMSM_VK_TRY(vk.vkQueueSubmit(device_.queue(), 1, &submit, fence_));
+    ++submissions_;
     HMSM_VK_TRY(vk.vkWaitForFences(device_.handle(), 1, &fence_, VK_TRUE, UINT64_MAX));
     return {};
 }
