@@ -1,9 +1,17 @@
 #include "frame_ring.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cstddef>
 
-namespace hmsm::detail::vk {
+namespace hmsm::detail {
+namespace {
+std::atomic<uint64_t> g_first_slot_bytes{0};
+}  // namespace
+
+void vulkan_set_frame_slot_bytes(uint64_t bytes) { g_first_slot_bytes = bytes; }
+
+namespace vk {
 namespace {
 
 /// A slot's first size: the whole wind table (header and 256 step slots) with room to spare.
@@ -12,6 +20,10 @@ constexpr VkDeviceSize kFirstSlotBytes = VkDeviceSize(64) << 10;
 constexpr VkDeviceSize kStageAlignment = 16;
 
 }  // namespace
+
+FrameRing::FrameRing(const Device& device, uint32_t frames)
+    : device_(device), first_slot_bytes_(g_first_slot_bytes ? g_first_slot_bytes.load() : kFirstSlotBytes),
+      slots_(frames) {}
 
 void FrameRing::next_frame() {
     current_ = (current_ + 1) % uint32_t(slots_.size());
@@ -25,7 +37,7 @@ Result<void*> FrameRing::stage(VkBuffer dst, VkDeviceSize dst_offset, VkDeviceSi
     Slot& slot = slots_[current_];
     const VkDeviceSize offset = (slot.used + kStageAlignment - 1) / kStageAlignment * kStageAlignment;
     if (!slot.buffer.handle() || offset + bytes > slot.buffer.size()) {
-        const VkDeviceSize size = std::max({kFirstSlotBytes, 2 * slot.buffer.size(), bytes});
+        const VkDeviceSize size = std::max({first_slot_bytes_, 2 * slot.buffer.size(), bytes});
         auto grown = Buffer::create(device_, size, VK_BUFFER_USAGE_TRANSFER_SRC_BIT, MemoryUse::staging,
                                     "frame parameters");
         if (!grown) return grown.status();
@@ -49,4 +61,5 @@ void FrameRing::record_copies(VkCommandBuffer cmd) {
     copies_.clear();
 }
 
-}  // namespace hmsm::detail::vk
+}  // namespace vk
+}  // namespace hmsm::detail

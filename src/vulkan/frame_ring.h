@@ -13,6 +13,12 @@
 
 #include <vector>
 
+namespace hmsm::detail {
+/// Test hook: rings created afterwards start each slot at `bytes` (0: the default), so a small
+/// value makes slots grow, also in the middle of a frame's writes.
+void vulkan_set_frame_slot_bytes(uint64_t bytes);
+}  // namespace hmsm::detail
+
 namespace hmsm::detail::vk {
 
 /// Most frames in flight a simulation accepts (hmsm::vulkan::ExternalContext::frames_in_flight).
@@ -21,7 +27,7 @@ inline constexpr uint32_t kMaxFramesInFlight = 16;
 class FrameRing {
 public:
     /// `frames` in [1, kMaxFramesInFlight]; the slots are allocated on first use.
-    FrameRing(const Device& device, uint32_t frames) : device_(device), slots_(frames) {}
+    FrameRing(const Device& device, uint32_t frames);
 
     uint32_t frames() const { return uint32_t(slots_.size()); }
     /// Moves to the next frame's slot; what the slot held before is free to overwrite.
@@ -50,6 +56,7 @@ private:
     };
 
     const Device& device_;
+    VkDeviceSize first_slot_bytes_;
     std::vector<Slot> slots_;
     uint32_t current_ = 0;
     std::vector<Copy> copies_;
