@@ -85,7 +85,25 @@ struct DeviceHandles {
     uint32_t queue_family_index = 0;
 };
 
+/// A Vulkan instance and device created by hmsm, shared by several simulations: N forests on
+/// one Context cost one VkInstance, one VkDevice and one set of driver threads instead of N
+/// (some drivers also refuse new instances after a few dozen in one process). The device is
+/// chosen as for BackendKind::vulkan (HMSM_VULKAN_DEVICE included). Simulations created on a
+/// Context hold a reference to its device, so the Context may be released before them. hmsm
+/// serializes its own submissions to the shared queue: simulations on one Context may step on
+/// different threads (each simulation still from one thread at a time).
+class Context;
+
 #ifdef HMSM_HAVE_VULKAN
+
+HMSM_API Result<std::shared_ptr<Context>> create_context();
+
+/// Simulation::create() on the device of `context`: `config.backend` is ignored (always
+/// Vulkan); `frames_in_flight` as ExternalContext::frames_in_flight.
+HMSM_API Result<std::unique_ptr<Simulation>> create_simulation(const Scene& scene,
+                                                               const SimulationConfig& config,
+                                                               const std::shared_ptr<Context>& context,
+                                                               uint32_t frames_in_flight = 3);
 
 /// Simulation::create() on the engine's device: `config.backend` is ignored (always Vulkan).
 HMSM_API Result<std::unique_ptr<Simulation>> create_simulation(const Scene& scene,
@@ -127,6 +145,13 @@ HMSM_API Status record_steps(Simulation& simulation, VkCommandBuffer command_buf
 
 #else
 
+inline Result<std::shared_ptr<Context>> create_context() {
+    return Status{ErrorCode::no_device, "vulkan: this build of hmsm has no Vulkan backend"};
+}
+inline Result<std::unique_ptr<Simulation>> create_simulation(const Scene&, const SimulationConfig&,
+                                                             const std::shared_ptr<Context>&, uint32_t = 3) {
+    return Status{ErrorCode::no_device, "vulkan: this build of hmsm has no Vulkan backend"};
+}
 inline Result<std::unique_ptr<Simulation>> create_simulation(const Scene&, const SimulationConfig&,
                                                              const ExternalContext&) {
     return Status{ErrorCode::no_device, "vulkan: this build of hmsm has no Vulkan backend"};

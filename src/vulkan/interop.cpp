@@ -5,6 +5,17 @@
 #include "../simulation_access.h"
 
 namespace hmsm::vulkan {
+
+/// The device hmsm created for the simulations of a Context (hmsm/vulkan.h).
+class Context {
+public:
+    explicit Context(std::shared_ptr<detail::vk::Device> device) : device_(std::move(device)) {}
+    const std::shared_ptr<detail::vk::Device>& device() const { return device_; }
+
+private:
+    std::shared_ptr<detail::vk::Device> device_;
+};
+
 namespace {
 
 using detail::BufferId;
@@ -30,6 +41,21 @@ BufferRange range_of(const VulkanBackend& backend, BufferId id) {
 }
 
 }  // namespace
+
+Result<std::shared_ptr<Context>> create_context() {
+    auto device = detail::vk::Device::create();
+    if (!device) return device.status();
+    return std::make_shared<Context>(std::move(device).value());
+}
+
+Result<std::unique_ptr<Simulation>> create_simulation(const Scene& scene, const SimulationConfig& config,
+                                                      const std::shared_ptr<Context>& context,
+                                                      uint32_t frames_in_flight) {
+    if (!context) return Status{ErrorCode::invalid_argument, "vulkan: create_simulation needs a Context"};
+    auto backend = detail::vk::VulkanBackend::create(context->device(), frames_in_flight);
+    if (!backend) return backend.status();
+    return detail::SimulationAccess::create(scene, config, std::move(backend).value());
+}
 
 Result<std::unique_ptr<Simulation>> create_simulation(const Scene& scene,
                                                       const SimulationConfig& config,

@@ -239,7 +239,7 @@ Status VulkanBackend::submit_chunk(Slot& slot, std::span<const Dispatch> program
     if (fault_ == VulkanFault::device_lost_at_submit && submissions_before_fault_-- == 0)
         device_lost_ = true;
     HMSM_TRY(check_device_lost());
-    HMSM_VK_TRY(vk.vkQueueSubmit(device_->queue(), 1, &submit, slot.fence));
+    HMSM_VK_TRY(device_->submit(submit, slot.fence));
     ++submissions_;
     slot.in_flight = true;
     slot.steps = timed ? steps.size() : 0;
