@@ -124,7 +124,7 @@ HMSM_API Result<DeviceHandles> device_handles(const Simulation& simulation);
 /// into the simulation's device buffers ahead of the steps.
 ///
 /// Frames in flight (docs/vulkan.md): with F = ExternalContext::frames_in_flight (3 unless set;
-/// 3 also for a simulation on hmsm's own device), the command buffer of the n-th call must have
+/// the create_simulation argument on a Context; 3 on hmsm's own device), the command buffer of the n-th call must have
 /// completed execution before the (n + F)-th call is made (e.g. wait for the fence of frame
 /// n before recording frame n + F, as a swap chain with F frames in flight does). Submit the
 /// command buffers in the order they were recorded, to one queue or with semaphores ordering
