@@ -101,6 +101,7 @@ set(_hmsm_vulkan_sources
   src/vulkan/device_buffer.cpp
   src/vulkan/pipelines.cpp
   src/vulkan/recorder.cpp
+  src/vulkan/frame_ring.cpp
   src/vulkan/windows.cpp
   src/vulkan/vulkan_backend.cpp
   src/vulkan/copy_bandwidth.cpp

@@ -23,9 +23,10 @@ namespace hmsm::vulkan {
 /// A Vulkan context owned by the engine. hmsm never destroys these handles; they must outlive
 /// every Simulation created on them. The device needs Vulkan 1.1 and no extra feature or
 /// extension. `queue` must belong to `queue_family_index`, which must support compute; hmsm
-/// submits to it only inside Simulation::step() and Simulation::read() (and never after
-/// record_steps() for that simulation, see below), so the engine must not use the queue from
-/// another thread during those calls (Vulkan's external synchronization rule).
+/// submits to it inside Simulation::create(), step(), read(), add_instances(),
+/// remove_instances() and reset_instances(), never inside record_steps(), so the engine must
+/// not use the queue from another thread during those calls (Vulkan's external
+/// synchronization rule).
 struct ExternalContext {
     VkInstance instance = VK_NULL_HANDLE;
     VkPhysicalDevice physical_device = VK_NULL_HANDLE;
@@ -34,6 +35,10 @@ struct ExternalContext {
     uint32_t queue_family_index = 0;
     /// The engine's loader entry point; null means the system Vulkan loader (libvulkan.so.1).
     PFN_vkGetInstanceProcAddr get_instance_proc_addr = nullptr;
+    /// Command buffers recorded by record_steps() that may be pending execution at once (1 to
+    /// 16): the slots of the ring that carries each frame's live changes to the device. See
+    /// record_steps() for the rule it sets.
+    uint32_t frames_in_flight = 3;
 };
 
 /// One output as a range of a device buffer: `count` elements of `stride` bytes starting at
@@ -80,7 +85,25 @@ struct DeviceHandles {
     uint32_t queue_family_index = 0;
 };
 
+/// A Vulkan instance and device created by hmsm, shared by several simulations: N forests on
+/// one Context cost one VkInstance, one VkDevice and one set of driver threads instead of N
+/// (some drivers also refuse new instances after a few dozen in one process). The device is
+/// chosen as for BackendKind::vulkan (HMSM_VULKAN_DEVICE included). Simulations created on a
+/// Context hold a reference to its device, so the Context may be released before them. hmsm
+/// serializes its own submissions to the shared queue: simulations on one Context may step on
+/// different threads (each simulation still from one thread at a time).
+class Context;
+
 #ifdef HMSM_HAVE_VULKAN
+
+HMSM_API Result<std::shared_ptr<Context>> create_context();
+
+/// Simulation::create() on the device of `context`: `config.backend` is ignored (always
+/// Vulkan); `frames_in_flight` as ExternalContext::frames_in_flight.
+HMSM_API Result<std::unique_ptr<Simulation>> create_simulation(const Scene& scene,
+                                                               const SimulationConfig& config,
+                                                               const std::shared_ptr<Context>& context,
+                                                               uint32_t frames_in_flight = 3);
 
 /// Simulation::create() on the engine's device: `config.backend` is ignored (always Vulkan).
 HMSM_API Result<std::unique_ptr<Simulation>> create_simulation(const Scene& scene,
@@ -92,26 +115,43 @@ HMSM_API Result<SharedBuffers> shared_buffers(const Simulation& simulation);
 
 HMSM_API Result<DeviceHandles> device_handles(const Simulation& simulation);
 
-/// Records `count` (at most 256) steps into `command_buffer` (recording state, outside a render pass, from a
-/// pool of a compute-capable queue family of the simulation's device) instead of submitting
-/// them, and advances the simulation's clock as Simulation::step() would. hmsm binds its own
-/// compute pipeline, descriptor set and push constants (rebind yours afterwards) and starts
-/// with a compute-to-compute barrier against earlier work; before the engine consumes an
-/// output it records a barrier from VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT /
-/// VK_ACCESS_SHADER_WRITE_BIT to its own stage (e.g. VERTEX_INPUT / VERTEX_ATTRIBUTE_READ).
-/// The engine submits the command buffer; the recorded steps must complete before the next
-/// Simulation::step(), read() or record_steps() of this simulation is called. Per-pass times are
-/// not collected for recorded steps. Live changes made since the last step (wind, force fields,
-/// instance settings) take effect in the recorded steps: record_steps uploads them, and the
-/// steps' wind clock, with small transfers it submits to the queue and waits for before it
-/// records. add_instances() and remove_instances() move state within the simulation's buffers
-/// and may reallocate them: SharedBuffers and any command buffer recorded before them are
-/// invalid afterwards.
+/// Records `count` (at most 256) steps into `command_buffer` (recording state, outside a render
+/// pass, from a pool of a compute-capable queue family of the simulation's device) instead of
+/// submitting them, and advances the simulation's clock as Simulation::step() would. hmsm
+/// neither submits nor waits here. Live changes made since the last step (wind, force fields,
+/// instance settings) take effect in the recorded steps: record_steps writes them, with the
+/// steps' wind clock, into a host-visible ring slot of this frame and records copies from it
+/// into the simulation's device buffers ahead of the steps.
+///
+/// Frames in flight (docs/vulkan.md): with F = ExternalContext::frames_in_flight (3 unless set;
+/// the create_simulation argument on a Context; 3 on hmsm's own device), the command buffer of the n-th call must have
+/// completed execution before the (n + F)-th call is made (e.g. wait for the fence of frame
+/// n before recording frame n + F, as a swap chain with F frames in flight does). Submit the
+/// command buffers in the order they were recorded, to one queue or with semaphores ordering
+/// them. All recorded steps must have completed before Simulation::step(), read(),
+/// add_instances(), remove_instances(), reset_instances() or the simulation's destruction.
+///
+/// hmsm binds its own compute pipeline, descriptor set and push constants (rebind yours
+/// afterwards) and starts with a barrier against earlier compute and transfer work; before the
+/// engine consumes an output it records a barrier from VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT /
+/// VK_ACCESS_SHADER_WRITE_BIT to its own stage (e.g. VERTEX_INPUT / VERTEX_ATTRIBUTE_READ), and
+/// before the next recording overwrites outputs the engine's draws still read, a barrier from
+/// its stage to COMPUTE_SHADER. Per-pass times are not collected for recorded steps.
+/// add_instances() and remove_instances() move state within the simulation's buffers and may
+/// reallocate them: SharedBuffers and any command buffer recorded before them are invalid
+/// afterwards.
 HMSM_API Status record_steps(Simulation& simulation, VkCommandBuffer command_buffer,
                              uint32_t count = 1);
 
 #else
 
+inline Result<std::shared_ptr<Context>> create_context() {
+    return Status{ErrorCode::no_device, "vulkan: this build of hmsm has no Vulkan backend"};
+}
+inline Result<std::unique_ptr<Simulation>> create_simulation(const Scene&, const SimulationConfig&,
+                                                             const std::shared_ptr<Context>&, uint32_t = 3) {
+    return Status{ErrorCode::no_device, "vulkan: this build of hmsm has no Vulkan backend"};
+}
 inline Result<std::unique_ptr<Simulation>> create_simulation(const Scene&, const SimulationConfig&,
                                                              const ExternalContext&) {
     return Status{ErrorCode::no_device, "vulkan: this build of hmsm has no Vulkan backend"};

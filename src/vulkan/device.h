@@ -60,6 +60,14 @@ public:
     /// waits for it nor destroys it, so the process can still report the error and exit.
     void abandon() { abandoned_ = true; }
 
+    /// vkQueueSubmit of one submission, serialized with every other submission hmsm makes to
+    /// this device's queue (simulations sharing an hmsm::vulkan::Context may step on several
+    /// threads).
+    VkResult submit(const VkSubmitInfo& info, VkFence fence) const {
+        std::lock_guard lock(queue_mutex_);
+        return table_.vkQueueSubmit(queue_, 1, &info, fence);
+    }
+
     /// Ok, or an internal error carrying the first validation message reported since the last
     /// call (always ok when validation is off). Clears the messages.
     Status take_validation_messages();
@@ -89,6 +97,7 @@ private:
     VkPhysicalDeviceMemoryProperties memory_{};
     DeviceLimits limits_;
 
+    mutable std::mutex queue_mutex_;
     std::mutex messages_mutex_;
     std::vector<std::string> messages_;
 };

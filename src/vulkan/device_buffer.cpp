@@ -178,7 +178,8 @@ Status Transfer::submit(const std::function<void(VkCommandBuffer)>& commands) {
     submit.commandBufferCount = 1;
     submit.pCommandBuffers = &command_buffer_;
     HMSM_VK_TRY(vk.vkResetFences(device_.handle(), 1, &fence_));
-    HMSM_VK_TRY(vk.vkQueueSubmit(device_.queue(), 1, &submit, fence_));
+    HMSM_VK_TRY(device_.submit(submit, fence_));
+    ++submissions_;
     HMSM_VK_TRY(vk.vkWaitForFences(device_.handle(), 1, &fence_, VK_TRUE, UINT64_MAX));
     return {};
 }

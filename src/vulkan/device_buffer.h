@@ -55,6 +55,8 @@ public:
                     const std::function<void(const void*, VkDeviceSize, VkDeviceSize)>& consume);
     /// Records `commands` into a one-shot command buffer, submits it and waits.
     Status submit(const std::function<void(VkCommandBuffer)>& commands);
+    /// Submissions made so far (a test hook).
+    uint64_t submissions() const { return submissions_; }
 
 private:
     explicit Transfer(const Device& device) : device_(device) {}
@@ -65,6 +67,7 @@ private:
     VkCommandBuffer command_buffer_ = VK_NULL_HANDLE;
     VkFence fence_ = VK_NULL_HANDLE;
     Buffer staging_;
+    uint64_t submissions_ = 0;
 };
 
 /// A global memory barrier making all earlier compute and transfer writes visible to `dst_stage`

@@ -5,6 +5,17 @@
 #include "../simulation_access.h"
 
 namespace hmsm::vulkan {
+
+/// The device hmsm created for the simulations of a Context (hmsm/vulkan.h).
+class Context {
+public:
+    explicit Context(std::shared_ptr<detail::vk::Device> device) : device_(std::move(device)) {}
+    const std::shared_ptr<detail::vk::Device>& device() const { return device_; }
+
+private:
+    std::shared_ptr<detail::vk::Device> device_;
+};
+
 namespace {
 
 using detail::BufferId;
@@ -31,12 +42,27 @@ BufferRange range_of(const VulkanBackend& backend, BufferId id) {
 
 }  // namespace
 
+Result<std::shared_ptr<Context>> create_context() {
+    auto device = detail::vk::Device::create();
+    if (!device) return device.status();
+    return std::make_shared<Context>(std::move(device).value());
+}
+
+Result<std::unique_ptr<Simulation>> create_simulation(const Scene& scene, const SimulationConfig& config,
+                                                      const std::shared_ptr<Context>& context,
+                                                      uint32_t frames_in_flight) {
+    if (!context) return Status{ErrorCode::invalid_argument, "vulkan: create_simulation needs a Context"};
+    auto backend = detail::vk::VulkanBackend::create(context->device(), frames_in_flight);
+    if (!backend) return backend.status();
+    return detail::SimulationAccess::create(scene, config, std::move(backend).value());
+}
+
 Result<std::unique_ptr<Simulation>> create_simulation(const Scene& scene,
                                                       const SimulationConfig& config,
                                                       const ExternalContext& context) {
     auto device = detail::vk::Device::adopt(context);
     if (!device) return device.status();
-    auto backend = detail::vk::VulkanBackend::create(std::move(device).value());
+    auto backend = detail::vk::VulkanBackend::create(std::move(device).value(), context.frames_in_flight);
     if (!backend) return backend.status();
     return detail::SimulationAccess::create(scene, config, std::move(backend).value());
 }
@@ -61,21 +87,21 @@ Result<DeviceHandles> device_handles(const Simulation& simulation) {
 Status record_steps(Simulation& simulation, VkCommandBuffer command_buffer, uint32_t count) {
     auto backend = vulkan_backend_of(simulation);
     if (!backend) return backend.status();
-    // Every recorded step reads its own slot of the wind table, which the engine's submission
-    // must still find intact: one recording covers at most one table's worth of steps.
+    // A recording stays within one wind table of steps (hmsm/vulkan.h).
     if (count > HMSM_WIND_STEP_SLOTS)
         return {ErrorCode::invalid_argument, "vulkan: record_steps records at most " +
                                                  std::to_string(HMSM_WIND_STEP_SLOTS) + " steps at once (asked for " +
                                                  std::to_string(count) + ")"};
     if (!command_buffer)
         return {ErrorCode::invalid_argument, "vulkan: record_steps needs a command buffer"};
-    // Simulation::step() computes the wind phases, runs the program through the backend and
-    // advances the clock; with a record target the backend records instead of submitting.
+    // Simulation::step() uploads the live changes and the steps' wind clock, runs the program
+    // through the backend and advances the clock; while recording, the backend stages the
+    // uploads in the frame's ring slot and records copies and steps instead of submitting.
     VulkanBackend& vulkan = *backend.value();
-    vulkan.set_record_target(command_buffer);
+    vulkan.begin_recording(command_buffer);
     Status status = simulation.step(count);
-    vulkan.set_record_target(VK_NULL_HANDLE);
-    return status;
+    Status ended = vulkan.end_recording();
+    return status.ok() ? ended : status;
 }
 
 }  // namespace hmsm::vulkan

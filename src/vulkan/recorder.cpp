@@ -3,6 +3,7 @@
 #include "device_buffer.h"
 
 #include <algorithm>
+#include <cstring>
 
 namespace hmsm::detail::vk {
 
@@ -13,17 +14,57 @@ WorkgroupGrid workgroup_grid(uint64_t groups, const DeviceLimits& limits) {
     return {uint32_t(x), uint32_t(y)};
 }
 
-void record_steps(const Device& device, const Pipelines& pipelines, const Windows& windows,
-                  VkCommandBuffer cmd, std::span<const Dispatch> program,
+namespace {
+
+/// Equal dispatches: the pass and every field of the constants (not the padding before params).
+bool same_dispatch(const Dispatch& a, const Dispatch& b) {
+    static_assert(offsetof(gpu::PassConstants, wind_slot) + sizeof(uint32_t) <= offsetof(gpu::PassConstants, params));
+    constexpr size_t scalars = offsetof(gpu::PassConstants, wind_slot) + sizeof(uint32_t);
+    return a.pass == b.pass && std::memcmp(&a.constants, &b.constants, scalars) == 0 &&
+           std::memcmp(&a.constants.params, &b.constants.params, sizeof a.constants.params) == 0;
+}
+
+}  // namespace
+
+bool RecordingPlan::holds(std::span<const Dispatch> program) const {
+    if (program.size() != program_.size() || program.empty()) return false;
+    for (size_t i = 0; i < program.size(); ++i)
+        if (!same_dispatch(program[i], program_[i])) return false;
+    return true;
+}
+
+Status RecordingPlan::prepare(const Device& device, Pipelines& pipelines, const Windows& windows,
+                              std::span<const Dispatch> program) {
+    if (holds(program)) return {};
+    program_.clear();
+    HMSM_TRY(pipelines.prepare(program));
+    parts_.clear();
+    for (const WindowPlan::Part& part : windows.plan.expand(program)) {
+        const Dispatch& d = part.dispatch;
+        Part p;
+        p.pipeline = pipelines.pipeline_for(d).pipeline;
+        p.set = windows.sets.set(part.segment);
+        p.constants = d.constants;
+        // One workgroup per instance for in-dispatch rounds, else one per HMSM_WORKGROUP_SIZE
+        // threads.
+        p.grid = workgroup_grid(launch_shape(d).workgroups, device.limits());
+        p.reads = dispatch_reads(d);
+        p.writes = dispatch_writes(d);
+        p.reads_wind_slot = reads_wind_slot(d);
+        p.last = part.last;
+        parts_.push_back(p);
+    }
+    program_.assign(program.begin(), program.end());
+    return {};
+}
+
+void record_steps(const Device& device, VkPipelineLayout layout, const RecordingPlan& plan, VkCommandBuffer cmd,
                   std::span<const RunStep> steps, VkQueryPool timestamps) {
     const VolkDeviceTable& vk = device.vk();
-    const uint32_t queries = uint32_t(steps.size() * program.size() + 1);
+    const uint32_t queries = uint32_t(steps.size() * plan.dispatches() + 1);
     if (timestamps) vk.vkCmdResetQueryPool(cmd, timestamps, 0, queries);
     barrier_after_all_writes(device, cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
                              VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT);
-    // Each dispatch as its parts, one per segment of the scene it covers (windows.h).
-    const std::vector<WindowPlan::Part> parts = windows.plan.expand(program);
-    VkDescriptorSet bound_set = VK_NULL_HANDLE;
     if (timestamps) vk.vkCmdWriteTimestamp(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, timestamps, 0);
 
     VkMemoryBarrier barrier{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
@@ -31,38 +72,35 @@ void record_steps(const Device& device, const Pipelines& pipelines, const Window
     barrier.dstAccessMask = VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT;
     uint32_t written = 0, read = 0;  // buffers touched since the last barrier (bit = BufferId)
     VkPipeline bound = VK_NULL_HANDLE;
+    VkDescriptorSet bound_set = VK_NULL_HANDLE;
     uint32_t query = 1;
     for (const RunStep& step : steps) {
-        for (const WindowPlan::Part& part : parts) {
-            const Dispatch& d = part.dispatch;
-            const uint32_t reads = dispatch_reads(d), writes = dispatch_writes(d);
-            if (((reads | writes) & written) || (writes & read)) {
+        for (const RecordingPlan::Part& part : plan.parts()) {
+            if (((part.reads | part.writes) & written) || (part.writes & read)) {
                 vk.vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
                                         VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, 0, 1, &barrier, 0,
                                         nullptr, 0, nullptr);
                 written = read = 0;
             }
-            written |= writes;
-            read |= reads;
-
-            const Pipelines::Choice choice = pipelines.pipeline_for(d);
-            if (choice.pipeline != bound) {
-                vk.vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, choice.pipeline);
-                bound = choice.pipeline;
+            written |= part.writes;
+            read |= part.reads;
+            if (part.pipeline != bound) {
+                vk.vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, part.pipeline);
+                bound = part.pipeline;
             }
-            if (VkDescriptorSet set = windows.sets.set(part.segment); set != bound_set) {
-                vk.vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipelines.layout(), 0,
-                                           1, &set, 0, nullptr);
-                bound_set = set;
+            if (part.set != bound_set) {
+                vk.vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, layout, 0, 1, &part.set, 0, nullptr);
+                bound_set = part.set;
             }
-            gpu::PassConstants constants = d.constants;
-            if (reads_wind_slot(d)) constants.wind_slot = step.wind_slot;
-            vk.vkCmdPushConstants(cmd, pipelines.layout(), VK_SHADER_STAGE_COMPUTE_BIT, 0,
-                                  sizeof(constants), &constants);
-            // One workgroup per instance for in-dispatch rounds, else one
-            // per HMSM_WORKGROUP_SIZE threads.
-            WorkgroupGrid grid = workgroup_grid(launch_shape(d).workgroups, device.limits());
-            if (grid.x) vk.vkCmdDispatch(cmd, grid.x, grid.y, 1);
+            if (part.reads_wind_slot) {
+                gpu::PassConstants constants = part.constants;
+                constants.wind_slot = step.wind_slot;
+                vk.vkCmdPushConstants(cmd, layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(constants), &constants);
+            } else {
+                vk.vkCmdPushConstants(cmd, layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(part.constants),
+                                      &part.constants);
+            }
+            if (part.grid.x) vk.vkCmdDispatch(cmd, part.grid.x, part.grid.y, 1);
             if (timestamps && part.last)
                 vk.vkCmdWriteTimestamp(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, timestamps, query++);
         }

@@ -27,9 +27,15 @@ constexpr bool is_shared_output(BufferId id) {
 
 }  // namespace
 
-Result<std::unique_ptr<VulkanBackend>> VulkanBackend::create(std::shared_ptr<Device> device) {
+Result<std::unique_ptr<VulkanBackend>> VulkanBackend::create(std::shared_ptr<Device> device,
+                                                             uint32_t frames_in_flight) {
+    if (frames_in_flight == 0 || frames_in_flight > kMaxFramesInFlight)
+        return Status{ErrorCode::invalid_argument, "vulkan: frames_in_flight must be 1 to " +
+                                                       std::to_string(kMaxFramesInFlight) + " (got " +
+                                                       std::to_string(frames_in_flight) + ")"};
     std::unique_ptr<VulkanBackend> b(new VulkanBackend(std::move(device)));
     const Device& dev = *b->device_;
+    b->ring_ = std::make_unique<FrameRing>(dev, frames_in_flight);
     auto pipelines = Pipelines::create(dev);
     if (!pipelines) return pipelines.status();
     b->pipelines_ = std::move(pipelines).value();
@@ -67,6 +73,7 @@ VulkanBackend::~VulkanBackend() {
     // Buffers, pipelines and the transfer go before the device (member order would not ensure it
     // for the shared device).
     sets_.reset();
+    ring_.reset();
     for (Buffer& b : buffers_) b = Buffer();
     pipelines_.reset();
     transfer_.reset();
@@ -149,6 +156,7 @@ Status VulkanBackend::upload(const SceneData& scene) {
                 device_->vk().vkCmdFillBuffer(cmd, buffers_[uint32_t(info.id)].handle(), 0,
                                               VK_WHOLE_SIZE, 0);
     }));
+    recording_.clear();  // its descriptor sets go
     auto sets = WindowSets::create(*device_, pipelines_->set_layout(), *plan_, buffers_);
     if (!sets) return sets.status();
     sets_ = std::move(sets).value();
@@ -221,7 +229,7 @@ Status VulkanBackend::submit_chunk(Slot& slot, std::span<const Dispatch> program
     VkCommandBufferBeginInfo begin{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
     begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
     HMSM_VK_TRY(vk.vkBeginCommandBuffer(slot.command_buffer, &begin));
-    record_steps(*device_, *pipelines_, Windows{*plan_, *sets_}, slot.command_buffer, program, steps,
+    record_steps(*device_, pipelines_->layout(), recording_, slot.command_buffer, steps,
                  timed ? slot.timestamps : VK_NULL_HANDLE);
     HMSM_VK_TRY(vk.vkEndCommandBuffer(slot.command_buffer));
     VkSubmitInfo submit{VK_STRUCTURE_TYPE_SUBMIT_INFO};
@@ -231,7 +239,8 @@ Status VulkanBackend::submit_chunk(Slot& slot, std::span<const Dispatch> program
     if (fault_ == VulkanFault::device_lost_at_submit && submissions_before_fault_-- == 0)
         device_lost_ = true;
     HMSM_TRY(check_device_lost());
-    HMSM_VK_TRY(vk.vkQueueSubmit(device_->queue(), 1, &submit, slot.fence));
+    HMSM_VK_TRY(device_->submit(submit, slot.fence));
+    ++submissions_;
     slot.in_flight = true;
     slot.steps = timed ? steps.size() : 0;
     return {};
@@ -266,10 +275,10 @@ Status VulkanBackend::run(std::span<const Dispatch> program, std::span<const Run
     times_ = {};
     if (program.empty() || steps.empty()) return {};
     if (!plan_ || !sets_) return {ErrorCode::internal, "vulkan: run() before upload()"};
-    HMSM_TRY(pipelines_->prepare(program));
+    HMSM_TRY(recording_.prepare(*device_, *pipelines_, Windows{*plan_, *sets_}, program));
     if (record_target_) {
-        record_steps(*device_, *pipelines_, Windows{*plan_, *sets_}, record_target_, program, steps,
-                     VK_NULL_HANDLE);
+        ring_->record_copies(record_target_);
+        record_steps(*device_, pipelines_->layout(), recording_, record_target_, steps, VK_NULL_HANDLE);
         return device_->take_validation_messages();
     }
     const size_t steps_per_chunk = std::max<size_t>(1, kDispatchesPerChunk / program.size());
@@ -310,10 +319,40 @@ Status VulkanBackend::read(BufferId id, uint64_t first, uint64_t count, void* ds
     return device_->take_validation_messages();
 }
 
+void VulkanBackend::begin_recording(VkCommandBuffer command_buffer) {
+    record_target_ = command_buffer;
+    ring_->next_frame();
+}
+
+Status VulkanBackend::end_recording() {
+    ring_->record_copies(record_target_);
+    record_target_ = VK_NULL_HANDLE;
+    return device_->take_validation_messages();
+}
+
+Status VulkanBackend::stage_write(BufferId id, uint64_t first, uint64_t count, const void* src, Scalar as) {
+    const Shape shape = buffer_info(id).shape;
+    const uint64_t scalar_bytes = as == Scalar::f64 ? 8 : 4;
+    auto stage = [&](const WindowPlan::Piece& piece) -> Status {
+        const auto* in =
+            static_cast<const std::byte*>(src) + (piece.logical - first) * shape_scalars(shape) * scalar_bytes;
+        const VkDeviceSize bytes = piece.count * device_element_bytes(id);
+        auto staged = ring_->stage(buffers_[uint32_t(id)].handle(), piece.physical * device_element_bytes(id), bytes);
+        if (!staged) return staged.status();
+        scalars_to_words(shape, in, bytes / 4, *staged, as);
+        return {};
+    };
+    // Only a ping-pong buffer of a split scene has more than one piece (windows.h).
+    if (!plan_->split() || buffer_info(id).scope != Scope::chain_halves) return stage({first, first, count});
+    for (const WindowPlan::Piece& piece : plan_->pieces(id, first, count)) HMSM_TRY(stage(piece));
+    return {};
+}
+
 Status VulkanBackend::write(BufferId id, uint64_t first, uint64_t count, const void* src, Scalar as) {
     HMSM_TRY(check_device_lost());
     HMSM_TRY(check_range(id, first, count));
     if (count == 0) return {};
+    if (record_target_) return stage_write(id, first, count, src, as);
     const Shape shape = buffer_info(id).shape;
     const uint64_t scalar_bytes = as == Scalar::f64 ? 8 : 4;
     for (const WindowPlan::Piece& piece : plan_->pieces(id, first, count)) {

@@ -3,13 +3,17 @@
 // host records the next chunk while the device runs the previous one), with per-dispatch
 // timestamps summed into PassTimes when profiling is on. Scenes whose state buffers exceed
 // maxStorageBufferRange are bound in windows, one descriptor set per segment of instances, and
-// each dispatch is recorded as one part per segment (windows.h).
+// each dispatch is recorded as one part per segment (windows.h). Steps recorded into an engine's
+// command buffer take their live changes from a ring of frame slots (frame_ring.h) and replay
+// the program's commands built once (recorder.h RecordingPlan): no submission, no wait.
 #pragma once
 
 #include "device.h"
 #include "fault_injection.h"
 #include "device_buffer.h"
+#include "frame_ring.h"
 #include "pipelines.h"
+#include "recorder.h"
 #include "windows.h"
 
 #include "../backend.h"
@@ -21,7 +25,10 @@ namespace hmsm::detail::vk {
 
 class VulkanBackend final : public Backend {
 public:
-    static Result<std::unique_ptr<VulkanBackend>> create(std::shared_ptr<Device> device);
+    /// `frames_in_flight` (1 to kMaxFramesInFlight) sizes the ring of live parameters of
+    /// recorded steps (frame_ring.h, hmsm::vulkan::ExternalContext::frames_in_flight).
+    static Result<std::unique_ptr<VulkanBackend>> create(std::shared_ptr<Device> device,
+                                                         uint32_t frames_in_flight = 3);
     ~VulkanBackend() override;
 
     BackendKind kind() const override { return BackendKind::vulkan; }
@@ -45,9 +52,17 @@ public:
     uint64_t element_count(BufferId id) const { return element_counts_[uint32_t(id)]; }
     /// The scene's segments (one unless a buffer exceeds the window); valid after upload().
     const WindowPlan& window_plan() const { return *plan_; }
-    /// While set, run() records into `command_buffer` instead of submitting (and returns
-    /// before the work executes); VK_NULL_HANDLE restores normal submission.
-    void set_record_target(VkCommandBuffer command_buffer) { record_target_ = command_buffer; }
+    /// Until end_recording(), run() records into `command_buffer` instead of submitting (and
+    /// returns before the work executes), and write() stages its data in the next frame's slot
+    /// of the ring and records the copy to the device ahead of the steps: nothing is submitted
+    /// or waited for.
+    void begin_recording(VkCommandBuffer command_buffer);
+    /// Records the copies of writes made after the last run() and restores normal submission.
+    Status end_recording();
+    uint32_t frames_in_flight() const { return ring_->frames(); }
+    /// Queue submissions hmsm made itself on this backend (step, read, write outside a
+    /// recording, ...); a test hook: record_steps makes none.
+    uint64_t submissions() const { return submissions_ + transfer_->submissions(); }
 
     /// For `hmsm bench`'s roofline (copy_bandwidth.cpp): the faster of vkCmdCopyBuffer and a
     /// compute-shader copy between two scratch device-local buffers, each the median of
@@ -86,6 +101,8 @@ private:
     /// Waits for `slot` and adds its timestamps to times_ (program = what it ran).
     Status finish_slot(Slot& slot, std::span<const Dispatch> program);
     Status ensure_timestamp_capacity(Slot& slot, uint32_t queries);
+    /// write() inside a recording: the data goes to the ring, the copy into the command buffer.
+    Status stage_write(BufferId id, uint64_t first, uint64_t count, const void* src, Scalar as);
 
     std::shared_ptr<Device> device_;
     std::unique_ptr<Pipelines> pipelines_;
@@ -105,6 +122,9 @@ private:
     bool device_lost_ = false;
     PassTimes times_;
     VkCommandBuffer record_target_ = VK_NULL_HANDLE;
+    std::unique_ptr<FrameRing> ring_;
+    RecordingPlan recording_;  // the commands of a step of the last program run
+    uint64_t submissions_ = 0;
 };
 
 }  // namespace hmsm::detail::vk

@@ -1,0 +1,65 @@
+#include "frame_ring.h"
+
+#include <algorithm>
+#include <atomic>
+#include <cstddef>
+
+namespace hmsm::detail {
+namespace {
+std::atomic<uint64_t> g_first_slot_bytes{0};
+}  // namespace
+
+void vulkan_set_frame_slot_bytes(uint64_t bytes) { g_first_slot_bytes = bytes; }
+
+namespace vk {
+namespace {
+
+/// A slot's first size: the whole wind table (header and 256 step slots) with room to spare.
+constexpr VkDeviceSize kFirstSlotBytes = VkDeviceSize(64) << 10;
+/// Staged ranges start at multiples of this (a vec4), so each copies whole elements.
+constexpr VkDeviceSize kStageAlignment = 16;
+
+}  // namespace
+
+FrameRing::FrameRing(const Device& device, uint32_t frames)
+    : device_(device), first_slot_bytes_(g_first_slot_bytes ? g_first_slot_bytes.load() : kFirstSlotBytes),
+      slots_(frames) {}
+
+void FrameRing::next_frame() {
+    current_ = (current_ + 1) % uint32_t(slots_.size());
+    Slot& slot = slots_[current_];
+    slot.used = 0;
+    slot.outgrown.clear();
+    copies_.clear();
+}
+
+Result<void*> FrameRing::stage(VkBuffer dst, VkDeviceSize dst_offset, VkDeviceSize bytes) {
+    Slot& slot = slots_[current_];
+    const VkDeviceSize offset = (slot.used + kStageAlignment - 1) / kStageAlignment * kStageAlignment;
+    if (!slot.buffer.handle() || offset + bytes > slot.buffer.size()) {
+        const VkDeviceSize size = std::max({first_slot_bytes_, 2 * slot.buffer.size(), bytes});
+        auto grown = Buffer::create(device_, size, VK_BUFFER_USAGE_TRANSFER_SRC_BIT, MemoryUse::staging,
+                                    "frame parameters");
+        if (!grown) return grown.status();
+        if (slot.buffer.handle()) slot.outgrown.push_back(std::move(slot.buffer));
+        slot.buffer = std::move(grown).value();
+        slot.used = 0;
+        return stage(dst, dst_offset, bytes);
+    }
+    slot.used = offset + bytes;
+    copies_.push_back({slot.buffer.handle(), dst, VkBufferCopy{offset, dst_offset, bytes}});
+    return static_cast<void*>(static_cast<std::byte*>(slot.buffer.mapped()) + offset);
+}
+
+void FrameRing::record_copies(VkCommandBuffer cmd) {
+    if (copies_.empty()) return;
+    // Earlier dispatches may still read the destinations (write-after-read) and earlier copies
+    // have written them (write-after-write). The host wrote the sources before the engine's
+    // submission, which makes host-coherent writes visible to the device.
+    barrier_after_all_writes(device_, cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT);
+    for (const Copy& copy : copies_) device_.vk().vkCmdCopyBuffer(cmd, copy.src, copy.dst, 1, &copy.region);
+    copies_.clear();
+}
+
+}  // namespace vk
+}  // namespace hmsm::detail

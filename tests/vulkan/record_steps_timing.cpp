@@ -1,0 +1,163 @@
+// The host cost of hmsm::vulkan::record_steps as an engine pays it each frame: a device of the
+// "engine" (created apart from the simulation), three command buffers with a fence each, and
+// frames submitted without waiting but for the fence of the frame that last used the command
+// buffer. Prints the median and 99th percentile CPU microseconds of the record_steps call alone,
+// with nothing changed and with a wind change and a moved force field before every frame.
+// Not a test: it asserts nothing and runs without validation (which would dominate the cost).
+//
+//   hmsm_vulkan_record_timing [--preset paper-1] [--trees 1] [--frames 600] [--steps 2]
+//                             [--joints] [--idle]
+//
+// --joints simulates only the joint matrices (SimulationConfig::outputs = joints, so large
+// forests fit a CPU driver); --idle waits for the queue to drain before each record_steps, so
+// the time is hmsm's own work without device work running beside it.
+#include "vulkan/device.h"
+
+#include <hmsm/hmsm.h>
+#include <hmsm/vulkan.h>
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <string>
+#include <vector>
+
+namespace {
+
+struct Options {
+    std::string preset = "paper-1";
+    uint32_t trees = 1, frames = 600, steps = 2;
+    bool joints = false, idle = false;
+};
+
+bool parse(int argc, char** argv, Options& o) {
+    for (int i = 1; i < argc; ++i) {
+        const std::string arg = argv[i];
+        const bool has_value = i + 1 < argc;
+        if (arg == "--preset" && has_value) o.preset = argv[++i];
+        else if (arg == "--trees" && has_value) o.trees = uint32_t(std::strtoul(argv[++i], nullptr, 10));
+        else if (arg == "--frames" && has_value) o.frames = uint32_t(std::strtoul(argv[++i], nullptr, 10));
+        else if (arg == "--steps" && has_value) o.steps = uint32_t(std::strtoul(argv[++i], nullptr, 10));
+        else if (arg == "--joints") o.joints = true;
+        else if (arg == "--idle") o.idle = true;
+        else {
+            std::fprintf(stderr, "unknown or incomplete argument %s\n", arg.c_str());
+            return false;
+        }
+    }
+    return o.trees > 0 && o.frames > 0 && o.steps > 0;
+}
+
+int fail(const std::string& what) {
+    std::fprintf(stderr, "error: %s\n", what.c_str());
+    return 1;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    using namespace hmsm;
+    Options o;
+    if (!parse(argc, argv, o)) return fail("usage: see the comment at the top of record_steps_timing.cpp");
+    auto engine = detail::vk::Device::create();
+    if (!engine) return fail(engine.status().message());
+    const detail::vk::Device& device = **engine;
+    const VolkDeviceTable& vk = device.vk();
+    vulkan::ExternalContext context;
+    context.instance = device.instance();
+    context.physical_device = device.physical_device();
+    context.device = device.handle();
+    context.queue = device.queue();
+    context.queue_family_index = device.queue_family();
+
+    auto tree = generate_preset(o.preset);
+    if (!tree) return fail(tree.status().message());
+    auto scene = grid_scene(*tree, o.trees, 6.0, 1);
+    if (!scene) return fail(scene.status().message());
+    SimulationConfig config;
+    config.wind.strength = 8.0;
+    if (o.joints) config.outputs = Outputs::joints;
+    auto created = vulkan::create_simulation(*scene, config, context);
+    if (!created) return fail(created.status().message());
+    Simulation& sim = **created;
+
+    constexpr uint32_t kFrames = 3;
+    VkCommandPoolCreateInfo pool_info{VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO};
+    pool_info.flags = VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT;
+    pool_info.queueFamilyIndex = device.queue_family();
+    VkCommandPool pool = VK_NULL_HANDLE;
+    if (vk.vkCreateCommandPool(device.handle(), &pool_info, nullptr, &pool) != VK_SUCCESS)
+        return fail("vkCreateCommandPool");
+    std::array<VkCommandBuffer, kFrames> commands{};
+    VkCommandBufferAllocateInfo allocate{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
+    allocate.commandPool = pool;
+    allocate.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
+    allocate.commandBufferCount = kFrames;
+    if (vk.vkAllocateCommandBuffers(device.handle(), &allocate, commands.data()) != VK_SUCCESS)
+        return fail("vkAllocateCommandBuffers");
+    std::array<VkFence, kFrames> fences{};
+    VkFenceCreateInfo fence_info{VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
+    fence_info.flags = VK_FENCE_CREATE_SIGNALED_BIT;
+    for (VkFence& f : fences)
+        if (vk.vkCreateFence(device.handle(), &fence_info, nullptr, &f) != VK_SUCCESS) return fail("vkCreateFence");
+
+    std::printf("device %s, %s x %u%s, record_steps(sim, cmd, %u), %u frames, %u in flight%s\n",
+                device.name().c_str(), o.preset.c_str(), o.trees, o.joints ? " (joints only)" : "", o.steps,
+                o.frames, kFrames, o.idle ? ", queue idle before each call" : "");
+    uint64_t frame = 0;
+    for (const bool live : {false, true}) {
+        std::vector<double> micros, change_micros;
+        for (uint32_t i = 0; i < o.frames; ++i, ++frame) {
+            const uint32_t k = uint32_t(frame % kFrames);
+            vk.vkWaitForFences(device.handle(), 1, &fences[k], VK_TRUE, UINT64_MAX);
+            vk.vkResetFences(device.handle(), 1, &fences[k]);
+            if (o.idle) vk.vkQueueWaitIdle(device.queue());
+            vk.vkResetCommandBuffer(commands[k], 0);
+            VkCommandBufferBeginInfo begin{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
+            begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
+            vk.vkBeginCommandBuffer(commands[k], &begin);
+            if (live) {
+                const auto start = std::chrono::steady_clock::now();
+                Wind wind = sim.wind();
+                wind.strength = 8.0 + 2.0 * double(i % 7) / 7.0;  // a gust
+                if (Status s = sim.set_wind(wind); !s) return fail(s.message());
+                ForceField field;
+                field.kind = ForceField::Kind::radial;
+                field.center = {0.1 * double(i % 50), 2.0, 0.0};  // a moving helicopter
+                field.radius = 5.0;
+                field.radial = 10.0;
+                if (Status s = sim.set_force_fields({&field, 1}); !s) return fail(s.message());
+                change_micros.push_back(
+                    std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - start).count());
+            }
+            const auto start = std::chrono::steady_clock::now();
+            const Status recorded = vulkan::record_steps(sim, commands[k], o.steps);
+            micros.push_back(std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - start).count());
+            if (!recorded) return fail(recorded.message());
+            vk.vkEndCommandBuffer(commands[k]);
+            VkSubmitInfo submit{VK_STRUCTURE_TYPE_SUBMIT_INFO};
+            submit.commandBufferCount = 1;
+            submit.pCommandBuffers = &commands[k];
+            if (vk.vkQueueSubmit(device.queue(), 1, &submit, fences[k]) != VK_SUCCESS) return fail("vkQueueSubmit");
+        }
+        auto quantile = [](std::vector<double> v, double q) {
+            if (v.empty()) return 0.0;
+            std::sort(v.begin(), v.end());
+            return v[std::min(v.size() - 1, size_t(q * double(v.size())))];
+        };
+        std::printf("%-34s record_steps median %8.1f us  p99 %8.1f us", live ? "wind change + moved force field:" : "nothing changed:",
+                    quantile(micros, 0.5), quantile(micros, 0.99));
+        if (live) std::printf("   (set_wind + set_force_fields median %.1f us)", quantile(change_micros, 0.5));
+        std::printf("\n");
+    }
+    vk.vkQueueWaitIdle(device.queue());
+    std::vector<float> joints;
+    if (Status s = sim.read(Output::joint_matrices, joints); !s) return fail(s.message());
+    for (VkFence f : fences) vk.vkDestroyFence(device.handle(), f, nullptr);
+    vk.vkDestroyCommandPool(device.handle(), pool, nullptr);
+    created->reset();  // before the engine's device
+    return 0;
+}
