@@ -1,10 +1,12 @@
 // Levels of detail (docs/model.md 3.12, include/hmsm/levels.h): budgets give the joint counts
 // asked for, a level is a consistent model whose kept chains move exactly as the full model's
 // (checked with an independent double-precision stepper of passes 1-3 against cpu64), the
-// trunk's first frequency is kept, and bad budgets are refused.
+// trunk's first frequency is kept, the skin of a level is the full mesh at rest and follows the
+// full model's kept chains, and bad budgets are refused.
 #include "test_trees.h"
 
 #include <hmsm/levels.h>
+#include <hmsm/skin.h>
 
 #include <gtest/gtest.h>
 
@@ -245,6 +247,62 @@ TEST(Levels, BudgetsBelowTheTrunkOnlyLevelAreRefused) {
     auto mismatched = build_level(m.tree, *other, {}, 16);
     ASSERT_FALSE(mismatched.ok());
     EXPECT_EQ(mismatched.status().code(), ErrorCode::invalid_argument);
+}
+
+/// A level's skin: weights sum to 1 over existing level joints; at rest it is the full rest
+/// mesh; after wind it moves every vertex whose chains the level keeps as pass 7 of the full
+/// model does, from the full model's joint matrices of its source chains.
+TEST(Levels, LevelSkinIsTheFullMeshAtRestAndFollowsKeptChains) {
+    TreeModel tree = *generate_preset("paper-5");
+    SimulationConfig config;
+    config.backend = BackendKind::cpu;
+    config.wind.profile = WindProfile::constant;
+    config.wind.strength = 9.0;
+    auto sim = Simulation::create(single_tree_scene(tree), config);
+    ASSERT_TRUE(sim.ok()) << sim.status().message();
+    const Hierarchy& full = (*sim)->hierarchy(0);
+    const MeshTemplate& mesh = (*sim)->mesh(0);
+    const SkinTemplate full_skin = build_skin(tree, full, mesh, config.model);
+    auto levels = build_levels(tree, full, config.parameters, {256, 16, 1});
+    ASSERT_TRUE(levels.ok());
+    const double height = tree_height(tree);
+    for (int round = 0; round < 2; ++round) {
+        if (round == 1) ASSERT_TRUE((*sim)->step(120).ok());
+        std::vector<float> palette, vertices;
+        ASSERT_TRUE((*sim)->read(Output::joint_matrices, palette).ok());
+        ASSERT_TRUE((*sim)->read(Output::vertex_positions, vertices).ok());
+        for (const DetailLevel& level : *levels) {
+            SCOPED_TRACE(std::to_string(level.joint_count()) + " joints, round " + std::to_string(round));
+            const SkinTemplate skin = build_skin(tree, full, mesh, config.model, level);
+            ASSERT_EQ(skin.vertices.size(), mesh.vertices.size());
+            ASSERT_EQ(skin.inverse_bind.size(), size_t(level.joint_count()));
+            ASSERT_EQ(skin.source_chains, level.source_chain);
+            for (const SkinVertex& v : skin.vertices) {
+                EXPECT_NEAR(v.weights[0] + v.weights[1], 1.0, 1e-12);
+                EXPECT_GE(v.joints[0], 0);
+                EXPECT_LT(v.joints[0], level.joint_count());
+                EXPECT_LT(v.joints[1], level.joint_count());
+                if (v.joints[1] < 0) EXPECT_EQ(v.weights[1], 0.0);
+                else EXPECT_NE(v.joints[1], v.joints[0]);
+            }
+            std::vector<float> level_palette;
+            for (int32_t source : skin.source_chains)
+                level_palette.insert(level_palette.end(), palette.begin() + 12 * source, palette.begin() + 12 * source + 12);
+            std::vector<float> skinned(3 * mesh.vertices.size());
+            ASSERT_TRUE(skin_vertices(skin, level_palette, skinned).ok());
+            size_t compared = 0;
+            for (size_t i = 0; i < mesh.vertices.size(); ++i) {
+                bool kept = true;  // every joint of the full skin is a chain the level keeps
+                for (int32_t joint : full_skin.vertices[i].joints)
+                    if (joint >= 0) kept = kept && level.source_chain[size_t(level.chain_of[size_t(joint)])] == joint;
+                if (round == 1 && !kept) continue;
+                ++compared;
+                for (int k = 0; k < 3; ++k)
+                    ASSERT_NEAR(skinned[3 * i + size_t(k)], vertices[3 * i + size_t(k)], 1e-5 * height) << "vertex " << i;
+            }
+            EXPECT_GT(compared, 0u);
+        }
+    }
 }
 
 }  // namespace
