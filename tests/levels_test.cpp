@@ -16,7 +16,8 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
-#include <set>
+#include <string>
+#include <utility>
 
 using namespace hmsm;
 
@@ -100,6 +101,27 @@ TEST(Levels, DefaultBudgetsGiveTheirJointCountsNested) {
         EXPECT_GT(levels->back().geometric_error_m, 0.0);
         EXPECT_EQ(levels->back().hierarchy.max_depth, 0);
         for (int32_t owner : levels->back().hierarchy.node_owner) EXPECT_EQ(owner, 0);
+    }
+}
+
+/// Every budget from the chain count down to 1 on small trees, with chains cut by
+/// max_chain_segments too: the joint count asked for and a consistent model each time.
+TEST(Levels, EveryBudgetOfSmallTreesGivesAConsistentModel) {
+    ModelOptions cut;
+    cut.max_chain_segments = 2;
+    for (const auto& [tree, options] : {std::pair{test::small_tree(), ModelOptions{}}, std::pair{test::small_tree(), cut},
+                                        std::pair{test::deep_tree(6), cut}}) {
+        auto full = build_hierarchy(tree, options, {});
+        ASSERT_TRUE(full.ok()) << full.status().message();
+        const int32_t chains = int32_t(full->chains.size());
+        ASSERT_GT(chains, 3);
+        for (int32_t budget = chains; budget >= 1; --budget) {
+            SCOPED_TRACE("budget " + std::to_string(budget) + " of " + std::to_string(chains));
+            auto level = build_level(tree, *full, {}, budget);
+            ASSERT_TRUE(level.ok()) << level.status().message();
+            EXPECT_EQ(level->joint_count(), budget);
+            expect_consistent(tree, *full, *level);
+        }
     }
 }
 

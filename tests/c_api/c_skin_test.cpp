@@ -125,6 +125,10 @@ TEST(CSkin, ReadsGiveBuildSkinsData) {
         ASSERT_EQ(parents[c], sim->hierarchy(0).chains[c].parent) << "chain " << c;
     }
     EXPECT_EQ(parents[0], -1);
+    // A model's own skin: every joint is driven by its own chain.
+    const auto sources = read_skin<int32_t>(hmsm_skin_read_i32, paper.skin, HMSM_SKIN_SOURCE_CHAINS);
+    ASSERT_EQ(sources.size(), chains);
+    for (size_t c = 0; c < chains; ++c) ASSERT_EQ(sources[c], int32_t(c)) << "chain " << c;
 }
 
 TEST(CSkin, BadArgumentsFailAndWriteNothing) {
