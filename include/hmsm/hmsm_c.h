@@ -226,6 +226,10 @@ HMSM_API hmsm_status hmsm_scene_load_forest(const char* path, hmsm_scene** scene
 HMSM_API hmsm_status hmsm_scene_add_model(hmsm_scene* scene, const hmsm_tree* tree,
                                           const char* name, uint32_t* model);
 HMSM_API hmsm_status hmsm_scene_add_instance(hmsm_scene* scene, const hmsm_instance* instance);
+/* Runs model `model` at a level of detail (hmsm::Scene::joint_budgets, docs/model.md 3.12):
+ * max_joints 0 runs the model whole (the default), N >= 1 its finest level with at most N
+ * chains in its place; a negative max_joints fails with HMSM_INVALID_ARGUMENT. */
+HMSM_API hmsm_status hmsm_scene_set_joint_budget(hmsm_scene* scene, uint32_t model, int32_t max_joints);
 HMSM_API hmsm_status hmsm_scene_model_count(const hmsm_scene* scene, uint32_t* count);
 HMSM_API hmsm_status hmsm_scene_instance_count(const hmsm_scene* scene, uint64_t* count);
 HMSM_API void hmsm_scene_destroy(hmsm_scene* scene);

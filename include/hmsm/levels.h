@@ -7,6 +7,7 @@
 #include <hmsm/export.h>
 
 #include <hmsm/hierarchy.h>
+#include <hmsm/mesh.h>
 #include <hmsm/options.h>
 #include <hmsm/status.h>
 #include <hmsm/tree.h>
@@ -58,5 +59,12 @@ HMSM_API Result<std::vector<DetailLevel>> build_levels(const TreeModel& tree, co
                                                        const std::vector<int32_t>& budgets = {
                                                            std::begin(kDefaultJointBudgets),
                                                            std::end(kDefaultJointBudgets)});
+
+/// The model's mesh (build_mesh(tree, full, options)) bound to the level, vertex for vertex:
+/// each vertex rigid with the level chain that carries its chain, or, on a base ring whose two
+/// chains fall into different level chains, blended between those as in pass 7 (docs/model.md
+/// 3.8), its rest position and normal expressed in their frames. At rest it is the model's mesh.
+HMSM_API MeshTemplate build_level_mesh(const TreeModel& tree, const Hierarchy& full, const MeshTemplate& mesh,
+                                       const DetailLevel& level);
 
 }  // namespace hmsm

@@ -201,6 +201,46 @@ std::vector<std::vector<glm::dvec3>> full_static_poses(const Hierarchy& full, co
 
 }  // namespace
 
+MeshTemplate build_level_mesh(const TreeModel& tree, const Hierarchy& full, const MeshTemplate& mesh,
+                              const DetailLevel& level) {
+    const Hierarchy& h = level.hierarchy;
+    auto frame = [](const Hierarchy& in, int32_t c) { return glm::dmat3(in.chains[size_t(c)].frame); };
+    auto attach = [&](const Hierarchy& in, int32_t c) {
+        return glm::dvec3(tree.nodes[size_t(in.chains[size_t(c)].attach_node)].position);
+    };
+    // A rest point (direction) given in full chain c's frame, in level chain C's frame.
+    auto point_in = [&](int32_t C, int32_t c, const glm::dvec3& local) {
+        const glm::dvec3 rest = attach(full, c) + frame(full, c) * local;
+        return glm::transpose(frame(h, C)) * (rest - attach(h, C));
+    };
+    auto direction_in = [&](int32_t C, int32_t c, const glm::dvec3& local) {
+        return glm::transpose(frame(h, C)) * (frame(full, c) * local);
+    };
+    MeshTemplate out = mesh;
+    for (MeshVertex& v : out.vertices) {
+        const int32_t c = v.chain, f = v.fix_chain;
+        const int32_t C = level.chain_of[size_t(c)];
+        const int32_t F = f >= 0 ? level.chain_of[size_t(f)] : -1;
+        if (level.source_chain[size_t(C)] != c) {
+            v.position = point_in(C, c, glm::dvec3(v.position));
+            v.normal = direction_in(C, c, glm::dvec3(v.normal));
+        }
+        v.chain = C;
+        if (F < 0 || F == C) {  // rigid with one level chain
+            v.fix_chain = -1;
+            v.parent_position = Vec3(0.0);
+            v.parent_normal = Vec3(0.0);
+        } else {
+            if (level.source_chain[size_t(F)] != f) {
+                v.parent_position = point_in(F, f, glm::dvec3(v.parent_position));
+                v.parent_normal = direction_in(F, f, glm::dvec3(v.parent_normal));
+            }
+            v.fix_chain = F;
+        }
+    }
+    return out;
+}
+
 Result<DetailLevel> build_level(const TreeModel& tree, const Hierarchy& full, const Parameters& parameters,
                                 int32_t max_joints) {
     HMSM_TRY(check_budget(max_joints, "joint budget"));
