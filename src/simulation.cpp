@@ -8,6 +8,8 @@
 #include "simulation_impl.h"
 #include "step_program.h"
 
+#include <hmsm/levels.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -132,7 +134,16 @@ Result<std::unique_ptr<Simulation>> Simulation::Impl::create(const Scene& scene,
             return Status{hierarchy.status().code(),
                           "model '" + scene.model_names[m] + "': " + hierarchy.status().message()};
         }
-        sim->meshes_.push_back(build_mesh(scene.models[m], *hierarchy, config.model));
+        MeshTemplate mesh = build_mesh(scene.models[m], *hierarchy, config.model);
+        const int32_t budget = m < scene.joint_budgets.size() ? scene.joint_budgets[m] : 0;
+        if (budget > 0) {  // the model's level of detail in its place (docs/model.md 3.12)
+            auto level = build_level(scene.models[m], *hierarchy, config.parameters, budget);
+            if (!level)
+                return Status{level.status().code(), "model '" + scene.model_names[m] + "': " + level.status().message()};
+            mesh = build_level_mesh(scene.models[m], *hierarchy, mesh, *level);
+            *hierarchy = std::move(level->hierarchy);
+        }
+        sim->meshes_.push_back(std::move(mesh));
         double largest = 0.0;
         for (const Chain& chain : hierarchy->chains) largest = std::max(largest, chain.wind_area);
         sim->largest_wind_area_.push_back(largest);

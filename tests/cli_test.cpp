@@ -227,3 +227,32 @@ TEST_F(Cli, LongRunningCommandsAcceptNoProgress) {
     EXPECT_NE(r.out.find("\"models\""), std::string::npos);
     EXPECT_EQ(r.err.find('\r'), std::string::npos) << r.err;
 }
+
+/// The levels of detail in hmsm info (docs/model.md 3.12): one per budget, finest first, with
+/// their joint counts, an f0 ratio of 1 and a geometric error that grows as joints go; a budget
+/// below the trunk-only level is bad input.
+TEST_F(Cli, InfoListsTheLevelsOfDetail) {
+    CliRun r = run("info --preset paper-5 --json --levels 16,256,1,64");
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    auto info = nlohmann::json::parse(last_.out);
+    ASSERT_EQ(info["levels"].size(), 4u);
+    const int expected[] = {256, 64, 16, 1};
+    for (size_t i = 0; i < 4; ++i) {
+        const auto& level = info["levels"][i];
+        EXPECT_EQ(level["budget"], expected[i]);
+        EXPECT_EQ(level["joints"], expected[i]);
+        EXPECT_NEAR(level["frequency_ratio"].get<double>(), 1.0, 0.05);
+        EXPECT_NEAR(level["trunk_frequency_hz"].get<double>(), info["trunk_frequency_hz"].get<double>(), 1e-12);
+        if (i > 0)
+            EXPECT_GE(level["geometric_error_m"].get<double>(), info["levels"][i - 1]["geometric_error_m"].get<double>());
+    }
+    EXPECT_GT(info["levels"][3]["geometric_error_m"].get<double>(), 0.0);
+    CliRun text = run("info --tree " + path("small.json"));
+    ASSERT_EQ(text.exit_code, 0) << text.err;
+    EXPECT_NE(text.out.find("f0 ratio"), std::string::npos) << text.out;
+    // With --chains: a refused budget leaves no chain table behind.
+    CliFixture::expect_bad_input("info --tree " + path("small.json") + " --levels 16,0 --chains " + path("c.csv"),
+                                 "trunk-only");
+    CliFixture::expect_bad_input("info --tree " + path("small.json") + " --levels 16,x --chains " + path("c.csv"),
+                                 "--levels");
+}

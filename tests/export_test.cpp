@@ -337,6 +337,68 @@ TEST_F(Export, BadArgumentsExitTwoWithoutFile) {
     EXPECT_FALSE(fs::exists(out));
 }
 
+/// --max-joints N (docs/export.md "Joint budgets"): the skin names at most N joints, every
+/// JOINTS_0 entry is one of them, the clip's frame 0 is hmsm's rest mesh, and at every frame the
+/// vertices of the chains the level keeps are hmsm's own (the folded ones follow their carriers).
+TEST_F(Export, MaxJointsBindsTheMeshToALevelWithinTheBudget) {
+    TreeModel tree = *generate_preset("paper-5");
+    SimulationConfig config;
+    config.backend = BackendKind::cpu64;
+    config.wind.profile = WindProfile::constant;
+    config.wind.strength = 9.0;
+    auto sim = Simulation::create(single_tree_scene(tree), config);
+    ASSERT_TRUE(sim) << sim.status().message();
+    auto level = build_level(tree, (*sim)->hierarchy(0), config.parameters, 64);
+    ASSERT_TRUE(level) << level.status().message();
+    const SkinTemplate full_skin = build_skin(tree, (*sim)->hierarchy(0), (*sim)->mesh(0), config.model);
+    auto r = run("export --preset paper-5 --gltf " + path("p5.glb") +
+                 " --seconds 1 --fps 4 --wind constant --wind-strength 9 --max-joints 64");
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_NE(r.err.find("of 64 joints"), std::string::npos) << r.err;
+    const tinygltf::Model m = load_glb(path("p5.glb"));
+    ASSERT_EQ(m.skins.at(0).joints.size(), 64u);
+    EXPECT_EQ(m.animations.at(0).channels.size(), 64u);
+    for (const auto& p : m.meshes.at(0).primitives)
+        for (uint16_t joint : read_accessor<uint16_t>(m, p.attributes.at("JOINTS_0"), 4,
+                                                      TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT))
+            ASSERT_LT(joint, 64);
+    const double tolerance = 1e-5 * tree_height(tree);
+    uint64_t done = 0;
+    size_t compared_moving = 0;
+    for (size_t k = 0; k < 5; ++k) {
+        const uint64_t steps = uint64_t(std::floor(double(k) / (4.0 * config.parameters.dt) + 0.5 + 1e-9));
+        ASSERT_TRUE((*sim)->step(uint32_t(steps - done)).ok());
+        done = steps;
+        std::vector<double> expected;
+        ASSERT_TRUE((*sim)->read(Output::vertex_positions, expected).ok());
+        const auto got = skinned_vertices(m, k, nullptr);
+        ASSERT_EQ(3 * got.size(), expected.size());
+        for (size_t i = 0; i < got.size(); ++i) {
+            bool kept = true;  // every joint of the vertex is a chain the level keeps
+            for (int32_t joint : full_skin.vertices[i].joints)
+                if (joint >= 0) kept = kept && level->source_chain[size_t(level->chain_of[size_t(joint)])] == joint;
+            if (k > 0 && !kept) continue;
+            compared_moving += k > 0;
+            for (int a = 0; a < 3; ++a)
+                ASSERT_NEAR(got[i][a], expected[3 * i + size_t(a)], tolerance) << "frame " << k << ", vertex " << i;
+        }
+    }
+    EXPECT_GT(compared_moving, 0u);
+}
+
+TEST_F(Export, MaxJointsBelowTheTrunkOnlyLevelIsRefused) {
+    for (const char* budget : {"0", "-4"})
+        expect_bad_input("export --gltf " + path("bad.glb") + " --tree " + path("small.json") +
+                             " --seconds 1 --fps 10 --max-joints " + budget,
+                         "trunk-only");
+    auto whole = run("export --gltf " + path("whole.glb") + " --tree " + path("small.json") +
+                     " --seconds 0.5 --fps 10 --max-joints 100000");
+    ASSERT_EQ(whole.exit_code, 0) << whole.err;
+    auto h = build_hierarchy(test::small_tree(), {});
+    ASSERT_TRUE(h);
+    EXPECT_EQ(load_glb(path("whole.glb")).skins.at(0).joints.size(), h->chains.size());
+}
+
 // The Khronos glTF validator (tools/gltf/validate.mjs, npm package gltf-validator installed by
 // tools/install_deps.sh): zero errors on paper-1 and on a small odd tree.
 TEST_F(Export, KhronosValidatorFindsNoError) {
@@ -351,7 +413,8 @@ TEST_F(Export, KhronosValidatorFindsNoError) {
                                                       " --seconds 1.3 --fps 7 --ring-sides 3 --fix-weight 0.2 "
                                                       "--origin 4,0,1 --yaw -2 --wind constant --wind-strength 25"},
                              Export_{"still.glb", "--tree " + path("small.json") + " --seconds 0 --fps 30"},
-                             Export_{"rod.glb", "--tree " + path("rod.json") + " --seconds 0.5 --fps 24"}}) {
+                             Export_{"rod.glb", "--tree " + path("rod.json") + " --seconds 0.5 --fps 24"},
+                             Export_{"p1-16.glb", "--preset paper-1 --seconds 0.5 --fps 12 --max-joints 16"}}) {
         SCOPED_TRACE(e.args);
         auto r = run("export --gltf " + path(e.file) + " " + e.args);
         ASSERT_EQ(r.exit_code, 0) << r.err;

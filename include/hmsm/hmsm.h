@@ -6,6 +6,7 @@
 #include <hmsm/generator.h>
 #include <hmsm/hierarchy.h>
 #include <hmsm/import.h>
+#include <hmsm/levels.h>
 #include <hmsm/mesh.h>
 #include <hmsm/options.h>
 #include <hmsm/pass.h>

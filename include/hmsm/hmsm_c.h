@@ -19,7 +19,7 @@
  *   functions taking a const handle may run concurrently with each other; distinct handles
  *   concurrently. The last-status message is per thread.
  * - Sized structs: every struct that crosses this boundary (hmsm_config, hmsm_wind,
- *   hmsm_instance, hmsm_force_field, hmsm_counts) begins with `uint32_t struct_size`, the size
+ *   hmsm_instance, hmsm_force_field, hmsm_counts, hmsm_level_options) begins with `uint32_t struct_size`, the size
  *   of the caller's definition of it. Fill a struct with its hmsm_*_init function and the
  *   caller's size, HMSM_INIT(hmsm_config_init, &config), which sets struct_size and hmsm's
  *   defaults; then change what you need. Every call that reads or fills a struct checks
@@ -226,6 +226,10 @@ HMSM_API hmsm_status hmsm_scene_load_forest(const char* path, hmsm_scene** scene
 HMSM_API hmsm_status hmsm_scene_add_model(hmsm_scene* scene, const hmsm_tree* tree,
                                           const char* name, uint32_t* model);
 HMSM_API hmsm_status hmsm_scene_add_instance(hmsm_scene* scene, const hmsm_instance* instance);
+/* Runs model `model` at a level of detail (hmsm::Scene::joint_budgets, docs/model.md 3.12):
+ * max_joints 0 runs the model whole (the default), N >= 1 its finest level with at most N
+ * chains in its place; a negative max_joints fails with HMSM_INVALID_ARGUMENT. */
+HMSM_API hmsm_status hmsm_scene_set_joint_budget(hmsm_scene* scene, uint32_t model, int32_t max_joints);
 HMSM_API hmsm_status hmsm_scene_model_count(const hmsm_scene* scene, uint32_t* count);
 HMSM_API hmsm_status hmsm_scene_instance_count(const hmsm_scene* scene, uint64_t* count);
 HMSM_API void hmsm_scene_destroy(hmsm_scene* scene);
@@ -307,12 +311,27 @@ enum {
     HMSM_SKIN_INVERSE_BIND = 4,   /* per chain [12]: [B^T | -B^T p] row by row */
     HMSM_SKIN_BIND_MATRICES = 5,  /* per chain [12]: the rest joint matrix [B | p] row by row */
     HMSM_SKIN_CHAIN_PARENTS = 6,  /* per chain [1], integers: the parent chain, -1 for the trunk */
-    HMSM_SKIN_DATA_COUNT = 7
+    HMSM_SKIN_SOURCE_CHAINS = 7,  /* per joint [1], integers: the model's chain that drives it */
+    HMSM_SKIN_DATA_COUNT = 8
 };
 /* The skin of model `model` of the simulation (hmsm::build_skin); one skin serves every
  * instance of the model, including instances added later. */
 HMSM_API hmsm_status hmsm_skin_create(const hmsm_simulation* simulation, uint32_t model,
                                       hmsm_skin** skin);
+/* A level of detail (hmsm::build_level, docs/model.md 3.12): the finest level of the model with
+ * at most max_joints joints (default 256); a max_joints at or above the model's chain count
+ * gives the model itself, one below 1 fails with HMSM_INVALID_ARGUMENT. */
+typedef struct hmsm_level_options {
+    uint32_t struct_size;
+    int32_t max_joints;
+} hmsm_level_options;
+HMSM_API hmsm_status hmsm_level_options_init(hmsm_level_options* options, size_t struct_size);
+/* The skin of model `model` at the level of `options` (hmsm::build_skin with a DetailLevel):
+ * the same vertices and triangles, with the level's chains as joints. Joint j moves as the
+ * model's chain HMSM_SKIN_SOURCE_CHAINS[j]: its palette entry is that chain's joint matrix (for
+ * hmsm_skin_vertices, gather them into a palette of `chains` entries). */
+HMSM_API hmsm_status hmsm_skin_create_level(const hmsm_simulation* simulation, uint32_t model,
+                                            const hmsm_level_options* options, hmsm_skin** skin);
 HMSM_API void hmsm_skin_destroy(hmsm_skin* skin);
 HMSM_API hmsm_status hmsm_skin_sizes(const hmsm_skin* skin, uint64_t* vertices, uint64_t* chains);
 /* Reads `data` (HMSM_SKIN_*) into values[capacity]; *count = elements x components. The

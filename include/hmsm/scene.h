@@ -25,6 +25,10 @@ struct Scene {
     std::vector<TreeModel> models;
     std::vector<std::string> model_names;  ///< same length as models
     std::vector<Instance> instances;
+    /// Per model (models past its end: 0): 0 runs the model whole; N >= 1 runs, in its place,
+    /// its finest level of detail with at most N chains (docs/model.md 3.12), whose kept chains
+    /// move as the model's and whose folded branches move rigidly with them.
+    std::vector<int32_t> joint_budgets;
 };
 
 /// One instance of `tree` (at the origin with yaw 0 by default).

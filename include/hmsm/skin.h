@@ -5,6 +5,7 @@
 
 #include <hmsm/export.h>
 #include <hmsm/hierarchy.h>
+#include <hmsm/levels.h>
 #include <hmsm/mesh.h>
 #include <hmsm/options.h>
 #include <hmsm/status.h>
@@ -41,11 +42,23 @@ struct SkinTemplate {
     std::vector<std::array<double, 12>> bind;
     /// Per chain, its parent chain (-1 for the trunk): the joint hierarchy.
     std::vector<int32_t> parents;
+    /// Per joint, the model's chain whose joint matrix drives it: the chain itself in a model's
+    /// skin, DetailLevel::source_chain in a level's (which moves exactly as that chain).
+    std::vector<int32_t> source_chains;
 };
 
 /// Builds the skin of `mesh` (build_mesh(tree, hierarchy, options)).
 HMSM_API SkinTemplate build_skin(const TreeModel& tree, const Hierarchy& hierarchy, const MeshTemplate& mesh,
                         const ModelOptions& options);
+
+/// The skin of the same mesh at a level of detail (build_level(tree, hierarchy, ...)): every
+/// vertex keeps its bind position and normal, its joints become the level chains that carry
+/// them (DetailLevel::chain_of; a vertex whose two joints fall into one level chain keeps that
+/// one with weight 1), and the joints are the level's chains, with the inverse bind matrices
+/// of the chains they keep. Drawn with the joint matrices of source_chains, it is the full
+/// mesh at rest and moves every vertex of a kept chain as the full model does.
+HMSM_API SkinTemplate build_skin(const TreeModel& tree, const Hierarchy& hierarchy, const MeshTemplate& mesh,
+                                 const ModelOptions& options, const DetailLevel& level);
 
 /// Linear-blend skinning on the CPU of one instance of `skin`'s model (docs/skinning.md), for
 /// engines that cannot skin on the GPU: per vertex

@@ -201,6 +201,12 @@ void set_defaults(hmsm_counts& out) {
     out.struct_size = sizeof out;
 }
 
+void set_defaults(hmsm_level_options& out) {
+    std::memset(&out, 0, sizeof out);
+    out.struct_size = sizeof out;
+    out.max_joints = kDefaultJointBudgets[0];
+}
+
 }  // namespace hmsm::c_api
 
 using namespace hmsm;
@@ -268,6 +274,10 @@ hmsm_status hmsm_force_field_init(hmsm_force_field* field, size_t struct_size) {
 
 hmsm_status hmsm_counts_init(hmsm_counts* counts, size_t struct_size) {
     return init_struct("hmsm_counts_init", counts, struct_size);
+}
+
+hmsm_status hmsm_level_options_init(hmsm_level_options* options, size_t struct_size) {
+    return init_struct("hmsm_level_options_init", options, struct_size);
 }
 
 hmsm_status hmsm_output_components(int32_t output, uint32_t* components) {

@@ -42,6 +42,23 @@ hmsm_status hmsm_scene_add_model(hmsm_scene* scene, const hmsm_tree* tree, const
     });
 }
 
+hmsm_status hmsm_scene_set_joint_budget(hmsm_scene* scene, uint32_t model, int32_t max_joints) {
+    return guarded([&]() -> Status {
+        const std::string fn = "hmsm_scene_set_joint_budget";
+        if (!scene) return bad(fn + ": scene is NULL");
+        const size_t models = scene->scene.models.size();
+        if (model >= models)
+            return bad(fn + ": model " + std::to_string(model) + " does not exist (" + std::to_string(models) +
+                       " models)");
+        if (max_joints < 0)
+            return bad(fn + ": max_joints " + std::to_string(max_joints) +
+                       ": must be 0 (the model whole) or at least 1 (the trunk-only level)");
+        scene->scene.joint_budgets.resize(models, 0);
+        scene->scene.joint_budgets[model] = max_joints;
+        return {};
+    });
+}
+
 hmsm_status hmsm_scene_add_instance(hmsm_scene* scene, const hmsm_instance* instance) {
     return guarded([&]() -> Status {
         if (!scene) return bad("hmsm_scene_add_instance: scene is NULL");

@@ -1,6 +1,7 @@
 // The C ABI's skins: a model's skin data read into caller buffers, and CPU skinning of one
 // instance from its joint matrices (hmsm::build_skin, hmsm::skin_vertices).
 #include "c_api_internal.h"
+#include "c_struct.h"
 
 #include <span>
 #include <type_traits>
@@ -11,7 +12,9 @@ using namespace hmsm::c_api;
 
 namespace {
 
-bool is_integer_data(int32_t data) { return data == HMSM_SKIN_JOINTS || data == HMSM_SKIN_CHAIN_PARENTS; }
+bool is_integer_data(int32_t data) {
+    return data == HMSM_SKIN_JOINTS || data == HMSM_SKIN_CHAIN_PARENTS || data == HMSM_SKIN_SOURCE_CHAINS;
+}
 
 /// Skin data `data` flattened (elements x components) as T.
 template <class T>
@@ -39,8 +42,11 @@ void flatten(const SkinTemplate& skin, int32_t data, std::vector<T>& out) {
             for (const auto& m : skin.bind)
                 for (double x : m) put(x);
             break;
-        default:  // HMSM_SKIN_CHAIN_PARENTS
+        case HMSM_SKIN_CHAIN_PARENTS:
             for (int32_t parent : skin.parents) put(parent);
+            break;
+        default:  // HMSM_SKIN_SOURCE_CHAINS
+            for (int32_t source : skin.source_chains) put(source);
             break;
     }
 }
@@ -80,6 +86,28 @@ hmsm_status hmsm_skin_create(const hmsm_simulation* simulation, uint32_t model, 
                        std::to_string(models) + " models)");
         *skin = new hmsm_skin{build_skin(sim.scene().models[model], sim.hierarchy(model), sim.mesh(model),
                                          sim.config().model)};
+        return {};
+    });
+}
+
+hmsm_status hmsm_skin_create_level(const hmsm_simulation* simulation, uint32_t model,
+                                   const hmsm_level_options* options, hmsm_skin** skin) {
+    return guarded([&]() -> Status {
+        const char* fn = "hmsm_skin_create_level";
+        if (!simulation) return bad(std::string(fn) + ": simulation is NULL");
+        if (!options) return bad(std::string(fn) + ": options is NULL");
+        if (!skin) return bad(std::string(fn) + ": skin is NULL");
+        hmsm_level_options read{};
+        HMSM_TRY(read_struct(std::string(fn) + ": options", options, read));
+        const Simulation& sim = *simulation->simulation;
+        const size_t models = sim.scene().models.size();
+        if (model >= models)
+            return bad(std::string(fn) + ": model " + std::to_string(model) + " does not exist (" +
+                       std::to_string(models) + " models)");
+        const TreeModel& tree = sim.scene().models[model];
+        auto level = build_level(tree, sim.hierarchy(model), sim.config().parameters, read.max_joints);
+        if (!level) return Status{level.status().code(), std::string(fn) + ": options->max_joints: " + level.status().message()};
+        *skin = new hmsm_skin{build_skin(tree, sim.hierarchy(model), sim.mesh(model), sim.config().model, *level)};
         return {};
     });
 }

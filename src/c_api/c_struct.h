@@ -104,6 +104,13 @@ struct CStruct<hmsm_counts> {
         HMSM_C_FIELD(hmsm_counts, time)});
 };
 
+template <>
+struct CStruct<hmsm_level_options> {
+    static constexpr const char* name = "hmsm_level_options";
+    static constexpr auto layouts = prefix_layouts(std::array{
+        HMSM_C_FIELD(hmsm_level_options, struct_size), HMSM_C_FIELD(hmsm_level_options, max_joints)});
+};
+
 #undef HMSM_C_FIELD
 
 static_assert(layouts_are_distinct<hmsm_wind>(CStruct<hmsm_wind>::layouts));
@@ -111,6 +118,7 @@ static_assert(layouts_are_distinct<hmsm_config>(CStruct<hmsm_config>::layouts));
 static_assert(layouts_are_distinct<hmsm_instance>(CStruct<hmsm_instance>::layouts));
 static_assert(layouts_are_distinct<hmsm_force_field>(CStruct<hmsm_force_field>::layouts));
 static_assert(layouts_are_distinct<hmsm_counts>(CStruct<hmsm_counts>::layouts));
+static_assert(layouts_are_distinct<hmsm_level_options>(CStruct<hmsm_level_options>::layouts));
 
 /// hmsm's defaults in every field, struct_size = sizeof(T), padding zero.
 void set_defaults(hmsm_config& out);
@@ -118,6 +126,7 @@ void set_defaults(hmsm_wind& out);
 void set_defaults(hmsm_instance& out);
 void set_defaults(hmsm_force_field& out);
 void set_defaults(hmsm_counts& out);
+void set_defaults(hmsm_level_options& out);
 
 /// The field bytes of a caller's T of `struct_size` bytes; `what` names it in the message
 /// ("hmsm_simulation_create: config").

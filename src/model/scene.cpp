@@ -63,6 +63,15 @@ Status validate_scene(const Scene& scene) {
         if (!std::isfinite(inst.wind_phase))
             return {ErrorCode::invalid_argument, where + "wind_phase is not finite"};
     }
+    if (scene.joint_budgets.size() > scene.models.size())
+        return {ErrorCode::invalid_argument, "scene: " + std::to_string(scene.joint_budgets.size()) +
+                                                 " joint budgets for " + std::to_string(scene.models.size()) +
+                                                 " models"};
+    for (size_t m = 0; m < scene.joint_budgets.size(); ++m)
+        if (scene.joint_budgets[m] < 0)
+            return {ErrorCode::invalid_argument,
+                    "model '" + scene.model_names[m] + "': joint budget " + std::to_string(scene.joint_budgets[m]) +
+                        ": must be 0 (the model whole) or at least 1 (the trunk-only level)"};
     for (size_t m = 0; m < scene.models.size(); ++m) {
         Status valid = validate_tree(scene.models[m]);
         if (!valid) return {valid.code(), "model '" + scene.model_names[m] + "': " + valid.message()};

@@ -31,6 +31,7 @@ SkinTemplate build_skin(const TreeModel& tree, const Hierarchy& h, const MeshTem
         skin.bind.push_back(rows(frame, attach[c]));
         skin.inverse_bind.push_back(rows(glm::transpose(frame), -(glm::transpose(frame) * attach[c])));
         skin.parents.push_back(h.chains[c].parent);
+        skin.source_chains.push_back(int32_t(c));
     }
     const double beta = options.fix_weight;
     skin.vertices.reserve(mesh.vertices.size());
@@ -49,6 +50,29 @@ SkinTemplate build_skin(const TreeModel& tree, const Hierarchy& h, const MeshTem
             }
         }
         skin.vertices.push_back(s);
+    }
+    return skin;
+}
+
+SkinTemplate build_skin(const TreeModel& tree, const Hierarchy& h, const MeshTemplate& mesh,
+                        const ModelOptions& options, const DetailLevel& level) {
+    const SkinTemplate full = build_skin(tree, h, mesh, options);
+    SkinTemplate skin;
+    for (size_t c = 0; c < level.source_chain.size(); ++c) {
+        const size_t source = size_t(level.source_chain[c]);
+        skin.inverse_bind.push_back(full.inverse_bind[source]);
+        skin.bind.push_back(full.bind[source]);
+        skin.parents.push_back(level.hierarchy.chains[c].parent);
+        skin.source_chains.push_back(int32_t(source));
+    }
+    skin.vertices = full.vertices;
+    for (SkinVertex& v : skin.vertices) {
+        for (int32_t& joint : v.joints)
+            if (joint >= 0) joint = level.chain_of[size_t(joint)];
+        if (v.joints[1] >= 0 && v.joints[1] == v.joints[0]) {  // both joints fold into one chain
+            v.joints = {v.joints[0], -1};
+            v.weights = {1.0, 0.0};
+        }
     }
     return skin;
 }

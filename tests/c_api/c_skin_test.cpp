@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <string>
 #include <vector>
 
 using namespace hmsm;
@@ -124,6 +125,10 @@ TEST(CSkin, ReadsGiveBuildSkinsData) {
         ASSERT_EQ(parents[c], sim->hierarchy(0).chains[c].parent) << "chain " << c;
     }
     EXPECT_EQ(parents[0], -1);
+    // A model's own skin: every joint is driven by its own chain.
+    const auto sources = read_skin<int32_t>(hmsm_skin_read_i32, paper.skin, HMSM_SKIN_SOURCE_CHAINS);
+    ASSERT_EQ(sources.size(), chains);
+    for (size_t c = 0; c < chains; ++c) ASSERT_EQ(sources[c], int32_t(c)) << "chain " << c;
 }
 
 TEST(CSkin, BadArgumentsFailAndWriteNothing) {
@@ -288,3 +293,60 @@ TEST(CSkin, CppSkinVerticesMatchesTheFormula) {
 }
 
 }  // namespace
+
+/// A level's skin through the C ABI (hmsm_skin_create_level): at most max_joints joints, its
+/// data is build_skin()'s for that level, and with the model's joint matrices of its source
+/// chains it draws the full rest mesh. Bad options are refused and leave the handle unset.
+TEST(CSkin, LevelSkinHasItsJointBudgetAndDrawsTheRestMesh) {
+    Paper1 paper;
+    make_paper1(paper);
+    hmsm_level_options options;
+    ASSERT_EQ(HMSM_INIT(hmsm_level_options_init, &options), HMSM_OK);
+    EXPECT_EQ(options.max_joints, 256);
+    options.max_joints = 64;
+    hmsm_skin* level = nullptr;
+    ASSERT_EQ(hmsm_skin_create_level(paper.c, 0, &options, &level), HMSM_OK) << hmsm_status_message();
+    uint64_t vertices = 0, chains = 0, full_vertices = 0, full_chains = 0;
+    ASSERT_EQ(hmsm_skin_sizes(level, &vertices, &chains), HMSM_OK);
+    ASSERT_EQ(hmsm_skin_sizes(paper.skin, &full_vertices, &full_chains), HMSM_OK);
+    EXPECT_EQ(chains, 64u);
+    EXPECT_EQ(vertices, full_vertices);
+
+    std::unique_ptr<Simulation> sim;
+    cpp_skin(sim);
+    auto built = build_level(sim->scene().models[0], sim->hierarchy(0), sim->config().parameters, 64);
+    ASSERT_TRUE(built.ok());
+    const auto sources = read_skin<int32_t>(hmsm_skin_read_i32, level, HMSM_SKIN_SOURCE_CHAINS);
+    EXPECT_EQ(sources, built->source_chain);
+    const auto joints = read_skin<int32_t>(hmsm_skin_read_i32, level, HMSM_SKIN_JOINTS);
+    const auto weights = read_skin<double>(hmsm_skin_read_f64, level, HMSM_SKIN_WEIGHTS);
+    for (size_t v = 0; v < vertices; ++v) {
+        ASSERT_NEAR(weights[2 * v] + weights[2 * v + 1], 1.0, 1e-12) << "vertex " << v;
+        for (int j = 0; j < 2; ++j) ASSERT_LT(joints[2 * v + size_t(j)], 64) << "vertex " << v;
+    }
+
+    const std::vector<float> rest = read_f32(paper.c, HMSM_OUTPUT_VERTEX_POSITIONS);
+    const std::vector<float> palette = read_f32(paper.c, HMSM_OUTPUT_JOINT_MATRICES);
+    std::vector<float> gathered;
+    for (int32_t source : sources)
+        gathered.insert(gathered.end(), palette.begin() + 12 * source, palette.begin() + 12 * source + 12);
+    std::vector<float> positions(3 * vertices);
+    size_t count = 0;
+    ASSERT_EQ(hmsm_skin_vertices(level, gathered.data(), gathered.size(), positions.data(), nullptr,
+                                 positions.size(), &count, 1),
+              HMSM_OK);
+    EXPECT_LT(largest_distance(positions, rest), 1e-5 * tree_height(*generate_preset("paper-1", 0)));
+    hmsm_skin_destroy(level);
+
+    hmsm_skin* untouched = nullptr;
+    options.max_joints = 0;
+    EXPECT_EQ(hmsm_skin_create_level(paper.c, 0, &options, &untouched), HMSM_INVALID_ARGUMENT);
+    EXPECT_NE(std::string(hmsm_status_message()).find("trunk-only"), std::string::npos) << hmsm_status_message();
+    EXPECT_EQ(hmsm_skin_create_level(paper.c, 0, nullptr, &untouched), HMSM_INVALID_ARGUMENT);
+    EXPECT_EQ(hmsm_skin_create_level(paper.c, 3, &options, &untouched), HMSM_INVALID_ARGUMENT);
+    options.max_joints = 16;
+    options.struct_size = 0;
+    EXPECT_EQ(hmsm_skin_create_level(paper.c, 0, &options, &untouched), HMSM_INVALID_ARGUMENT);
+    EXPECT_NE(std::string(hmsm_status_message()).find("hmsm_level_options"), std::string::npos);
+    EXPECT_EQ(untouched, nullptr);
+}

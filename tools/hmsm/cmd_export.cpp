@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cinttypes>
 #include <cmath>
+#include <optional>
 
 namespace hmsm::cli {
 namespace {
@@ -19,6 +20,7 @@ struct ExportFlags {
     std::string backend = "cpu64";
     double seconds = 0.0;
     double fps = 0.0;
+    int32_t max_joints = 0;  ///< with --max-joints: the finest level of detail within it
     bool no_progress = false;
 } flags;
 }  // namespace
@@ -35,6 +37,8 @@ void register_export_flags(CLI::App& app) {
     add_wind_flags(app, flags.wind);
     app.add_option("--seconds", flags.seconds, "clip length T in seconds")->required();
     app.add_option("--fps", flags.fps, "key frames per second F (frame k = 0 ... T*F)")->required();
+    add_integer_option(app, "--max-joints", flags.max_joints,
+                       "at most N joints: the finest level of detail within N (docs/export.md)");
     app.add_option("--backend", flags.backend, backend_choices(BackendKind::cpu64));
     app.add_flag("--no-progress", flags.no_progress, "no progress on stderr");
 }
@@ -51,6 +55,10 @@ int run_export(CLI::App& app) {
     if (flags.seconds * flags.fps > 1e7)
         return fail_input("--seconds " + std::to_string(flags.seconds) + " at --fps " + std::to_string(flags.fps) +
                           ": more than 10 million frames");
+    const bool limit_joints = app.count("--max-joints") > 0;
+    if (limit_joints && flags.max_joints < 1)
+        return fail_input("--max-joints " + std::to_string(flags.max_joints) +
+                          ": below the trunk-only level, the coarsest level there is (1 joint)");
     Status shared = apply_shared_options(config, flags.model, flags.parameters, flags.wind);
     if (!shared) return fail(shared);
     auto scene = load_scene(flags.source, app);
@@ -73,8 +81,17 @@ int run_export(CLI::App& app) {
     auto created = Simulation::create(*scene, config);
     if (!created) return fail(created.status());
     Simulation& sim = **created;
-    const Hierarchy& hierarchy = sim.hierarchy(0);
+    const Hierarchy& model_hierarchy = sim.hierarchy(0);
     const MeshTemplate& mesh = sim.mesh(0);
+    // The joints: the model's chains, or those of the finest level within --max-joints, each
+    // of which moves exactly as the model's chain it keeps (docs/model.md 3.12).
+    std::optional<DetailLevel> level;
+    if (limit_joints) {
+        auto built = build_level(scene->models[0], model_hierarchy, config.parameters, flags.max_joints);
+        if (!built) return fail_input("--max-joints: " + built.status().message());
+        level = std::move(*built);
+    }
+    const Hierarchy& hierarchy = level ? level->hierarchy : model_hierarchy;
     const uint64_t frames = export_frame_count(flags.seconds, flags.fps);
     // Keys dominate the file: 16 bytes per joint and frame.
     const double key_bytes = double(frames) * double(hierarchy.chains.size()) * 16.0;
@@ -83,12 +100,14 @@ int run_export(CLI::App& app) {
                           ": " + std::to_string(frames) + " frames of " + std::to_string(hierarchy.chains.size()) +
                           " joints need more than 1 GiB of keys");
 
-    auto skin = derive_skin(scene->models[0], hierarchy, mesh, config.model);
+    auto skin = derive_skin(level ? build_skin(scene->models[0], model_hierarchy, mesh, config.model, *level)
+                                  : build_skin(scene->models[0], model_hierarchy, mesh, config.model),
+                            hierarchy, mesh);
     if (!skin) return fail(skin.status());
 
     JointClip clip;
     clip.fps = flags.fps;
-    std::vector<double> rotations;
+    std::vector<double> rotations, joint_rotations;
     uint64_t done = 0;
     StepProgress progress(frames, !flags.no_progress, "frame");
     for (uint64_t k = 0; k < frames; ++k) {
@@ -106,7 +125,13 @@ int run_export(CLI::App& app) {
         }
         Status read = sim.read(Output::chain_rotations, rotations);
         if (!read) return fail(read);
-        append_clip_frame(clip, hierarchy, rotations);
+        if (level) {  // each joint takes the rotation of the model's chain it keeps
+            joint_rotations.clear();
+            for (int32_t source : level->source_chain)
+                joint_rotations.insert(joint_rotations.end(), rotations.begin() + 9 * source,
+                                       rotations.begin() + 9 * source + 9);
+        }
+        append_clip_frame(clip, hierarchy, level ? joint_rotations : rotations);
         progress.update(k + 1);
     }
     progress.finish();

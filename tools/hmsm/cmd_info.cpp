@@ -1,5 +1,6 @@
 // hmsm info (--tree FILE | --preset NAME) [--grouping ...] [--max-chain-segments K] [--json]
-//           [--chains FILE.csv] with simulate's parameter flags (they decide the capped chains)
+//           [--chains FILE.csv] [--levels B,B,...] with simulate's parameter flags (they decide
+//           the capped chains and the levels' constants)
 #include "cli_common.h"
 
 #include <nlohmann/json.hpp>
@@ -12,7 +13,23 @@ struct InfoFlags {
     Parameters parameters;
     bool json = false;
     std::string chains_csv;
+    std::string levels;  ///< joint budgets, comma-separated; empty: kDefaultJointBudgets
 } flags;
+
+/// The --levels list: whole integers separated by commas.
+Result<std::vector<int32_t>> parse_budgets(const std::string& text) {
+    if (text.empty()) return std::vector<int32_t>(std::begin(kDefaultJointBudgets), std::end(kDefaultJointBudgets));
+    std::vector<int32_t> budgets;
+    size_t start = 0;
+    while (true) {
+        const size_t comma = text.find(',', start);
+        auto budget = parse_integer<int32_t>(text.substr(start, comma - start), "--levels");
+        if (!budget) return budget.status();
+        budgets.push_back(*budget);
+        if (comma == std::string::npos) return budgets;
+        start = comma + 1;
+    }
+}
 }  // namespace
 
 void register_info_flags(CLI::App& app) {
@@ -25,6 +42,8 @@ void register_info_flags(CLI::App& app) {
     add_parameter_flags(app, flags.parameters);
     app.add_flag("--json", flags.json, "print JSON instead of text");
     app.add_option("--chains", flags.chains_csv, "write chain,parent,depth,attach_node,nodes CSV");
+    app.add_option("--levels", flags.levels,
+                   "joint budgets of the levels of detail, comma-separated (default 256,64,16,1)");
 }
 
 int run_info(CLI::App& app) {
@@ -32,6 +51,8 @@ int run_info(CLI::App& app) {
     if (!options) return fail(options.status());
     Status parameters_ok = validate(flags.parameters);
     if (!parameters_ok) return fail(parameters_ok);
+    auto budgets = parse_budgets(flags.levels);
+    if (!budgets) return fail(budgets.status());
     auto scene = load_scene(flags.source, app);
     if (!scene) return fail(scene.status());
     const TreeModel& tree = scene->models[0];
@@ -46,6 +67,8 @@ int run_info(CLI::App& app) {
     auto hierarchy = build_hierarchy(tree, *options, flags.parameters);
     if (!hierarchy) return fail(hierarchy.status());
     MeshTemplate mesh = build_mesh(tree, *hierarchy, *options);
+    auto levels = build_levels(tree, *hierarchy, flags.parameters, *budgets);
+    if (!levels) return fail_input("--levels: " + levels.status().message());
 
     if (chains_file) {
         std::string csv = "chain,parent,depth,attach_node,nodes\n";
@@ -75,6 +98,15 @@ int run_info(CLI::App& app) {
         j["leaves"] = tree.leaves.size();
         j["height_m"] = tree_height(tree);
         j["capped_chains"] = h.capped_chain_count;
+        j["trunk_frequency_hz"] = levels->front().full_trunk_frequency_hz;
+        j["levels"] = nlohmann::json::array();
+        for (const DetailLevel& level : *levels)
+            j["levels"].push_back({{"budget", level.budget},
+                                   {"joints", level.joint_count()},
+                                   {"max_depth", level.hierarchy.max_depth},
+                                   {"trunk_frequency_hz", level.trunk_frequency_hz},
+                                   {"frequency_ratio", level.frequency_ratio()},
+                                   {"geometric_error_m", level.geometric_error_m}});
         std::printf("%s\n", j.dump(2).c_str());
     } else {
         std::printf("nodes            %zu\n", tree.nodes.size());
@@ -87,6 +119,13 @@ int run_info(CLI::App& app) {
         std::printf("leaves           %zu\n", tree.leaves.size());
         std::printf("height           %.3f m\n", tree_height(tree));
         std::printf("capped chains    %d\n", h.capped_chain_count);
+        std::printf("trunk frequency  %.4f Hz\n", levels->front().full_trunk_frequency_hz);
+        std::printf("levels           budget  joints  f0 ratio  geometric error\n");
+        const double height = tree_height(tree);
+        for (const DetailLevel& level : *levels)
+            std::printf("                 %6d  %6d  %8.4f  %.4f m (%.3f %% of height)\n", level.budget,
+                        level.joint_count(), level.frequency_ratio(), level.geometric_error_m,
+                        height > 0.0 ? 100.0 * level.geometric_error_m / height : 0.0);
     }
     return kExitOk;
 }

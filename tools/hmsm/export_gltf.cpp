@@ -15,15 +15,15 @@
 
 namespace hmsm::cli {
 
-Result<SkinTemplate> derive_skin(const TreeModel& tree, const Hierarchy& h, const MeshTemplate& mesh,
-                                 const ModelOptions& options) {
+Result<SkinTemplate> derive_skin(const hmsm::SkinTemplate& bind, const Hierarchy& h, const MeshTemplate& mesh) {
     const size_t chains = h.chains.size();
     if (chains > size_t(std::numeric_limits<uint16_t>::max()) + 1)
         return Status{ErrorCode::invalid_argument,
                       "the tree has " + std::to_string(chains) +
-                          " chains; a glTF skin here names at most 65536 joints"};
+                          " chains; a glTF skin here names at most 65536 joints (--max-joints sets fewer)"};
+    if (bind.inverse_bind.size() != chains || bind.vertices.size() != mesh.vertices.size())
+        return Status{ErrorCode::internal, "export: the skin does not match its joints or mesh"};
     // The library's skin (bind pose, joints and weights, inverse bind matrices), in glTF's terms.
-    const hmsm::SkinTemplate bind = build_skin(tree, h, mesh, options);
     SkinTemplate skin;
     skin.inverse_bind.resize(chains);
     skin.joint_translation.resize(chains, glm::dvec3(0.0));

@@ -35,10 +35,11 @@ struct SkinTemplate {
     uint32_t leaf_index_count = 0;   ///< the last indices: 6 per leaf card
 };
 
-/// The skin of a model in glTF's terms, from the library's build_skin. Fails (invalid_argument)
-/// with more chains than a glTF JOINTS_0 accessor of unsigned shorts can name.
-Result<SkinTemplate> derive_skin(const TreeModel& tree, const Hierarchy& hierarchy,
-                                 const MeshTemplate& mesh, const ModelOptions& options);
+/// A skin of the library's build_skin (of the model, or of a level of detail) in glTF's terms;
+/// `joints` is the hierarchy its joints are the chains of (the model's or the level's). Fails
+/// (invalid_argument) with more joints than a glTF JOINTS_0 accessor of unsigned shorts can name.
+Result<SkinTemplate> derive_skin(const hmsm::SkinTemplate& bind, const Hierarchy& joints,
+                                 const MeshTemplate& mesh);
 
 /// Frames of a clip of `seconds` at `fps`: k = 0 … ⌊seconds·fps + 1e-9⌋.
 uint64_t export_frame_count(double seconds, double fps);
