@@ -1,6 +1,7 @@
 // Pass 1: generalized wind force per chain, from the wind in the chain's previous-step frame:
-// w = lambda_i s Y(tau + phi_i) d + the force fields at the chain's previous origin
-// (docs/model.md 3.5, 3.7, 3.9; the wind table layout is in gpu_layout.h).
+// w = lambda_i s Y(tau + phi_i) d (atmospheric: a vector, instance_wind_vector) + the force
+// fields at the chain's previous origin (docs/model.md 3.5, 3.7, 3.9; the wind table layout is
+// in gpu_layout.h).
 #include "cpu_state.h"
 
 #include "../common/wind_profile.h"
@@ -10,14 +11,20 @@
 
 namespace hmsm::detail::cpu {
 
-/// lambda_i s Y(tau + phi_i) d of group instance k at wind-table step slot `slot`: the part of
-/// the wind that depends only on the instance and the step.
+/// lambda_i s Y(tau + phi_i) d of group instance k at wind-table step slot `slot` (atmospheric:
+/// lambda_i s (e_x (1 + u') + e_y v' + e_z w')): the part of the wind that depends only on the
+/// instance and the step.
 template <class T>
 typename State<T>::vec3 instance_wind_vector(const State<T>& s, const gpu::PassConstants& pc, uint32_t slot, uint32_t k) {
     using vec3 = typename State<T>::vec3;
     const auto* table = s.wind_table.data();
     const auto* step_phase = &table[HMSM_WIND_STEPS + HMSM_WIND_STEP_VEC4S * slot];
     const auto& instance = s.instance_wind[pc.instance_begin + k];
+    if (pc.profile == HMSM_WIND_PROFILE_ATMOSPHERIC) {
+        const auto c = atmospheric_components<T>(&table[HMSM_WIND_AMPLITUDES].x, &step_phase[1].x, &instance[4]);
+        return instance[0] * (c.along * vec3(table[HMSM_WIND_VECTOR]) + c.lateral * vec3(table[HMSM_WIND_LATERAL]) +
+                              c.vertical * vec3(table[HMSM_WIND_VERTICAL]));
+    }
     T y;
     if (pc.profile == HMSM_WIND_PROFILE_TURBULENT)
         y = turbulent_y<T>(&table[HMSM_WIND_AMPLITUDES].x, &step_phase[1].x, &instance[4]);
