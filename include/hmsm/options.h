@@ -111,7 +111,8 @@ HMSM_API uint64_t splitmix64(uint64_t x);
 /// Y(x) of docs/model.md 3.5 for the periodic profiles (none, constant, Y1-Y4; period 2);
 /// `turbulent` needs the wind's modes: use wind_value.
 HMSM_API double wind_profile_value(WindProfile profile, double x);
-/// Y(x) of the wind's profile, the turbulent one included.
+/// Y(x) of the wind's profile, the turbulent one included; for `atmospheric` 1 + u' at the
+/// origin, x the clock in metres travelled.
 HMSM_API double wind_value(const Wind& wind, double x);
 /// w for an instance at `origin` with the wind fixed since the start: s Y(f t + phi) d, with
 /// the instance's wind phase p and wind scale lambda (docs/model.md 3.5); for `atmospheric`

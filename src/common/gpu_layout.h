@@ -71,7 +71,8 @@
 ///   [HMSM_WIND_FIELDS, +2 per field): (centre xyz, radius), (F xyz, kind) with kind 0 =
 ///       directional (force h F), 1 = radial (force h F.x unit(x - centre))
 ///   [HMSM_WIND_STEPS + 9 s, +9): step slot s: (tau mod 2, 0, 0, 0), then frac(m_k tau + u_k)
-///       (atmospheric: frac(kx_k tau + u_k), tau in metres) as instance_wind's elements 1..8. A wind_force dispatch reads slot pc.wind_slot.
+///       (atmospheric: frac(kx_k tau + u_k), tau in metres) as instance_wind's elements 1..8.
+///       A wind_force dispatch reads slot pc.wind_slot.
 #define HMSM_WIND_MODES 32
 #define HMSM_WIND_MODE_VEC4S 8
 #define HMSM_WIND_MODES_U_VEC4S 4  // atmospheric: mode vec4s [0, 4) u', [4, 6) v', [6, 8) w'
