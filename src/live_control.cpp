@@ -126,21 +126,25 @@ Status Simulation::set_wind(const Wind& wind) {
     HMSM_TRY(s.check_wind(wind, s.instances_));
     // tau continues: tau_b is tau at the next step under the wind in force so far.
     const uint64_t next = s.steps_done_ + 1;
-    s.clock_.base_tau = s.clock_.tau(s.config_.wind.frequency, s.config_.parameters.dt, next);
+    s.clock_.base_tau = s.clock_.tau(wind_clock_rate(s.config_.wind), s.config_.parameters.dt, next);
     s.clock_.base_step = next;
     // Only what the change touches is rebuilt: an engine ramping the strength every frame (a
     // gust) rewrites the small wind header, not every instance's wind data or the step program.
     const Wind& old = s.config_.wind;
     const bool turbulence_changed = wind.turbulence != old.turbulence || wind.seed != old.seed;
-    // Per-instance data: the phase phi_i (frequency, direction, front) and whether the modes'
-    // phases are used at all (turbulent or not).
-    const bool phases_changed = wind.frequency != old.frequency || wind.direction != old.direction ||
-                                wind.front_speed != old.front_speed ||
-                                (wind.profile == WindProfile::turbulent) != (old.profile == WindProfile::turbulent);
+    // Per-instance data: the phase phi_i (frequency, direction, front), whether the modes'
+    // phases are used at all and which profile's they are (turbulent, atmospheric or none); the
+    // atmospheric spatial phases also follow the seed's wavenumbers and the strength's sign.
+    const bool atmospheric = wind.profile == WindProfile::atmospheric;
+    const bool phases_changed =
+        wind.frequency != old.frequency || wind.direction != old.direction || wind.front_speed != old.front_speed ||
+        (wind.profile == WindProfile::turbulent) != (old.profile == WindProfile::turbulent) ||
+        atmospheric != (old.profile == WindProfile::atmospheric) ||
+        (atmospheric && (wind.seed != old.seed || (wind.strength < 0.0) != (old.strength < 0.0)));
     const bool profile_changed = wind.profile != old.profile;  // PassConstants.profile of the program
     s.config_.wind = wind;
     s.data_->profile = wind.profile;
-    if (turbulence_changed) s.modes_ = turbulent_modes(wind.turbulence, wind.seed);
+    if (turbulence_changed) s.modes_ = detail::wind_modes(wind);
     s.header_dirty_ = true;
     s.instance_wind_dirty_ = s.instance_wind_dirty_ || phases_changed;
     s.program_dirty_ = s.program_dirty_ || profile_changed;

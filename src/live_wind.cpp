@@ -1,5 +1,7 @@
 #include "live_wind.h"
 
+#include "model/atmospheric_wind.h"
+
 #include <glm/geometric.hpp>
 
 #include <cmath>
@@ -10,34 +12,56 @@ namespace {
 double mod2(double x) { return x - 2.0 * std::floor(x / 2.0); }
 double frac(double x) { return x - std::floor(x); }
 
+/// The point whose spatial phases an instance at `origin` takes: gusts travel along the mean
+/// wind, which blows against d for a negative strength.
+Vec3 advected_point(const Wind& wind, const Vec3& origin) { return wind.strength < 0.0 ? -origin : origin; }
+
 }  // namespace
+
+WindModes wind_modes(const Wind& wind) {
+    return {turbulent_modes(wind.turbulence, wind.seed), atmospheric_modes(wind.turbulence, wind.seed)};
+}
 
 double instance_wind_phase(const Wind& wind, const Instance& instance) {
     return instance.wind_phase + wind_phase(wind, instance.origin);
 }
 
-void fill_instance_wind(const Wind& wind, const TurbulentModes& modes, const Instance& instance,
-                        double* out) {
+void fill_instance_wind(const Wind& wind, const WindModes& modes, const Instance& instance, double* out) {
     const double phi = instance_wind_phase(wind, instance);
     out[0] = instance.wind_scale;
     out[1] = mod2(phi);
     out[2] = instance.active ? 0.0 : 1.0;  // paused (gpu_layout.h)
     out[3] = 0.0;
+    if (wind.profile == WindProfile::atmospheric) {
+        const WindFrame frame = wind_frame(wind.direction);
+        const Vec3 x = advected_point(wind, instance.origin);
+        for (uint32_t k = 0; k < kTurbulentModes; ++k)
+            out[4 + k] = atmospheric_instance_phase(modes.atmospheric, k, phi, x, frame);
+        return;
+    }
     for (uint32_t k = 0; k < kTurbulentModes; ++k)
-        out[4 + k] = wind.profile == WindProfile::turbulent ? frac(modes.multiple[k] * phi) : 0.0;
+        out[4 + k] = wind.profile == WindProfile::turbulent ? frac(modes.turbulent.multiple[k] * phi) : 0.0;
 }
 
-void fill_wind_header(const Wind& wind, const TurbulentModes& modes,
-                      std::span<const ForceField> fields, double* out) {
+void fill_wind_header(const Wind& wind, const WindModes& modes, std::span<const ForceField> fields,
+                      double* out) {
     for (uint32_t i = 0; i < kWindHeaderScalars; ++i) out[i] = 0.0;
+    const bool atmospheric = wind.profile == WindProfile::atmospheric;
     for (uint32_t k = 0; k < kTurbulentModes; ++k)
-        out[4 * HMSM_WIND_AMPLITUDES + k] = modes.amplitude[k];
+        out[4 * HMSM_WIND_AMPLITUDES + k] = atmospheric ? modes.atmospheric.amplitude[k] : modes.turbulent.amplitude[k];
     const Vec3 w = wind.strength * glm::normalize(wind.direction);
     double* vector = out + 4 * HMSM_WIND_VECTOR;
     vector[0] = w.x;
     vector[1] = w.y;
     vector[2] = w.z;
     vector[3] = double(fields.size());
+    if (atmospheric) {
+        const WindFrame frame = wind_frame(wind.direction);
+        for (int i = 0; i < 3; ++i) {
+            out[4 * HMSM_WIND_LATERAL + i] = wind.strength * frame.lateral[i];
+            out[4 * HMSM_WIND_VERTICAL + i] = wind.strength * frame.vertical[i];
+        }
+    }
     for (size_t f = 0; f < fields.size(); ++f) {
         double* sphere = out + 4 * (HMSM_WIND_FIELDS + 2 * f);
         double* force = sphere + 4;
@@ -59,13 +83,17 @@ void fill_wind_header(const Wind& wind, const TurbulentModes& modes,
     }
 }
 
-void fill_wind_step(const Wind& wind, const TurbulentModes& modes, double tau, double* out) {
+void fill_wind_step(const Wind& wind, const WindModes& modes, double tau, double* out) {
     out[0] = mod2(tau);
     out[1] = out[2] = out[3] = 0.0;
-    for (uint32_t k = 0; k < kTurbulentModes; ++k)
-        out[4 + k] = wind.profile == WindProfile::turbulent
-                         ? frac(modes.multiple[k] * tau + modes.phase[k])
-                         : 0.0;
+    for (uint32_t k = 0; k < kTurbulentModes; ++k) {
+        if (wind.profile == WindProfile::atmospheric)
+            out[4 + k] = atmospheric_step_phase(modes.atmospheric, k, tau);
+        else
+            out[4 + k] = wind.profile == WindProfile::turbulent
+                             ? frac(modes.turbulent.multiple[k] * tau + modes.turbulent.phase[k])
+                             : 0.0;
+    }
 }
 
 }  // namespace hmsm::detail

@@ -21,7 +21,8 @@ inline constexpr uint32_t kWindHeaderScalars = 4 * HMSM_WIND_STEPS;
 inline constexpr uint32_t kWindStepScalars = 4 * HMSM_WIND_STEP_VEC4S;
 
 /// The wind clock: tau_n = tau_b + (f dt) (n - n_b), with (n_b, tau_b) moved to the step before
-/// which the wind was last set, so tau stays continuous when f changes.
+/// which the wind was last set, so tau stays continuous when f changes; f is the clock's rate,
+/// wind_clock_rate (atmospheric: the mean wind speed, so tau is in metres).
 struct WindClock {
     uint64_t base_step = 1;  ///< n_b
     double base_tau = 0.0;   ///< tau_b
@@ -30,16 +31,24 @@ struct WindClock {
     }
 };
 
+/// The mode constants of a wind setting's turbulent and atmospheric profiles (its turbulence
+/// and seed), computed once per setting.
+struct WindModes {
+    TurbulentModes turbulent;
+    AtmosphericModes atmospheric;
+};
+WindModes wind_modes(const Wind& wind);
+
 /// The instance's wind phase phi = p + (v > 0 ? -f (o.d)/v : 0), d normalized.
 double instance_wind_phase(const Wind& wind, const Instance& instance);
 
-/// instance_wind element of `instance`: (lambda, phi mod 2, paused, 0), then frac(m_k phi).
-void fill_instance_wind(const Wind& wind, const TurbulentModes& modes, const Instance& instance,
-                        double* out);
-/// Wind table header: amplitudes a_k, (s d, field count), the force fields.
-void fill_wind_header(const Wind& wind, const TurbulentModes& modes,
-                      std::span<const ForceField> fields, double* out);
-/// One step slot: (tau mod 2, 0, 0, 0), then frac(m_k tau + u_k).
-void fill_wind_step(const Wind& wind, const TurbulentModes& modes, double tau, double* out);
+/// instance_wind element of `instance`: (lambda, phi mod 2, paused, 0), then frac(m_k phi)
+/// (atmospheric: the spatial phases, gpu_layout.h).
+void fill_instance_wind(const Wind& wind, const WindModes& modes, const Instance& instance, double* out);
+/// Wind table header: amplitudes a_k, (s d, field count), s e_y and s e_z, the force fields.
+void fill_wind_header(const Wind& wind, const WindModes& modes, std::span<const ForceField> fields,
+                      double* out);
+/// One step slot: (tau mod 2, 0, 0, 0), then frac(m_k tau + u_k) (atmospheric: kx_k for m_k).
+void fill_wind_step(const Wind& wind, const WindModes& modes, double tau, double* out);
 
 }  // namespace hmsm::detail

@@ -91,9 +91,10 @@ Status Simulation::Impl::check_forces(const Wind& wind, std::span<const Instance
 
 Status Simulation::Impl::check_wind(const Wind& wind, std::span<const Instance> instances) const {
     HMSM_TRY(validate(wind));
-    // The clock f t at the next step (docs/model.md 3.11).
+    // The clock f t (atmospheric: U t) at the next step (docs/model.md 3.11).
     const double next_time = double(steps_done_ + 1) * config_.parameters.dt;
-    HMSM_TRY(detail::check_wind_clock(wind.frequency, next_time, clock_.base_tau + wind.frequency * next_time));
+    const double rate = wind_clock_rate(wind);
+    HMSM_TRY(detail::check_wind_clock(rate, next_time, clock_.base_tau + rate * next_time));
     HMSM_TRY(check_forces(wind, instances, force_fields_));
     // A front so slow that -f (o.d)/v overflows would make the phase, and every force, NaN.
     for (size_t i = 0; i < instances.size(); ++i)
@@ -153,7 +154,7 @@ Result<std::unique_ptr<Simulation>> Simulation::Impl::create(const Scene& scene,
     sim->instances_ = scene.instances;
     HMSM_TRY(sim->check_wind(config.wind, scene.instances));
     HMSM_TRY(sim->check_size(scene.instances));
-    sim->modes_ = turbulent_modes(config.wind.turbulence, config.wind.seed);
+    sim->modes_ = detail::wind_modes(config.wind);
 
     sim->data_ = std::make_unique<SceneData>(
         detail::flatten_scene(scene, sim->hierarchies_, sim->meshes_, config.parameters,
@@ -202,13 +203,13 @@ Status Simulation::Impl::step(uint32_t count) {
         run_steps_.resize(steps);
         for (uint32_t k = 0; k <= steps; ++k) {
             const uint64_t n = steps_done_ + k + 1;  // steps_done_ counts the earlier chunks
-            const double tau = clock_.tau(wind.frequency, dt, n);
+            const double tau = clock_.tau(wind_clock_rate(wind), dt, n);
             if (!(std::abs(tau) <= detail::kMaxWindPhase) && k == steps) {  // the step after: its own step() will say
                 std::fill_n(&wind_scratch_[size_t(k) * detail::kWindStepScalars], detail::kWindStepScalars, 0.0);
                 continue;
             }
             if (!(std::abs(tau) <= detail::kMaxWindPhase))  // f t past the clock's range
-                HMSM_TRY(detail::check_wind_clock(wind.frequency, double(n - 1) * dt, tau));
+                HMSM_TRY(detail::check_wind_clock(wind_clock_rate(wind), double(n - 1) * dt, tau));
             detail::fill_wind_step(wind, modes_, tau, &wind_scratch_[size_t(k) * detail::kWindStepScalars]);
             if (k < steps) run_steps_[k] = {k, detail::AheadStep::whole};
         }

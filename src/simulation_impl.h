@@ -85,7 +85,7 @@ struct __attribute__((visibility("hidden"))) Simulation::Impl {
     std::vector<ForceField> force_fields_;
     std::vector<Instance> instances_;  // the current instance list (live control)
     detail::WindClock clock_;
-    TurbulentModes modes_{};
+    detail::WindModes modes_{};
     bool program_dirty_ = true, header_dirty_ = true, instance_wind_dirty_ = true;
     std::vector<uint32_t> dirty_instances_;  // instance_wind elements to rewrite
     std::vector<detail::RunStep> run_steps_;  // scratch: the wind-table slot of each step of a run

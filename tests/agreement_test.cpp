@@ -74,6 +74,17 @@ std::vector<SceneCase> end_to_end_cases() {
     front.wind.front_speed = 3.0;
     front.wind.frequency = 0.4;
     cases.push_back({"travelling_front_y2", *grid_scene(test::deep_tree(3), 5, 9.0, 7), front});
+    // The atmospheric wind field: a vector per instance that differs across the forest; 19
+    // instances (not a multiple of any workgroup or block) in pointer jumping and the path walk.
+    SimulationConfig atmospheric = windy;
+    atmospheric.wind.profile = WindProfile::atmospheric;
+    atmospheric.wind.turbulence = 0.8;
+    atmospheric.wind.seed = 2024;
+    atmospheric.parameters.wind_gain = 6.0;
+    cases.push_back({"atmospheric_grid_of_19", *grid_scene(test::small_tree(), 19, 4.0, 3), atmospheric});
+    atmospheric.composition = Composition::path_walk;
+    atmospheric.wind.direction = {-1, 0.2, 2};
+    cases.push_back({"atmospheric_path_walk", *grid_scene(test::deep_tree(5), 7, 7.0, 13), atmospheric});
     return cases;
 }
 

@@ -185,14 +185,17 @@ TEST_F(CliLive, TurbulentWindFlags) {
 }
 
 // Needs the turbulent profile of docs/model.md 3.5 in the backends.
-TEST_F(CliLive, TurbulentWindDependsOnTheSeed) {
-    for (auto [seed, file] : {std::pair{"1", "s1.csv"}, std::pair{"1", "s1b.csv"}, std::pair{"2", "s2.csv"}})
-        ASSERT_EQ(run(simulate(std::string("--steps 60 --wind turbulent --wind-seed ") + seed + " --dump-nodes " +
-                               path(file))).exit_code,
-                  0)
-            << last_.err;
-    EXPECT_EQ(read_text(path("s1.csv")), read_text(path("s1b.csv")));
-    EXPECT_NE(read_text(path("s1.csv")), read_text(path("s2.csv")));
+TEST_F(CliLive, TurbulentAndAtmosphericWindDependOnTheSeed) {
+    for (std::string profile : {"turbulent", "atmospheric"}) {
+        SCOPED_TRACE(profile);
+        for (auto [seed, file] : {std::pair{"1", "s1.csv"}, std::pair{"1", "s1b.csv"}, std::pair{"2", "s2.csv"}})
+            ASSERT_EQ(run(simulate("--steps 60 --wind " + profile + " --wind-seed " + seed + " --dump-nodes " +
+                                   path(profile + file))).exit_code,
+                      0)
+                << last_.err;
+        EXPECT_EQ(read_text(path(profile + "s1.csv")), read_text(path(profile + "s1b.csv")));
+        EXPECT_NE(read_text(path(profile + "s1.csv")), read_text(path(profile + "s2.csv")));
+    }
 }
 
 TEST_F(CliLive, MaxFrequencyDecidesTheCappedChains) {

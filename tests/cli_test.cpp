@@ -129,7 +129,7 @@ TEST_F(Cli, ChoiceErrorsListTheNameTables) {
     for (const char* form : {"pointer-jumping-per-round", "pointer_jumping_in_dispatch"})
         expect_bad_input("simulate" + tree + " --composition " + form, std::string("--composition '") + form + "'");
     expect_bad_input("simulate" + tree + " --outputs vertices", "expected joints, nodes or all");
-    expect_bad_input("simulate" + tree + " --wind gale", "expected none, constant, y1, y2, y3, y4 or turbulent");
+    expect_bad_input("simulate" + tree + " --wind gale", "expected none, constant, y1, y2, y3, y4, turbulent or atmospheric");
     CliFixture::expect_bad_input("bench --no-progress --forest-composition rounds",
                                  "--forest-composition 'rounds': expected pointer-jumping");
     // Compositions are accepted with '-' or '_' between words.

@@ -39,7 +39,7 @@ TEST(Names, EveryTableCoversItsEnumAndRoundTrips) {
     expect_table(kVertexLayoutNames, VertexLayout::packed, parse_vertex_layout);
     expect_table(kOutputsNames, Outputs::all, parse_outputs);
     expect_table(kGroupingNames, Grouping::width, parse_grouping);
-    expect_table(kWindProfileNames, WindProfile::turbulent, parse_wind_profile);
+    expect_table(kWindProfileNames, WindProfile::atmospheric, parse_wind_profile);
 }
 
 TEST(Names, PublicSpellingsAreStable) {

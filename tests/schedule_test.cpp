@@ -44,6 +44,15 @@ const char* kSpecExample = R"([
 
 }  // namespace
 
+TEST(Schedule, ParsesTheAtmosphericProfileWithSpeedTurbulenceAndSeed) {
+    auto s = parse(R"([{"step": 3, "wind": {"profile": "atmospheric", "speed": 9, "turbulence": 0.5, "seed": 11}}])");
+    ASSERT_TRUE(s.ok()) << s.status().message();
+    ASSERT_TRUE(s->events[0].wind.has_value());
+    EXPECT_EQ(s->events[0].wind->profile, WindProfile::atmospheric);
+    EXPECT_EQ(s->events[0].wind->turbulence, 0.5);
+    EXPECT_EQ(s->events[0].wind->seed, 11u);
+}
+
 TEST(Schedule, ParsesTheDocumentedExample) {
     auto s = parse(kSpecExample);
     ASSERT_TRUE(s.ok()) << s.status().message();

@@ -90,7 +90,8 @@ enum { /* hmsm_wind.profile (docs/model.md 3.5) */
     HMSM_WIND_Y2 = 3,
     HMSM_WIND_Y3 = 4,
     HMSM_WIND_Y4 = 5,
-    HMSM_WIND_TURBULENT = 6
+    HMSM_WIND_TURBULENT = 6,
+    HMSM_WIND_ATMOSPHERIC = 7
 };
 /* What hmsm_simulation_read_* returns, components per element in brackets (as hmsm::Output):
  * node positions [3], vertex positions [3], vertex normals [3], chain rotations [9,

@@ -38,13 +38,17 @@ struct Parameters {
     double max_frequency = 4.0;   ///< f_cap (Hz): no chain sways faster than this
 };
 
-/// The paper's four wind profiles, constant (Y = 1), none (Y = 0) and turbulent (a sum of 32
-/// modes with a von Karman-like spectrum, docs/model.md 3.5).
-enum class WindProfile : uint32_t { none = 0, constant = 1, y1 = 2, y2 = 3, y3 = 4, y4 = 5, turbulent = 6 };
+/// The paper's four wind profiles, constant (Y = 1), none (Y = 0), turbulent (a sum of 32
+/// modes with a von Karman-like spectrum) and atmospheric (a three-component Kaimal wind field
+/// advected with the mean wind), docs/model.md 3.5.
+enum class WindProfile : uint32_t {
+    none = 0, constant = 1, y1 = 2, y2 = 3, y3 = 4, y4 = 5, turbulent = 6, atmospheric = 7
+};
 inline constexpr NamedValue<WindProfile> kWindProfileNames[] = {
     {WindProfile::none, "none"}, {WindProfile::constant, "constant"}, {WindProfile::y1, "y1"},
     {WindProfile::y2, "y2"},     {WindProfile::y3, "y3"},             {WindProfile::y4, "y4"},
     {WindProfile::turbulent, "turbulent"},
+    {WindProfile::atmospheric, "atmospheric"},
 };
 
 struct Wind {
@@ -53,10 +57,10 @@ struct Wind {
     /// Dynamic pressure relative to a 6 m/s breeze: a wind of U m/s is strength (U / 6)^2
     /// (wind_strength_for_speed).
     double strength = 1.0;
-    double frequency = 0.1;    ///< f (Hz): the rate of the profile's clock
-    double front_speed = 0.0;  ///< v (m/s) > 0: a front travelling along direction; 0: none
-    double turbulence = 0.3;   ///< sigma in [0, 2]: relative fluctuation of the turbulent profile
-    uint64_t seed = 0;         ///< phases of the turbulent profile's modes
+    double frequency = 0.1;    ///< f (Hz): the rate of the profile's clock (atmospheric: unused)
+    double front_speed = 0.0;  ///< v (m/s) > 0: a front travelling along direction; 0: none (atmospheric: unused)
+    double turbulence = 0.3;   ///< sigma in [0, 2]: relative fluctuation of the turbulent and atmospheric profiles
+    uint64_t seed = 0;         ///< the random modes of the turbulent and atmospheric profiles
 };
 
 /// Wind strength of a wind speed U in m/s: (U / 6)^2.
@@ -74,16 +78,45 @@ struct TurbulentModes {
 };
 HMSM_API TurbulentModes turbulent_modes(double turbulence, uint64_t seed);
 
+/// Modes of the atmospheric profile per component: along the mean wind (u), lateral (v) and
+/// vertical (w); mode k belongs to u for k < 16, v for 16 <= k < 24, w above (docs/model.md 3.5).
+inline constexpr uint32_t kAtmosphericModesU = 16, kAtmosphericModesV = 8, kAtmosphericModesW = 8;
+
+/// The constants of the atmospheric profile for one wind setting, in double: mode k contributes
+/// a_k cos(2 pi (kx_k (xi - x.e_x) - ky_k x.e_y - kz_k x.e_z + u_k)) to its component, with xi the
+/// distance the mean wind has travelled and x the point (docs/model.md 3.5).
+struct AtmosphericModes {
+    double wavenumber[kTurbulentModes];  ///< kx_k (cycles per metre) along the mean wind
+    double lateral[kTurbulentModes];     ///< ky_k: Davenport-like lateral coherence
+    double vertical[kTurbulentModes];    ///< kz_k: the same vertically
+    double amplitude[kTurbulentModes];   ///< a_k, the Kaimal variance of the mode's band
+    double phase[kTurbulentModes];       ///< u_k in [0, 1)
+};
+HMSM_API AtmosphericModes atmospheric_modes(double turbulence, uint64_t seed);
+
+/// The unit vectors of the atmospheric profile's components for a wind direction d: e_x =
+/// unit(d), e_y = unit(e_up x e_x) with e_up = +y (+x where d is vertical), e_z = e_x x e_y.
+struct WindFrame {
+    Vec3 along, lateral, vertical;
+};
+HMSM_API WindFrame wind_frame(const Vec3& direction);
+
+/// The rate of the wind clock (docs/model.md 3.5): the frequency f, or for `atmospheric` the
+/// mean wind speed 6 sqrt(|s|) in m/s, so that the clock is the distance the wind has travelled.
+HMSM_API double wind_clock_rate(const Wind& wind);
+
 /// SplitMix64's output function (all arithmetic mod 2^64), as docs/model.md 3.5 uses it.
 HMSM_API uint64_t splitmix64(uint64_t x);
 
 /// Y(x) of docs/model.md 3.5 for the periodic profiles (none, constant, Y1-Y4; period 2);
 /// `turbulent` needs the wind's modes: use wind_value.
 HMSM_API double wind_profile_value(WindProfile profile, double x);
-/// Y(x) of the wind's profile, the turbulent one included.
+/// Y(x) of the wind's profile, the turbulent one included; for `atmospheric` 1 + u' at the
+/// origin, x the clock in metres travelled.
 HMSM_API double wind_value(const Wind& wind, double x);
 /// w for an instance at `origin` with the wind fixed since the start: s Y(f t + phi) d, with
-/// the instance's wind phase p and wind scale lambda (docs/model.md 3.5).
+/// the instance's wind phase p and wind scale lambda (docs/model.md 3.5); for `atmospheric`
+/// lambda s (e_x (1 + u') + e_y v' + e_z w') at the clock U t + p.
 HMSM_API Vec3 wind_at(const Wind& wind, const Vec3& origin, double t, double instance_phase = 0.0,
              double instance_scale = 1.0);
 /// Front phase of an instance at `origin`: -f (o.d)/v with d normalized, or 0 without a front

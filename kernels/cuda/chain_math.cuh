@@ -26,12 +26,13 @@ HMSM_HOST_DEVICE float instance_wind_y(const BufferPointers& b, const gpu::PassC
     return wind_profile_y<float>(pc.profile, load(table + slot).x + own.y);  // tau + phi, both mod 2
 }
 
-/// Pass 1 for model chain c with the instance's wind scale in hand: `scale` = lambda_i Y.
+/// Pass 1 for model chain c with the instance's wind in hand: `instance_wind` = lambda_i s Y d
+/// (atmospheric: lambda_i s (e_x (1 + u') + e_y v' + e_z w')).
 HMSM_HOST_DEVICE float2 chain_wind_force_at(const BufferPointers& b, const gpu::PassConstants& pc, uint32_t c,
-                                            float3 x, const Mat3& rotation, float scale) {
+                                            float3 x, const Mat3& rotation, float3 instance_wind) {
     const float4* table = b.wind_table;
     const float4 vector_count = load(table + HMSM_WIND_VECTOR);  // (s d, number of fields)
-    float3 wind = scale * xyz(vector_count);
+    float3 wind = instance_wind;
     const uint32_t fields = uint32_t(vector_count.w);
     for (uint32_t f = 0; f < fields; ++f) {
         const float4 sphere = load(table + HMSM_WIND_FIELDS + 2 * f);
@@ -56,13 +57,30 @@ HMSM_HOST_DEVICE float instance_wind_scale(const BufferPointers& b, const gpu::P
     return own.x * instance_wind_y(b, pc, k, step_slot, own);
 }
 
+/// The instance's wind vector at step slot `step_slot`: lambda_i Y s d, or for the atmospheric
+/// profile lambda_i s (e_x (1 + u') + e_y v' + e_z w') (docs/model.md 3.5).
+HMSM_HOST_DEVICE float3 instance_wind_vector(const BufferPointers& b, const gpu::PassConstants& pc, uint32_t k,
+                                             uint32_t step_slot) {
+    const float4* table = b.wind_table;
+    if (pc.profile == HMSM_WIND_PROFILE_ATMOSPHERIC) {
+        const uint64_t first = uint64_t(HMSM_INSTANCE_WIND_VEC4S) * (pc.instance_begin + k);
+        const uint32_t slot = HMSM_WIND_STEPS + HMSM_WIND_STEP_VEC4S * step_slot;
+        const WindComponents<float> c = atmospheric_components<float>(
+            &table[HMSM_WIND_AMPLITUDES].x, &table[slot + 1].x, &b.instance_wind[first + 1].x);
+        const float scale = load(b.instance_wind + first).x;  // lambda
+        return scale * (c.along * xyz(load(table + HMSM_WIND_VECTOR)) + c.lateral * xyz(load(table + HMSM_WIND_LATERAL)) +
+                        c.vertical * xyz(load(table + HMSM_WIND_VERTICAL)));
+    }
+    return instance_wind_scale(b, pc, k, step_slot) * xyz(load(table + HMSM_WIND_VECTOR));
+}
+
 /// Pass 1 for model chain c of group instance k: the generalized force g = A (w_loc.z, -w_loc.x)
 /// with w_loc = R^T w in the chain's frame of the previous step (R, and the origin x at which
 /// the force fields act, loaded by the caller from the pose half), w = lambda_i s Y(tau + phi_i)
 /// d plus the force fields. pc.wind_slot is the step's slot of the wind table (gpu_layout.h).
 HMSM_HOST_DEVICE float2 chain_wind_force(const BufferPointers& b, const gpu::PassConstants& pc,
                                          uint32_t k, uint32_t c, float3 x, const Mat3& rotation) {
-    return chain_wind_force_at(b, pc, c, x, rotation, instance_wind_scale(b, pc, k, pc.wind_slot));
+    return chain_wind_force_at(b, pc, c, x, rotation, instance_wind_vector(b, pc, k, pc.wind_slot));
 }
 
 /// Pass 2, the step: symplectic Euler on S = (theta_x, theta_z) of static chain model_chain from
@@ -342,8 +360,16 @@ HMSM_HOST_DEVICE void walk_ahead(const BufferPointers& b, const gpu::PassConstan
     walk_pose<false, true>(b, pc, k, c, nullptr, rotation, origin);
     const uint64_t chain = state_chain(pc, k, c);
     store_joint_of(b, chain, rotation, origin);
-    const float scale = load(b.chain_origin + half_begin(pc, pc.src_half) + state_chain(pc, k, 0)).w;
-    const float2 g = chain_wind_force_at(b, pc, uint32_t(c), xyz(origin), rotation, scale);
+    // The atmospheric wind is a vector, not a stored scale times s d: evaluated here.
+    float3 wind;
+    if (pc.profile == HMSM_WIND_PROFILE_ATMOSPHERIC) {
+        const uint32_t next_slot = pc.wind_slot + 1u < HMSM_WIND_STEP_SLOTS ? pc.wind_slot + 1u : pc.wind_slot;
+        wind = instance_wind_vector(b, pc, k, next_slot);
+    } else {
+        const float scale = load(b.chain_origin + half_begin(pc, pc.src_half) + state_chain(pc, k, 0)).w;
+        wind = scale * xyz(load(b.wind_table + HMSM_WIND_VECTOR));
+    }
+    const float2 g = chain_wind_force_at(b, pc, uint32_t(c), xyz(origin), rotation, wind);
     const uint32_t model_chain = pc.model_chain_begin + uint32_t(c);
     b.chain_state_next[chain] = integrate_step(b, pc, model_chain, load(b.chain_state + chain), g);
 }

@@ -7,27 +7,45 @@
 
 /// Pass 1 for model chain c of group instance k: the generalized force
 /// g = A (w_loc.z, -w_loc.x) from the wind in the chain's previous-step frame w_loc = R^T w,
-/// w = lambda_i s Y(tau + phi_i) d plus the force fields at the chain's previous origin x, R
+/// w = lambda_i s Y(tau + phi_i) d (atmospheric: lambda_i s (e_x (1 + u') + e_y v' + e_z w'))
+/// plus the force fields at the chain's previous origin x, R
 /// the chain's previous rotation (docs/model.md 3.5, 3.7, 3.9; table in gpu_layout.h).
 vec2 chain_wind_force(uint k, uint c, vec3 x, mat3 rotation) {
     uint slot = HMSM_WIND_STEPS + HMSM_WIND_STEP_VEC4S * pc.wind_slot;
     uint instance = HMSM_INSTANCE_WIND_VEC4S * (pc.instance_begin + k);
     vec4 own = instance_wind[instance];  // (lambda, phi mod 2, 0, 0)
-    float y;
-    if (pc.profile == HMSM_WIND_PROFILE_TURBULENT) {
-        // Yt = 1 + sum a_k cos(2 pi (frac(m_k tau + u_k) + frac(m_k phi))), reduced to [0, 1).
-        y = 1.0;
+    vec4 vector_count = wind_table[HMSM_WIND_VECTOR];  // (s d, number of fields)
+    vec3 wind;
+    if (pc.profile == HMSM_WIND_PROFILE_ATMOSPHERIC) {
+        // w = lambda s (e_x (1 + u') + e_y v' + e_z w'): each component sums its modes'
+        // a_k cos(2 pi (frac(kx_k tau + u_k) + spatial phase_k)), reduced to [0, 1).
+        vec3 sums = vec3(1.0, 0.0, 0.0);
         for (uint e = 0u; e < HMSM_WIND_MODE_VEC4S; ++e) {
             vec4 phase = wind_table[slot + 1u + e] + instance_wind[instance + 1u + e];
             phase -= floor(phase);
-            vec4 a = wind_table[HMSM_WIND_AMPLITUDES + e];
-            y += dot(a, cos(2.0 * HMSM_PI * phase));
+            float part = dot(wind_table[HMSM_WIND_AMPLITUDES + e], cos(2.0 * HMSM_PI * phase));
+            if (e < HMSM_WIND_MODES_U_VEC4S) sums.x += part;
+            else if (e < HMSM_WIND_MODES_U_VEC4S + HMSM_WIND_MODES_V_VEC4S) sums.y += part;
+            else sums.z += part;
         }
+        wind = own.x * (sums.x * vector_count.xyz + sums.y * wind_table[HMSM_WIND_LATERAL].xyz +
+                        sums.z * wind_table[HMSM_WIND_VERTICAL].xyz);
     } else {
-        y = wind_profile_y(pc.profile, wind_table[slot].x + own.y);  // tau + phi, both mod 2
+        float y;
+        if (pc.profile == HMSM_WIND_PROFILE_TURBULENT) {
+            // Yt = 1 + sum a_k cos(2 pi (frac(m_k tau + u_k) + frac(m_k phi))), reduced to [0, 1).
+            y = 1.0;
+            for (uint e = 0u; e < HMSM_WIND_MODE_VEC4S; ++e) {
+                vec4 phase = wind_table[slot + 1u + e] + instance_wind[instance + 1u + e];
+                phase -= floor(phase);
+                vec4 a = wind_table[HMSM_WIND_AMPLITUDES + e];
+                y += dot(a, cos(2.0 * HMSM_PI * phase));
+            }
+        } else {
+            y = wind_profile_y(pc.profile, wind_table[slot].x + own.y);  // tau + phi, both mod 2
+        }
+        wind = own.x * y * vector_count.xyz;
     }
-    vec4 vector_count = wind_table[HMSM_WIND_VECTOR];  // (s d, number of fields)
-    vec3 wind = own.x * y * vector_count.xyz;
     uint fields = uint(vector_count.w);
     for (uint f = 0u; f < fields; ++f) {
         vec4 sphere = wind_table[HMSM_WIND_FIELDS + 2u * f];

@@ -50,7 +50,7 @@ Status to_output(int32_t output, Output& out) {
 }
 
 Status to_cpp(const hmsm_wind& in, Wind& out) {
-    if (in.profile < 0 || in.profile > HMSM_WIND_TURBULENT)
+    if (in.profile < 0 || in.profile > HMSM_WIND_ATMOSPHERIC)
         return bad("wind.profile: unknown value " + std::to_string(in.profile));
     if (!std::isfinite(in.turbulence) || in.turbulence < 0.0 || in.turbulence > 2.0)
         return bad("wind.turbulence must be finite and in [0, 2]");

@@ -52,29 +52,38 @@
 #define HMSM_BINDING_COUNT 27
 
 /// The wind of docs/model.md 3.5 on the device. Float backends never see the clock tau or a
-/// phase beyond a few units: the host reduces tau mod 2 and the turbulent mode phases mod 1 in
-/// double and hands over only those.
+/// phase beyond a few units: the host reduces tau mod 2 and the turbulent and atmospheric mode
+/// phases mod 1 in double and hands over only those.
 ///
 /// instance_wind, 9 vec4 per instance i (element 9 i + j):
 ///   j = 0: (lambda_i, phi_i mod 2, paused, 0)  wind scale; wind phase phi_i = p_i - f (o_i.d)/v;
 ///          paused 1 while the instance is inactive, else 0: a dispatch may cover paused
 ///          instances between active ones (live_control.cpp); where it does (params.w = 1), it
 ///          skips their elements
-///   j = 1..8: frac(m_k phi_i) for the turbulent modes k = 4 (j - 1) .. 4 (j - 1) + 3
+///   j = 1..8: frac(m_k phi_i) for the turbulent modes k = 4 (j - 1) .. 4 (j - 1) + 3;
+///          atmospheric: the spatial phases frac(kx_k (p_i - o_i.e_x) - ky_k o_i.e_y - kz_k o_i.e_z)
 /// wind_table, vec4 elements:
-///   [HMSM_WIND_AMPLITUDES, +8): turbulent amplitudes a_k (k = 4 e + component)
+///   [HMSM_WIND_AMPLITUDES, +8): turbulent or atmospheric amplitudes a_k (k = 4 e + component);
+///       atmospheric: modes [0, 16) u', [16, 24) v', [24, 32) w'
 ///   HMSM_WIND_VECTOR: (s d, number of force fields): strength times unit direction
+///   HMSM_WIND_LATERAL, HMSM_WIND_VERTICAL: (s e_y, 0), (s e_z, 0), the atmospheric profile's
+///       cross-wind directions times strength (hmsm::wind_frame)
 ///   [HMSM_WIND_FIELDS, +2 per field): (centre xyz, radius), (F xyz, kind) with kind 0 =
 ///       directional (force h F), 1 = radial (force h F.x unit(x - centre))
 ///   [HMSM_WIND_STEPS + 9 s, +9): step slot s: (tau mod 2, 0, 0, 0), then frac(m_k tau + u_k)
-///       as instance_wind's elements 1..8. A wind_force dispatch reads slot pc.wind_slot.
+///       (atmospheric: frac(kx_k tau + u_k), tau in metres) as instance_wind's elements 1..8.
+///       A wind_force dispatch reads slot pc.wind_slot.
 #define HMSM_WIND_MODES 32
 #define HMSM_WIND_MODE_VEC4S 8
+#define HMSM_WIND_MODES_U_VEC4S 4  // atmospheric: mode vec4s [0, 4) u', [4, 6) v', [6, 8) w'
+#define HMSM_WIND_MODES_V_VEC4S 2
 #define HMSM_INSTANCE_WIND_VEC4S 9
 #define HMSM_MAX_FORCE_FIELDS 16
 #define HMSM_WIND_AMPLITUDES 0
 #define HMSM_WIND_VECTOR 8
-#define HMSM_WIND_FIELDS 9
+#define HMSM_WIND_LATERAL 9
+#define HMSM_WIND_VERTICAL 10
+#define HMSM_WIND_FIELDS 11
 #define HMSM_WIND_STEPS (HMSM_WIND_FIELDS + 2 * HMSM_MAX_FORCE_FIELDS)
 #define HMSM_WIND_STEP_VEC4S 9
 /// Steps one Backend::run may take (one slot each); Simulation::step runs longer calls in chunks.
@@ -88,6 +97,7 @@
 #define HMSM_WIND_PROFILE_Y3 4u
 #define HMSM_WIND_PROFILE_Y4 5u
 #define HMSM_WIND_PROFILE_TURBULENT 6u
+#define HMSM_WIND_PROFILE_ATMOSPHERIC 7u
 
 /// The ping-pong halves of chain_rotation and chain_origin: pointer-jumping round r reads half
 /// HMSM_HALF_READ(r) (unused in round 0) and writes half HMSM_HALF_WRITTEN(r), so after `rounds`

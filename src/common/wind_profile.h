@@ -46,4 +46,26 @@ HMSM_HOST_DEVICE T turbulent_y(const T* amplitude, const T* step_phase, const T*
     return y;
 }
 
+/// The atmospheric profile's (1 + u', v', w') of docs/model.md 3.5 from the reduced phases of one
+/// step and one instance (gpu_layout.h): each component sums its modes' a_k cos(2 pi (step_k +
+/// instance_k)), the sum reduced to [0, 1) before the cosine; modes [0, 16) are u', [16, 24)
+/// v', [24, 32) w'.
+template <class T>
+struct WindComponents {
+    T along, lateral, vertical;
+};
+template <class T>
+HMSM_HOST_DEVICE WindComponents<T> atmospheric_components(const T* amplitude, const T* step_phase,
+                                                          const T* instance_phase) {
+    const T two_pi = T(6.28318530717958647692);
+    T sum[3] = {T(1), T(0), T(0)};
+    for (int k = 0; k < 32; ++k) {
+        T phase = step_phase[k] + instance_phase[k];
+        phase -= floor(phase);
+        sum[k < 4 * HMSM_WIND_MODES_U_VEC4S ? 0 : k < 4 * (HMSM_WIND_MODES_U_VEC4S + HMSM_WIND_MODES_V_VEC4S) ? 1 : 2] +=
+            amplitude[k] * cos(two_pi * phase);
+    }
+    return {sum[0], sum[1], sum[2]};
+}
+
 }  // namespace hmsm::detail

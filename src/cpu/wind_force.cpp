@@ -1,6 +1,7 @@
 // Pass 1: generalized wind force per chain, from the wind in the chain's previous-step frame:
-// w = lambda_i s Y(tau + phi_i) d + the force fields at the chain's previous origin
-// (docs/model.md 3.5, 3.7, 3.9; the wind table layout is in gpu_layout.h).
+// w = lambda_i s Y(tau + phi_i) d (atmospheric: a vector, instance_wind_vector) + the force
+// fields at the chain's previous origin (docs/model.md 3.5, 3.7, 3.9; the wind table layout is
+// in gpu_layout.h).
 #include "cpu_state.h"
 
 #include "../common/wind_profile.h"
@@ -10,28 +11,48 @@
 
 namespace hmsm::detail::cpu {
 
+/// lambda_i s Y(tau + phi_i) d of group instance k at wind-table step slot `slot` (atmospheric:
+/// lambda_i s (e_x (1 + u') + e_y v' + e_z w')): the part of the wind that depends only on the
+/// instance and the step.
+template <class T>
+typename State<T>::vec3 instance_wind_vector(const State<T>& s, const gpu::PassConstants& pc, uint32_t slot, uint32_t k) {
+    using vec3 = typename State<T>::vec3;
+    const auto* table = s.wind_table.data();
+    const auto* step_phase = &table[HMSM_WIND_STEPS + HMSM_WIND_STEP_VEC4S * slot];
+    const auto& instance = s.instance_wind[pc.instance_begin + k];
+    if (pc.profile == HMSM_WIND_PROFILE_ATMOSPHERIC) {
+        const auto c = atmospheric_components<T>(&table[HMSM_WIND_AMPLITUDES].x, &step_phase[1].x, &instance[4]);
+        return instance[0] * (c.along * vec3(table[HMSM_WIND_VECTOR]) + c.lateral * vec3(table[HMSM_WIND_LATERAL]) +
+                              c.vertical * vec3(table[HMSM_WIND_VERTICAL]));
+    }
+    T y;
+    if (pc.profile == HMSM_WIND_PROFILE_TURBULENT)
+        y = turbulent_y<T>(&table[HMSM_WIND_AMPLITUDES].x, &step_phase[1].x, &instance[4]);
+    else
+        y = wind_profile_y<T>(pc.profile, step_phase[0].x + instance[1]);  // tau + phi, both mod 2
+    return instance[0] * y * vec3(table[HMSM_WIND_VECTOR]);
+}
+
 /// g for every chain of the work items, handed to use(state chain, static chain, g); the
 /// previous pose from the pose half src_half, or from the joint matrix (`from_joint`: a path walk).
 template <class T, class Use>
 void wind_forces(State<T>& s, const gpu::PassConstants& pc, uint32_t wind_slot, Range r, bool from_joint, Use&& use) {
     using vec3 = typename State<T>::vec3;
-    const uint32_t slot = wind_slot;  // the step's slot of the wind table
     const auto* table = s.wind_table.data();
-    const auto& step = table[HMSM_WIND_STEPS + HMSM_WIND_STEP_VEC4S * slot];
-    const vec3 strength_direction(table[HMSM_WIND_VECTOR]);
     const uint32_t fields = uint32_t(table[HMSM_WIND_VECTOR].w);
+    // The instance's wind is evaluated once per run of consecutive chains of one instance (a
+    // range holds whole instances but for its ends), not per chain.
+    uint32_t wind_instance = UINT32_MAX;
+    vec3 wind_of_instance(0);
     for (uint32_t i = r.begin; i < r.end; ++i) {
         Element e = element_of(i, pc.model_chain_count);
         if (instance_paused(s, pc, e.instance)) continue;
         uint64_t c = state_chain(pc, e.instance, int32_t(e.index));
-        const auto& instance = s.instance_wind[pc.instance_begin + e.instance];
-        T y;
-        if (pc.profile == HMSM_WIND_PROFILE_TURBULENT)
-            y = turbulent_y<T>(&table[HMSM_WIND_AMPLITUDES].x, &table[HMSM_WIND_STEPS + HMSM_WIND_STEP_VEC4S * slot + 1].x,
-                               &instance[4]);
-        else
-            y = wind_profile_y<T>(pc.profile, step.x + instance[1]);  // tau + phi, both mod 2
-        vec3 w = instance[0] * y * strength_direction;
+        if (e.instance != wind_instance) {
+            wind_of_instance = instance_wind_vector(s, pc, wind_slot, e.instance);
+            wind_instance = e.instance;
+        }
+        vec3 w = wind_of_instance;
         const uint64_t pose = pc.src_half * s.total_chains + c;
         const vec3 x = from_joint ? joint_origin(s, c) : vec3(s.chain_origin[pose]);
         for (uint32_t f = 0; f < fields; ++f) {

@@ -115,7 +115,7 @@ Status check_wind_frequency(double frequency) {
 Status check_wind_clock(double frequency, double seconds, double phase) {
     if (!(std::abs(phase) <= kMaxWindPhase))
         return {ErrorCode::invalid_argument,
-                "wind clock f t = " + number_text(phase) + " (frequency " + number_text(frequency) + " Hz, time " +
+                "wind clock = " + number_text(phase) + " (rate " + number_text(frequency) + " per second, time " +
                     number_text(seconds) + " s) is out of range: it must stay within +-" +
                     number_text(kMaxWindPhase)};
     return {};

@@ -2,6 +2,7 @@
 #include <hmsm/options.h>
 
 #include "../common/wind_profile.h"
+#include "atmospheric_wind.h"
 #include "input_limits.h"
 
 #include <glm/geometric.hpp>
@@ -17,6 +18,10 @@ static_assert(uint32_t(hmsm::WindProfile::y2) == HMSM_WIND_PROFILE_Y2);
 static_assert(uint32_t(hmsm::WindProfile::y3) == HMSM_WIND_PROFILE_Y3);
 static_assert(uint32_t(hmsm::WindProfile::y4) == HMSM_WIND_PROFILE_Y4);
 static_assert(uint32_t(hmsm::WindProfile::turbulent) == HMSM_WIND_PROFILE_TURBULENT);
+static_assert(uint32_t(hmsm::WindProfile::atmospheric) == HMSM_WIND_PROFILE_ATMOSPHERIC);
+static_assert(hmsm::kAtmosphericModesU + hmsm::kAtmosphericModesV + hmsm::kAtmosphericModesW == HMSM_WIND_MODES);
+static_assert(hmsm::kAtmosphericModesU == 4 * HMSM_WIND_MODES_U_VEC4S &&
+              hmsm::kAtmosphericModesV == 4 * HMSM_WIND_MODES_V_VEC4S);
 
 namespace hmsm {
 
@@ -51,6 +56,11 @@ TurbulentModes turbulent_modes(double turbulence, uint64_t seed) {
 }
 
 double wind_value(const Wind& wind, double x) {
+    if (wind.profile == WindProfile::atmospheric) {  // 1 + u' at the origin
+        const AtmosphericModes modes = atmospheric_modes(wind.turbulence, wind.seed);
+        return 1.0 + detail::atmospheric_component(modes, 0, kAtmosphericModesU, x, glm::dvec3(0.0),
+                                                   wind_frame(wind.direction));
+    }
     if (wind.profile != WindProfile::turbulent) {
         return wind_profile_value(wind.profile, x - 2.0 * std::floor(x / 2.0));
     }
@@ -65,7 +75,7 @@ double wind_value(const Wind& wind, double x) {
 }
 
 double wind_phase(const Wind& wind, const glm::dvec3& origin) {
-    if (wind.front_speed <= 0.0) return 0.0;
+    if (wind.front_speed <= 0.0 || wind.profile == WindProfile::atmospheric) return 0.0;
     return -wind.frequency * glm::dot(origin, glm::normalize(wind.direction)) / wind.front_speed;
 }
 
@@ -73,6 +83,18 @@ double wind_strength_for_speed(double speed) { return (speed / 6.0) * (speed / 6
 
 glm::dvec3 wind_at(const Wind& wind, const glm::dvec3& origin, double t, double instance_phase,
                    double instance_scale) {
+    if (wind.profile == WindProfile::atmospheric) {
+        const AtmosphericModes modes = atmospheric_modes(wind.turbulence, wind.seed);
+        const WindFrame frame = wind_frame(wind.direction);
+        const double clock = wind_clock_rate(wind) * t + instance_phase;
+        const glm::dvec3 x = wind.strength < 0.0 ? -origin : origin;  // gusts travel with the mean wind
+        const uint32_t v = kAtmosphericModesU, w = v + kAtmosphericModesV;
+        const double u_rel = detail::atmospheric_component(modes, 0, v, clock, x, frame);
+        const double v_rel = detail::atmospheric_component(modes, v, w, clock, x, frame);
+        const double w_rel = detail::atmospheric_component(modes, w, kTurbulentModes, clock, x, frame);
+        return instance_scale * wind.strength *
+               ((1.0 + u_rel) * frame.along + v_rel * frame.lateral + w_rel * frame.vertical);
+    }
     double y = wind_value(wind, wind.frequency * t + instance_phase + wind_phase(wind, origin));
     return instance_scale * wind.strength * y * glm::normalize(wind.direction);
 }
@@ -135,7 +157,7 @@ Status validate(const Wind& w) {
         return bad("front speed", w.front_speed, "must be 0 (no front) or >= 0.01 m/s");
     if (!std::isfinite(w.turbulence) || w.turbulence < 0.0 || w.turbulence > 2.0)
         return bad("turbulence", w.turbulence, "must be in [0, 2]");
-    if (static_cast<uint32_t>(w.profile) > static_cast<uint32_t>(WindProfile::turbulent))
+    if (static_cast<uint32_t>(w.profile) > static_cast<uint32_t>(WindProfile::atmospheric))
         return {ErrorCode::invalid_argument, "wind profile " + std::to_string(static_cast<uint32_t>(w.profile)) +
                                                  " does not exist"};
     for (int i = 0; i < 3; ++i)

@@ -42,10 +42,14 @@ TEST_P(PassAgreement, EachDispatchMatchesCpu64OnRandomStates) {
     const auto [backend_under_test, pass, form] = GetParam();
     // The same seed for every backend: all see the same scenes, states and wind phases.
     std::mt19937 rng(1000 + 17 * uint32_t(pass) + uint32_t(form));
+    // Each scene with another wind profile with mode phases: y1, turbulent, atmospheric.
+    const WindProfile profiles[] = {WindProfile::y1, WindProfile::turbulent, WindProfile::atmospheric};
+    size_t scene_index = 0;
     for (const SceneSpec& spec : scene_specs()) {
         SCOPED_TRACE(spec.name);
         detail::SceneData data = random_scene_data(rng, spec.models, spec.instance_models,
                                                    spec.max_group_instances);
+        data.profile = profiles[scene_index++ % 3];
         auto backend = backend_under_test->create();
         if (!backend.ok() && backend.status().code() == ErrorCode::no_device)
             GTEST_SKIP() << backend.status().message();

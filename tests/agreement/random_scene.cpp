@@ -299,6 +299,10 @@ void randomize_state(const detail::SceneData& d, detail::Backend& a, detail::Bac
     for (int k = 0; k < 32; ++k) table[4 * HMSM_WIND_AMPLITUDES + k] = uniform(rng, 0, 0.2);
     double* vector = &table[4 * HMSM_WIND_VECTOR];
     vector[0] = uniform(rng, -4, 4); vector[1] = uniform(rng, -1, 1); vector[2] = uniform(rng, -4, 4); vector[3] = 3;
+    for (int k = 0; k < 3; ++k) {  // the atmospheric profile's cross-wind vectors s e_y, s e_z
+        table[4 * HMSM_WIND_LATERAL + k] = uniform(rng, -3, 3);
+        table[4 * HMSM_WIND_VERTICAL + k] = uniform(rng, -3, 3);
+    }
     for (int f = 0; f < 3; ++f) {
         double* sphere = &table[4 * (HMSM_WIND_FIELDS + 2 * f)];
         for (int k = 0; k < 3; ++k) sphere[k] = uniform(rng, -5, 5);

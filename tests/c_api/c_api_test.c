@@ -313,7 +313,7 @@ static void test_bad_configs(void) {
     CHECK_CONFIG_FAILS(model.ring_sides, 2);
     CHECK_CONFIG_FAILS(parameters.dt, NAN);
     CHECK_CONFIG_FAILS(parameters.stiffness, -1.0);
-    CHECK_CONFIG_FAILS(wind.profile, 7);
+    CHECK_CONFIG_FAILS(wind.profile, 8);
     CHECK_CONFIG_FAILS(wind.strength, NAN);
     CHECK_CONFIG_FAILS(wind.direction[0], 0.0);
 #undef CHECK_CONFIG_FAILS

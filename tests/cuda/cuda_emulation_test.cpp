@@ -80,16 +80,17 @@ void poison(HostImage& image, BufferId id) {
 class CudaEmulation : public ::testing::TestWithParam<test::TestComposition> {};
 
 /// Runs the first `steps` steps of `sim`'s step program through the kernel bodies on the host,
-/// with the wind clock of each step as Simulation::step computes it (tau = f t, reduced on the
+/// with the wind clock of each step as Simulation::step computes it (tau = f t, or U t for the
+/// atmospheric profile, reduced on the
 /// host into wind-table slot 0).
 void emulate_steps(const Simulation& sim, HostImage& image, uint32_t steps) {
     const double dt = sim.config().parameters.dt;
     const Wind& wind = sim.wind();
-    const TurbulentModes modes = turbulent_modes(wind.turbulence, wind.seed);
+    const detail::WindModes modes = detail::wind_modes(wind);
     auto* table = reinterpret_cast<float*>(image.bytes[uint32_t(BufferId::wind_table)].data());
     double slot[detail::kWindStepScalars];
     for (uint32_t k = 0; k < steps; ++k) {
-        detail::fill_wind_step(wind, modes, (wind.frequency * dt) * double(k), slot);
+        detail::fill_wind_step(wind, modes, (wind_clock_rate(wind) * dt) * double(k), slot);
         for (uint32_t i = 0; i < detail::kWindStepScalars; ++i) table[4 * HMSM_WIND_STEPS + i] = float(slot[i]);
         for (const detail::Dispatch& d : hmsm::detail::step_program_of(sim)) detail::cuda::emulate_dispatch(d, image.pointers, 0);
     }
@@ -187,14 +188,17 @@ TEST_P(CudaEmulation, PausedInstanceInsideADispatchIsSkipped) {
     }
 }
 
-TEST(CudaEmulationLive, TurbulentWindAndForceFieldsFollowCpu64) {
-    // The wind_force kernel with the turbulent profile, a front, per-instance wind scale and
-    // phase, and force fields of both kinds (docs/model.md 3.5, 3.9).
+class CudaEmulationWind : public ::testing::TestWithParam<WindProfile> {};
+
+TEST_P(CudaEmulationWind, ProfileFrontAndForceFieldsFollowCpu64) {
+    // The wind_force kernel with the turbulent or atmospheric profile, a front (unused by the
+    // atmospheric one), per-instance wind scale and phase, and force fields of both kinds
+    // (docs/model.md 3.5, 3.9).
     Scene scene = forest_scene(7);
     scene.instances[1].wind_scale = 0.4;
     scene.instances[2].wind_phase = 0.8;
     SimulationConfig config = test_config(BackendKind::cpu64, Composition::pointer_jumping, false);
-    config.wind.profile = WindProfile::turbulent;
+    config.wind.profile = GetParam();
     config.wind.turbulence = 0.9;
     config.wind.seed = 99;
     config.wind.front_speed = 3.0;
@@ -261,11 +265,11 @@ TEST(CudaEmulationPacked, ContourWritesThePositionAndTheNormalWordOnly) {
 /// emulate_steps).
 void write_step_slots(const Simulation& sim, HostImage& image, uint32_t k) {
     const Wind& wind = sim.wind();
-    const TurbulentModes modes = turbulent_modes(wind.turbulence, wind.seed);
+    const detail::WindModes modes = detail::wind_modes(wind);
     auto* table = reinterpret_cast<float*>(image.bytes[uint32_t(BufferId::wind_table)].data());
     double slot[detail::kWindStepScalars];
     for (uint32_t s = 0; s < 2; ++s) {
-        detail::fill_wind_step(wind, modes, (wind.frequency * sim.config().parameters.dt) * double(k + s), slot);
+        detail::fill_wind_step(wind, modes, (wind_clock_rate(wind) * sim.config().parameters.dt) * double(k + s), slot);
         for (uint32_t i = 0; i < detail::kWindStepScalars; ++i)
             table[4 * (HMSM_WIND_STEPS + s * HMSM_WIND_STEP_VEC4S) + i] = float(slot[i]);
     }
@@ -279,12 +283,15 @@ bool same_buffer(const HostImage& a, const HostImage& b, BufferId id) {
 // the first step whole, then each step without its wind_force dispatches, taking the angles the
 // step before wrote to chain_state_next. Its joint matrices and angles equal the plain path
 // walk's bit for bit, with the turbulent profile (whose value the top poses hoist per instance)
-// and force fields; after a live change (the wind vector) a step must run whole again: one
+// and force fields, and with the atmospheric one (whose wind vector the walk ahead evaluates
+// itself); after a live change (the wind vector) a step must run whole again: one
 // that takes the stale angles departs from the plain walk.
-TEST(CudaEmulationWalkAhead, EqualsThePathWalkBitForBit) {
+class CudaEmulationWalkAhead : public ::testing::TestWithParam<WindProfile> {};
+
+TEST_P(CudaEmulationWalkAhead, EqualsThePathWalkBitForBit) {
     const Scene scene = forest_scene(11);
     SimulationConfig config = test_config(BackendKind::cpu64, Composition::path_walk, false);
-    config.wind.profile = WindProfile::turbulent;
+    config.wind.profile = GetParam();
     config.wind.turbulence = 0.9;
     auto reference = Simulation::create(scene, config);
     ASSERT_TRUE(reference.ok()) << reference.status().message();
@@ -346,6 +353,13 @@ INSTANTIATE_TEST_SUITE_P(Compositions, CudaEmulation,
                                            test::TestComposition(Composition::level_by_level),
                                            test::TestComposition(Composition::path_walk)),
                          [](const auto& info) { return test::name_of(info.param); });
+
+std::string profile_name(const ::testing::TestParamInfo<WindProfile>& info) { return to_string(info.param); }
+
+INSTANTIATE_TEST_SUITE_P(Profiles, CudaEmulationWind,
+                         ::testing::Values(WindProfile::turbulent, WindProfile::atmospheric), profile_name);
+INSTANTIATE_TEST_SUITE_P(Profiles, CudaEmulationWalkAhead,
+                         ::testing::Values(WindProfile::turbulent, WindProfile::atmospheric), profile_name);
 
 }  // namespace
 }  // namespace hmsm::cuda_test

@@ -43,6 +43,7 @@ int joint_forest_cases(BackendKind backend, const std::vector<JointForestCase>& 
         SimulationConfig config;
         config.backend = backend;
         config.outputs = Outputs::joints;
+        config.wind.profile = settings.wind;
         config.composition = Composition::pointer_jumping;  // the first columns; then the path walk
         // Host memory: the state of one instance, from a one-instance simulation on the CPU.
         auto probe = Simulation::create(single_tree_scene(c.tree), [&] {

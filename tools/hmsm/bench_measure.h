@@ -16,6 +16,7 @@ struct Settings {
     uint32_t repeats = 5;        ///< timed batches per figure (the median is reported)
     double case_budget = 20.0;   ///< seconds one case may take; slow cases get fewer steps
     Composition forest_composition = Composition::automatic;  ///< of the forest rows
+    WindProfile wind = WindProfile::y1;  ///< the wind profile of every case (docs/model.md 3.5)
 };
 
 /// What to time on one simulation.

@@ -75,6 +75,7 @@ std::unique_ptr<Simulation> BenchRun::create(const Scene& scene, BackendRun& b, 
     config.composition = composition;
     config.vertex_layout = layout;
     config.profile_passes = false;
+    config.wind.profile = settings_.wind;
     auto sim = detail::SimulationAccess::create(scene, config, jumping_form);
     if (sim) {
         b.device = (*sim)->device_name();

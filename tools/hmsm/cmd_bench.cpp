@@ -42,6 +42,7 @@ struct BenchFlags {
     double spacing = 25.0;
     double case_budget = 20.0;
     std::string forest_composition = "automatic";
+    std::string wind = "y1";
     bool quick = false, no_progress = false;
     std::string json_path, out_stem, commit = "unknown", render;
 } flags;
@@ -164,6 +165,7 @@ void register_bench_flags(CLI::App& app) {
                    "composition of the forest rows: " +
                        choices(kCompositionNames, Spelling::hyphens, Composition::automatic) +
                        "; automatic is the library's default");
+    app.add_option("--wind", flags.wind, "wind profile of every case (default y1; names as for simulate --wind)");
     app.add_option("--case-budget", flags.case_budget,
                    "seconds one case may take: slower cases run fewer steps, forest sizes "
                    "extrapolated past it are skipped (default 20)");
@@ -211,6 +213,8 @@ int run_bench(CLI::App& app) {
     const auto forest_composition =
         parse_choice(kCompositionNames, flags.forest_composition, "--forest-composition", Spelling::hyphens);
     if (!forest_composition) return fail(forest_composition.status());
+    const auto wind = parse_choice(kWindProfileNames, flags.wind, "--wind", Spelling::as_is);
+    if (!wind) return fail(wind.status());
     if (!(flags.spacing >= 0.0) || !std::isfinite(flags.spacing))
         return fail_input("--spacing: must be a finite number >= 0");
 
@@ -277,7 +281,7 @@ int run_bench(CLI::App& app) {
     }
 
     Settings settings{uint32_t(flags.steps), uint32_t(flags.warmup), uint32_t(flags.repeats), flags.case_budget,
-                      *forest_composition};
+                      *forest_composition, *wind};
     const uint64_t device_copy_bytes = uint64_t((flags.quick ? 64.0 : 1024.0) * kMiB);
     const uint64_t host_copy_bytes = uint64_t((flags.quick ? 32.0 : 256.0) * kMiB);
     // Joints-only forest cases: the forest model (paper-1 or --tree) at each size, and a
@@ -400,6 +404,7 @@ int run_bench(CLI::App& app) {
         {"settings", {{"steps_per_batch", settings.steps}, {"warmup_steps", settings.warmup},
                       {"repeats", settings.repeats}, {"case_budget_seconds", settings.case_budget},
                       {"forest_composition", to_string(settings.forest_composition)},
+                      {"wind", to_string(settings.wind)},
                       {"instances", counts}, {"forest_model", forest_model.name}, {"spacing", flags.spacing},
                       {"forest_layouts", {to_string(kVertexLayouts[0]), to_string(kVertexLayouts[1])}}}},
         {"backends", backends_json},
