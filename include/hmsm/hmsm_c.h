@@ -83,6 +83,8 @@ enum { /* hmsm_config.composition */
 };
 enum { HMSM_VERTEX_LAYOUT_SEPARATE = 0, HMSM_VERTEX_LAYOUT_PACKED = 1 };
 enum { HMSM_GROUPING_DIRECTION = 0, HMSM_GROUPING_WIDTH = 1 };
+/* hmsm_config.dynamics (hmsm::Dynamics, docs/model.md 3.7 and 3.12) */
+enum { HMSM_DYNAMICS_PAPER = 0, HMSM_DYNAMICS_COUPLED = 1 };
 enum { /* hmsm_wind.profile (docs/model.md 3.5) */
     HMSM_WIND_NONE = 0,
     HMSM_WIND_CONSTANT = 1,
@@ -134,6 +136,18 @@ typedef struct hmsm_parameters {
     double max_frequency;
 } hmsm_parameters;
 
+/* The coupled dynamics' wood, leaves and damping: hmsm::Material, hmsm::Foliage and
+ * hmsm::Parameters' structural_damping and wood_drag_coefficient (docs/model.md 3.12). */
+typedef struct hmsm_coupled_parameters {
+    double modulus;               /* E (Pa) */
+    double wood_density;          /* green density (kg/m^3) */
+    double structural_damping;    /* zeta_s */
+    double wood_drag_coefficient; /* C_d of branches */
+    double leaf_mass_per_area;    /* kg per m^2 of leaf card */
+    double leaf_drag_coefficient; /* drag area per m^2 of leaf card */
+    int32_t leaves_on;            /* 1: leaf-on, 0: leaf-off */
+} hmsm_coupled_parameters;
+
 /* hmsm::Wind (docs/model.md 3.5) */
 typedef struct hmsm_wind {
     uint32_t struct_size;
@@ -157,6 +171,8 @@ typedef struct hmsm_config {
     hmsm_model_options model;
     hmsm_parameters parameters;
     hmsm_wind wind;
+    int32_t dynamics;                /* HMSM_DYNAMICS_*: the equations of motion */
+    hmsm_coupled_parameters coupled; /* used by HMSM_DYNAMICS_COUPLED, validated always */
 } hmsm_config;
 
 /* hmsm::Instance: a placed copy of model `model` (docs/model.md 3.6, 3.9) */
