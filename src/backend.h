@@ -193,6 +193,13 @@ Result<std::unique_ptr<Backend>> create_cuda_backend();
 /// where the host has more than one hardware thread (cpu_thread_count(cpu_threads) > 1), else
 /// the serial CPU (float). `cpu_threads` is SimulationConfig::cpu_threads (0: default).
 Result<std::unique_ptr<Backend>> create_backend(BackendKind kind, uint32_t cpu_threads = 0);
+/// The backend to create for `config`: its own, except that `automatic` under the coupled
+/// dynamics takes the CPU (cpu-parallel where more than one thread, else cpu), the only
+/// backends with the coupled passes.
+BackendKind backend_for_dynamics(const SimulationConfig& config);
+/// unsupported where backend `kind` lacks config's dynamics (the coupled passes run on cpu,
+/// cpu64 and cpu-parallel); invalid_argument for the coupled dynamics with the path walk.
+Status check_dynamics_runs(const SimulationConfig& config, BackendKind kind);
 
 /// Buffers each pass reads and writes (bit i = BufferId i), for barrier placement.
 uint32_t pass_reads(Pass pass);
@@ -217,16 +224,28 @@ inline uint32_t dispatch_passes(const Dispatch& d) {
 }
 /// Buffers a dispatch reads and writes (pass_table.h): a path walk's own columns, else the union
 /// over the passes it runs.
+/// A dispatch of the coupled dynamics adds pass_table.h's kCoupled* accesses.
+inline bool runs_coupled(const Dispatch& d) { return d.constants.dynamics == HMSM_PASS_DYNAMICS_COUPLED; }
 inline uint32_t dispatch_reads(const Dispatch& d) {
     if (is_top_poses_walk(d)) return kWalkTopPosesReads;
     if (is_walk_ahead(d)) return kWalkAheadReads;
-    return runs_path_walk(d) ? pass_info(d.pass).walk_reads : reads_of_passes(dispatch_passes(d));
+    if (runs_path_walk(d)) return pass_info(d.pass).walk_reads;
+    uint32_t reads = reads_of_passes(dispatch_passes(d));
+    if (runs_coupled(d) && d.pass == Pass::wind_force) reads |= kCoupledWindForceReads;
+    if (runs_coupled(d) && d.pass == Pass::integrate) reads |= kCoupledIntegrateReads;
+    return reads;
 }
 inline uint32_t dispatch_writes(const Dispatch& d) {
     if (is_top_poses_walk(d)) return kWalkTopPosesWrites;
     if (is_walk_ahead(d)) return kWalkAheadWrites;
-    return runs_path_walk(d) ? pass_info(d.pass).walk_writes : writes_of_passes(dispatch_passes(d));
+    if (runs_path_walk(d)) return pass_info(d.pass).walk_writes;
+    uint32_t writes = writes_of_passes(dispatch_passes(d));
+    if (runs_coupled(d) && d.pass == Pass::integrate) writes |= kCoupledIntegrateWrites;
+    return writes;
 }
+/// Whether a dispatch reads other chains' state anywhere in its instances though its pass is
+/// not hierarchical: coupled wind_force's gather (its chunks are planned by instance).
+inline bool reads_across_chains(const Dispatch& d) { return runs_coupled(d) && d.pass == Pass::wind_force; }
 
 /// Number of threads of a dispatch and the mapping shared by every backend.
 inline uint32_t dispatch_thread_count(const Dispatch& d) { return d.constants.element_count; }

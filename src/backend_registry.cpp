@@ -22,6 +22,24 @@ namespace detail {
 bool vulkan_backend_is_cpu_device(const Backend& backend);  // src/vulkan
 #endif
 
+BackendKind backend_for_dynamics(const SimulationConfig& config) {
+    if (config.model.dynamics != Dynamics::coupled || config.backend != BackendKind::automatic) return config.backend;
+    auto threads = cpu_thread_count(config.cpu_threads);
+    return threads.ok() && *threads > 1 ? BackendKind::cpu_parallel : BackendKind::cpu;
+}
+
+Status check_dynamics_runs(const SimulationConfig& config, BackendKind kind) {
+    if (config.model.dynamics != Dynamics::coupled) return {};
+    if (kind != BackendKind::cpu && kind != BackendKind::cpu64 && kind != BackendKind::cpu_parallel)
+        return {ErrorCode::unsupported, std::string("dynamics 'coupled' runs on the backends cpu, cpu64 and cpu-parallel; "
+                                                    "backend '") + to_string(kind) + "' has no coupled passes"};
+    if (config.composition == Composition::path_walk)
+        return {ErrorCode::invalid_argument,
+                "dynamics 'coupled' cannot run composition 'path_walk' (its wind_force reads other chains' angles, "
+                "which the path walk integrates in the same dispatch): use pointer_jumping, level_by_level or automatic"};
+    return {};
+}
+
 Result<std::unique_ptr<Backend>> create_backend(BackendKind kind, uint32_t cpu_threads) {
     switch (kind) {
         case BackendKind::cpu: return create_cpu_backend(false);

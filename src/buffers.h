@@ -12,7 +12,7 @@ namespace hmsm::detail {
 
 /// Element shape: scalars per element as stored (a mat3x4 is 12).
 enum class Shape : uint32_t { i32 = 1, i32x2 = 2, f32x2 = 102, f32x4 = 104, mat3x4 = 112,
-                              f32x36 = 136 };
+                              f32x24 = 124, f32x36 = 136 };
 
 constexpr uint32_t shape_scalars(Shape s) {
     switch (s) {
@@ -21,6 +21,7 @@ constexpr uint32_t shape_scalars(Shape s) {
         case Shape::f32x2: return 2;
         case Shape::f32x4: return 4;
         case Shape::mat3x4: return 12;
+        case Shape::f32x24: return 24;
         case Shape::f32x36: return 36;
     }
     return 0;
@@ -70,7 +71,9 @@ enum class Scope : uint32_t {
     X(instance_wind, HMSM_BINDING_INSTANCE_WIND, f32x36, instance)                  \
     X(wind_table, HMSM_BINDING_WIND_TABLE, f32x4, wind)                             \
     X(joint_matrix, HMSM_BINDING_JOINT_MATRIX, mat3x4, chain)                       \
-    X(chain_walk, HMSM_BINDING_CHAIN_WALK, i32, model_chain_walk)
+    X(chain_walk, HMSM_BINDING_CHAIN_WALK, i32, model_chain_walk)                   \
+    X(chain_dynamics, HMSM_BINDING_CHAIN_DYNAMICS, f32x24, model_chain)             \
+    X(chain_load, HMSM_BINDING_CHAIN_LOAD, f32x4, chain)
 
 enum class BufferId : uint32_t {
 #define HMSM_BUFFER_ENUM(name, binding, shape, scope) name = binding,

@@ -52,6 +52,10 @@ std::vector<std::byte> device_image(const SceneData& d, BufferId id) {
         case BufferId::vertex_rest_normal: return float4_image(d.vertex_rest_normal);
         case BufferId::vertex_parent_position: return float4_image(d.vertex_parent_position);
         case BufferId::vertex_parent_normal: return float4_image(d.vertex_parent_normal);
+        case BufferId::chain_dynamics: {  // the coupled dynamics' records, as floats
+            const std::vector<float> words(d.chain_dynamics.begin(), d.chain_dynamics.end());
+            return raw_bytes(words);
+        }
         // Instance buffers: the live instances, then zeros up to the capacity.
         case BufferId::instance_origin: return padded(float4_image(d.instance_origin), d, id);
         case BufferId::instance_yaw: return padded(float4_image(d.instance_yaw), d, id);

@@ -15,8 +15,13 @@ using detail::BufferId;
 
 /// The chain-scope state an instance carries: S, V, g, T, the joint matrices and both halves
 /// of R and O. Nodes and vertices are recomputed from R and O.
-constexpr BufferId kCarried[] = {BufferId::chain_state, BufferId::chain_force, BufferId::chain_local,
+/// The coupled dynamics adds the loads of the last step (docs/model.md 3.13).
+std::vector<BufferId> carried_buffers(bool coupled) {
+    std::vector<BufferId> ids = {BufferId::chain_state, BufferId::chain_force, BufferId::chain_local,
                                  BufferId::joint_matrix, BufferId::chain_rotation, BufferId::chain_origin};
+    if (coupled) ids.push_back(BufferId::chain_load);
+    return ids;
+}
 
 uint32_t halves_of(BufferId id) {
     return detail::buffer_info(id).scope == detail::Scope::chain_halves ? 2u : 1u;
@@ -143,6 +148,8 @@ Status Simulation::Impl::reset(std::span<const uint32_t> indices) {
         const std::vector<double> zeros(chains * 4, 0.0);
         HMSM_TRY(backend_->write(BufferId::chain_state, g.chain_begin, chains, zeros.data(), detail::Scalar::f64));
         HMSM_TRY(backend_->write(BufferId::chain_force, g.chain_begin, chains, zeros.data(), detail::Scalar::f64));
+        if (data_->coupled())
+            HMSM_TRY(backend_->write(BufferId::chain_load, g.chain_begin, chains, zeros.data(), detail::Scalar::f64));
     }
     ahead_schedule_.live_change();  // the reset angles replace any integrated ahead
     const detail::RunStep at_rest[1] = {};
@@ -171,7 +178,7 @@ Status Simulation::Impl::reshape_in_place(std::unique_ptr<detail::SceneData> nex
         }
         at += n;
     }
-    for (BufferId id : kCarried) {
+    for (BufferId id : carried_buffers(data_->coupled())) {
         std::vector<detail::ElementMove> in_buffer;
         for (uint64_t h = 0; h < halves_of(id); ++h)
             for (detail::ElementMove m : moves) {
@@ -187,6 +194,8 @@ Status Simulation::Impl::reshape_in_place(std::unique_ptr<detail::SceneData> nex
         const std::vector<double> zeros(added_chains * 4, 0.0);
         HMSM_TRY(backend_->write(BufferId::chain_state, at, added_chains, zeros.data(), detail::Scalar::f64));
         HMSM_TRY(backend_->write(BufferId::chain_force, at, added_chains, zeros.data(), detail::Scalar::f64));
+        if (next->coupled())
+            HMSM_TRY(backend_->write(BufferId::chain_load, at, added_chains, zeros.data(), detail::Scalar::f64));
     }
     // Origins and yaws from the first instance that changed place on.
     const uint64_t changed = next->instance_count() - first_moved;
@@ -219,28 +228,29 @@ Status Simulation::Impl::reshape_anew(std::unique_ptr<detail::SceneData> next,
         std::vector<double> f64;
         std::vector<float> f32;
     };
-    std::vector<Saved> saved(std::size(kCarried));  // per buffer, the halves back to back
+    const std::vector<BufferId> carried = carried_buffers(data_->coupled());
+    std::vector<Saved> saved(std::size(carried));  // per buffer, the halves back to back
     const uint64_t live = data_->total_chains;
-    for (size_t b = 0; b < std::size(kCarried); ++b) {
-        const uint32_t per = detail::shape_scalars(detail::buffer_info(kCarried[b]).shape);
-        const uint64_t scalars = halves_of(kCarried[b]) * live * per;
+    for (size_t b = 0; b < std::size(carried); ++b) {
+        const uint32_t per = detail::shape_scalars(detail::buffer_info(carried[b]).shape);
+        const uint64_t scalars = halves_of(carried[b]) * live * per;
         if (scalar == detail::Scalar::f64) saved[b].f64.resize(scalars);
         else saved[b].f32.resize(scalars);
-        for (uint32_t h = 0; h < halves_of(kCarried[b]); ++h) {
+        for (uint32_t h = 0; h < halves_of(carried[b]); ++h) {
             void* dst = scalar == detail::Scalar::f64 ? static_cast<void*>(saved[b].f64.data() + h * live * per)
                                                       : static_cast<void*>(saved[b].f32.data() + h * live * per);
-            HMSM_TRY(backend_->read(kCarried[b], h * data_->chain_capacity, live, dst, scalar));
+            HMSM_TRY(backend_->read(carried[b], h * data_->chain_capacity, live, dst, scalar));
         }
     }
     HMSM_TRY(backend_->upload(*next));
     data_ = std::move(next);
     ++full_uploads_;
-    for (size_t b = 0; b < std::size(kCarried); ++b) {
-        const uint32_t per = detail::shape_scalars(detail::buffer_info(kCarried[b]).shape);
+    for (size_t b = 0; b < std::size(carried); ++b) {
+        const uint32_t per = detail::shape_scalars(detail::buffer_info(carried[b]).shape);
         auto carry = [&](auto& values) -> Status {
             using V = typename std::decay_t<decltype(values)>::value_type;
             std::vector<V> out(live * per);
-            for (uint32_t h = 0; h < halves_of(kCarried[b]); ++h) {
+            for (uint32_t h = 0; h < halves_of(carried[b]); ++h) {
                 uint64_t at = 0;
                 for (uint32_t i : survivors) {
                     const uint64_t from = h * live + old_chain[i];
@@ -248,7 +258,7 @@ Status Simulation::Impl::reshape_anew(std::unique_ptr<detail::SceneData> next,
                     std::copy_n(values.begin() + from * per, n * per, out.begin() + at * per);
                     at += n;
                 }
-                HMSM_TRY(backend_->write(kCarried[b], h * data_->chain_capacity, at, out.data(), scalar));
+                HMSM_TRY(backend_->write(carried[b], h * data_->chain_capacity, at, out.data(), scalar));
             }
             return {};
         };

@@ -9,13 +9,15 @@ uint32_t pass_writes(Pass pass) { return pass_info(pass).writes; }
 
 uint64_t SceneData::element_count(BufferId id) const {
     switch (buffer_info(id).scope) {
-        case Scope::model_chain: return chain_parent.size();
+        case Scope::model_chain:
+            if (id == BufferId::chain_dynamics) return chain_dynamics.size() / (4 * HMSM_CHAIN_DYNAMICS_VEC4S);
+            return chain_parent.size();
         case Scope::model_chain_jump: return chain_jump.size();
         case Scope::model_chain_walk: return chain_walk.size();
         case Scope::model_node: return node_owner.size();
         case Scope::model_vertex: return vertex_chain.size();
         case Scope::instance: return instance_capacity;
-        case Scope::chain: return chain_capacity;
+        case Scope::chain: return id == BufferId::chain_load && !coupled() ? 0 : chain_capacity;
         case Scope::chain_halves: return 2 * chain_capacity;
         case Scope::node: return id == BufferId::node_world && !produces_nodes() ? 0 : node_capacity;
         case Scope::vertex:

@@ -1,5 +1,7 @@
 #include "scene_data.h"
 
+#include "model/coupled_constants.h"
+
 #include <algorithm>
 #include <cmath>
 
@@ -14,6 +16,20 @@ uint32_t jump_rounds_for_depth(int32_t max_depth) {
 namespace {
 
 glm::dvec4 point(const glm::dvec3& p) { return {p, 0.0}; }
+
+/// A chain's record of the coupled dynamics (gpu_layout.h HMSM_CHAIN_DYNAMICS_VEC4S).
+void append_coupled_record(std::vector<double>& out, const ChainDynamics& k, double dt) {
+    for (int a = 0; a < 2; ++a) {
+        const auto phi = oscillator_transition(k.inertia[a], k.stiffness[a], k.damping[a], dt);
+        out.insert(out.end(), phi.begin(), phi.end());
+    }
+    const glm::dvec3 moment = kReferencePressure * k.wind_moment;
+    const double rest[16] = {k.inertia[0], k.inertia[1], k.stiffness[0], k.stiffness[1],
+                             k.damping[0], k.damping[1], k.aero_damping[0], k.aero_damping[1],
+                             moment.x, moment.y, moment.z, 0.0,
+                             double(k.first_child), double(k.child_count), 0.0, 0.0};
+    out.insert(out.end(), std::begin(rest), std::end(rest));
+}
 
 }  // namespace
 
@@ -36,6 +52,7 @@ gpu::PassConstants group_constants(const SceneData& d, const InstanceGroup& g, u
     pc.total_model_chains = d.total_model_chains();
     pc.src_half = final_half;
     pc.dst_half = final_half;
+    pc.dynamics = d.coupled() ? HMSM_PASS_DYNAMICS_COUPLED : HMSM_PASS_DYNAMICS_PAPER;
     pc.params = {float(d.dt), float(d.max_angle), float(d.fix_weight), g.covers_paused ? 1.0f : 0.0f};
     return pc;
 }
@@ -87,6 +104,7 @@ SceneData flatten_scene(const Scene& scene, const std::vector<Hierarchy>& hierar
             d.chain_attach.push_back(chain.attach_node);
             d.chain_rest_rotation.push_back(chain.rest_rotation);
             d.chain_constants.push_back({chain.inertia, chain.stiffness, chain.damping, chain.wind_area});
+            if (options.dynamics == Dynamics::coupled) append_coupled_record(d.chain_dynamics, chain.dynamics, parameters.dt);
         }
         for (size_t n = 0; n < h.node_owner.size(); ++n) {
             d.node_owner.push_back(h.node_owner[n]);
@@ -150,6 +168,7 @@ SceneData flatten_scene(const Scene& scene, const std::vector<Hierarchy>& hierar
     d.max_angle = parameters.max_angle;
     d.fix_weight = options.fix_weight;
     d.profile = wind.profile;
+    d.dynamics = options.dynamics;
     return d;
 }
 

@@ -46,6 +46,9 @@ struct SceneData {
     std::vector<int32_t> chain_attach;
     std::vector<glm::dmat3> chain_rest_rotation;
     std::vector<glm::dvec4> chain_constants;  // (I, K, D, A)
+    /// Dynamics::coupled: HMSM_CHAIN_DYNAMICS_VEC4S x 4 scalars per model chain (gpu_layout.h);
+    /// empty under the paper's dynamics.
+    std::vector<double> chain_dynamics;
     std::vector<int32_t> node_owner;
     std::vector<glm::dvec4> node_local;
     std::vector<glm::ivec2> vertex_chain;
@@ -90,6 +93,8 @@ struct SceneData {
     double max_angle = 0.8;
     double fix_weight = 0.5;
     WindProfile profile = WindProfile::none;
+    Dynamics dynamics = Dynamics::paper;
+    bool coupled() const { return dynamics == Dynamics::coupled; }
     /// The contour pass's output layout; packed leaves vertex_normal without elements.
     VertexLayout vertex_layout = VertexLayout::separate;
     bool packed_vertices() const { return vertex_layout == VertexLayout::packed; }

@@ -137,7 +137,7 @@ Result<std::unique_ptr<Simulation>> Simulation::Impl::create(const Scene& scene,
         }
         MeshTemplate mesh = build_mesh(scene.models[m], *hierarchy, config.model);
         const int32_t budget = m < scene.joint_budgets.size() ? scene.joint_budgets[m] : 0;
-        if (budget > 0) {  // the model's level of detail in its place (docs/model.md 3.12)
+        if (budget > 0) {  // the model's level of detail in its place (docs/model.md 3.13)
             auto level = build_level(scene.models[m], *hierarchy, config.parameters, budget);
             if (!level)
                 return Status{level.status().code(), "model '" + scene.model_names[m] + "': " + level.status().message()};
@@ -166,14 +166,18 @@ Result<std::unique_ptr<Simulation>> Simulation::Impl::create(const Scene& scene,
         sim->backend_ = std::move(backend);
         sim->config_.backend = sim->backend_->kind();
     } else {
-        auto created = detail::create_backend(config.backend, config.cpu_threads);
+        auto created = detail::create_backend(detail::backend_for_dynamics(config), config.cpu_threads);
         if (!created) return created.status();
         sim->backend_ = std::move(created).value();
     }
+    HMSM_TRY(detail::check_dynamics_runs(config, sim->backend_->kind()));
     if (config.composition == Composition::automatic) {
         int32_t deepest = 0;
         for (const Hierarchy& h : sim->hierarchies_) deepest = std::max(deepest, h.max_depth);
-        sim->config_.composition = detail::automatic_composition(sim->backend_->capabilities().prefers_path_walk, deepest);
+        // The coupled wind_force gathers other chains' angles, so it cannot share a dispatch
+        // with integrate as the path walk's wind pair does (docs/model.md 3.13).
+        const bool walk = sim->backend_->capabilities().prefers_path_walk && config.model.dynamics == Dynamics::paper;
+        sim->config_.composition = detail::automatic_composition(walk, deepest);
     }
     sim->backend_->set_profiling(config.profile_passes);
     HMSM_TRY(sim->backend_->upload(*sim->data_));

@@ -12,6 +12,27 @@
 
 namespace hmsm {
 
+/// A chain's constants in the coupled dynamics (docs/model.md 3.13), in SI units; index 0 is
+/// the chain's local x axis (theta_x), 1 its local z axis (theta_z).
+struct ChainDynamics {
+    double mass = 0.0;               ///< own wood and leaves (kg)
+    double subtree_mass = 0.0;       ///< with every chain that hangs from it, at any depth
+    double drag_area = 0.0;          ///< own wood and leaves, C_d included (m^2)
+    double subtree_drag_area = 0.0;  ///< with every chain that hangs from it
+    /// M_c: first moment of drag area about the joint, in the chain's rest frame (m^3): own
+    /// wood and leaves, and each child's subtree drag area at its attach node.
+    Vec3 wind_moment{0.0};
+    double inertia[2] = {};          ///< I about the joint (kg m^2), children lumped (3.13)
+    double beam_stiffness = 0.0;     ///< 1/K = (1/L^2) int (L - s)^2 / (E J(s)) ds (N m/rad)
+    double frequency[2] = {};        ///< f0 of the tapered cantilever with the same load (Hz)
+    double stiffness[2] = {};        ///< K = (2 pi f0)^2 I (N m/rad)
+    double damping[2] = {};          ///< structural D = 2 zeta_s sqrt(K I) (N m s/rad)
+    /// Aerodynamic damping per square root of wind strength: D_aero = aero_damping sqrt(|w|).
+    double aero_damping[2] = {};
+    int32_t first_child = 0;         ///< children: chains [first_child, first_child + child_count)
+    int32_t child_count = 0;
+};
+
 struct Chain {
     int32_t parent = -1;       ///< parent chain id, -1 for the trunk
     int32_t depth = 0;         ///< trunk 0
@@ -26,6 +47,9 @@ struct Chain {
     double damping = 0.0;      ///< D_c
     double wind_area = 0.0;    ///< A_c
     bool capped = false;       ///< the frequency cap raised I_c (docs/model.md 3.4)
+    /// Dynamics::coupled only (zero under paper). The paper fields above then hold axis x's
+    /// I, K and D, and wind_area the largest force per unit wind strength, q_ref |M_c|.
+    ChainDynamics dynamics;
 };
 
 struct Hierarchy {

@@ -83,6 +83,8 @@ enum { /* hmsm_config.composition */
 };
 enum { HMSM_VERTEX_LAYOUT_SEPARATE = 0, HMSM_VERTEX_LAYOUT_PACKED = 1 };
 enum { HMSM_GROUPING_DIRECTION = 0, HMSM_GROUPING_WIDTH = 1 };
+/* hmsm_config.dynamics (hmsm::Dynamics, docs/model.md 3.7 and 3.13) */
+enum { HMSM_DYNAMICS_PAPER = 0, HMSM_DYNAMICS_COUPLED = 1 };
 enum { /* hmsm_wind.profile (docs/model.md 3.5) */
     HMSM_WIND_NONE = 0,
     HMSM_WIND_CONSTANT = 1,
@@ -135,6 +137,18 @@ typedef struct hmsm_parameters {
     double max_frequency;
 } hmsm_parameters;
 
+/* The coupled dynamics' wood, leaves and damping: hmsm::Material, hmsm::Foliage and
+ * hmsm::Parameters' structural_damping and wood_drag_coefficient (docs/model.md 3.13). */
+typedef struct hmsm_coupled_parameters {
+    double modulus;               /* E (Pa) */
+    double wood_density;          /* green density (kg/m^3) */
+    double structural_damping;    /* zeta_s */
+    double wood_drag_coefficient; /* C_d of branches */
+    double leaf_mass_per_area;    /* kg per m^2 of leaf card */
+    double leaf_drag_coefficient; /* drag area per m^2 of leaf card */
+    int32_t leaves_on;            /* 1: leaf-on, 0: leaf-off */
+} hmsm_coupled_parameters;
+
 /* hmsm::Wind (docs/model.md 3.5) */
 typedef struct hmsm_wind {
     uint32_t struct_size;
@@ -158,6 +172,8 @@ typedef struct hmsm_config {
     hmsm_model_options model;
     hmsm_parameters parameters;
     hmsm_wind wind;
+    int32_t dynamics;                /* HMSM_DYNAMICS_*: the equations of motion */
+    hmsm_coupled_parameters coupled; /* used by HMSM_DYNAMICS_COUPLED, validated always */
 } hmsm_config;
 
 /* hmsm::Instance: a placed copy of model `model` (docs/model.md 3.6, 3.9) */
@@ -227,7 +243,7 @@ HMSM_API hmsm_status hmsm_scene_load_forest(const char* path, hmsm_scene** scene
 HMSM_API hmsm_status hmsm_scene_add_model(hmsm_scene* scene, const hmsm_tree* tree,
                                           const char* name, uint32_t* model);
 HMSM_API hmsm_status hmsm_scene_add_instance(hmsm_scene* scene, const hmsm_instance* instance);
-/* Runs model `model` at a level of detail (hmsm::Scene::joint_budgets, docs/model.md 3.12):
+/* Runs model `model` at a level of detail (hmsm::Scene::joint_budgets, docs/model.md 3.13):
  * max_joints 0 runs the model whole (the default), N >= 1 its finest level with at most N
  * chains in its place; a negative max_joints fails with HMSM_INVALID_ARGUMENT. */
 HMSM_API hmsm_status hmsm_scene_set_joint_budget(hmsm_scene* scene, uint32_t model, int32_t max_joints);
@@ -319,7 +335,7 @@ enum {
  * instance of the model, including instances added later. */
 HMSM_API hmsm_status hmsm_skin_create(const hmsm_simulation* simulation, uint32_t model,
                                       hmsm_skin** skin);
-/* A level of detail (hmsm::build_level, docs/model.md 3.12): the finest level of the model with
+/* A level of detail (hmsm::build_level, docs/model.md 3.13): the finest level of the model with
  * at most max_joints joints (default 256); a max_joints at or above the model's chain count
  * gives the model itself, one below 1 fails with HMSM_INVALID_ARGUMENT. */
 typedef struct hmsm_level_options {

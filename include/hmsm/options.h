@@ -19,12 +19,35 @@ enum class Grouping { direction, width };
 inline constexpr NamedValue<Grouping> kGroupingNames[] = {{Grouping::direction, "direction"},
                                                           {Grouping::width, "width"}};
 
+/// The equations of motion (docs/model.md 3.7 for `paper`, 3.13 for `coupled`): the paper's
+/// independent per-chain oscillators with free constants k and rho, or chains whose inertia,
+/// stiffness and wind load come from the wood and leaves they carry, coupled to their parent
+/// and children through their joints.
+enum class Dynamics : uint32_t { paper = 0, coupled = 1 };
+inline constexpr NamedValue<Dynamics> kDynamicsNames[] = {{Dynamics::paper, "paper"},
+                                                          {Dynamics::coupled, "coupled"}};
+
 /// Options that shape the hierarchy and the branch mesh.
 struct ModelOptions {
     Grouping grouping = Grouping::direction;
     int32_t max_chain_segments = 0;  ///< cut chains after this many nodes; 0 = never (the paper)
     int32_t ring_sides = 8;          ///< vertices per branch-mesh ring, >= 3
     double fix_weight = 0.5;         ///< contour fix-up weight beta in [0, 1]
+    Dynamics dynamics = Dynamics::paper;
+};
+
+/// Wood of the coupled dynamics (docs/model.md 3.13); the defaults are green broadleaf wood.
+struct Material {
+    double modulus = 9.0e9;  ///< E, Young's modulus along the grain (Pa)
+    double density = 900.0;  ///< green density (kg/m^3)
+};
+
+/// Leaf cards in the coupled dynamics (docs/model.md 3.13): each card adds mass and drag in
+/// proportion to its area (width x height).
+struct Foliage {
+    bool on = true;                 ///< leaf-on; leaf-off cards add nothing
+    double mass_per_area = 0.2;     ///< fresh leaf mass per card area (kg/m^2)
+    double drag_coefficient = 0.3;  ///< drag area per card area
 };
 
 /// Physical parameters (docs/model.md 3.4); defaults give natural sway at real-world tree sizes.
@@ -36,6 +59,12 @@ struct Parameters {
     double max_angle = 0.8;       ///< theta_max (rad)
     double dt = 1.0 / 120.0;      ///< fixed time step (s)
     double max_frequency = 4.0;   ///< f_cap (Hz): no chain sways faster than this
+    // The coupled dynamics (docs/model.md 3.13) takes dt, max_angle and these; it ignores
+    // density, stiffness, damping_ratio, wind_gain and max_frequency.
+    Material material;
+    Foliage foliage;
+    double structural_damping = 0.03;    ///< zeta_s: damping ratio of the wood alone
+    double wood_drag_coefficient = 1.2;  ///< C_d of a branch segment (a cylinder across the flow)
 };
 
 /// The paper's four wind profiles, constant (Y = 1), none (Y = 0), turbulent (a sum of 32
@@ -124,6 +153,8 @@ HMSM_API Vec3 wind_at(const Wind& wind, const Vec3& origin, double t, double ins
 HMSM_API double wind_phase(const Wind& wind, const Vec3& origin);
 
 HMSM_API const char* to_string(Grouping grouping);
+HMSM_API const char* to_string(Dynamics dynamics);
+HMSM_API std::optional<Dynamics> parse_dynamics(std::string_view name);
 HMSM_API const char* to_string(WindProfile profile);
 HMSM_API std::optional<Grouping> parse_grouping(std::string_view name);
 HMSM_API std::optional<WindProfile> parse_wind_profile(std::string_view name);

@@ -27,6 +27,7 @@ using DeviceType_i32x2 = int2;
 using DeviceType_f32x2 = float2;
 using DeviceType_f32x4 = float4;
 using DeviceType_mat3x4 = float4;
+using DeviceType_f32x24 = float4;  // 6 consecutive float4 (chain_dynamics)
 using DeviceType_f32x36 = float4;  // 9 consecutive float4 (instance_wind)
 
 /// Base pointers of every buffer of the buffer table, named as in HMSM_BUFFERS.

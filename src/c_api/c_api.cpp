@@ -132,6 +132,10 @@ Status to_cpp(const hmsm_config& in, SimulationConfig& out) {
         return bad("config.profile_passes must be 0 or 1");
     if (in.model.grouping != HMSM_GROUPING_DIRECTION && in.model.grouping != HMSM_GROUPING_WIDTH)
         return bad("config.model.grouping: unknown value " + std::to_string(in.model.grouping));
+    if (in.dynamics != HMSM_DYNAMICS_PAPER && in.dynamics != HMSM_DYNAMICS_COUPLED)
+        return bad("config.dynamics: unknown value " + std::to_string(in.dynamics));
+    if (in.coupled.leaves_on != 0 && in.coupled.leaves_on != 1)
+        return bad("config.coupled.leaves_on must be 0 or 1");
     config.backend = static_cast<BackendKind>(in.backend);
     config.composition = *kCompositions[size_t(in.composition)];
     config.vertex_layout = static_cast<VertexLayout>(in.vertex_layout);
@@ -144,6 +148,12 @@ Status to_cpp(const hmsm_config& in, SimulationConfig& out) {
     const hmsm_parameters& p = in.parameters;
     config.parameters = {p.density, p.stiffness, p.damping_ratio, p.wind_gain,
                          p.max_angle, p.dt, p.max_frequency};
+    config.model.dynamics = static_cast<Dynamics>(in.dynamics);
+    const hmsm_coupled_parameters& k = in.coupled;
+    config.parameters.material = {k.modulus, k.wood_density};
+    config.parameters.structural_damping = k.structural_damping;
+    config.parameters.wood_drag_coefficient = k.wood_drag_coefficient;
+    config.parameters.foliage = {k.leaves_on == 1, k.leaf_mass_per_area, k.leaf_drag_coefficient};
     Status wind = to_cpp(in.wind, config.wind);
     if (!wind) return {wind.code(), "config." + wind.message()};
     // Options and parameters are validated (ranges, finite numbers) by Simulation::create.
@@ -173,6 +183,9 @@ void set_defaults(hmsm_config& out) {
     const Parameters& p = defaults.parameters;
     out.parameters = {p.density, p.stiffness, p.damping_ratio, p.wind_gain,
                       p.max_angle, p.dt, p.max_frequency};
+    out.dynamics = static_cast<int32_t>(defaults.model.dynamics);
+    out.coupled = {p.material.modulus, p.material.density, p.structural_damping, p.wood_drag_coefficient,
+                   p.foliage.mass_per_area, p.foliage.drag_coefficient, p.foliage.on ? 1 : 0};
     set_defaults(out.wind);
     to_c(defaults.wind, out.wind);
 }

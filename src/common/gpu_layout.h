@@ -49,7 +49,24 @@
 #define HMSM_BINDING_JOINT_MATRIX 25         // mat3x4 per chain: rows (R row 0, O.x), (R row 1, O.y), (R row 2, O.z)
 // Model scope, for Composition::path_walk:
 #define HMSM_BINDING_CHAIN_WALK 26           // HMSM_WALK_RECORD_INTS int per model chain: its walk record (below)
-#define HMSM_BINDING_COUNT 27
+// The coupled dynamics (docs/model.md 3.13; no elements under the paper's):
+#define HMSM_BINDING_CHAIN_DYNAMICS 27       // HMSM_CHAIN_DYNAMICS_VEC4S vec4 per model chain: below
+#define HMSM_BINDING_CHAIN_LOAD 28           // vec4 per chain: (tau_x, tau_z, 0, 0), the load g of the last step
+#define HMSM_BINDING_COUNT 29
+
+/// What PassConstants.dynamics says the passes integrate (hmsm::Dynamics values).
+#define HMSM_PASS_DYNAMICS_PAPER 0u
+#define HMSM_PASS_DYNAMICS_COUPLED 1u
+/// A chain's record of the coupled dynamics (binding HMSM_BINDING_CHAIN_DYNAMICS), vec4 j of
+/// HMSM_CHAIN_DYNAMICS_VEC4S; axis x is theta_x, axis z theta_z (docs/model.md 3.13):
+///   j = 0: transition about x over dt, (a11, a12, a21, a22): with y = S - g / K,
+///          (y, V) <- (a11 y + a12 V, a21 y + a22 V)
+///   j = 1: transition about z
+///   j = 2: (I_x, I_z, K_x, K_z)
+///   j = 3: (D_x, D_z, aero_x, aero_z): structural damping; aerodynamic damping per sqrt(|w|)
+///   j = 4: (q_ref M_c, 0): the wind moment, torque = (q_ref M_c) x w_local
+///   j = 5: (first child, child count, 0, 0) as floats (model-local chain ids, < 2^24)
+#define HMSM_CHAIN_DYNAMICS_VEC4S 6u
 
 /// The wind of docs/model.md 3.5 on the device. Float backends never see the clock tau or a
 /// phase beyond a few units: the host reduces tau mod 2 and the turbulent and atmospheric mode
@@ -217,12 +234,16 @@ struct PassConstants {
     uint src_half;            // ping-pong: half read (pose readers: the half holding R and O)
     uint dst_half;            // ping-pong: half written
     uint wind_slot;           // the step's wind-table slot (Backend::run sets it where reads_wind_slot)
+    uint dynamics;            // HMSM_DYNAMICS_*: the equations wind_force and integrate run
+    uint reserved0;           // padding up to params (std430 aligns a vec4 to 16 bytes)
+    uint reserved1;
     vec4 params;              // (dt, max_angle, fix_weight, covers paused: 1 if the group has paused instances)
 };
 
 #ifdef __cplusplus
 static_assert(sizeof(PassConstants) == 112, "PassConstants must match std430");
-static_assert(offsetof(PassConstants, wind_slot) == 80 && offsetof(PassConstants, params) == 96,
+static_assert(offsetof(PassConstants, wind_slot) == 80 && offsetof(PassConstants, dynamics) == 84 &&
+                  offsetof(PassConstants, params) == 96,
               "PassConstants must match std430");
 static_assert(offsetof(PassConstants, round) == 52 && offsetof(PassConstants, kind) == 56,
               "PassConstants must match std430");

@@ -54,11 +54,13 @@ struct ScalarView {
         for (int r = 0; r < 3; ++r)
             for (int k = 0; k < 4; ++k) b[i][r][k] = T(in[r * 4 + k]);
     }
-    static void get(const std::vector<std::array<T, 36>>& b, uint64_t i, double* out) {
-        for (int k = 0; k < 36; ++k) out[k] = double(b[i][k]);
+    template <size_t N>
+    static void get(const std::vector<std::array<T, N>>& b, uint64_t i, double* out) {
+        for (size_t k = 0; k < N; ++k) out[k] = double(b[i][k]);
     }
-    static void set(std::vector<std::array<T, 36>>& b, uint64_t i, const double* in) {
-        for (int k = 0; k < 36; ++k) b[i][k] = T(in[k]);
+    template <size_t N>
+    static void set(std::vector<std::array<T, N>>& b, uint64_t i, const double* in) {
+        for (size_t k = 0; k < N; ++k) b[i][k] = T(in[k]);
     }
     static void set(std::vector<int32_t>& b, uint64_t i, const double* in) { b[i] = int32_t(in[0]); }
     static void set(std::vector<glm::ivec2>& b, uint64_t i, const double* in) {
@@ -195,6 +197,10 @@ private:
         s_.chain_rest_rotation.assign(d.chain_rest_rotation.begin(), d.chain_rest_rotation.end());
         s_.chain_constants = convert_vec4<T, vec4>(d.chain_constants);
         s_.node_local = convert_vec4<T, vec4>(d.node_local);
+        constexpr size_t record = 4 * HMSM_CHAIN_DYNAMICS_VEC4S;
+        s_.chain_dynamics.assign(d.element_count(BufferId::chain_dynamics), {});
+        for (size_t c = 0; c < s_.chain_dynamics.size(); ++c)
+            for (size_t k = 0; k < record; ++k) s_.chain_dynamics[c][k] = T(d.chain_dynamics[record * c + k]);
         s_.vertex_rest_position = convert_vec4<T, vec4>(d.vertex_rest_position);
         s_.vertex_rest_normal = convert_vec4<T, vec4>(d.vertex_rest_normal);
         s_.vertex_parent_position = convert_vec4<T, vec4>(d.vertex_parent_position);
@@ -210,6 +216,7 @@ private:
         s_.wind_table.assign(HMSM_WIND_TABLE_ELEMENTS, vec4(0));
         s_.chain_state.assign(d.element_count(BufferId::chain_state), vec4(0));
         s_.chain_force.assign(d.element_count(BufferId::chain_force), typename State<T>::vec2(0));
+        s_.chain_load.assign(d.element_count(BufferId::chain_load), vec4(0));
         s_.chain_local.assign(d.element_count(BufferId::chain_local), typename State<T>::mat3(0));
         s_.chain_rotation.assign(d.element_count(BufferId::chain_rotation), typename State<T>::mat3(0));
         s_.node_relative.assign(d.element_count(BufferId::node_relative), vec4(0));

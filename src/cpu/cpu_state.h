@@ -30,6 +30,8 @@ struct State {
     std::vector<glm::ivec2> vertex_chain;
     std::vector<mat3> chain_rest_rotation;
     std::vector<vec4> chain_constants, node_local;
+    /// The coupled dynamics' records (gpu_layout.h HMSM_CHAIN_DYNAMICS_VEC4S; empty under paper).
+    std::vector<std::array<T, 4 * HMSM_CHAIN_DYNAMICS_VEC4S>> chain_dynamics;
     std::vector<vec4> vertex_rest_position, vertex_rest_normal;
     std::vector<vec4> vertex_parent_position, vertex_parent_normal;
     std::vector<vec4> instance_origin, instance_yaw;
@@ -39,6 +41,7 @@ struct State {
     // Per-instance state.
     std::vector<vec4> chain_state;
     std::vector<vec2> chain_force;
+    std::vector<vec4> chain_load;      // coupled: (tau_x, tau_z, 0, 0), the load of the last step
     std::vector<mat3> chain_local;
     std::vector<mat3> chain_rotation;  // two halves of total_chains (the allocated chains)
     std::vector<vec4> node_relative;
@@ -147,6 +150,16 @@ template <class T> void path_walk(State<T>& s, const gpu::PassConstants& pc, Ran
 template <class T> void wind_force_and_integrate(State<T>& s, const gpu::PassConstants& pc, uint32_t wind_slot, Range r);
 /// Composition::path_walk's node pair: passes 4 and 6 per node, storing only node_world.
 template <class T> void node_relative_and_world(State<T>& s, const gpu::PassConstants& pc, Range r);
+/// The coupled dynamics (coupled_dynamics.cpp, docs/model.md 3.13): pass 1's g of state chain c
+/// (static chain model_chain, group instance `instance`) under the wind w_local in its frame;
+/// and pass 2's exact step of its angles under g (stores S/V and g as the load its parent
+/// takes in the next step; returns S).
+template <class T>
+typename State<T>::vec2 coupled_force(const State<T>& s, const gpu::PassConstants& pc, uint32_t instance,
+                                      uint64_t c, uint32_t model_chain, const typename State<T>::vec3& w_local);
+template <class T>
+typename State<T>::vec2 coupled_integrate_angles(State<T>& s, uint32_t model_chain, uint64_t c,
+                                                 const typename State<T>::vec2& g);
 /// Pass 2's halves: the symplectic Euler step of state chain c of static chain model_chain under
 /// g (stores S/V, returns S), and the local transform T of static chain model_chain of global
 /// instance `instance` at angles S.

@@ -52,7 +52,9 @@ void integrate(State<T>& s, const gpu::PassConstants& pc, Range r) {
         if (instance_paused(s, pc, e.instance)) continue;
         uint64_t c = state_chain(pc, e.instance, int32_t(e.index));
         const uint32_t model_chain = pc.model_chain_begin + e.index;
-        const auto angle = integrate_angles(s, model_chain, c, s.chain_force[c]);
+        const auto angle = pc.dynamics == HMSM_PASS_DYNAMICS_COUPLED
+                               ? coupled_integrate_angles(s, model_chain, c, s.chain_force[c])
+                               : integrate_angles(s, model_chain, c, s.chain_force[c]);
         s.chain_local[c] = local_transform(s, model_chain, pc.instance_begin + e.instance, angle);
     }
 }

@@ -26,7 +26,7 @@ namespace {
 
 /// Whether a dispatch reads anywhere within its instances (a hierarchical pass's parents and
 /// jump targets), so that its chunks are planned by instance, not by element.
-bool instance_wide(const Dispatch& d) { return is_hierarchical(d.pass); }
+bool instance_wide(const Dispatch& d) { return is_hierarchical(d.pass) || reads_across_chains(d); }
 
 /// Work items per instance of a dispatch (a dispatch covers whole instances of one group).
 uint32_t items_per_instance(const Dispatch& d) {

@@ -67,6 +67,10 @@ void wind_forces(State<T>& s, const gpu::PassConstants& pc, uint32_t wind_slot, 
             else if (distance >= T(1e-9)) w += (h * force.x / distance) * offset;
         }
         auto w_local = glm::transpose(from_joint ? joint_rotation(s, c) : s.chain_rotation[pose]) * w;
+        if (pc.dynamics == HMSM_PASS_DYNAMICS_COUPLED) {
+            use(c, pc.model_chain_begin + e.index, coupled_force(s, pc, e.instance, c, pc.model_chain_begin + e.index, w_local));
+            continue;
+        }
         T area = s.chain_constants[pc.model_chain_begin + e.index].w;
         use(c, pc.model_chain_begin + e.index, typename State<T>::vec2(area * w_local.z, -area * w_local.x));
     }

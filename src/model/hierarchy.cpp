@@ -1,6 +1,8 @@
 // Direction-first chain decomposition (docs/model.md 3.2), frames (3.3) and constants (3.4).
 #include <hmsm/hierarchy.h>
 
+#include "coupled_constants.h"
+
 #include <glm/geometric.hpp>
 #include <glm/matrix.hpp>
 
@@ -168,6 +170,7 @@ Result<Hierarchy> build_hierarchy(const TreeModel& tree, const ModelOptions& opt
     }
     h.chains_per_depth.assign(h.max_depth + 1, 0);
     for (const Chain& chain : h.chains) ++h.chains_per_depth[chain.depth];
+    if (options.dynamics == Dynamics::coupled) HMSM_TRY(detail::fill_coupled_constants(tree, parameters, h));
     return h;
 }
 

@@ -73,6 +73,28 @@ Status check_radius(std::string_view what, double radius) {
     return {};
 }
 
+namespace {
+
+Status check_range(std::string_view what, double value, PhysicalRange range, const char* unit) {
+    if (!(value >= range.min && value <= range.max))
+        return bad(what, number_text(value),
+                   "must be finite and within [" + number_text(range.min) + ", " + number_text(range.max) + "]" + unit,
+                   std::isfinite(value));
+    return {};
+}
+
+}  // namespace
+
+Status check_material(const Parameters& p) {
+    HMSM_TRY(check_range("material.modulus", p.material.modulus, kModulusRange, " Pa"));
+    HMSM_TRY(check_range("material.density", p.material.density, kWoodDensityRange, " kg/m^3"));
+    HMSM_TRY(check_range("foliage.mass_per_area", p.foliage.mass_per_area, kLeafMassPerAreaRange, " kg/m^2"));
+    HMSM_TRY(check_range("foliage.drag_coefficient", p.foliage.drag_coefficient, kDragCoefficientRange, ""));
+    HMSM_TRY(check_range("wood_drag_coefficient", p.wood_drag_coefficient, kDragCoefficientRange, ""));
+    HMSM_TRY(check_range("structural_damping", p.structural_damping, kStructuralDampingRange, ""));
+    return {};
+}
+
 Status check_force(std::string_view what, double value) {
     if (!(std::abs(value) <= kMaxForce))
         return bad(what, number_text(value), "must be finite and within +-" + number_text(kMaxForce),

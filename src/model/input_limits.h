@@ -4,6 +4,7 @@
 // a value is judged the same wherever it enters and the message names the value and the limit.
 #pragma once
 
+#include <hmsm/options.h>
 #include <hmsm/status.h>
 
 #include <glm/vec3.hpp>
@@ -32,6 +33,18 @@ inline constexpr double kMaxWindScale = 1e6;
 inline constexpr double kMaxWindFrequency = 1e6;
 /// The wind clock f t: beyond it the phase reduced mod 2 keeps no fractional digits.
 inline constexpr double kMaxWindPhase = 1e15;
+
+/// The coupled dynamics' wood and leaves (docs/model.md 3.13): every real wood lies far inside
+/// these ranges (green wood: E of 5 to 20 GPa, density of 400 to 1,200 kg/m^3); values past
+/// them are typing errors (E in GPa instead of Pa, density in g/cm^3).
+struct PhysicalRange {
+    double min, max;
+};
+inline constexpr PhysicalRange kModulusRange{1e7, 1e12};          ///< E (Pa)
+inline constexpr PhysicalRange kWoodDensityRange{10.0, 1e4};      ///< kg/m^3
+inline constexpr PhysicalRange kLeafMassPerAreaRange{0.0, 100.0}; ///< kg/m^2
+inline constexpr PhysicalRange kDragCoefficientRange{0.0, 10.0};  ///< wood and leaves
+inline constexpr PhysicalRange kStructuralDampingRange{0.0, 10.0};
 
 // --- Sizes, checked from counts before anything proportional to them is allocated.
 
@@ -85,6 +98,9 @@ Status check_wind_frequency(double frequency);
 /// The wind clock `phase` (f t, continued across frequency changes) at simulated time
 /// `seconds` within kMaxWindPhase.
 Status check_wind_clock(double frequency, double seconds, double phase);
+/// The material, foliage and damping of the coupled dynamics within the ranges above
+/// ("material.modulus = 9 is out of range: must be finite and within [1e+07, 1e+12] Pa").
+Status check_material(const Parameters& parameters);
 /// A force field (center, radius, force) within the ranges above.
 Status check_force_field(std::string_view what, const glm::dvec3& center, double radius,
                          const glm::dvec3& directional, double radial);

@@ -100,6 +100,8 @@ glm::dvec3 wind_at(const Wind& wind, const glm::dvec3& origin, double t, double 
 }
 
 const char* to_string(Grouping grouping) { return name_in(kGroupingNames, grouping); }
+const char* to_string(Dynamics dynamics) { return name_in(kDynamicsNames, dynamics); }
+std::optional<Dynamics> parse_dynamics(std::string_view name) { return value_named(kDynamicsNames, name); }
 const char* to_string(WindProfile profile) { return name_in(kWindProfileNames, profile); }
 std::optional<Grouping> parse_grouping(std::string_view name) { return value_named(kGroupingNames, name); }
 std::optional<WindProfile> parse_wind_profile(std::string_view name) {
@@ -128,6 +130,9 @@ Status validate(const ModelOptions& o) {
         return bad("fix_weight", o.fix_weight, "must be in [0, 1]");
     if (o.max_chain_segments < 0)
         return bad("max_chain_segments", o.max_chain_segments, "must be >= 0");
+    if (o.dynamics != Dynamics::paper && o.dynamics != Dynamics::coupled)
+        return {ErrorCode::invalid_argument,
+                "dynamics " + std::to_string(static_cast<uint32_t>(o.dynamics)) + " does not exist"};
     return {};
 }
 
@@ -145,6 +150,7 @@ Status validate(const Parameters& p) {
         return bad("max_angle", p.max_angle, "must be in (0, pi/2]");
     if (!std::isfinite(p.max_frequency) || p.max_frequency <= 0.0)
         return bad("max_frequency", p.max_frequency, "must be finite and > 0");
+    HMSM_TRY(detail::check_material(p));
     return {};
 }
 

@@ -16,11 +16,13 @@
     X(Wind, profile) X(Wind, direction) X(Wind, strength) X(Wind, frequency)               \
     X(Wind, front_speed) X(Wind, turbulence) X(Wind, seed)                                 \
     X(Parameters, density) X(Parameters, dt) X(Parameters, max_frequency)                  \
-    X(ModelOptions, ring_sides) X(ModelOptions, fix_weight)                                \
+    X(Parameters, material) X(Parameters, foliage) X(Parameters, wood_drag_coefficient)    \
+    X(ModelOptions, ring_sides) X(ModelOptions, fix_weight) X(ModelOptions, dynamics)      \
     X(ForceField, kind) X(ForceField, center) X(ForceField, radius)                        \
     X(ForceField, directional) X(ForceField, radial)                                       \
     X(Chain, members) X(Chain, frame) X(Chain, rest_rotation) X(Chain, length)             \
-    X(Chain, capped)                                                                       \
+    X(Chain, capped) X(Chain, dynamics) X(ChainDynamics, wind_moment)                      \
+    X(ChainDynamics, first_child)                                                          \
     X(Hierarchy, node_owner) X(Hierarchy, node_local) X(Hierarchy, max_depth)              \
     X(MeshVertex, position) X(MeshVertex, normal) X(MeshVertex, parent_position)           \
     X(MeshVertex, parent_normal)                                                           \
@@ -32,7 +34,7 @@
 
 #define HMSM_LAYOUT_STRUCTS(X)                                                             \
     X(TreeNode) X(TreeLeaf) X(TreeModel) X(Instance) X(Scene) X(Wind) X(Parameters)        \
-    X(ModelOptions) X(ForceField) X(Chain) X(Hierarchy) X(MeshVertex) X(MeshTemplate)      \
+    X(ModelOptions) X(Material) X(Foliage) X(ForceField) X(ChainDynamics) X(Chain) X(Hierarchy) X(MeshVertex) X(MeshTemplate)      \
     X(SimulationConfig) X(PassTimes) X(DetailLevel) X(Vec2) X(Vec3) X(Mat3)
 
 /// sizeof and alignof of every struct, then offsetof of every field, in list order.

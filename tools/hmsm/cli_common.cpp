@@ -137,13 +137,19 @@ void add_model_flags(CLI::App& app, ModelFlags& f) {
                        "cut chains after K nodes (0 = never, default)");
     add_integer_option(app, "--ring-sides", f.options.ring_sides, "vertices per branch ring (default 8)");
     app.add_option("--fix-weight", f.options.fix_weight, "contour fix-up weight in [0,1] (default 0.5)");
+    app.add_option("--dynamics", f.dynamics,
+                   "equations of motion: " + choices(kDynamicsNames, Spelling::as_is, Dynamics::paper) +
+                       " (coupled: docs/model.md 3.13)");
 }
 
 Result<ModelOptions> model_options(const ModelFlags& f) {
     auto grouping = parse_choice(kGroupingNames, f.grouping, "--grouping", Spelling::as_is);
     if (!grouping) return grouping.status();
+    auto dynamics = parse_choice(kDynamicsNames, f.dynamics, "--dynamics", Spelling::as_is);
+    if (!dynamics) return dynamics.status();
     ModelOptions options = f.options;
     options.grouping = *grouping;
+    options.dynamics = *dynamics;
     HMSM_TRY(validate(options));
     return options;
 }
@@ -157,6 +163,15 @@ void add_parameter_flags(CLI::App& app, Parameters& p) {
     app.add_option("--max-angle", p.max_angle, "max joint angle in radians (default 0.8)");
     app.add_option("--max-frequency", p.max_frequency,
                    "frequency cap f_cap in Hz: no chain sways faster (default 4)");
+    // The coupled dynamics (docs/model.md 3.13).
+    app.add_option("--modulus", p.material.modulus, "coupled: wood's Young's modulus E in Pa (default 9e9)");
+    app.add_option("--wood-density", p.material.density, "coupled: green wood density in kg/m^3 (default 900)");
+    app.add_option("--structural-damping", p.structural_damping,
+                   "coupled: damping ratio of the wood alone (default 0.03)");
+    app.add_option("--wood-drag", p.wood_drag_coefficient, "coupled: drag coefficient of branches (default 1.2)");
+    app.add_option("--leaf-mass", p.foliage.mass_per_area, "coupled: leaf mass per card area in kg/m^2 (default 0.2)");
+    app.add_option("--leaf-drag", p.foliage.drag_coefficient, "coupled: leaf drag area per card area (default 0.3)");
+    app.add_flag_callback("--leaf-off", [&p] { p.foliage.on = false; }, "coupled: leaves add no mass or drag");
 }
 
 void add_wind_flags(CLI::App& app, WindFlags& f) {

@@ -117,6 +117,7 @@ Result<Scene> load_scene(const SourceFlags& flags, CLI::App& app, const ModelOpt
 /// Model options, parameters and wind as flags.
 struct ModelFlags {
     std::string grouping = "direction";
+    std::string dynamics = "paper";
     ModelOptions options;
 };
 void add_model_flags(CLI::App& app, ModelFlags& flags);

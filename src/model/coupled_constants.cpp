@@ -1,0 +1,295 @@
+// Per-chain constants of the coupled dynamics (docs/model.md 3.13): tapered mass and drag-area
+// moments from the chain's own radii, children lumped at their attach nodes, the stiffness that
+// gives the rigid link the first frequency of the tapered cantilever it stands for, and the
+// transition of the exact oscillator step.
+#include "coupled_constants.h"
+
+#include <glm/geometric.hpp>
+#include <glm/matrix.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <numbers>
+#include <string>
+#include <vector>
+
+namespace hmsm::detail {
+
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+/// Pieces per segment of the cantilever's static deflection (docs/model.md 3.13).
+constexpr int kPiecesPerSegment = 8;
+
+/// A chain straightened along its arc length: node j (0 the attach node) at local position p[j],
+/// radius r[j], arc length s[j].
+struct ChainPath {
+    std::vector<glm::dvec3> p;
+    std::vector<double> r, s;
+};
+
+/// Squared distance of a point from the chain's local x axis (index 0) or z axis (index 1).
+double axis_distance2(const glm::dvec3& x, int axis) {
+    return axis == 0 ? x.y * x.y + x.z * x.z : x.x * x.x + x.y * x.y;
+}
+
+/// A load in the chain's frame: mass and drag area at local position x.
+struct PointLoad {
+    int32_t path_index;
+    glm::dvec3 x;
+    double mass, drag_area;
+};
+
+bool float_safe(double v, bool may_be_zero) {
+    if (v == 0.0) return may_be_zero;
+    return std::isfinite(v) && std::abs(v) >= 1e-30 && std::abs(v) <= 1e30;
+}
+
+/// The child's inertia about its joint (axes x, z of its own frame) seen about the parent's axis
+/// `axis` (x or z of the parent frame): I_x (x_k . e)^2 + I_z (z_k . e)^2, Q_k = [x_k y_k z_k].
+double projected_inertia(const Chain& child, int axis) {
+    const int e = axis == 0 ? 0 : 2;
+    const glm::dmat3& q = child.rest_rotation;
+    return child.dynamics.inertia[0] * q[0][e] * q[0][e] + child.dynamics.inertia[1] * q[2][e] * q[2][e];
+}
+
+/// The first natural frequency (rad/s) about each axis of chain c as a tapered cantilever
+/// carrying its leaves and children, by Rayleigh's quotient with the static deflection shape
+/// (docs/model.md 3.13); and the tapered beam's tip stiffness K_beam.
+void cantilever(const ChainPath& path, const std::vector<double>& node_mass,
+                const std::vector<std::array<double, 2>>& node_rotary, const Material& material,
+                double omega[2], double& beam_stiffness) {
+    const size_t segments = path.p.size() - 1;
+    const size_t boundaries = segments * kPiecesPerSegment + 1;
+    std::vector<double> s(boundaries), r(boundaries), point(boundaries, 0.0), piece(boundaries, 0.0);
+    std::vector<std::array<double, 2>> rotary(boundaries, {0.0, 0.0});
+    for (size_t j = 0; j < segments; ++j) {
+        for (int i = 0; i <= kPiecesPerSegment; ++i) {
+            const size_t b = j * kPiecesPerSegment + size_t(i);
+            const double t = double(i) / kPiecesPerSegment;
+            s[b] = path.s[j] + (path.s[j + 1] - path.s[j]) * t;
+            r[b] = path.r[j] + (path.r[j + 1] - path.r[j]) * t;
+        }
+    }
+    for (size_t j = 0; j <= segments; ++j) {
+        point[j * kPiecesPerSegment] += node_mass[j];
+        rotary[j * kPiecesPerSegment] = node_rotary[j];
+    }
+    const double L = s.back();
+    double compliance = 0.0;  // int (L - s)^2 / (E J) ds
+    for (size_t b = 0; b + 1 < boundaries; ++b) {
+        const double ds = s[b + 1] - s[b], rm = 0.5 * (r[b] + r[b + 1]), sm = 0.5 * (s[b] + s[b + 1]);
+        piece[b] = material.density * kPi * rm * rm * ds;
+        compliance += (L - sm) * (L - sm) / (material.modulus * kPi * rm * rm * rm * rm / 4.0) * ds;
+    }
+    beam_stiffness = L * L / compliance;
+    // Static deflection under the loads (unit gravity across the chain): bending moment from
+    // the tip down, curvature M / (E J), slope and deflection from the clamped base up.
+    std::vector<double> moment(boundaries, 0.0), slope(boundaries, 0.0), deflection(boundaries, 0.0);
+    double beyond = 0.0;  // load strictly beyond boundary b + 1
+    for (size_t b = boundaries - 1; b-- > 0;) {
+        const double ds = s[b + 1] - s[b];
+        moment[b] = moment[b + 1] + (beyond + point[b + 1]) * ds + piece[b] * 0.5 * ds;
+        beyond += point[b + 1] + piece[b];
+    }
+    auto curvature = [&](size_t b) { return moment[b] / (material.modulus * kPi * std::pow(r[b], 4) / 4.0); };
+    for (size_t b = 0; b + 1 < boundaries; ++b) {
+        const double ds = s[b + 1] - s[b];
+        slope[b + 1] = slope[b] + 0.5 * (curvature(b) + curvature(b + 1)) * ds;
+        deflection[b + 1] = deflection[b] + 0.5 * (slope[b] + slope[b + 1]) * ds;
+    }
+    double work = 0.0, kinetic = 0.0, rotational[2] = {0.0, 0.0};
+    for (size_t b = 0; b < boundaries; ++b) {
+        work += point[b] * deflection[b];
+        kinetic += point[b] * deflection[b] * deflection[b];
+        for (int a = 0; a < 2; ++a) rotational[a] += rotary[b][a] * slope[b] * slope[b];
+        if (b + 1 < boundaries) {
+            const double w = 0.5 * (deflection[b] + deflection[b + 1]);
+            work += piece[b] * w;
+            kinetic += piece[b] * w * w;
+        }
+    }
+    for (int a = 0; a < 2; ++a) omega[a] = std::sqrt(work / (kinetic + rotational[a]));
+}
+
+Status out_of_range(size_t c, const Chain& chain, const char* what, double value) {
+    char buf[160];
+    std::snprintf(buf, sizeof buf, "%s %.3g", what, value);
+    return Status{ErrorCode::invalid_argument,
+                  "chain " + std::to_string(c) + " (attach node " + std::to_string(chain.attach_node) +
+                      "): coupled constant out of the computable range [1e-30, 1e30] (" + buf +
+                      "): radius, segment length, material or dt too extreme"};
+}
+
+}  // namespace
+
+double uniform_cantilever_frequency(double length, double radius, const Material& material) {
+    const double beta = 1.87510407;  // first root of 1 + cos(b) cosh(b) = 0
+    const double j = kPi * std::pow(radius, 4) / 4.0, mu = material.density * kPi * radius * radius;
+    return beta * beta / (2.0 * kPi) * std::sqrt(material.modulus * j / (mu * std::pow(length, 4)));
+}
+
+std::array<double, 4> oscillator_transition(double inertia, double stiffness, double damping, double dt) {
+    // exp(A dt): scale A dt down by 2^k below norm 1/8, sum the Taylor series, square k times.
+    double a[4] = {0.0, dt, -stiffness / inertia * dt, -damping / inertia * dt};
+    double norm = std::max(std::abs(a[0]) + std::abs(a[1]), std::abs(a[2]) + std::abs(a[3]));
+    int squarings = 0;
+    while (norm > 0.125 && squarings < 200) {
+        norm *= 0.5;
+        ++squarings;
+    }
+    const double scale = std::ldexp(1.0, -squarings);
+    for (double& v : a) v *= scale;
+    double result[4] = {1.0, 0.0, 0.0, 1.0}, term[4] = {1.0, 0.0, 0.0, 1.0};
+    for (int k = 1; k <= 20; ++k) {
+        const double t[4] = {(term[0] * a[0] + term[1] * a[2]) / k, (term[0] * a[1] + term[1] * a[3]) / k,
+                             (term[2] * a[0] + term[3] * a[2]) / k, (term[2] * a[1] + term[3] * a[3]) / k};
+        for (int i = 0; i < 4; ++i) {
+            term[i] = t[i];
+            result[i] += t[i];
+        }
+    }
+    for (int k = 0; k < squarings; ++k) {
+        const double m[4] = {result[0] * result[0] + result[1] * result[2], result[0] * result[1] + result[1] * result[3],
+                             result[2] * result[0] + result[3] * result[2], result[2] * result[1] + result[3] * result[3]};
+        for (int i = 0; i < 4; ++i) result[i] = m[i];
+    }
+    return {result[0], result[1], result[2], result[3]};
+}
+
+Status fill_coupled_constants(const TreeModel& tree, const Parameters& parameters, Hierarchy& h) {
+    const auto& nodes = tree.nodes;
+    const Material& material = parameters.material;
+    const size_t chain_count = h.chains.size();
+
+    // Each node's index along its owner's path (the trunk's root: 0).
+    std::vector<int32_t> path_index(nodes.size(), 0);
+    std::vector<ChainPath> paths(chain_count);
+    for (size_t c = 0; c < chain_count; ++c) {
+        const Chain& chain = h.chains[c];
+        ChainPath& path = paths[c];
+        path.p.push_back(glm::dvec3(0.0));
+        // The base takes the attach node's radius for the trunk and the first member's for a
+        // branch (its attach node's radius is the parent's), as the mesh's base ring does.
+        path.r.push_back(c == 0 ? nodes[chain.attach_node].radius : nodes[chain.members.front()].radius);
+        path.s.push_back(0.0);
+        for (size_t j = 0; j < chain.members.size(); ++j) {
+            const int32_t m = chain.members[j];
+            path_index[m] = int32_t(j + 1);
+            path.s.push_back(path.s.back() + glm::length(h.node_local[m] - path.p.back()));
+            path.p.push_back(h.node_local[m]);
+            path.r.push_back(nodes[m].radius);
+        }
+    }
+
+    // Leaves: mass and drag area from the card's area, at the node plus its offset.
+    std::vector<std::vector<PointLoad>> leaves(chain_count);
+    if (parameters.foliage.on) {
+        for (const TreeLeaf& leaf : tree.leaves) {
+            const int32_t owner = h.node_owner[leaf.node];
+            const double area = leaf.size.x * leaf.size.y;
+            const glm::dvec3 x = h.node_local[leaf.node] + glm::transpose(h.chains[owner].frame) * leaf.offset;
+            leaves[owner].push_back({path_index[leaf.node], x, parameters.foliage.mass_per_area * area,
+                                     parameters.foliage.drag_coefficient * area});
+        }
+    }
+
+    // Children: breadth-first numbering makes them one contiguous id range (docs/model.md 3.2).
+    for (size_t c = 1; c < chain_count; ++c) {
+        ChainDynamics& parent = h.chains[h.chains[c].parent].dynamics;
+        if (parent.child_count == 0) parent.first_child = int32_t(c);
+        if (parent.first_child + parent.child_count != int32_t(c))
+            return Status{ErrorCode::internal, "chain " + std::to_string(c) + ": children not contiguous"};
+        ++parent.child_count;
+    }
+
+    const double wood_cd = parameters.wood_drag_coefficient;
+    const double zeta = parameters.structural_damping;
+    // Children have larger ids than their parent: from the last chain up, every child is done.
+    for (size_t c = chain_count; c-- > 0;) {
+        Chain& chain = h.chains[c];
+        ChainDynamics& d = chain.dynamics;
+        const ChainPath& path = paths[c];
+        double inertia[2] = {0.0, 0.0}, drag_moment2[2] = {0.0, 0.0};
+        glm::dvec3 moment(0.0);
+        // Own wood: each segment a frustum, 3-point Gauss-Legendre along it (exact for the
+        // quartic integrands of mass and drag-area moments).
+        const double gauss_t[3] = {0.5 - std::sqrt(0.15), 0.5, 0.5 + std::sqrt(0.15)};
+        const double gauss_w[3] = {5.0 / 18.0, 8.0 / 18.0, 5.0 / 18.0};
+        for (size_t j = 1; j < path.p.size(); ++j) {
+            const double len = path.s[j] - path.s[j - 1];
+            for (int q = 0; q < 3; ++q) {
+                const double r = path.r[j - 1] + (path.r[j] - path.r[j - 1]) * gauss_t[q];
+                const glm::dvec3 x = path.p[j - 1] + (path.p[j] - path.p[j - 1]) * gauss_t[q];
+                const double dm = material.density * kPi * r * r * len * gauss_w[q];
+                const double da = wood_cd * 2.0 * r * len * gauss_w[q];
+                d.mass += dm;
+                d.drag_area += da;
+                moment += da * x;
+                for (int a = 0; a < 2; ++a) {
+                    inertia[a] += dm * axis_distance2(x, a);
+                    drag_moment2[a] += da * axis_distance2(x, a);
+                }
+            }
+        }
+        std::vector<double> node_mass(path.p.size(), 0.0);
+        std::vector<std::array<double, 2>> node_rotary(path.p.size(), {0.0, 0.0});
+        for (const PointLoad& leaf : leaves[c]) {
+            d.mass += leaf.mass;
+            d.drag_area += leaf.drag_area;
+            moment += leaf.drag_area * leaf.x;
+            for (int a = 0; a < 2; ++a) {
+                inertia[a] += leaf.mass * axis_distance2(leaf.x, a);
+                drag_moment2[a] += leaf.drag_area * axis_distance2(leaf.x, a);
+            }
+            node_mass[size_t(leaf.path_index)] += leaf.mass;
+        }
+        d.subtree_mass = d.mass;
+        d.subtree_drag_area = d.drag_area;
+        for (int32_t k = d.first_child; k < d.first_child + d.child_count; ++k) {
+            const Chain& child = h.chains[k];
+            const glm::dvec3 a = h.node_local[child.attach_node];
+            const size_t at = size_t(path_index[child.attach_node]);
+            d.subtree_mass += child.dynamics.subtree_mass;
+            d.subtree_drag_area += child.dynamics.subtree_drag_area;
+            moment += child.dynamics.subtree_drag_area * a;
+            node_mass[at] += child.dynamics.subtree_mass;
+            for (int ax = 0; ax < 2; ++ax) {
+                const double rotary = projected_inertia(child, ax);
+                inertia[ax] += child.dynamics.subtree_mass * axis_distance2(a, ax) + rotary;
+                drag_moment2[ax] += child.dynamics.subtree_drag_area * axis_distance2(a, ax);
+                node_rotary[at][ax] += rotary;
+            }
+        }
+        double omega[2];
+        cantilever(path, node_mass, node_rotary, material, omega, d.beam_stiffness);
+        d.wind_moment = moment;
+        for (int a = 0; a < 2; ++a) {
+            d.inertia[a] = inertia[a];
+            d.frequency[a] = omega[a] / (2.0 * kPi);
+            d.stiffness[a] = omega[a] * omega[a] * inertia[a];
+            d.damping[a] = 2.0 * zeta * std::sqrt(d.stiffness[a] * inertia[a]);
+            d.aero_damping[a] = kAirDensity * kReferenceWindSpeed * drag_moment2[a];
+        }
+        chain.inertia = d.inertia[0];
+        chain.stiffness = d.stiffness[0];
+        chain.damping = d.damping[0];
+        chain.wind_area = kReferencePressure * glm::length(moment);
+        chain.capped = false;
+        for (int a = 0; a < 2; ++a) {
+            if (!float_safe(d.inertia[a], false)) return out_of_range(c, chain, "inertia", d.inertia[a]);
+            if (!float_safe(d.stiffness[a], false)) return out_of_range(c, chain, "stiffness", d.stiffness[a]);
+            if (!float_safe(parameters.dt / d.inertia[a], false))
+                return out_of_range(c, chain, "dt/I", parameters.dt / d.inertia[a]);
+            if (!float_safe(d.damping[a], true)) return out_of_range(c, chain, "damping", d.damping[a]);
+            if (!float_safe(d.aero_damping[a], true))
+                return out_of_range(c, chain, "aerodynamic damping", d.aero_damping[a]);
+        }
+        if (!float_safe(chain.wind_area, true)) return out_of_range(c, chain, "wind moment", chain.wind_area);
+    }
+    h.capped_chain_count = 0;
+    return {};
+}
+
+}  // namespace hmsm::detail
