@@ -220,8 +220,14 @@ HMSM_API void hmsm_tree_destroy(hmsm_tree* tree);
 
 /* --- scenes ------------------------------------------------------------------------------- */
 HMSM_API hmsm_status hmsm_scene_create(hmsm_scene** scene);
-/* An hmsm-forest JSON v1 file (docs/model.md 4). */
+/* An hmsm-forest JSON v1 file (docs/model.md 4): builds the models its instances place. */
 HMSM_API hmsm_status hmsm_scene_load_forest(const char* path, hmsm_scene** scene);
+/* As hmsm_scene_load_forest, also building the `count` models named in `names` (those that
+ * hmsm_simulation_add_instances will add later); a name the forest lacks is an error. */
+HMSM_API hmsm_status hmsm_scene_load_forest_with(const char* path, const char* const* names, size_t count,
+                                                 hmsm_scene** scene);
+/* The index of the model called `name` (several forest names may share one model). */
+HMSM_API hmsm_status hmsm_scene_find_model(const hmsm_scene* scene, const char* name, uint32_t* model);
 /* Copies `tree` into the scene as a new model; *model receives its index (may be NULL). */
 HMSM_API hmsm_status hmsm_scene_add_model(hmsm_scene* scene, const hmsm_tree* tree,
                                           const char* name, uint32_t* model);
