@@ -86,6 +86,11 @@ Status Simulation::Impl::reshape(const std::vector<uint32_t>& survivors, std::sp
         first_moved = 0;  // every output buffer is new
     }
     instances_ = std::move(next);
+    std::vector<InstanceId> ids;
+    ids.reserve(instances_.size());
+    for (uint32_t i : survivors) ids.push_back(instance_ids_[i]);
+    for (size_t k = 0; k < added.size(); ++k) ids.push_back(InstanceId(next_instance_id_++));
+    instance_ids_ = std::move(ids);
     header_dirty_ = instance_wind_dirty_ = program_dirty_ = true;
 
     // Survivors whose state moved: node positions and vertices are a pure function of the

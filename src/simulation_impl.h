@@ -67,6 +67,10 @@ struct __attribute__((visibility("hidden"))) Simulation::Impl {
     std::vector<detail::Dispatch> step_program_;
     std::vector<ForceField> force_fields_;
     std::vector<Instance> instances_;  // the current instance list (live control)
+    /// The handle of each current instance, ascending: survivors keep their order and added
+    /// instances take next_instance_id_ on.
+    std::vector<InstanceId> instance_ids_;
+    uint64_t next_instance_id_ = 0;
     detail::WindClock clock_;
     TurbulentModes modes_{};
     bool program_dirty_ = true, header_dirty_ = true, instance_wind_dirty_ = true;

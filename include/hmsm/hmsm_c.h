@@ -282,6 +282,21 @@ HMSM_API hmsm_status hmsm_simulation_remove_instances(hmsm_simulation* simulatio
    nothing. */
 HMSM_API hmsm_status hmsm_simulation_reset_instances(hmsm_simulation* simulation,
                                                      const uint32_t* indices, size_t count);
+/* Stable instance handles (Simulation::index_of and friends, docs/driving.md): the instances of
+ * the scene get ids 0 .. n-1, each added one the next unused id; an id stays valid while its
+ * instance lives and is never given again. A removed, unknown or repeated id is refused, naming
+ * it, and changes nothing. */
+typedef uint64_t hmsm_instance_id;
+/* hmsm_simulation_add_instances, and ids[count] receives the added instances' ids. */
+HMSM_API hmsm_status hmsm_simulation_add_instances_with_ids(hmsm_simulation* simulation,
+                                                            const hmsm_instance* instances, size_t count,
+                                                            hmsm_instance_id* ids);
+HMSM_API hmsm_status hmsm_simulation_remove_instances_by_id(hmsm_simulation* simulation,
+                                                            const hmsm_instance_id* ids, size_t count);
+HMSM_API hmsm_status hmsm_simulation_index_of(const hmsm_simulation* simulation, hmsm_instance_id id,
+                                              uint64_t* index);
+HMSM_API hmsm_status hmsm_simulation_id_of(const hmsm_simulation* simulation, uint64_t index,
+                                           hmsm_instance_id* id);
 /* The current instance list into instances[capacity]; *count = the number of instances.
  * instances[0].struct_size gives the layout of every element written. */
 HMSM_API hmsm_status hmsm_simulation_instances(const hmsm_simulation* simulation,
