@@ -282,6 +282,9 @@ HMSM_API hmsm_status hmsm_simulation_remove_instances(hmsm_simulation* simulatio
    nothing. */
 HMSM_API hmsm_status hmsm_simulation_reset_instances(hmsm_simulation* simulation,
                                                      const uint32_t* indices, size_t count);
+/* Room on the device for `count` instances in all (Simulation::reserve_instances): adding up to
+ * that many then costs only what the added instances cost. */
+HMSM_API hmsm_status hmsm_simulation_reserve_instances(hmsm_simulation* simulation, uint64_t count);
 /* Stable instance handles (Simulation::index_of and friends, docs/driving.md): the instances of
  * the scene get ids 0 .. n-1, each added one the next unused id; an id stays valid while its
  * instance lives and is never given again. A removed, unknown or repeated id is refused, naming

@@ -233,6 +233,13 @@ hmsm_status hmsm_simulation_add_instances(hmsm_simulation* simulation,
     });
 }
 
+hmsm_status hmsm_simulation_reserve_instances(hmsm_simulation* simulation, uint64_t count) {
+    return guarded([&]() -> Status {
+        if (!simulation) return bad("hmsm_simulation_reserve_instances: simulation is NULL");
+        return simulation->simulation->reserve_instances(count);
+    });
+}
+
 hmsm_status hmsm_simulation_remove_instances(hmsm_simulation* simulation, const uint64_t* indices,
                                              size_t count) {
     return guarded([&]() -> Status {

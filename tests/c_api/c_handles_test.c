@@ -1,4 +1,4 @@
-/* The C ABI's stable instance handles: ids survive removals of other
+/* The C ABI's stable instance handles and reserve_instances: ids survive removals of other
    instances and are never reused; a removed, unknown or repeated id is refused, naming it, and
    changes nothing. */
 #include "c_check.h"
@@ -41,6 +41,10 @@ int main(void) {
     hmsm_instance_id given[2] = {0, 0}, id = 0;
     const hmsm_instance_id first[] = {0}, removed_and_live[] = {2, 0}, unknown[] = {77}, twice[] = {1, 1};
     uint64_t index = 0;
+
+    CHECK_STATUS(HMSM_OK, hmsm_simulation_reserve_instances(simulation, 16));
+    CHECK_STATUS(HMSM_UNSUPPORTED, hmsm_simulation_reserve_instances(simulation, 1ull << 40));
+    CHECK_STATUS(HMSM_INVALID_ARGUMENT, hmsm_simulation_reserve_instances(NULL, 4));
 
     CHECK_STATUS(HMSM_OK, hmsm_simulation_id_of(simulation, 2, &id));
     CHECK(id == 2);
