@@ -13,6 +13,9 @@ namespace {
 
 using detail::BufferId;
 
+/// Most elements of one state buffer the capacity grows to (a chain buffer holds two halves).
+constexpr uint64_t kMaxStateElements = std::numeric_limits<uint32_t>::max() / 2;
+
 /// The chain-scope state an instance carries: S, V, g, T, the joint matrices and both halves
 /// of R and O. Nodes and vertices are recomputed from R and O.
 /// The coupled dynamics adds the loads of the last step (docs/model.md 3.13).
@@ -21,6 +24,32 @@ std::vector<BufferId> carried_buffers(bool coupled) {
                                  BufferId::joint_matrix, BufferId::chain_rotation, BufferId::chain_origin};
     if (coupled) ids.push_back(BufferId::chain_load);
     return ids;
+}
+
+/// The outputs that passes 4, 6 and 7 compute from R and O, element for element.
+constexpr BufferId kMovedOutputs[] = {BufferId::node_relative, BufferId::node_world, BufferId::vertex_position,
+                                      BufferId::vertex_normal};
+
+/// Moves that bring each survivor's elements [old[i], old[i + 1]) down behind the survivor
+/// before it, neighbours coalesced, ascending (no source is overwritten before it is read);
+/// `end` receives the elements the survivors hold.
+std::vector<detail::ElementMove> survivor_moves(const std::vector<uint32_t>& survivors,
+                                                const std::vector<uint64_t>& old, uint64_t& end) {
+    std::vector<detail::ElementMove> moves;
+    uint64_t at = 0;
+    for (uint32_t i : survivors) {
+        const uint64_t from = old[i], n = old[i + 1] - from;
+        if (from != at) {
+            if (!moves.empty() && moves.back().src + moves.back().count == from &&
+                moves.back().dst + moves.back().count == at)
+                moves.back().count += n;
+            else
+                moves.push_back({from, at, n});
+        }
+        at += n;
+    }
+    end = at;
+    return moves;
 }
 
 uint32_t halves_of(BufferId id) {
@@ -57,19 +86,47 @@ std::vector<detail::InstanceGroup> groups_from(const detail::SceneData& d, uint3
 
 }  // namespace
 
-Status Simulation::Impl::reshape(const std::vector<uint32_t>& survivors, std::span<const Instance> added) {
+Status Simulation::reserve_instances(uint64_t count) {
+    Impl& s = *impl_;
+    if (count > kMaxInstances)
+        return {ErrorCode::unsupported, "reserve_instances: " + std::to_string(count) + " instances, at most " +
+                                            std::to_string(kMaxInstances) + " are supported"};
+    Impl::Reserved room;
+    for (const detail::ModelRange& m : s.data_->models) {
+        room.chains = std::max(room.chains, count * m.chain_count);
+        room.nodes = std::max(room.nodes, count * m.node_count);
+        room.vertices = std::max(room.vertices, count * m.vertex_count);
+    }
+    room.instances = count;
+    if (room.chains > kMaxStateElements || room.nodes > kMaxStateElements || room.vertices > kMaxStateElements)
+        return {ErrorCode::unsupported, "reserve_instances: room for " + std::to_string(count) +
+                                            " instances of the largest model would take more than " +
+                                            std::to_string(kMaxStateElements) + " elements of one buffer"};
+    const detail::SceneData& d = *s.data_;
+    const bool fits = room.chains <= d.chain_capacity && room.nodes <= d.node_capacity &&
+                      room.vertices <= d.vertex_capacity && room.instances <= d.instance_capacity;
+    const Impl::Reserved before = s.reserved_;
+    s.reserved_ = room;
+    if (fits || !s.backend_->capabilities().reshapes_in_place) return {};
+    std::vector<uint32_t> everyone(s.instances_.size());
+    for (uint32_t i = 0; i < everyone.size(); ++i) everyone[i] = i;
+    Status grown_now = s.reshape(everyone, {}, /*reupload=*/true);
+    if (!grown_now) s.reserved_ = before;
+    return grown_now;
+}
+
+Status Simulation::Impl::reshape(const std::vector<uint32_t>& survivors, std::span<const Instance> added,
+                                 bool reupload) {
     std::vector<Instance> next;
     next.reserve(survivors.size() + added.size());
     for (uint32_t i : survivors) next.push_back(instances_[i]);
     next.insert(next.end(), added.begin(), added.end());
     HMSM_TRY(check_size(next));
 
-    Scene layout;  // flatten_scene reads only the instances; models come from the hierarchies
-    layout.instances = next;
-    auto data = std::make_unique<detail::SceneData>(detail::flatten_scene(
-        layout, hierarchies_, meshes_, config_.parameters, config_.model, config_.wind));
-    data->vertex_layout = config_.vertex_layout;
-    data->outputs = config_.outputs;
+    // The new instance layout over the models as they are: the model arrays are not rebuilt.
+    auto data = std::make_unique<detail::SceneData>();
+    data->models = data_->models;
+    detail::lay_out_instances(*data, next);
 
     // Per old instance: its first state chain.
     std::vector<uint64_t> old_chain(instances_.size() + 1, 0);
@@ -84,29 +141,49 @@ Status Simulation::Impl::reshape(const std::vector<uint32_t>& survivors, std::sp
         }
 
     ahead_schedule_.live_change();  // the state moves, the angles integrated ahead with it
-    if (backend_->capabilities().reshapes_in_place && data_->holds(*data)) {
+    const bool in_place = !reupload && backend_->capabilities().reshapes_in_place && data_->holds(*data);
+    if (in_place) {
         HMSM_TRY(reshape_in_place(std::move(data), survivors, old_chain, first_moved));
     } else {
         HMSM_TRY(reshape_anew(std::move(data), survivors, old_chain));
-        first_moved = 0;  // every output buffer is new
+        first_moved = 0;  // every instance buffer is new
     }
     instances_ = std::move(next);
-    header_dirty_ = instance_wind_dirty_ = program_dirty_ = true;
+    std::vector<InstanceId> ids;
+    ids.reserve(instances_.size());
+    for (uint32_t i : survivors) ids.push_back(instance_ids_[i]);
+    for (size_t k = 0; k < added.size(); ++k) ids.push_back(InstanceId(next_instance_id_++));
+    instance_ids_ = std::move(ids);
+    header_dirty_ = program_dirty_ = true;
+    if (!in_place) {
+        instance_wind_dirty_ = true;
+    } else if (first_moved < instances_.size()) {
+        // Winds of the instances that changed place or came: written as one range, together
+        // with those changed before whose place stayed (apply_pending).
+        std::erase_if(dirty_instances_, [&](uint32_t i) { return i >= first_moved; });
+        dirty_instances_.push_back(first_moved);
+        dirty_instances_.push_back(uint32_t(instances_.size() - 1));
+    } else {
+        std::erase_if(dirty_instances_, [&](uint32_t i) { return i >= instances_.size(); });
+    }
 
-    // Survivors whose state moved: node positions and vertices are a pure function of the
-    // carried R and O (passes 4, 6, 7 map elements one to one), so recomputing them restores
-    // them exactly. Added instances are posed at rest from S = V = 0.
+    // Added instances are posed at rest from S = V = 0. In place, the survivors' outputs moved
+    // with their state; after an upload every output buffer is new: node positions and vertices
+    // are a pure function of the carried R and O (passes 4, 6, 7 map elements one to one), so
+    // recomputing them restores them exactly.
     const detail::RunStep at_rest[1] = {};
     const uint32_t first_added = uint32_t(survivors.size());
-    std::vector<detail::InstanceGroup> moved;
-    for (detail::InstanceGroup g : groups_from(*data_, first_moved)) {
-        if (g.instance_begin >= first_added) continue;
-        g.instance_count = std::min(g.instance_count, first_added - g.instance_begin);
-        moved.push_back(g);
+    if (!in_place && first_added > 0) {
+        std::vector<detail::InstanceGroup> survived;
+        for (detail::InstanceGroup g : data_->groups) {
+            if (g.instance_begin >= first_added) continue;
+            g.instance_count = std::min(g.instance_count, first_added - g.instance_begin);
+            survived.push_back(g);
+        }
+        const uint32_t outputs = (1u << uint32_t(Pass::node_relative)) | (1u << uint32_t(Pass::node_world)) |
+                                 (1u << uint32_t(Pass::contour));
+        HMSM_TRY(backend_->run(program_for(survived, Pass::node_relative, outputs), at_rest));
     }
-    const uint32_t outputs = (1u << uint32_t(Pass::node_relative)) | (1u << uint32_t(Pass::node_world)) |
-                             (1u << uint32_t(Pass::contour));
-    if (!moved.empty()) HMSM_TRY(backend_->run(program_for(moved, Pass::node_relative, outputs), at_rest));
     if (!added.empty())
         HMSM_TRY(backend_->run(program_for(groups_from(*data_, first_added), Pass::integrate), at_rest));
     return apply_pending();
@@ -165,19 +242,8 @@ Status Simulation::Impl::reshape_in_place(std::unique_ptr<detail::SceneData> nex
     next->node_capacity = data_->node_capacity;
     next->vertex_capacity = data_->vertex_capacity;
     next->instance_capacity = data_->instance_capacity;
-    std::vector<detail::ElementMove> moves;  // in chains, ascending: no source is overwritten early
-    uint64_t at = 0;
-    for (uint32_t k = 0; k < survivors.size(); ++k) {
-        const uint64_t from = old_chain[survivors[k]], n = old_chain[survivors[k] + 1] - from;
-        if (from != at) {
-            if (!moves.empty() && moves.back().src + moves.back().count == from &&
-                moves.back().dst + moves.back().count == at)
-                moves.back().count += n;
-            else
-                moves.push_back({from, at, n});
-        }
-        at += n;
-    }
+    uint64_t at = 0;  // chains the survivors hold
+    const std::vector<detail::ElementMove> moves = survivor_moves(survivors, old_chain, at);
     for (BufferId id : carried_buffers(data_->coupled())) {
         std::vector<detail::ElementMove> in_buffer;
         for (uint64_t h = 0; h < halves_of(id); ++h)
@@ -187,6 +253,21 @@ Status Simulation::Impl::reshape_in_place(std::unique_ptr<detail::SceneData> nex
                 in_buffer.push_back(m);
             }
         HMSM_TRY(backend_->move_elements(id, in_buffer));
+    }
+    // The survivors' outputs (nodes, vertices) move with them: bitwise what they were, and a
+    // copy instead of passes 4, 6 and 7 over every instance behind the first gap.
+    std::vector<uint64_t> old_node(instances_.size() + 1, 0), old_vertex(instances_.size() + 1, 0);
+    for (size_t i = 0; i < instances_.size(); ++i) {
+        old_node[i + 1] = old_node[i] + data_->models[instances_[i].model].node_count;
+        old_vertex[i + 1] = old_vertex[i] + data_->models[instances_[i].model].vertex_count;
+    }
+    uint64_t nodes = 0, vertices = 0;
+    const std::vector<detail::ElementMove> node_moves = survivor_moves(survivors, old_node, nodes);
+    const std::vector<detail::ElementMove> vertex_moves = survivor_moves(survivors, old_vertex, vertices);
+    for (BufferId id : kMovedOutputs) {
+        if (data_->element_count(id) == 0) continue;
+        const bool node_scope = detail::buffer_info(id).scope == detail::Scope::node;
+        HMSM_TRY(backend_->move_elements(id, node_scope ? node_moves : vertex_moves));
     }
     // Added instances start at rest: S = V = 0 and g = 0 (T, R, O are computed from them).
     const uint64_t added_chains = next->total_chains - at;
@@ -208,7 +289,14 @@ Status Simulation::Impl::reshape_in_place(std::unique_ptr<detail::SceneData> nex
             HMSM_TRY(backend_->write(id, first_moved, changed, values.data(), detail::Scalar::f64));
         }
     }
-    data_ = std::move(next);
+    detail::SceneData& d = *data_;
+    d.instance_origin = std::move(next->instance_origin);
+    d.instance_yaw = std::move(next->instance_yaw);
+    d.instance_wind = std::move(next->instance_wind);
+    d.groups = std::move(next->groups);
+    d.total_chains = next->total_chains;
+    d.total_nodes = next->total_nodes;
+    d.total_vertices = next->total_vertices;
     return {};
 }
 
@@ -218,11 +306,23 @@ Status Simulation::Impl::reshape_anew(std::unique_ptr<detail::SceneData> next,
     // Read the state back in the precision the backend stores it in (so that it carries over
     // bit for bit), allocate with room to grow, upload, write the state back. Only live chains
     // are read and written: a scene split into windows maps no element past them.
-    const uint64_t limit = std::numeric_limits<uint32_t>::max() / 2;
-    next->chain_capacity = grown(data_->chain_capacity, next->total_chains, limit);
-    next->node_capacity = grown(data_->node_capacity, next->total_nodes, limit);
-    next->vertex_capacity = grown(data_->vertex_capacity, next->total_vertices, limit);
-    next->instance_capacity = uint32_t(grown(data_->instance_capacity, next->instance_count(), 1u << 24));
+    {
+        detail::SceneData whole = *data_;  // the model arrays and uniforms, then the new layout
+        whole.instance_origin = std::move(next->instance_origin);
+        whole.instance_yaw = std::move(next->instance_yaw);
+        whole.instance_wind = std::move(next->instance_wind);
+        whole.groups = std::move(next->groups);
+        whole.total_chains = next->total_chains;
+        whole.total_nodes = next->total_nodes;
+        whole.total_vertices = next->total_vertices;
+        *next = std::move(whole);
+    }
+    const uint64_t limit = kMaxStateElements;
+    next->chain_capacity = std::max(grown(data_->chain_capacity, next->total_chains, limit), reserved_.chains);
+    next->node_capacity = std::max(grown(data_->node_capacity, next->total_nodes, limit), reserved_.nodes);
+    next->vertex_capacity = std::max(grown(data_->vertex_capacity, next->total_vertices, limit), reserved_.vertices);
+    next->instance_capacity = uint32_t(std::max<uint64_t>(
+        grown(data_->instance_capacity, next->instance_count(), uint64_t(1) << 24), reserved_.instances));
     const detail::Scalar scalar = backend_->kind() == BackendKind::cpu64 ? detail::Scalar::f64 : detail::Scalar::f32;
     struct Saved {
         std::vector<double> f64;

@@ -75,6 +75,39 @@ void fill_walk_records(SceneData& d) {
     }
 }
 
+void lay_out_instances(SceneData& d, std::span<const Instance> instances, uint64_t max_group_elements) {
+    d.instance_origin.clear();
+    d.instance_yaw.clear();
+    d.groups.clear();
+    d.total_chains = d.total_nodes = d.total_vertices = 0;
+    d.instance_origin.reserve(instances.size());
+    d.instance_yaw.reserve(instances.size());
+    for (size_t i = 0; i < instances.size(); ++i) {
+        const Instance& inst = instances[i];
+        const ModelRange& range = d.models[inst.model];
+        d.instance_origin.push_back({inst.origin, 0.0});
+        d.instance_yaw.push_back({std::cos(inst.yaw), std::sin(inst.yaw), 0.0, 0.0});
+        uint64_t per_instance = std::max({range.chain_count, range.node_count, range.vertex_count});
+        InstanceGroup* group = d.groups.empty() ? nullptr : &d.groups.back();
+        if (!group || group->model != inst.model ||
+            uint64_t(group->instance_count + 1) * per_instance > max_group_elements) {
+            InstanceGroup g;
+            g.model = inst.model;
+            g.instance_begin = uint32_t(i);
+            g.chain_begin = uint32_t(d.total_chains);
+            g.node_begin = uint32_t(d.total_nodes);
+            g.vertex_begin = uint32_t(d.total_vertices);
+            d.groups.push_back(g);
+            group = &d.groups.back();
+        }
+        ++group->instance_count;
+        d.total_chains += range.chain_count;
+        d.total_nodes += range.node_count;
+        d.total_vertices += range.vertex_count;
+    }
+    d.instance_wind.assign(size_t(HMSM_INSTANCE_WIND_VEC4S) * 4 * d.instance_origin.size(), 0.0);
+}
+
 SceneData flatten_scene(const Scene& scene, const std::vector<Hierarchy>& hierarchies,
                         const std::vector<MeshTemplate>& meshes, const Parameters& parameters,
                         const ModelOptions& options, const Wind& wind,
@@ -137,31 +170,7 @@ SceneData flatten_scene(const Scene& scene, const std::vector<Hierarchy>& hierar
 
     fill_walk_records(d);
 
-    // Instances and groups.
-    for (size_t i = 0; i < scene.instances.size(); ++i) {
-        const Instance& inst = scene.instances[i];
-        const ModelRange& range = d.models[inst.model];
-        d.instance_origin.push_back({inst.origin, 0.0});
-        d.instance_yaw.push_back({std::cos(inst.yaw), std::sin(inst.yaw), 0.0, 0.0});
-        uint64_t per_instance = std::max({range.chain_count, range.node_count, range.vertex_count});
-        InstanceGroup* group = d.groups.empty() ? nullptr : &d.groups.back();
-        if (!group || group->model != inst.model ||
-            uint64_t(group->instance_count + 1) * per_instance > max_group_elements) {
-            InstanceGroup g;
-            g.model = inst.model;
-            g.instance_begin = uint32_t(i);
-            g.chain_begin = uint32_t(d.total_chains);
-            g.node_begin = uint32_t(d.total_nodes);
-            g.vertex_begin = uint32_t(d.total_vertices);
-            d.groups.push_back(g);
-            group = &d.groups.back();
-        }
-        ++group->instance_count;
-        d.total_chains += range.chain_count;
-        d.total_nodes += range.node_count;
-        d.total_vertices += range.vertex_count;
-    }
-    d.instance_wind.assign(size_t(HMSM_INSTANCE_WIND_VEC4S) * 4 * d.instance_origin.size(), 0.0);
+    lay_out_instances(d, scene.instances, max_group_elements);
     d.fit_capacity();
 
     d.dt = parameters.dt;

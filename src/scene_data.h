@@ -16,6 +16,7 @@
 #include <glm/vec4.hpp>
 
 #include <cstdint>
+#include <span>
 #include <vector>
 
 namespace hmsm::detail {
@@ -120,6 +121,12 @@ SceneData flatten_scene(const Scene& scene, const std::vector<Hierarchy>& hierar
                         const std::vector<MeshTemplate>& meshes, const Parameters& parameters,
                         const ModelOptions& options, const Wind& wind,
                         uint64_t max_group_elements = (1ull << 31));
+
+/// Lays out `instances` over d's models: instance_origin, instance_yaw, a zero instance_wind,
+/// groups and the total chain, node and vertex counts (flatten_scene's instance part; a live
+/// change lays out the new list without flattening the models again).
+void lay_out_instances(SceneData& d, std::span<const Instance> instances,
+                       uint64_t max_group_elements = (1ull << 31));
 
 /// The constants every dispatch over `group` shares (offsets, counts, wind, parameters), with
 /// kind per_element and `final_half` as both halves; a dispatch then sets its own kind, element

@@ -45,6 +45,14 @@ std::string model_list(std::span<const std::string> names) {
 
 }  // namespace
 
+std::vector<std::string> scheduled_model_names(const Schedule& schedule) {
+    std::vector<std::string> names;
+    for (const ScheduleEvent& e : schedule.events)
+        for (const ScheduledInstance& a : e.add)
+            if (std::find(names.begin(), names.end(), a.model) == names.end()) names.push_back(a.model);
+    return names;
+}
+
 Status validate_schedule(const Schedule& schedule, std::span<const std::string> model_names,
                          uint64_t instance_count, const Wind& initial_wind) {
     Wind wind = initial_wind;

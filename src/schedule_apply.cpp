@@ -37,14 +37,13 @@ Status apply_schedule_events(const Schedule& schedule, uint64_t step, Simulation
             }
         }
         if (!e.add.empty()) {
-            const std::vector<std::string>& names = sim.scene().model_names;
             std::vector<Instance> added;
             for (const ScheduledInstance& a : e.add) {
-                auto found = std::find(names.begin(), names.end(), a.model);
-                if (found == names.end())
+                const std::optional<uint32_t> model = find_model(sim.scene(), a.model);
+                if (!model)
                     return {ErrorCode::invalid_argument, where + "model \"" + detail::quote_input(a.model) + "\" is not one of the run's models"};
                 Instance inst;
-                inst.model = uint32_t(found - names.begin());
+                inst.model = *model;
                 inst.origin = a.origin;
                 inst.yaw = a.yaw;
                 inst.wind_scale = a.wind_scale;

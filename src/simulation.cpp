@@ -152,6 +152,8 @@ Result<std::unique_ptr<Simulation>> Simulation::Impl::create(const Scene& scene,
     }
 
     sim->instances_ = scene.instances;
+    for (uint64_t i = 0; i < scene.instances.size(); ++i) sim->instance_ids_.push_back(InstanceId(i));
+    sim->next_instance_id_ = scene.instances.size();
     HMSM_TRY(sim->check_wind(config.wind, scene.instances));
     HMSM_TRY(sim->check_size(scene.instances));
     sim->modes_ = detail::wind_modes(config.wind);

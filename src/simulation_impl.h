@@ -33,7 +33,8 @@ struct __attribute__((visibility("hidden"))) Simulation::Impl {
                                               Pass first, uint32_t passes = ~0u) const;
     /// Replaces the instance list: survivors (old indices, in order) then `added`; carries the
     /// survivors' state over and poses the added instances at rest (live_control.cpp).
-    Status reshape(const std::vector<uint32_t>& survivors, std::span<const Instance> added);
+    /// With `reupload`, the scene is uploaded anew even within the capacity (reserve_instances).
+    Status reshape(const std::vector<uint32_t>& survivors, std::span<const Instance> added, bool reupload = false);
     /// reshape() within the capacity: moves state on the device, writes the added instances.
     Status reshape_in_place(std::unique_ptr<detail::SceneData> next, const std::vector<uint32_t>& survivors,
                             const std::vector<uint64_t>& old_chain, uint32_t first_moved);
@@ -84,6 +85,15 @@ struct __attribute__((visibility("hidden"))) Simulation::Impl {
     std::vector<detail::Dispatch> step_program_;
     std::vector<ForceField> force_fields_;
     std::vector<Instance> instances_;  // the current instance list (live control)
+    /// The handle of each current instance, ascending: survivors keep their order and added
+    /// instances take next_instance_id_ on.
+    std::vector<InstanceId> instance_ids_;
+    uint64_t next_instance_id_ = 0;
+    /// The room reserve_instances() asked for: a re-upload allocates at least this much.
+    struct Reserved {
+        uint64_t chains = 0, nodes = 0, vertices = 0, instances = 0;
+    };
+    Reserved reserved_;
     detail::WindClock clock_;
     detail::WindModes modes_{};
     bool program_dirty_ = true, header_dirty_ = true, instance_wind_dirty_ = true;

@@ -324,3 +324,26 @@ TEST_F(CliLive, ForestWindScaleAndActiveReachTheSimulation) {
     EXPECT_TRUE(same(2)) << "inactive: frozen";
     EXPECT_FALSE(same(3));
 }
+
+// A schedule may add instances of a forest model that no forest instance places: the CLI asks
+// the forest loader for the schedule's models.
+TEST_F(CliLive, ScheduleAddsAModelTheForestDoesNotPlace) {
+    ASSERT_TRUE(save_tree(test::rod(), path("rod.json")).ok());
+    write("forest.json", R"({"format": "hmsm-forest", "version": 1,
+        "models": {"t": "small.json", "r": "rod.json", "unused": "broken.json"}, "instances": [{"model": "t"}]})");
+    write("broken.json", "not a tree");
+    write("s.json", R"({"format": "hmsm-schedule", "version": 1, "events": [
+        {"step": 3, "add": [{"model": "r", "origin": [4, 0, 0]}]}]})");
+    ASSERT_EQ(run("simulate --forest " + path("forest.json") + " --backend cpu64 --steps 6 --wind-schedule " +
+                  path("s.json") + " --dump-nodes " + path("n.csv"))
+                  .exit_code,
+              0)
+        << last_.err;
+    std::string header;
+    EXPECT_EQ(csv(path("n.csv"), header).size(), test::small_tree().nodes.size() + test::rod().nodes.size());
+    write("bad.json", R"({"format": "hmsm-schedule", "version": 1, "events": [
+        {"step": 3, "add": [{"model": "unused"}]}]})");
+    expect_bad("simulate --forest " + path("forest.json") + " --backend cpu64 --steps 6 --wind-schedule " +
+                   path("bad.json"),
+               "models.unused");
+}

@@ -147,28 +147,56 @@ TEST(Limits, TreesAreSizedFromTheirCountsBeforeTheBuild) {
 }
 
 // 2,000 names of one preset were each generated and built (about 6 MB each): out of memory.
-TEST(Limits, ForestLoadsEachReferenceOnceAndSizesTheBuildFirst) {
-    auto forest_of = [](int names) {
+// Names that share a reference share one model; names nobody uses are not built.
+TEST(Limits, ForestBuildsEachUsedReferenceOnce) {
+    auto forest_of = [](int names, const std::string& instances) {
         std::string text = R"({"format": "hmsm-forest", "version": 1, "models": {)";
         for (int i = 0; i < names; ++i) text += (i ? ", " : "") + ("\"m" + std::to_string(i) + "\": \"preset:paper-5\"");
-        return text + R"(}, "instances": [{"model": "m7"}, {"model": "m9"}, {"model": "m7"}]})";
+        return text + R"(, "other": "preset:paper-4"}, "instances": )" + instances + "}";
     };
     const auto start = std::chrono::steady_clock::now();
-    auto huge = parse_forest(forest_of(2000), ".", "f.json");
-    ASSERT_FALSE(huge.ok());
-    EXPECT_EQ(huge.status().code(), ErrorCode::unsupported);
-    EXPECT_NE(huge.status().message().find("MiB"), std::string::npos) << huge.status().message();
-    EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 5.0);
-    auto scene = parse_forest(forest_of(20), ".", "f.json");
+    auto scene = parse_forest(forest_of(2000, R"([{"model": "m7"}, {"model": "m9"}, {"model": "m7"}])"), ".", "f.json");
     ASSERT_TRUE(scene.ok()) << scene.status().message();
-    ASSERT_EQ(scene->models.size(), 20u);  // every name, for schedules that add instances
-    EXPECT_EQ(scene->model_names[scene->instances[0].model], "m7");
-    EXPECT_EQ(scene->model_names[scene->instances[1].model], "m9");
-    EXPECT_EQ(scene->instances[2].model, scene->instances[0].model);
+    EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 5.0);
+    ASSERT_EQ(scene->models.size(), 1u);  // m7 and m9 name one preset; m0.. and "other" are unused
+    EXPECT_EQ(scene->model_names, std::vector<std::string>{"m7"});
+    ASSERT_EQ(scene->model_aliases.size(), 1u);
+    EXPECT_EQ(scene->model_aliases[0].name, "m9");
+    for (const Instance& inst : scene->instances) EXPECT_EQ(inst.model, 0u);
+    EXPECT_EQ(find_model(*scene, "m9"), std::optional<uint32_t>(0));
+    EXPECT_EQ(find_model(*scene, "m8"), std::nullopt);
+    EXPECT_TRUE(validate_scene(*scene).ok());
+    auto sim = Simulation::create(*scene, {});
+    ASSERT_TRUE(sim.ok()) << sim.status().message();
+    EXPECT_EQ((*sim)->scene().models.size(), 1u);
+
+    // An extra name builds its model for later add_instances; an unknown one is refused.
+    const std::vector<std::string> extra{"other", "m3"};
+    auto with_extra = parse_forest(forest_of(20, R"([{"model": "m7"}])"), ".", "f.json", extra);
+    ASSERT_TRUE(with_extra.ok()) << with_extra.status().message();
+    ASSERT_EQ(with_extra->models.size(), 2u);
+    EXPECT_EQ(find_model(*with_extra, "m3"), find_model(*with_extra, "m7"));
+    EXPECT_NE(find_model(*with_extra, "other"), find_model(*with_extra, "m7"));
+    const std::vector<std::string> unknown{"birch"};
+    expect_refused(parse_forest(forest_of(20, R"([{"model": "m7"}])"), ".", "f.json", unknown).status(),
+                   {"birch", "f.json"});
+
+    // The build estimate counts the built models only.
+    detail::SizeLimits tight = detail::kDefaultSizeLimits;
+    tight.build_bytes = detail::model_build_bytes(generate_preset("paper-5")->nodes.size(),
+                                                  generate_preset("paper-5")->leaves.size(), 3) + 1;
+    {
+        detail::ScopedSizeLimits scoped(tight);
+        EXPECT_TRUE(parse_forest(forest_of(200, R"([{"model": "m1"}, {"model": "m2"}])"), ".", "f.json").ok());
+        auto both = parse_forest(forest_of(200, R"([{"model": "m1"}, {"model": "other"}])"), ".", "f.json");
+        ASSERT_FALSE(both.ok());
+        EXPECT_EQ(both.status().code(), ErrorCode::unsupported);
+        EXPECT_NE(both.status().message().find("MiB"), std::string::npos) << both.status().message();
+    }
     detail::SizeLimits small = detail::kDefaultSizeLimits;
     small.forest_models = 10;
     detail::ScopedSizeLimits scoped(small);
-    expect_refused(parse_forest(forest_of(20), ".", "f.json").status(), {"models", "20", "10"});
+    expect_refused(parse_forest(forest_of(20, R"([{"model": "m1"}])"), ".", "f.json").status(), {"models", "21", "10"});
 }
 
 // Importers: a 2 GB sparse file and a character device were read (4.2 GB, or until memory ran out).

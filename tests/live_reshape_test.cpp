@@ -220,6 +220,42 @@ TEST_P(LiveReshape, AddedInstancesStartAtRest) {
             EXPECT_NEAR(rest[3 * n + size_t(c)], model.nodes[n].position[c] - model.nodes[root].position[c], 1e-5);
 }
 
+// reserve_instances uploads once; additions up to the reserved count then upload nothing, and
+// every output is bitwise what a simulation that never reserved gives.
+TEST_P(LiveReshape, ReservedRoomTakesAdditionsWithoutUpload) {
+    std::string skip;
+    auto reserved = create(two_model_forest(), true, skip);
+    if (!skip.empty()) GTEST_SKIP() << skip;
+    auto plain = create(two_model_forest(), true, skip);
+    ASSERT_TRUE(reserved && plain);
+    ASSERT_TRUE(reserved->step(5).ok());
+    ASSERT_TRUE(plain->step(5).ok());
+    const uint64_t room = reserved->instance_count() + 12;
+    ASSERT_TRUE(reserved->reserve_instances(room).ok());
+    EXPECT_EQ(full_uploads_of(*reserved), 1u);
+    EXPECT_GE(scene_data_of(*reserved).instance_capacity, room);
+    ASSERT_TRUE(reserved->reserve_instances(4).ok());
+    EXPECT_EQ(full_uploads_of(*reserved), 1u) << "the room is there already";
+    EXPECT_EQ(outputs_of(*reserved), outputs_of(*plain));
+    for (uint32_t k = 0; k < 12; ++k) {
+        const Instance one[] = {{k % 2, {20.0 + 4.0 * k, 0, 0}, 0.1 * k}};
+        ASSERT_TRUE(reserved->add_instances(one).ok());
+        ASSERT_TRUE(plain->add_instances(one).ok());
+        if (k == 5) {
+            const uint64_t gone[] = {2};
+            ASSERT_TRUE(reserved->remove_instances(gone).ok());
+            ASSERT_TRUE(plain->remove_instances(gone).ok());
+        }
+    }
+    EXPECT_EQ(full_uploads_of(*reserved), 1u) << "every addition fitted the reserved room";
+    ASSERT_TRUE(reserved->step(10).ok());
+    ASSERT_TRUE(plain->step(10).ok());
+    EXPECT_EQ(outputs_of(*reserved), outputs_of(*plain));
+    const Status too_many = reserved->reserve_instances(uint64_t(kMaxInstances) + 1);
+    EXPECT_EQ(too_many.code(), ErrorCode::unsupported);
+    EXPECT_EQ(full_uploads_of(*reserved), 1u);
+}
+
 INSTANTIATE_TEST_SUITE_P(Backends, LiveReshape,
                          ::testing::Values(BackendKind::cpu64, BackendKind::cpu, BackendKind::cpu_parallel,
                                            BackendKind::vulkan, BackendKind::cuda),

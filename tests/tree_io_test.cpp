@@ -167,3 +167,47 @@ TEST(Forest, LoadsModelsAndInstancesRelativeToTheFile) {
     EXPECT_NE(missing.status().message().find("models.rod"), std::string::npos);
     std::filesystem::remove_all(dir);
 }
+
+// A model nobody places and no caller asks for is not read: a broken or huge file behind it
+// does not stop the forest, a missing file or an unknown preset still does.
+TEST(Forest, UnusedModelsAreCheckedButNotRead) {
+    auto dir = std::filesystem::temp_directory_path() / "hmsm_forest_unused_test";
+    std::filesystem::create_directories(dir);
+    ASSERT_TRUE(save_tree(test::rod(), (dir / "rod.json").string()).ok());
+    std::ofstream(dir / "broken.json") << "{ this is not a tree";
+    {
+        std::ofstream huge(dir / "huge.json");
+        huge.seekp((std::streamoff(1) << 30) - 1);  // sparse: past the input size limit
+        huge.put('x');
+    }
+    std::ofstream(dir / "forest.json") << R"({"format": "hmsm-forest", "version": 1,
+        "models": {"rod": "rod.json", "broken": "broken.json", "huge": "huge.json", "p": "preset:paper-5"},
+        "instances": [{"model": "rod"}]})";
+    auto scene = load_forest((dir / "forest.json").string());
+    ASSERT_TRUE(scene.ok()) << scene.status().message();
+    EXPECT_EQ(scene->models.size(), 1u);
+    EXPECT_EQ(scene->model_names, std::vector<std::string>{"rod"});
+    EXPECT_FALSE(find_model(*scene, "broken").has_value());
+
+    const std::vector<std::string> wants_broken{"broken"};
+    auto asked = load_forest((dir / "forest.json").string(), wants_broken);
+    ASSERT_FALSE(asked.ok());
+    EXPECT_NE(asked.status().message().find("models.broken"), std::string::npos) << asked.status().message();
+    const std::vector<std::string> wants_huge{"huge"};
+    auto huge = load_forest((dir / "forest.json").string(), wants_huge);
+    ASSERT_FALSE(huge.ok());
+    EXPECT_NE(huge.status().message().find("models.huge"), std::string::npos) << huge.status().message();
+
+    std::ofstream(dir / "missing.json") << R"({"format": "hmsm-forest", "version": 1,
+        "models": {"rod": "rod.json", "gone": "nope.json"}, "instances": [{"model": "rod"}]})";
+    auto missing = load_forest((dir / "missing.json").string());
+    ASSERT_FALSE(missing.ok());
+    EXPECT_EQ(missing.status().code(), ErrorCode::io);
+    EXPECT_NE(missing.status().message().find("models.gone"), std::string::npos) << missing.status().message();
+    std::ofstream(dir / "preset.json") << R"({"format": "hmsm-forest", "version": 1,
+        "models": {"rod": "rod.json", "p": "preset:paper-9"}, "instances": [{"model": "rod"}]})";
+    auto preset = load_forest((dir / "preset.json").string());
+    ASSERT_FALSE(preset.ok());
+    EXPECT_NE(preset.status().message().find("paper-9"), std::string::npos) << preset.status().message();
+    std::filesystem::remove_all(dir);
+}

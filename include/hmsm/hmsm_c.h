@@ -237,8 +237,14 @@ HMSM_API void hmsm_tree_destroy(hmsm_tree* tree);
 
 /* --- scenes ------------------------------------------------------------------------------- */
 HMSM_API hmsm_status hmsm_scene_create(hmsm_scene** scene);
-/* An hmsm-forest JSON v1 file (docs/model.md 4). */
+/* An hmsm-forest JSON v1 file (docs/model.md 4): builds the models its instances place. */
 HMSM_API hmsm_status hmsm_scene_load_forest(const char* path, hmsm_scene** scene);
+/* As hmsm_scene_load_forest, also building the `count` models named in `names` (those that
+ * hmsm_simulation_add_instances will add later); a name the forest lacks is an error. */
+HMSM_API hmsm_status hmsm_scene_load_forest_with(const char* path, const char* const* names, size_t count,
+                                                 hmsm_scene** scene);
+/* The index of the model called `name` (several forest names may share one model). */
+HMSM_API hmsm_status hmsm_scene_find_model(const hmsm_scene* scene, const char* name, uint32_t* model);
 /* Copies `tree` into the scene as a new model; *model receives its index (may be NULL). */
 HMSM_API hmsm_status hmsm_scene_add_model(hmsm_scene* scene, const hmsm_tree* tree,
                                           const char* name, uint32_t* model);
@@ -307,6 +313,24 @@ HMSM_API hmsm_status hmsm_simulation_remove_instances(hmsm_simulation* simulatio
    nothing. */
 HMSM_API hmsm_status hmsm_simulation_reset_instances(hmsm_simulation* simulation,
                                                      const uint32_t* indices, size_t count);
+/* Room on the device for `count` instances in all (Simulation::reserve_instances): adding up to
+ * that many then costs only what the added instances cost. */
+HMSM_API hmsm_status hmsm_simulation_reserve_instances(hmsm_simulation* simulation, uint64_t count);
+/* Stable instance handles (Simulation::index_of and friends, docs/driving.md): the instances of
+ * the scene get ids 0 .. n-1, each added one the next unused id; an id stays valid while its
+ * instance lives and is never given again. A removed, unknown or repeated id is refused, naming
+ * it, and changes nothing. */
+typedef uint64_t hmsm_instance_id;
+/* hmsm_simulation_add_instances, and ids[count] receives the added instances' ids. */
+HMSM_API hmsm_status hmsm_simulation_add_instances_with_ids(hmsm_simulation* simulation,
+                                                            const hmsm_instance* instances, size_t count,
+                                                            hmsm_instance_id* ids);
+HMSM_API hmsm_status hmsm_simulation_remove_instances_by_id(hmsm_simulation* simulation,
+                                                            const hmsm_instance_id* ids, size_t count);
+HMSM_API hmsm_status hmsm_simulation_index_of(const hmsm_simulation* simulation, hmsm_instance_id id,
+                                              uint64_t* index);
+HMSM_API hmsm_status hmsm_simulation_id_of(const hmsm_simulation* simulation, uint64_t index,
+                                           hmsm_instance_id* id);
 /* The current instance list into instances[capacity]; *count = the number of instances.
  * instances[0].struct_size gives the layout of every element written. */
 HMSM_API hmsm_status hmsm_simulation_instances(const hmsm_simulation* simulation,

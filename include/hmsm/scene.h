@@ -6,7 +6,10 @@
 #include <hmsm/tree.h>
 
 #include <cstdint>
+#include <optional>
+#include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace hmsm {
@@ -21,15 +24,27 @@ struct Instance {
     bool active = true;        ///< an inactive instance is frozen (docs/model.md 3.9)
 };
 
+/// A further name of a scene model: forest keys that name one file or preset share its model.
+struct ModelAlias {
+    std::string name;
+    uint32_t model = 0;
+};
+
 struct Scene {
     std::vector<TreeModel> models;
-    std::vector<std::string> model_names;  ///< same length as models
+    std::vector<std::string> model_names;  ///< same length as models: each model's first name
+    std::vector<ModelAlias> model_aliases; ///< more names, each of a model in `models`
     std::vector<Instance> instances;
     /// Per model (models past its end: 0): 0 runs the model whole; N >= 1 runs, in its place,
     /// its finest level of detail with at most N chains (docs/model.md 3.12), whose kept chains
     /// move as the model's and whose folded branches move rigidly with them.
     std::vector<int32_t> joint_budgets;
 };
+
+/// The model called `name`: among model_names first, then model_aliases.
+HMSM_API std::optional<uint32_t> find_model(const Scene& scene, std::string_view name);
+/// Every name of the scene's models: model_names, then the aliases' names.
+HMSM_API std::vector<std::string> all_model_names(const Scene& scene);
 
 /// One instance of `tree` (at the origin with yaw 0 by default).
 HMSM_API Scene single_tree_scene(TreeModel tree, Vec3 origin = Vec3(0.0), double yaw = 0.0);
@@ -47,10 +62,15 @@ inline constexpr uint32_t kMaxGridInstances = kMaxInstances;
 HMSM_API Result<Scene> grid_scene(TreeModel tree, uint32_t count, double spacing, uint64_t seed);
 
 /// Reads an hmsm-forest JSON v1 file; model paths are relative to the file, "preset:NAME"
-/// generates a preset.
-HMSM_API Result<Scene> load_forest(const std::string& path);
+/// generates a preset. Only the models that an instance places or `extra_models` names are
+/// loaded and built, each distinct file or preset once: names sharing one become one scene
+/// model (model_names holds its first needed name, model_aliases the others). A model nobody
+/// needs is checked to be a string naming an existing file or a known preset, never read
+/// (docs/model.md 3.11). A name in `extra_models` that the forest does not define is an error.
+HMSM_API Result<Scene> load_forest(const std::string& path, std::span<const std::string> extra_models = {});
 HMSM_API Result<Scene> parse_forest(std::string_view json, const std::string& base_directory,
-                                    std::string_view source = "forest");
+                                    std::string_view source = "forest",
+                                    std::span<const std::string> extra_models = {});
 
 /// Checks that every instance names a model and every number is finite.
 HMSM_API Status validate_scene(const Scene& scene);

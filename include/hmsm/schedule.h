@@ -82,7 +82,11 @@ HMSM_API Result<Schedule> parse_schedule(std::string_view json, std::string_view
 /// Reads and parses a schedule file (I/O errors are ErrorCode::io).
 HMSM_API Result<Schedule> load_schedule(const std::string& path);
 
-/// Checks a parsed schedule against the run it will drive: `model_names` (Scene::model_names),
+/// The distinct model names that the schedule's events add instances of, in first-use order
+/// (the models a forest must build for it: load_forest's extra_models).
+HMSM_API std::vector<std::string> scheduled_model_names(const Schedule& schedule);
+
+/// Checks a parsed schedule against the run it will drive: `model_names` (all_model_names),
 /// the instance count and the wind in force at step 1. Tracks the instance count through every
 /// remove and add, so an index that does not exist when its event applies is rejected, and
 /// validates the wind after every change (validate(const Wind&)), every force list, every
@@ -92,7 +96,7 @@ HMSM_API Status validate_schedule(const Schedule& schedule, std::span<const std:
                          uint64_t instance_count, const Wind& initial_wind);
 
 /// Applies, in file order, every event whose step is `step` (call it before running step `step`,
-/// for step = steps_done() + 1). Model names resolve through simulation.scene().model_names.
+/// for step = steps_done() + 1). Model names resolve through find_model(simulation.scene(), name).
 /// Validate the schedule first: an error here is a rejected live-control call, reported as is.
 HMSM_API Status apply_schedule_events(const Schedule& schedule, uint64_t step, Simulation& simulation);
 

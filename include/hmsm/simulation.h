@@ -18,6 +18,12 @@
 
 namespace hmsm {
 
+/// A handle of one instance of a simulation, stable while it lives: the instances given to
+/// create() get 0 .. n-1 in scene order, every added instance the next unused value. Removing
+/// other instances leaves it valid; a removed instance's id is never given again in the
+/// simulation's life (docs/driving.md, instance handles).
+enum class InstanceId : uint64_t {};
+
 /// A running simulation of a scene. Threading: one Simulation may be used by one thread at a
 /// time (calls on it are not synchronized); distinct Simulations may run concurrently on any
 /// backends, and may be created and destroyed from several threads at once. const member
@@ -62,9 +68,27 @@ public:
     /// this costs what the added instances cost; past it, the scene is uploaded anew once with
     /// 1.5 times the capacity (docs/driving.md).
     Status add_instances(std::span<const Instance> instances);
+    /// Makes room on the device for `count` instances in all, each as large as the scene's
+    /// largest model, so that adding up to that many costs only what the added instances cost:
+    /// one upload of the scene now if the room is smaller, nothing otherwise. The room is kept
+    /// when a later addition outgrows it. At most kMaxInstances (docs/driving.md).
+    Status reserve_instances(uint64_t count);
+    /// As add_instances(instances), and `ids` (as many as `instances`) receives the added
+    /// instances' handles, in order.
+    Status add_instances(std::span<const Instance> instances, std::span<InstanceId> ids);
     /// Removes instances by their current indices (no repeats); the survivors keep their order
     /// and their state, moved on the device (docs/driving.md).
     Status remove_instances(std::span<const uint64_t> indices);
+    /// remove_instances() by handle: an id that was removed, was never given, or is listed
+    /// twice is refused, naming it, and nothing changes.
+    Status remove_instances_by_id(std::span<const InstanceId> ids);
+    /// The current index of the instance `id` (an error naming the id if it was removed or
+    /// never given). Handles are kept in ascending order, so this is a binary search.
+    Result<uint64_t> index_of(InstanceId id) const;
+    /// The handle of the instance at current index `index` (an error if out of range).
+    Result<InstanceId> id_of(uint64_t index) const;
+    /// The handles of the current instance list, index for index (ascending).
+    std::span<const InstanceId> instance_ids() const;
     /// Puts instances (current indices, no repeats) back at rest, exactly as right after
     /// add_instances(): S = V = 0, generalized force 0, posed at rest, whatever their state was
     /// (violent motion, or NaN from the caller's own numbers). Their settings (origin, wind

@@ -34,6 +34,9 @@ hmsm_status report(const Status& status);
 
 inline Status bad(std::string message) { return {ErrorCode::invalid_argument, std::move(message)}; }
 
+/// Reads and converts `count` caller instances (each struct_size-checked) for function `fn`.
+Status read_instances(const char* fn, const hmsm_instance* instances, size_t count, std::vector<Instance>& out);
+
 /// Runs `body` (returning a Status) so that no exception leaves it.
 template <class Body>
 hmsm_status guarded(Body&& body) noexcept {

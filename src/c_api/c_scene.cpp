@@ -1,6 +1,9 @@
 // The C ABI's scenes: models and instances, assembled by the caller or read from a forest file.
 #include "c_api_internal.h"
 #include "c_struct.h"
+#include "model/input_limits.h"
+
+#include <optional>
 
 using namespace hmsm;
 using namespace hmsm::c_api;
@@ -22,6 +25,37 @@ hmsm_status hmsm_scene_load_forest(const char* path, hmsm_scene** scene) {
         Result<Scene> loaded = load_forest(path);
         if (!loaded) return loaded.status();
         *scene = new hmsm_scene{std::move(*loaded)};
+        return {};
+    });
+}
+
+hmsm_status hmsm_scene_load_forest_with(const char* path, const char* const* names, size_t count,
+                                        hmsm_scene** scene) {
+    return guarded([&]() -> Status {
+        if (!path) return bad("hmsm_scene_load_forest_with: path is NULL");
+        if (!scene) return bad("hmsm_scene_load_forest_with: scene is NULL");
+        if (!names && count > 0) return bad("hmsm_scene_load_forest_with: names is NULL");
+        std::vector<std::string> extra;
+        for (size_t i = 0; i < count; ++i) {
+            if (!names[i]) return bad("hmsm_scene_load_forest_with: names[" + std::to_string(i) + "] is NULL");
+            extra.emplace_back(names[i]);
+        }
+        Result<Scene> loaded = load_forest(path, extra);
+        if (!loaded) return loaded.status();
+        *scene = new hmsm_scene{std::move(*loaded)};
+        return {};
+    });
+}
+
+hmsm_status hmsm_scene_find_model(const hmsm_scene* scene, const char* name, uint32_t* model) {
+    return guarded([&]() -> Status {
+        if (!scene) return bad("hmsm_scene_find_model: scene is NULL");
+        if (!name) return bad("hmsm_scene_find_model: name is NULL");
+        if (!model) return bad("hmsm_scene_find_model: model is NULL");
+        const std::optional<uint32_t> found = find_model(scene->scene, name);
+        if (!found)
+            return bad("hmsm_scene_find_model: no model is called '" + detail::quote_input(name) + "'");
+        *model = *found;
         return {};
     });
 }

@@ -235,21 +235,41 @@ hmsm_status hmsm_simulation_set_instance_active(hmsm_simulation* simulation, uin
     });
 }
 
+}  // extern "C"
+
+namespace hmsm::c_api {
+
+Status read_instances(const char* fn, const hmsm_instance* instances, size_t count, std::vector<Instance>& out) {
+    if (!instances && count > 0) return bad(std::string(fn) + ": instances is NULL with count > 0");
+    std::vector<hmsm_instance> full;
+    HMSM_TRY(read_array(std::string(fn) + ": instances", instances, count, full));
+    out.assign(count, Instance{});
+    for (size_t i = 0; i < count; ++i) {
+        const std::string what = std::string(fn) + ": instance " + std::to_string(i);
+        HMSM_TRY(to_cpp(full[i], out[i], what.c_str()));
+    }
+    return {};
+}
+
+}  // namespace hmsm::c_api
+
+extern "C" {
+
 hmsm_status hmsm_simulation_add_instances(hmsm_simulation* simulation,
                                           const hmsm_instance* instances, size_t count) {
     return guarded([&]() -> Status {
         const char* fn = "hmsm_simulation_add_instances";
         if (!simulation) return bad(std::string(fn) + ": simulation is NULL");
-        if (!instances && count > 0)
-            return bad(std::string(fn) + ": instances is NULL with count > 0");
-        std::vector<hmsm_instance> full;
-        HMSM_TRY(read_array(std::string(fn) + ": instances", instances, count, full));
-        std::vector<Instance> converted(count);
-        for (size_t i = 0; i < count; ++i) {
-            const std::string what = std::string(fn) + ": instance " + std::to_string(i);
-            HMSM_TRY(to_cpp(full[i], converted[i], what.c_str()));
-        }
+        std::vector<Instance> converted;
+        HMSM_TRY(read_instances(fn, instances, count, converted));
         return simulation->simulation->add_instances(converted);
+    });
+}
+
+hmsm_status hmsm_simulation_reserve_instances(hmsm_simulation* simulation, uint64_t count) {
+    return guarded([&]() -> Status {
+        if (!simulation) return bad("hmsm_simulation_reserve_instances: simulation is NULL");
+        return simulation->simulation->reserve_instances(count);
     });
 }
 

@@ -1,18 +1,20 @@
 // hmsm-forest JSON v1 (docs/model.md 4): named models (files relative to the forest file, or
-// "preset:NAME") and instances that refer to them. Each distinct reference is loaded once.
+// "preset:NAME") and instances that refer to them. Only the models in use are loaded, each
+// distinct reference once.
 #include <hmsm/generator.h>
 #include <hmsm/scene.h>
 
 #include "json_util.h"
 #include "input_limits.h"
 
+#include <algorithm>
 #include <filesystem>
 #include <map>
 
 namespace hmsm {
 
-Result<Scene> parse_forest(std::string_view text, const std::string& base_directory,
-                           std::string_view source) {
+Result<Scene> parse_forest(std::string_view text, const std::string& base_directory, std::string_view source,
+                           std::span<const std::string> extra_models) {
     auto parsed = detail::parse_json(text, source);
     if (!parsed) return parsed.status();
     const auto& doc = *parsed;
@@ -27,46 +29,31 @@ Result<Scene> parse_forest(std::string_view text, const std::string& base_direct
     HMSM_TRY(detail::check_count(std::string(source) + ": models", models_it->size(), detail::size_limits().forest_models,
                                  ErrorCode::invalid_tree));
 
-    // Every named model is loaded (a schedule may add instances of any), each distinct
-    // reference (file or preset) read or generated once. What building them would take is
-    // summed before a model is copied under another name: at the fewest ring sides (3) it is
-    // less than any simulation of the forest builds, so a forest no simulation could build is
-    // refused here (docs/model.md 3.11).
-    Scene scene;
-    std::map<std::string, uint32_t> index;    // model name -> scene model
-    std::map<std::string, TreeModel> loaded;  // reference -> model, loaded once
-    uint64_t build_bytes = 0;
+    // Each name's reference, in the file's order; which names are needed is known once the
+    // instances are read (docs/model.md 3.11).
+    struct NamedModel {
+        std::string name;
+        std::string reference;
+        bool needed = false;
+    };
+    std::vector<NamedModel> named;
+    std::map<std::string, size_t> by_name;
     for (auto it = models_it->begin(); it != models_it->end(); ++it) {
-        const std::string name = it.key();
-        if (!it->is_string()) return r.error("models", detail::quote_input(name).c_str(), "expected a path string");
-        const std::string ref = it->get<std::string>();
-        auto cached = loaded.find(ref);
-        if (cached == loaded.end()) {
-            Result<TreeModel> model = Status{};
-            if (ref.rfind("preset:", 0) == 0) {
-                model = generate_preset(ref.substr(7));
-            } else {
-                std::filesystem::path path(ref);
-                if (path.is_relative()) path = std::filesystem::path(base_directory) / path;
-                model = load_tree(path.string());
-            }
-            if (!model)
-                return Status{model.status().code(),
-                              detail::one_line(std::string(source) + ": models." + detail::quote_input(name) + ": " +
-                                               model.status().message())};
-            cached = loaded.emplace(ref, std::move(model).value()).first;
-        }
-        build_bytes += detail::model_build_bytes(cached->second.nodes.size(), cached->second.leaves.size(), 3);
-        if (build_bytes > detail::size_limits().build_bytes)
-            return Status{ErrorCode::unsupported,
-                          std::string(source) + ": models: building its models would take more than " +
-                              std::to_string(detail::size_limits().build_bytes >> 20) +
-                              " MiB of host memory, the limit (docs/model.md 3.11)"};
-        index[name] = uint32_t(scene.models.size());
-        scene.models.push_back(cached->second);
-        scene.model_names.push_back(name);
+        if (!it->is_string())
+            return r.error("models", detail::quote_input(it.key()).c_str(), "expected a path string");
+        by_name[it.key()] = named.size();
+        named.push_back({it.key(), it->get<std::string>()});
+    }
+    for (const std::string& name : extra_models) {
+        auto found = by_name.find(name);
+        if (found == by_name.end())
+            return Status{ErrorCode::invalid_argument,
+                          detail::one_line(std::string(source) + ": model \"" + detail::quote_input(name) +
+                                           "\" is asked for but is not one of the forest's models")};
+        named[found->second].needed = true;
     }
 
+    Scene scene;
     const nlohmann::json* instances = nullptr;
     HMSM_TRY(r.array_field(doc, "", "instances", instances));
     if (instances->empty()) return r.error("", "instances", "must list at least one instance");
@@ -78,11 +65,12 @@ Result<Scene> parse_forest(std::string_view text, const std::string& base_direct
         HMSM_TRY(r.expect_object(item, where));
         std::string name;
         HMSM_TRY(r.string_field(item, where, "model", name));
-        auto found = index.find(name);
-        if (found == index.end())
+        auto found = by_name.find(name);
+        if (found == by_name.end())
             return r.error(where, "model", "\"" + detail::quote_input(name) + "\" is not one of the forest's models");
+        named[found->second].needed = true;
         Instance inst;
-        inst.model = found->second;
+        inst.model = uint32_t(found->second);  // a name's position until the models are built
         if (item.contains("origin")) {
             HMSM_TRY(r.vec3_field(item, where, "origin", inst.origin));
             if (Status range = detail::check_coordinate("origin", inst.origin); !range)
@@ -102,14 +90,64 @@ Result<Scene> parse_forest(std::string_view text, const std::string& base_direct
         }
         scene.instances.push_back(inst);
     }
+
+    // Each distinct reference that a needed name holds is read or generated once, and what
+    // building it would take is summed: at the fewest ring sides (3) that is less than any
+    // simulation of the forest builds, so a forest no simulation could build is refused here.
+    // A name nobody needs is only checked to name an existing file or a known preset.
+    std::vector<uint32_t> model_of_name(named.size(), UINT32_MAX);
+    std::map<std::string, uint32_t> built;  // reference -> scene model
+    uint64_t build_bytes = 0;
+    for (size_t n = 0; n < named.size(); ++n) {
+        const NamedModel& entry = named[n];
+        const bool preset = entry.reference.rfind("preset:", 0) == 0;
+        std::filesystem::path path(entry.reference);
+        if (!preset && path.is_relative()) path = std::filesystem::path(base_directory) / path;
+        const std::string where = std::string(source) + ": models." + detail::quote_input(entry.name) + ": ";
+        if (!entry.needed) {
+            if (preset) {
+                const auto& presets = preset_names();
+                if (std::find(presets.begin(), presets.end(), entry.reference.substr(7)) == presets.end())
+                    return Status{ErrorCode::invalid_argument,
+                                  detail::one_line(where + "unknown preset '" + entry.reference.substr(7) + "'")};
+            } else {
+                std::error_code ec;
+                const auto status = std::filesystem::status(path, ec);
+                if (!std::filesystem::exists(status))
+                    return Status{ErrorCode::io, detail::one_line(where + path.string() + ": no such file")};
+                if (std::filesystem::is_directory(status))
+                    return Status{ErrorCode::io, detail::one_line(where + path.string() + ": is a directory, expected a file")};
+            }
+            continue;
+        }
+        auto cached = built.find(entry.reference);
+        if (cached != built.end()) {
+            model_of_name[n] = cached->second;
+            scene.model_aliases.push_back({entry.name, cached->second});
+            continue;
+        }
+        Result<TreeModel> model = preset ? generate_preset(entry.reference.substr(7)) : load_tree(path.string());
+        if (!model) return Status{model.status().code(), detail::one_line(where + model.status().message())};
+        build_bytes += detail::model_build_bytes(model->nodes.size(), model->leaves.size(), 3);
+        if (build_bytes > detail::size_limits().build_bytes)
+            return Status{ErrorCode::unsupported,
+                          std::string(source) + ": models: building its models would take more than " +
+                              std::to_string(detail::size_limits().build_bytes >> 20) +
+                              " MiB of host memory, the limit (docs/model.md 3.11)"};
+        model_of_name[n] = uint32_t(scene.models.size());
+        built.emplace(entry.reference, model_of_name[n]);
+        scene.models.push_back(std::move(model).value());
+        scene.model_names.push_back(entry.name);
+    }
+    for (Instance& inst : scene.instances) inst.model = model_of_name[inst.model];
     return scene;
 }
 
-Result<Scene> load_forest(const std::string& path) {
+Result<Scene> load_forest(const std::string& path, std::span<const std::string> extra_models) {
     auto text = detail::read_text_file(path);
     if (!text) return text.status();
     std::string base = std::filesystem::path(path).parent_path().string();
-    return parse_forest(*text, base.empty() ? "." : base, path);
+    return parse_forest(*text, base.empty() ? "." : base, path, extra_models);
 }
 
 }  // namespace hmsm

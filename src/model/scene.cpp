@@ -44,6 +44,20 @@ Result<Scene> grid_scene(TreeModel tree, uint32_t count, double spacing, uint64_
     return scene;
 }
 
+std::optional<uint32_t> find_model(const Scene& scene, std::string_view name) {
+    for (size_t m = 0; m < scene.model_names.size(); ++m)
+        if (scene.model_names[m] == name) return uint32_t(m);
+    for (const ModelAlias& alias : scene.model_aliases)
+        if (alias.name == name) return alias.model;
+    return std::nullopt;
+}
+
+std::vector<std::string> all_model_names(const Scene& scene) {
+    std::vector<std::string> names = scene.model_names;
+    for (const ModelAlias& alias : scene.model_aliases) names.push_back(alias.name);
+    return names;
+}
+
 Status validate_scene(const Scene& scene) {
     if (scene.models.empty()) return {ErrorCode::invalid_argument, "scene has no models"};
     if (scene.model_names.size() != scene.models.size())
@@ -72,6 +86,11 @@ Status validate_scene(const Scene& scene) {
             return {ErrorCode::invalid_argument,
                     "model '" + scene.model_names[m] + "': joint budget " + std::to_string(scene.joint_budgets[m]) +
                         ": must be 0 (the model whole) or at least 1 (the trunk-only level)"};
+    for (const ModelAlias& alias : scene.model_aliases)
+        if (alias.model >= scene.models.size())
+            return {ErrorCode::invalid_argument, "scene: model alias '" + detail::quote_input(alias.name) +
+                                                     "' names model " + std::to_string(alias.model) +
+                                                     ", which does not exist"};
     for (size_t m = 0; m < scene.models.size(); ++m) {
         Status valid = validate_tree(scene.models[m]);
         if (!valid) return {valid.code(), "model '" + scene.model_names[m] + "': " + valid.message()};

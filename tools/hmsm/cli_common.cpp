@@ -90,8 +90,9 @@ Result<glm::dvec3> parse_vec3(const std::string& text, const char* flag) {
     return v;
 }
 
-Result<Scene> load_scene(const SourceFlags& f, CLI::App& app, const ModelOptions* options) {
-    if (!f.forest.empty()) return load_forest(f.forest);
+Result<Scene> load_scene(const SourceFlags& f, CLI::App& app, const ModelOptions* options,
+                         std::span<const std::string> needed_models) {
+    if (!f.forest.empty()) return load_forest(f.forest, needed_models);
     if (f.tree.empty() && f.preset.empty())
         return Status{ErrorCode::invalid_argument,
                       "give the tree with --tree FILE or --preset NAME" +
@@ -229,13 +230,23 @@ Status apply_shared_options(SimulationConfig& config, const ModelFlags& model, c
     return {};
 }
 
-Result<std::optional<Schedule>> schedule_option(const WindFlags& f, const Scene& scene, const Wind& wind) {
+Result<std::optional<Schedule>> read_schedule_option(const WindFlags& f) {
     if (f.schedule.empty()) return std::optional<Schedule>();
     auto schedule = load_schedule(f.schedule);
     if (!schedule) return schedule.status();
-    Status valid = validate_schedule(*schedule, scene.model_names, scene.instances.size(), wind);
-    if (!valid) return Status{valid.code(), f.schedule + ": " + valid.message()};
     return std::optional<Schedule>(std::move(schedule).value());
+}
+
+std::vector<std::string> scheduled_models(const std::optional<Schedule>& schedule) {
+    return schedule ? scheduled_model_names(*schedule) : std::vector<std::string>{};
+}
+
+Status check_schedule_option(const WindFlags& f, const std::optional<Schedule>& schedule, const Scene& scene,
+                             const Wind& wind) {
+    if (!schedule) return {};
+    Status valid = validate_schedule(*schedule, all_model_names(scene), scene.instances.size(), wind);
+    if (!valid) return Status{valid.code(), f.schedule + ": " + valid.message()};
+    return {};
 }
 
 StagedOutputs::~StagedOutputs() {

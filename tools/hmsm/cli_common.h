@@ -112,7 +112,9 @@ struct SourceFlags {
 void add_source_flags(CLI::App& app, SourceFlags& flags, bool with_forest_and_instances);
 /// Loads the scene. With `options`, a grid of --instances is first sized from the model's counts
 /// (mesh vertices per instance) and refused before anything scene-sized is allocated.
-Result<Scene> load_scene(const SourceFlags& flags, CLI::App& app, const ModelOptions* options = nullptr);
+/// A forest builds the models its instances place and those `needed_models` names (a schedule's).
+Result<Scene> load_scene(const SourceFlags& flags, CLI::App& app, const ModelOptions* options = nullptr,
+                         std::span<const std::string> needed_models = {});
 
 /// Model options, parameters and wind as flags.
 struct ModelFlags {
@@ -139,9 +141,13 @@ Result<Wind> wind_options(const WindFlags& flags);
 /// (what every simulating subcommand starts from).
 Status apply_shared_options(SimulationConfig& config, const ModelFlags& model, const Parameters& parameters,
                             const WindFlags& wind);
-/// The --wind-schedule file, parsed and validated against the scene and the flags' wind; none
-/// when the flag is not given.
-Result<std::optional<Schedule>> schedule_option(const WindFlags& flags, const Scene& scene, const Wind& wind);
+/// The --wind-schedule file, parsed; none when the flag is not given. Read it before the scene,
+/// so that a forest builds the models the schedule adds (scheduled_models), then check it
+/// against the scene and the flags' wind (check_schedule_option).
+Result<std::optional<Schedule>> read_schedule_option(const WindFlags& flags);
+std::vector<std::string> scheduled_models(const std::optional<Schedule>& schedule);
+Status check_schedule_option(const WindFlags& flags, const std::optional<Schedule>& schedule, const Scene& scene,
+                             const Wind& wind);
 
 /// Parses "X,Y,Z" strictly (three finite numbers).
 Result<glm::dvec3> parse_vec3(const std::string& text, const char* flag);

@@ -61,11 +61,12 @@ int run_export(CLI::App& app) {
                           ": below the trunk-only level, the coarsest level there is (1 joint)");
     Status shared = apply_shared_options(config, flags.model, flags.parameters, flags.wind);
     if (!shared) return fail(shared);
-    auto scene = load_scene(flags.source, app);
+    auto schedule = read_schedule_option(flags.wind);
+    if (!schedule) return fail(schedule.status());
+    auto scene = load_scene(flags.source, app, nullptr, scheduled_models(*schedule));
     if (!scene) return fail(scene.status());
     // A schedule may change the wind and the force fields; the clip covers one fixed instance.
-    auto schedule = schedule_option(flags.wind, *scene, config.wind);
-    if (!schedule) return fail(schedule.status());
+    if (Status valid = check_schedule_option(flags.wind, *schedule, *scene, config.wind); !valid) return fail(valid);
     if (*schedule)
         for (const ScheduleEvent& e : (*schedule)->events)
             if (!e.instances.empty() || !e.remove.empty() || !e.add.empty())

@@ -230,10 +230,11 @@ int run_render(CLI::App& app) {
         return fail(Status{ErrorCode::io, "--out " + out.string() + ": folder " + parent.string() +
                                               " does not exist"});
 
-    auto scene = load_scene(flags.source, app, &config.model);
-    if (!scene) return fail(scene.status());
-    auto schedule = schedule_option(flags.wind, *scene, config.wind);
+    auto schedule = read_schedule_option(flags.wind);
     if (!schedule) return fail(schedule.status());
+    auto scene = load_scene(flags.source, app, &config.model, scheduled_models(*schedule));
+    if (!scene) return fail(scene.status());
+    if (Status valid = check_schedule_option(flags.wind, *schedule, *scene, config.wind); !valid) return fail(valid);
     if (*schedule)
         for (const ScheduleEvent& e : (*schedule)->events)
             if (!e.remove.empty() || !e.add.empty())

@@ -196,10 +196,11 @@ int run_simulate(CLI::App& app) {
     if (flags.steps < 0) return fail_input("--steps " + std::to_string(flags.steps) + ": must be >= 0");
     Status shared = apply_shared_options(config, flags.model, flags.parameters, flags.wind);
     if (!shared) return fail(shared);
-    auto scene = load_scene(flags.source, app, &config.model);
-    if (!scene) return fail(scene.status());
-    auto schedule = schedule_option(flags.wind, *scene, config.wind);
+    auto schedule = read_schedule_option(flags.wind);
     if (!schedule) return fail(schedule.status());
+    auto scene = load_scene(flags.source, app, &config.model, scheduled_models(*schedule));
+    if (!scene) return fail(scene.status());
+    if (Status valid = check_schedule_option(flags.wind, *schedule, *scene, config.wind); !valid) return fail(valid);
     if (flags.trace.empty() != flags.trace_nodes.empty())
         return fail_input("--trace FILE and --trace-nodes top|I,J,... go together");
     std::vector<std::vector<uint32_t>> traced;
