@@ -21,7 +21,8 @@ std::vector<std::vector<float>> outputs_of(const Simulation& sim) {
                      Output::chain_rotations, Output::chain_origins, Output::chain_angles,
                      Output::joint_matrices}) {
         out.emplace_back();
-        EXPECT_TRUE(sim.read(o, out.back()).ok()) << int(o);
+        const Status read = sim.read(o, out.back());
+        EXPECT_TRUE(read.ok()) << "output " << int(o) << ": " << read.message();
     }
     return out;
 }
@@ -83,6 +84,10 @@ public:
     Status write(detail::BufferId id, uint64_t first, uint64_t count, const void* src, detail::Scalar as) override {
         return inner_->write(id, first, count, src, as);
     }
+    Status request_read(uint32_t slot, detail::BufferId id, uint64_t first, uint64_t count) const override {
+        return inner_->request_read(slot, id, first, count);
+    }
+    Result<const float*> take_read(uint32_t slot) const override { return inner_->take_read(slot); }
     Status move_elements(detail::BufferId, std::span<const detail::ElementMove>) override {
         return {ErrorCode::internal, "UploadsAnew moves nothing"};
     }
