@@ -3,6 +3,7 @@
 // Taylor advection from time series of the generated wind, and its dependence on the seed.
 #include "model/atmospheric_wind.h"
 #include "test_trees.h"
+#include "analysis.h"
 
 #include <hmsm/hmsm.h>
 
@@ -24,28 +25,6 @@ constexpr uint32_t kV = kAtmosphericModesU, kW = kAtmosphericModesU + kAtmospher
 std::array<double, 3> components(const AtmosphericModes& m, const WindFrame& f, const Vec3& x, double clock) {
     return {detail::atmospheric_component(m, 0, kV, clock, x, f), detail::atmospheric_component(m, kV, kW, clock, x, f),
             detail::atmospheric_component(m, kW, kTurbulentModes, clock, x, f)};
-}
-
-/// In-place radix-2 FFT (size a power of two).
-void fft(std::vector<std::complex<double>>& a) {
-    const size_t n = a.size();
-    for (size_t i = 1, j = 0; i < n; ++i) {
-        size_t bit = n >> 1;
-        for (; j & bit; bit >>= 1) j ^= bit;
-        j ^= bit;
-        if (i < j) std::swap(a[i], a[j]);
-    }
-    for (size_t len = 2; len <= n; len <<= 1) {
-        const std::complex<double> w = std::polar(1.0, -2.0 * kPi / double(len));
-        for (size_t i = 0; i < n; i += len) {
-            std::complex<double> wk = 1.0;
-            for (size_t k = 0; k < len / 2; ++k, wk *= w) {
-                const auto even = a[i + k], odd = a[i + k + len / 2] * wk;
-                a[i + k] = even + odd;
-                a[i + k + len / 2] = even - odd;
-            }
-        }
-    }
 }
 
 double variance(const std::vector<double>& x) {
@@ -142,7 +121,7 @@ TEST(AtmosphericWind, SpectrumHasTheKaimalSlopeAndTheRequestedVariances) {
         std::vector<std::complex<double>> spectrum(n);
         for (size_t i = 0; i < n; ++i)
             spectrum[i] = u[i] * 0.5 * (1.0 - std::cos(2.0 * kPi * double(i) / double(n)));
-        fft(spectrum);
+        cli::fft(spectrum);
         for (size_t j = 1; j < n / 2; ++j) {
             const double f = double(j) / (double(n) * dt);
             const double band = std::floor(std::log(f / band_low) / std::log(band_step));

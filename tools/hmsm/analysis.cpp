@@ -14,28 +14,6 @@ namespace {
 
 constexpr double kTwoPi = 2.0 * std::numbers::pi;
 
-/// In-place radix-2 FFT; size a power of two.
-void fft(std::vector<std::complex<double>>& a) {
-    const size_t n = a.size();
-    for (size_t i = 1, j = 0; i < n; ++i) {
-        size_t bit = n >> 1;
-        for (; j & bit; bit >>= 1) j ^= bit;
-        j ^= bit;
-        if (i < j) std::swap(a[i], a[j]);
-    }
-    for (size_t len = 2; len <= n; len <<= 1) {
-        const std::complex<double> w = std::polar(1.0, -kTwoPi / double(len));
-        for (size_t i = 0; i < n; i += len) {
-            std::complex<double> z = 1.0;
-            for (size_t k = 0; k < len / 2; ++k, z *= w) {
-                const auto u = a[i + k], v = a[i + k + len / 2] * z;
-                a[i + k] = u + v;
-                a[i + k + len / 2] = u - v;
-            }
-        }
-    }
-}
-
 /// Runs `seconds` of simulation and returns the top node's displacement along `along` per step.
 Result<std::vector<double>> trace_top(const TreeModel& tree, int32_t top, const AnalysisSettings& s,
                                       const Wind& wind, double seconds, const glm::dvec3& along) {
@@ -66,6 +44,27 @@ Result<std::vector<double>> trace_top(const TreeModel& tree, int32_t top, const 
 }
 
 }  // namespace
+
+void fft(std::vector<std::complex<double>>& a) {
+    const size_t n = a.size();
+    for (size_t i = 1, j = 0; i < n; ++i) {
+        size_t bit = n >> 1;
+        for (; j & bit; bit >>= 1) j ^= bit;
+        j ^= bit;
+        if (i < j) std::swap(a[i], a[j]);
+    }
+    for (size_t len = 2; len <= n; len <<= 1) {
+        const std::complex<double> w = std::polar(1.0, -kTwoPi / double(len));
+        for (size_t i = 0; i < n; i += len) {
+            std::complex<double> z = 1.0;
+            for (size_t k = 0; k < len / 2; ++k, z *= w) {
+                const auto u = a[i + k], v = a[i + k + len / 2] * z;
+                a[i + k] = u + v;
+                a[i + k + len / 2] = u - v;
+            }
+        }
+    }
+}
 
 bool chain_capped(const Chain& chain, const Parameters& p) {
     const double raw_inertia = p.density * chain.radius * chain.radius * std::pow(chain.length, 3);

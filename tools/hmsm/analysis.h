@@ -5,6 +5,7 @@
 
 #include <hmsm/hmsm.h>
 
+#include <complex>
 #include <functional>
 #include <string>
 #include <vector>
@@ -69,5 +70,8 @@ Result<ModelAnalysis> analyze_model(const TreeModel& tree, const std::string& na
 
 /// Peak-based fit of a damped oscillation about its final value (exposed for tests).
 void fit_oscillation(StepResponse& response);
+
+/// In-place radix-2 FFT (forward, unnormalized); the size must be a power of two.
+void fft(std::vector<std::complex<double>>& a);
 
 }  // namespace hmsm::cli
