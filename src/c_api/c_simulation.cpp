@@ -11,32 +11,34 @@ using namespace hmsm::c_api;
 
 namespace {
 
-template <class T>
-hmsm_status read_output(const char* fn, const hmsm_simulation* simulation, int32_t output,
-                        T* values, size_t capacity, size_t* count) {
+/// `fn` over `simulation`: fetch(simulation, output, values as std::vector<T>), then copied
+/// out to the caller's buffer (read and take_read share everything but the fetch).
+template <class T, class Sim, class Fetch>
+hmsm_status output_to_caller(const char* fn, Sim* simulation, int32_t output, T* values, size_t capacity,
+                             size_t* count, Fetch fetch) {
     return guarded([&]() -> Status {
         if (!simulation) return bad(std::string(fn) + ": simulation is NULL");
         if (!count) return bad(std::string(fn) + ": count is NULL");
         Output which;
         HMSM_TRY(to_output(output, which));
         std::vector<T> data;
-        HMSM_TRY(simulation->simulation->read(which, data));
+        HMSM_TRY(fetch(*simulation->simulation, which, data));
         return copy_out(fn, data, values, capacity, count);
     });
 }
 
 template <class T>
+hmsm_status read_output(const char* fn, const hmsm_simulation* simulation, int32_t output,
+                        T* values, size_t capacity, size_t* count) {
+    return output_to_caller(fn, simulation, output, values, capacity, count,
+                            [](const Simulation& sim, Output o, std::vector<T>& data) { return sim.read(o, data); });
+}
+
+template <class T>
 hmsm_status take_output(const char* fn, hmsm_simulation* simulation, int32_t output, T* values, size_t capacity,
                         size_t* count) {
-    return guarded([&]() -> Status {
-        if (!simulation) return bad(std::string(fn) + ": simulation is NULL");
-        if (!count) return bad(std::string(fn) + ": count is NULL");
-        Output which;
-        HMSM_TRY(to_output(output, which));
-        std::vector<T> data;
-        HMSM_TRY(simulation->simulation->take_read(which, data));
-        return copy_out(fn, data, values, capacity, count);
-    });
+    return output_to_caller(fn, simulation, output, values, capacity, count,
+                            [](Simulation& sim, Output o, std::vector<T>& data) { return sim.take_read(o, data); });
 }
 
 Status check_instance(const char* fn, const hmsm_simulation* simulation, uint64_t instance) {
