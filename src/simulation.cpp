@@ -41,11 +41,8 @@ Simulation::Simulation(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 std::vector<Dispatch> Simulation::Impl::program_for(const std::vector<detail::InstanceGroup>& groups,
                                                     Pass first, uint32_t passes) const {
     const detail::BackendCapabilities can = backend_->capabilities();
-    // The CUDA walk that integrates ahead disagrees with cpu64 under the atmospheric wind on the
-    // device (its host emulation agrees); until that is found, this profile walks step by step.
-    const bool ahead = can.walks_ahead && config_.wind.profile != WindProfile::atmospheric;
     return build_program(*data_, groups, config_.composition, can.dispatches_are_expensive, first, passes,
-                         ahead, jumping_form_);
+                         can.walks_ahead, jumping_form_);
 }
 
 Status Simulation::Impl::check_size(std::span<const Instance> instances) const {

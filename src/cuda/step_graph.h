@@ -3,7 +3,7 @@
 // The program is captured once from the stream (every dispatch in order, so ordering replaces
 // barriers; a dispatch that does not depend on the one before it runs beside it, step_graph.cpp). Between replays only the step's wind-table
 // slot (gpu_layout.h) changes: it lives in the constants (pc.wind_slot) of the dispatches that read
-// it (backend.h reads_wind_slot: wind_force, the top poses of the walk ahead), so before
+// it (backend.h reads_wind_slot: wind_force, the top poses and the walk ahead), so before
 // each replay every such kernel node gets new parameters through
 // cudaGraphExecKernelNodeSetParams. That is possible generically because every pass kernel
 // takes (BufferPointers, PassConstants) by value (launchers.h). Launches already enqueued keep

@@ -17,10 +17,16 @@ namespace {
 // scale, one paused and resumed, one added, a field moved before every call for a while) and one
 // call of many steps, a simulation whose backend integrates ahead leaves the same joint matrices
 // and angles, bit for bit, as one whose backend does not. It takes the angles integrated ahead
-// where nothing changed, and walks plain while the field moves before every call.
-TEST(CudaEmulationWalkAhead, StepLayerDecidesFromLiveChangesBitForBit) {
+// where nothing changed, and walks plain while the field moves before every call. Calls of
+// several steps run the walk ahead at wind-table slots past the first, where the atmospheric
+// profile's walk ahead must read the slot after its own step's.
+class CudaEmulationAheadSchedule : public ::testing::TestWithParam<WindProfile> {};
+
+TEST_P(CudaEmulationAheadSchedule, StepLayerDecidesFromLiveChangesBitForBit) {
     const Scene scene = forest_scene(7);
-    const SimulationConfig config = test_config(BackendKind::cuda, Composition::path_walk, false);
+    SimulationConfig config = test_config(BackendKind::cuda, Composition::path_walk, false);
+    config.wind.profile = GetParam();
+    config.wind.turbulence = 0.9;
     test::EmulatedAheadSteps steps;
     auto plain = detail::SimulationAccess::create(scene, config, test::create_cuda_emulation_backend());
     auto ahead = detail::SimulationAccess::create(scene, config, test::create_cuda_emulation_backend(&steps));
@@ -64,6 +70,10 @@ TEST(CudaEmulationWalkAhead, StepLayerDecidesFromLiveChangesBitForBit) {
     EXPECT_GE(steps.plain - plain_before_field, 12u);
     EXPECT_GE(steps.taken - taken_before_calm, 2u);
 }
+
+INSTANTIATE_TEST_SUITE_P(Profiles, CudaEmulationAheadSchedule,
+                         ::testing::Values(WindProfile::y1, WindProfile::atmospheric),
+                         [](const auto& info) { return to_string(info.param); });
 
 }  // namespace
 }  // namespace hmsm::cuda_test
