@@ -252,6 +252,7 @@ TEST(StepProgram, WalkAheadOnlyForStepsOfForestsWithEveryInstanceActive) {
     EXPECT_EQ(ahead[1].constants.level_count, top);
     EXPECT_EQ(ahead[1].constants.element_count, 7 * top);
     EXPECT_TRUE(detail::reads_wind_slot(ahead[1]));
+    EXPECT_TRUE(detail::reads_wind_slot(ahead[2]));  // the atmospheric wind of the slot after
     ASSERT_TRUE(detail::is_walk_ahead(ahead[2]));
     EXPECT_EQ(ahead[2].constants.element_count, 7 * tree.chains.size());
     EXPECT_EQ(count(ahead, detail::is_walk_ahead), 1);
