@@ -11,28 +11,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* A call that must fail with `code` and leave a message naming something. */
-#define CHECK_FAILS(code, call)                                                        \
-    do {                                                                               \
-        hmsm_status status_ = (call);                                                  \
-        if (status_ != (code) || hmsm_status_message()[0] == '\0') {                   \
-            fprintf(stderr, "%s:%d: %s gave %s (%s), expected %s\n", __FILE__, __LINE__, \
-                    #call, hmsm_status_name(status_), hmsm_status_message(),           \
-                    hmsm_status_name(code));                                           \
-            ++failures;                                                                \
-        }                                                                              \
-    } while (0)
-
-#define CHECK_OK(call)                                                                  \
-    do {                                                                                \
-        hmsm_status status_ = (call);                                                   \
-        if (status_ != HMSM_OK || hmsm_status_message()[0] != '\0') {                   \
-            fprintf(stderr, "%s:%d: %s gave %s: %s\n", __FILE__, __LINE__, #call,        \
-                    hmsm_status_name(status_), hmsm_status_message());                  \
-            ++failures;                                                                 \
-        }                                                                               \
-    } while (0)
-
 static void test_status_and_defaults(void) {
     hmsm_config config;
     hmsm_instance instance;

@@ -30,6 +30,29 @@ static int failures = 0;
         }                                                                                    \
     } while (0)
 
+/* A call that must fail with `code` and leave a message naming something. */
+#define CHECK_FAILS(code, call)                                                        \
+    do {                                                                               \
+        hmsm_status status_ = (call);                                                  \
+        if (status_ != (code) || hmsm_status_message()[0] == '\0') {                   \
+            fprintf(stderr, "%s:%d: %s gave %s (%s), expected %s\n", __FILE__, __LINE__, \
+                    #call, hmsm_status_name(status_), hmsm_status_message(),           \
+                    hmsm_status_name(code));                                           \
+            ++failures;                                                                \
+        }                                                                              \
+    } while (0)
+
+/* A call that must succeed and leave no message. */
+#define CHECK_OK(call)                                                                  \
+    do {                                                                                \
+        hmsm_status status_ = (call);                                                   \
+        if (status_ != HMSM_OK || hmsm_status_message()[0] != '\0') {                   \
+            fprintf(stderr, "%s:%d: %s gave %s: %s\n", __FILE__, __LINE__, #call,        \
+                    hmsm_status_name(status_), hmsm_status_message());                  \
+            ++failures;                                                                 \
+        }                                                                               \
+    } while (0)
+
 /* A three-node tree as arrays, the C way to hand hmsm an engine's own skeleton: a trunk and a
    bent branch above it, 4 m tall. */
 static inline hmsm_tree* small_tree(void) {
