@@ -249,15 +249,9 @@ TEST_P(Agreement, RoundsInOneDispatchMatchOneDispatchPerRound) {
     }
 }
 
-std::string backend_name(const ::testing::TestParamInfo<BackendKind>& info) {
-    std::string name = to_string(info.param);
-    std::replace(name.begin(), name.end(), '-', '_');  // cpu_parallel
-    return name;
-}
-
 INSTANTIATE_TEST_SUITE_P(Backends, Agreement,
                          ::testing::Values(BackendKind::cpu, BackendKind::cpu_parallel, BackendKind::vulkan,
                                            BackendKind::cuda),
-                         backend_name);
+                         test::BackendTestName());
 
 }  // namespace

@@ -122,11 +122,7 @@ TEST_P(Determinism, PathWalkIsAlsoRepeatable) { expect_repeatable(GetParam(), Co
 INSTANTIATE_TEST_SUITE_P(Backends, Determinism,
                          ::testing::Values(BackendKind::cpu, BackendKind::cpu64, BackendKind::cpu_parallel,
                                            BackendKind::vulkan, BackendKind::cuda),
-                         [](const ::testing::TestParamInfo<BackendKind>& info) {
-                             std::string name = to_string(info.param);
-                             std::replace(name.begin(), name.end(), '-', '_');  // cpu_parallel
-                             return name;
-                         });
+                         test::BackendTestName());
 
 namespace {
 

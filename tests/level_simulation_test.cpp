@@ -106,11 +106,7 @@ TEST_P(LevelSimulation, KeptChainsMoveAsTheWholeModelAndBackendsAgreeWithCpu64) 
 INSTANTIATE_TEST_SUITE_P(Backends, LevelSimulation,
                          ::testing::Values(BackendKind::cpu64, BackendKind::cpu, BackendKind::cpu_parallel,
                                            BackendKind::vulkan, BackendKind::cuda),
-                         [](const ::testing::TestParamInfo<BackendKind>& info) {
-                             std::string name = to_string(info.param);
-                             std::replace(name.begin(), name.end(), '-', '_');
-                             return name;
-                         });
+                         test::BackendTestName());
 
 TEST(LevelSimulation, BadJointBudgetsAreRefused) {
     Scene scene = levels_scene();

@@ -159,7 +159,7 @@ TEST(LiveAgreementPathWalk, EqualsLevelByLevelBitwiseThroughASchedule) {
 
 INSTANTIATE_TEST_SUITE_P(Backends, LiveAgreement,
                          ::testing::Values(BackendKind::cpu, BackendKind::vulkan, BackendKind::cuda),
-                         [](const auto& info) { return std::string(to_string(info.param)); });
+                         test::BackendTestName());
 
 class LiveControl : public ::testing::TestWithParam<BackendKind> {};
 
@@ -383,7 +383,7 @@ TEST_P(LiveControl, WindChangeIsPhaseContinuous) {
 INSTANTIATE_TEST_SUITE_P(Backends, LiveControl,
                          ::testing::Values(BackendKind::cpu64, BackendKind::cpu, BackendKind::vulkan,
                                            BackendKind::cuda),
-                         [](const auto& info) { return std::string(to_string(info.param)); });
+                         test::BackendTestName());
 
 }  // namespace
 }  // namespace hmsm

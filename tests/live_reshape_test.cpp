@@ -264,12 +264,7 @@ TEST_P(LiveReshape, ReservedRoomTakesAdditionsWithoutUpload) {
 INSTANTIATE_TEST_SUITE_P(Backends, LiveReshape,
                          ::testing::Values(BackendKind::cpu64, BackendKind::cpu, BackendKind::cpu_parallel,
                                            BackendKind::vulkan, BackendKind::cuda),
-                         [](const auto& info) {
-                             std::string name = to_string(info.param);
-                             for (char& c : name)
-                                 if (c == '-') c = '_';
-                             return name;
-                         });
+                         test::BackendTestName());
 
 }  // namespace
 }  // namespace hmsm

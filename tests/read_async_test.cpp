@@ -106,8 +106,5 @@ INSTANTIATE_TEST_SUITE_P(Backends, ReadAsync,
                                                               BackendKind::cuda),
                                             ::testing::Values(VertexLayout::separate, VertexLayout::packed)),
                          [](const auto& info) {
-                             std::string name = to_string(std::get<0>(info.param));
-                             for (char& c : name)
-                                 if (c == '-') c = '_';
-                             return name + "_" + to_string(std::get<1>(info.param));
+                             return test::backend_test_name(std::get<0>(info.param)) + "_" + to_string(std::get<1>(info.param));
                          });

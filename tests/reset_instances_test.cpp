@@ -115,12 +115,7 @@ TEST_P(ResetInstances, ReturnsExactlyToRestOthersUntouched) {
 INSTANTIATE_TEST_SUITE_P(Backends, ResetInstances,
                          ::testing::Values(BackendKind::cpu, BackendKind::cpu64, BackendKind::cpu_parallel,
                                            BackendKind::vulkan, BackendKind::cuda),
-                         [](const auto& info) {
-                             std::string name = to_string(info.param);
-                             for (char& c : name)
-                                 if (c == '-') c = '_';
-                             return name;
-                         });
+                         test::BackendTestName());
 
 }  // namespace
 }  // namespace hmsm

@@ -192,7 +192,7 @@ TEST_P(Joints, OutputsOnDemandSkipPassesAndKeepTheJoints) {
 INSTANTIATE_TEST_SUITE_P(Backends, Joints,
                          ::testing::Values(BackendKind::cpu, BackendKind::cpu64, BackendKind::vulkan,
                                            BackendKind::cuda),
-                         [](const ::testing::TestParamInfo<BackendKind>& info) { return std::string(to_string(info.param)); });
+                         test::BackendTestName());
 
 /// The bind pose: at rest an instance at the origin with yaw 0 has M_c = [B_c | p̄_attach(c)],
 /// the skin's bind matrices, and bind positions are pass 7's rest vertices.

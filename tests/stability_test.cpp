@@ -160,9 +160,7 @@ TEST_P(GpuStability, SaturatingWindStaysFiniteAndBounded) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Backends, GpuStability, ::testing::Values(BackendKind::vulkan, BackendKind::cuda),
-                         [](const ::testing::TestParamInfo<BackendKind>& info) {
-                             return std::string(to_string(info.param));
-                         });
+                         test::BackendTestName());
 
 namespace {
 

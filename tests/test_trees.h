@@ -5,6 +5,7 @@
 
 #include <initializer_list>
 #include <ostream>
+#include <string>
 
 namespace hmsm::test {
 
@@ -44,3 +45,18 @@ namespace hmsm {
 /// Test names and failure messages show a backend by its name.
 inline void PrintTo(BackendKind kind, std::ostream* os) { *os << to_string(kind); }
 }  // namespace hmsm
+
+namespace hmsm::test {
+/// A backend as a test-name part ("cpu_parallel": test names take no '-').
+inline std::string backend_test_name(BackendKind kind) {
+    std::string name = to_string(kind);
+    for (char& c : name)
+        if (c == '-') c = '_';
+    return name;
+}
+/// INSTANTIATE_TEST_SUITE_P's name generator for a suite over backends.
+struct BackendTestName {
+    template <class Info>
+    std::string operator()(const Info& info) const { return backend_test_name(info.param); }
+};
+}  // namespace hmsm::test
