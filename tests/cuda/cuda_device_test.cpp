@@ -75,14 +75,20 @@ void expect_agreement(const Scene& scene, test::TestComposition composition, boo
 }
 
 // The walk that integrates ahead (forests on CUDA): stepped call by call with live changes in
-// between (the wind, force fields, an instance's wind scale, one paused and resumed, one added, a
-// field moved before every call for a while) and one call of many steps, a simulation that takes the angles integrated ahead leaves the same
-// joint matrices and angles, bit for bit, as one whose backend does not integrate ahead, and it
-// does take them.
-TEST(CudaWalkAhead, StepByStepWithLiveChangesEqualsThePlainWalkBitForBit) {
+// between (run_live_call) and one call of many steps, a simulation that takes the angles
+// integrated ahead leaves the same joint matrices and angles, bit for bit, as one whose backend
+// does not integrate ahead, and it does take them; under y1 and under the atmospheric profile,
+// whose walk ahead evaluates the wind of the slot after its step's itself.
+class CudaWalkAhead : public ::testing::TestWithParam<WindProfile> {};
+
+TEST_P(CudaWalkAhead, StepByStepWithLiveChangesEqualsThePlainWalkBitForBit) {
     HMSM_SKIP_WITHOUT_CUDA();
     const Scene scene = forest_scene(7);
-    const SimulationConfig config = test_config(BackendKind::cuda, Composition::path_walk, false);
+    SimulationConfig config = test_config(BackendKind::cuda, Composition::path_walk, false);
+    config.wind.profile = GetParam();
+    config.wind.turbulence = 0.9;
+    const LiveScript script{.wind = 8, .field = 16, .scale = 20, .pause = 24, .resume = 30, .add = 36,
+                            .moving_from = 40, .moving_to = 56, .long_call = 40, .long_steps = 300};
     setenv("HMSM_CUDA_WALK_AHEAD", "0", 1);
     auto plain = create_or_fail(scene, config);
     unsetenv("HMSM_CUDA_WALK_AHEAD");
@@ -93,25 +99,11 @@ TEST(CudaWalkAhead, StepByStepWithLiveChangesEqualsThePlainWalkBitForBit) {
     uint64_t taken_before_calm = 0;
     for (uint32_t k = 0; k < 60; ++k) {
         if (k == 56) taken_before_calm = backend.steps_taken_ahead();
+        // One call of 300 steps runs in two chunks of the wind table (Simulation::step), the
+        // second taking the first's angles.
         for (Simulation* sim : {plain.get(), ahead.get()}) {
-            Wind wind = sim->wind();
-            wind.strength *= 1.5;
-            ForceField field;
-            field.center = {2, 3, 1};
-            field.radius = 15.0;
-            field.directional = {4, 0, 2};
-            if (k == 8) ASSERT_TRUE(sim->set_wind(wind).ok());
-            if (k == 16) ASSERT_TRUE(sim->set_force_fields({&field, 1}).ok());
-            if (k == 20) ASSERT_TRUE(sim->set_instance_wind_scale(1, 0.3).ok());
-            if (k == 24) ASSERT_TRUE(sim->set_instance_active(1, false).ok());
-            if (k == 30) ASSERT_TRUE(sim->set_instance_active(1, true).ok());
-            if (k == 36) ASSERT_TRUE(sim->add_instances({&scene.instances[0], 1}).ok());
-            // A field that moves before every call (a character walking), then calm again.
-            field.center.x = double(k);
-            if (k > 40 && k < 56) ASSERT_TRUE(sim->set_force_fields({&field, 1}).ok());
-            // Mostly one step per call, some three; one call of 300 runs in two chunks of the
-            // wind table (Simulation::step), the second taking the first's angles.
-            ASSERT_TRUE(sim->step(k == 40 ? 300 : k % 4 == 3 ? 3 : 1).ok());
+            run_live_call(*sim, scene, script, k);
+            if (HasFatalFailure()) return;
         }
         const auto& program = hmsm::detail::step_program_of(*ahead);
         walked_ahead = walked_ahead || std::any_of(program.begin(), program.end(), detail::is_walk_ahead);
@@ -128,6 +120,9 @@ TEST(CudaWalkAhead, StepByStepWithLiveChangesEqualsThePlainWalkBitForBit) {
     EXPECT_GE(backend.steps_walked_plain(), 10u);
     EXPECT_GE(backend.steps_taken_ahead() - taken_before_calm, 3u);
 }
+
+INSTANTIATE_TEST_SUITE_P(Profiles, CudaWalkAhead, ::testing::Values(WindProfile::y1, WindProfile::atmospheric),
+                         [](const auto& info) { return to_string(info.param); });
 
 class CudaSimulation : public ::testing::TestWithParam<test::TestComposition> {};
 

@@ -71,6 +71,24 @@ SimulationConfig test_config(BackendKind backend, Composition composition, bool 
     return config;
 }
 
+void run_live_call(Simulation& sim, const Scene& scene, const LiveScript& script, uint32_t k) {
+    Wind wind = sim.wind();
+    wind.strength *= 1.5;
+    ForceField field;
+    field.center = {2, 3, 1};
+    field.radius = 15.0;
+    field.directional = {4, 0, 2};
+    if (k == script.wind) ASSERT_TRUE(sim.set_wind(wind).ok());
+    if (k == script.field) ASSERT_TRUE(sim.set_force_fields({&field, 1}).ok());
+    if (k == script.scale) ASSERT_TRUE(sim.set_instance_wind_scale(1, 0.3).ok());
+    if (k == script.pause) ASSERT_TRUE(sim.set_instance_active(1, false).ok());
+    if (k == script.resume) ASSERT_TRUE(sim.set_instance_active(1, true).ok());
+    if (k == script.add) ASSERT_TRUE(sim.add_instances({&scene.instances[0], 1}).ok());
+    field.center.x = double(k);
+    if (k > script.moving_from && k < script.moving_to) ASSERT_TRUE(sim.set_force_fields({&field, 1}).ok());
+    ASSERT_TRUE(sim.step(k == script.long_call ? script.long_steps : k % 4 == 3 ? 3 : 1).ok());
+}
+
 std::string no_cuda_device_reason() {
     auto backend = detail::create_backend(BackendKind::cuda);
     if (backend) return {};

@@ -25,6 +25,18 @@ Scene forest_scene(uint64_t seed);
 /// its own phase.
 SimulationConfig test_config(BackendKind backend, Composition composition, bool profile);
 
+/// The live changes the walk-ahead tests make between calls, each at its call: the wind made
+/// stronger, a force field, an instance's wind scale, instance 1 paused and resumed, one instance
+/// added, then a field that moves before every call from `moving_from` to `moving_to` (a
+/// character walking) and calm again. Calls step once, every fourth three times, and the call
+/// `long_call` runs `long_steps` steps.
+struct LiveScript {
+    uint32_t wind, field, scale, pause, resume, add, moving_from, moving_to, long_call, long_steps;
+};
+
+/// Makes call k's changes of `script` to `sim` (the added instance is scene's first) and steps it.
+void run_live_call(Simulation& sim, const Scene& scene, const LiveScript& script, uint32_t k);
+
 /// Message of the CUDA backend's no_device error, or empty when a CUDA device is present.
 std::string no_cuda_device_reason();
 

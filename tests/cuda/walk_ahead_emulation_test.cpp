@@ -20,6 +20,9 @@ namespace {
 // where nothing changed, and walks plain while the field moves before every call. Calls of
 // several steps run the walk ahead at wind-table slots past the first, where the atmospheric
 // profile's walk ahead must read the slot after its own step's.
+constexpr LiveScript kScript{.wind = 4, .field = 8, .scale = 10, .pause = 12, .resume = 14, .add = 16,
+                             .moving_from = 22, .moving_to = 40, .long_call = 20, .long_steps = 12};
+
 class CudaEmulationAheadSchedule : public ::testing::TestWithParam<WindProfile> {};
 
 TEST_P(CudaEmulationAheadSchedule, StepLayerDecidesFromLiveChangesBitForBit) {
@@ -37,22 +40,8 @@ TEST_P(CudaEmulationAheadSchedule, StepLayerDecidesFromLiveChangesBitForBit) {
         if (k == 22) plain_before_field = steps.plain;
         if (k == 40) taken_before_calm = steps.taken;
         for (Simulation* sim : {plain->get(), ahead->get()}) {
-            Wind wind = sim->wind();
-            wind.strength *= 1.5;
-            ForceField field;
-            field.center = {2, 3, 1};
-            field.radius = 15.0;
-            field.directional = {4, 0, 2};
-            if (k == 4) ASSERT_TRUE(sim->set_wind(wind).ok());
-            if (k == 8) ASSERT_TRUE(sim->set_force_fields({&field, 1}).ok());
-            if (k == 10) ASSERT_TRUE(sim->set_instance_wind_scale(1, 0.3).ok());
-            if (k == 12) ASSERT_TRUE(sim->set_instance_active(1, false).ok());
-            if (k == 14) ASSERT_TRUE(sim->set_instance_active(1, true).ok());
-            if (k == 16) ASSERT_TRUE(sim->add_instances({&scene.instances[0], 1}).ok());
-            // A field that moves before every call (a character walking), then calm again.
-            field.center.x = double(k);
-            if (k > 22 && k < 40) ASSERT_TRUE(sim->set_force_fields({&field, 1}).ok());
-            ASSERT_TRUE(sim->step(k == 20 ? 12 : k % 4 == 3 ? 3 : 1).ok());
+            run_live_call(*sim, scene, kScript, k);
+            if (HasFatalFailure()) return;
         }
         const auto& program = detail::step_program_of(**ahead);
         walked_ahead = walked_ahead || std::any_of(program.begin(), program.end(), detail::is_walk_ahead);
