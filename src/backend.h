@@ -193,13 +193,9 @@ Result<std::unique_ptr<Backend>> create_cuda_backend();
 /// where the host has more than one hardware thread (cpu_thread_count(cpu_threads) > 1), else
 /// the serial CPU (float). `cpu_threads` is SimulationConfig::cpu_threads (0: default).
 Result<std::unique_ptr<Backend>> create_backend(BackendKind kind, uint32_t cpu_threads = 0);
-/// The backend to create for `config`: its own, except that `automatic` under the coupled
-/// dynamics takes the CPU (cpu-parallel where more than one thread, else cpu), the only
-/// backends with the coupled passes.
-BackendKind backend_for_dynamics(const SimulationConfig& config);
-/// unsupported where backend `kind` lacks config's dynamics (the coupled passes run on cpu,
-/// cpu64 and cpu-parallel); invalid_argument for the coupled dynamics with the path walk.
-Status check_dynamics_runs(const SimulationConfig& config, BackendKind kind);
+/// invalid_argument for the coupled dynamics with the path walk, whose wind pair cannot run
+/// the coupled wind_force (it reads other chains' state).
+Status check_dynamics_runs(const SimulationConfig& config);
 
 /// Buffers each pass reads and writes (bit i = BufferId i), for barrier placement.
 uint32_t pass_reads(Pass pass);

@@ -22,17 +22,8 @@ namespace detail {
 bool vulkan_backend_is_cpu_device(const Backend& backend);  // src/vulkan
 #endif
 
-BackendKind backend_for_dynamics(const SimulationConfig& config) {
-    if (config.model.dynamics != Dynamics::coupled || config.backend != BackendKind::automatic) return config.backend;
-    auto threads = cpu_thread_count(config.cpu_threads);
-    return threads.ok() && *threads > 1 ? BackendKind::cpu_parallel : BackendKind::cpu;
-}
-
-Status check_dynamics_runs(const SimulationConfig& config, BackendKind kind) {
+Status check_dynamics_runs(const SimulationConfig& config) {
     if (config.model.dynamics != Dynamics::coupled) return {};
-    if (kind != BackendKind::cpu && kind != BackendKind::cpu64 && kind != BackendKind::cpu_parallel)
-        return {ErrorCode::unsupported, std::string("dynamics 'coupled' runs on the backends cpu, cpu64 and cpu-parallel; "
-                                                    "backend '") + to_string(kind) + "' has no coupled passes"};
     if (config.composition == Composition::path_walk)
         return {ErrorCode::invalid_argument,
                 "dynamics 'coupled' cannot run composition 'path_walk' (its wind_force reads other chains' angles, "

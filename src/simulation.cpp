@@ -168,11 +168,11 @@ Result<std::unique_ptr<Simulation>> Simulation::Impl::create(const Scene& scene,
         sim->backend_ = std::move(backend);
         sim->config_.backend = sim->backend_->kind();
     } else {
-        auto created = detail::create_backend(detail::backend_for_dynamics(config), config.cpu_threads);
+        auto created = detail::create_backend(config.backend, config.cpu_threads);
         if (!created) return created.status();
         sim->backend_ = std::move(created).value();
     }
-    HMSM_TRY(detail::check_dynamics_runs(config, sim->backend_->kind()));
+    HMSM_TRY(detail::check_dynamics_runs(config));
     if (config.composition == Composition::automatic) {
         int32_t deepest = 0;
         for (const Hierarchy& h : sim->hierarchies_) deepest = std::max(deepest, h.max_depth);

@@ -7,6 +7,7 @@
 // ping-pong halves of in-dispatch rounds.
 #pragma once
 
+#include "coupled_math.cuh"
 #include "pass_math.cuh"
 
 #include <cmath>
@@ -26,10 +27,11 @@ HMSM_HOST_DEVICE float instance_wind_y(const BufferPointers& b, const gpu::PassC
     return wind_profile_y<float>(pc.profile, load(table + slot).x + own.y);  // tau + phi, both mod 2
 }
 
-/// Pass 1 for model chain c with the instance's wind in hand: `instance_wind` = lambda_i s Y d
-/// (atmospheric: lambda_i s (e_x (1 + u') + e_y v' + e_z w')).
-HMSM_HOST_DEVICE float2 chain_wind_force_at(const BufferPointers& b, const gpu::PassConstants& pc, uint32_t c,
-                                            float3 x, const Mat3& rotation, float3 instance_wind) {
+/// The wind w_loc = R^T w in the frame `rotation` of a chain whose origin is x: the instance's
+/// wind `instance_wind` = lambda_i s Y d (atmospheric: lambda_i s (e_x (1 + u') + e_y v' + e_z w'))
+/// plus the force fields at x.
+HMSM_HOST_DEVICE float3 chain_local_wind(const BufferPointers& b, float3 x, const Mat3& rotation,
+                                         float3 instance_wind) {
     const float4* table = b.wind_table;
     const float4 vector_count = load(table + HMSM_WIND_VECTOR);  // (s d, number of fields)
     float3 wind = instance_wind;
@@ -45,7 +47,14 @@ HMSM_HOST_DEVICE float2 chain_wind_force_at(const BufferPointers& b, const gpu::
         if (force.w == 0.0f) wind = wind + h * xyz(force);
         else if (distance >= 1e-9f) wind = wind + (h * force.x / distance) * offset;
     }
-    const float3 local = transpose_times(rotation, wind);
+    return transpose_times(rotation, wind);
+}
+
+/// Pass 1 of the paper's dynamics for model chain c with the instance's wind in hand:
+/// g = A (w_loc.z, -w_loc.x).
+HMSM_HOST_DEVICE float2 chain_wind_force_at(const BufferPointers& b, const gpu::PassConstants& pc, uint32_t c,
+                                            float3 x, const Mat3& rotation, float3 instance_wind) {
+    const float3 local = chain_local_wind(b, x, rotation, instance_wind);
     const float area = load(b.chain_constants + pc.model_chain_begin + c).w;
     return make_float2(area * local.z, -area * local.x);
 }
@@ -77,10 +86,14 @@ HMSM_HOST_DEVICE float3 instance_wind_vector(const BufferPointers& b, const gpu:
 /// Pass 1 for model chain c of group instance k: the generalized force g = A (w_loc.z, -w_loc.x)
 /// with w_loc = R^T w in the chain's frame of the previous step (R, and the origin x at which
 /// the force fields act, loaded by the caller from the pose half), w = lambda_i s Y(tau + phi_i)
-/// d plus the force fields. pc.wind_slot is the step's slot of the wind table (gpu_layout.h).
+/// d plus the force fields; under the coupled dynamics coupled_force's g. pc.wind_slot is the
+/// step's slot of the wind table (gpu_layout.h).
 HMSM_HOST_DEVICE float2 chain_wind_force(const BufferPointers& b, const gpu::PassConstants& pc,
                                          uint32_t k, uint32_t c, float3 x, const Mat3& rotation) {
-    return chain_wind_force_at(b, pc, c, x, rotation, instance_wind_vector(b, pc, k, pc.wind_slot));
+    const float3 wind = instance_wind_vector(b, pc, k, pc.wind_slot);
+    if (pc.dynamics == HMSM_PASS_DYNAMICS_COUPLED)  // docs/model.md 3.13
+        return coupled_force(b, pc, k, state_chain(pc, k, int32_t(c)), c, chain_local_wind(b, x, rotation, wind));
+    return chain_wind_force_at(b, pc, c, x, rotation, wind);
 }
 
 /// Pass 2, the step: symplectic Euler on S = (theta_x, theta_z) of static chain model_chain from
@@ -143,10 +156,13 @@ HMSM_HOST_DEVICE Mat3 local_transform(const BufferPointers& b, const gpu::PassCo
 HMSM_HOST_DEVICE Mat3 chain_integrate(const BufferPointers& b, const gpu::PassConstants& pc,
                                       uint32_t k, uint32_t c, uint64_t chain, float2 g_force) {
     const uint32_t model_chain = pc.model_chain_begin + c;
-    const float4 state = integrate_step(b, pc, model_chain, b.chain_state[chain], g_force);
+    const bool coupled = pc.dynamics == HMSM_PASS_DYNAMICS_COUPLED;  // docs/model.md 3.13
+    const float4 state = coupled ? coupled_step(b, pc, model_chain, b.chain_state[chain], g_force)
+                                 : integrate_step(b, pc, model_chain, b.chain_state[chain], g_force);
     const Mat3 local =
         local_transform(b, pc, k, model_chain, load(b.chain_parent + model_chain) < 0, make_float2(state.x, state.y));
     b.chain_state[chain] = state;
+    if (coupled) b.chain_load[chain] = make_float4(g_force.x, g_force.y, 0.0f, 0.0f);  // the parent's next load
     return local;
 }
 

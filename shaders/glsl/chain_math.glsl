@@ -5,11 +5,14 @@
 #ifndef HMSM_CHAIN_MATH_GLSL
 #define HMSM_CHAIN_MATH_GLSL
 
+#include "coupled_math.glsl"
+
 /// Pass 1 for model chain c of group instance k: the generalized force
 /// g = A (w_loc.z, -w_loc.x) from the wind in the chain's previous-step frame w_loc = R^T w,
 /// w = lambda_i s Y(tau + phi_i) d (atmospheric: lambda_i s (e_x (1 + u') + e_y v' + e_z w'))
 /// plus the force fields at the chain's previous origin x, R
-/// the chain's previous rotation (docs/model.md 3.5, 3.7, 3.9; table in gpu_layout.h).
+/// the chain's previous rotation (docs/model.md 3.5, 3.7, 3.9; table in gpu_layout.h); under the
+/// coupled dynamics coupled_force's g.
 vec2 chain_wind_force(uint k, uint c, vec3 x, mat3 rotation) {
     uint slot = HMSM_WIND_STEPS + HMSM_WIND_STEP_VEC4S * pc.wind_slot;
     uint instance = HMSM_INSTANCE_WIND_VEC4S * (pc.instance_begin + k);
@@ -59,6 +62,7 @@ vec2 chain_wind_force(uint k, uint c, vec3 x, mat3 rotation) {
         else if (distance >= 1e-9) wind += (h * force.x / distance) * offset;
     }
     vec3 wind_local = transpose(rotation) * wind;
+    if (pc.dynamics == HMSM_PASS_DYNAMICS_COUPLED) return coupled_force(k, c, wind_local);  // docs/model.md 3.13
     float area = chain_constants[pc.model_chain_begin + c].w;
     return vec2(area * wind_local.z, -area * wind_local.x);
 }
@@ -104,9 +108,11 @@ mat3 local_transform(uint k, uint model_chain, bool trunk, vec2 angle) {
 /// is updated), then T; T's inputs are read before the state is written.
 mat3 chain_integrate(uint k, uint c, uint chain, vec2 g) {
     uint model_chain = pc.model_chain_begin + c;
-    vec4 s = integrate_step(model_chain, chain_state[chain], g);
+    bool coupled = pc.dynamics == HMSM_PASS_DYNAMICS_COUPLED;  // docs/model.md 3.13
+    vec4 s = coupled ? coupled_step(model_chain, chain_state[chain], g) : integrate_step(model_chain, chain_state[chain], g);
     mat3 t = local_transform(k, model_chain, chain_parent[model_chain] < 0, s.xy);
     chain_state[chain] = s;
+    if (coupled) chain_load[chain] = vec4(g, 0.0, 0.0);  // the parent's next load
     return t;
 }
 

@@ -57,6 +57,11 @@ layout(set = 0, binding = HMSM_BINDING_VERTEX_NORMAL, std430) buffer VertexNorma
 // Joint matrices [R_c | O_c] as three vec4 rows (R row i, O_i); a mat3x4 whose "columns" are rows.
 layout(set = 0, binding = HMSM_BINDING_JOINT_MATRIX, std430) buffer JointMatrix { mat3x4 joint_matrix[]; };
 
+// The coupled dynamics (docs/model.md 3.13; no elements under the paper's): HMSM_CHAIN_DYNAMICS_VEC4S
+// vec4 per model chain (its record), and per chain the load g of its last step.
+layout(set = 0, binding = HMSM_BINDING_CHAIN_DYNAMICS, std430) readonly buffer ChainDynamics { vec4 chain_dynamics[]; };
+layout(set = 0, binding = HMSM_BINDING_CHAIN_LOAD, std430) buffer ChainLoad { vec4 chain_load[]; };
+
 // Live control, written by the host between steps (gpu_layout.h): 9 vec4 per instance, and the
 // wind table (turbulent amplitudes, wind vector, force fields, per-step slots).
 layout(set = 0, binding = HMSM_BINDING_INSTANCE_WIND, std430) readonly buffer InstanceWind { vec4 instance_wind[]; };

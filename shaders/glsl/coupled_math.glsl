@@ -1,0 +1,63 @@
+// The coupled dynamics of passes 1 and 2 (docs/model.md 3.13): the generalized force from the
+// wind moment, the children's loads and the aerodynamic damping, and the exact step of the
+// damped oscillator with the force held. Mirrors src/cpu/coupled_dynamics.cpp and
+// kernels/cuda/coupled_math.cuh line by line; include after common.glsl.
+#ifndef HMSM_COUPLED_MATH_GLSL
+#define HMSM_COUPLED_MATH_GLSL
+
+/// vec4 `v` of model chain `model_chain`'s record (gpu_layout.h HMSM_CHAIN_DYNAMICS_VEC4S).
+vec4 coupled_record(uint model_chain, uint v) { return chain_dynamics[HMSM_CHAIN_DYNAMICS_VEC4S * model_chain + v]; }
+
+/// Pass 1 of the coupled dynamics for model chain c of group instance k, with the wind w_local
+/// in the chain's frame of the previous step.
+vec2 coupled_force(uint k, uint c, vec3 w_local) {
+    uint model_chain = pc.model_chain_begin + c;
+    // Wind: the torque (q_ref M) x w_local about the joint, its x and z components.
+    vec3 moment = coupled_record(model_chain, 4u).xyz;
+    vec2 g = vec2(moment.y * w_local.z - moment.z * w_local.y, moment.x * w_local.y - moment.y * w_local.x);
+    // Each child's load of the last step, rotated from the child's frame into this one by Q.
+    vec4 children = coupled_record(model_chain, 5u);
+    int first = int(children.x), count = int(children.y);
+    for (int j = first; j < first + count; ++j) {
+        vec4 load_j = chain_load[state_chain(k, uint(j))];
+        vec3 passed = as_mat3(chain_rest_rotation[pc.model_chain_begin + uint(j)]) * vec3(load_j.x, 0.0, load_j.y);
+        g += passed.xz;
+    }
+    // Aerodynamic damping D_a = aero sqrt(|w|), held as the torque that takes from the rate what
+    // exp(-D_a dt / I) would over one step.
+    float speed = sqrt(sqrt(dot(w_local, w_local)));
+    vec4 s = chain_state[state_chain(k, c)];
+    vec4 inertia_stiffness = coupled_record(model_chain, 2u);
+    vec4 damping_record = coupled_record(model_chain, 3u);
+    float dt = pc.params.x;
+    for (int a = 0; a < 2; ++a) {
+        float damping = damping_record[2 + a] * speed;
+        float x = damping * dt / inertia_stiffness[a];
+        float share = x > 1e-4 ? (1.0 - exp(-x)) / x : 1.0 - 0.5 * x;
+        g[a] -= damping * share * s[2 + a];
+    }
+    return g;
+}
+
+/// Pass 2 of the coupled dynamics: the exact step of static chain model_chain from state s under
+/// g held, clamped at max_angle; returns the new state. The caller stores g as the load.
+vec4 coupled_step(uint model_chain, vec4 s, vec2 g) {
+    vec4 inertia_stiffness = coupled_record(model_chain, 2u);
+    float max_angle = pc.params.y;
+    for (int j = 0; j < 2; ++j) {
+        // The offset from the equilibrium g/K turns by the transition of this axis.
+        vec4 transition = coupled_record(model_chain, uint(j));
+        float equilibrium = g[j] / inertia_stiffness[2 + j];
+        float offset = s[j] - equilibrium;
+        float next_rate = transition.z * offset + transition.w * s[2 + j];
+        s[j] = equilibrium + transition.x * offset + transition.y * s[2 + j];
+        s[2 + j] = next_rate;
+        if (abs(s[j]) > max_angle) {
+            s[j] = sign(s[j]) * max_angle;
+            s[2 + j] = 0.0;
+        }
+    }
+    return s;
+}
+
+#endif  // HMSM_COUPLED_MATH_GLSL

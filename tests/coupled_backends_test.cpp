@@ -1,0 +1,109 @@
+// The coupled dynamics (docs/model.md 3.13) on every backend: a forest of paper-5 trees (1,179
+// chains, no multiple of a workgroup) agrees with cpu64 over 1,000 steps of turbulent and
+// atmospheric wind with live changes: a gust, a force field, an instance's wind scale, one
+// instance paused and resumed, one removed and one added. The CUDA kernels also run on the
+// host (cuda_emulation), so a machine without a GPU checks their arithmetic and indexing.
+#include "agreement/pass_agreement.h"
+#include "simulation_access.h"
+#include "test_trees.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace hmsm {
+namespace {
+
+struct CoupledCase {
+    std::string backend;  // a name of test::backends_under_test(), or "cpu_parallel"
+    WindProfile profile;
+};
+
+Result<std::unique_ptr<detail::Backend>> backend_named(const std::string& name) {
+    if (name == "cpu_parallel") return detail::create_backend(BackendKind::cpu_parallel, 3);
+    for (const test::BackendUnderTest& b : test::backends_under_test())
+        if (b.name == name) return b.create();
+    return Status{ErrorCode::invalid_argument, "no backend named " + name};
+}
+
+/// The live changes before each of four runs of 250 steps.
+void change(Simulation& sim, int phase, const Instance& added) {
+    Wind gust = sim.wind();
+    gust.strength *= 1.8;
+    gust.direction = {0.3, 0.0, 1.0};
+    ForceField push;
+    push.center = {0.0, 6.0, 0.0};
+    push.radius = 8.0;
+    push.directional = {0.0, 0.0, 30.0};
+    const uint64_t first = 0;
+    if (phase == 1) ASSERT_TRUE(sim.set_wind(gust).ok());
+    if (phase == 2) {
+        ASSERT_TRUE(sim.set_force_fields({&push, 1}).ok());
+        ASSERT_TRUE(sim.set_instance_wind_scale(1, 0.5).ok());
+        ASSERT_TRUE(sim.set_instance_active(2, false).ok());
+    }
+    if (phase == 3) {
+        ASSERT_TRUE(sim.set_force_fields({}).ok());
+        ASSERT_TRUE(sim.set_instance_active(2, true).ok());
+        ASSERT_TRUE(sim.remove_instances({&first, 1}).ok());
+        ASSERT_TRUE(sim.add_instances({&added, 1}).ok());
+    }
+}
+
+class CoupledBackends : public ::testing::TestWithParam<CoupledCase> {};
+
+TEST_P(CoupledBackends, AgreeWithCpu64OverLiveChanges) {
+    auto backend = backend_named(GetParam().backend);
+    if (!backend && backend.status().code() == ErrorCode::no_device) GTEST_SKIP() << backend.status().message();
+    ASSERT_TRUE(backend.ok()) << backend.status().message();
+    auto preset = generate_preset("paper-5");
+    ASSERT_TRUE(preset.ok());
+    auto grid = grid_scene(*preset, 3, 20.0, 1);
+    ASSERT_TRUE(grid.ok());
+    const Scene& scene = *grid;
+    SimulationConfig config;
+    config.backend = BackendKind::cpu64;
+    config.model.dynamics = Dynamics::coupled;
+    config.outputs = Outputs::joints_and_nodes;
+    config.wind.profile = GetParam().profile;
+    config.wind.strength = 4.0;
+    config.wind.turbulence = 0.5;
+    auto oracle = Simulation::create(scene, config);
+    ASSERT_TRUE(oracle.ok()) << oracle.status().message();
+    auto tested = detail::SimulationAccess::create(scene, config, std::move(backend).value());
+    ASSERT_TRUE(tested.ok()) << tested.status().message();
+    Instance added = scene.instances[1];
+    added.origin = {40.0, 0.0, 40.0};
+    for (int phase = 0; phase < 4; ++phase) {
+        for (Simulation* sim : {oracle->get(), tested->get()}) {
+            change(*sim, phase, added);
+            if (HasFatalFailure()) return;
+            ASSERT_TRUE(sim->step(250).ok());
+        }
+        std::vector<double> expected, actual, angles;
+        ASSERT_TRUE((*oracle)->read(Output::node_positions, expected).ok());
+        ASSERT_TRUE((*tested)->read(Output::node_positions, actual).ok());
+        ASSERT_TRUE((*oracle)->read(Output::chain_angles, angles).ok());
+        double scale = 0.0, swing = 0.0;
+        for (double v : expected) scale = std::max(scale, std::abs(v));
+        for (size_t i = 0; i < angles.size(); i += 4) swing = std::max({swing, std::abs(angles[i]), std::abs(angles[i + 1])});
+        ASSERT_GT(swing, 1e-3) << "the trees must sway for the comparison to mean something";
+        ASSERT_TRUE(test::all_finite(actual));
+        EXPECT_LT(test::max_abs_difference(actual, expected), 1e-5 * scale) << "after phase " << phase;
+    }
+}
+
+INSTANTIATE_TEST_SUITE_P(Backends, CoupledBackends,
+                         ::testing::Values(CoupledCase{"cpu", WindProfile::turbulent},
+                                           CoupledCase{"cpu_parallel", WindProfile::turbulent},
+                                           CoupledCase{"vulkan", WindProfile::turbulent},
+                                           CoupledCase{"vulkan", WindProfile::atmospheric},
+                                           CoupledCase{"cuda", WindProfile::turbulent},
+                                           CoupledCase{"cuda", WindProfile::atmospheric},
+                                           CoupledCase{"cuda_emulation", WindProfile::turbulent},
+                                           CoupledCase{"cuda_emulation", WindProfile::atmospheric}),
+                         [](const auto& info) { return info.param.backend + "_" + to_string(info.param.profile); });
+
+}  // namespace
+}  // namespace hmsm
