@@ -193,9 +193,6 @@ Result<std::unique_ptr<Backend>> create_cuda_backend();
 /// where the host has more than one hardware thread (cpu_thread_count(cpu_threads) > 1), else
 /// the serial CPU (float). `cpu_threads` is SimulationConfig::cpu_threads (0: default).
 Result<std::unique_ptr<Backend>> create_backend(BackendKind kind, uint32_t cpu_threads = 0);
-/// invalid_argument for the coupled dynamics with the path walk, whose wind pair cannot run
-/// the coupled wind_force (it reads other chains' state).
-Status check_dynamics_runs(const SimulationConfig& config);
 
 /// Buffers each pass reads and writes (bit i = BufferId i), for barrier placement.
 uint32_t pass_reads(Pass pass);
@@ -228,22 +225,22 @@ inline bool runs_coupled(const Dispatch& d) { return d.constants.dynamics == HMS
 inline uint32_t dispatch_reads(const Dispatch& d) {
     if (is_top_poses_walk(d)) return kWalkTopPosesReads;
     if (is_walk_ahead(d)) return kWalkAheadReads;
-    if (runs_path_walk(d)) return pass_info(d.pass).walk_reads;
-    uint32_t reads = reads_of_passes(dispatch_passes(d));
-    if (runs_coupled(d) && d.pass == Pass::wind_force) reads |= kCoupledWindForceReads;
-    if (runs_coupled(d) && d.pass == Pass::integrate) reads |= kCoupledIntegrateReads;
+    uint32_t reads = runs_path_walk(d) ? pass_info(d.pass).walk_reads : reads_of_passes(dispatch_passes(d));
+    const uint32_t passes = dispatch_passes(d);
+    if (runs_coupled(d) && (passes >> uint32_t(Pass::wind_force) & 1u)) reads |= kCoupledWindForceReads;
+    if (runs_coupled(d) && (passes >> uint32_t(Pass::integrate) & 1u)) reads |= kCoupledIntegrateReads;
     return reads;
 }
 inline uint32_t dispatch_writes(const Dispatch& d) {
     if (is_top_poses_walk(d)) return kWalkTopPosesWrites;
     if (is_walk_ahead(d)) return kWalkAheadWrites;
-    if (runs_path_walk(d)) return pass_info(d.pass).walk_writes;
-    uint32_t writes = writes_of_passes(dispatch_passes(d));
-    if (runs_coupled(d) && d.pass == Pass::integrate) writes |= kCoupledIntegrateWrites;
+    uint32_t writes = runs_path_walk(d) ? pass_info(d.pass).walk_writes : writes_of_passes(dispatch_passes(d));
+    if (runs_coupled(d) && (dispatch_passes(d) >> uint32_t(Pass::wind_force) & 1u)) writes |= kCoupledWindForceWrites;
     return writes;
 }
 /// Whether a dispatch reads other chains' state anywhere in its instances though its pass is
-/// not hierarchical: coupled wind_force's gather (its chunks are planned by instance).
+/// not hierarchical: coupled wind_force's gather of the loads of the last step (its chunks are
+/// planned by instance).
 inline bool reads_across_chains(const Dispatch& d) { return runs_coupled(d) && d.pass == Pass::wind_force; }
 
 /// Number of threads of a dispatch and the mapping shared by every backend.

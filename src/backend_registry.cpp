@@ -22,15 +22,6 @@ namespace detail {
 bool vulkan_backend_is_cpu_device(const Backend& backend);  // src/vulkan
 #endif
 
-Status check_dynamics_runs(const SimulationConfig& config) {
-    if (config.model.dynamics != Dynamics::coupled) return {};
-    if (config.composition == Composition::path_walk)
-        return {ErrorCode::invalid_argument,
-                "dynamics 'coupled' cannot run composition 'path_walk' (its wind_force reads other chains' angles, "
-                "which the path walk integrates in the same dispatch): use pointer_jumping, level_by_level or automatic"};
-    return {};
-}
-
 Result<std::unique_ptr<Backend>> create_backend(BackendKind kind, uint32_t cpu_threads) {
     switch (kind) {
         case BackendKind::cpu: return create_cpu_backend(false);

@@ -73,7 +73,7 @@ enum class Scope : uint32_t {
     X(joint_matrix, HMSM_BINDING_JOINT_MATRIX, mat3x4, chain)                       \
     X(chain_walk, HMSM_BINDING_CHAIN_WALK, i32, model_chain_walk)                   \
     X(chain_dynamics, HMSM_BINDING_CHAIN_DYNAMICS, f32x24, model_chain)             \
-    X(chain_load, HMSM_BINDING_CHAIN_LOAD, f32x4, chain)
+    X(chain_load, HMSM_BINDING_CHAIN_LOAD, f32x4, chain_halves)
 
 enum class BufferId : uint32_t {
 #define HMSM_BUFFER_ENUM(name, binding, shape, scope) name = binding,

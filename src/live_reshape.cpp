@@ -225,8 +225,10 @@ Status Simulation::Impl::reset(std::span<const uint32_t> indices) {
         const std::vector<double> zeros(chains * 4, 0.0);
         HMSM_TRY(backend_->write(BufferId::chain_state, g.chain_begin, chains, zeros.data(), detail::Scalar::f64));
         HMSM_TRY(backend_->write(BufferId::chain_force, g.chain_begin, chains, zeros.data(), detail::Scalar::f64));
-        if (data_->coupled())
-            HMSM_TRY(backend_->write(BufferId::chain_load, g.chain_begin, chains, zeros.data(), detail::Scalar::f64));
+        if (data_->coupled())  // both halves of the loads
+            for (uint64_t half : {uint64_t(0), data_->chain_capacity})
+                HMSM_TRY(backend_->write(BufferId::chain_load, half + g.chain_begin, chains, zeros.data(),
+                                         detail::Scalar::f64));
     }
     ahead_schedule_.live_change();  // the reset angles replace any integrated ahead
     const detail::RunStep at_rest[1] = {};
@@ -275,8 +277,10 @@ Status Simulation::Impl::reshape_in_place(std::unique_ptr<detail::SceneData> nex
         const std::vector<double> zeros(added_chains * 4, 0.0);
         HMSM_TRY(backend_->write(BufferId::chain_state, at, added_chains, zeros.data(), detail::Scalar::f64));
         HMSM_TRY(backend_->write(BufferId::chain_force, at, added_chains, zeros.data(), detail::Scalar::f64));
-        if (next->coupled())
-            HMSM_TRY(backend_->write(BufferId::chain_load, at, added_chains, zeros.data(), detail::Scalar::f64));
+        if (next->coupled())  // both halves of the loads
+            for (uint64_t half : {uint64_t(0), next->chain_capacity})
+                HMSM_TRY(backend_->write(BufferId::chain_load, half + at, added_chains, zeros.data(),
+                                         detail::Scalar::f64));
     }
     // Origins and yaws from the first instance that changed place on.
     const uint64_t changed = next->instance_count() - first_moved;

@@ -85,7 +85,7 @@ void fill_wind_header(const Wind& wind, const WindModes& modes, std::span<const 
 
 void fill_wind_step(const Wind& wind, const WindModes& modes, double tau, double* out) {
     out[0] = mod2(tau);
-    out[1] = out[2] = out[3] = 0.0;
+    out[1] = out[2] = out[3] = 0.0;  // out[1]: the step's load half, set by the caller (gpu_layout.h)
     for (uint32_t k = 0; k < kTurbulentModes; ++k) {
         if (wind.profile == WindProfile::atmospheric)
             out[4 + k] = atmospheric_step_phase(modes.atmospheric, k, tau);

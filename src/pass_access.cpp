@@ -17,8 +17,8 @@ uint64_t SceneData::element_count(BufferId id) const {
         case Scope::model_node: return node_owner.size();
         case Scope::model_vertex: return vertex_chain.size();
         case Scope::instance: return instance_capacity;
-        case Scope::chain: return id == BufferId::chain_load && !coupled() ? 0 : chain_capacity;
-        case Scope::chain_halves: return 2 * chain_capacity;
+        case Scope::chain: return chain_capacity;
+        case Scope::chain_halves: return id == BufferId::chain_load && !coupled() ? 0 : 2 * chain_capacity;
         case Scope::node: return id == BufferId::node_world && !produces_nodes() ? 0 : node_capacity;
         case Scope::vertex:
             if (!produces_vertices()) return 0;

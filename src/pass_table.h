@@ -96,14 +96,15 @@ inline constexpr uint32_t kWalkAheadReads =
     kWalkTopPosesReads | HMSM_B(chain_rotation) | HMSM_B(chain_origin) | HMSM_B(chain_constants);
 inline constexpr uint32_t kWalkAheadWrites = HMSM_B(joint_matrix) | HMSM_B(chain_state);
 
-/// The coupled dynamics (docs/model.md 3.13; PassConstants.dynamics) adds to the columns above:
-/// wind_force gathers its children's loads of the last step (chain_load, anywhere in the
-/// instance) through their rest rotations and reads its own rates for the aerodynamic damping;
-/// integrate reads the chain's record and stores the load its parent takes next.
+/// The coupled dynamics (docs/model.md 3.13; PassConstants.dynamics) adds to the columns above
+/// (to a path walk's wind pair both): wind_force gathers its children's loads of the last step
+/// (one half of chain_load, anywhere in the instance) through their rest rotations, reads its
+/// own rates for the aerodynamic damping and stores its load in the other half; integrate reads
+/// the chain's record.
 inline constexpr uint32_t kCoupledWindForceReads = HMSM_B(chain_state) | HMSM_B(chain_load) |
                                                    HMSM_B(chain_dynamics) | HMSM_B(chain_rest_rotation);
+inline constexpr uint32_t kCoupledWindForceWrites = HMSM_B(chain_load);
 inline constexpr uint32_t kCoupledIntegrateReads = HMSM_B(chain_dynamics);
-inline constexpr uint32_t kCoupledIntegrateWrites = HMSM_B(chain_load);
 
 /// What one dispatch runs (PassConstants.kind): X(name, NAME, passes) with NAME the suffix of its
 /// HMSM_DISPATCH_* number in gpu_layout.h (shared with CUDA and GLSL) and `passes` the passes

@@ -41,8 +41,10 @@ Simulation::Simulation(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 std::vector<Dispatch> Simulation::Impl::program_for(const std::vector<detail::InstanceGroup>& groups,
                                                     Pass first, uint32_t passes) const {
     const detail::BackendCapabilities can = backend_->capabilities();
-    return build_program(*data_, groups, config_.composition, can.dispatches_are_expensive, first, passes,
-                         can.walks_ahead, jumping_form_);
+    // The walk ahead integrates the paper's equations (kernels/cuda/chain_math.cuh walk_ahead).
+    const bool ahead = can.walks_ahead && config_.model.dynamics == Dynamics::paper;
+    return build_program(*data_, groups, config_.composition, can.dispatches_are_expensive, first, passes, ahead,
+                         jumping_form_);
 }
 
 Status Simulation::Impl::check_size(std::span<const Instance> instances) const {
@@ -172,14 +174,11 @@ Result<std::unique_ptr<Simulation>> Simulation::Impl::create(const Scene& scene,
         if (!created) return created.status();
         sim->backend_ = std::move(created).value();
     }
-    HMSM_TRY(detail::check_dynamics_runs(config));
     if (config.composition == Composition::automatic) {
         int32_t deepest = 0;
         for (const Hierarchy& h : sim->hierarchies_) deepest = std::max(deepest, h.max_depth);
-        // The coupled wind_force gathers other chains' angles, so it cannot share a dispatch
-        // with integrate as the path walk's wind pair does (docs/model.md 3.13).
-        const bool walk = sim->backend_->capabilities().prefers_path_walk && config.model.dynamics == Dynamics::paper;
-        sim->config_.composition = detail::automatic_composition(walk, deepest);
+        sim->config_.composition =
+            detail::automatic_composition(sim->backend_->capabilities().prefers_path_walk, deepest);
     }
     sim->backend_->set_profiling(config.profile_passes);
     HMSM_TRY(sim->backend_->upload(*sim->data_));
@@ -217,6 +216,7 @@ Status Simulation::Impl::step(uint32_t count) {
             if (!(std::abs(tau) <= detail::kMaxWindPhase))  // f t past the clock's range
                 HMSM_TRY(detail::check_wind_clock(wind_clock_rate(wind), double(n - 1) * dt, tau));
             detail::fill_wind_step(wind, modes_, tau, &wind_scratch_[size_t(k) * detail::kWindStepScalars]);
+            wind_scratch_[size_t(k) * detail::kWindStepScalars + 1] = double(n % 2);  // the load half step n writes
             if (k < steps) run_steps_[k] = {k, detail::AheadStep::whole};
         }
         HMSM_TRY(backend_->write(detail::BufferId::wind_table, HMSM_WIND_STEPS,

@@ -1,8 +1,10 @@
-// The coupled dynamics (docs/model.md 3.13) on every backend: a forest of paper-5 trees (1,179
-// chains, no multiple of a workgroup) agrees with cpu64 over 1,000 steps of turbulent and
-// atmospheric wind with live changes: a gust, a force field, an instance's wind scale, one
-// instance paused and resumed, one removed and one added. The CUDA kernels also run on the
-// host (cuda_emulation), so a machine without a GPU checks their arithmetic and indexing.
+// The coupled dynamics (docs/model.md 3.13) on every backend and composition: a forest of
+// paper-5 trees (1,179 chains, no multiple of a workgroup) agrees with cpu64 over 1,000 steps of
+// turbulent and atmospheric wind with live changes: a gust, a force field, an instance's wind
+// scale, one instance paused and resumed, one removed and one added. The path walk runs
+// wind_force and integrate in one dispatch, where a chain's load must not be overwritten before
+// its parent has read it (the two halves of chain_load). The CUDA kernels also run on the host
+// (cuda_emulation), so a machine without a GPU checks their arithmetic and indexing.
 #include "agreement/pass_agreement.h"
 #include "simulation_access.h"
 #include "test_trees.h"
@@ -18,6 +20,7 @@ namespace {
 struct CoupledCase {
     std::string backend;  // a name of test::backends_under_test(), or "cpu_parallel"
     WindProfile profile;
+    Composition composition;
 };
 
 Result<std::unique_ptr<detail::Backend>> backend_named(const std::string& name) {
@@ -69,6 +72,7 @@ TEST_P(CoupledBackends, AgreeWithCpu64OverLiveChanges) {
     config.wind.profile = GetParam().profile;
     config.wind.strength = 4.0;
     config.wind.turbulence = 0.5;
+    config.composition = GetParam().composition;
     auto oracle = Simulation::create(scene, config);
     ASSERT_TRUE(oracle.ok()) << oracle.status().message();
     auto tested = detail::SimulationAccess::create(scene, config, std::move(backend).value());
@@ -94,16 +98,20 @@ TEST_P(CoupledBackends, AgreeWithCpu64OverLiveChanges) {
     }
 }
 
-INSTANTIATE_TEST_SUITE_P(Backends, CoupledBackends,
-                         ::testing::Values(CoupledCase{"cpu", WindProfile::turbulent},
-                                           CoupledCase{"cpu_parallel", WindProfile::turbulent},
-                                           CoupledCase{"vulkan", WindProfile::turbulent},
-                                           CoupledCase{"vulkan", WindProfile::atmospheric},
-                                           CoupledCase{"cuda", WindProfile::turbulent},
-                                           CoupledCase{"cuda", WindProfile::atmospheric},
-                                           CoupledCase{"cuda_emulation", WindProfile::turbulent},
-                                           CoupledCase{"cuda_emulation", WindProfile::atmospheric}),
-                         [](const auto& info) { return info.param.backend + "_" + to_string(info.param.profile); });
+constexpr WindProfile kTurbulent = WindProfile::turbulent, kAtmospheric = WindProfile::atmospheric;
+constexpr Composition kWalk = Composition::path_walk, kJumping = Composition::pointer_jumping;
+
+INSTANTIATE_TEST_SUITE_P(
+    Backends, CoupledBackends,
+    ::testing::Values(CoupledCase{"cpu", kTurbulent, kJumping}, CoupledCase{"cpu", kAtmospheric, kWalk},
+                      CoupledCase{"cpu_parallel", kTurbulent, kJumping}, CoupledCase{"cpu_parallel", kTurbulent, kWalk},
+                      CoupledCase{"vulkan", kTurbulent, kWalk}, CoupledCase{"vulkan", kAtmospheric, kJumping},
+                      CoupledCase{"cuda", kTurbulent, kWalk}, CoupledCase{"cuda", kAtmospheric, kWalk},
+                      CoupledCase{"cuda", kAtmospheric, kJumping}, CoupledCase{"cuda_emulation", kTurbulent, kWalk},
+                      CoupledCase{"cuda_emulation", kAtmospheric, kJumping}),
+    [](const auto& info) {
+        return info.param.backend + "_" + to_string(info.param.profile) + "_" + to_string(info.param.composition);
+    });
 
 }  // namespace
 }  // namespace hmsm

@@ -255,17 +255,9 @@ TEST(Coupled, FloatBackendsAgreeWithCpu64) {
     EXPECT_EQ(serial, threaded);
 }
 
-// The paper's dynamics is the default, and the coupled one refuses the path walk, whose wind
-// pair cannot gather other chains' loads (tests/coupled_backends_test.cpp runs every backend).
-TEST(Coupled, PaperIsTheDefaultAndThePathWalkIsRefused) {
-    EXPECT_EQ(ModelOptions{}.dynamics, Dynamics::paper);
-    SimulationConfig config = coupled_config();
-    config.composition = Composition::path_walk;
-    auto walk = Simulation::create(single_tree_scene(test::small_tree()), config);
-    ASSERT_FALSE(walk.ok());
-    EXPECT_EQ(walk.status().code(), ErrorCode::invalid_argument);
-    EXPECT_NE(walk.status().message().find("path_walk"), std::string::npos) << walk.status().message();
-}
+// The paper's dynamics is the default (tests/coupled_backends_test.cpp runs the coupled one on
+// every backend and composition).
+TEST(Coupled, PaperIsTheDefault) { EXPECT_EQ(ModelOptions{}.dynamics, Dynamics::paper); }
 
 TEST(Coupled, BadMaterialsAreRefusedNamingTheValue) {
     const Scene scene = single_tree_scene(test::small_tree());

@@ -119,10 +119,13 @@ HMSM_HOST_DEVICE float4 integrate_step(const BufferPointers& b, const gpu::PassC
     return make_float4(angle[0], angle[1], rate[0], rate[1]);
 }
 
-/// The step for state chain `chain`, stored to chain_state (theta_x, theta_z, v_x, v_z).
+/// The step for state chain `chain` (the paper's or the coupled one), stored to chain_state
+/// (theta_x, theta_z, v_x, v_z).
 HMSM_HOST_DEVICE void integrate_angles(const BufferPointers& b, const gpu::PassConstants& pc,
                                        uint32_t model_chain, uint64_t chain, float2 g_force) {
-    b.chain_state[chain] = integrate_step(b, pc, model_chain, b.chain_state[chain], g_force);
+    b.chain_state[chain] = pc.dynamics == HMSM_PASS_DYNAMICS_COUPLED  // docs/model.md 3.13
+                               ? coupled_step(b, pc, model_chain, b.chain_state[chain], g_force)
+                               : integrate_step(b, pc, model_chain, b.chain_state[chain], g_force);
 }
 
 /// Pass 2, the transform: T = Q Rz(theta_z) Rx(theta_x) of static chain model_chain at angles
@@ -162,7 +165,6 @@ HMSM_HOST_DEVICE Mat3 chain_integrate(const BufferPointers& b, const gpu::PassCo
     const Mat3 local =
         local_transform(b, pc, k, model_chain, load(b.chain_parent + model_chain) < 0, make_float2(state.x, state.y));
     b.chain_state[chain] = state;
-    if (coupled) b.chain_load[chain] = make_float4(g_force.x, g_force.y, 0.0f, 0.0f);  // the parent's next load
     return local;
 }
 

@@ -13,11 +13,19 @@ HMSM_HOST_DEVICE float4 coupled_record(const BufferPointers& b, uint32_t model_c
     return load(b.chain_dynamics + uint64_t(HMSM_CHAIN_DYNAMICS_VEC4S) * model_chain + v);
 }
 
+/// The half of chain_load the step of wind-table slot pc.wind_slot writes; it reads the other
+/// (gpu_layout.h).
+HMSM_HOST_DEVICE uint32_t load_half_written(const BufferPointers& b, const gpu::PassConstants& pc) {
+    return uint32_t(load(b.wind_table + HMSM_WIND_STEPS + HMSM_WIND_STEP_VEC4S * pc.wind_slot).y);
+}
+
 /// Pass 1 of the coupled dynamics for model chain c of group instance k (state chain `chain`),
-/// with the wind w_local in the chain's frame of the previous step.
+/// with the wind w_local in the chain's frame of the previous step; stores g as the chain's load
+/// in the half this step writes, for its parent's next step.
 HMSM_HOST_DEVICE float2 coupled_force(const BufferPointers& b, const gpu::PassConstants& pc, uint32_t k,
                                       uint64_t chain, uint32_t c, float3 w_local) {
     const uint32_t model_chain = pc.model_chain_begin + c;
+    const uint32_t written = load_half_written(b, pc);
     // Wind: the torque (q_ref M) x w_local about the joint, its x and z components.
     const float4 moment = coupled_record(b, model_chain, 4);
     float2 g = make_float2(moment.y * w_local.z - moment.z * w_local.y, moment.x * w_local.y - moment.y * w_local.x);
@@ -25,7 +33,7 @@ HMSM_HOST_DEVICE float2 coupled_force(const BufferPointers& b, const gpu::PassCo
     const float4 children = coupled_record(b, model_chain, 5);
     const int32_t first = int32_t(children.x), count = int32_t(children.y);
     for (int32_t j = first; j < first + count; ++j) {
-        const float4 load_j = load(b.chain_load + state_chain(pc, k, j));
+        const float4 load_j = load(b.chain_load + half_begin(pc, 1u - written) + state_chain(pc, k, j));
         const float3 passed = load_mat3(b.chain_rest_rotation, pc.model_chain_begin + uint32_t(j)) *
                               make_float3(load_j.x, 0.0f, load_j.y);
         g.x += passed.x;
@@ -49,11 +57,12 @@ HMSM_HOST_DEVICE float2 coupled_force(const BufferPointers& b, const gpu::PassCo
         const float share = x > 1e-4f ? (1.0f - expf(-x)) / x : 1.0f - 0.5f * x;
         force[a] -= damping * share * rate[a];
     }
+    b.chain_load[half_begin(pc, written) + chain] = make_float4(force[0], force[1], 0.0f, 0.0f);
     return make_float2(force[0], force[1]);
 }
 
 /// Pass 2 of the coupled dynamics: the exact step of static chain model_chain from `state`
-/// under g held, clamped at max_angle; returns the new state. The caller stores g as the load.
+/// under g held, clamped at max_angle; returns the new state.
 HMSM_HOST_DEVICE float4 coupled_step(const BufferPointers& b, const gpu::PassConstants& pc, uint32_t model_chain,
                                      float4 state, float2 g_force) {
     const float4 transition[2] = {coupled_record(b, model_chain, 0), coupled_record(b, model_chain, 1)};

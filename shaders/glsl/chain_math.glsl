@@ -104,15 +104,18 @@ mat3 local_transform(uint k, uint model_chain, bool trunk, vec2 angle) {
     return t;
 }
 
+/// Pass 2's step of either dynamics (PassConstants.dynamics; docs/model.md 3.7, 3.13).
+vec4 step_angles(uint model_chain, vec4 s, vec2 g) {
+    return pc.dynamics == HMSM_PASS_DYNAMICS_COUPLED ? coupled_step(model_chain, s, g) : integrate_step(model_chain, s, g);
+}
+
 /// Pass 2 for model chain c of group instance k under generalized force g: the step (chain_state
 /// is updated), then T; T's inputs are read before the state is written.
 mat3 chain_integrate(uint k, uint c, uint chain, vec2 g) {
     uint model_chain = pc.model_chain_begin + c;
-    bool coupled = pc.dynamics == HMSM_PASS_DYNAMICS_COUPLED;  // docs/model.md 3.13
-    vec4 s = coupled ? coupled_step(model_chain, chain_state[chain], g) : integrate_step(model_chain, chain_state[chain], g);
+    vec4 s = step_angles(model_chain, chain_state[chain], g);
     mat3 t = local_transform(k, model_chain, chain_parent[model_chain] < 0, s.xy);
     chain_state[chain] = s;
-    if (coupled) chain_load[chain] = vec4(g, 0.0, 0.0);  // the parent's next load
     return t;
 }
 

@@ -8,10 +8,16 @@
 /// vec4 `v` of model chain `model_chain`'s record (gpu_layout.h HMSM_CHAIN_DYNAMICS_VEC4S).
 vec4 coupled_record(uint model_chain, uint v) { return chain_dynamics[HMSM_CHAIN_DYNAMICS_VEC4S * model_chain + v]; }
 
+/// The half of chain_load the step of wind-table slot pc.wind_slot writes; it reads the other
+/// (gpu_layout.h).
+uint load_half_written() { return uint(wind_table[HMSM_WIND_STEPS + HMSM_WIND_STEP_VEC4S * pc.wind_slot].y); }
+
 /// Pass 1 of the coupled dynamics for model chain c of group instance k, with the wind w_local
-/// in the chain's frame of the previous step.
+/// in the chain's frame of the previous step; stores g as the chain's load in the half this step
+/// writes, for its parent's next step.
 vec2 coupled_force(uint k, uint c, vec3 w_local) {
     uint model_chain = pc.model_chain_begin + c;
+    uint written = load_half_written();
     // Wind: the torque (q_ref M) x w_local about the joint, its x and z components.
     vec3 moment = coupled_record(model_chain, 4u).xyz;
     vec2 g = vec2(moment.y * w_local.z - moment.z * w_local.y, moment.x * w_local.y - moment.y * w_local.x);
@@ -19,7 +25,7 @@ vec2 coupled_force(uint k, uint c, vec3 w_local) {
     vec4 children = coupled_record(model_chain, 5u);
     int first = int(children.x), count = int(children.y);
     for (int j = first; j < first + count; ++j) {
-        vec4 load_j = chain_load[state_chain(k, uint(j))];
+        vec4 load_j = chain_load[half_offset(1u - written) + state_chain(k, uint(j))];
         vec3 passed = as_mat3(chain_rest_rotation[pc.model_chain_begin + uint(j)]) * vec3(load_j.x, 0.0, load_j.y);
         g += passed.xz;
     }
@@ -36,11 +42,12 @@ vec2 coupled_force(uint k, uint c, vec3 w_local) {
         float share = x > 1e-4 ? (1.0 - exp(-x)) / x : 1.0 - 0.5 * x;
         g[a] -= damping * share * s[2 + a];
     }
+    chain_load[half_offset(written) + state_chain(k, c)] = vec4(g, 0.0, 0.0);
     return g;
 }
 
 /// Pass 2 of the coupled dynamics: the exact step of static chain model_chain from state s under
-/// g held, clamped at max_angle; returns the new state. The caller stores g as the load.
+/// g held, clamped at max_angle; returns the new state.
 vec4 coupled_step(uint model_chain, vec4 s, vec2 g) {
     vec4 inertia_stiffness = coupled_record(model_chain, 2u);
     float max_angle = pc.params.y;

@@ -51,7 +51,7 @@
 #define HMSM_BINDING_CHAIN_WALK 26           // HMSM_WALK_RECORD_INTS int per model chain: its walk record (below)
 // The coupled dynamics (docs/model.md 3.13; no elements under the paper's):
 #define HMSM_BINDING_CHAIN_DYNAMICS 27       // HMSM_CHAIN_DYNAMICS_VEC4S vec4 per model chain: below
-#define HMSM_BINDING_CHAIN_LOAD 28           // vec4 per chain: (tau_x, tau_z, 0, 0), the load g of the last step
+#define HMSM_BINDING_CHAIN_LOAD 28           // vec4 per chain, 2 halves: (g_x, g_z, 0, 0), the load g of a step
 #define HMSM_BINDING_COUNT 29
 
 /// What PassConstants.dynamics says the passes integrate (hmsm::Dynamics values).
@@ -87,7 +87,8 @@
 ///       cross-wind directions times strength (hmsm::wind_frame)
 ///   [HMSM_WIND_FIELDS, +2 per field): (centre xyz, radius), (F xyz, kind) with kind 0 =
 ///       directional (force h F), 1 = radial (force h F.x unit(x - centre))
-///   [HMSM_WIND_STEPS + 9 s, +9): step slot s: (tau mod 2, 0, 0, 0), then frac(m_k tau + u_k)
+///   [HMSM_WIND_STEPS + 9 s, +9): step slot s: (tau mod 2, h, 0, 0) with h = n mod 2 for step n
+///       (the half of chain_load the step writes; it reads the other), then frac(m_k tau + u_k)
 ///       (atmospheric: frac(kx_k tau + u_k), tau in metres) as instance_wind's elements 1..8.
 ///       A wind_force dispatch reads slot pc.wind_slot.
 #define HMSM_WIND_MODES 32

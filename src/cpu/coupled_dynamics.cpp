@@ -1,6 +1,7 @@
 // The coupled dynamics on the CPU (docs/model.md 3.13): pass 1's generalized force from the
 // wind moment, the children's loads and aerodynamic damping; pass 2's exact step of the damped
-// oscillator with the force held.
+// oscillator with the force held. Mirrored by kernels/cuda/coupled_math.cuh and
+// shaders/glsl/coupled_math.glsl.
 #include "cpu_state.h"
 
 #include <cmath>
@@ -19,7 +20,8 @@ T field(const std::array<T, 4 * HMSM_CHAIN_DYNAMICS_VEC4S>& record, uint32_t v, 
 
 template <class T>
 typename State<T>::vec2 coupled_force(const State<T>& s, const gpu::PassConstants& pc, uint32_t instance,
-                                      uint64_t c, uint32_t model_chain, const typename State<T>::vec3& w_local) {
+                                      uint64_t c, uint32_t model_chain, const typename State<T>::vec3& w_local,
+                                      uint32_t load_half) {
     using vec2 = typename State<T>::vec2;
     using vec3 = typename State<T>::vec3;
     const auto& k = s.chain_dynamics[model_chain];
@@ -29,10 +31,10 @@ typename State<T>::vec2 coupled_force(const State<T>& s, const gpu::PassConstant
     vec2 g(torque.x, torque.z);
     // Each child's load of the last step (its wind, its own children's loads and its
     // aerodynamic damping), which its joint passes on, rotated from the child's frame into this
-    // one by its rest rotation Q.
+    // one by its rest rotation Q; from the half of chain_load the last step wrote.
     const int32_t first = int32_t(field(k, 5, 0)), count = int32_t(field(k, 5, 1));
     for (int32_t j = first; j < first + count; ++j) {
-        const auto& load = s.chain_load[state_chain(pc, instance, j)];
+        const auto& load = s.chain_load[load_half * s.total_chains + state_chain(pc, instance, j)];
         const vec3 passed = s.chain_rest_rotation[pc.model_chain_begin + uint32_t(j)] * vec3(load.x, T(0), load.y);
         g += vec2(passed.x, passed.z);
     }
@@ -71,14 +73,13 @@ typename State<T>::vec2 coupled_integrate_angles(State<T>& s, uint32_t model_cha
         }
     }
     sv = {angle[0], angle[1], rate[0], rate[1]};
-    s.chain_load[c] = {g[0], g[1], T(0), T(0)};
     return {angle[0], angle[1]};
 }
 
 template State<float>::vec2 coupled_force<float>(const State<float>&, const gpu::PassConstants&, uint32_t,
-                                                  uint64_t, uint32_t, const State<float>::vec3&);
+                                                  uint64_t, uint32_t, const State<float>::vec3&, uint32_t);
 template State<double>::vec2 coupled_force<double>(const State<double>&, const gpu::PassConstants&, uint32_t,
-                                                    uint64_t, uint32_t, const State<double>::vec3&);
+                                                    uint64_t, uint32_t, const State<double>::vec3&, uint32_t);
 template State<float>::vec2 coupled_integrate_angles<float>(State<float>&, uint32_t, uint64_t,
                                                              const State<float>::vec2&);
 template State<double>::vec2 coupled_integrate_angles<double>(State<double>&, uint32_t, uint64_t,

@@ -151,12 +151,14 @@ template <class T> void wind_force_and_integrate(State<T>& s, const gpu::PassCon
 /// Composition::path_walk's node pair: passes 4 and 6 per node, storing only node_world.
 template <class T> void node_relative_and_world(State<T>& s, const gpu::PassConstants& pc, Range r);
 /// The coupled dynamics (coupled_dynamics.cpp, docs/model.md 3.13): pass 1's g of state chain c
-/// (static chain model_chain, group instance `instance`) under the wind w_local in its frame;
-/// and pass 2's exact step of its angles under g (stores S/V and g as the load its parent
-/// takes in the next step; returns S).
+/// (static chain model_chain, group instance `instance`) under the wind w_local in its frame,
+/// its children's loads read from half `load_half` of chain_load (the half the last step wrote;
+/// the caller stores g in the other); and pass 2's exact step of its angles under g (stores S/V,
+/// returns S).
 template <class T>
 typename State<T>::vec2 coupled_force(const State<T>& s, const gpu::PassConstants& pc, uint32_t instance,
-                                      uint64_t c, uint32_t model_chain, const typename State<T>::vec3& w_local);
+                                      uint64_t c, uint32_t model_chain, const typename State<T>::vec3& w_local,
+                                      uint32_t load_half);
 template <class T>
 typename State<T>::vec2 coupled_integrate_angles(State<T>& s, uint32_t model_chain, uint64_t c,
                                                  const typename State<T>::vec2& g);

@@ -40,6 +40,9 @@ void wind_forces(State<T>& s, const gpu::PassConstants& pc, uint32_t wind_slot, 
     using vec3 = typename State<T>::vec3;
     const auto* table = s.wind_table.data();
     const uint32_t fields = uint32_t(table[HMSM_WIND_VECTOR].w);
+    // The coupled dynamics: the half of chain_load this step writes (the wind table's step slot)
+    // and the other, which the last step wrote.
+    const uint32_t load_written = uint32_t(table[HMSM_WIND_STEPS + HMSM_WIND_STEP_VEC4S * wind_slot].y);
     // The instance's wind is evaluated once per run of consecutive chains of one instance (a
     // range holds whole instances but for its ends), not per chain.
     uint32_t wind_instance = UINT32_MAX;
@@ -68,7 +71,9 @@ void wind_forces(State<T>& s, const gpu::PassConstants& pc, uint32_t wind_slot, 
         }
         auto w_local = glm::transpose(from_joint ? joint_rotation(s, c) : s.chain_rotation[pose]) * w;
         if (pc.dynamics == HMSM_PASS_DYNAMICS_COUPLED) {
-            use(c, pc.model_chain_begin + e.index, coupled_force(s, pc, e.instance, c, pc.model_chain_begin + e.index, w_local));
+            const auto g = coupled_force(s, pc, e.instance, c, pc.model_chain_begin + e.index, w_local, 1 - load_written);
+            s.chain_load[load_written * s.total_chains + c] = {g.x, g.y, T(0), T(0)};  // the parent's next load
+            use(c, pc.model_chain_begin + e.index, g);
             continue;
         }
         T area = s.chain_constants[pc.model_chain_begin + e.index].w;
@@ -88,7 +93,8 @@ void wind_force(State<T>& s, const gpu::PassConstants& pc, uint32_t wind_slot, R
 template <class T>
 void wind_force_and_integrate(State<T>& s, const gpu::PassConstants& pc, uint32_t wind_slot, Range r) {
     wind_forces(s, pc, wind_slot, r, true, [&](uint64_t c, uint32_t model_chain, const typename State<T>::vec2& g) {
-        integrate_angles(s, model_chain, c, g);
+        if (pc.dynamics == HMSM_PASS_DYNAMICS_COUPLED) coupled_integrate_angles(s, model_chain, c, g);
+        else integrate_angles(s, model_chain, c, g);
     });
 }
 
