@@ -92,7 +92,8 @@ HMSM_HOST_DEVICE float2 chain_wind_force(const BufferPointers& b, const gpu::Pas
                                          uint32_t k, uint32_t c, float3 x, const Mat3& rotation) {
     const float3 wind = instance_wind_vector(b, pc, k, pc.wind_slot);
     if (pc.dynamics == HMSM_PASS_DYNAMICS_COUPLED)  // docs/model.md 3.13
-        return coupled_force(b, pc, k, state_chain(pc, k, int32_t(c)), c, chain_local_wind(b, x, rotation, wind));
+        return coupled_force(b, pc, k, state_chain(pc, k, int32_t(c)), c, chain_local_wind(b, x, rotation, wind),
+                             load_half_written(b, pc));
     return chain_wind_force_at(b, pc, c, x, rotation, wind);
 }
 
@@ -371,7 +372,8 @@ HMSM_HOST_DEVICE void walk_top_pose(const BufferPointers& b, const gpu::PassCons
 /// HMSM_DISPATCH_WALK_AHEAD for chain c of group instance k: the path walk from the top poses, its pose
 /// to the joint matrix, then the next step's pass 1 at that pose (what the next step's
 /// wind_force would read back from the joint matrix, with the trunk's stored wind scale) and
-/// pass 2's integration, the new angles to chain_state_next.
+/// pass 2's integration, the new angles to chain_state_next; under the coupled dynamics its
+/// pass 1 reads this step's loads and writes the next step's half.
 HMSM_HOST_DEVICE void walk_ahead(const BufferPointers& b, const gpu::PassConstants& pc, uint32_t k, int32_t c) {
     Mat3 rotation;
     float4 origin;
@@ -387,8 +389,14 @@ HMSM_HOST_DEVICE void walk_ahead(const BufferPointers& b, const gpu::PassConstan
         const float scale = load(b.chain_origin + half_begin(pc, pc.src_half) + state_chain(pc, k, 0)).w;
         wind = scale * xyz(load(b.wind_table + HMSM_WIND_VECTOR));
     }
-    const float2 g = chain_wind_force_at(b, pc, uint32_t(c), xyz(origin), rotation, wind);
     const uint32_t model_chain = pc.model_chain_begin + uint32_t(c);
+    if (pc.dynamics == HMSM_PASS_DYNAMICS_COUPLED) {  // the next step writes the other load half
+        const float2 g = coupled_force(b, pc, k, chain, uint32_t(c), chain_local_wind(b, xyz(origin), rotation, wind),
+                                       1u - load_half_written(b, pc));
+        b.chain_state_next[chain] = coupled_step(b, pc, model_chain, load(b.chain_state + chain), g);
+        return;
+    }
+    const float2 g = chain_wind_force_at(b, pc, uint32_t(c), xyz(origin), rotation, wind);
     b.chain_state_next[chain] = integrate_step(b, pc, model_chain, load(b.chain_state + chain), g);
 }
 

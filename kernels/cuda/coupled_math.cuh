@@ -20,12 +20,12 @@ HMSM_HOST_DEVICE uint32_t load_half_written(const BufferPointers& b, const gpu::
 }
 
 /// Pass 1 of the coupled dynamics for model chain c of group instance k (state chain `chain`),
-/// with the wind w_local in the chain's frame of the previous step; stores g as the chain's load
-/// in the half this step writes, for its parent's next step.
+/// with the wind w_local in the chain's frame of the previous step; reads the children's loads
+/// from half 1 - `written` and stores g as the chain's load in half `written`, for its parent's
+/// next step.
 HMSM_HOST_DEVICE float2 coupled_force(const BufferPointers& b, const gpu::PassConstants& pc, uint32_t k,
-                                      uint64_t chain, uint32_t c, float3 w_local) {
+                                      uint64_t chain, uint32_t c, float3 w_local, uint32_t written) {
     const uint32_t model_chain = pc.model_chain_begin + c;
-    const uint32_t written = load_half_written(b, pc);
     // Wind: the torque (q_ref M) x w_local about the joint, its x and z components.
     const float4 moment = coupled_record(b, model_chain, 4);
     float2 g = make_float2(moment.y * w_local.z - moment.z * w_local.y, moment.x * w_local.y - moment.y * w_local.x);

@@ -78,15 +78,16 @@ void expect_agreement(const Scene& scene, test::TestComposition composition, boo
 // between (run_live_call) and one call of many steps, a simulation that takes the angles
 // integrated ahead leaves the same joint matrices and angles, bit for bit, as one whose backend
 // does not integrate ahead, and it does take them; under y1 and under the atmospheric profile,
-// whose walk ahead evaluates the wind of the slot after its step's itself.
-class CudaWalkAhead : public ::testing::TestWithParam<WindProfile> {};
+// whose walk ahead evaluates the wind of the slot after its step's itself; under either dynamics.
+class CudaWalkAhead : public ::testing::TestWithParam<std::pair<WindProfile, Dynamics>> {};
 
 TEST_P(CudaWalkAhead, StepByStepWithLiveChangesEqualsThePlainWalkBitForBit) {
     HMSM_SKIP_WITHOUT_CUDA();
     const Scene scene = forest_scene(7);
     SimulationConfig config = test_config(BackendKind::cuda, Composition::path_walk, false);
-    config.wind.profile = GetParam();
+    config.wind.profile = GetParam().first;
     config.wind.turbulence = 0.9;
+    config.model.dynamics = GetParam().second;
     const LiveScript script{.wind = 8, .field = 16, .scale = 20, .pause = 24, .resume = 30, .add = 36,
                             .moving_from = 40, .moving_to = 56, .long_call = 40, .long_steps = 300};
     setenv("HMSM_CUDA_WALK_AHEAD", "0", 1);
@@ -121,8 +122,14 @@ TEST_P(CudaWalkAhead, StepByStepWithLiveChangesEqualsThePlainWalkBitForBit) {
     EXPECT_GE(backend.steps_taken_ahead() - taken_before_calm, 3u);
 }
 
-INSTANTIATE_TEST_SUITE_P(Profiles, CudaWalkAhead, ::testing::Values(WindProfile::y1, WindProfile::atmospheric),
-                         [](const auto& info) { return to_string(info.param); });
+INSTANTIATE_TEST_SUITE_P(Profiles, CudaWalkAhead,
+                         ::testing::Values(std::pair{WindProfile::y1, Dynamics::paper},
+                                           std::pair{WindProfile::atmospheric, Dynamics::paper},
+                                           std::pair{WindProfile::y1, Dynamics::coupled},
+                                           std::pair{WindProfile::atmospheric, Dynamics::coupled}),
+                         [](const auto& info) {
+                             return std::string(to_string(info.param.first)) + "_" + to_string(info.param.second);
+                         });
 
 class CudaSimulation : public ::testing::TestWithParam<test::TestComposition> {};
 

@@ -19,17 +19,23 @@ namespace {
 // and angles, bit for bit, as one whose backend does not. It takes the angles integrated ahead
 // where nothing changed, and walks plain while the field moves before every call. Calls of
 // several steps run the walk ahead at wind-table slots past the first, where the atmospheric
-// profile's walk ahead must read the slot after its own step's.
+// profile's walk ahead must read the slot after its own step's. Under the coupled dynamics the
+// walk ahead also reads this step's loads and writes the next step's.
+struct AheadCase {
+    WindProfile profile;
+    Dynamics dynamics;
+};
 constexpr LiveScript kScript{.wind = 4, .field = 8, .scale = 10, .pause = 12, .resume = 14, .add = 16,
                              .moving_from = 22, .moving_to = 40, .long_call = 20, .long_steps = 12};
 
-class CudaEmulationAheadSchedule : public ::testing::TestWithParam<WindProfile> {};
+class CudaEmulationAheadSchedule : public ::testing::TestWithParam<AheadCase> {};
 
 TEST_P(CudaEmulationAheadSchedule, StepLayerDecidesFromLiveChangesBitForBit) {
     const Scene scene = forest_scene(7);
     SimulationConfig config = test_config(BackendKind::cuda, Composition::path_walk, false);
-    config.wind.profile = GetParam();
+    config.wind.profile = GetParam().profile;
     config.wind.turbulence = 0.9;
+    config.model.dynamics = GetParam().dynamics;
     test::EmulatedAheadSteps steps;
     auto plain = detail::SimulationAccess::create(scene, config, test::create_cuda_emulation_backend());
     auto ahead = detail::SimulationAccess::create(scene, config, test::create_cuda_emulation_backend(&steps));
@@ -61,8 +67,13 @@ TEST_P(CudaEmulationAheadSchedule, StepLayerDecidesFromLiveChangesBitForBit) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Profiles, CudaEmulationAheadSchedule,
-                         ::testing::Values(WindProfile::y1, WindProfile::atmospheric),
-                         [](const auto& info) { return to_string(info.param); });
+                         ::testing::Values(AheadCase{WindProfile::y1, Dynamics::paper},
+                                           AheadCase{WindProfile::atmospheric, Dynamics::paper},
+                                           AheadCase{WindProfile::y1, Dynamics::coupled},
+                                           AheadCase{WindProfile::atmospheric, Dynamics::coupled}),
+                         [](const auto& info) {
+                             return std::string(to_string(info.param.profile)) + "_" + to_string(info.param.dynamics);
+                         });
 
 }  // namespace
 }  // namespace hmsm::cuda_test
