@@ -41,8 +41,11 @@ Simulation::Simulation(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 std::vector<Dispatch> Simulation::Impl::program_for(const std::vector<detail::InstanceGroup>& groups,
                                                     Pass first, uint32_t passes) const {
     const detail::BackendCapabilities can = backend_->capabilities();
+    // The walk ahead runs the next step's pass 1 inside the walk; the coupled pass 1 gathers
+    // other chains' loads, which that dispatch integrates: never ahead under it.
+    const bool ahead = can.walks_ahead && config_.model.dynamics == Dynamics::paper;
     return build_program(*data_, groups, config_.composition, can.dispatches_are_expensive, first, passes,
-                         can.walks_ahead, jumping_form_);
+                         ahead, jumping_form_);
 }
 
 Status Simulation::Impl::check_size(std::span<const Instance> instances) const {
