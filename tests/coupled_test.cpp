@@ -10,6 +10,8 @@
 
 #include <hmsm/hmsm_c.h>
 
+#include <nlohmann/json.hpp>
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -323,4 +325,56 @@ TEST_F(CoupledCli, SimulatesAndRefusesBadMaterials) {
     expect_bad_input("simulate --tree " + path("small.json") + " --dynamics coupled --modulus 9",
                      "material.modulus = 9 is out of range");
     expect_bad_input("simulate --tree " + path("small.json") + " --dynamics flexible", "--dynamics");
+}
+
+// hmsm info --dynamics coupled: the trunk's constants as build_hierarchy computes them, and the
+// range of the chains' frequencies; without it, no coupled section.
+TEST_F(CoupledCli, InfoSummarizesTheCoupledConstants) {
+    const test::CliRun r = run("info --preset paper-1 --json --dynamics coupled");
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const auto info = nlohmann::json::parse(r.out);
+    ASSERT_TRUE(info.contains("coupled")) << r.out;
+    auto tree = generate_preset("paper-1");
+    ASSERT_TRUE(tree.ok());
+    ModelOptions options;
+    options.dynamics = Dynamics::coupled;
+    auto h = build_hierarchy(*tree, options, Parameters{});
+    ASSERT_TRUE(h.ok()) << h.status().message();
+    const ChainDynamics& trunk = h->chains.front().dynamics;
+    const auto& t = info["coupled"]["trunk"];
+    EXPECT_DOUBLE_EQ(t["frequency_hz"][0].get<double>(), trunk.frequency[0]);
+    EXPECT_DOUBLE_EQ(t["subtree_mass_kg"].get<double>(), trunk.subtree_mass);
+    EXPECT_DOUBLE_EQ(t["stiffness_n_m_per_rad"][1].get<double>(), trunk.stiffness[1]);
+    EXPECT_DOUBLE_EQ(t["damping_n_m_s_per_rad"][0].get<double>(), trunk.damping[0]);
+    EXPECT_GT(trunk.frequency[0], 0.0);
+    EXPECT_LE(info["coupled"]["chain_frequency_min_hz"].get<double>(), trunk.frequency[0]);
+    EXPECT_GE(info["coupled"]["chain_frequency_max_hz"].get<double>(), trunk.frequency[0]);
+    const auto paper = nlohmann::json::parse(run("info --preset paper-1 --json").out);
+    EXPECT_FALSE(paper.contains("coupled"));
+    const test::CliRun text = run("info --preset paper-1 --dynamics coupled");
+    ASSERT_EQ(text.exit_code, 0) << text.err;
+    EXPECT_NE(text.out.find("coupled trunk"), std::string::npos) << text.out;
+    expect_bad_input("info --preset paper-1 --dynamics flexible", "--dynamics");
+}
+
+// hmsm bench --dynamics coupled: per backend a one-tree and a joints-only forest row, each with
+// the paper's and the coupled time per step, and their ratio in the table.
+TEST_F(CoupledCli, BenchReportsCoupledBesidePaper) {
+    const std::string file = path("bench.json");
+    const test::CliRun r = run("bench --quick --no-progress --backends cpu --presets none --instances none "
+                               "--joint-instances none --dynamics coupled --json " + file);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const auto document = nlohmann::json::parse(test::read_text(file));
+    const auto& rows = document["dynamics"];
+    ASSERT_EQ(rows.size(), 2u) << rows.dump();
+    EXPECT_EQ(rows[0]["instances"], 1);
+    EXPECT_EQ(rows[1]["instances"], 10);
+    EXPECT_EQ(rows[1]["outputs"], "joints");
+    for (const auto& row : rows) {
+        ASSERT_FALSE(row.contains("failed")) << row.dump();
+        EXPECT_GT(row["paper_ms"].get<double>(), 0.0);
+        EXPECT_GT(row["coupled_ms"].get<double>(), 0.0);
+    }
+    EXPECT_NE(r.out.find("coupled / paper"), std::string::npos) << r.out;
+    expect_bad_input("bench --quick --no-progress --backends cpu --dynamics flexible", "--dynamics");
 }

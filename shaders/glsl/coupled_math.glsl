@@ -1,7 +1,7 @@
 // The coupled dynamics of passes 1 and 2 (docs/model.md 3.13): the generalized force from the
 // wind moment, the children's loads and the aerodynamic damping, and the exact step of the
-// damped oscillator with the force held. Mirrors src/cpu/coupled_dynamics.cpp and
-// kernels/cuda/coupled_math.cuh line by line; include after common.glsl.
+// damped oscillator with the force held. Mirrors src/common/coupled_math.h (the math of the
+// CPU passes and the CUDA kernels) line by line; include after common.glsl.
 #ifndef HMSM_COUPLED_MATH_GLSL
 #define HMSM_COUPLED_MATH_GLSL
 

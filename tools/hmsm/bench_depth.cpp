@@ -21,9 +21,9 @@ TreeModel deep_rod(uint32_t depth) {
     return tree;
 }
 
-/// Wall seconds per step of `sim` (joints only): warm-up, one probe step, then up to `steps`
-/// within the budget.
-Result<double> seconds_per_step(Simulation& sim, uint32_t steps, uint32_t warmup, double budget) {
+}  // namespace
+
+Result<double> wall_seconds_per_step(Simulation& sim, uint32_t steps, uint32_t warmup, double budget) {
     HMSM_TRY(sim.step(std::max(1u, warmup)));
     auto start = Clock::now();
     HMSM_TRY(sim.step(1));
@@ -33,8 +33,6 @@ Result<double> seconds_per_step(Simulation& sim, uint32_t steps, uint32_t warmup
     HMSM_TRY(sim.step(timed));
     return std::chrono::duration<double>(Clock::now() - start).count() / double(timed);
 }
-
-}  // namespace
 
 nlohmann::json measure_composition_depths(const std::vector<BackendKind>& backends,
                                           const std::vector<uint32_t>& depths, uint32_t steps,
@@ -54,7 +52,7 @@ nlohmann::json measure_composition_depths(const std::vector<BackendKind>& backen
                     config.model.max_chain_segments = 1;
                     config.wind.profile = WindProfile::y1;
                     auto sim = Simulation::create(*scene, config);
-                    Result<double> seconds = sim ? seconds_per_step(**sim, steps, warmup, case_budget / 2)
+                    Result<double> seconds = sim ? wall_seconds_per_step(**sim, steps, warmup, case_budget / 2)
                                                  : Result<double>(sim.status());
                     if (!seconds) {
                         row["failed"] = seconds.status().message();

@@ -12,6 +12,10 @@
 
 namespace hmsm::cli::bench {
 
+/// Wall seconds per step of `sim`: `warmup` steps (at least one), one probe step, then up to
+/// `steps` timed steps in one call, fewer where the probe times the count would pass `budget`.
+Result<double> wall_seconds_per_step(Simulation& sim, uint32_t steps, uint32_t warmup, double budget);
+
 /// Per available backend, depth and forest size (1 and 100 instances): wall milliseconds per
 /// step (joints only) of Composition::path_walk and of Composition::pointer_jumping on a
 /// synthetic chain of `depth` levels (a straight rod cut into one-segment chains, each the

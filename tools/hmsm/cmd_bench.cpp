@@ -2,6 +2,7 @@
 // vs level by level, and forest scaling against the copy-bandwidth roofline. Markdown on stdout,
 // JSON with --json (schema: docs/benchmarks/README.md), both as a device's page with --out.
 #include "bench_depth.h"
+#include "bench_dynamics.h"
 #include "bench_frames.h"
 #include "bench_joints.h"
 #include "bench_report.h"
@@ -43,6 +44,7 @@ struct BenchFlags {
     double case_budget = 20.0;
     std::string forest_composition = "automatic";
     std::string wind = "y1";
+    std::string dynamics = "paper";  // coupled: also the dynamics table (bench_dynamics.h)
     bool quick = false, no_progress = false;
     std::string json_path, out_stem, commit = "unknown", render;
 } flags;
@@ -88,7 +90,8 @@ std::string render_tables(const json& document) {
     return render_markdown(document) + bench::render_joint_forest(document.value("forest_joints", json::array())) +
            bench::render_live_control(document.value("live_control", json::array())) +
            bench::render_composition_depths(document.value("composition_depths", json::array())) +
-           bench::render_frames(document.value("frames", json::array()));
+           bench::render_frames(document.value("frames", json::array())) +
+           bench::render_dynamics(document.value("dynamics", json::array()));
 }
 
 /// The device page `--out STEM` writes as STEM.md: a header naming the device (the stem's file
@@ -166,6 +169,10 @@ void register_bench_flags(CLI::App& app) {
                        choices(kCompositionNames, Spelling::hyphens, Composition::automatic) +
                        "; automatic is the library's default");
     app.add_option("--wind", flags.wind, "wind profile of every case (default y1; names as for simulate --wind)");
+    app.add_option("--dynamics", flags.dynamics,
+                   "paper (default) or coupled: coupled adds a table of ms per step under the paper's and the "
+                   "coupled dynamics (docs/model.md 3.13) for one paper-1 tree and 10,000 joints-only trees "
+                   "(--tree's model if given; 10 trees with --quick) on each backend, with coupled / paper");
     app.add_option("--case-budget", flags.case_budget,
                    "seconds one case may take: slower cases run fewer steps, forest sizes "
                    "extrapolated past it are skipped (default 20)");
@@ -215,6 +222,8 @@ int run_bench(CLI::App& app) {
     if (!forest_composition) return fail(forest_composition.status());
     const auto wind = parse_choice(kWindProfileNames, flags.wind, "--wind", Spelling::as_is);
     if (!wind) return fail(wind.status());
+    const auto dynamics_choice = parse_choice(kDynamicsNames, flags.dynamics, "--dynamics", Spelling::as_is);
+    if (!dynamics_choice) return fail(dynamics_choice.status());
     if (!(flags.spacing >= 0.0) || !std::isfinite(flags.spacing))
         return fail_input("--spacing: must be a finite number >= 0");
 
@@ -350,6 +359,14 @@ int run_bench(CLI::App& app) {
                                             flags.spacing};
         frames = bench::measure_frames(*tree, live_backends, frame_settings);
     }
+    json dynamics = json::array();
+    if (*dynamics_choice == Dynamics::coupled) {
+        auto tree = flags.tree.empty() ? generate_preset("paper-1") : load_tree(flags.tree);
+        if (!tree) return fail(tree.status());
+        const std::string name = flags.tree.empty() ? "paper-1" : std::filesystem::path(flags.tree).stem().string();
+        dynamics = bench::measure_dynamics(*tree, name, live_backends, flags.quick ? 10u : 10000u, flags.spacing,
+                                           settings.steps, settings.warmup, settings.case_budget);
+    }
     progress.finish();
 
     add_speedups(run.presets, run.forest);
@@ -414,6 +431,7 @@ int run_bench(CLI::App& app) {
         {"live_control", live_control},
         {"frames", frames},
         {"composition_depths", composition_depths},
+        {"dynamics", dynamics},
         {"copy_bandwidth", copy},
         {"skipped", run.skipped},
         {"notes", notes},

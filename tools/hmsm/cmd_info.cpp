@@ -1,9 +1,12 @@
 // hmsm info (--tree FILE | --preset NAME) [--grouping ...] [--max-chain-segments K] [--json]
-//           [--chains FILE.csv] [--levels B,B,...] with simulate's parameter flags (they decide
-//           the capped chains and the levels' constants)
+//           [--chains FILE.csv] [--levels B,B,...] [--dynamics paper|coupled] with simulate's
+//           parameter flags (they decide the capped chains, the levels' constants and, under
+//           coupled, the per-chain constants of docs/model.md 3.13)
 #include "cli_common.h"
 
 #include <nlohmann/json.hpp>
+
+#include <algorithm>
 
 namespace hmsm::cli {
 namespace {
@@ -30,6 +33,41 @@ Result<std::vector<int32_t>> parse_budgets(const std::string& text) {
         start = comma + 1;
     }
 }
+
+/// The coupled dynamics' per-chain constants (docs/model.md 3.13) in summary: the trunk's, and
+/// the range of the chains' first frequencies.
+nlohmann::json coupled_summary(const Hierarchy& h) {
+    const ChainDynamics& trunk = h.chains.front().dynamics;
+    double low = trunk.frequency[0], high = trunk.frequency[0];
+    for (const Chain& chain : h.chains)
+        for (double f : chain.dynamics.frequency) {
+            low = std::min(low, f);
+            high = std::max(high, f);
+        }
+    return {{"trunk",
+             {{"frequency_hz", {trunk.frequency[0], trunk.frequency[1]}},
+              {"mass_kg", trunk.mass},
+              {"subtree_mass_kg", trunk.subtree_mass},
+              {"inertia_kg_m2", {trunk.inertia[0], trunk.inertia[1]}},
+              {"stiffness_n_m_per_rad", {trunk.stiffness[0], trunk.stiffness[1]}},
+              {"damping_n_m_s_per_rad", {trunk.damping[0], trunk.damping[1]}},
+              {"subtree_drag_area_m2", trunk.subtree_drag_area}}},
+            {"chain_frequency_min_hz", low},
+            {"chain_frequency_max_hz", high}};
+}
+
+void print_coupled_summary(const nlohmann::json& c) {
+    const nlohmann::json& t = c["trunk"];
+    std::printf("coupled trunk    f0 %.4f / %.4f Hz (x / z), m %.4g kg, m_sub %.4g kg, A_sub %.4g m^2\n",
+                t["frequency_hz"][0].get<double>(), t["frequency_hz"][1].get<double>(), t["mass_kg"].get<double>(),
+                t["subtree_mass_kg"].get<double>(), t["subtree_drag_area_m2"].get<double>());
+    std::printf("                 I %.4g / %.4g kg m^2, K %.4g / %.4g N m/rad, D %.4g / %.4g N m s/rad\n",
+                t["inertia_kg_m2"][0].get<double>(), t["inertia_kg_m2"][1].get<double>(),
+                t["stiffness_n_m_per_rad"][0].get<double>(), t["stiffness_n_m_per_rad"][1].get<double>(),
+                t["damping_n_m_s_per_rad"][0].get<double>(), t["damping_n_m_s_per_rad"][1].get<double>());
+    std::printf("coupled chains   f0 %.4f .. %.4f Hz\n", c["chain_frequency_min_hz"].get<double>(),
+                c["chain_frequency_max_hz"].get<double>());
+}
 }  // namespace
 
 void register_info_flags(CLI::App& app) {
@@ -38,6 +76,9 @@ void register_info_flags(CLI::App& app) {
     add_integer_option(app, "--max-chain-segments", flags.model.options.max_chain_segments,
                        "cut chains after K nodes (0 = never)");
     add_integer_option(app, "--ring-sides", flags.model.options.ring_sides, "vertices per ring (default 8)");
+    app.add_option("--dynamics", flags.model.dynamics,
+                   "paper (default) or coupled: coupled also prints its per-chain constants in summary "
+                   "(docs/model.md 3.13)");
     // The parameters decide which chains the frequency cap raises ("capped chains").
     add_parameter_flags(app, flags.parameters);
     app.add_flag("--json", flags.json, "print JSON instead of text");
@@ -99,6 +140,7 @@ int run_info(CLI::App& app) {
         j["height_m"] = tree_height(tree);
         j["capped_chains"] = h.capped_chain_count;
         j["trunk_frequency_hz"] = levels->front().full_trunk_frequency_hz;
+        if (options->dynamics == Dynamics::coupled) j["coupled"] = coupled_summary(h);
         j["levels"] = nlohmann::json::array();
         for (const DetailLevel& level : *levels)
             j["levels"].push_back({{"budget", level.budget},
@@ -120,6 +162,7 @@ int run_info(CLI::App& app) {
         std::printf("height           %.3f m\n", tree_height(tree));
         std::printf("capped chains    %d\n", h.capped_chain_count);
         std::printf("trunk frequency  %.4f Hz\n", levels->front().full_trunk_frequency_hz);
+        if (options->dynamics == Dynamics::coupled) print_coupled_summary(coupled_summary(h));
         std::printf("levels           budget  joints  f0 ratio  geometric error\n");
         const double height = tree_height(tree);
         for (const DetailLevel& level : *levels)
