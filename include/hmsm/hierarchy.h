@@ -22,15 +22,25 @@ struct ChainDynamics {
     /// M_c: first moment of drag area about the joint, in the chain's rest frame (m^3): own
     /// wood and leaves, and each child's subtree drag area at its attach node.
     Vec3 wind_moment{0.0};
-    double inertia[2] = {};          ///< I about the joint (kg m^2), children lumped (3.13)
-    double beam_stiffness = 0.0;     ///< 1/K = (1/L^2) int (L - s)^2 / (E J(s)) ds (N m/rad)
-    double frequency[2] = {};        ///< f0 of the tapered cantilever with the same load (Hz)
-    double stiffness[2] = {};        ///< K = (2 pi f0)^2 I (N m/rad)
+    /// I of the equations of motion (kg m^2): rigid_inertia, or K / omega0^2 for a link of a
+    /// split chain (3.13)
+    double inertia[2] = {};
+    double rigid_inertia[2] = {};    ///< about the joint, everything beyond it lumped (kg m^2)
+    /// 1/K = (1/L^2) int (L - s)^2 / (E J(s)) ds (N m/rad), of the whole chain for a link
+    double beam_stiffness = 0.0;
+    /// f0 of the tapered cantilever with the same load (Hz), of the whole chain for a link
+    double frequency[2] = {};
+    /// K = (2 pi f0)^2 I, or a link's joint stiffness from E J along the chain (N m/rad)
+    double stiffness[2] = {};
     double damping[2] = {};          ///< structural D = 2 zeta_s sqrt(K I) (N m s/rad)
     /// Aerodynamic damping per square root of wind strength: D_aero = aero_damping sqrt(|w|).
     double aero_damping[2] = {};
     int32_t first_child = 0;         ///< children: chains [first_child, first_child + child_count)
     int32_t child_count = 0;
+    /// A chain longer than its tree's link length is split into links (3.13): this chain is link
+    /// link_index of link_count; link k + 1 is the last child of link k.
+    int32_t link_index = 0;
+    int32_t link_count = 0;  ///< 1 for an unsplit chain; 0 under paper
 };
 
 struct Chain {

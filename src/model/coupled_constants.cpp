@@ -113,6 +113,74 @@ void cantilever(const ChainPath& path, const std::vector<double>& node_mass,
     for (int a = 0; a < 2; ++a) omega[a] = std::sqrt(work / (kinetic + rotational[a]));
 }
 
+/// The links of split chain `first` (docs/model.md 3.13): the whole chain's cantilever gives f0;
+/// joint j's compliance is int h_j(s) / (E J(s)) ds with h_j the hat function that is 1 at joint
+/// j and 0 at the joints beside it (the base: 0 at joint 1 only; the tip: beyond the last);
+/// K_j = 1 / compliance, I_j = K_j / omega0^2, D_j = 2 zeta sqrt(K_j I_j), and the aerodynamic
+/// damping scaled with I_j by I_j / I_rigid.
+void split_chain_constants(Hierarchy& h, size_t first, const std::vector<ChainPath>& paths,
+                           const std::vector<std::vector<double>>& node_masses,
+                           const std::vector<std::vector<std::array<double, 2>>>& node_rotaries,
+                           const Material& material, double zeta) {
+    std::vector<size_t> links{first};
+    while (int32_t(links.size()) < h.chains[first].dynamics.link_count) {
+        const ChainDynamics& d = h.chains[links.back()].dynamics;
+        links.push_back(size_t(d.first_child + d.child_count - 1));  // the next link: last child
+    }
+    ChainPath whole;
+    std::vector<double> node_mass;
+    std::vector<std::array<double, 2>> node_rotary;
+    std::vector<double> joint_s;
+    for (size_t link : links) {
+        const ChainPath& path = paths[link];
+        const size_t from = whole.s.empty() ? 0 : 1;  // a link's base is the last link's tip
+        const double offset = whole.s.empty() ? 0.0 : whole.s.back();
+        joint_s.push_back(offset);
+        if (from == 1) {
+            node_mass.back() += node_masses[link][0];
+            for (int a = 0; a < 2; ++a) node_rotary.back()[a] += node_rotaries[link][0][a];
+        }
+        for (size_t j = from; j < path.s.size(); ++j) {
+            whole.s.push_back(offset + path.s[j]);
+            whole.r.push_back(path.r[j]);
+            whole.p.push_back(glm::dvec3(0.0, offset + path.s[j], 0.0));
+            node_mass.push_back(node_masses[link][j]);
+            node_rotary.push_back(node_rotaries[link][j]);
+        }
+    }
+    double omega[2], beam_stiffness = 0.0;
+    cantilever(whole, node_mass, node_rotary, material, omega, beam_stiffness);
+    // Joint compliances: the curvature M / (E J) between two joints is shared linearly by them.
+    const size_t n = links.size();
+    joint_s.push_back(whole.s.back());
+    std::vector<double> compliance(n, 0.0);
+    size_t joint = 0;
+    for (size_t j = 0; j + 1 < whole.s.size(); ++j) {
+        for (int i = 0; i < kPiecesPerSegment; ++i) {
+            const double t0 = double(i) / kPiecesPerSegment, t1 = double(i + 1) / kPiecesPerSegment;
+            const double ds = (whole.s[j + 1] - whole.s[j]) * (t1 - t0);
+            const double sm = whole.s[j] + (whole.s[j + 1] - whole.s[j]) * 0.5 * (t0 + t1);
+            const double rm = whole.r[j] + (whole.r[j + 1] - whole.r[j]) * 0.5 * (t0 + t1);
+            while (joint + 1 < n && sm >= joint_s[joint + 1]) ++joint;
+            const double u = (sm - joint_s[joint]) / (joint_s[joint + 1] - joint_s[joint]);
+            const double w = ds / (material.modulus * kPi * rm * rm * rm * rm / 4.0);
+            compliance[joint] += (1.0 - u) * w;
+            if (joint + 1 < n) compliance[joint + 1] += u * w;
+        }
+    }
+    for (size_t i = 0; i < n; ++i) {
+        ChainDynamics& d = h.chains[links[i]].dynamics;
+        d.beam_stiffness = beam_stiffness;
+        for (int a = 0; a < 2; ++a) {
+            d.frequency[a] = omega[a] / (2.0 * kPi);
+            d.stiffness[a] = 1.0 / compliance[i];
+            d.inertia[a] = d.stiffness[a] / (omega[a] * omega[a]);
+            d.damping[a] = 2.0 * zeta * std::sqrt(d.stiffness[a] * d.inertia[a]);
+            d.aero_damping[a] *= d.inertia[a] / d.rigid_inertia[a];
+        }
+    }
+}
+
 Status out_of_range(size_t c, const Chain& chain, const char* what, double value) {
     char buf[160];
     std::snprintf(buf, sizeof buf, "%s %.3g", what, value);
@@ -172,7 +240,9 @@ Status fill_coupled_constants(const TreeModel& tree, const Parameters& parameter
         path.p.push_back(glm::dvec3(0.0));
         // The base takes the attach node's radius for the trunk and the first member's for a
         // branch (its attach node's radius is the parent's), as the mesh's base ring does.
-        path.r.push_back(c == 0 ? nodes[chain.attach_node].radius : nodes[chain.members.front()].radius);
+        // A link after the first continues its chain through the attach node.
+        const bool continues = c == 0 || chain.dynamics.link_index > 0;
+        path.r.push_back(continues ? nodes[chain.attach_node].radius : nodes[chain.members.front()].radius);
         path.s.push_back(0.0);
         for (size_t j = 0; j < chain.members.size(); ++j) {
             const int32_t m = chain.members[j];
@@ -206,6 +276,10 @@ Status fill_coupled_constants(const TreeModel& tree, const Parameters& parameter
 
     const double wood_cd = parameters.wood_drag_coefficient;
     const double zeta = parameters.structural_damping;
+    // The cantilever loads of each chain: masses and projected rotary inertias at its path nodes
+    // (a link's next link excluded: it lies on the same cantilever).
+    std::vector<std::vector<double>> node_masses(chain_count);
+    std::vector<std::vector<std::array<double, 2>>> node_rotaries(chain_count);
     // Children have larger ids than their parent: from the last chain up, every child is done.
     for (size_t c = chain_count; c-- > 0;) {
         Chain& chain = h.chains[c];
@@ -233,8 +307,10 @@ Status fill_coupled_constants(const TreeModel& tree, const Parameters& parameter
                 }
             }
         }
-        std::vector<double> node_mass(path.p.size(), 0.0);
-        std::vector<std::array<double, 2>> node_rotary(path.p.size(), {0.0, 0.0});
+        std::vector<double>& node_mass = node_masses[c];
+        std::vector<std::array<double, 2>>& node_rotary = node_rotaries[c];
+        node_mass.assign(path.p.size(), 0.0);
+        node_rotary.assign(path.p.size(), {0.0, 0.0});
         for (const PointLoad& leaf : leaves[c]) {
             d.mass += leaf.mass;
             d.drag_area += leaf.drag_area;
@@ -254,28 +330,39 @@ Status fill_coupled_constants(const TreeModel& tree, const Parameters& parameter
             d.subtree_mass += child.dynamics.subtree_mass;
             d.subtree_drag_area += child.dynamics.subtree_drag_area;
             moment += child.dynamics.subtree_drag_area * a;
-            node_mass[at] += child.dynamics.subtree_mass;
+            const bool next_link = child.dynamics.link_index > 0;
+            if (!next_link) node_mass[at] += child.dynamics.subtree_mass;
             for (int ax = 0; ax < 2; ++ax) {
                 const double rotary = projected_inertia(child, ax);
                 inertia[ax] += child.dynamics.subtree_mass * axis_distance2(a, ax) + rotary;
                 drag_moment2[ax] += child.dynamics.subtree_drag_area * axis_distance2(a, ax);
-                node_rotary[at][ax] += rotary;
+                if (!next_link) node_rotary[at][ax] += rotary;
             }
         }
-        double omega[2];
-        cantilever(path, node_mass, node_rotary, material, omega, d.beam_stiffness);
         d.wind_moment = moment;
         for (int a = 0; a < 2; ++a) {
-            d.inertia[a] = inertia[a];
+            d.inertia[a] = d.rigid_inertia[a] = inertia[a];
+            d.aero_damping[a] = kAirDensity * kReferenceWindSpeed * drag_moment2[a];
+        }
+        if (d.link_count > 1) continue;  // split_chain_constants, below
+        double omega[2];
+        cantilever(path, node_mass, node_rotary, material, omega, d.beam_stiffness);
+        for (int a = 0; a < 2; ++a) {
             d.frequency[a] = omega[a] / (2.0 * kPi);
             d.stiffness[a] = omega[a] * omega[a] * inertia[a];
             d.damping[a] = 2.0 * zeta * std::sqrt(d.stiffness[a] * inertia[a]);
-            d.aero_damping[a] = kAirDensity * kReferenceWindSpeed * drag_moment2[a];
         }
+    }
+    for (size_t c = 0; c < chain_count; ++c)
+        if (h.chains[c].dynamics.link_index == 0 && h.chains[c].dynamics.link_count > 1)
+            split_chain_constants(h, c, paths, node_masses, node_rotaries, material, zeta);
+    for (size_t c = chain_count; c-- > 0;) {
+        Chain& chain = h.chains[c];
+        const ChainDynamics& d = chain.dynamics;
         chain.inertia = d.inertia[0];
         chain.stiffness = d.stiffness[0];
         chain.damping = d.damping[0];
-        chain.wind_area = kReferencePressure * glm::length(moment);
+        chain.wind_area = kReferencePressure * glm::length(d.wind_moment);
         chain.capped = false;
         for (int a = 0; a < 2; ++a) {
             if (!float_safe(d.inertia[a], false)) return out_of_range(c, chain, "inertia", d.inertia[a]);

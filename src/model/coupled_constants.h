@@ -17,6 +17,11 @@ inline constexpr double kReferenceWindSpeed = 6.0;
 /// Dynamic pressure of strength 1: q_ref = rho_air U_ref^2 / 2 (Pa).
 inline constexpr double kReferencePressure = 0.5 * kAirDensity * kReferenceWindSpeed * kReferenceWindSpeed;
 
+/// Under coupled, the trunk is split into kTrunkLinks links and every chain into links of about
+/// the same length, at most kMaxLinks (docs/model.md 3.13).
+inline constexpr int32_t kTrunkLinks = 6;
+inline constexpr int32_t kMaxLinks = 6;
+
 /// Fills chain.dynamics of every chain of `h` (built with Dynamics::coupled from `tree`), and
 /// sets the paper fields to axis x's values (hierarchy.h). invalid_argument, naming the chain
 /// and its attach node, where a constant leaves the float-safe range of docs/model.md 3.4.

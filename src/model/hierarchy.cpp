@@ -59,6 +59,42 @@ glm::dmat3 rest_frame(const glm::dvec3& attach, const glm::dvec3& first_member) 
     return glm::dmat3(x, y, z);
 }
 
+/// Arc length of the polyline from `attach` through `list`, node by node (docs/model.md 3.3).
+std::vector<double> arc_lengths(const TreeModel& tree, int32_t attach, const std::vector<int32_t>& list) {
+    std::vector<double> s;
+    glm::dvec3 previous = tree.nodes[attach].position;
+    double total = 0.0;
+    for (int32_t m : list) {
+        total += glm::length(tree.nodes[m].position - previous);
+        previous = tree.nodes[m].position;
+        s.push_back(total);
+    }
+    return s;
+}
+
+/// The links of a chain of the coupled dynamics (docs/model.md 3.13): n = min(members,
+/// kMaxLinks, round(L / link_length)) links, at least one, each cut after the member whose arc
+/// length is nearest to i L / n and holding at least one member.
+std::vector<std::vector<int32_t>> split_into_links(const TreeModel& tree, int32_t attach,
+                                                   const std::vector<int32_t>& list, double link_length) {
+    const std::vector<double> s = arc_lengths(tree, attach, list);
+    const int32_t m = int32_t(list.size());
+    const double rounded = std::round(s.back() / link_length);
+    const int32_t n = std::max(1, std::min({m, detail::kMaxLinks, rounded < double(m) ? int32_t(rounded) : m}));
+    std::vector<std::vector<int32_t>> links;
+    int32_t begin = 0;
+    for (int32_t i = 1; i < n; ++i) {
+        const double target = s.back() * double(i) / double(n);
+        int32_t end = begin + 1;  // one past the link's last member
+        for (int32_t e = end + 1; e <= m - (n - i); ++e)
+            if (std::abs(s[size_t(e - 1)] - target) < std::abs(s[size_t(end - 1)] - target)) end = e;
+        links.emplace_back(list.begin() + begin, list.begin() + end);
+        begin = end;
+    }
+    links.emplace_back(list.begin() + begin, list.end());
+    return links;
+}
+
 }  // namespace
 
 Result<Hierarchy> build_hierarchy(const TreeModel& tree, const ModelOptions& options,
@@ -90,11 +126,28 @@ Result<Hierarchy> build_hierarchy(const TreeModel& tree, const ModelOptions& opt
         return list;
     };
 
+    // Under coupled, each chain of the decomposition above is split into links of about the
+    // trunk's length over kTrunkLinks (docs/model.md 3.13); the links still to open after
+    // chain c, each a continuation, are pending[c].
+    const bool coupled = options.dynamics == Dynamics::coupled;
+    std::vector<std::vector<std::vector<int32_t>>> pending;
+    const std::vector<int32_t> trunk_list = follow(kappa[root]);
+    const double link_length = arc_lengths(tree, root, trunk_list).back() / detail::kTrunkLinks;
+    auto open_chain = [&](Chain chain, const std::vector<int32_t>& list) {
+        std::vector<std::vector<int32_t>> links =
+            coupled ? split_into_links(tree, chain.attach_node, list, link_length)
+                    : std::vector<std::vector<int32_t>>{list};
+        chain.members = std::move(links.front());
+        if (coupled) chain.dynamics.link_count = int32_t(links.size());
+        links.erase(links.begin());
+        h.chains.push_back(std::move(chain));
+        pending.push_back(std::move(links));
+    };
+
     h.node_owner.assign(n, -1);
     Chain trunk;
     trunk.attach_node = root;
-    trunk.members = follow(kappa[root]);
-    h.chains.push_back(std::move(trunk));
+    open_chain(std::move(trunk), trunk_list);
     h.node_owner[root] = 0;
 
     for (size_t c = 0; c < h.chains.size(); ++c) {
@@ -104,17 +157,25 @@ Result<Hierarchy> build_hierarchy(const TreeModel& tree, const ModelOptions& opt
         order.insert(order.end(), h.chains[c].members.begin(), h.chains[c].members.end());
         for (size_t j = 0; j < order.size(); ++j) {
             int32_t node = order[j];
-            auto add_chain = [&](int32_t first) {
-                Chain child;
-                child.parent = int32_t(c);
-                child.depth = h.chains[c].depth + 1;
-                child.attach_node = node;
-                child.members = follow(first);
-                h.chains.push_back(std::move(child));
-            };
+            Chain child;
+            child.parent = int32_t(c);
+            child.depth = h.chains[c].depth + 1;
+            child.attach_node = node;
             for (int32_t k : children[node])
-                if (k != kappa[node]) add_chain(k);
-            if (j + 1 == order.size() && kappa[node] >= 0) add_chain(kappa[node]);  // cut chain
+                if (k != kappa[node]) open_chain(child, follow(k));
+            if (j + 1 < order.size() || kappa[node] < 0) continue;
+            if (pending[c].empty()) {  // cut by max_chain_segments
+                open_chain(child, follow(kappa[node]));
+                continue;
+            }
+            // The next link of a split chain, carrying the links after it.
+            std::vector<std::vector<int32_t>> rest = std::move(pending[c]);
+            child.members = std::move(rest.front());
+            rest.erase(rest.begin());
+            child.dynamics.link_index = h.chains[c].dynamics.link_index + 1;
+            child.dynamics.link_count = h.chains[c].dynamics.link_count;
+            h.chains.push_back(std::move(child));
+            pending.push_back(std::move(rest));
         }
     }
 
