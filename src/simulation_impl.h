@@ -5,6 +5,7 @@
 #include <hmsm/simulation.h>
 
 #include "backend.h"
+#include "cpu/thread_pool.h"
 #include "live_wind.h"
 #include "scene_data.h"
 #include "step_program.h"
@@ -63,9 +64,14 @@ struct __attribute__((visibility("hidden"))) Simulation::Impl {
     /// The source of `output`, or invalid_argument (message starting with `fn`) when the
     /// simulation does not produce it.
     Result<ReadSource> read_source(Output output, const char* fn) const;
-    /// The output's values from its stored elements `raw`, into `out`.
+    /// The output's values from its stored elements `raw`, into `out`: large outputs in
+    /// chunks on the readback threads, each element converted as a single pass would.
     template <class Stored, class Out>
-    static void unpack(const ReadSource& source, const Stored* raw, std::vector<Out>& out);
+    void unpack(const ReadSource& source, const Stored* raw, std::vector<Out>& out) const;
+    /// Calls body(begin, end) over disjoint element ranges covering [0, count): one range
+    /// when the output is small, else ranges of about a MiB spread over the readback threads.
+    template <class F>
+    void for_element_ranges(uint64_t count, uint64_t bytes_per_element, F&& body) const;
     template <class Out>
     Status read_into(Output output, std::vector<Out>& out) const;
     Status request_read(Output output);
@@ -111,6 +117,10 @@ struct __attribute__((visibility("hidden"))) Simulation::Impl {
     // and a queue submission on Vulkan, pinned memory on CUDA) are shared, and const calls may
     // run concurrently (the threading contract in include/hmsm/simulation.h).
     mutable std::mutex read_mutex_;
+    // The threads that convert large readbacks (started on the first one), and the lock that
+    // keeps read() and take_read() from sharing them at once.
+    mutable std::unique_ptr<detail::cpu::ThreadPool> unpack_pool_;
+    mutable std::mutex unpack_mutex_;
     /// request_read's requests, one per Output: what was requested and, where the backend does
     /// not read asynchronously, the elements read at the request.
     struct PendingRead {

@@ -1,7 +1,9 @@
 // Reading outputs back: Simulation::read, and the asynchronous request_read / take_read pair.
 // Every path ends in one host pass from the elements as the backend stores them (float words,
 // double on cpu64) into the caller's vector: components picked out of vec4s and joint
-// matrices, or octahedral normal words decoded (VertexLayout::packed).
+// matrices, or octahedral normal words decoded (VertexLayout::packed). A large output is
+// converted in chunks on several threads; an output that is the stored elements in the
+// caller's precision is copied, or read by the backend straight into the caller's vector.
 #include <hmsm/simulation.h>
 
 #include "backend.h"
@@ -9,8 +11,12 @@
 #include "scene_data.h"
 #include "simulation_impl.h"
 
+#include <algorithm>
+#include <cstring>
 #include <iterator>
 #include <string>
+#include <thread>
+#include <type_traits>
 
 namespace hmsm {
 
@@ -63,42 +69,75 @@ Result<Simulation::Impl::ReadSource> Simulation::Impl::read_source(Output output
     return source;
 }
 
+template <class F>
+void Simulation::Impl::for_element_ranges(uint64_t count, uint64_t bytes_per_element, F&& body) const {
+    // A range of about a MiB amortizes waking a thread; eight threads saturate the memory bus.
+    constexpr uint64_t kRangeBytes = uint64_t(1) << 20;
+    constexpr uint32_t kMostThreads = 8;
+    const uint64_t ranges = std::min<uint64_t>(count * bytes_per_element / kRangeBytes, 64 * kMostThreads);
+    const uint32_t threads = std::min(kMostThreads, std::max(1u, std::thread::hardware_concurrency()));
+    if (ranges < 2 || threads < 2) {
+        if (count > 0) body(uint64_t(0), count);
+        return;
+    }
+    std::lock_guard lock(unpack_mutex_);
+    if (!unpack_pool_) unpack_pool_ = std::make_unique<detail::cpu::ThreadPool>(threads);
+    unpack_pool_->for_each(uint32_t(ranges), [&](uint32_t k) {
+        const uint64_t begin = k * count / ranges, end = (k + 1) * count / ranges;
+        if (begin < end) body(begin, end);
+    });
+}
+
 template <class Stored, class Out>
-void Simulation::Impl::unpack(const ReadSource& source, const Stored* raw, std::vector<Out>& out) {
+void Simulation::Impl::unpack(const ReadSource& source, const Stored* raw, std::vector<Out>& out) const {
     const uint64_t count = source.count;
     if (source.packed_normals) {
         // The double CPU oracle holds the word as an integer value, every other backend as
         // float bits (detail::packed_word_to_w).
         out.resize(count * 3);
-        for (uint64_t i = 0; i < count; ++i) {
-            const auto n = detail::decode_normal_word<Out>(detail::packed_word_from_w<Stored>(raw[4 * i + 3]));
-            out[3 * i] = n.x;
-            out[3 * i + 1] = n.y;
-            out[3 * i + 2] = n.z;
-        }
+        Out* dst = out.data();
+        for_element_ranges(count, 3 * sizeof(Out), [&](uint64_t begin, uint64_t end) {
+            for (uint64_t i = begin; i < end; ++i) {
+                const auto n = detail::decode_normal_word<Out>(detail::packed_word_from_w<Stored>(raw[4 * i + 3]));
+                dst[3 * i] = n.x;
+                dst[3 * i + 1] = n.y;
+                dst[3 * i + 2] = n.z;
+            }
+        });
         return;
     }
     const uint32_t stored = source.stored;
     const uint32_t wanted = output_components(source.output);
     out.resize(count * wanted);
+    Out* dst = out.data();
     if (stored == 4 && wanted == 3) {  // positions and normals: the per-frame hot path
-        for (uint64_t i = 0; i < count; ++i) {
-            out[3 * i] = Out(raw[4 * i]);
-            out[3 * i + 1] = Out(raw[4 * i + 1]);
-            out[3 * i + 2] = Out(raw[4 * i + 2]);
-        }
+        for_element_ranges(count, 3 * sizeof(Out), [&](uint64_t begin, uint64_t end) {
+            for (uint64_t i = begin; i < end; ++i) {
+                dst[3 * i] = Out(raw[4 * i]);
+                dst[3 * i + 1] = Out(raw[4 * i + 1]);
+                dst[3 * i + 2] = Out(raw[4 * i + 2]);
+            }
+        });
         return;
     }
     if (stored == wanted) {  // joint matrices and angles: every scalar in order
-        for (uint64_t i = 0; i < count * wanted; ++i) out[i] = Out(raw[i]);
+        for_element_ranges(count, wanted * sizeof(Out), [&](uint64_t begin, uint64_t end) {
+            if constexpr (std::is_same_v<Stored, Out>) {
+                std::memcpy(dst + begin * wanted, raw + begin * wanted, (end - begin) * wanted * sizeof(Out));
+            } else {
+                for (uint64_t i = begin * wanted; i < end * wanted; ++i) dst[i] = Out(raw[i]);
+            }
+        });
         return;
     }
     // Output component k -> its scalar in the stored element: from a joint matrix's rows
     // (r00 r01 r02 ox, r10 ...) R column by column or O.
     const bool rotations = source.output == Output::chain_rotations;
-    for (uint64_t i = 0; i < count; ++i)
-        for (uint32_t k = 0; k < wanted; ++k)
-            out[i * wanted + k] = Out(raw[i * stored + (rotations ? (k % 3) * 4 + k / 3 : k * 4 + 3)]);
+    for_element_ranges(count, wanted * sizeof(Out), [&](uint64_t begin, uint64_t end) {
+        for (uint64_t i = begin; i < end; ++i)
+            for (uint32_t k = 0; k < wanted; ++k)
+                dst[i * wanted + k] = Out(raw[i * stored + (rotations ? (k % 3) * 4 + k / 3 : k * 4 + 3)]);
+    });
 }
 
 template <class Out>
@@ -112,6 +151,18 @@ Status Simulation::Impl::read_into(Output output, std::vector<Out>& out) const {
         if (!raw) return raw.status();
         unpack(*source, *raw, out);
         return {};
+    }
+    // Where the output is the stored elements themselves in the caller's precision (joint
+    // matrices and angles as float, or as double on cpu64), the backend reads straight into
+    // the caller's vector.
+    constexpr detail::Scalar out_scalar = std::is_same_v<Out, double> ? detail::Scalar::f64 : detail::Scalar::f32;
+    const bool stores_out = backend_->kind() == BackendKind::cpu64 ? out_scalar == detail::Scalar::f64
+                                                                   : out_scalar == detail::Scalar::f32;
+    if (stores_out && !source->packed_normals && source->stored == output_components(output)) {
+        out.resize(source->count * source->stored);
+        Status status = backend_->read(source->id, 0, source->count, out.data(), out_scalar);
+        if (!status) out.clear();  // no partial output
+        return status;
     }
     // Elements as the backend stores them (cpu64: double), converted in unpack: the same
     // values as the backend's own conversion.

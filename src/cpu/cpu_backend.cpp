@@ -157,6 +157,16 @@ public:
                     return;
                 }
             }
+            if constexpr (std::is_same_v<Element, glm::mat<3, 4, T>> || std::is_same_v<Element, glm::vec<4, T>>) {
+                // Joint matrices (rows of [R | O]) and vec4s in the backend's own precision:
+                // their scalars lie in memory in the order read() returns them, so a copy
+                // gives what the conversion through double would, at the copy's speed.
+                static_assert(sizeof(Element) == sizeof(T) * (std::is_same_v<Element, glm::vec<4, T>> ? 4 : 12));
+                if (as == (std::is_same_v<T, double> ? Scalar::f64 : Scalar::f32)) {
+                    if (count > 0) std::memcpy(dst, buffer.data() + first, count * sizeof(Element));
+                    return;
+                }
+            }
             const uint32_t n = shape_scalars(buffer_info(id).shape);
             double tmp[36];
             for (uint64_t i = 0; i < count; ++i) {

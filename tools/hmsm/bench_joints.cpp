@@ -3,8 +3,12 @@
 
 #include "bench_model.h"
 
+#include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
+#include <vector>
 
 namespace hmsm::cli::bench {
 namespace {
@@ -20,6 +24,32 @@ bool uses_host_memory(BackendKind kind, const std::string& device) {
     for (const char* cpu_driver : {"llvmpipe", "lavapipe", "SwiftShader"})
         if (device.find(cpu_driver) != std::string::npos) return true;
     return false;
+}
+
+double median_of(std::vector<double> v) {
+    std::sort(v.begin(), v.end());
+    return v.empty() ? 0.0 : v[v.size() / 2];
+}
+
+/// read() of the joint matrices in GB/s, and a plain memcpy of as many bytes between two
+/// warm host buffers (the host's copy roofline), each the median of a few repeats.
+void measure_joint_read(const Simulation& sim, json& row) {
+    std::vector<float> joints;
+    if (!sim.read(Output::joint_matrices, joints).ok()) return;  // warm: the vector has its size
+    const double bytes = double(joints.size() * sizeof(float));
+    std::vector<double> read_seconds, copy_seconds;
+    std::vector<float> copy(joints.size());
+    for (int k = 0; k < 7; ++k) {
+        auto start = std::chrono::steady_clock::now();
+        if (!sim.read(Output::joint_matrices, joints).ok()) return;
+        read_seconds.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+        start = std::chrono::steady_clock::now();
+        std::memcpy(copy.data(), joints.data(), size_t(bytes));
+        copy_seconds.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+    }
+    row["read_bytes"] = bytes;
+    put(row, "read_gb_per_s", bytes / median_of(read_seconds) * 1e-9);
+    put(row, "memcpy_gb_per_s", bytes / median_of(copy_seconds) * 1e-9);
 }
 
 }  // namespace
@@ -110,6 +140,7 @@ int joint_forest_cases(BackendKind backend, const std::vector<JointForestCase>& 
         put(row, "chains_per_second", double(chains_per_instance) * c.count * r.batched);
         put(row, "steps_per_second_profiled", r.profiled);
         if (r.has_passes) put(row, "device_seconds_per_step", r.device_seconds);
+        measure_joint_read(**sim, row);
         sim->reset();
         // The same forest with passes 3 and 5 as path walks.
         for (Composition other : {Composition::path_walk}) {
@@ -143,10 +174,12 @@ std::string render_joint_forest(const json& rows) {
     std::string out =
         "\n### Forest scaling, joints only (passes 1-5)\n\n"
         "Pointer jumping; path walk: passes 3 and 5 in one dispatch each, every chain walking up its "
-        "path to the root.\n\n"
+        "path to the root. read() GB/s: `Simulation::read` of every joint matrix after the steps "
+        "(float, median of 7); memcpy GB/s: a plain host copy of as many bytes in the same run, the "
+        "host's copy roofline.\n\n"
         "| backend | model | instances | chains | joint bytes | ms per step | device ms per step | Mchains/s "
-        "| path walk ms per step | path walk device ms per step | path walk Mchains/s |\n"
-        "|---|---|--:|--:|--:|--:|--:|--:|--:|--:|--:|\n";
+        "| path walk ms per step | path walk device ms per step | path walk Mchains/s | read() GB/s | memcpy GB/s |\n"
+        "|---|---|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|\n";
     char line[500];
     for (const json& r : rows) {
         auto number_in = [](const json& j, const char* key, double scale) {
@@ -155,13 +188,14 @@ std::string render_joint_forest(const json& rows) {
         auto number = [&](const char* key, double scale) { return number_in(r, key, scale); };
         const json walk = r.value("path_walk", json::object());
         std::snprintf(line, sizeof line,
-                      "| %s | %s | %llu | %llu | %llu | %.3f | %.3f | %.1f | %.3f | %.3f | %.1f |\n",
+                      "| %s | %s | %llu | %llu | %llu | %.3f | %.3f | %.1f | %.3f | %.3f | %.1f | %.2f | %.2f |\n",
                       r.value("backend", "").c_str(), r.value("model", "").c_str(),
                       (unsigned long long)r.value("instances", 0ull), (unsigned long long)r.value("chains", 0ull),
                       (unsigned long long)r.value("joint_bytes", 0ull), number("seconds_per_step", 1e3),
                       number("device_seconds_per_step", 1e3), number("chains_per_second", 1e-6),
                       number_in(walk, "seconds_per_step", 1e3),
-                      number_in(walk, "device_seconds_per_step", 1e3), number_in(walk, "chains_per_second", 1e-6));
+                      number_in(walk, "device_seconds_per_step", 1e3), number_in(walk, "chains_per_second", 1e-6),
+                      number("read_gb_per_s", 1.0), number("memcpy_gb_per_s", 1.0));
         out += line;
     }
     return out;
