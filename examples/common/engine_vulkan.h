@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <functional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -30,13 +31,22 @@ inline void check(VkResult result, const char* what) {
     if (result != VK_SUCCESS) throw VulkanError(std::string(what) + " failed (VkResult " + std::to_string(int(result)) + ")");
 }
 
-/// The engine's instance, device and queue. Validation messages are counted (and printed);
-/// an engine loop that ends with any of them has failed.
+/// What the engine asks of its device.
+struct DeviceOptions {
+    /// A missing validation layer is an error instead of a note.
+    bool require_validation = false;
+    /// A graphics queue (with compute) and stores from vertex shaders; otherwise compute only.
+    bool graphics = true;
+    /// Receives every validation message; unset, they are printed to stderr. Either way they
+    /// are counted: an engine loop that ends with any of them has failed.
+    std::function<void(const char*)> on_validation_message;
+};
+
+/// The engine's instance, device and queue.
 class Device {
 public:
-    /// `require_validation`: a missing validation layer is an error instead of a note.
-    explicit Device(bool require_validation) {
-        create_instance(require_validation);
+    explicit Device(DeviceOptions options) : options_(std::move(options)) {
+        create_instance();
         choose_device();
         create_device();
     }
@@ -73,8 +83,10 @@ private:
     static VKAPI_ATTR VkBool32 VKAPI_CALL on_message(VkDebugUtilsMessageSeverityFlagBitsEXT,
                                                       VkDebugUtilsMessageTypeFlagsEXT,
                                                       const VkDebugUtilsMessengerCallbackDataEXT* data, void* user) {
-        ++static_cast<Device*>(user)->messages_;
-        std::fprintf(stderr, "validation: %s\n", data->pMessage);
+        Device& device = *static_cast<Device*>(user);
+        ++device.messages_;
+        if (device.options_.on_validation_message) device.options_.on_validation_message(data->pMessage);
+        else std::fprintf(stderr, "validation: %s\n", data->pMessage);
         return VK_FALSE;
     }
 
@@ -88,7 +100,7 @@ private:
         return false;
     }
 
-    void create_instance(bool require_validation) {
+    void create_instance() {
         VkApplicationInfo app{VK_STRUCTURE_TYPE_APPLICATION_INFO};
         app.pApplicationName = "hmsm engine loop";
         app.apiVersion = VK_API_VERSION_1_1;
@@ -110,7 +122,7 @@ private:
         messenger.pfnUserCallback = &Device::on_message;
         messenger.pUserData = this;
         const bool validate = layer_present(layers[0]);
-        if (!validate && require_validation) throw VulkanError("VK_LAYER_KHRONOS_validation is not installed");
+        if (!validate && options_.require_validation) throw VulkanError("VK_LAYER_KHRONOS_validation is not installed");
         if (!validate) std::fprintf(stderr, "note: VK_LAYER_KHRONOS_validation is not installed; running without it\n");
         if (validate) {
             info.enabledLayerCount = 1;
@@ -131,8 +143,9 @@ private:
         }
     }
 
-    /// The first device with Vulkan 1.1, a graphics + compute queue family and stores from
-    /// vertex shaders (the example writes its skinned vertices out for checking).
+    /// The first device with Vulkan 1.1 and a compute queue family; with `graphics`, a
+    /// graphics + compute family and stores from vertex shaders (the engine loop writes its
+    /// skinned vertices out for checking).
     void choose_device() {
         uint32_t count = 0;
         check(vkEnumeratePhysicalDevices(instance_, &count, nullptr), "vkEnumeratePhysicalDevices");
@@ -143,21 +156,23 @@ private:
             vkGetPhysicalDeviceProperties(candidate, &properties);
             VkPhysicalDeviceFeatures features;
             vkGetPhysicalDeviceFeatures(candidate, &features);
-            if (properties.apiVersion < VK_API_VERSION_1_1 || !features.vertexPipelineStoresAndAtomics) continue;
+            if (properties.apiVersion < VK_API_VERSION_1_1) continue;
+            if (options_.graphics && !features.vertexPipelineStoresAndAtomics) continue;
             uint32_t families = 0;
             vkGetPhysicalDeviceQueueFamilyProperties(candidate, &families, nullptr);
             std::vector<VkQueueFamilyProperties> list(families);
             vkGetPhysicalDeviceQueueFamilyProperties(candidate, &families, list.data());
             for (uint32_t f = 0; f < families; ++f) {
-                const VkQueueFlags wanted = VK_QUEUE_GRAPHICS_BIT | VK_QUEUE_COMPUTE_BIT;
+                const VkQueueFlags wanted = options_.graphics ? VK_QUEUE_GRAPHICS_BIT | VK_QUEUE_COMPUTE_BIT
+                                                              : VK_QUEUE_COMPUTE_BIT;
                 if ((list[f].queueFlags & wanted) != wanted) continue;
                 physical_ = candidate;
                 family_ = f;
-                std::printf("device: %s\n", properties.deviceName);
                 return;
             }
         }
-        throw NoDevice("no Vulkan 1.1 device with a graphics + compute queue and vertex-shader stores");
+        throw NoDevice(options_.graphics ? "no Vulkan 1.1 device with a graphics + compute queue and vertex-shader stores"
+                                         : "no Vulkan 1.1 device with a compute queue");
     }
 
     void create_device() {
@@ -167,7 +182,7 @@ private:
         queue.queueCount = 1;
         queue.pQueuePriorities = &priority;
         VkPhysicalDeviceFeatures features{};
-        features.vertexPipelineStoresAndAtomics = VK_TRUE;
+        features.vertexPipelineStoresAndAtomics = options_.graphics ? VK_TRUE : VK_FALSE;
         VkDeviceCreateInfo info{VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO};
         info.queueCreateInfoCount = 1;
         info.pQueueCreateInfos = &queue;
@@ -176,6 +191,7 @@ private:
         vkGetDeviceQueue(device_, family_, 0, &queue_);
     }
 
+    DeviceOptions options_;
     VkInstance instance_ = VK_NULL_HANDLE;
     VkDebugUtilsMessengerEXT messenger_ = VK_NULL_HANDLE;
     VkPhysicalDevice physical_ = VK_NULL_HANDLE;

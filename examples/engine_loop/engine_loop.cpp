@@ -102,7 +102,9 @@ int run(const std::string& folder) {
     std::filesystem::create_directories(folder, error);
     if (error) return fail("cannot create the output folder " + folder + ": " + error.message());
     const char* require = std::getenv("HMSM_VULKAN_REQUIRE_VALIDATION");
-    engine::Device device(require && std::string(require) == "1");
+    engine::DeviceOptions options;
+    options.require_validation = require && std::string(require) == "1";
+    engine::Device device(options);
 
     // A small preset, one tree at the origin (yaw 0: world = the skin's bind space).
     auto tree = hmsm::generate_preset("paper-5");
