@@ -132,6 +132,12 @@ public:
     /// temporary (source and destination may overlap): the state of surviving instances when
     /// others are removed (live_control.cpp). Nothing goes through the host.
     virtual Status move_elements(BufferId id, std::span<const ElementMove> moves) = 0;
+    /// Bracket a change of the instance list (live_reshape.cpp). A backend may hold back the
+    /// writes, moves and runs made in between and carry them, in order, with the next work it
+    /// does (Vulkan: in the next command buffer recorded by record_steps, docs/vulkan.md); any
+    /// other call sees them done.
+    virtual void begin_instance_change() {}
+    virtual void end_instance_change() {}
     /// What the backend can do and prefers (BackendCapabilities); may change with upload()
     /// (Vulkan: whether the scene is split into windows).
     virtual BackendCapabilities capabilities() const { return {}; }

@@ -117,6 +117,11 @@ Status Simulation::reserve_instances(uint64_t count) {
 
 Status Simulation::Impl::reshape(const std::vector<uint32_t>& survivors, std::span<const Instance> added,
                                  bool reupload) {
+    struct InstanceChange {
+        detail::Backend& backend;
+        explicit InstanceChange(detail::Backend& b) : backend(b) { backend.begin_instance_change(); }
+        ~InstanceChange() { backend.end_instance_change(); }
+    } change(*backend_);
     std::vector<Instance> next;
     next.reserve(survivors.size() + added.size());
     for (uint32_t i : survivors) next.push_back(instances_[i]);

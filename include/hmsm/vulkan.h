@@ -58,9 +58,9 @@ struct BufferRange {
     uint64_t count = 0;
 };
 
-/// The device buffers an engine can draw from. Valid until the simulation is destroyed or its
-/// instances are added or removed (which reallocates them: call shared_buffers() again); their
-/// contents change in every step. Outputs the simulation does not produce
+/// The device buffers an engine can draw from. Valid until the simulation is destroyed or added
+/// instances outgrow its capacity (which reallocates them: call shared_buffers() again); their
+/// contents change in every step and move when instances are added or removed. Outputs the simulation does not produce
 /// (SimulationConfig::outputs) are empty ranges.
 struct SharedBuffers {
     BufferRange vertex_positions;  ///< branch-mesh and leaf vertices (docs/model.md 3.8)
@@ -129,7 +129,10 @@ HMSM_API Result<DeviceHandles> device_handles(const Simulation& simulation);
 /// n before recording frame n + F, as a swap chain with F frames in flight does). Submit the
 /// command buffers in the order they were recorded, to one queue or with semaphores ordering
 /// them. All recorded steps must have completed before Simulation::step(), read(),
-/// add_instances(), remove_instances(), reset_instances() or the simulation's destruction.
+/// reset_instances() or the simulation's destruction. add_instances() and remove_instances()
+/// within the capacity (reserve_instances) after a first record_steps neither submit nor wait:
+/// the change is recorded at the start of the next record_steps; growth past the capacity
+/// submits, waits and reallocates (docs/vulkan.md, "Streaming instances").
 ///
 /// hmsm binds its own compute pipeline, descriptor set and push constants (rebind yours
 /// afterwards) and starts with a barrier against earlier compute and transfer work; before the
@@ -137,9 +140,9 @@ HMSM_API Result<DeviceHandles> device_handles(const Simulation& simulation);
 /// VK_ACCESS_SHADER_WRITE_BIT to its own stage (e.g. VERTEX_INPUT / VERTEX_ATTRIBUTE_READ), and
 /// before the next recording overwrites outputs the engine's draws still read, a barrier from
 /// its stage to COMPUTE_SHADER. Per-pass times are not collected for recorded steps.
-/// add_instances() and remove_instances() move state within the simulation's buffers and may
-/// reallocate them: SharedBuffers and any command buffer recorded before them are invalid
-/// afterwards.
+/// add_instances() and remove_instances() move state within the simulation's buffers; growing
+/// past the capacity reallocates them: SharedBuffers and any command buffer recorded before
+/// that are invalid afterwards.
 HMSM_API Status record_steps(Simulation& simulation, VkCommandBuffer command_buffer,
                              uint32_t count = 1);
 

@@ -98,8 +98,9 @@ Status record_steps(Simulation& simulation, VkCommandBuffer command_buffer, uint
     // through the backend and advances the clock; while recording, the backend stages the
     // uploads in the frame's ring slot and records copies and steps instead of submitting.
     VulkanBackend& vulkan = *backend.value();
-    vulkan.begin_recording(command_buffer);
-    Status status = simulation.step(count);
+    // Instance changes held back since the last recording come first (docs/vulkan.md).
+    Status status = vulkan.begin_recording(command_buffer);
+    if (status.ok()) status = simulation.step(count);
     Status ended = vulkan.end_recording();
     return status.ok() ? ended : status;
 }

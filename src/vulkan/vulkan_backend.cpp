@@ -129,6 +129,7 @@ Status VulkanBackend::check_range(BufferId id, uint64_t first, uint64_t count) c
 }
 
 Status VulkanBackend::upload(const SceneData& scene) {
+    HMSM_TRY(submit_held_back());
     HMSM_TRY(plan_windows(scene));
     if (fault_ == VulkanFault::out_of_device_memory_at_upload)
         return failure(VK_ERROR_OUT_OF_DEVICE_MEMORY, "vkAllocateMemory (injected)", __FILE__, __LINE__);
@@ -173,29 +174,15 @@ Status VulkanBackend::move_elements(BufferId id, std::span<const ElementMove> mo
     if (!checked) return checked.status();
     const uint64_t largest = *checked;
     if (largest == 0) return {};
-    if (move_scratch_.size() < largest) {
-        move_scratch_ = Buffer{};
-        auto scratch = Buffer::create(*device_, largest,
-                                      VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
-                                      MemoryUse::device_local, "state move scratch");
-        if (!scratch) return scratch.status();
-        move_scratch_ = std::move(scratch).value();
+    HMSM_TRY(ensure_move_scratch(largest));
+    if (holding_back()) {
+        HeldBack change{HeldBack::Kind::move, id};
+        change.moves.assign(moves.begin(), moves.end());
+        held_back_.push_back(std::move(change));
+        return {};
     }
-    const VkBuffer buffer = buffers_[uint32_t(id)].handle();
-    HMSM_TRY(transfer_->submit([&](VkCommandBuffer cmd) {
-        const VolkDeviceTable& vk = device_->vk();
-        for (const ElementMove& m : moves) {
-            if (m.src == m.dst || m.count == 0) continue;
-            const VkBufferCopy out{m.src * element_bytes, 0, m.count * element_bytes};
-            vk.vkCmdCopyBuffer(cmd, buffer, move_scratch_.handle(), 1, &out);
-            barrier_after_all_writes(*device_, cmd, VK_PIPELINE_STAGE_TRANSFER_BIT,
-                                     VK_ACCESS_TRANSFER_READ_BIT | VK_ACCESS_TRANSFER_WRITE_BIT);
-            const VkBufferCopy back{0, m.dst * element_bytes, m.count * element_bytes};
-            vk.vkCmdCopyBuffer(cmd, move_scratch_.handle(), buffer, 1, &back);
-            barrier_after_all_writes(*device_, cmd, VK_PIPELINE_STAGE_TRANSFER_BIT,
-                                     VK_ACCESS_TRANSFER_READ_BIT | VK_ACCESS_TRANSFER_WRITE_BIT);
-        }
-    }));
+    HMSM_TRY(submit_held_back());
+    HMSM_TRY(transfer_->submit([&](VkCommandBuffer cmd) { record_moves(cmd, id, moves); }));
     return device_->take_validation_messages();
 }
 
@@ -275,6 +262,14 @@ Status VulkanBackend::run(std::span<const Dispatch> program, std::span<const Run
     times_ = {};
     if (program.empty() || steps.empty()) return {};
     if (!plan_ || !sets_) return {ErrorCode::internal, "vulkan: run() before upload()"};
+    if (holding_back()) {
+        HeldBack change{HeldBack::Kind::run};
+        change.program.assign(program.begin(), program.end());
+        change.steps.assign(steps.begin(), steps.end());
+        held_back_.push_back(std::move(change));
+        return {};
+    }
+    if (!record_target_) HMSM_TRY(submit_held_back());
     HMSM_TRY(recording_.prepare(*device_, *pipelines_, Windows{*plan_, *sets_}, program));
     if (record_target_) {
         ring_->record_copies(record_target_);
@@ -305,6 +300,9 @@ Status VulkanBackend::read(BufferId id, uint64_t first, uint64_t count, void* ds
     HMSM_TRY(check_device_lost());
     HMSM_TRY(check_range(id, first, count));
     if (count == 0) return {};
+    // A read sees every change made before it: held-back ones are submitted first (the
+    // buffers' contents, which read() does not change, then include them).
+    HMSM_TRY(const_cast<VulkanBackend*>(this)->submit_held_back());
     const Shape shape = buffer_info(id).shape;
     const uint64_t scalar_bytes = as == Scalar::f64 ? 8 : 4;
     // Pieces: one unless a ping-pong buffer of a split scene is read across segments.
@@ -319,14 +317,16 @@ Status VulkanBackend::read(BufferId id, uint64_t first, uint64_t count, void* ds
     return device_->take_validation_messages();
 }
 
-void VulkanBackend::begin_recording(VkCommandBuffer command_buffer) {
+Status VulkanBackend::begin_recording(VkCommandBuffer command_buffer) {
     record_target_ = command_buffer;
     ring_->next_frame();
+    return record_held_back();
 }
 
 Status VulkanBackend::end_recording() {
     ring_->record_copies(record_target_);
     record_target_ = VK_NULL_HANDLE;
+    engine_recorded_ = true;
     return device_->take_validation_messages();
 }
 
@@ -353,6 +353,8 @@ Status VulkanBackend::write(BufferId id, uint64_t first, uint64_t count, const v
     HMSM_TRY(check_range(id, first, count));
     if (count == 0) return {};
     if (record_target_) return stage_write(id, first, count, src, as);
+    if (holding_back()) return hold_back_write(id, first, count, src, as);
+    HMSM_TRY(submit_held_back());
     const Shape shape = buffer_info(id).shape;
     const uint64_t scalar_bytes = as == Scalar::f64 ? 8 : 4;
     for (const WindowPlan::Piece& piece : plan_->pieces(id, first, count)) {

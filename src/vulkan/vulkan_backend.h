@@ -41,6 +41,14 @@ public:
     /// overlapping regions), all in one submission.
     Status move_elements(BufferId id, std::span<const ElementMove> moves) override;
     void set_profiling(bool enabled) override { profiling_ = enabled; }
+    /// Once the simulation has recorded steps into an engine's command buffer, an instance
+    /// change within the capacity holds its writes, moves and at-rest runs back for the next
+    /// recording (deferred_changes.cpp): add_instances and remove_instances neither submit nor
+    /// wait. Any other operation (step(), read(), upload, ...) submits them first.
+    void begin_instance_change() override { in_instance_change_ = true; }
+    void end_instance_change() override { in_instance_change_ = false; }
+    /// Changes held back for the next recording (a test hook).
+    size_t held_back_changes() const { return held_back_.size(); }
     PassTimes pass_times() const override { return times_; }
 
     // Engine interop (hmsm/vulkan.h).
@@ -56,7 +64,8 @@ public:
     /// returns before the work executes), and write() stages its data in the next frame's slot
     /// of the ring and records the copy to the device ahead of the steps: nothing is submitted
     /// or waited for.
-    void begin_recording(VkCommandBuffer command_buffer);
+    /// Records the changes held back since the last recording first.
+    Status begin_recording(VkCommandBuffer command_buffer);
     /// Records the copies of writes made after the last run() and restores normal submission.
     Status end_recording();
     uint32_t frames_in_flight() const { return ring_->frames(); }
@@ -101,6 +110,28 @@ private:
     /// Waits for `slot` and adds its timestamps to times_ (program = what it ran).
     Status finish_slot(Slot& slot, std::span<const Dispatch> program);
     Status ensure_timestamp_capacity(Slot& slot, uint32_t queries);
+    /// A write, move or run of an instance change held back for the next recording.
+    struct HeldBack {
+        enum class Kind { write, move, run } kind;
+        BufferId id{};
+        uint64_t first = 0, count = 0;
+        Scalar as = Scalar::f32;
+        std::vector<std::byte> data;
+        std::vector<ElementMove> moves;
+        std::vector<Dispatch> program;
+        std::vector<RunStep> steps;
+    };
+    /// Whether a write, move or run is held back rather than done now.
+    bool holding_back() const { return in_instance_change_ && engine_recorded_ && !record_target_ && !releasing_; }
+    /// Submits the held-back changes (before any operation that is not itself held back).
+    Status submit_held_back();
+    /// Records the held-back changes into the recording's command buffer, in order.
+    Status record_held_back();
+    Status hold_back_write(BufferId id, uint64_t first, uint64_t count, const void* src, Scalar as);
+    /// The moves into `cmd`, each through the scratch buffer (vkCmdCopyBuffer forbids
+    /// overlapping regions), after a barrier against all earlier work, also an engine's reads.
+    void record_moves(VkCommandBuffer cmd, BufferId id, std::span<const ElementMove> moves) const;
+    Status ensure_move_scratch(uint64_t bytes);
     /// write() inside a recording: the data goes to the ring, the copy into the command buffer.
     Status stage_write(BufferId id, uint64_t first, uint64_t count, const void* src, Scalar as);
 
@@ -125,6 +156,10 @@ private:
     std::unique_ptr<FrameRing> ring_;
     RecordingPlan recording_;  // the commands of a step of the last program run
     uint64_t submissions_ = 0;
+    bool in_instance_change_ = false;
+    bool engine_recorded_ = false;  // record_steps has recorded into an engine's command buffer
+    bool releasing_ = false;        // held-back changes being submitted or recorded
+    std::vector<HeldBack> held_back_;
 };
 
 }  // namespace hmsm::detail::vk

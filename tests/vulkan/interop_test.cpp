@@ -1,11 +1,11 @@
 // hmsm/vulkan.h: a simulation on an engine's device, steps recorded into the engine's command
 // buffer, and the shared output buffers.
+#include "engine_device.h"
 #include "simulation_access.h"
 #include "test_trees.h"
 #include "vulkan_test_support.h"
 
 #include "common/octahedral.h"
-#include "vulkan/device.h"
 
 #include <hmsm/vulkan.h>
 
@@ -14,14 +14,15 @@ namespace {
 
 TEST_F(VulkanTest, RecordedStepsApplyLiveChanges) {
     // Live changes made before record_steps take effect in the recorded steps, as in step().
-    auto engine = detail::vk::Device::create();
-    if (!engine.ok() && engine.status().code() == ErrorCode::no_device) GTEST_SKIP() << engine.status().message();
-    ASSERT_TRUE(engine.ok()) << engine.status().message();
-    const detail::vk::Device& device = *engine.value();
+    std::string no_device;
+    auto engine = EngineDevice::create(no_device);
+    if (!no_device.empty()) GTEST_SKIP() << no_device;
+    ASSERT_TRUE(engine);
+    const EngineDevice& device = *engine;
     SimulationConfig config;
     config.wind.strength = 6.0;
     Scene scene = *grid_scene(small_tree(), 4, 5.0, 4);
-    auto shared = vulkan::create_simulation(scene, config, engine_context(device));
+    auto shared = vulkan::create_simulation(scene, config, device.context());
     ASSERT_TRUE(shared.ok()) << shared.status().message();
     Simulation& sim = *shared.value();
     std::string skip;
@@ -60,11 +61,12 @@ TEST_F(VulkanTest, RecordedStepsApplyLiveChanges) {
 
 TEST_F(VulkanTest, EngineDeviceWithRecordedStepsMatchesOwnDevice) {
     // The "engine": a device hmsm did not create for this simulation.
-    auto engine = detail::vk::Device::create();
-    if (!engine.ok() && engine.status().code() == ErrorCode::no_device) GTEST_SKIP() << engine.status().message();
-    ASSERT_TRUE(engine.ok()) << engine.status().message();
-    const detail::vk::Device& device = *engine.value();
-    const vulkan::ExternalContext context = engine_context(device);
+    std::string no_device;
+    auto engine = EngineDevice::create(no_device);
+    if (!no_device.empty()) GTEST_SKIP() << no_device;
+    ASSERT_TRUE(engine);
+    const EngineDevice& device = *engine;
+    const vulkan::ExternalContext context = device.context();
 
     SimulationConfig config;
     config.wind.strength = 6.0;
@@ -74,7 +76,7 @@ TEST_F(VulkanTest, EngineDeviceWithRecordedStepsMatchesOwnDevice) {
     Simulation& sim = *shared.value();
     auto handles = vulkan::device_handles(sim);
     ASSERT_TRUE(handles.ok());
-    EXPECT_EQ(handles->device, device.handle());
+    EXPECT_EQ(handles->device, context.device);
 
     std::string skip;
     auto reference = create_simulation_or_skip(scene, config, BackendKind::vulkan, skip);

@@ -1,5 +1,7 @@
 #include "vulkan_test_support.h"
 
+#include "engine_device.h"
+
 #include <hmsm/vulkan.h>
 
 #include "vulkan/validation.h"
@@ -68,39 +70,9 @@ double relative_difference(const std::vector<double>& a, const std::vector<doubl
     return diff / scale;
 }
 
-vulkan::ExternalContext engine_context(const detail::vk::Device& device) {
-    vulkan::ExternalContext context;
-    context.instance = device.instance();
-    context.physical_device = device.physical_device();
-    context.device = device.handle();
-    context.queue = device.queue();
-    context.queue_family_index = device.queue_family();
-    return context;
-}
-
-void record_steps_on_engine_queue(const detail::vk::Device& device, Simulation& simulation, uint32_t steps) {
-    const VolkDeviceTable& vk = device.vk();
-    VkCommandPoolCreateInfo pool_info{VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO};
-    pool_info.queueFamilyIndex = device.queue_family();
-    VkCommandPool pool;
-    ASSERT_EQ(vk.vkCreateCommandPool(device.handle(), &pool_info, nullptr, &pool), VK_SUCCESS);
-    VkCommandBufferAllocateInfo allocate{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
-    allocate.commandPool = pool;
-    allocate.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
-    allocate.commandBufferCount = 1;
-    VkCommandBuffer cmd;
-    ASSERT_EQ(vk.vkAllocateCommandBuffers(device.handle(), &allocate, &cmd), VK_SUCCESS);
-    VkCommandBufferBeginInfo begin{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
-    ASSERT_EQ(vk.vkBeginCommandBuffer(cmd, &begin), VK_SUCCESS);
-    const Status recorded = vulkan::record_steps(simulation, cmd, steps);
-    EXPECT_TRUE(recorded.ok()) << recorded.message();
-    ASSERT_EQ(vk.vkEndCommandBuffer(cmd), VK_SUCCESS);
-    VkSubmitInfo submit{VK_STRUCTURE_TYPE_SUBMIT_INFO};
-    submit.commandBufferCount = 1;
-    submit.pCommandBuffers = &cmd;
-    EXPECT_EQ(vk.vkQueueSubmit(device.queue(), 1, &submit, VK_NULL_HANDLE), VK_SUCCESS);
-    EXPECT_EQ(vk.vkQueueWaitIdle(device.queue()), VK_SUCCESS);
-    vk.vkDestroyCommandPool(device.handle(), pool, nullptr);
+void add_validation_message(const std::string& message) {
+    std::lock_guard lock(messages().mutex);
+    messages().list.push_back(message);
 }
 
 }  // namespace hmsm::test

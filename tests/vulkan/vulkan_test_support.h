@@ -35,14 +35,6 @@ protected:
 /// A Vulkan backend, or null with `skip` set to the reason (no device); other errors fail.
 std::unique_ptr<detail::Backend> create_vulkan_or_skip(std::string& skip);
 
-/// The hmsm/vulkan.h context of a device created as an engine would (not by hmsm).
-vulkan::ExternalContext engine_context(const detail::vk::Device& device);
-
-/// As an engine would: records `steps` steps of `simulation` (created on `device`) into a
-/// command buffer of its own pool with hmsm::vulkan::record_steps, submits it to the device's
-/// queue and waits for it. Failures are reported as test failures (check HasFatalFailure()).
-void record_steps_on_engine_queue(const detail::vk::Device& device, Simulation& simulation, uint32_t steps);
-
 /// Reads a whole buffer as doubles.
 std::vector<double> read_buffer(const detail::Backend& backend, detail::BufferId id, uint64_t count);
 /// max |a - b| / max(1, max |b|); infinity when sizes differ or anything is NaN.

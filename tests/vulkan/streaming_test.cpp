@@ -1,0 +1,149 @@
+// Instances streamed in and out while frames are in flight (docs/vulkan.md, "Streaming
+// instances"): on a simulation driven by record_steps, add_instances and remove_instances
+// within the reserved capacity are carried by the next recorded command buffer, so hmsm
+// neither submits nor waits. Synchronization validation (on in this suite when the layer is
+// installed) checks the recorded moves against the frames still running; the results must
+// equal the same changes stepped with step() on the Vulkan backend, and agree with cpu64.
+#include "engine_device.h"
+#include "simulation_access.h"
+#include "test_trees.h"
+#include "vulkan_test_support.h"
+
+#include <hmsm/vulkan.h>
+
+namespace hmsm::test {
+namespace {
+
+/// The changes before frame `f`: a gust every frame, instances added on some frames and
+/// removed on others (from the front, the middle and the back), the wind turned once.
+void stream_before_frame(Simulation& s, uint32_t f) {
+    Wind wind = s.wind();
+    wind.strength = 6.0 + 0.5 * double(f % 4);
+    if (f == 6) wind.direction = {0.8, 0.0, 0.6};
+    ASSERT_TRUE(s.set_wind(wind).ok());
+    if (f % 4 == 1) {
+        const Instance added[] = {{0, {10.0 + f, 0.0, 3.0}, 0.3 * f}, {0, {-4.0, 0.0, 2.0 * f}, 1.0}};
+        ASSERT_TRUE(s.add_instances(added).ok());
+    }
+    if (f % 4 == 3) {
+        const uint64_t gone[] = {0, s.instance_count() / 2};
+        ASSERT_TRUE(s.remove_instances(gone).ok());
+    }
+    if (f == 8) {
+        const uint64_t last[] = {s.instance_count() - 1};
+        ASSERT_TRUE(s.remove_instances(last).ok());
+    }
+}
+
+TEST_F(VulkanTest, StreamedInstancesTravelWithTheRecordedFrames) {
+    std::string no_device;
+    auto engine = EngineDevice::create(no_device);
+    if (!no_device.empty()) GTEST_SKIP() << no_device;
+    ASSERT_TRUE(engine);
+    SimulationConfig config;
+    config.wind.strength = 6.0;
+    const Scene scene = *grid_scene(small_tree(), 4, 5.0, 4);
+    auto recorded = vulkan::create_simulation(scene, config, engine->context());
+    ASSERT_TRUE(recorded.ok()) << recorded.status().message();
+    Simulation& sim = *recorded.value();
+    std::string skip;
+    auto reference = create_simulation_or_skip(scene, config, BackendKind::vulkan, skip);
+    ASSERT_TRUE(reference);
+    SimulationConfig exact = config;
+    exact.backend = BackendKind::cpu64;
+    auto oracle = Simulation::create(scene, exact);
+    ASSERT_TRUE(oracle.ok()) << oracle.status().message();
+    for (Simulation* s : {&sim, reference.get(), oracle.value().get()}) ASSERT_TRUE(s->reserve_instances(12).ok());
+    const auto& backend = dynamic_cast<const detail::vk::VulkanBackend&>(detail::backend_of(sim));
+
+    constexpr uint32_t kFrames = 12;
+    {
+        EngineFrames frames(*engine, 3);
+        if (HasFailure()) return;
+        // The first frame makes the simulation one driven by record_steps.
+        VkCommandBuffer first = frames.begin(0);
+        ASSERT_TRUE(vulkan::record_steps(sim, first, 2).ok());
+        frames.submit(0);
+        ASSERT_TRUE(reference->step(2).ok());
+        ASSERT_TRUE(oracle.value()->step(2).ok());
+        const uint64_t submissions = backend.submissions();
+        const vulkan::SharedBuffers buffers = *vulkan::shared_buffers(sim);
+        for (uint32_t f = 1; f < kFrames; ++f) {
+            for (Simulation* s : {&sim, reference.get(), oracle.value().get()}) stream_before_frame(*s, f);
+            if (HasFatalFailure()) return;
+            if (f % 4 == 1 || f % 4 == 3) EXPECT_GT(backend.held_back_changes(), 0u) << "frame " << f;
+            VkCommandBuffer cmd = frames.begin(f);
+            const Status status = vulkan::record_steps(sim, cmd, 2);
+            frames.submit(f);
+            ASSERT_TRUE(status.ok()) << "frame " << f << ": " << status.message();
+            EXPECT_EQ(backend.held_back_changes(), 0u);
+            ASSERT_TRUE(reference->step(2).ok());
+            ASSERT_TRUE(oracle.value()->step(2).ok());
+        }
+        // hmsm neither submitted nor waited, and the buffers the engine draws from stayed.
+        EXPECT_EQ(backend.submissions(), submissions);
+        EXPECT_EQ(vulkan::shared_buffers(sim)->joint_matrices.buffer, buffers.joint_matrices.buffer);
+        frames.wait_all();
+    }
+    ASSERT_EQ(sim.instance_count(), reference->instance_count());
+    EXPECT_EQ(sim.steps_done(), reference->steps_done());
+    for (Output output : {Output::node_positions, Output::vertex_positions, Output::joint_matrices}) {
+        std::vector<float> a, b;
+        std::vector<double> exact_values;
+        ASSERT_TRUE(sim.read(output, a).ok());
+        ASSERT_TRUE(reference->read(output, b).ok());
+        EXPECT_EQ(a, b) << "output " << int(output);
+        if (output == Output::joint_matrices) continue;
+        ASSERT_TRUE(oracle.value()->read(output, exact_values).ok());
+        EXPECT_LT(relative_difference(std::vector<double>(a.begin(), a.end()), exact_values), 1e-4)
+            << "output " << int(output);
+    }
+    recorded.value().reset();  // before the engine's device
+}
+
+TEST_F(VulkanTest, GrowthPastTheCapacityWhileRecordingSubmitsAndStillMatches) {
+    std::string no_device;
+    auto engine = EngineDevice::create(no_device);
+    if (!no_device.empty()) GTEST_SKIP() << no_device;
+    ASSERT_TRUE(engine);
+    SimulationConfig config;
+    config.wind.strength = 6.0;
+    const Scene scene = *grid_scene(small_tree(), 2, 5.0, 4);
+    auto recorded = vulkan::create_simulation(scene, config, engine->context());
+    ASSERT_TRUE(recorded.ok()) << recorded.status().message();
+    Simulation& sim = *recorded.value();
+    std::string skip;
+    auto reference = create_simulation_or_skip(scene, config, BackendKind::vulkan, skip);
+    ASSERT_TRUE(reference);
+    const auto& backend = dynamic_cast<const detail::vk::VulkanBackend&>(detail::backend_of(sim));
+    {
+        EngineFrames frames(*engine, 3);
+        if (HasFailure()) return;
+        for (uint32_t f = 0; f < 6; ++f) {
+            if (f == 3) {
+                // Past the capacity: the scene is uploaded anew, which submits and waits.
+                std::vector<Instance> many(6, Instance{0, {20.0, 0.0, 0.0}, 0.5});
+                for (size_t k = 0; k < many.size(); ++k) many[k].origin.z = 4.0 * double(k);
+                const uint64_t submissions = backend.submissions();
+                ASSERT_TRUE(sim.add_instances(many).ok());
+                ASSERT_TRUE(reference->add_instances(many).ok());
+                EXPECT_GT(backend.submissions(), submissions);
+            }
+            VkCommandBuffer cmd = frames.begin(f);
+            const Status status = vulkan::record_steps(sim, cmd, 3);
+            frames.submit(f);
+            ASSERT_TRUE(status.ok()) << status.message();
+            ASSERT_TRUE(reference->step(3).ok());
+        }
+        frames.wait_all();
+    }
+    EXPECT_EQ(sim.instance_count(), reference->instance_count());
+    std::vector<float> a, b;
+    ASSERT_TRUE(sim.read(Output::vertex_positions, a).ok());
+    ASSERT_TRUE(reference->read(Output::vertex_positions, b).ok());
+    EXPECT_EQ(a, b);
+    recorded.value().reset();
+}
+
+}  // namespace
+}  // namespace hmsm::test
