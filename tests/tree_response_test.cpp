@@ -74,6 +74,8 @@ TEST(TreeResponse, CoupledRodMatchesTheCantileverAndTheDampingSet) {
         EXPECT_NEAR(a->release.fft_frequency_hz, damped, 0.03 * damped);
         EXPECT_NEAR(a->release.damping_ratio, zeta, 0.1 * zeta);
         EXPECT_GT(a->release.pulled_m, 0.0);
+        EXPECT_NEAR(a->dbh, 2.0 * r, 1e-12);
+        EXPECT_NEAR(a->height, L, 1e-12);
         EXPECT_GE(a->release.cycles, 5);
         ASSERT_EQ(a->sway.size(), 1u);
         const cli::SwayRun& w = a->sway[0];

@@ -24,13 +24,16 @@ struct WholeTreeFlags {
     std::string plot_release, plot_sway;
 } flags;
 
-nlohmann::json to_json(const TreeResponse& r, const Dynamics dynamics, bool leaves_on) {
+nlohmann::json to_json(const TreeResponse& r, const Dynamics dynamics, const Parameters& p) {
     nlohmann::json j;
     j["model"] = r.name;
     j["dynamics"] = to_string(dynamics);
-    j["leaves_on"] = leaves_on;
+    j["leaves_on"] = p.foliage.on;
+    j["modulus_pa"] = p.material.modulus;
+    j["wood_density_kg_m3"] = p.material.density;
     j["nodes"] = r.nodes;
     j["height_m"] = r.height;
+    j["dbh_m"] = r.dbh;
     j["top_node"] = r.top_node;
     j["base_node"] = r.base_node;
     j["release"] = {{"pulled_m", r.release.pulled_m},
@@ -58,9 +61,12 @@ nlohmann::json to_json(const TreeResponse& r, const Dynamics dynamics, bool leav
 
 void print_text(const TreeResponse& r, const Parameters& p, Dynamics dynamics) {
     const TreeResponseSettings& s = flags.settings;
-    std::printf("model %s (%s dynamics%s): %zu nodes, height %.3f m, top node %d\n", r.name.c_str(),
+    std::printf("model %s (%s dynamics%s): %zu nodes, height %.3f m, DBH %.3f m, top node %d\n", r.name.c_str(),
                 to_string(dynamics), dynamics == Dynamics::coupled ? (p.foliage.on ? ", leaves on" : ", leaves off") : "",
-                r.nodes, r.height, r.top_node);
+                r.nodes, r.height, r.dbh, r.top_node);
+    if (dynamics == Dynamics::coupled)
+        std::printf("wood           E %.3g Pa, density %.4g kg/m^3, structural damping %.3g\n", p.material.modulus,
+                    p.material.density, p.structural_damping);
     std::printf("release test   pulled %.4f m by %.1f m/s for %.0f s, decay over %.0f s\n", r.release.pulled_m,
                 s.pull_speed, s.pull_seconds, s.release_seconds);
     if (r.release.cycles > 0)
@@ -194,12 +200,14 @@ int run_whole_tree(const Scene& scene, const ModelOptions& options, const Parame
     if (json) {
         nlohmann::json j;
         j["models"] = nlohmann::json::array();
-        for (const auto& r : responses) j["models"].push_back(to_json(r, options.dynamics, parameters.foliage.on));
+        for (size_t m = 0; m < responses.size(); ++m)
+            j["models"].push_back(
+                to_json(responses[m], options.dynamics, parameters_for_tree(scene.models[m], parameters)));
         std::printf("%s\n", j.dump(2).c_str());
     } else {
         for (size_t m = 0; m < responses.size(); ++m) {
             if (m) std::printf("\n");
-            print_text(responses[m], parameters, options.dynamics);
+            print_text(responses[m], parameters_for_tree(scene.models[m], parameters), options.dynamics);
         }
     }
     return kExitOk;

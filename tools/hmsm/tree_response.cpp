@@ -167,6 +167,19 @@ Result<TreeResponse> analyze_tree_response(const TreeModel& tree, const std::str
     out.base_node = out.top_node;
     while (out.base_node > 0 && tree.nodes[size_t(out.base_node)].parent > 0)
         out.base_node = tree.nodes[size_t(out.base_node)].parent;
+    {
+        // Radius linear along each segment of the path from the root to the top node.
+        const double breast = tree.nodes[0].position.y + 1.3;
+        out.dbh = 2.0 * tree.nodes[0].radius;
+        for (int32_t n = out.top_node; n > 0; n = tree.nodes[size_t(n)].parent) {
+            const TreeNode& a = tree.nodes[size_t(tree.nodes[size_t(n)].parent)];
+            const TreeNode& b = tree.nodes[size_t(n)];
+            if ((a.position.y - breast) * (b.position.y - breast) <= 0 && a.position.y != b.position.y) {
+                const double u = (breast - a.position.y) / (b.position.y - a.position.y);
+                out.dbh = 2.0 * (a.radius + u * (b.radius - a.radius));
+            }
+        }
+    }
     Probe probe{out.top_node, out.base_node};
     glm::dvec3 along(s.wind_direction.x, 0.0, s.wind_direction.z);
     probe.along = glm::length(along) > 1e-12 ? glm::normalize(along) : glm::dvec3(1, 0, 0);

@@ -57,6 +57,7 @@ struct TreeResponse {
     size_t nodes = 0;
     double height = 0;
     int32_t top_node = 0, base_node = 0;  ///< highest node; the first node above the root on its path
+    double dbh = 0;  ///< diameter at breast height: 2 r at 1.3 m above the root on the root-top path
     ReleaseTest release;
     std::vector<SwayRun> sway;
 };
