@@ -59,7 +59,7 @@ TEST(TreeIo, RejectsEveryViolationWithTheItemNamed) {
     expect_rejected("[1, 2]", {"object"});
     expect_rejected(R"({"format": "hmsm-forest", "version": 1, "nodes": []})", {"format", "hmsm-tree"});
     expect_rejected(R"({"version": 1, "nodes": []})", {"format", "missing"});
-    expect_rejected(R"({"format": "hmsm-tree", "version": 2, "nodes": []})", {"version"});
+    expect_rejected(R"({"format": "hmsm-tree", "version": 3, "nodes": []})", {"version", "1 to 2"});
     expect_rejected(R"({"format": "hmsm-tree", "version": 1})", {"nodes", "missing"});
     expect_rejected(tree_json(R"({"parent": -1, "position": [0,0,0], "radius": 0.3})"), {"at least two"});
     expect_rejected(tree_json(R"({"parent": -1, "position": [0,0,0], "radius": 0.3},

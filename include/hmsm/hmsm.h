@@ -14,5 +14,6 @@
 #include <hmsm/schedule.h>
 #include <hmsm/simulation.h>
 #include <hmsm/skin.h>
+#include <hmsm/species.h>
 #include <hmsm/status.h>
 #include <hmsm/tree.h>

@@ -8,6 +8,7 @@
 #include <hmsm/types.h>
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -30,20 +31,32 @@ struct TreeLeaf {
     Vec2 size{0.1, 0.1};
 };
 
-/// A validated skeleton: nodes in input order (ids are indices) plus optional leaves.
+/// The wood a tree is made of, for the coupled dynamics (docs/model.md 3.13, 4.1).
+struct TreeMaterial {
+    std::string species;   ///< a species preset's name or empty (include/hmsm/species.h)
+    double modulus = 0.0;  ///< E (Pa)
+    double density = 0.0;  ///< green density (kg/m^3)
+};
+
+/// A validated skeleton: nodes in input order (ids are indices) plus optional leaves, and
+/// optionally its wood and leaf state (hmsm-tree version 2); without them the simulation's
+/// Parameters decide (hmsm::parameters_for_tree).
 struct TreeModel {
     std::vector<TreeNode> nodes;
     std::vector<TreeLeaf> leaves;
+    std::optional<TreeMaterial> material;
+    std::optional<bool> leaves_on;  ///< leaf-on (true) or leaf-off (false) under coupled
 };
 
 /// Checks every rule of docs/model.md 3.1 plus the leaf fields; the message names node or leaf.
 HMSM_API Status validate_tree(const TreeModel& tree);
 
-/// Parses hmsm-tree JSON v1 and validates it. `source` names the input in error messages.
+/// Parses hmsm-tree JSON (version 1, or 2 with material and leaf state) and validates it. `source` names the input in error messages.
 HMSM_API Result<TreeModel> parse_tree(std::string_view json, std::string_view source = "tree");
 /// Reads and parses a tree file.
 HMSM_API Result<TreeModel> load_tree(const std::string& path);
-/// Serializes to hmsm-tree JSON v1 (round-trips exactly: numbers are written with 17 digits).
+/// Serializes to hmsm-tree JSON, version 1, or 2 where the tree carries a material or a leaf
+/// state (round-trips exactly: numbers are written with 17 digits).
 HMSM_API std::string tree_to_json(const TreeModel& tree);
 /// Writes a tree file; on failure no file is left behind.
 HMSM_API Status save_tree(const TreeModel& tree, const std::string& path);

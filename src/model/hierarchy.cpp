@@ -1,5 +1,6 @@
 // Direction-first chain decomposition (docs/model.md 3.2), frames (3.3) and constants (3.4).
 #include <hmsm/hierarchy.h>
+#include <hmsm/species.h>
 
 #include "coupled_constants.h"
 
@@ -231,7 +232,9 @@ Result<Hierarchy> build_hierarchy(const TreeModel& tree, const ModelOptions& opt
     }
     h.chains_per_depth.assign(h.max_depth + 1, 0);
     for (const Chain& chain : h.chains) ++h.chains_per_depth[chain.depth];
-    if (options.dynamics == Dynamics::coupled) HMSM_TRY(detail::fill_coupled_constants(tree, parameters, h));
+    // A tree's own material and leaf state take the place of the parameters' (docs/model.md 4.1).
+    if (options.dynamics == Dynamics::coupled)
+        HMSM_TRY(detail::fill_coupled_constants(tree, parameters_for_tree(tree, parameters), h));
     return h;
 }
 

@@ -95,6 +95,16 @@ Status check_material(const Parameters& p) {
     return {};
 }
 
+Status check_tree_material(std::string_view where, std::string_view species, double modulus, double density) {
+    const std::string w(where);
+    HMSM_TRY(check_range(w + "modulus", modulus, kModulusRange, " Pa"));
+    HMSM_TRY(check_range(w + "density", density, kWoodDensityRange, " kg/m^3"));
+    if (species.size() > kMaxSpeciesNameBytes)
+        return Status{ErrorCode::invalid_argument, w + "species: " + quote_input(species) + " is longer than " +
+                                                       std::to_string(kMaxSpeciesNameBytes) + " bytes"};
+    return {};
+}
+
 Status check_force(std::string_view what, double value) {
     if (!(std::abs(value) <= kMaxForce))
         return bad(what, number_text(value), "must be finite and within +-" + number_text(kMaxForce),

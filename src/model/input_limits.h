@@ -45,6 +45,8 @@ inline constexpr PhysicalRange kWoodDensityRange{10.0, 1e4};      ///< kg/m^3
 inline constexpr PhysicalRange kLeafMassPerAreaRange{0.0, 100.0}; ///< kg/m^2
 inline constexpr PhysicalRange kDragCoefficientRange{0.0, 10.0};  ///< wood and leaves
 inline constexpr PhysicalRange kStructuralDampingRange{0.0, 10.0};
+/// A tree file's species name (docs/model.md 4.1): bytes.
+inline constexpr size_t kMaxSpeciesNameBytes = 64;
 
 // --- Sizes, checked from counts before anything proportional to them is allocated.
 
@@ -101,6 +103,9 @@ Status check_wind_clock(double frequency, double seconds, double phase);
 /// The material, foliage and damping of the coupled dynamics within the ranges above
 /// ("material.modulus = 9 is out of range: must be finite and within [1e+07, 1e+12] Pa").
 Status check_material(const Parameters& parameters);
+/// A tree's material (modulus, density) within the ranges above and its species name within
+/// kMaxSpeciesNameBytes; `where` prefixes the field ("material.modulus").
+Status check_tree_material(std::string_view where, std::string_view species, double modulus, double density);
 /// A force field (center, radius, force) within the ranges above.
 Status check_force_field(std::string_view what, const glm::dvec3& center, double radius,
                          const glm::dvec3& directional, double radial);

@@ -176,15 +176,20 @@ Status JsonReader::expect_object(const nlohmann::json& j, const std::string& whe
     return {};
 }
 
-Status JsonReader::expect_format(const nlohmann::json& doc, const char* format) const {
+Status JsonReader::expect_format(const nlohmann::json& doc, const char* format, int max_version,
+                                 int* version_out) const {
     std::string value;
     HMSM_TRY(string_field(doc, "", "format", value));
     if (value != format)
         return error("", "format", "is \"" + quote_input(value) + "\", expected \"" + format + "\"");
     const auto* version = field(doc, "version");
     if (!version) return error("", "version", "missing");
-    if (!version->is_number_integer() || version->get<int64_t>() != 1)
-        return error("", "version", "is " + quote_input(version->dump()) + ", only version 1 is supported");
+    if (!version->is_number_integer() || version->get<int64_t>() < 1 || version->get<int64_t>() > max_version)
+        return error("", "version", "is " + quote_input(version->dump()) +
+                                        (max_version == 1 ? std::string(", only version 1 is supported")
+                                                          : ", only versions 1 to " + std::to_string(max_version) +
+                                                                " are supported"));
+    if (version_out) *version_out = int(version->get<int64_t>());
     return {};
 }
 

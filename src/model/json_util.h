@@ -43,8 +43,9 @@ public:
     JsonReader(std::string_view source, ErrorCode code) : source_(source), code_(code) {}
 
     Status expect_object(const nlohmann::json& j, const std::string& where) const;
-    /// "format" equal to `format` and "version" equal to 1.
-    Status expect_format(const nlohmann::json& doc, const char* format) const;
+    /// "format" equal to `format` and "version" an integer in [1, max_version] (to *version_out).
+    Status expect_format(const nlohmann::json& doc, const char* format, int max_version = 1,
+                         int* version_out = nullptr) const;
     Status array_field(const nlohmann::json& obj, const std::string& where, const char* key,
                        const nlohmann::json*& out) const;
     Status string_field(const nlohmann::json& obj, const std::string& where, const char* key,

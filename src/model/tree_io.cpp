@@ -92,6 +92,9 @@ Status validate_tree(const TreeModel& tree) {
         if (!(glm::length(glm::cross(leaf.up, leaf.normal)) > 1e-9 * glm::length(leaf.normal)))
             return tree_error(where + "up is zero or parallel to normal");
     }
+    if (tree.material)
+        HMSM_TRY(size_checked(detail::check_tree_material("material.", tree.material->species, tree.material->modulus,
+                                                          tree.material->density)));
     return {};
 }
 
@@ -113,7 +116,8 @@ Result<TreeModel> parse_tree(std::string_view text, std::string_view source) {
     const auto& doc = *parsed;
     TreeModel tree;
     HMSM_TRY(r.expect_object(doc, ""));
-    HMSM_TRY(r.expect_format(doc, "hmsm-tree"));
+    int version = 1;
+    HMSM_TRY(r.expect_format(doc, "hmsm-tree", 2, &version));
     const nlohmann::json* nodes = nullptr;
     HMSM_TRY(r.array_field(doc, "", "nodes", nodes));
     // Sized from the counts before the node and leaf lists are allocated.
@@ -147,6 +151,23 @@ Result<TreeModel> parse_tree(std::string_view text, std::string_view source) {
             HMSM_TRY(r.vec2_field(item, where, "size", leaf.size));
         }
     }
+    // Version 2: the wood and the leaf state (docs/model.md 4.1); version 1 ignores them as
+    // unknown keys.
+    if (version >= 2 && doc.contains("material")) {
+        const auto& m = doc["material"];
+        HMSM_TRY(r.expect_object(m, "material"));
+        TreeMaterial material;
+        if (m.contains("species")) HMSM_TRY(r.string_field(m, "material", "species", material.species));
+        HMSM_TRY(r.number_field(m, "material", "modulus", material.modulus));
+        HMSM_TRY(r.number_field(m, "material", "density", material.density));
+        tree.material = material;
+    }
+    if (version >= 2 && doc.contains("leaves_on")) {
+        if (!doc["leaves_on"].is_boolean())
+            return Status{ErrorCode::invalid_tree, std::string(source) + ": leaves_on: expected true or false, got " +
+                                                       detail::quote_input(doc["leaves_on"].dump())};
+        tree.leaves_on = doc["leaves_on"].get<bool>();
+    }
     Status valid = validate_tree(tree);
     if (!valid) return Status{valid.code(), std::string(source) + ": " + valid.message()};
     return tree;
@@ -171,7 +192,14 @@ std::string tree_to_json(const TreeModel& tree) {
         for (int k = 0; k < n; ++k) s += (k ? "," : "") + num(v[k]);
         return s + "]";
     };
-    out << "{\"format\": \"hmsm-tree\", \"version\": 1,\n\"nodes\": [\n";
+    const bool version2 = tree.material || tree.leaves_on;
+    out << "{\"format\": \"hmsm-tree\", \"version\": " << (version2 ? 2 : 1) << ",\n";
+    if (tree.material)
+        out << "\"material\": {\"species\": " << nlohmann::json(tree.material->species).dump(-1, ' ', false, nlohmann::json::error_handler_t::replace)
+            << ", \"modulus\": " << num(tree.material->modulus) << ", \"density\": " << num(tree.material->density)
+            << "},\n";
+    if (tree.leaves_on) out << "\"leaves_on\": " << (*tree.leaves_on ? "true" : "false") << ",\n";
+    out << "\"nodes\": [\n";
     for (size_t i = 0; i < tree.nodes.size(); ++i) {
         const auto& n = tree.nodes[i];
         out << "{\"parent\": " << n.parent << ", \"position\": " << vec(n.position, 3)

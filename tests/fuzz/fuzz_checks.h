@@ -62,6 +62,12 @@ inline std::string check_tree(const uint8_t* data, size_t size) {
                    same_bits(x.up[k], y.up[k]);
         if (!same) return "round trip changed leaf " + std::to_string(j);
     }
+    if (a.material.has_value() != b.material.has_value() || a.leaves_on != b.leaves_on)
+        return "round trip changed the material or leaf state's presence";
+    if (a.material && (a.material->species != b.material->species ||
+                       !same_bits(a.material->modulus, b.material->modulus) ||
+                       !same_bits(a.material->density, b.material->density)))
+        return "round trip changed the material";
     return "";
 }
 

@@ -18,7 +18,9 @@ constexpr double kTwoPi = 2.0 * std::numbers::pi;
 Result<std::vector<double>> trace_top(const TreeModel& tree, int32_t top, const AnalysisSettings& s,
                                       const Wind& wind, double seconds, const glm::dvec3& along) {
     TreeModel bare = tree;
-    bare.leaves.clear();  // leaves do not act on the motion; skip their vertices
+    // Under paper leaves do not act on the motion: skip their vertices. Under coupled they
+    // carry mass and drag (docs/model.md 3.13) and stay.
+    if (s.options.dynamics == Dynamics::paper) bare.leaves.clear();
     SimulationConfig config;
     config.backend = BackendKind::cpu64;
     config.model = s.options;
@@ -93,6 +95,11 @@ void fit_oscillation(StepResponse& r) {
     if (t.size() < 2) return;
     r.peaks = int(t.size());
     r.frequency_hz = double(t.size() - 1) / (t.back() - t.front());
+    r.damping_ratio = decay_damping_ratio(t, amplitude, r.frequency_hz);
+}
+
+double decay_damping_ratio(const std::vector<double>& t, const std::vector<double>& amplitude, double frequency_hz) {
+    if (t.size() < 2 || t.size() != amplitude.size()) return 0.0;
     // ln(amplitude) = c - sigma t by least squares; zeta = sigma / sqrt(sigma^2 + omega_d^2).
     double mt = 0, ma = 0;
     for (size_t k = 0; k < t.size(); ++k) mt += t[k], ma += std::log(amplitude[k]);
@@ -103,8 +110,36 @@ void fit_oscillation(StepResponse& r) {
         sta += (t[k] - mt) * (std::log(amplitude[k]) - ma);
     }
     const double sigma = stt > 0 ? -sta / stt : 0.0;
-    const double omega = kTwoPi * r.frequency_hz;
-    r.damping_ratio = sigma / std::sqrt(sigma * sigma + omega * omega);
+    const double omega = kTwoPi * frequency_hz;
+    return sigma / std::sqrt(sigma * sigma + omega * omega);
+}
+
+Spectrum power_spectrum(const std::vector<double>& x, double dt, double min_peak_hz) {
+    Spectrum out;
+    if (x.size() < 2) return out;
+    double mean = 0;
+    for (double v : x) mean += v;
+    mean /= double(x.size());
+    size_t size = 1;
+    while (size < x.size()) size <<= 1;
+    std::vector<std::complex<double>> a(size, 0.0);
+    double window_power = 0;
+    for (size_t k = 0; k < x.size(); ++k) {
+        const double w = 0.5 - 0.5 * std::cos(kTwoPi * double(k) / double(x.size()));  // Hann
+        a[k] = (x[k] - mean) * w;
+        window_power += w * w;
+    }
+    fft(a);
+    const double fs = 1.0 / dt;
+    double best = -1;
+    for (size_t k = 1; k <= size / 2; ++k) {
+        const double f = double(k) * fs / double(size);
+        const double psd = (k == size / 2 ? 1.0 : 2.0) * std::norm(a[k]) / (fs * window_power);
+        out.frequency_hz.push_back(f);
+        out.power.push_back(psd);
+        if (f > min_peak_hz && psd > best) best = psd, out.peak_hz = f;
+    }
+    return out;
 }
 
 Result<ModelAnalysis> analyze_model(const TreeModel& tree, const std::string& name,
@@ -153,29 +188,7 @@ Result<ModelAnalysis> analyze_model(const TreeModel& tree, const std::string& na
 
     auto sway = trace_top(tree, out.top_node, s, s.spectrum_wind, s.spectrum_seconds, along);
     if (!sway) return sway.status();
-    const std::vector<double>& x = *sway;
-    double mean = 0;
-    for (double v : x) mean += v;
-    mean /= double(x.size());
-    size_t size = 1;
-    while (size < x.size()) size <<= 1;
-    std::vector<std::complex<double>> a(size, 0.0);
-    double window_power = 0;
-    for (size_t k = 0; k < x.size(); ++k) {
-        const double w = 0.5 - 0.5 * std::cos(kTwoPi * double(k) / double(x.size()));  // Hann
-        a[k] = (x[k] - mean) * w;
-        window_power += w * w;
-    }
-    fft(a);
-    const double fs = 1.0 / p.dt;
-    double best = -1;
-    for (size_t k = 1; k <= size / 2; ++k) {
-        const double f = double(k) * fs / double(size);
-        const double psd = (k == size / 2 ? 1.0 : 2.0) * std::norm(a[k]) / (fs * window_power);
-        out.spectrum.frequency_hz.push_back(f);
-        out.spectrum.power.push_back(psd);
-        if (f > 2.0 / s.spectrum_seconds && psd > best) best = psd, out.spectrum.peak_hz = f;
-    }
+    out.spectrum = power_spectrum(*sway, p.dt, 2.0 / s.spectrum_seconds);
     return out;
 }
 

@@ -71,6 +71,14 @@ Result<ModelAnalysis> analyze_model(const TreeModel& tree, const std::string& na
 /// Peak-based fit of a damped oscillation about its final value (exposed for tests).
 void fit_oscillation(StepResponse& response);
 
+/// Damping ratio of a decay whose successive peaks (times t, amplitudes > 0) fall exponentially,
+/// oscillating at frequency_hz: ln(a) = c - sigma t by least squares, zeta = sigma / |s|.
+double decay_damping_ratio(const std::vector<double>& t, const std::vector<double>& amplitude, double frequency_hz);
+
+/// One-sided power spectral density (m^2/Hz) of samples spaced dt, mean removed, Hann window,
+/// zero-padded to a power of two; its peak is the strongest bin above min_peak_hz.
+Spectrum power_spectrum(const std::vector<double>& x, double dt, double min_peak_hz);
+
 /// In-place radix-2 FFT (forward, unnormalized); the size must be a power of two.
 void fft(std::vector<std::complex<double>>& a);
 

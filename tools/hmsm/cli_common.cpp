@@ -90,8 +90,10 @@ Result<glm::dvec3> parse_vec3(const std::string& text, const char* flag) {
     return v;
 }
 
-Result<Scene> load_scene(const SourceFlags& f, CLI::App& app, const ModelOptions* options,
-                         std::span<const std::string> needed_models) {
+namespace {
+
+Result<Scene> load_scene_as_given(const SourceFlags& f, CLI::App& app, const ModelOptions* options,
+                                  std::span<const std::string> needed_models) {
     if (!f.forest.empty()) return load_forest(f.forest, needed_models);
     if (f.tree.empty() && f.preset.empty())
         return Status{ErrorCode::invalid_argument,
@@ -129,6 +131,34 @@ Result<Scene> load_scene(const SourceFlags& f, CLI::App& app, const ModelOptions
     if (!origin) return origin.status();
     if (!std::isfinite(f.yaw)) return Status{ErrorCode::invalid_argument, "--yaw must be finite"};
     return single_tree_scene(std::move(tree).value(), *origin, f.yaw);
+}
+
+/// The value of flag `name` when the subcommand has it and it was given.
+std::optional<double> given(CLI::App& app, const char* name) {
+    const CLI::Option* option = app.get_option_no_throw(name);
+    if (!option || option->count() == 0) return std::nullopt;
+    return option->as<double>();
+}
+
+}  // namespace
+
+Result<Scene> load_scene(const SourceFlags& f, CLI::App& app, const ModelOptions* options,
+                         std::span<const std::string> needed_models) {
+    auto scene = load_scene_as_given(f, app, options, needed_models);
+    if (!scene) return scene;
+    // The coupled dynamics' flags given on the command line override a tree file's material and
+    // leaf state (docs/model.md 4.1); not given, the file's stand.
+    const std::optional<double> modulus = given(app, "--modulus"), density = given(app, "--wood-density");
+    const bool leaf_off = app.get_option_no_throw("--leaf-off") && app.count("--leaf-off") > 0;
+    for (TreeModel& tree : scene->models) {
+        if (tree.material && (modulus || density)) {
+            tree.material->species.clear();  // no longer the preset's wood
+            if (modulus) tree.material->modulus = *modulus;
+            if (density) tree.material->density = *density;
+        }
+        if (leaf_off) tree.leaves_on = false;
+    }
+    return scene;
 }
 
 void add_model_flags(CLI::App& app, ModelFlags& f) {

@@ -2,9 +2,11 @@
 // natural frequency, damping ratio, whether the frequency cap raised it and its static deflection
 // at --wind-speed; the top node's step response (constant wind switched on at t = 0) with its
 // measured frequency and damping, and the power spectrum of its sway under a chosen wind.
-// Text or JSON on stdout; PNG plots with --plot-step, --plot-spectrum, --plot-chains.
+// Text or JSON on stdout; PNG plots with --plot-step, --plot-spectrum, --plot-chains. With
+// --whole-tree, the whole-tree report of cmd_analyze_tree.cpp instead.
 #include "analysis.h"
 #include "cli_common.h"
+#include "cmd_analyze_tree.h"
 #include "step_progress.h"
 #ifdef HMSM_HAVE_PLOTS
 #include "plot.h"
@@ -180,6 +182,7 @@ void register_analyze_flags(CLI::App& app) {
     app.add_option("--plot-step", flags.plot_step, "PNG: the top node's step response");
     app.add_option("--plot-spectrum", flags.plot_spectrum, "PNG: the top node's sway spectrum (log-log)");
     app.add_option("--plot-chains", flags.plot_chains, "PNG: histogram of chain frequencies by depth");
+    register_whole_tree_flags(app);
 }
 
 int run_analyze(CLI::App& app) {
@@ -203,6 +206,15 @@ int run_analyze(CLI::App& app) {
     settings.spectrum_wind.strength = strength_of_speed(flags.wind_speed);
     StagedOutputs outputs;
     outputs.add_inputs({flags.source.tree, flags.source.forest, flags.wind.schedule});
+    if (whole_tree_requested()) {
+        for (const char* chain_flag : {"--plot-step", "--plot-spectrum", "--plot-chains", "--step-seconds",
+                                       "--spectrum-seconds"})
+            if (app.count(chain_flag))
+                return fail_input(std::string(chain_flag) + " belongs to the per-chain report, not --whole-tree");
+        Status valid = validate(flags.parameters);
+        if (!valid) return fail(valid);
+        return run_whole_tree(*scene, *options, flags.parameters, *wind, outputs, flags.json, !flags.no_progress);
+    }
     std::vector<std::pair<size_t, int>> files;
     const std::pair<const std::string*, const char*> plots[] = {
         {&flags.plot_step, "--plot-step"}, {&flags.plot_spectrum, "--plot-spectrum"}, {&flags.plot_chains, "--plot-chains"}};
