@@ -18,14 +18,15 @@ namespace {
 /// The optional "joint_budgets" {name: N} (Scene::joint_budgets) and "lod_budgets"
 /// {name: [N, ...]} (Scene::lod_budgets): per model name, the budgets of the level it runs on
 /// and of the levels its instances may switch to. Names sharing a model must agree.
-Status read_budgets(const nlohmann::json& doc, detail::JsonReader& r, const std::map<std::string, size_t>& by_name, const std::vector<uint32_t>& model_of_name,
-                    Scene& scene) {
+Status read_budgets(const nlohmann::json& doc, detail::JsonReader& r, const std::map<std::string, size_t>& by_name,
+                    const std::vector<uint32_t>& model_of_name, Scene& scene) {
     for (const char* key : {"joint_budgets", "lod_budgets"}) {
         auto field = doc.find(key);
         if (field == doc.end()) continue;
         const bool levels = std::string_view(key) == "lod_budgets";
         if (!field->is_object())
-            return r.error("", key, levels ? "expected an object of name: [joint budgets]" : "expected an object of name: joint budget");
+            return r.error("", key, levels ? "expected an object of name: [joint budgets]"
+                                           : "expected an object of name: joint budget");
         std::vector<char> set(scene.models.size(), 0);
         for (auto it = field->begin(); it != field->end(); ++it) {
             const std::string name = detail::quote_input(it.key());
