@@ -73,7 +73,7 @@ Status Simulation::Impl::check_forces(const Wind& wind, std::span<const Instance
         const uint32_t m = instances[i].model;
         if (detail::check_wind_force({}, wind.strength, instances[i].wind_scale, largest_wind_area_[m])) continue;
         return detail::check_wind_force("instance " + std::to_string(i) + " (model '" +
-                                            detail::quote_input(scene_.model_names[m]) + "')",
+                                            detail::quote_input(scene_.model_names[lod_models_[m].scene_model]) + "')",
                                         wind.strength, instances[i].wind_scale, largest_wind_area_[m]);
     }
     double area = 0.0;
@@ -136,6 +136,10 @@ Result<std::unique_ptr<Simulation>> Simulation::Impl::create(const Scene& scene,
                           "model '" + scene.model_names[m] + "': " + hierarchy.status().message()};
         }
         MeshTemplate mesh = build_mesh(scene.models[m], *hierarchy, config.model);
+        Impl::LodModel lod{uint32_t(m), 0, {}};
+        for (size_t c = 0; c < hierarchy->chains.size(); ++c) lod.source_chain.push_back(int32_t(c));
+        if (m < scene.lod_budgets.size() && !scene.lod_budgets[m].empty())
+            HMSM_TRY(sim->add_lod_levels(uint32_t(m), *hierarchy, mesh));
         const int32_t budget = m < scene.joint_budgets.size() ? scene.joint_budgets[m] : 0;
         if (budget > 0) {  // the model's level of detail in its place (docs/model.md 3.13)
             auto level = build_level(scene.models[m], *hierarchy, config.parameters, budget);
@@ -143,7 +147,9 @@ Result<std::unique_ptr<Simulation>> Simulation::Impl::create(const Scene& scene,
                 return Status{level.status().code(), "model '" + scene.model_names[m] + "': " + level.status().message()};
             mesh = build_level_mesh(scene.models[m], *hierarchy, mesh, *level);
             *hierarchy = std::move(level->hierarchy);
+            lod.source_chain = std::move(level->source_chain);
         }
+        sim->lod_models_.push_back(std::move(lod));
         sim->meshes_.push_back(std::move(mesh));
         double largest = 0.0;
         for (const Chain& chain : hierarchy->chains) largest = std::max(largest, chain.wind_area);
@@ -151,6 +157,7 @@ Result<std::unique_ptr<Simulation>> Simulation::Impl::create(const Scene& scene,
         sim->hierarchies_.push_back(std::move(hierarchy).value());
     }
 
+    HMSM_TRY(sim->append_lod_levels());
     sim->instances_ = scene.instances;
     for (uint64_t i = 0; i < scene.instances.size(); ++i) sim->instance_ids_.push_back(InstanceId(i));
     sim->next_instance_id_ = scene.instances.size();
@@ -253,7 +260,7 @@ uint64_t Simulation::vertex_count() const { return impl_->data_->total_vertices;
 uint32_t Simulation::jump_rounds() const { return impl_->data_->jump_rounds; }
 uint32_t Simulation::capped_chain_count() const {
     uint32_t n = 0;
-    for (const auto& h : impl_->hierarchies_) n += uint32_t(h.capped_chain_count);
+    for (size_t m = 0; m < impl_->scene_.models.size(); ++m) n += uint32_t(impl_->hierarchies_[m].capped_chain_count);
     return n;
 }
 const Wind& Simulation::wind() const { return impl_->config_.wind; }

@@ -78,6 +78,35 @@ struct __attribute__((visibility("hidden"))) Simulation::Impl {
     template <class Out>
     Status take_read(Output output, std::vector<Out>& out);
 
+    /// Levels of detail at run time (lod_switch.cpp): builds the levels of scene model `m`
+    /// (Scene::lod_budgets) from its full hierarchy and mesh, kept until append_lod_levels().
+    Status add_lod_levels(uint32_t m, const Hierarchy& full, const MeshTemplate& full_mesh);
+    /// Appends the levels built by add_lod_levels() as models after the scene's.
+    Status append_lod_levels();
+    /// Runs every instance of `models` (current index -> new model) on its new model, keeping
+    /// its index and carrying the state of the chains both models keep (lod_switch.cpp).
+    Status switch_models(const std::vector<std::pair<uint32_t, uint32_t>>& models);
+
+    /// A model the simulation runs: a scene model (level 0, as Scene::joint_budgets runs it) or
+    /// one of its levels of detail. source_chain maps its chains to the full model's.
+    struct LodModel {
+        uint32_t scene_model = 0;
+        uint32_t level = 0;
+        std::vector<int32_t> source_chain;
+    };
+    /// Per run model: scene models first (index = scene model), then their levels.
+    std::vector<LodModel> lod_models_;
+    /// Per scene model: the run model of each level (level 0: the scene model itself).
+    std::vector<std::vector<uint32_t>> levels_of_;
+    /// Levels built by add_lod_levels() during create(), appended by append_lod_levels().
+    struct PendingLevel {
+        Hierarchy hierarchy;
+        MeshTemplate mesh;
+        LodModel lod;
+    };
+    std::vector<PendingLevel> pending_levels_;
+    LodBands lod_bands_;
+
     SimulationConfig config_;
     /// The dispatch form of Composition::pointer_jumping (by size unless a test or the bench
     /// forces one through Simulation::Access).

@@ -253,6 +253,12 @@ HMSM_API hmsm_status hmsm_scene_add_instance(hmsm_scene* scene, const hmsm_insta
  * max_joints 0 runs the model whole (the default), N >= 1 its finest level with at most N
  * chains in its place; a negative max_joints fails with HMSM_INVALID_ARGUMENT. */
 HMSM_API hmsm_status hmsm_scene_set_joint_budget(hmsm_scene* scene, uint32_t model, int32_t max_joints);
+/* The joint budgets (each >= 1) of the levels of detail that instances of `model` may switch to
+ * while a simulation runs (hmsm::Scene::lod_budgets, docs/driving.md): level 0 is the model as
+ * created, level k the finest with at most budgets[k - 1] chains. A budget below 1 fails with
+ * HMSM_INVALID_ARGUMENT and changes nothing. */
+HMSM_API hmsm_status hmsm_scene_set_lod_budgets(hmsm_scene* scene, uint32_t model, const int32_t* budgets,
+                                                size_t count);
 HMSM_API hmsm_status hmsm_scene_model_count(const hmsm_scene* scene, uint32_t* count);
 HMSM_API hmsm_status hmsm_scene_instance_count(const hmsm_scene* scene, uint64_t* count);
 HMSM_API void hmsm_scene_destroy(hmsm_scene* scene);
@@ -331,6 +337,22 @@ HMSM_API hmsm_status hmsm_simulation_index_of(const hmsm_simulation* simulation,
                                               uint64_t* index);
 HMSM_API hmsm_status hmsm_simulation_id_of(const hmsm_simulation* simulation, uint64_t index,
                                            hmsm_instance_id* id);
+/* Levels of detail at run time (hmsm::Simulation::set_instance_lods and friends,
+ * docs/driving.md): runs instance ids[k] on levels[k], all in one reshape, keeping each
+ * instance's id, index and settings and carrying the state of the chains both levels keep. An
+ * unknown or repeated id or a level the model lacks fails, naming it, and changes nothing. */
+HMSM_API hmsm_status hmsm_simulation_set_instance_lods(hmsm_simulation* simulation, const hmsm_instance_id* ids,
+                                                       const uint32_t* levels, size_t count);
+HMSM_API hmsm_status hmsm_simulation_instance_lod(const hmsm_simulation* simulation, hmsm_instance_id id,
+                                                  uint32_t* level);
+/* Distance bands for hmsm_simulation_update_lod (hmsm::LodBands): edges[count] in metres,
+ * strictly increasing and positive; hysteresis a fraction of an edge in [0, 1). */
+HMSM_API hmsm_status hmsm_simulation_set_lod_bands(hmsm_simulation* simulation, const double* edges, size_t count,
+                                                   double hysteresis);
+/* Chooses every instance's level from its distance to viewer (x, y, z metres) and switches those
+ * that change; *switched (may be NULL) receives how many did. Once per frame, before stepping. */
+HMSM_API hmsm_status hmsm_simulation_update_lod(hmsm_simulation* simulation, const double viewer[3],
+                                                uint64_t* switched);
 /* The current instance list into instances[capacity]; *count = the number of instances.
  * instances[0].struct_size gives the layout of every element written. */
 HMSM_API hmsm_status hmsm_simulation_instances(const hmsm_simulation* simulation,

@@ -39,6 +39,11 @@ struct Scene {
     /// its finest level of detail with at most N chains (docs/model.md 3.12), whose kept chains
     /// move as the model's and whose folded branches move rigidly with them.
     std::vector<int32_t> joint_budgets;
+    /// Per model (models past its end: none): the joint budgets (each >= 1) of the levels of
+    /// detail its instances may switch to while the simulation runs (Simulation::set_instance_lod,
+    /// docs/driving.md). Level 0 is the model as joint_budgets runs it; level k >= 1 is the
+    /// finest level with at most lod_budgets[m][k - 1] chains. Empty: the model has level 0 only.
+    std::vector<std::vector<int32_t>> lod_budgets;
 };
 
 /// The model called `name`: among model_names first, then model_aliases.

@@ -24,6 +24,16 @@ namespace hmsm {
 /// simulation's life (docs/driving.md, instance handles).
 enum class InstanceId : uint64_t {};
 
+/// Distance bands for Simulation::update_lod (docs/driving.md, levels of detail): an instance
+/// at distance d (metres, from its origin to the viewer) belongs on level k where
+/// edges[k - 1] <= d < edges[k] (level 0 nearer than edges[0]; levels past a model's last are
+/// its last). It leaves its level only once d passes the band's edge by more than
+/// `hysteresis` times that edge, so a viewer oscillating about an edge does not flip it.
+struct LodBands {
+    std::vector<double> edges;  ///< strictly increasing, finite, > 0 (metres); empty: level 0
+    double hysteresis = 0.1;    ///< fraction of an edge, in [0, 1)
+};
+
 /// A running simulation of a scene. Threading: one Simulation may be used by one thread at a
 /// time (calls on it are not synchronized); distinct Simulations may run concurrently on any
 /// backends, and may be created and destroyed from several threads at once. const member
@@ -97,7 +107,35 @@ public:
     /// one rest pose of the listed instances. An index out of range or listed twice is refused
     /// and changes nothing. Threading as every non-const member (see the class comment).
     Status reset_instances(std::span<const uint32_t> indices);
-    /// The current instance list (models are those of the scene given to create()).
+    // --- Levels of detail at run time (docs/driving.md). Scene::lod_budgets gives each model
+    // its levels: 0 is the model as created, higher levels are coarser. A switch runs the
+    // instance on the level's model and keeps its handle, index, origin, yaw, wind scale and
+    // phase and active flag; the chains both levels keep carry their angles, rates, force and
+    // load, chains the finer level unfolds start rigid with their parent (angles and rates 0).
+    // It takes effect at once (read() returns the new level's pose, the same for kept chains).
+    // Many switches in one call cost one reshape of the state from the first switched
+    // instance on. A rejected call (an unknown handle, a level the model lacks, a handle
+    // listed twice) changes nothing. Threading as every non-const member.
+
+    /// Runs instance `id` on `level` (0 .. lod_level_count(model) - 1).
+    Status set_instance_lod(InstanceId id, uint32_t level);
+    /// set_instance_lod for each pair (`ids` and `levels` of one length), in one reshape.
+    Status set_instance_lods(std::span<const InstanceId> ids, std::span<const uint32_t> levels);
+    /// The level instance `id` runs on.
+    Result<uint32_t> instance_lod(InstanceId id) const;
+    /// Levels of scene model `model` (1 + Scene::lod_budgets[model].size()); 0 for no such model.
+    uint32_t lod_level_count(uint32_t model) const;
+    /// The bands update_lod() chooses by; invalid bands are refused and change nothing.
+    Status set_lod_bands(const LodBands& bands);
+    const LodBands& lod_bands() const;
+    /// Chooses each instance's level from its distance to `viewer` (world metres) by the
+    /// bands, with hysteresis, and switches those that change in one set_instance_lods call.
+    /// Once per frame, before step(). Returns how many instances switched.
+    Result<uint64_t> update_lod(Vec3 viewer);
+
+    /// The current instance list. An instance on level 0 names its scene model; on a level
+    /// k >= 1, `model` is the run model of that level (scene().models.size() or more), whose
+    /// hierarchy() and mesh() describe what the instance runs.
     std::span<const Instance> instances() const;
 
     /// Reads an output for every instance, converted to the requested precision.
@@ -128,8 +166,12 @@ public:
     /// The scene as given to create() (its instance list does not follow live changes; see
     /// instances()).
     const Scene& scene() const;
+    /// The hierarchy and mesh a model runs with: a scene model, or a run model of a level
+    /// (instances()[i].model; lod_model()).
     const Hierarchy& hierarchy(uint32_t model) const;
     const MeshTemplate& mesh(uint32_t model) const;
+    /// The run model of scene model `model` on `level` (an error naming both if absent).
+    Result<uint32_t> lod_model(uint32_t model, uint32_t level) const;
 
     uint64_t instance_count() const;
     uint64_t chain_count() const;   ///< over all instances

@@ -13,6 +13,59 @@
 
 namespace hmsm {
 
+namespace {
+
+/// The optional "joint_budgets" {name: N} (Scene::joint_budgets) and "lod_budgets"
+/// {name: [N, ...]} (Scene::lod_budgets): per model name, the budgets of the level it runs on
+/// and of the levels its instances may switch to. Names sharing a model must agree.
+Status read_budgets(const nlohmann::json& doc, detail::JsonReader& r, const std::map<std::string, size_t>& by_name,
+                    const std::vector<uint32_t>& model_of_name, Scene& scene) {
+    for (const char* key : {"joint_budgets", "lod_budgets"}) {
+        auto field = doc.find(key);
+        if (field == doc.end()) continue;
+        const bool levels = std::string_view(key) == "lod_budgets";
+        if (!field->is_object())
+            return r.error("", key, levels ? "expected an object of name: [joint budgets]"
+                                           : "expected an object of name: joint budget");
+        std::vector<char> set(scene.models.size(), 0);
+        for (auto it = field->begin(); it != field->end(); ++it) {
+            const std::string name = detail::quote_input(it.key());
+            auto found = by_name.find(it.key());
+            if (found == by_name.end()) return r.error(key, name.c_str(), "is not one of the forest's models");
+            std::vector<int32_t> budgets;
+            const bool list = it->is_array();
+            for (const auto& b : list ? *it : nlohmann::json::array({*it})) {
+                if (!b.is_number_integer() || b.get<int64_t>() < (levels ? 1 : 0) || b.get<int64_t>() > INT32_MAX)
+                    return r.error(key, name.c_str(),
+                                   std::string(levels ? "expected joint budgets of at least 1 (the trunk-only level)"
+                                                      : "expected 0 (the model whole) or a joint budget of at least 1") +
+                                       ", got " + detail::quote_input(b.dump()));
+                budgets.push_back(int32_t(b.get<int64_t>()));
+            }
+            if (list != levels || budgets.empty())
+                return r.error(key, name.c_str(), levels ? "expected a non-empty array of joint budgets"
+                                                         : "expected one joint budget");
+            const uint32_t m = model_of_name[found->second];
+            if (m == UINT32_MAX) continue;  // a model no instance places
+            if (levels) {
+                scene.lod_budgets.resize(scene.models.size());
+                if (set[m] && scene.lod_budgets[m] != budgets)
+                    return r.error(key, name.c_str(), "names the same model as another name, with other budgets");
+                scene.lod_budgets[m] = budgets;
+            } else {
+                scene.joint_budgets.resize(scene.models.size(), 0);
+                if (set[m] && scene.joint_budgets[m] != budgets[0])
+                    return r.error(key, name.c_str(), "names the same model as another name, with another budget");
+                scene.joint_budgets[m] = budgets[0];
+            }
+            set[m] = 1;
+        }
+    }
+    return {};
+}
+
+}  // namespace
+
 Result<Scene> parse_forest(std::string_view text, const std::string& base_directory, std::string_view source,
                            std::span<const std::string> extra_models) {
     auto parsed = detail::parse_json(text, source);
@@ -140,6 +193,7 @@ Result<Scene> parse_forest(std::string_view text, const std::string& base_direct
         scene.model_names.push_back(entry.name);
     }
     for (Instance& inst : scene.instances) inst.model = model_of_name[inst.model];
+    HMSM_TRY(read_budgets(doc, r, by_name, model_of_name, scene));
     return scene;
 }
 

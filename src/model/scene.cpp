@@ -86,6 +86,17 @@ Status validate_scene(const Scene& scene) {
             return {ErrorCode::invalid_argument,
                     "model '" + scene.model_names[m] + "': joint budget " + std::to_string(scene.joint_budgets[m]) +
                         ": must be 0 (the model whole) or at least 1 (the trunk-only level)"};
+    if (scene.lod_budgets.size() > scene.models.size())
+        return {ErrorCode::invalid_argument, "scene: level-of-detail budgets for " +
+                                                 std::to_string(scene.lod_budgets.size()) + " models, the scene has " +
+                                                 std::to_string(scene.models.size())};
+    for (size_t m = 0; m < scene.lod_budgets.size(); ++m)
+        for (size_t k = 0; k < scene.lod_budgets[m].size(); ++k)
+            if (scene.lod_budgets[m][k] < 1)
+                return {ErrorCode::invalid_argument,
+                        "model '" + scene.model_names[m] + "': level " + std::to_string(k + 1) + " joint budget " +
+                            std::to_string(scene.lod_budgets[m][k]) +
+                            ": below the trunk-only level, the coarsest there is (1 joint)"};
     for (const ModelAlias& alias : scene.model_aliases)
         if (alias.model >= scene.models.size())
             return {ErrorCode::invalid_argument, "scene: model alias '" + detail::quote_input(alias.name) +

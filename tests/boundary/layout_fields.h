@@ -29,13 +29,14 @@
     X(MeshTemplate, indices) X(MeshTemplate, leaf_count)                                   \
     X(SimulationConfig, model) X(SimulationConfig, parameters) X(SimulationConfig, wind)   \
     X(SimulationConfig, composition) X(SimulationConfig, profile_passes)                   \
-    X(Scene, instances) X(Scene, joint_budgets)                                            \
+    X(Scene, instances) X(Scene, joint_budgets) X(Scene, lod_budgets)                      \
+    X(LodBands, edges) X(LodBands, hysteresis)                                             \
     X(DetailLevel, hierarchy) X(DetailLevel, chain_of) X(DetailLevel, geometric_error_m)
 
 #define HMSM_LAYOUT_STRUCTS(X)                                                             \
     X(TreeNode) X(TreeLeaf) X(TreeModel) X(Instance) X(Scene) X(Wind) X(Parameters)        \
     X(ModelOptions) X(Material) X(Foliage) X(ForceField) X(ChainDynamics) X(Chain) X(Hierarchy) X(MeshVertex) X(MeshTemplate)      \
-    X(SimulationConfig) X(PassTimes) X(DetailLevel) X(Vec2) X(Vec3) X(Mat3)
+    X(SimulationConfig) X(PassTimes) X(DetailLevel) X(LodBands) X(Vec2) X(Vec3) X(Mat3)
 
 /// sizeof and alignof of every struct, then offsetof of every field, in list order.
 #define HMSM_LAYOUT_SIZE(s) sizeof(hmsm::s), alignof(hmsm::s),

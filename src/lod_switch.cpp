@@ -1,0 +1,351 @@
+// Levels of detail at run time (docs/driving.md, levels of detail): every level of a model is a
+// model of the device scene from create() on, and a switch runs an instance on another of them.
+// The instance keeps its index: the chain-scope state of every instance from the first switched
+// one on is laid out anew, the chains both levels keep carrying their state element for element
+// (a level keeps the full model's chains with their constants, docs/model.md 3.12), and chains
+// the finer level unfolds start rigid with their parent.
+#include "simulation_impl.h"
+
+#include <hmsm/levels.h>
+
+#include <glm/geometric.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+namespace hmsm {
+
+namespace {
+
+using detail::BufferId;
+using detail::InstanceGroup;
+using detail::SceneData;
+
+std::string id_name(InstanceId id) { return "instance id " + std::to_string(uint64_t(id)); }
+
+/// The chain-scope state that carries through a switch (the buffers live_reshape.cpp moves).
+std::vector<BufferId> carried_buffers(bool coupled) {
+    std::vector<BufferId> ids = {BufferId::chain_state, BufferId::chain_force, BufferId::chain_local,
+                                 BufferId::joint_matrix, BufferId::chain_rotation, BufferId::chain_origin};
+    if (coupled) ids.push_back(BufferId::chain_load);
+    return ids;
+}
+
+uint32_t halves_of(BufferId id) {
+    return detail::buffer_info(id).scope == detail::Scope::chain_halves ? 2u : 1u;
+}
+
+/// The part of d's groups covering instances [first, end) that are flagged in `wanted` (empty:
+/// all), neighbours in one group as one slice. Slices read no paused flag, so paused instances
+/// are recomputed too.
+std::vector<InstanceGroup> slices_of(const SceneData& d, uint32_t first, const std::vector<char>& wanted) {
+    std::vector<InstanceGroup> out;
+    for (const InstanceGroup& g : d.groups) {
+        const detail::ModelRange& m = d.models[g.model];
+        for (uint32_t i = std::max(first, g.instance_begin); i < g.instance_begin + g.instance_count; ++i) {
+            if (!wanted.empty() && !wanted[i]) continue;
+            if (!out.empty() && out.back().model == g.model && i != g.instance_begin &&
+                out.back().instance_begin + out.back().instance_count == i) {
+                ++out.back().instance_count;
+                continue;
+            }
+            const uint32_t k = i - g.instance_begin;
+            InstanceGroup one = g;
+            one.instance_begin = i;
+            one.instance_count = 1;
+            one.chain_begin += k * m.chain_count;
+            one.node_begin += k * m.node_count;
+            one.vertex_begin += k * m.vertex_count;
+            one.covers_paused = false;
+            out.push_back(one);
+        }
+    }
+    return out;
+}
+
+uint64_t grown(uint64_t current, uint64_t needed) {
+    return needed <= current ? current : std::max(needed, current + current / 2);
+}
+
+}  // namespace
+
+Status Simulation::Impl::add_lod_levels(uint32_t m, const Hierarchy& full, const MeshTemplate& full_mesh) {
+    const std::vector<int32_t>& budgets = scene_.lod_budgets[m];
+    for (size_t k = 0; k < budgets.size(); ++k) {
+        auto level = build_level(scene_.models[m], full, config_.parameters, budgets[k]);
+        if (!level)
+            return Status{level.status().code(), "model '" + scene_.model_names[m] + "': level " +
+                                                     std::to_string(k + 1) + ": " + level.status().message()};
+        PendingLevel pending;
+        pending.mesh = build_level_mesh(scene_.models[m], full, full_mesh, *level);
+        pending.lod = {m, uint32_t(k + 1), std::move(level->source_chain)};
+        pending.hierarchy = std::move(level->hierarchy);
+        pending_levels_.push_back(std::move(pending));
+    }
+    return {};
+}
+
+Status Simulation::Impl::append_lod_levels() {
+    levels_of_.resize(scene_.models.size());
+    for (uint32_t m = 0; m < levels_of_.size(); ++m) levels_of_[m] = {m};
+    for (PendingLevel& level : pending_levels_) {
+        double largest = 0.0;
+        for (const Chain& chain : level.hierarchy.chains) largest = std::max(largest, chain.wind_area);
+        levels_of_[level.lod.scene_model].push_back(uint32_t(hierarchies_.size()));
+        largest_wind_area_.push_back(largest);
+        hierarchies_.push_back(std::move(level.hierarchy));
+        meshes_.push_back(std::move(level.mesh));
+        lod_models_.push_back(std::move(level.lod));
+    }
+    pending_levels_.clear();
+    return {};
+}
+
+namespace {
+
+/// How a switched instance's chains take their state: per chain of its new model, the chain of
+/// its old model that keeps the same full-model chain, or -1 (unfolded: rest relative to its
+/// parent, T = Q_c).
+struct ChainMap {
+    std::vector<int32_t> old_chain;
+    std::vector<glm::dmat3> rest_rotation;  // Q_c per new chain, read where old_chain is -1
+};
+
+/// Carries the chain-scope state of `old` (live chains, halves back to back) into the layout of
+/// the new instance list: instance i moves whole from old_chain[i] to new_chain[i] unless it has
+/// a map (maps[i] non-null); then each of its chains takes the values of the old chain the map
+/// names, or those of a chain at rest relative to its parent (state, force and load 0, T = Q,
+/// pose recomputed).
+template <class V>
+std::vector<V> carry_layout(const std::vector<V>& old, uint32_t per, uint32_t halves, BufferId id,
+                            const std::vector<uint64_t>& old_chain, const std::vector<uint64_t>& new_chain,
+                            const std::vector<const ChainMap*>& maps) {
+    const uint64_t old_live = old_chain.back(), new_live = new_chain.back();
+    std::vector<V> out(size_t(halves * new_live * per), V(0));
+    for (uint32_t h = 0; h < halves; ++h) {
+        const V* src = old.data() + h * old_live * per;
+        V* dst = out.data() + h * new_live * per;
+        for (size_t i = 0; i + 1 < old_chain.size(); ++i) {
+            if (!maps[i]) {
+                std::copy_n(src + old_chain[i] * per, (old_chain[i + 1] - old_chain[i]) * per, dst + new_chain[i] * per);
+                continue;
+            }
+            const ChainMap& map = *maps[i];
+            for (size_t j = 0; j < map.old_chain.size(); ++j) {
+                V* into = dst + (new_chain[i] + j) * per;
+                if (map.old_chain[j] >= 0) {
+                    std::copy_n(src + (old_chain[i] + uint64_t(map.old_chain[j])) * per, per, into);
+                } else if (id == BufferId::chain_local) {  // T = Q Rz(0) Rx(0): rigid with the parent
+                    for (int col = 0; col < 3; ++col)
+                        for (int row = 0; row < 3; ++row) into[4 * col + row] = V(map.rest_rotation[j][col][row]);
+                }
+            }
+        }
+    }
+    return out;
+}
+
+}  // namespace
+
+Status Simulation::Impl::switch_models(const std::vector<std::pair<uint32_t, uint32_t>>& models) {
+    if (models.empty()) return {};
+    std::vector<Instance> next = instances_;
+    std::vector<char> switched(instances_.size(), 0);
+    uint32_t first = uint32_t(instances_.size());
+    for (auto [i, model] : models) {
+        next[i].model = model;
+        switched[i] = 1;
+        first = std::min(first, i);
+    }
+    HMSM_TRY(check_size(next));
+    std::vector<ChainMap> chain_maps(models.size());
+    std::vector<const ChainMap*> maps(instances_.size(), nullptr);
+    for (size_t k = 0; k < models.size(); ++k) {
+        const auto [i, model] = models[k];
+        const LodModel& from = lod_models_[instances_[i].model];
+        const LodModel& into = lod_models_[model];
+        std::vector<int32_t> kept_at(size_t(from.source_chain.back()) + 1, -1);  // sources ascend
+        for (size_t c = 0; c < from.source_chain.size(); ++c) kept_at[size_t(from.source_chain[c])] = int32_t(c);
+        ChainMap& map = chain_maps[k];
+        for (size_t j = 0; j < into.source_chain.size(); ++j) {
+            const size_t full = size_t(into.source_chain[j]);
+            map.old_chain.push_back(full < kept_at.size() ? kept_at[full] : -1);
+            map.rest_rotation.emplace_back(hierarchies_[model].chains[j].rest_rotation);
+        }
+        maps[i] = &map;
+    }
+    auto laid = std::make_unique<SceneData>();
+    laid->models = data_->models;
+    detail::lay_out_instances(*laid, next);
+    std::vector<uint64_t> old_chain(instances_.size() + 1, 0), new_chain(instances_.size() + 1, 0);
+    for (size_t i = 0; i < instances_.size(); ++i) {
+        old_chain[i + 1] = old_chain[i] + data_->models[instances_[i].model].chain_count;
+        new_chain[i + 1] = new_chain[i] + data_->models[next[i].model].chain_count;
+    }
+
+    // The state as the backend stores it, so that everything carried is bit for bit.
+    const detail::Scalar scalar = backend_->kind() == BackendKind::cpu64 ? detail::Scalar::f64 : detail::Scalar::f32;
+    const std::vector<BufferId> carried = carried_buffers(data_->coupled());
+    std::vector<std::vector<double>> values64(carried.size());
+    std::vector<std::vector<float>> values32(carried.size());
+    const uint64_t old_live = data_->total_chains;
+    for (size_t b = 0; b < carried.size(); ++b) {
+        const uint32_t per = detail::shape_scalars(detail::buffer_info(carried[b]).shape);
+        const uint32_t halves = halves_of(carried[b]);
+        auto read_all = [&](auto& values) -> Status {
+            values.resize(size_t(halves * old_live * per));
+            for (uint32_t h = 0; h < halves; ++h)
+                HMSM_TRY(backend_->read(carried[b], h * data_->chain_capacity, old_live,
+                                        values.data() + h * old_live * per, scalar));
+            values = carry_layout(values, per, halves, carried[b], old_chain, new_chain, maps);
+            return {};
+        };
+        HMSM_TRY(scalar == detail::Scalar::f64 ? read_all(values64[b]) : read_all(values32[b]));
+    }
+
+    ahead_schedule_.live_change();  // the state moves, the angles integrated ahead with it
+    const bool in_place = backend_->capabilities().reshapes_in_place && data_->holds(*laid);
+    if (in_place) {
+        detail::SceneData& d = *data_;
+        d.groups = std::move(laid->groups);
+        d.total_chains = laid->total_chains;
+        d.total_nodes = laid->total_nodes;
+        d.total_vertices = laid->total_vertices;
+    } else {
+        detail::SceneData whole = *data_;
+        whole.instance_origin = std::move(laid->instance_origin);
+        whole.instance_yaw = std::move(laid->instance_yaw);
+        whole.instance_wind = std::move(laid->instance_wind);
+        whole.groups = std::move(laid->groups);
+        whole.total_chains = laid->total_chains;
+        whole.total_nodes = laid->total_nodes;
+        whole.total_vertices = laid->total_vertices;
+        whole.chain_capacity = std::max(grown(data_->chain_capacity, whole.total_chains), reserved_.chains);
+        whole.node_capacity = std::max(grown(data_->node_capacity, whole.total_nodes), reserved_.nodes);
+        whole.vertex_capacity = std::max(grown(data_->vertex_capacity, whole.total_vertices), reserved_.vertices);
+        HMSM_TRY(backend_->upload(whole));
+        *data_ = std::move(whole);
+        ++full_uploads_;
+        first = 0;
+        instance_wind_dirty_ = true;
+    }
+    const uint64_t new_live = data_->total_chains, from = new_chain[first];
+    for (size_t b = 0; b < carried.size(); ++b) {
+        const uint32_t per = detail::shape_scalars(detail::buffer_info(carried[b]).shape);
+        for (uint32_t h = 0; h < halves_of(carried[b]); ++h) {
+            const size_t at = size_t((h * new_live + from) * per);
+            const void* src = scalar == detail::Scalar::f64 ? static_cast<const void*>(values64[b].data() + at)
+                                                            : static_cast<const void*>(values32[b].data() + at);
+            HMSM_TRY(backend_->write(carried[b], h * data_->chain_capacity + from, new_live - from, src, scalar));
+        }
+    }
+    instances_ = std::move(next);
+    header_dirty_ = program_dirty_ = true;
+
+    // Outputs of the instances that moved: passes 4, 6 and 7 from the carried pose, element for
+    // element what they were. Then the switched instances are posed from their angles.
+    const detail::RunStep at_rest[1] = {};
+    const uint32_t outputs = (1u << uint32_t(Pass::node_relative)) | (1u << uint32_t(Pass::node_world)) |
+                             (1u << uint32_t(Pass::contour));
+    const std::vector<InstanceGroup> moved = slices_of(*data_, first, {});
+    if (!moved.empty()) HMSM_TRY(backend_->run(program_for(moved, Pass::node_relative, outputs), at_rest));
+    HMSM_TRY(backend_->run(program_for(slices_of(*data_, 0, switched), Pass::compose), at_rest));
+    return apply_pending();
+}
+
+Status Simulation::set_instance_lod(InstanceId id, uint32_t level) {
+    return set_instance_lods({&id, 1}, {&level, 1});
+}
+
+Status Simulation::set_instance_lods(std::span<const InstanceId> ids, std::span<const uint32_t> levels) {
+    const Impl& s = *impl_;
+    if (ids.size() != levels.size())
+        return {ErrorCode::invalid_argument, "set_instance_lods: " + std::to_string(ids.size()) + " ids but " +
+                                                 std::to_string(levels.size()) + " levels"};
+    std::vector<std::pair<uint32_t, uint32_t>> changes;  // (index, run model)
+    std::vector<uint64_t> seen;
+    seen.reserve(ids.size());
+    for (size_t k = 0; k < ids.size(); ++k) {
+        Result<uint64_t> index = index_of(ids[k]);
+        if (!index) return {index.status().code(), "set_instance_lod: " + index.status().message()};
+        seen.push_back(*index);
+        const Impl::LodModel& now = s.lod_models_[s.instances_[*index].model];
+        const std::vector<uint32_t>& run_models = s.levels_of_[now.scene_model];
+        if (levels[k] >= run_models.size())
+            return {ErrorCode::invalid_argument,
+                    "set_instance_lod: " + id_name(ids[k]) + " (model '" + s.scene_.model_names[now.scene_model] +
+                        "'): level " + std::to_string(levels[k]) + " does not exist (the model has levels 0 to " +
+                        std::to_string(run_models.size() - 1) + ", Scene::lod_budgets)"};
+        if (levels[k] != now.level) changes.emplace_back(uint32_t(*index), run_models[levels[k]]);
+    }
+    std::sort(seen.begin(), seen.end());
+    if (auto twice = std::adjacent_find(seen.begin(), seen.end()); twice != seen.end())
+        return {ErrorCode::invalid_argument,
+                "set_instance_lod: " + id_name(s.instance_ids_[*twice]) + " is listed twice"};
+    std::sort(changes.begin(), changes.end());
+    return impl_->switch_models(changes);
+}
+
+Result<uint32_t> Simulation::instance_lod(InstanceId id) const {
+    Result<uint64_t> index = index_of(id);
+    if (!index) return Status{index.status().code(), "instance_lod: " + index.status().message()};
+    return impl_->lod_models_[impl_->instances_[*index].model].level;
+}
+
+uint32_t Simulation::lod_level_count(uint32_t model) const {
+    return model < impl_->levels_of_.size() ? uint32_t(impl_->levels_of_[model].size()) : 0u;
+}
+
+Result<uint32_t> Simulation::lod_model(uint32_t model, uint32_t level) const {
+    if (model >= impl_->levels_of_.size())
+        return Status{ErrorCode::invalid_argument, "lod_model: model " + std::to_string(model) +
+                                                       " does not exist (the scene has " +
+                                                       std::to_string(impl_->levels_of_.size()) + " models)"};
+    const std::vector<uint32_t>& run_models = impl_->levels_of_[model];
+    if (level >= run_models.size())
+        return Status{ErrorCode::invalid_argument, "lod_model: model '" + impl_->scene_.model_names[model] +
+                                                       "' has no level " + std::to_string(level) +
+                                                       " (levels 0 to " + std::to_string(run_models.size() - 1) + ")"};
+    return run_models[level];
+}
+
+Status Simulation::set_lod_bands(const LodBands& bands) {
+    if (!std::isfinite(bands.hysteresis) || bands.hysteresis < 0.0 || bands.hysteresis >= 1.0)
+        return {ErrorCode::invalid_argument,
+                "set_lod_bands: hysteresis " + std::to_string(bands.hysteresis) + " is not in [0, 1)"};
+    for (size_t k = 0; k < bands.edges.size(); ++k) {
+        const double edge = bands.edges[k];
+        if (!std::isfinite(edge) || edge <= 0.0 || (k > 0 && edge <= bands.edges[k - 1]))
+            return {ErrorCode::invalid_argument, "set_lod_bands: edge " + std::to_string(k) + " (" +
+                                                     std::to_string(edge) +
+                                                     " m) is not finite, positive and above the edge before"};
+    }
+    impl_->lod_bands_ = bands;
+    return {};
+}
+
+const LodBands& Simulation::lod_bands() const { return impl_->lod_bands_; }
+
+Result<uint64_t> Simulation::update_lod(Vec3 viewer) {
+    const Impl& s = *impl_;
+    if (!std::isfinite(viewer.x) || !std::isfinite(viewer.y) || !std::isfinite(viewer.z))
+        return Status{ErrorCode::invalid_argument, "update_lod: the viewer position is not finite"};
+    const std::vector<double>& edges = s.lod_bands_.edges;
+    const double h = s.lod_bands_.hysteresis;
+    std::vector<std::pair<uint32_t, uint32_t>> changes;
+    for (uint32_t i = 0; i < s.instances_.size(); ++i) {
+        const Impl::LodModel& now = s.lod_models_[s.instances_[i].model];
+        const std::vector<uint32_t>& run_models = s.levels_of_[now.scene_model];
+        const uint32_t top = uint32_t(std::min<size_t>(run_models.size() - 1, edges.size()));
+        const double distance = glm::length(glm::dvec3(s.instances_[i].origin) - glm::dvec3(viewer));
+        uint32_t level = std::min(now.level, top);
+        while (level < top && distance > edges[level] * (1.0 + h)) ++level;
+        while (level > 0 && distance < edges[level - 1] * (1.0 - h)) --level;
+        if (level != now.level) changes.emplace_back(i, run_models[level]);
+    }
+    HMSM_TRY(impl_->switch_models(changes));
+    return uint64_t(changes.size());
+}
+
+}  // namespace hmsm
