@@ -4,6 +4,7 @@
 #include "vk_error.h"
 
 #include "../device_words.h"
+#include "../element_moves.h"
 
 #include <algorithm>
 #include <atomic>
@@ -171,29 +172,57 @@ Status VulkanBackend::move_elements(BufferId id, std::span<const ElementMove> mo
     auto checked = largest_move_bytes(moves, element_bytes,
                                       [&](uint64_t first, uint64_t count) { return check_range(id, first, count); });
     if (!checked) return checked.status();
-    const uint64_t largest = *checked;
-    if (largest == 0) return {};
-    if (move_scratch_.size() < largest) {
+    if (*checked == 0) return {};
+    const VkBuffer buffer = buffers_[uint32_t(id)].handle();
+    const VolkDeviceTable& vk = device_->vk();
+    auto after_copies = [&](VkCommandBuffer cmd) {
+        barrier_after_all_writes(*device_, cmd, VK_PIPELINE_STAGE_TRANSFER_BIT,
+                                 VK_ACCESS_TRANSFER_READ_BIT | VK_ACCESS_TRANSFER_WRITE_BIT);
+    };
+    if (destinations_apart_from_sources(moves)) {
+        // A swap removal's moves: one copy command over all of them, no scratch.
+        std::vector<VkBufferCopy> regions;
+        for (const ElementMove& m : moves)
+            if (m.src != m.dst && m.count > 0)
+                regions.push_back({m.src * element_bytes, m.dst * element_bytes, m.count * element_bytes});
+        HMSM_TRY(transfer_->submit([&](VkCommandBuffer cmd) {
+            vk.vkCmdCopyBuffer(cmd, buffer, buffer, uint32_t(regions.size()), regions.data());
+            after_copies(cmd);
+        }));
+        return device_->take_validation_messages();
+    }
+    // In order: a move apart from its own source is one copy, one that overlaps itself goes
+    // through scratch at most kMoveScratchBytes at a time.
+    uint64_t staged = 0;
+    for (const ElementMove& m : moves)
+        if (overlaps_itself(m)) staged = std::max(staged, std::min(m.count * element_bytes, kMoveScratchBytes));
+    if (move_scratch_.size() < staged) {
         move_scratch_ = Buffer{};
-        auto scratch = Buffer::create(*device_, largest,
+        auto scratch = Buffer::create(*device_, staged,
                                       VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
                                       MemoryUse::device_local, "state move scratch");
         if (!scratch) return scratch.status();
         move_scratch_ = std::move(scratch).value();
     }
-    const VkBuffer buffer = buffers_[uint32_t(id)].handle();
+    const uint64_t chunk_elements = std::max<uint64_t>(1, kMoveScratchBytes / element_bytes);
     HMSM_TRY(transfer_->submit([&](VkCommandBuffer cmd) {
-        const VolkDeviceTable& vk = device_->vk();
         for (const ElementMove& m : moves) {
             if (m.src == m.dst || m.count == 0) continue;
-            const VkBufferCopy out{m.src * element_bytes, 0, m.count * element_bytes};
-            vk.vkCmdCopyBuffer(cmd, buffer, move_scratch_.handle(), 1, &out);
-            barrier_after_all_writes(*device_, cmd, VK_PIPELINE_STAGE_TRANSFER_BIT,
-                                     VK_ACCESS_TRANSFER_READ_BIT | VK_ACCESS_TRANSFER_WRITE_BIT);
-            const VkBufferCopy back{0, m.dst * element_bytes, m.count * element_bytes};
-            vk.vkCmdCopyBuffer(cmd, move_scratch_.handle(), buffer, 1, &back);
-            barrier_after_all_writes(*device_, cmd, VK_PIPELINE_STAGE_TRANSFER_BIT,
-                                     VK_ACCESS_TRANSFER_READ_BIT | VK_ACCESS_TRANSFER_WRITE_BIT);
+            if (!overlaps_itself(m)) {
+                const VkBufferCopy direct{m.src * element_bytes, m.dst * element_bytes, m.count * element_bytes};
+                vk.vkCmdCopyBuffer(cmd, buffer, buffer, 1, &direct);
+                after_copies(cmd);
+                continue;
+            }
+            (void)for_each_chunk(m, chunk_elements, [&](uint64_t src, uint64_t dst, uint64_t count) -> Status {
+                const VkBufferCopy out{src * element_bytes, 0, count * element_bytes};
+                vk.vkCmdCopyBuffer(cmd, buffer, move_scratch_.handle(), 1, &out);
+                after_copies(cmd);
+                const VkBufferCopy back{0, dst * element_bytes, count * element_bytes};
+                vk.vkCmdCopyBuffer(cmd, move_scratch_.handle(), buffer, 1, &back);
+                after_copies(cmd);
+                return {};
+            });
         }
     }));
     return device_->take_validation_messages();
