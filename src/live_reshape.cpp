@@ -169,8 +169,8 @@ Status Simulation::Impl::reshape(const std::vector<uint32_t>& survivors, std::sp
     bool in_place = !reupload && backend_->capabilities().reshapes_in_place && data_->holds(*data);
     if (in_place && !ascending) {
         // A swap removal moves instances from the end into the holes: in place when each one
-        // fills a hole of its own size (one model, or equal sizes); otherwise the instances
-        // between would shift over sources not yet read, and the scene is uploaded anew.
+        // fills a hole of its own size (one model) or the instances between shift down; where
+        // they would shift up over sources not yet read, the scene is uploaded anew.
         const auto per_node = [&](uint32_t model) { return data_->models[model].node_count; };
         const auto per_vertex = [&](uint32_t model) { return data_->models[model].vertex_count; };
         uint64_t end = 0;
