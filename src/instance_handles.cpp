@@ -1,16 +1,36 @@
 // Stable instance handles (docs/driving.md, instance handles): every instance gets the next
-// unused id when it enters the simulation. Removal keeps the survivors' order and additions
-// append, so the current ids are always ascending and an id is found by binary search.
+// unused id when it enters the simulation. Ordered removal keeps the survivors' order and
+// additions append, so the ids stay ascending and an id is found by binary search; after a swap
+// removal (docs/model.md 3.9) a hash index of the current ids answers instead.
 #include "simulation_impl.h"
 
 #include <algorithm>
 #include <string>
+#include <unordered_map>
 
 namespace hmsm {
 
 namespace {
 
 std::string id_name(InstanceId id) { return "instance id " + std::to_string(uint64_t(id)); }
+
+/// The current indices of `ids`, or an error naming the first id removed, never given or
+/// listed twice.
+Result<std::vector<uint64_t>> indices_of(const Simulation& sim, std::span<const InstanceId> ids) {
+    std::vector<uint64_t> indices;
+    indices.reserve(ids.size());
+    for (InstanceId id : ids) {
+        Result<uint64_t> index = sim.index_of(id);
+        if (!index) return index.status();
+        indices.push_back(*index);
+    }
+    std::vector<uint64_t> sorted = indices;
+    std::sort(sorted.begin(), sorted.end());
+    if (auto twice = std::adjacent_find(sorted.begin(), sorted.end()); twice != sorted.end())
+        return Status{ErrorCode::invalid_argument,
+                      id_name(sim.instance_ids()[*twice]) + " is listed twice for removal"};
+    return indices;
+}
 
 }  // namespace
 
@@ -26,8 +46,13 @@ Status Simulation::add_instances(std::span<const Instance> instances, std::span<
 
 Result<uint64_t> Simulation::index_of(InstanceId id) const {
     const std::vector<InstanceId>& ids = impl_->instance_ids_;
-    auto found = std::lower_bound(ids.begin(), ids.end(), id);
-    if (found != ids.end() && *found == id) return uint64_t(found - ids.begin());
+    if (impl_->ids_ascending_) {
+        auto found = std::lower_bound(ids.begin(), ids.end(), id);
+        if (found != ids.end() && *found == id) return uint64_t(found - ids.begin());
+    } else {
+        const std::unordered_map<uint64_t, uint32_t>& index = impl_->id_index_;
+        if (auto found = index.find(uint64_t(id)); found != index.end()) return uint64_t(found->second);
+    }
     if (uint64_t(id) < impl_->next_instance_id_)
         return Status{ErrorCode::invalid_argument, id_name(id) + " was removed"};
     return Status{ErrorCode::invalid_argument, id_name(id) + " was never given (the next id is " +
@@ -45,18 +70,36 @@ Result<InstanceId> Simulation::id_of(uint64_t index) const {
 std::span<const InstanceId> Simulation::instance_ids() const { return impl_->instance_ids_; }
 
 Status Simulation::remove_instances_by_id(std::span<const InstanceId> ids) {
-    std::vector<uint64_t> indices;
-    indices.reserve(ids.size());
-    for (InstanceId id : ids) {
-        Result<uint64_t> index = index_of(id);
-        if (!index) return index.status();
-        indices.push_back(*index);
+    Result<std::vector<uint64_t>> indices = indices_of(*this, ids);
+    if (!indices) return indices.status();
+    return remove_instances(*indices);
+}
+
+Status Simulation::swap_remove_instances(std::span<const InstanceId> ids) {
+    if (ids.empty()) return {};
+    Result<std::vector<uint64_t>> indices = indices_of(*this, ids);
+    if (!indices) return indices.status();
+    Impl& s = *impl_;
+    const uint32_t n = uint32_t(s.instances_.size());
+    if (indices->size() == n)
+        return {ErrorCode::invalid_argument,
+                "cannot remove every instance: a simulation keeps at least one (deactivate it instead)"};
+    std::vector<bool> removed(n, false);
+    for (uint64_t i : *indices) removed[i] = true;
+    // The holes below the new count take, in ascending order, the survivors at or past it in
+    // their order; every other survivor keeps its index.
+    const uint32_t kept = n - uint32_t(indices->size());
+    std::vector<uint32_t> survivors(kept);
+    uint32_t from = kept;
+    for (uint32_t k = 0; k < kept; ++k) {
+        if (!removed[k]) {
+            survivors[k] = k;
+            continue;
+        }
+        while (removed[from]) ++from;
+        survivors[k] = from++;
     }
-    std::vector<uint64_t> sorted = indices;
-    std::sort(sorted.begin(), sorted.end());
-    if (auto twice = std::adjacent_find(sorted.begin(), sorted.end()); twice != sorted.end())
-        return {ErrorCode::invalid_argument, id_name(impl_->instance_ids_[*twice]) + " is listed twice for removal"};
-    return remove_instances(indices);
+    return s.reshape(survivors, {});
 }
 
 }  // namespace hmsm

@@ -1,7 +1,7 @@
 // Adding and removing instances (docs/model.md 3.9, docs/driving.md): the instance list is
-// replaced by the survivors followed by the added instances, every survivor keeps its state bit
-// for bit, and the device scene is kept where the capacity allows (in place) or uploaded anew
-// with room to grow.
+// replaced by the survivors (in order, or with holes filled from the end for a swap removal)
+// followed by the added instances, every survivor keeps its state bit for bit, and the device
+// scene is kept where the capacity allows (in place) or uploaded anew with room to grow.
 #include "simulation_impl.h"
 
 #include <algorithm>
@@ -30,9 +30,10 @@ std::vector<BufferId> carried_buffers(bool coupled) {
 constexpr BufferId kMovedOutputs[] = {BufferId::node_relative, BufferId::node_world, BufferId::vertex_position,
                                       BufferId::vertex_normal};
 
-/// Moves that bring each survivor's elements [old[i], old[i + 1]) down behind the survivor
-/// before it, neighbours coalesced, ascending (no source is overwritten before it is read);
-/// `end` receives the elements the survivors hold.
+/// Moves that bring each survivor's elements [old[i], old[i + 1]) behind the survivor before
+/// it in the new list, neighbours coalesced; `end` receives the elements the survivors hold.
+/// For survivors in ascending order the moves go down and ascend, so that no source is
+/// overwritten before it is read; for another order, sequential_safe() tells.
 std::vector<detail::ElementMove> survivor_moves(const std::vector<uint32_t>& survivors,
                                                 const std::vector<uint64_t>& old, uint64_t& end) {
     std::vector<detail::ElementMove> moves;
@@ -50,6 +51,27 @@ std::vector<detail::ElementMove> survivor_moves(const std::vector<uint32_t>& sur
     }
     end = at;
     return moves;
+}
+
+/// Whether applying `moves` one after the other reads every source before a move writes over
+/// it: each move goes down (or nowhere) and ends at or below every later move's source.
+bool sequential_safe(const std::vector<detail::ElementMove>& moves) {
+    uint64_t later_sources = std::numeric_limits<uint64_t>::max();
+    for (size_t k = moves.size(); k-- > 0;) {
+        const detail::ElementMove& m = moves[k];
+        if (m.dst > m.src || m.dst + m.count > later_sources) return false;
+        later_sources = std::min(later_sources, m.src);
+    }
+    return true;
+}
+
+/// Elements per instance of `instances` as running sums: old[i] is the first element of
+/// instance i, old[n] the total (`per` picks chains, nodes or vertices of a model).
+template <class Per>
+std::vector<uint64_t> running_offsets(const std::vector<Instance>& instances, Per per) {
+    std::vector<uint64_t> old(instances.size() + 1, 0);
+    for (size_t i = 0; i < instances.size(); ++i) old[i + 1] = old[i] + per(instances[i].model);
+    return old;
 }
 
 uint32_t halves_of(BufferId id) {
@@ -134,19 +156,33 @@ Status Simulation::Impl::reshape(const std::vector<uint32_t>& survivors, std::sp
     detail::lay_out_instances(*data, next);
 
     // Per old instance: its first state chain.
-    std::vector<uint64_t> old_chain(instances_.size() + 1, 0);
-    for (size_t i = 0; i < instances_.size(); ++i)
-        old_chain[i + 1] = old_chain[i] + data_->models[instances_[i].model].chain_count;
-    // The first new instance whose state is not where it was.
-    uint32_t first_moved = uint32_t(survivors.size());
-    for (uint32_t k = 0; k < survivors.size(); ++k)
+    const std::vector<uint64_t> old_chain =
+        running_offsets(instances_, [&](uint32_t model) { return data_->models[model].chain_count; });
+    // The first and last new instances whose state is not where it was (added ones included).
+    uint32_t first_moved = uint32_t(survivors.size()), last_moved = 0;
+    bool ascending = true;
+    for (uint32_t k = 0; k < survivors.size(); ++k) {
         if (survivors[k] != k) {
-            first_moved = k;
-            break;
+            first_moved = std::min(first_moved, k);
+            last_moved = k;
         }
+        if (k > 0 && survivors[k] < survivors[k - 1]) ascending = false;
+    }
+    if (!added.empty()) last_moved = uint32_t(next.size() - 1);
 
     ahead_schedule_.live_change();  // the state moves, the angles integrated ahead with it
-    const bool in_place = !reupload && backend_->capabilities().reshapes_in_place && data_->holds(*data);
+    bool in_place = !reupload && backend_->capabilities().reshapes_in_place && data_->holds(*data);
+    if (in_place && !ascending) {
+        // A swap removal moves instances from the end into the holes: in place when each one
+        // fills a hole of its own size (one model) or the instances between shift down; where
+        // they would shift up over sources not yet read, the scene is uploaded anew.
+        const auto per_node = [&](uint32_t model) { return data_->models[model].node_count; };
+        const auto per_vertex = [&](uint32_t model) { return data_->models[model].vertex_count; };
+        uint64_t end = 0;
+        in_place = sequential_safe(survivor_moves(survivors, old_chain, end)) &&
+                   sequential_safe(survivor_moves(survivors, running_offsets(instances_, per_node), end)) &&
+                   sequential_safe(survivor_moves(survivors, running_offsets(instances_, per_vertex), end));
+    }
     if (in_place) {
         HMSM_TRY(reshape_in_place(std::move(data), survivors, old_chain, first_moved));
     } else {
@@ -159,15 +195,21 @@ Status Simulation::Impl::reshape(const std::vector<uint32_t>& survivors, std::sp
     for (uint32_t i : survivors) ids.push_back(instance_ids_[i]);
     for (size_t k = 0; k < added.size(); ++k) ids.push_back(InstanceId(next_instance_id_++));
     instance_ids_ = std::move(ids);
+    ids_ascending_ = std::is_sorted(instance_ids_.begin(), instance_ids_.end());
+    id_index_.clear();
+    if (!ids_ascending_) {  // built here: index_of is a const call and may run concurrently
+        id_index_.reserve(instance_ids_.size());
+        for (uint32_t i = 0; i < instance_ids_.size(); ++i) id_index_.emplace(uint64_t(instance_ids_[i]), i);
+    }
     header_dirty_ = program_dirty_ = true;
     if (!in_place) {
         instance_wind_dirty_ = true;
     } else if (first_moved < instances_.size()) {
         // Winds of the instances that changed place or came: written as one range, together
         // with those changed before whose place stayed (apply_pending).
-        std::erase_if(dirty_instances_, [&](uint32_t i) { return i >= first_moved; });
+        std::erase_if(dirty_instances_, [&](uint32_t i) { return i >= instances_.size(); });
         dirty_instances_.push_back(first_moved);
-        dirty_instances_.push_back(uint32_t(instances_.size() - 1));
+        dirty_instances_.push_back(last_moved);
     } else {
         std::erase_if(dirty_instances_, [&](uint32_t i) { return i >= instances_.size(); });
     }
@@ -263,11 +305,10 @@ Status Simulation::Impl::reshape_in_place(std::unique_ptr<detail::SceneData> nex
     }
     // The survivors' outputs (nodes, vertices) move with them: bitwise what they were, and a
     // copy instead of passes 4, 6 and 7 over every instance behind the first gap.
-    std::vector<uint64_t> old_node(instances_.size() + 1, 0), old_vertex(instances_.size() + 1, 0);
-    for (size_t i = 0; i < instances_.size(); ++i) {
-        old_node[i + 1] = old_node[i] + data_->models[instances_[i].model].node_count;
-        old_vertex[i + 1] = old_vertex[i] + data_->models[instances_[i].model].vertex_count;
-    }
+    const std::vector<uint64_t> old_node =
+        running_offsets(instances_, [&](uint32_t model) { return data_->models[model].node_count; });
+    const std::vector<uint64_t> old_vertex =
+        running_offsets(instances_, [&](uint32_t model) { return data_->models[model].vertex_count; });
     uint64_t nodes = 0, vertices = 0;
     const std::vector<detail::ElementMove> node_moves = survivor_moves(survivors, old_node, nodes);
     const std::vector<detail::ElementMove> vertex_moves = survivor_moves(survivors, old_vertex, vertices);
@@ -287,16 +328,20 @@ Status Simulation::Impl::reshape_in_place(std::unique_ptr<detail::SceneData> nex
                 HMSM_TRY(backend_->write(BufferId::chain_load, half + at, added_chains, zeros.data(),
                                          detail::Scalar::f64));
     }
-    // Origins and yaws from the first instance that changed place on.
-    const uint64_t changed = next->instance_count() - first_moved;
-    if (changed > 0) {
-        std::vector<double> values(changed * 4);
+    // Origins and yaws of the instances that changed place or came, run by run.
+    const uint32_t count = next->instance_count();
+    for (uint32_t first = first_moved; first < count;) {
+        uint32_t end = first + 1;
+        while (end < count && (end >= survivors.size() || survivors[end] != end)) ++end;
+        std::vector<double> values(uint64_t(end - first) * 4);
         for (BufferId id : {BufferId::instance_origin, BufferId::instance_yaw}) {
             const auto& source = id == BufferId::instance_origin ? next->instance_origin : next->instance_yaw;
-            for (uint64_t i = 0; i < changed; ++i)
-                for (int c = 0; c < 4; ++c) values[4 * i + c] = source[first_moved + i][c];
-            HMSM_TRY(backend_->write(id, first_moved, changed, values.data(), detail::Scalar::f64));
+            for (uint32_t i = first; i < end; ++i)
+                for (int c = 0; c < 4; ++c) values[4 * (i - first) + c] = source[i][c];
+            HMSM_TRY(backend_->write(id, first, end - first, values.data(), detail::Scalar::f64));
         }
+        first = end;
+        while (first < count && first < survivors.size() && survivors[first] == first) ++first;
     }
     detail::SceneData& d = *data_;
     d.instance_origin = std::move(next->instance_origin);

@@ -13,6 +13,7 @@
 #include <array>
 #include <memory>
 #include <mutex>
+#include <unordered_map>
 #include <vector>
 
 namespace hmsm {
@@ -32,8 +33,9 @@ struct __attribute__((visibility("hidden"))) Simulation::Impl {
     /// per Pass).
     std::vector<detail::Dispatch> program_for(const std::vector<detail::InstanceGroup>& groups,
                                               Pass first, uint32_t passes = ~0u) const;
-    /// Replaces the instance list: survivors (old indices, in order) then `added`; carries the
-    /// survivors' state over and poses the added instances at rest (live_control.cpp).
+    /// Replaces the instance list: survivors (old indices, in their new order) then `added`;
+    /// carries the survivors' state over and poses the added instances at rest
+    /// (live_reshape.cpp).
     /// With `reupload`, the scene is uploaded anew even within the capacity (reserve_instances).
     Status reshape(const std::vector<uint32_t>& survivors, std::span<const Instance> added, bool reupload = false);
     /// reshape() within the capacity: moves state on the device, writes the added instances.
@@ -120,9 +122,13 @@ struct __attribute__((visibility("hidden"))) Simulation::Impl {
     std::vector<detail::Dispatch> step_program_;
     std::vector<ForceField> force_fields_;
     std::vector<Instance> instances_;  // the current instance list (live control)
-    /// The handle of each current instance, ascending: survivors keep their order and added
-    /// instances take next_instance_id_ on.
+    /// The handle of each current instance: survivors keep their order and added instances
+    /// take next_instance_id_ on, so the ids stay ascending until a swap removal moves one.
     std::vector<InstanceId> instance_ids_;
+    /// Whether instance_ids_ is ascending (index_of searches it); otherwise index_of uses
+    /// id_index_, the index of each current id, rebuilt by every add or remove.
+    bool ids_ascending_ = true;
+    std::unordered_map<uint64_t, uint32_t> id_index_;
     uint64_t next_instance_id_ = 0;
     /// The room reserve_instances() asked for: a re-upload allocates at least this much.
     struct Reserved {

@@ -96,5 +96,32 @@ TEST(InstanceHandles, BadHandlesChangeNothing) {
     expect_ids(*sim, ids({0, 1, 2, 4}));
 }
 
+// A swap removal fills each hole below the new count with the survivors past it, in order; the
+// handles follow; additions then append with fresh ids; bad ids change nothing.
+TEST(InstanceHandles, FollowSwapRemovals) {
+    auto sim = five_trees();
+    ASSERT_TRUE(sim);
+    ASSERT_TRUE(sim->step(6).ok());
+    const glm::dvec3 last_origin = sim->instances()[4].origin;
+    ASSERT_TRUE(sim->swap_remove_instances(ids({1})).ok());
+    expect_ids(*sim, ids({0, 4, 2, 3}));
+    EXPECT_EQ(sim->instances()[1].origin, last_origin);
+    expect_refused_unchanged(*sim, [&] { return sim->swap_remove_instances(ids({0, 1})); },
+                             "instance id 1 was removed");
+    expect_refused_unchanged(*sim, [&] { return sim->swap_remove_instances(ids({5})); },
+                             "instance id 5 was never given");
+    expect_refused_unchanged(*sim, [&] { return sim->swap_remove_instances(ids({4, 4})); },
+                             "instance id 4 is listed twice");
+    expect_refused_unchanged(*sim, [&] { return sim->swap_remove_instances(ids({0, 4, 2, 3})); }, "every instance");
+    ASSERT_TRUE(sim->swap_remove_instances(ids({0, 3})).ok());  // hole 0 takes id 2, id 3 was last
+    expect_ids(*sim, ids({2, 4}));
+    const Instance added[] = {{0, {30, 0, 0}, 0.1}};
+    ASSERT_TRUE(sim->add_instances(added).ok());
+    expect_ids(*sim, ids({2, 4, 5}));
+    ASSERT_TRUE(sim->remove_instances_by_id(ids({4})).ok());
+    expect_ids(*sim, ids({2, 5}));
+    ASSERT_TRUE(sim->step(3).ok());
+}
+
 }  // namespace
 }  // namespace hmsm

@@ -261,6 +261,90 @@ TEST_P(LiveReshape, ReservedRoomTakesAdditionsWithoutUpload) {
     EXPECT_EQ(full_uploads_of(*reserved), 1u);
 }
 
+std::vector<InstanceId> handles(std::initializer_list<uint64_t> values) {
+    std::vector<InstanceId> out;
+    for (uint64_t v : values) out.push_back(InstanceId(v));
+    return out;
+}
+
+/// Swap removals between steps: two holes filled from the end, two additions, the first
+/// instance's hole filled by the last added one.
+void churn_by_swaps(Simulation& sim) {
+    ASSERT_TRUE(sim.step(20).ok());
+    ASSERT_TRUE(sim.swap_remove_instances(handles({2, 5})).ok());
+    ASSERT_TRUE(sim.step(10).ok());
+    const Instance added[] = {{0, {14, 0, 3}, 0.3}, {0, {-8, 0, -6}, 1.1, 0.8, 0.2}};
+    ASSERT_TRUE(sim.add_instances(added).ok());
+    ASSERT_TRUE(sim.swap_remove_instances(handles({0})).ok());
+    ASSERT_TRUE(sim.step(15).ok());
+}
+
+// A swap removal moves only the instances that fill the holes, on the device and bit for bit;
+// the others keep index and outputs, and the handles follow the moved ones.
+TEST_P(LiveReshape, SwapRemovalMovesOnlyTheFillers) {
+    std::string skip;
+    auto sim = create(*grid_scene(test::small_tree(), 10, 5.0, 4), true, skip);
+    if (!skip.empty()) GTEST_SKIP() << skip;
+    ASSERT_TRUE(sim);
+    ASSERT_TRUE(sim->step(25).ok());
+    const auto before = outputs_of(*sim);
+    const auto sizes = instance_sizes(*sim);
+    ASSERT_TRUE(sim->swap_remove_instances(handles({5, 2})).ok());
+    EXPECT_EQ(full_uploads_of(*sim), 0u);
+    EXPECT_EQ(scene_data_of(*sim).groups.size(), 1u) << "one model: still one run of instances";
+    const size_t from[] = {0, 1, 8, 3, 4, 9, 6, 7};  // holes 2 and 5 take 8 and 9
+    ASSERT_EQ(sim->instance_count(), std::size(from));
+    const auto after = outputs_of(*sim);
+    for (size_t o = 0; o < after.size(); ++o)
+        for (size_t k = 0; k < std::size(from); ++k)
+            EXPECT_EQ(instance_slice(after[o], sizes[o], k), instance_slice(before[o], sizes[o], from[k]))
+                << "output " << o << ", new index " << k;
+    for (size_t k = 0; k < std::size(from); ++k) {
+        EXPECT_EQ(sim->id_of(k).value(), InstanceId(from[k]));
+        EXPECT_EQ(sim->index_of(InstanceId(from[k])).value(), k);
+    }
+    EXPECT_FALSE(sim->index_of(InstanceId(5)).ok());
+    // Refused: a removed id, an unknown one, a repeat, everyone; nothing changes.
+    for (const auto& bad : {handles({1, 5}), handles({77}), handles({3, 3}), handles({0, 1, 3, 4, 6, 7, 8, 9})}) {
+        const Status refused = sim->swap_remove_instances(bad);
+        EXPECT_EQ(refused.code(), ErrorCode::invalid_argument) << refused.message();
+        EXPECT_EQ(outputs_of(*sim), after);
+        EXPECT_EQ(sim->instance_count(), std::size(from));
+    }
+    EXPECT_NE(sim->swap_remove_instances(handles({1, 5})).message().find("instance id 5 was removed"),
+              std::string::npos);
+}
+
+// Swap removals in place give bitwise what uploading anew gives, also where a filler's model
+// differs from its hole's, and follow cpu64.
+TEST_P(LiveReshape, SwapRemovalEqualsUploadingAnewAndFollowsCpu64) {
+    const Scene scenes[] = {*grid_scene(test::small_tree(), 10, 5.0, 4), two_model_forest()};
+    for (size_t which = 0; which < std::size(scenes); ++which) {
+        SCOPED_TRACE(which == 0 ? "one model" : "two models");
+        std::string skip;
+        auto in_place = create(scenes[which], true, skip);
+        if (!skip.empty()) GTEST_SKIP() << skip;
+        auto anew = create(scenes[which], false, skip);
+        auto oracle = test::create_simulation_or_skip(scenes[which], windy(), BackendKind::cpu64, skip);
+        ASSERT_TRUE(in_place && anew && oracle);
+        for (Simulation* sim : {in_place.get(), anew.get(), oracle.get()}) churn_by_swaps(*sim);
+        EXPECT_EQ(outputs_of(*in_place), outputs_of(*anew));
+        // Two models: hole 5 takes the deep tree, the instance after it shifts (in place when it
+        // shifts down, through an upload when up).
+        if (which == 0) EXPECT_EQ(full_uploads_of(*in_place), 0u);
+        EXPECT_LE(full_uploads_of(*in_place), 1u);
+        const std::vector<InstanceId> ids(in_place->instance_ids().begin(), in_place->instance_ids().end());
+        EXPECT_EQ(ids, std::vector<InstanceId>(oracle->instance_ids().begin(), oracle->instance_ids().end()));
+        std::vector<float> nodes, expected;
+        ASSERT_TRUE(in_place->read(Output::node_positions, nodes).ok());
+        ASSERT_TRUE(oracle->read(Output::node_positions, expected).ok());
+        ASSERT_EQ(nodes.size(), expected.size());
+        const std::vector<double> a(nodes.begin(), nodes.end()), b(expected.begin(), expected.end());
+        ASSERT_TRUE(test::all_finite(a));
+        EXPECT_LE(test::max_abs_difference(a, b), 1e-3) << "against cpu64";
+    }
+}
+
 INSTANTIATE_TEST_SUITE_P(Backends, LiveReshape,
                          ::testing::Values(BackendKind::cpu64, BackendKind::cpu, BackendKind::cpu_parallel,
                                            BackendKind::vulkan, BackendKind::cuda),

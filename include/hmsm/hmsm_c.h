@@ -333,6 +333,10 @@ HMSM_API hmsm_status hmsm_simulation_add_instances_with_ids(hmsm_simulation* sim
                                                             hmsm_instance_id* ids);
 HMSM_API hmsm_status hmsm_simulation_remove_instances_by_id(hmsm_simulation* simulation,
                                                             const hmsm_instance_id* ids, size_t count);
+/* Removes by id without keeping the order (Simulation::swap_remove_instances): each hole is
+ * filled by the last surviving instances, so only as many instances move as are removed. */
+HMSM_API hmsm_status hmsm_simulation_swap_remove_instances(hmsm_simulation* simulation,
+                                                           const hmsm_instance_id* ids, size_t count);
 HMSM_API hmsm_status hmsm_simulation_index_of(const hmsm_simulation* simulation, hmsm_instance_id id,
                                               uint64_t* index);
 HMSM_API hmsm_status hmsm_simulation_id_of(const hmsm_simulation* simulation, uint64_t index,

@@ -92,12 +92,19 @@ public:
     /// remove_instances() by handle: an id that was removed, was never given, or is listed
     /// twice is refused, naming it, and nothing changes.
     Status remove_instances_by_id(std::span<const InstanceId> ids);
+    /// Removes instances by handle without keeping the order (docs/model.md 3.9, swap removal):
+    /// the holes the removed instances leave below the new count are filled, lowest first, by
+    /// the last surviving instances of the list, so that only as many instances move as are
+    /// removed; every other survivor keeps its index. Handles stay valid (index_of follows the
+    /// moved instances). Refuses what remove_instances_by_id() refuses, changing nothing.
+    Status swap_remove_instances(std::span<const InstanceId> ids);
     /// The current index of the instance `id` (an error naming the id if it was removed or
-    /// never given). Handles are kept in ascending order, so this is a binary search.
+    /// never given).
     Result<uint64_t> index_of(InstanceId id) const;
     /// The handle of the instance at current index `index` (an error if out of range).
     Result<InstanceId> id_of(uint64_t index) const;
-    /// The handles of the current instance list, index for index (ascending).
+    /// The handles of the current instance list, index for index (ascending until a
+    /// swap_remove_instances() moves an instance down).
     std::span<const InstanceId> instance_ids() const;
     /// Puts instances (current indices, no repeats) back at rest, exactly as right after
     /// add_instances(): S = V = 0, generalized force 0, posed at rest, whatever their state was

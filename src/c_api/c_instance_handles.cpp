@@ -36,6 +36,18 @@ hmsm_status hmsm_simulation_remove_instances_by_id(hmsm_simulation* simulation, 
     });
 }
 
+hmsm_status hmsm_simulation_swap_remove_instances(hmsm_simulation* simulation, const hmsm_instance_id* ids,
+                                                  size_t count) {
+    return guarded([&]() -> Status {
+        const char* fn = "hmsm_simulation_swap_remove_instances";
+        if (!simulation) return bad(std::string(fn) + ": simulation is NULL");
+        if (!ids && count > 0) return bad(std::string(fn) + ": ids is NULL with count > 0");
+        std::vector<InstanceId> copied(count);
+        std::transform(ids, ids + count, copied.begin(), [](uint64_t id) { return InstanceId(id); });
+        return simulation->simulation->swap_remove_instances(copied);
+    });
+}
+
 hmsm_status hmsm_simulation_index_of(const hmsm_simulation* simulation, hmsm_instance_id id, uint64_t* index) {
     return guarded([&]() -> Status {
         const char* fn = "hmsm_simulation_index_of";

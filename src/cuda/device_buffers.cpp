@@ -2,6 +2,7 @@
 
 #include "cuda_error.h"
 #include "../device_words.h"
+#include "../element_moves.h"
 
 #include <cuda_runtime_api.h>
 
@@ -121,21 +122,36 @@ Status DeviceBuffers::move(BufferId id, std::span<const ElementMove> moves, cuda
     auto checked = largest_move_bytes(moves, element_bytes,
                                       [&](uint64_t first, uint64_t count) { return check_range(id, first, count); });
     if (!checked) return checked.status();
-    const uint64_t largest = *checked;
-    if (largest == 0) return {};
-    if (move_scratch_bytes_ < largest) {
+    if (*checked == 0) return {};
+    // A move that overlaps itself goes through scratch, at most kMoveScratchBytes at a time;
+    // any other is one copy on the stream, which orders the moves as listed.
+    uint64_t staged = 0;
+    for (const ElementMove& m : moves)
+        if (overlaps_itself(m)) staged = std::max(staged, std::min(m.count * element_bytes, kMoveScratchBytes));
+    if (move_scratch_bytes_ < staged) {
         if (move_scratch_) CUDA_TRY(cudaFree(move_scratch_));
         move_scratch_ = nullptr;
         move_scratch_bytes_ = 0;
-        CUDA_TRY(cudaMalloc(&move_scratch_, largest));
-        move_scratch_bytes_ = largest;
+        CUDA_TRY(cudaMalloc(&move_scratch_, staged));
+        move_scratch_bytes_ = staged;
     }
     auto* base = static_cast<std::byte*>(bases_[uint32_t(id)]);
+    const uint64_t chunk_elements = std::max<uint64_t>(1, kMoveScratchBytes / element_bytes);
     for (const ElementMove& m : moves) {
         if (m.src == m.dst || m.count == 0) continue;
-        const uint64_t bytes = m.count * element_bytes;
-        CUDA_TRY(cudaMemcpyAsync(move_scratch_, base + m.src * element_bytes, bytes, cudaMemcpyDeviceToDevice, stream));
-        CUDA_TRY(cudaMemcpyAsync(base + m.dst * element_bytes, move_scratch_, bytes, cudaMemcpyDeviceToDevice, stream));
+        if (!overlaps_itself(m)) {
+            CUDA_TRY(cudaMemcpyAsync(base + m.dst * element_bytes, base + m.src * element_bytes,
+                                     m.count * element_bytes, cudaMemcpyDeviceToDevice, stream));
+            continue;
+        }
+        HMSM_TRY(for_each_chunk(m, chunk_elements, [&](uint64_t src, uint64_t dst, uint64_t count) -> Status {
+            const uint64_t bytes = count * element_bytes;
+            std::byte* const at = base + dst * element_bytes;
+            CUDA_TRY(cudaMemcpyAsync(move_scratch_, base + src * element_bytes, bytes, cudaMemcpyDeviceToDevice,
+                                     stream));
+            CUDA_TRY(cudaMemcpyAsync(at, move_scratch_, bytes, cudaMemcpyDeviceToDevice, stream));
+            return {};
+        }));
     }
     CUDA_TRY(cudaStreamSynchronize(stream));
     return {};

@@ -9,6 +9,7 @@
 #include "vulkan_backend.h"
 
 #include "../device_words.h"
+#include "../element_moves.h"
 
 #include <algorithm>
 #include <cstring>
@@ -65,7 +66,7 @@ Status VulkanBackend::ensure_move_scratch(uint64_t bytes) {
     // A held-back move still names the scratch buffer: keep it, and record_moves goes through
     // it in pieces.
     for (const HeldBack& c : held_back_)
-        if (c.kind == HeldBack::Kind::move) return {};
+        if (c.kind == HeldBack::Kind::move && move_scratch_.size() > 0) return {};
     move_scratch_ = Buffer{};
     auto scratch = Buffer::create(*device_, bytes, VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
                                   MemoryUse::device_local, "state move scratch");
@@ -85,25 +86,41 @@ void VulkanBackend::record_moves(VkCommandBuffer cmd, BufferId id, std::span<con
     before.dstAccessMask = VK_ACCESS_TRANSFER_READ_BIT | VK_ACCESS_TRANSFER_WRITE_BIT;
     vk.vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_ALL_COMMANDS_BIT, VK_PIPELINE_STAGE_TRANSFER_BIT, 0, 1, &before,
                             0, nullptr, 0, nullptr);
-    // A move larger than the scratch buffer goes in pieces: front to back when it moves down
-    // (each piece is read before a later piece's destination overwrites it), back to front
-    // when it moves up.
+    auto after_copies = [&] {
+        barrier_after_all_writes(*device_, cmd, VK_PIPELINE_STAGE_TRANSFER_BIT,
+                                 VK_ACCESS_TRANSFER_READ_BIT | VK_ACCESS_TRANSFER_WRITE_BIT);
+    };
+    if (destinations_apart_from_sources(moves)) {
+        // A swap removal's moves: one copy command over all of them, no scratch.
+        std::vector<VkBufferCopy> regions;
+        for (const ElementMove& m : moves)
+            if (m.src != m.dst && m.count > 0)
+                regions.push_back({m.src * element_bytes, m.dst * element_bytes, m.count * element_bytes});
+        if (!regions.empty()) vk.vkCmdCopyBuffer(cmd, buffer, buffer, uint32_t(regions.size()), regions.data());
+        after_copies();
+        return;
+    }
+    // In order: a move apart from its own source is one copy; one that overlaps itself goes
+    // through the scratch buffer in pieces, in the order for_each_chunk gives (every piece of
+    // the source read before a destination piece overwrites it).
     const uint64_t piece = std::max<uint64_t>(1, move_scratch_.size() / element_bytes);
     for (const ElementMove& m : moves) {
         if (m.src == m.dst || m.count == 0) continue;
-        const uint64_t pieces = (m.count + piece - 1) / piece;
-        for (uint64_t k = 0; k < pieces; ++k) {
-            const uint64_t at = m.dst < m.src ? k * piece : (pieces - 1 - k) * piece;
-            const uint64_t n = std::min(piece, m.count - at);
-            const VkBufferCopy out{(m.src + at) * element_bytes, 0, n * element_bytes};
-            vk.vkCmdCopyBuffer(cmd, buffer, move_scratch_.handle(), 1, &out);
-            barrier_after_all_writes(*device_, cmd, VK_PIPELINE_STAGE_TRANSFER_BIT,
-                                     VK_ACCESS_TRANSFER_READ_BIT | VK_ACCESS_TRANSFER_WRITE_BIT);
-            const VkBufferCopy back{0, (m.dst + at) * element_bytes, n * element_bytes};
-            vk.vkCmdCopyBuffer(cmd, move_scratch_.handle(), buffer, 1, &back);
-            barrier_after_all_writes(*device_, cmd, VK_PIPELINE_STAGE_TRANSFER_BIT,
-                                     VK_ACCESS_TRANSFER_READ_BIT | VK_ACCESS_TRANSFER_WRITE_BIT);
+        if (!overlaps_itself(m)) {
+            const VkBufferCopy direct{m.src * element_bytes, m.dst * element_bytes, m.count * element_bytes};
+            vk.vkCmdCopyBuffer(cmd, buffer, buffer, 1, &direct);
+            after_copies();
+            continue;
         }
+        (void)for_each_chunk(m, piece, [&](uint64_t src, uint64_t dst, uint64_t count) -> Status {
+            const VkBufferCopy out{src * element_bytes, 0, count * element_bytes};
+            vk.vkCmdCopyBuffer(cmd, buffer, move_scratch_.handle(), 1, &out);
+            after_copies();
+            const VkBufferCopy back{0, dst * element_bytes, count * element_bytes};
+            vk.vkCmdCopyBuffer(cmd, move_scratch_.handle(), buffer, 1, &back);
+            after_copies();
+            return {};
+        });
     }
 }
 

@@ -4,6 +4,7 @@
 #include "vk_error.h"
 
 #include "../device_words.h"
+#include "../element_moves.h"
 
 #include <algorithm>
 #include <atomic>
@@ -172,9 +173,12 @@ Status VulkanBackend::move_elements(BufferId id, std::span<const ElementMove> mo
     auto checked = largest_move_bytes(moves, element_bytes,
                                       [&](uint64_t first, uint64_t count) { return check_range(id, first, count); });
     if (!checked) return checked.status();
-    const uint64_t largest = *checked;
-    if (largest == 0) return {};
-    HMSM_TRY(ensure_move_scratch(largest));
+    if (*checked == 0) return {};
+    // Scratch only for moves that overlap themselves, at most kMoveScratchBytes at a time.
+    uint64_t staged = 0;
+    for (const ElementMove& m : moves)
+        if (overlaps_itself(m)) staged = std::max(staged, std::min(m.count * element_bytes, kMoveScratchBytes));
+    HMSM_TRY(ensure_move_scratch(staged));
     if (holding_back()) {
         HeldBack change{HeldBack::Kind::move, id};
         change.moves.assign(moves.begin(), moves.end());

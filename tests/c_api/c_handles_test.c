@@ -40,6 +40,7 @@ int main(void) {
     hmsm_instance added[2];
     hmsm_instance_id given[2] = {0, 0}, id = 0;
     const hmsm_instance_id first[] = {0}, removed_and_live[] = {2, 0}, unknown[] = {77}, twice[] = {1, 1};
+    const hmsm_instance_id swap_first[] = {1};
     uint64_t index = 0;
 
     CHECK_STATUS(HMSM_OK, hmsm_simulation_reserve_instances(simulation, 16));
@@ -83,6 +84,21 @@ int main(void) {
     CHECK_STATUS(HMSM_OK, hmsm_simulation_add_instances_with_ids(simulation, added, 1, given));
     CHECK(given[0] == 5);
     CHECK(instance_count(simulation) == 4);
+
+    /* Swap removal: the last instance (id 5) fills the hole of id 1 at index 0. */
+    CHECK_STATUS(HMSM_OK, hmsm_simulation_swap_remove_instances(simulation, swap_first, 1));
+    CHECK_STATUS(HMSM_OK, hmsm_simulation_index_of(simulation, 5, &index));
+    CHECK(index == 0);
+    CHECK_STATUS(HMSM_OK, hmsm_simulation_id_of(simulation, 1, &id));
+    CHECK(id == 2);
+    CHECK_STATUS(HMSM_INVALID_ARGUMENT, hmsm_simulation_swap_remove_instances(simulation, swap_first, 1));
+    CHECK(strstr(hmsm_status_message(), "instance id 1 was removed") != NULL);
+    CHECK_STATUS(HMSM_INVALID_ARGUMENT, hmsm_simulation_swap_remove_instances(simulation, unknown, 1));
+    CHECK(strstr(hmsm_status_message(), "instance id 77") != NULL);
+    CHECK_STATUS(HMSM_INVALID_ARGUMENT, hmsm_simulation_swap_remove_instances(simulation, NULL, 1));
+    CHECK_STATUS(HMSM_INVALID_ARGUMENT, hmsm_simulation_swap_remove_instances(NULL, swap_first, 1));
+    CHECK(instance_count(simulation) == 3);
+    CHECK_STATUS(HMSM_OK, hmsm_simulation_step(simulation, 2));
     hmsm_simulation_destroy(simulation);
     if (failures) fprintf(stderr, "%d check(s) failed\n", failures);
     return failures ? 1 : 0;

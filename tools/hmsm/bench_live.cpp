@@ -1,5 +1,6 @@
 // Live-control costs (src/live_control.cpp): removing instances moves the survivors' state on
-// the device, adding them back within the capacity writes only the added ones, adding past the
+// the device (all those after the first hole in order, or only the fillers of a swap removal),
+// adding them back within the capacity writes only the added ones, adding past the
 // capacity re-uploads the scene once with room to grow; a wind change between two steps; and
 // pausing and resuming a tenth of the forest.
 #include "bench_live.h"
@@ -39,9 +40,10 @@ nlohmann::json measure_live_control(const TreeModel& model, const std::vector<Ba
         }
         Simulation& s = **sim;
         (void)s.step(2);
-        for (uint32_t count : {1u, 100u}) {
+        for (uint32_t count : {1u, 10u, 100u}) {
             if (count >= forest) continue;
-            // Remove `count` instances spread over the forest, then add them back at the end.
+            // Remove `count` instances spread over the forest, then add them back at the end;
+            // the same by swap removal.
             std::vector<uint64_t> indices(count);
             std::vector<Instance> removed;
             for (uint32_t k = 0; k < count; ++k) indices[k] = uint64_t(k) * (forest / count);
@@ -53,6 +55,12 @@ nlohmann::json measure_live_control(const TreeModel& model, const std::vector<Ba
             start = Clock::now();
             if (status) status = s.add_instances(removed);
             const double add_seconds = seconds_since(start);
+            std::vector<InstanceId> ids;
+            for (uint64_t i : indices) ids.push_back(s.instance_ids()[i]);
+            start = Clock::now();
+            if (status) status = s.swap_remove_instances(ids);
+            const double swap_remove_seconds = seconds_since(start);
+            if (status) status = s.add_instances(removed);
             start = Clock::now();
             if (status) status = s.step();
             const double first_step_seconds = seconds_since(start);
@@ -63,6 +71,7 @@ nlohmann::json measure_live_control(const TreeModel& model, const std::vector<Ba
             } else {
                 entry["remove_seconds"] = remove_seconds;
                 entry["add_seconds"] = add_seconds;
+                entry["swap_remove_seconds"] = swap_remove_seconds;
                 // 0 when both happened in place (no scene upload).
                 entry["scene_uploads"] = detail::full_uploads_of(s) - uploads;
                 entry["first_step_seconds"] = first_step_seconds;
@@ -137,6 +146,24 @@ nlohmann::json measure_live_control(const TreeModel& model, const std::vector<Ba
             results.push_back({{"backend", to_string(kind)}, {"instances", forest}, {"added", more.size()},
                                {"add_past_capacity_seconds", grow}, {"add_within_capacity_seconds", fit},
                                {"scene_uploads", detail::full_uploads_of(s) - uploads}});
+        // One instance past the capacity, once the room is filled: the single call that pays
+        // for the growth.
+        {
+            const detail::SceneData& d = detail::scene_data_of(s);
+            const uint64_t per = d.models.empty() ? 1 : std::max<uint64_t>(1, d.models[0].chain_count);
+            const uint64_t room = std::min<uint64_t>(d.instance_capacity - d.instance_count(),
+                                                     (d.chain_capacity - d.total_chains) / per);
+            if (status && room > 0) status = s.add_instances(std::vector<Instance>(room, s.instances()[0]));
+            const uint64_t before = detail::full_uploads_of(s);
+            start = Clock::now();
+            const Instance one = s.instances()[0];
+            if (status) status = s.add_instances({&one, 1});
+            const double one_past = seconds_since(start);
+            if (status)
+                results.push_back({{"backend", to_string(kind)}, {"instances", s.instances().size() - 1},
+                                   {"add_one_past_capacity_seconds", one_past},
+                                   {"scene_uploads", detail::full_uploads_of(s) - before}});
+        }
     }
     return results;
 }
@@ -165,6 +192,7 @@ std::string render_live_control(const nlohmann::json& rows) {
             const std::string n = std::to_string(r.value("changed", 0ull));
             line("remove " + n, ms(r, "remove_seconds"), uploads);
             line("add " + n + " back", ms(r, "add_seconds"), "");
+            if (r.contains("swap_remove_seconds")) line("swap-remove " + n, ms(r, "swap_remove_seconds"), "");
             line("first step after", ms(r, "first_step_seconds"), "");
         } else if (r.contains("set_wind_step_seconds")) {
             line("set_wind + step", ms(r, "set_wind_step_seconds"), "");
@@ -183,6 +211,8 @@ std::string render_live_control(const nlohmann::json& rows) {
             const std::string n = std::to_string(r.value("added", 0ull));
             line("add " + n + " past the capacity, then " + n + " within",
                  ms(r, "add_past_capacity_seconds") + ", " + ms(r, "add_within_capacity_seconds"), uploads);
+        } else if (r.contains("add_one_past_capacity_seconds")) {
+            line("add 1 past the capacity (the scene grows by half)", ms(r, "add_one_past_capacity_seconds"), uploads);
         }
     }
     return out;
