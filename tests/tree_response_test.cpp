@@ -82,8 +82,9 @@ TEST(TreeResponse, CoupledRodMatchesTheCantileverAndTheDampingSet) {
         EXPECT_GT(w.mean_along_m, 0.0);  // pushed downwind
         EXPECT_GT(w.mean_top_over_height, 0.0);
         EXPECT_GT(w.mean_lean_rad, 0.0);
-        // One rigid link: the base leans as far as the top, angle = displacement / height.
-        EXPECT_NEAR(w.mean_lean_rad, w.mean_top_over_height, 0.2 * w.mean_top_over_height + 1e-4);
+        // The rod is split into links that bend (docs/model.md 3.13): its base leans less than a
+        // rigid hinge would, angle < displacement / height.
+        EXPECT_LT(w.mean_lean_rad, 0.8 * w.mean_top_over_height);
         EXPECT_GT(w.cross_ratio, 0.0);
         EXPECT_LT(w.cross_ratio, 2.0);
         EXPECT_NEAR(w.band_low_hz, 1.5 * a->release.frequency_hz, 1e-12);
