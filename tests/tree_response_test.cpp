@@ -123,9 +123,9 @@ TEST(TreeResponse, RefusesBadSettings) {
 class WholeTreeCli : public test::CliFixture {};
 
 TEST_F(WholeTreeCli, WritesTheReportAndPlots) {
-    const std::string quick_run = " --whole-tree --pull-seconds 5 --release-seconds 20 --settle-seconds 2"
-                                  " --sway-seconds 20 --sway-speeds 5,20 --no-progress";
-    ASSERT_EQ(run("analyze --preset paper-1 --dynamics coupled --json" + quick_run + " --plot-release " +
+    const std::string quick_run = " --whole-tree --pull-seconds 3 --release-seconds 12 --settle-seconds 1"
+                                  " --sway-seconds 8 --sway-speeds 5,20 --no-progress";
+    ASSERT_EQ(run("analyze --preset paper-5 --dynamics coupled --json" + quick_run + " --plot-release " +
                   path("release.png") + " --plot-sway " + path("sway.png")).exit_code,
               0)
         << last_.err;
@@ -144,7 +144,7 @@ TEST_F(WholeTreeCli, WritesTheReportAndPlots) {
         ASSERT_GT(bytes.size(), 1000u) << png;
         EXPECT_EQ(bytes.substr(1, 3), "PNG") << png;
     }
-    ASSERT_EQ(run("analyze --preset paper-1" + quick_run).exit_code, 0) << last_.err;
+    ASSERT_EQ(run("analyze --preset paper-5" + quick_run).exit_code, 0) << last_.err;
     EXPECT_NE(last_.out.find("release test"), std::string::npos);
     EXPECT_NE(last_.out.find("paper dynamics"), std::string::npos);
 }
