@@ -123,7 +123,7 @@ Status Simulation::Impl::apply_pending() {
 
 Status Simulation::set_wind(const Wind& wind) {
     Impl& s = *impl_;
-    HMSM_TRY(s.check_wind(wind, s.instances_));
+    HMSM_TRY(s.check_wind(wind, &s.config_.wind));
     // tau continues: tau_b is tau at the next step under the wind in force so far.
     const uint64_t next = s.steps_done_ + 1;
     s.clock_.base_tau = s.clock_.tau(wind_clock_rate(s.config_.wind), s.config_.parameters.dt, next);
@@ -153,7 +153,7 @@ Status Simulation::set_wind(const Wind& wind) {
 
 Status Simulation::set_force_fields(std::span<const ForceField> fields) {
     HMSM_TRY(validate_force_fields(fields));
-    HMSM_TRY(impl_->check_forces(impl_->config_.wind, {}, fields));
+    HMSM_TRY(impl_->check_forces(fields));
     impl_->force_fields_.assign(fields.begin(), fields.end());
     impl_->header_dirty_ = true;
     return {};
@@ -176,6 +176,7 @@ Status Simulation::set_instance_wind_scale(uint64_t instance, double wind_scale)
     HMSM_TRY(detail::check_wind_force(instance_name(instance), impl_->config_.wind.strength, wind_scale,
                                       impl_->largest_wind_area_[changed.model]));
     impl_->instances_[instance].wind_scale = wind_scale;
+    impl_->instances_changed();
     impl_->dirty_instances_.push_back(uint32_t(instance));
     return {};
 }

@@ -190,6 +190,7 @@ Status Simulation::Impl::reshape(const std::vector<uint32_t>& survivors, std::sp
         first_moved = 0;  // every instance buffer is new
     }
     instances_ = std::move(next);
+    instances_changed();
     std::vector<InstanceId> ids;
     ids.reserve(instances_.size());
     for (uint32_t i : survivors) ids.push_back(instance_ids_[i]);

@@ -241,6 +241,7 @@ Status Simulation::Impl::switch_models(const std::vector<std::pair<uint32_t, uin
         }
     }
     instances_ = std::move(next);
+    instances_changed();
     header_dirty_ = program_dirty_ = true;
 
     // Outputs of the instances that moved: passes 4, 6 and 7 from the carried pose, element for

@@ -47,14 +47,22 @@ struct __attribute__((visibility("hidden"))) Simulation::Impl {
                         const std::vector<uint64_t>& old_chain);
     /// Checks that `instances` fit the 32-bit element counts of the device layout.
     Status check_size(std::span<const Instance> instances) const;
-    /// Checks the wind force of every chain of `instances` under `wind` and the force of
-    /// `fields` against the float range (docs/model.md 3.11).
-    Status check_forces(const Wind& wind, std::span<const Instance> instances,
-                        std::span<const ForceField> fields) const;
+    /// Checks the force of `fields` against the float range (docs/model.md 3.11).
+    Status check_forces(std::span<const ForceField> fields) const;
+    /// Checks the wind force of every chain of the instances under `wind`: O(models) while the
+    /// largest instance load leaves room, instance by instance (naming the first offender)
+    /// only near the limit.
+    Status check_instance_forces(const Wind& wind) const;
+    /// The largest wind_scale * A_c over the instances (cached until instances_changed()).
+    double largest_instance_load() const;
+    /// Every change of an instance's model or wind scale, and of the instance list, calls it.
+    void instances_changed() { largest_instance_load_ = -1.0; }
     /// Resets `indices` to rest (S = V = 0, posed at rest); live_control.cpp.
     Status reset(std::span<const uint32_t> indices);
-    /// Checks that the wind keeps every force and phase finite for `instances`.
-    Status check_wind(const Wind& wind, std::span<const Instance> instances) const;
+    /// Checks that `wind` keeps every force and phase of the instances finite. With
+    /// `in_force`, the wind the instances were checked against so far, phases that depend on
+    /// nothing that changed are not checked again (an engine's gust each frame stays O(models)).
+    Status check_wind(const Wind& wind, const Wind* in_force = nullptr) const;
     /// Where an output comes from (simulation_read.cpp).
     struct ReadSource {
         Output output = Output::node_positions;
@@ -117,6 +125,7 @@ struct __attribute__((visibility("hidden"))) Simulation::Impl {
     std::vector<Hierarchy> hierarchies_;
     std::vector<MeshTemplate> meshes_;
     std::vector<double> largest_wind_area_;  // per model: the largest chain wind area A_c
+    mutable double largest_instance_load_ = -1.0;  // largest_instance_load(); < 0: not known
     std::unique_ptr<detail::SceneData> data_;
     std::unique_ptr<detail::Backend> backend_;
     std::vector<detail::Dispatch> step_program_;

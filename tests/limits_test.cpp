@@ -95,6 +95,32 @@ TEST(Limits, WindScaleAndItsProductWithTheStrengthAreBounded) {
     expect_refused(Simulation::create(scene, strong).status(), {"wind force"});
 }
 
+// set_wind bounds the forces by the largest instance load it keeps between instance changes:
+// a raised wind scale, an added instance and a removal each change that bound.
+TEST(Limits, SetWindSeesEveryInstanceChange) {
+    auto sim = small_simulation();
+    ASSERT_TRUE(sim);
+    Wind wind = sim->wind();
+    wind.strength = 1e20;
+    ASSERT_TRUE(sim->set_wind(wind).ok());
+    ASSERT_TRUE(sim->set_instance_wind_scale(0, 1e5).ok());
+    wind.strength = 1e26;  // fine for a scale of 1, too strong for 1e5
+    expect_refused(sim->set_wind(wind), {"instance 0", "wind force", "1e+30"});
+    ASSERT_TRUE(sim->set_instance_wind_scale(0, 1.0).ok());
+    ASSERT_TRUE(sim->set_wind(wind).ok());  // the lowered scale is seen too
+    wind.strength = 1e20;
+    ASSERT_TRUE(sim->set_wind(wind).ok());
+    Instance added;
+    added.wind_scale = 1e5;
+    ASSERT_TRUE(sim->add_instances({&added, 1}).ok());
+    wind.strength = 1e26;
+    expect_refused(sim->set_wind(wind), {"instance 1", "wind force"});
+    EXPECT_EQ(sim->wind().strength, 1e20);
+    const uint64_t strong = 1;
+    ASSERT_TRUE(sim->remove_instances({&strong, 1}).ok());
+    EXPECT_TRUE(sim->set_wind(wind).ok());
+}
+
 // Origins and radii of 1e300 ran with inf and NaN outputs.
 TEST(Limits, OriginsAndRadiiBeyondTheRangeAreRefused) {
     Scene scene = single_tree_scene(test::small_tree(), Vec3(1e300, 0.0, 0.0));
