@@ -235,6 +235,29 @@ HMSM_API hmsm_status hmsm_tree_from_nodes(const int32_t* parents, const double* 
 HMSM_API hmsm_status hmsm_tree_node_count(const hmsm_tree* tree, uint64_t* count);
 HMSM_API void hmsm_tree_destroy(hmsm_tree* tree);
 
+/* --- a tree's wood and leaves under the coupled dynamics (docs/model.md 3.13, 4.1) ---------- */
+/* Without them the simulation's hmsm_parameters (material, leaves_on) decide. They change the
+ * tree only: a model added to a scene afterwards carries them (hmsm_scene_add_model copies). */
+enum { /* hmsm_tree leaf state (hmsm::TreeModel::leaves_on) */
+    HMSM_LEAF_STATE_FROM_PARAMETERS = 0,
+    HMSM_LEAF_STATE_ON = 1,
+    HMSM_LEAF_STATE_OFF = 2
+};
+/* The wood species presets (data/species.json): their number, and the key of preset `index`
+ * ("sugar-maple"), a string owned by the library for its lifetime. */
+HMSM_API hmsm_status hmsm_species_count(uint64_t* count);
+HMSM_API hmsm_status hmsm_species_name(uint64_t index, const char** name);
+/* The tree's material from a species preset; an unknown name fails naming the known ones. */
+HMSM_API hmsm_status hmsm_tree_set_species(hmsm_tree* tree, const char* name);
+/* The tree's material by value: modulus E (Pa) and green density (kg/m^3), range-checked. */
+HMSM_API hmsm_status hmsm_tree_set_material(hmsm_tree* tree, double modulus, double density);
+HMSM_API hmsm_status hmsm_tree_clear_material(hmsm_tree* tree);
+/* *has_material = 1 and its values, or 0 and zeros when the tree carries none. */
+HMSM_API hmsm_status hmsm_tree_material(const hmsm_tree* tree, int32_t* has_material, double* modulus,
+                                        double* density);
+HMSM_API hmsm_status hmsm_tree_set_leaf_state(hmsm_tree* tree, int32_t state); /* HMSM_LEAF_STATE_* */
+HMSM_API hmsm_status hmsm_tree_leaf_state(const hmsm_tree* tree, int32_t* state);
+
 /* --- scenes ------------------------------------------------------------------------------- */
 HMSM_API hmsm_status hmsm_scene_create(hmsm_scene** scene);
 /* An hmsm-forest JSON v1 file (docs/model.md 4): builds the models its instances place. */
