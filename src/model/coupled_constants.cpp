@@ -46,6 +46,12 @@ bool float_safe(double v, bool may_be_zero) {
     return std::isfinite(v) && std::abs(v) >= 1e-30 && std::abs(v) <= 1e30;
 }
 
+/// Twice the product of the parts perpendicular to the local x axis (index 0) or z axis (index 1)
+/// of two vectors: the cross term 2 (a . b)_perp of |a + b|_perp^2.
+double axis_cross2(const glm::dvec3& a, const glm::dvec3& b, int axis) {
+    return 2.0 * (axis == 0 ? a.y * b.y + a.z * b.z : a.x * b.x + a.y * b.y);
+}
+
 /// The child's inertia about its joint (axes x, z of its own frame) seen about the parent's axis
 /// `axis` (x or z of the parent frame): I_x (x_k . e)^2 + I_z (z_k . e)^2, Q_k = [x_k y_k z_k].
 double projected_inertia(const Chain& child, int axis) {
@@ -280,13 +286,16 @@ Status fill_coupled_constants(const TreeModel& tree, const Parameters& parameter
     // (a link's next link excluded: it lies on the same cantilever).
     std::vector<std::vector<double>> node_masses(chain_count);
     std::vector<std::vector<std::array<double, 2>>> node_rotaries(chain_count);
+    // Each chain's subtree first mass moment about its joint, in its own frame: the parallel-axis
+    // transport of its inertia to its parent's joint needs the subtree's centroid.
+    std::vector<glm::dvec3> mass_moments(chain_count, glm::dvec3(0.0));
     // Children have larger ids than their parent: from the last chain up, every child is done.
     for (size_t c = chain_count; c-- > 0;) {
         Chain& chain = h.chains[c];
         ChainDynamics& d = chain.dynamics;
         const ChainPath& path = paths[c];
         double inertia[2] = {0.0, 0.0}, drag_moment2[2] = {0.0, 0.0};
-        glm::dvec3 moment(0.0);
+        glm::dvec3 moment(0.0), mass_moment(0.0);
         // Own wood: each segment a frustum, 3-point Gauss-Legendre along it (exact for the
         // quartic integrands of mass and drag-area moments).
         const double gauss_t[3] = {0.5 - std::sqrt(0.15), 0.5, 0.5 + std::sqrt(0.15)};
@@ -301,6 +310,7 @@ Status fill_coupled_constants(const TreeModel& tree, const Parameters& parameter
                 d.mass += dm;
                 d.drag_area += da;
                 moment += da * x;
+                mass_moment += dm * x;
                 for (int a = 0; a < 2; ++a) {
                     inertia[a] += dm * axis_distance2(x, a);
                     drag_moment2[a] += da * axis_distance2(x, a);
@@ -315,6 +325,7 @@ Status fill_coupled_constants(const TreeModel& tree, const Parameters& parameter
             d.mass += leaf.mass;
             d.drag_area += leaf.drag_area;
             moment += leaf.drag_area * leaf.x;
+            mass_moment += leaf.mass * leaf.x;
             for (int a = 0; a < 2; ++a) {
                 inertia[a] += leaf.mass * axis_distance2(leaf.x, a);
                 drag_moment2[a] += leaf.drag_area * axis_distance2(leaf.x, a);
@@ -330,16 +341,23 @@ Status fill_coupled_constants(const TreeModel& tree, const Parameters& parameter
             d.subtree_mass += child.dynamics.subtree_mass;
             d.subtree_drag_area += child.dynamics.subtree_drag_area;
             moment += child.dynamics.subtree_drag_area * a;
+            // The child's subtree mass moment about its own joint, in this chain's frame.
+            const glm::dvec3 child_moment = child.rest_rotation * mass_moments[size_t(k)];
+            mass_moment += child.dynamics.subtree_mass * a + child_moment;
             const bool next_link = child.dynamics.link_index > 0;
             if (!next_link) node_mass[at] += child.dynamics.subtree_mass;
             for (int ax = 0; ax < 2; ++ax) {
                 const double rotary = projected_inertia(child, ax);
-                inertia[ax] += child.dynamics.subtree_mass * axis_distance2(a, ax) + rotary;
+                // Parallel axis from the child's joint to this joint, the child's centroid not at
+                // its joint: m d(a)^2 + 2 a . (m c) across the axis, plus its inertia about its joint.
+                inertia[ax] += child.dynamics.subtree_mass * axis_distance2(a, ax) +
+                               axis_cross2(a, child_moment, ax) + rotary;
                 drag_moment2[ax] += child.dynamics.subtree_drag_area * axis_distance2(a, ax);
                 if (!next_link) node_rotary[at][ax] += rotary;
             }
         }
         d.wind_moment = moment;
+        mass_moments[c] = mass_moment;
         for (int a = 0; a < 2; ++a) {
             d.inertia[a] = d.rigid_inertia[a] = inertia[a];
             d.aero_damping[a] = kAirDensity * kReferenceWindSpeed * drag_moment2[a];
