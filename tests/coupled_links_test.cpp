@@ -55,7 +55,9 @@ double crossing_frequency(std::vector<double> x, double dt) {
 }  // namespace
 
 // The rod is split into the trunk's six links; each link's rigid inertia is the rod beyond its
-// joint about that joint, and every link sways at the whole rod's cantilever frequency.
+// joint about that joint (mu l^3 / 3 for the length l beyond it: the lumping transports each next
+// link's inertia with the parallel-axis cross term of its centroid), and every link sways at the
+// whole rod's cantilever frequency.
 TEST(CoupledLinks, LongRodIsSplitIntoLinksThatKeepTheCantileverFrequency) {
     ModelOptions options;
     options.dynamics = Dynamics::coupled;
@@ -73,16 +75,18 @@ TEST(CoupledLinks, LongRodIsSplitIntoLinksThatKeepTheCantileverFrequency) {
         EXPECT_EQ(d.link_count, detail::kTrunkLinks);
         EXPECT_EQ(h->chains[c].members.size(), size_t(kRodSegments / detail::kTrunkLinks));
         if (c > 0) EXPECT_EQ(h->chains[c].parent, int32_t(c - 1));
-        // Own wood about the joint, plus the next link lumped as children are: its subtree
-        // mass at its attach node and its rigid inertia.
+        // The rod beyond the joint, a rigid rod of length l hinged at its end: mu l^3 / 3 about
+        // both axes across it. Lumping the next link at its attach node without the cross term
+        // 2 m_sub (l_a . c) would leave out mu l_a (l - l_a)^2 at each joint.
         const double link = kRodLength / detail::kTrunkLinks;
-        double lumped = mu * std::pow(link, 3) / 3.0;
+        const double beyond = kRodLength - link * double(c);
+        const double rigid = mu * std::pow(beyond, 3) / 3.0;
         if (c + 1 < h->chains.size()) {
             const ChainDynamics& next = h->chains[c + 1].dynamics;
-            lumped += next.subtree_mass * link * link + next.rigid_inertia[0];
             EXPECT_NEAR(d.subtree_mass, d.mass + next.subtree_mass, 1e-9 * d.subtree_mass);
         }
-        EXPECT_NEAR(d.rigid_inertia[0], lumped, 1e-6 * lumped) << "link " << c;
+        EXPECT_NEAR(d.subtree_mass, mu * beyond, 1e-9 * d.subtree_mass) << "link " << c;
+        for (int a = 0; a < 2; ++a) EXPECT_NEAR(d.rigid_inertia[a], rigid, 1e-9 * rigid) << "link " << c;
         for (int a = 0; a < 2; ++a) {
             EXPECT_NEAR(d.frequency[a], f0, 0.01 * f0) << "link " << c;
             EXPECT_NEAR(std::sqrt(d.stiffness[a] / d.inertia[a]) / (2 * std::numbers::pi), d.frequency[a],

@@ -34,6 +34,24 @@ double axis_distance2(const glm::dvec3& x, int axis) {
     return axis == 0 ? x.y * x.y + x.z * x.z : x.x * x.x + x.y * x.y;
 }
 
+/// What a chain's cantilever carries at one path node: point masses, their first mass moment
+/// along the path's tangent there (a rigid load whose centroid lies beyond or before the node:
+/// the lateral load's couple, and the displacement w + theta * lever of its centroid), and their
+/// rotational inertia about the node across each bending axis.
+struct NodeLoad {
+    double mass = 0.0, lever = 0.0;
+    std::array<double, 2> rotary{0.0, 0.0};
+};
+
+/// Unit tangent of a chain's path at node j: the mean direction of the segments beside it.
+glm::dvec3 path_tangent(const ChainPath& path, size_t j) {
+    glm::dvec3 t(0.0);
+    if (j > 0) t += glm::normalize(path.p[j] - path.p[j - 1]);
+    if (j + 1 < path.p.size()) t += glm::normalize(path.p[j + 1] - path.p[j]);
+    const double n = glm::length(t);
+    return n > 0.0 ? t / n : glm::dvec3(0.0, 1.0, 0.0);
+}
+
 /// A load in the chain's frame: mass and drag area at local position x.
 struct PointLoad {
     int32_t path_index;
@@ -44,6 +62,12 @@ struct PointLoad {
 bool float_safe(double v, bool may_be_zero) {
     if (v == 0.0) return may_be_zero;
     return std::isfinite(v) && std::abs(v) >= 1e-30 && std::abs(v) <= 1e30;
+}
+
+/// Twice the product of the parts perpendicular to the local x axis (index 0) or z axis (index 1)
+/// of two vectors: the cross term 2 (a . b)_perp of |a + b|_perp^2.
+double axis_cross2(const glm::dvec3& a, const glm::dvec3& b, int axis) {
+    return 2.0 * (axis == 0 ? a.y * b.y + a.z * b.z : a.x * b.x + a.y * b.y);
 }
 
 /// The child's inertia about its joint (axes x, z of its own frame) seen about the parent's axis
@@ -57,12 +81,12 @@ double projected_inertia(const Chain& child, int axis) {
 /// The first natural frequency (rad/s) about each axis of chain c as a tapered cantilever
 /// carrying its leaves and children, by Rayleigh's quotient with the static deflection shape
 /// (docs/model.md 3.13); and the tapered beam's tip stiffness K_beam.
-void cantilever(const ChainPath& path, const std::vector<double>& node_mass,
-                const std::vector<std::array<double, 2>>& node_rotary, const Material& material,
+void cantilever(const ChainPath& path, const std::vector<NodeLoad>& node_load, const Material& material,
                 double omega[2], double& beam_stiffness) {
     const size_t segments = path.p.size() - 1;
     const size_t boundaries = segments * kPiecesPerSegment + 1;
     std::vector<double> s(boundaries), r(boundaries), point(boundaries, 0.0), piece(boundaries, 0.0);
+    std::vector<double> lever(boundaries, 0.0);
     std::vector<std::array<double, 2>> rotary(boundaries, {0.0, 0.0});
     for (size_t j = 0; j < segments; ++j) {
         for (int i = 0; i <= kPiecesPerSegment; ++i) {
@@ -73,8 +97,9 @@ void cantilever(const ChainPath& path, const std::vector<double>& node_mass,
         }
     }
     for (size_t j = 0; j <= segments; ++j) {
-        point[j * kPiecesPerSegment] += node_mass[j];
-        rotary[j * kPiecesPerSegment] = node_rotary[j];
+        point[j * kPiecesPerSegment] += node_load[j].mass;
+        lever[j * kPiecesPerSegment] = node_load[j].lever;
+        rotary[j * kPiecesPerSegment] = node_load[j].rotary;
     }
     const double L = s.back();
     double compliance = 0.0;  // int (L - s)^2 / (E J) ds
@@ -85,24 +110,28 @@ void cantilever(const ChainPath& path, const std::vector<double>& node_mass,
     }
     beam_stiffness = L * L / compliance;
     // Static deflection under the loads (unit gravity across the chain): bending moment from
-    // the tip down, curvature M / (E J), slope and deflection from the clamped base up.
+    // the tip down (each rigid load's couple, its lever, included below its node), curvature
+    // M / (E J), slope and deflection from the clamped base up.
     std::vector<double> moment(boundaries, 0.0), slope(boundaries, 0.0), deflection(boundaries, 0.0);
     double beyond = 0.0;  // load strictly beyond boundary b + 1
     for (size_t b = boundaries - 1; b-- > 0;) {
         const double ds = s[b + 1] - s[b];
-        moment[b] = moment[b + 1] + (beyond + point[b + 1]) * ds + piece[b] * 0.5 * ds;
+        moment[b] = moment[b + 1] + (beyond + point[b + 1]) * ds + piece[b] * 0.5 * ds + lever[b + 1];
         beyond += point[b + 1] + piece[b];
     }
-    auto curvature = [&](size_t b) { return moment[b] / (material.modulus * kPi * std::pow(r[b], 4) / 4.0); };
+    // moment[b] is the moment just beyond boundary b; just before it, a couple there adds on.
+    auto curvature = [&](size_t b, double m) { return m / (material.modulus * kPi * std::pow(r[b], 4) / 4.0); };
     for (size_t b = 0; b + 1 < boundaries; ++b) {
         const double ds = s[b + 1] - s[b];
-        slope[b + 1] = slope[b] + 0.5 * (curvature(b) + curvature(b + 1)) * ds;
+        slope[b + 1] = slope[b] + 0.5 * (curvature(b, moment[b]) + curvature(b + 1, moment[b + 1] + lever[b + 1])) * ds;
         deflection[b + 1] = deflection[b] + 0.5 * (slope[b] + slope[b + 1]) * ds;
     }
     double work = 0.0, kinetic = 0.0, rotational[2] = {0.0, 0.0};
     for (size_t b = 0; b < boundaries; ++b) {
-        work += point[b] * deflection[b];
-        kinetic += point[b] * deflection[b] * deflection[b];
+        // A rigid load's centroid moves by w + theta * lever: work m w + S theta, kinetic energy
+        // m w^2 + 2 S w theta + I theta^2 (I about the node).
+        work += point[b] * deflection[b] + lever[b] * slope[b];
+        kinetic += point[b] * deflection[b] * deflection[b] + 2.0 * lever[b] * deflection[b] * slope[b];
         for (int a = 0; a < 2; ++a) rotational[a] += rotary[b][a] * slope[b] * slope[b];
         if (b + 1 < boundaries) {
             const double w = 0.5 * (deflection[b] + deflection[b + 1]);
@@ -119,17 +148,15 @@ void cantilever(const ChainPath& path, const std::vector<double>& node_mass,
 /// K_j = 1 / compliance, I_j = K_j / omega0^2, D_j = 2 zeta sqrt(K_j I_j), and the aerodynamic
 /// damping scaled with I_j by I_j / I_rigid.
 void split_chain_constants(Hierarchy& h, size_t first, const std::vector<ChainPath>& paths,
-                           const std::vector<std::vector<double>>& node_masses,
-                           const std::vector<std::vector<std::array<double, 2>>>& node_rotaries,
-                           const Material& material, double zeta) {
+                           const std::vector<std::vector<NodeLoad>>& node_loads, const Material& material,
+                           double zeta) {
     std::vector<size_t> links{first};
     while (int32_t(links.size()) < h.chains[first].dynamics.link_count) {
         const ChainDynamics& d = h.chains[links.back()].dynamics;
         links.push_back(size_t(d.first_child + d.child_count - 1));  // the next link: last child
     }
     ChainPath whole;
-    std::vector<double> node_mass;
-    std::vector<std::array<double, 2>> node_rotary;
+    std::vector<NodeLoad> node_load;
     std::vector<double> joint_s;
     for (size_t link : links) {
         const ChainPath& path = paths[link];
@@ -137,19 +164,20 @@ void split_chain_constants(Hierarchy& h, size_t first, const std::vector<ChainPa
         const double offset = whole.s.empty() ? 0.0 : whole.s.back();
         joint_s.push_back(offset);
         if (from == 1) {
-            node_mass.back() += node_masses[link][0];
-            for (int a = 0; a < 2; ++a) node_rotary.back()[a] += node_rotaries[link][0][a];
+            const NodeLoad& base = node_loads[link][0];
+            node_load.back().mass += base.mass;
+            node_load.back().lever += base.lever;
+            for (int a = 0; a < 2; ++a) node_load.back().rotary[a] += base.rotary[a];
         }
         for (size_t j = from; j < path.s.size(); ++j) {
             whole.s.push_back(offset + path.s[j]);
             whole.r.push_back(path.r[j]);
             whole.p.push_back(glm::dvec3(0.0, offset + path.s[j], 0.0));
-            node_mass.push_back(node_masses[link][j]);
-            node_rotary.push_back(node_rotaries[link][j]);
+            node_load.push_back(node_loads[link][j]);
         }
     }
     double omega[2], beam_stiffness = 0.0;
-    cantilever(whole, node_mass, node_rotary, material, omega, beam_stiffness);
+    cantilever(whole, node_load, material, omega, beam_stiffness);
     // Joint compliances: the curvature M / (E J) between two joints is shared linearly by them.
     const size_t n = links.size();
     joint_s.push_back(whole.s.back());
@@ -276,17 +304,19 @@ Status fill_coupled_constants(const TreeModel& tree, const Parameters& parameter
 
     const double wood_cd = parameters.wood_drag_coefficient;
     const double zeta = parameters.structural_damping;
-    // The cantilever loads of each chain: masses and projected rotary inertias at its path nodes
+    // The cantilever loads of each chain at its path nodes: leaves and children as rigid bodies
     // (a link's next link excluded: it lies on the same cantilever).
-    std::vector<std::vector<double>> node_masses(chain_count);
-    std::vector<std::vector<std::array<double, 2>>> node_rotaries(chain_count);
+    std::vector<std::vector<NodeLoad>> node_loads(chain_count);
+    // Each chain's subtree first mass moment about its joint, in its own frame: the parallel-axis
+    // transport of its inertia to its parent's joint needs the subtree's centroid.
+    std::vector<glm::dvec3> mass_moments(chain_count, glm::dvec3(0.0));
     // Children have larger ids than their parent: from the last chain up, every child is done.
     for (size_t c = chain_count; c-- > 0;) {
         Chain& chain = h.chains[c];
         ChainDynamics& d = chain.dynamics;
         const ChainPath& path = paths[c];
         double inertia[2] = {0.0, 0.0}, drag_moment2[2] = {0.0, 0.0};
-        glm::dvec3 moment(0.0);
+        glm::dvec3 moment(0.0), mass_moment(0.0);
         // Own wood: each segment a frustum, 3-point Gauss-Legendre along it (exact for the
         // quartic integrands of mass and drag-area moments).
         const double gauss_t[3] = {0.5 - std::sqrt(0.15), 0.5, 0.5 + std::sqrt(0.15)};
@@ -301,25 +331,29 @@ Status fill_coupled_constants(const TreeModel& tree, const Parameters& parameter
                 d.mass += dm;
                 d.drag_area += da;
                 moment += da * x;
+                mass_moment += dm * x;
                 for (int a = 0; a < 2; ++a) {
                     inertia[a] += dm * axis_distance2(x, a);
                     drag_moment2[a] += da * axis_distance2(x, a);
                 }
             }
         }
-        std::vector<double>& node_mass = node_masses[c];
-        std::vector<std::array<double, 2>>& node_rotary = node_rotaries[c];
-        node_mass.assign(path.p.size(), 0.0);
-        node_rotary.assign(path.p.size(), {0.0, 0.0});
+        std::vector<NodeLoad>& node_load = node_loads[c];
+        node_load.assign(path.p.size(), NodeLoad{});
         for (const PointLoad& leaf : leaves[c]) {
             d.mass += leaf.mass;
             d.drag_area += leaf.drag_area;
             moment += leaf.drag_area * leaf.x;
+            mass_moment += leaf.mass * leaf.x;
             for (int a = 0; a < 2; ++a) {
                 inertia[a] += leaf.mass * axis_distance2(leaf.x, a);
                 drag_moment2[a] += leaf.drag_area * axis_distance2(leaf.x, a);
             }
-            node_mass[size_t(leaf.path_index)] += leaf.mass;
+            NodeLoad& at = node_load[size_t(leaf.path_index)];
+            const glm::dvec3 offset = leaf.x - path.p[size_t(leaf.path_index)];
+            at.mass += leaf.mass;
+            at.lever += leaf.mass * glm::dot(offset, path_tangent(path, size_t(leaf.path_index)));
+            for (int a = 0; a < 2; ++a) at.rotary[a] += leaf.mass * axis_distance2(offset, a);
         }
         d.subtree_mass = d.mass;
         d.subtree_drag_area = d.drag_area;
@@ -330,23 +364,33 @@ Status fill_coupled_constants(const TreeModel& tree, const Parameters& parameter
             d.subtree_mass += child.dynamics.subtree_mass;
             d.subtree_drag_area += child.dynamics.subtree_drag_area;
             moment += child.dynamics.subtree_drag_area * a;
+            // The child's subtree mass moment about its own joint, in this chain's frame.
+            const glm::dvec3 child_moment = child.rest_rotation * mass_moments[size_t(k)];
+            mass_moment += child.dynamics.subtree_mass * a + child_moment;
             const bool next_link = child.dynamics.link_index > 0;
-            if (!next_link) node_mass[at] += child.dynamics.subtree_mass;
+            if (!next_link) {
+                node_load[at].mass += child.dynamics.subtree_mass;
+                node_load[at].lever += glm::dot(child_moment, path_tangent(path, at));
+            }
             for (int ax = 0; ax < 2; ++ax) {
                 const double rotary = projected_inertia(child, ax);
-                inertia[ax] += child.dynamics.subtree_mass * axis_distance2(a, ax) + rotary;
+                // Parallel axis from the child's joint to this joint, the child's centroid not at
+                // its joint: m d(a)^2 + 2 a . (m c) across the axis, plus its inertia about its joint.
+                inertia[ax] += child.dynamics.subtree_mass * axis_distance2(a, ax) +
+                               axis_cross2(a, child_moment, ax) + rotary;
                 drag_moment2[ax] += child.dynamics.subtree_drag_area * axis_distance2(a, ax);
-                if (!next_link) node_rotary[at][ax] += rotary;
+                if (!next_link) node_load[at].rotary[ax] += rotary;
             }
         }
         d.wind_moment = moment;
+        mass_moments[c] = mass_moment;
         for (int a = 0; a < 2; ++a) {
             d.inertia[a] = d.rigid_inertia[a] = inertia[a];
             d.aero_damping[a] = kAirDensity * kReferenceWindSpeed * drag_moment2[a];
         }
         if (d.link_count > 1) continue;  // split_chain_constants, below
         double omega[2];
-        cantilever(path, node_mass, node_rotary, material, omega, d.beam_stiffness);
+        cantilever(path, node_load, material, omega, d.beam_stiffness);
         for (int a = 0; a < 2; ++a) {
             d.frequency[a] = omega[a] / (2.0 * kPi);
             d.stiffness[a] = omega[a] * omega[a] * inertia[a];
@@ -355,7 +399,7 @@ Status fill_coupled_constants(const TreeModel& tree, const Parameters& parameter
     }
     for (size_t c = 0; c < chain_count; ++c)
         if (h.chains[c].dynamics.link_index == 0 && h.chains[c].dynamics.link_count > 1)
-            split_chain_constants(h, c, paths, node_masses, node_rotaries, material, zeta);
+            split_chain_constants(h, c, paths, node_loads, material, zeta);
     for (size_t c = chain_count; c-- > 0;) {
         Chain& chain = h.chains[c];
         const ChainDynamics& d = chain.dynamics;
