@@ -33,6 +33,10 @@ struct OpenWorldSettings {
     uint64_t device_copy_bytes = 1 << 30, host_copy_bytes = 256 << 20;  ///< roofline block sizes
 };
 
+/// Settings from the --open-world-* flags (without `changes_given`: 2,000 per 500,000 trees);
+/// a value out of range is invalid_argument naming the flag.
+Result<OpenWorldSettings> open_world_settings(int64_t trees, int64_t frames, int64_t changes, bool changes_given);
+
 /// One JSON row per backend (or one skipped row naming why the case does not run there).
 nlohmann::json measure_open_world(const TreeModel& model, const std::string& model_name,
                                   const std::vector<BackendKind>& backends, const OpenWorldSettings& settings);

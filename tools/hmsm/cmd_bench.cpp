@@ -46,7 +46,7 @@ struct BenchFlags {
     std::string forest_composition = "automatic";
     std::string wind = "y1";
     bool open_world = false;  // the open-world case (bench_open_world.h)
-    int64_t open_world_trees = 500000, open_world_frames = 300, open_world_changes = 0;  // 0: scaled
+    int64_t open_world_trees = 500000, open_world_frames = 300, open_world_changes = 0;
     std::string dynamics = "paper";  // coupled: also the dynamics table (bench_dynamics.h)
     bool quick = false, no_progress = false;
     std::string json_path, out_stem, commit = "unknown", render;
@@ -231,15 +231,9 @@ int run_bench(CLI::App& app) {
         return fail_input("--frames " + std::to_string(flags.frames) + ": must be in [0, 100000]");
     flags.open_world |= app.count("--open-world-trees") + app.count("--open-world-frames") +
                             app.count("--open-world-changes") > 0;
-    if (flags.open_world_trees < 1 || flags.open_world_trees > kMaxInstances)
-        return fail_input("--open-world-trees " + std::to_string(flags.open_world_trees) + ": must be in [1, " +
-                          std::to_string(kMaxInstances) + "]");
-    if (flags.open_world_frames < 1 || flags.open_world_frames > 100000)
-        return fail_input("--open-world-frames " + std::to_string(flags.open_world_frames) + ": must be in [1, 100000]");
-    if (app.count("--open-world-changes") &&
-        (flags.open_world_changes < 1 || flags.open_world_changes > flags.open_world_trees))
-        return fail_input("--open-world-changes " + std::to_string(flags.open_world_changes) +
-                          ": must be in [1, --open-world-trees]");
+    auto world_settings = bench::open_world_settings(flags.open_world_trees, flags.open_world_frames,
+                                                     flags.open_world_changes, app.count("--open-world-changes") > 0);
+    if (!world_settings) return fail(world_settings.status());
     if (!(flags.case_budget > 0.0) || !std::isfinite(flags.case_budget))
         return fail_input("--case-budget: must be a positive number of seconds");
     const auto forest_composition =
@@ -396,12 +390,7 @@ int run_bench(CLI::App& app) {
     if (flags.open_world) {
         auto tree = flags.tree.empty() ? generate_preset("paper-1") : load_tree(flags.tree);
         if (!tree) return fail(tree.status());
-        bench::OpenWorldSettings world;
-        world.trees = uint32_t(flags.open_world_trees);
-        world.frames = uint32_t(flags.open_world_frames);
-        world.changes = flags.open_world_changes > 0
-                            ? uint32_t(flags.open_world_changes)
-                            : uint32_t(std::max<int64_t>(1, std::llround(2000.0 * double(world.trees) / 500000.0)));
+        bench::OpenWorldSettings world = *world_settings;
         world.spacing = flags.spacing;
         world.device_copy_bytes = device_copy_bytes;
         world.host_copy_bytes = host_copy_bytes;
