@@ -78,6 +78,13 @@ TEST_F(BenchOpenWorld, SmallWorldOnCpuReportsCallsSharesPopAndMemory) {
     EXPECT_GE(number(pop, "largest_jump_m"), 0.0);
     EXPECT_GT(number(pop, "motion_of_largest_m"), 0.0);
     EXPECT_GT(number(pop, "median_motion_m"), 0.0);
+    ASSERT_FALSE(pop["by_switch"].empty());
+    int measured = 0;
+    for (const auto& [kind, entry] : pop["by_switch"].items()) {
+        measured += entry.value("measured", 0);
+        EXPECT_LE(number(entry, "largest_jump_m"), number(pop, "largest_jump_m")) << kind;
+    }
+    EXPECT_EQ(measured, pop.value("switches_measured", -1));
 
     // Bytes per step against the copy roofline.
     EXPECT_GT(number(row, "bytes_per_step"), 0.0);

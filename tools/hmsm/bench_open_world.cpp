@@ -266,6 +266,20 @@ json pop_json(const json& jumps) {
     pop["largest_jump_levels"] = {jumps[largest]["from"], jumps[largest]["to"]};
     pop["median_jump_m"] = percentile(jump, 0.5);
     pop["median_motion_m"] = percentile(motion, 0.5);
+    // Per kind of switch ("3-4": from 16 joints to the trunk alone): the largest jump, the
+    // motion of that tree, and how many were measured.
+    json by_switch = json::object();
+    for (size_t k = 0; k < jumps.size(); ++k) {
+        const std::string kind = std::to_string(jumps[k]["from"].get<int>()) + "-" + std::to_string(jumps[k]["to"].get<int>());
+        if (!by_switch.contains(kind)) by_switch[kind] = json::object();
+        json& entry = by_switch[kind];
+        entry["measured"] = entry.value("measured", 0) + 1;
+        if (jump[k] >= entry.value("largest_jump_m", -1.0)) {
+            entry["largest_jump_m"] = jump[k];
+            entry["motion_m"] = motion[k];
+        }
+    }
+    pop["by_switch"] = by_switch;
     return pop;
 }
 
