@@ -194,7 +194,7 @@ TEST_F(BenchCli, QuickCpuWritesSchemaAndTables) {
     EXPECT_NE(r.out.find("| cpu | 20 | pause 2 |"), std::string::npos) << r.out;
     // Live control: removal and adding back within the capacity happen in place (no upload),
     // adding past the capacity uploads the scene once; pausing is timed.
-    bool removal = false, growth = false, pause = false;
+    bool removal = false, growth = false, pause = false, lod = false;
     for (const json& e : d["live_control"]) {
         if (e.contains("remove_seconds")) {
             removal = true;
@@ -204,13 +204,20 @@ TEST_F(BenchCli, QuickCpuWritesSchemaAndTables) {
             growth = true;
             EXPECT_EQ(e.value("scene_uploads", 99), 1) << e.dump();
         }
+        if (e.contains("lod_coarser_seconds")) {  // switches within the capacity: no upload
+            lod = true;
+            EXPECT_EQ(e.value("scene_uploads", 99), 0) << e.dump();
+            EXPECT_GT(e.value("lod_finer_seconds", -1.0), 0.0) << e.dump();
+            EXPECT_GT(e.value("update_lod_unchanged_seconds", -1.0), 0.0) << e.dump();
+        }
         if (e.contains("pause_seconds")) {
             pause = true;
             EXPECT_GE(e.value("paused_step_seconds", -1.0), 0.0) << e.dump();
             EXPECT_GE(e.value("paused_steps_seconds", -1.0), 0.0) << e.dump();
         }
     }
-    EXPECT_TRUE(removal && growth && pause) << d["live_control"].dump();
+    EXPECT_TRUE(removal && growth && pause && lod) << d["live_control"].dump();
+    EXPECT_NE(r.out.find("| cpu | 20 | switch 10 to 16 joints (set_instance_lods) |"), std::string::npos) << r.out;
     // --render prints the same tables from the JSON.
     CliRun rendered = run("bench --render " + (dir_ / "bench.json").string());
     EXPECT_EQ(rendered.exit_code, 0) << rendered.err;

@@ -1,8 +1,8 @@
 // Live-control costs (src/live_control.cpp): removing instances moves the survivors' state on
 // the device (all those after the first hole in order, or only the fillers of a swap removal),
 // adding them back within the capacity writes only the added ones, adding past the
-// capacity re-uploads the scene once with room to grow; a wind change between two steps; and
-// pausing and resuming a tenth of the forest.
+// capacity re-uploads the scene once with room to grow; switching instances between levels of
+// detail; a wind change between two steps; and pausing and resuming a tenth of the forest.
 #include "bench_live.h"
 
 #include "simulation_access.h"
@@ -28,6 +28,7 @@ nlohmann::json measure_live_control(const TreeModel& model, const std::vector<Ba
     nlohmann::json results = nlohmann::json::array();
     auto scene = grid_scene(model, forest, spacing, 1);
     if (!scene) return results;
+    scene->lod_budgets = {{256, 64, 16, 1}};  // levels for the switch rows; the state is per level run
     for (BackendKind kind : backends) {
         SimulationConfig config;
         config.backend = kind;
@@ -75,6 +76,34 @@ nlohmann::json measure_live_control(const TreeModel& model, const std::vector<Ba
                 // 0 when both happened in place (no scene upload).
                 entry["scene_uploads"] = detail::full_uploads_of(s) - uploads;
                 entry["first_step_seconds"] = first_step_seconds;
+            }
+            results.push_back(entry);
+        }
+        // Levels of detail: `count` instances spread over the forest switched to 16 joints and
+        // back to the whole tree, each in one set_instance_lods call; then update_lod with
+        // nothing to switch (the scan over every instance).
+        for (uint32_t count : {1u, 10u, 100u}) {
+            if (count >= forest) continue;
+            std::vector<InstanceId> ids;
+            for (uint32_t k = 0; k < count; ++k) ids.push_back(s.instance_ids()[uint64_t(k) * (forest / count)]);
+            const uint64_t uploads = detail::full_uploads_of(s);
+            auto start = Clock::now();
+            Status status = s.set_instance_lods(ids, std::vector<uint32_t>(count, 3));
+            const double coarser = seconds_since(start);
+            start = Clock::now();
+            if (status) status = s.set_instance_lods(ids, std::vector<uint32_t>(count, 0));
+            const double finer = seconds_since(start);
+            start = Clock::now();
+            Result<uint64_t> unchanged = status ? s.update_lod(Vec3(0.0)) : Result<uint64_t>(status);
+            const double scan = seconds_since(start);
+            nlohmann::json entry = {{"backend", to_string(kind)}, {"instances", forest}, {"lod_switched", count}};
+            if (!unchanged) {
+                entry["failed"] = unchanged.status().message();
+            } else {
+                entry["lod_coarser_seconds"] = coarser;
+                entry["lod_finer_seconds"] = finer;
+                entry["update_lod_unchanged_seconds"] = scan;
+                entry["scene_uploads"] = detail::full_uploads_of(s) - uploads;
             }
             results.push_back(entry);
         }
@@ -194,6 +223,11 @@ std::string render_live_control(const nlohmann::json& rows) {
             line("add " + n + " back", ms(r, "add_seconds"), "");
             if (r.contains("swap_remove_seconds")) line("swap-remove " + n, ms(r, "swap_remove_seconds"), "");
             line("first step after", ms(r, "first_step_seconds"), "");
+        } else if (r.contains("lod_coarser_seconds")) {
+            const std::string n = std::to_string(r.value("lod_switched", 0ull));
+            line("switch " + n + " to 16 joints (set_instance_lods)", ms(r, "lod_coarser_seconds"), uploads);
+            line("switch " + n + " back to the whole tree", ms(r, "lod_finer_seconds"), "");
+            line("update_lod, nothing to switch", ms(r, "update_lod_unchanged_seconds"), "");
         } else if (r.contains("set_wind_step_seconds")) {
             line("set_wind + step", ms(r, "set_wind_step_seconds"), "");
             line("plain step", ms(r, "plain_step_seconds"), "");

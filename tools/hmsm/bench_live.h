@@ -11,7 +11,9 @@
 namespace hmsm::cli::bench {
 
 /// Per available backend: seconds to remove and to add back 1 and 100 instances of a forest of
-/// `forest` trees of `model` (and whether the scene was uploaded anew), of one set_wind + step
+/// `forest` trees of `model` (and whether the scene was uploaded anew), of switching 1, 10 and
+/// 100 of them to 16 joints and back (levels of detail {256, 64, 16, 1}) and of an update_lod
+/// with nothing to switch, of one set_wind + step
 /// against a plain step, of pausing and resuming a tenth of the forest, and of adding past and
 /// then within the capacity. One JSON object per backend and case; a backend that cannot hold
 /// the forest is reported as skipped.

@@ -37,6 +37,12 @@ double element_bytes(const detail::BufferInfo& info) {
 /// positions, all of anything else.
 double sweep_bytes(const detail::SceneData& d, Pass p, const detail::BufferInfo& info) {
     double elements = double(d.element_count(info.id));
+    // A pass sweeps the live state, not the capacity kept for instances to come.
+    auto live = [&](uint64_t count, uint64_t capacity) { return capacity > 0 ? double(count) / double(capacity) : 1.0; };
+    if (info.scope == Scope::chain || info.scope == Scope::chain_halves) elements *= live(d.total_chains, d.chain_capacity);
+    if (info.scope == Scope::node) elements *= live(d.total_nodes, d.node_capacity);
+    if (info.scope == Scope::vertex) elements *= live(d.total_vertices, d.vertex_capacity);
+    if (info.scope == Scope::instance) elements *= live(d.instance_count(), d.instance_capacity);
     if (p == Pass::root_positions && info.id == BufferId::node_relative) elements = double(d.total_chains);
     if (info.scope == Scope::chain_halves) elements /= 2.0;
     if (info.scope == Scope::model_chain_jump) elements /= double(std::max(1u, d.jump_rounds));

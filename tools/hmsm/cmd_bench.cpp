@@ -8,6 +8,7 @@
 #include "bench_report.h"
 #include "bench_run.h"
 #include "bench_live.h"
+#include "bench_open_world.h"
 #include "cli_common.h"
 
 #include <nlohmann/json.hpp>
@@ -44,6 +45,8 @@ struct BenchFlags {
     double case_budget = 20.0;
     std::string forest_composition = "automatic";
     std::string wind = "y1";
+    bool open_world = false;  // the open-world case (bench_open_world.h)
+    int64_t open_world_trees = 500000, open_world_frames = 300, open_world_changes = 0;
     std::string dynamics = "paper";  // coupled: also the dynamics table (bench_dynamics.h)
     bool quick = false, no_progress = false;
     std::string json_path, out_stem, commit = "unknown", render;
@@ -91,7 +94,8 @@ std::string render_tables(const json& document) {
            bench::render_live_control(document.value("live_control", json::array())) +
            bench::render_composition_depths(document.value("composition_depths", json::array())) +
            bench::render_frames(document.value("frames", json::array())) +
-           bench::render_dynamics(document.value("dynamics", json::array()));
+           bench::render_dynamics(document.value("dynamics", json::array())) +
+           bench::render_open_world(document.value("open_world", json::array()));
 }
 
 /// The device page `--out STEM` writes as STEM.md: a header naming the device (the stem's file
@@ -173,6 +177,16 @@ void register_bench_flags(CLI::App& app) {
                    "paper (default) or coupled: coupled adds a table of ms per step under the paper's and the "
                    "coupled dynamics (docs/model.md 3.13) for one paper-1 tree and 10,000 joints-only trees "
                    "(--tree's model if given; 10 trees with --quick) on each backend, with coupled / paper");
+    app.add_flag("--open-world", flags.open_world,
+                 "also run the open world: paper-1 trees (--tree's model) on an endless grid streamed around "
+                 "a moving viewer, levels of detail by distance, one step per frame (docs/benchmarks/README.md)");
+    add_integer_option(app, "--open-world-trees", flags.open_world_trees,
+                       "trees within the open world's streaming radius (default 500000; implies --open-world)");
+    add_integer_option(app, "--open-world-frames", flags.open_world_frames,
+                       "timed open-world frames (default 300; implies --open-world)");
+    add_integer_option(app, "--open-world-changes", flags.open_world_changes,
+                       "streaming and LOD changes per frame the viewer's speed is set for (default 2000 per "
+                       "500000 trees; implies --open-world)");
     app.add_option("--case-budget", flags.case_budget,
                    "seconds one case may take: slower cases run fewer steps, forest sizes "
                    "extrapolated past it are skipped (default 20)");
@@ -215,6 +229,11 @@ int run_bench(CLI::App& app) {
         return fail_input("--repeats " + std::to_string(flags.repeats) + ": must be in [1, 1000]");
     if (flags.frames < 0 || flags.frames > 100000)
         return fail_input("--frames " + std::to_string(flags.frames) + ": must be in [0, 100000]");
+    flags.open_world |= app.count("--open-world-trees") + app.count("--open-world-frames") +
+                            app.count("--open-world-changes") > 0;
+    auto world_settings = bench::open_world_settings(flags.open_world_trees, flags.open_world_frames,
+                                                     flags.open_world_changes, app.count("--open-world-changes") > 0);
+    if (!world_settings) return fail(world_settings.status());
     if (!(flags.case_budget > 0.0) || !std::isfinite(flags.case_budget))
         return fail_input("--case-budget: must be a positive number of seconds");
     const auto forest_composition =
@@ -367,6 +386,19 @@ int run_bench(CLI::App& app) {
         dynamics = bench::measure_dynamics(*tree, name, live_backends, flags.quick ? 10u : 10000u, flags.spacing,
                                            settings.steps, settings.warmup, settings.case_budget);
     }
+    json open_world = json::array();
+    if (flags.open_world) {
+        auto tree = flags.tree.empty() ? generate_preset("paper-1") : load_tree(flags.tree);
+        if (!tree) return fail(tree.status());
+        bench::OpenWorldSettings world = *world_settings;
+        world.spacing = flags.spacing;
+        world.device_copy_bytes = device_copy_bytes;
+        world.host_copy_bytes = host_copy_bytes;
+        open_world = bench::measure_open_world(
+            *tree, flags.tree.empty() ? "paper-1" : std::filesystem::path(flags.tree).stem().string(), live_backends,
+            world);
+        for (const json& row : open_world) run.failures += row.contains("failed") ? 1 : 0;
+    }
     progress.finish();
 
     add_speedups(run.presets, run.forest);
@@ -432,6 +464,7 @@ int run_bench(CLI::App& app) {
         {"frames", frames},
         {"composition_depths", composition_depths},
         {"dynamics", dynamics},
+        {"open_world", open_world},
         {"copy_bandwidth", copy},
         {"skipped", run.skipped},
         {"notes", notes},

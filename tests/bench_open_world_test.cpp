@@ -1,0 +1,119 @@
+// `hmsm bench --open-world` through the CLI binary on the serial CPU backend at a small size:
+// the row's fields, level shares near the asked ones, a finite pop against a moving tree, call
+// distributions in order, the memory estimate and the markdown. No timing thresholds.
+#include "cli_fixture.h"
+
+#include <nlohmann/json.hpp>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <string>
+
+using nlohmann::json;
+
+namespace {
+
+using hmsm::test::CliRun;
+using hmsm::test::read_text;
+
+class BenchOpenWorld : public hmsm::test::CliFixture {
+protected:
+    BenchOpenWorld() : CliFixture(/*small_tree=*/false) {}
+};
+
+double number(const json& j, const char* key) {
+    EXPECT_TRUE(j.is_object() && j.contains(key) && j[key].is_number()) << "no number '" << key << "' in " << j.dump();
+    return j.is_object() && j.contains(key) && j[key].is_number() ? j[key].get<double>() : std::nan("");
+}
+
+TEST_F(BenchOpenWorld, SmallWorldOnCpuReportsCallsSharesPopAndMemory) {
+    const std::string file = path("open_world.json");
+    const uint32_t trees = 1000, frames = 4;
+    const CliRun r = run("bench --no-progress --backends cpu --presets none --instances none --joint-instances none "
+                         "--open-world-trees 1000 --open-world-frames 4 --open-world-changes 40 --json " + file);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const json d = json::parse(read_text(file), nullptr, false);
+    ASSERT_TRUE(d.contains("open_world") && d["open_world"].size() == 1) << d.dump();
+    const json& row = d["open_world"][0];
+    SCOPED_TRACE(row.dump());
+    ASSERT_FALSE(row.contains("skipped") || row.contains("failed"));
+    EXPECT_EQ(row["backend"], "cpu");
+    EXPECT_EQ(row["model"], "paper-1");
+    EXPECT_EQ(row["frames"], frames);
+    // About `trees` within the radius (the lattice points of a disc of that area).
+    EXPECT_NEAR(number(row, "instances"), trees, 0.05 * trees);
+    EXPECT_GT(number(row["changes_per_frame"], "median"), 0.0);
+
+    // Levels 0..4 hold about 0.5 %, 2 %, 10 % and the rest, split between 16 joints and the trunk.
+    const json& shares = row["level_shares"];
+    const json& asked = row["level_shares_asked"];
+    ASSERT_EQ(shares.size(), 5u);
+    double sum = 0.0;
+    for (size_t k = 0; k < 5; ++k) {
+        sum += shares[k].get<double>();
+        EXPECT_NEAR(shares[k].get<double>(), asked[k].get<double>(), 0.01 + 0.25 * asked[k].get<double>())
+            << "level " << k;
+    }
+    EXPECT_NEAR(sum, 1.0, 1e-9);
+
+    // Per call: median <= p99 <= max; update_lod and step once per frame.
+    for (const char* call : {"update_lod", "swap_remove", "add", "step", "frame"}) {
+        const json& c = row["calls"][call];
+        SCOPED_TRACE(call);
+        ASSERT_GT(c.value("calls", 0), 0);
+        EXPECT_LE(number(c, "median_seconds"), number(c, "p99_seconds"));
+        EXPECT_LE(number(c, "p99_seconds"), number(c, "max_seconds"));
+    }
+    EXPECT_EQ(row["calls"]["step"]["calls"], frames);
+    EXPECT_EQ(row["calls"]["update_lod"]["calls"], frames);
+    EXPECT_GT(number(row["still"]["step"], "median_seconds"), 0.0);
+    EXPECT_TRUE(std::isfinite(number(row, "changes_add_seconds")));
+
+    // The pop: switched trees measured, a finite jump, and a tree that moved over the frame.
+    const json& pop = row["pop"];
+    EXPECT_GT(pop.value("switches_measured", 0), 0) << pop.dump();
+    EXPECT_TRUE(std::isfinite(number(pop, "largest_jump_m")));
+    EXPECT_GE(number(pop, "largest_jump_m"), 0.0);
+    EXPECT_GT(number(pop, "motion_of_largest_m"), 0.0);
+    EXPECT_GT(number(pop, "median_motion_m"), 0.0);
+    ASSERT_FALSE(pop["by_switch"].empty());
+    int measured = 0;
+    for (const auto& [kind, entry] : pop["by_switch"].items()) {
+        measured += entry.value("measured", 0);
+        EXPECT_LE(number(entry, "largest_jump_m"), number(pop, "largest_jump_m")) << kind;
+    }
+    EXPECT_EQ(measured, pop.value("switches_measured", -1));
+
+    // Bytes per step against the copy roofline.
+    EXPECT_GT(number(row, "bytes_per_step"), 0.0);
+    EXPECT_GT(number(row, "copy_bandwidth"), 0.0);
+    EXPECT_GT(number(row, "copy_bandwidth_fraction"), 0.0);
+
+    // Memory: the estimate at the asked shares lies below that of as many whole trees, and the
+    // allocation after the run is of the estimate's order; every level keeps the model's nodes
+    // and mesh vertices, which bound the tree count.
+    const json& memory = row["memory"];
+    EXPECT_GT(number(memory, "estimate_device_bytes"), 0.0);
+    EXPECT_LT(number(memory, "estimate_device_bytes"), number(memory, "estimate_whole_trees_device_bytes"));
+    EXPECT_LT(number(row["memory_after"], "device_bytes"), 3.0 * number(memory, "estimate_device_bytes"));
+    ASSERT_EQ(memory["levels"].size(), 5u);
+    EXPECT_EQ(memory["levels"][0]["chains"], 2345);
+    EXPECT_EQ(memory["levels"][4]["chains"], 1);
+    EXPECT_EQ(memory["levels"][4]["nodes"], memory["levels"][0]["nodes"]);
+    EXPECT_EQ(number(memory, "largest_trees_by_mesh_vertices"),
+              double(std::numeric_limits<uint32_t>::max() / memory["levels"][0]["mesh_vertices"].get<uint64_t>()));
+
+    EXPECT_NE(r.out.find("### Open world"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("| cpu | update_lod | 4 |"), std::string::npos) << r.out;
+}
+
+TEST_F(BenchOpenWorld, BadSizesExitTwoWithOneLine) {
+    expect_bad_input("bench --backends cpu --presets none --open-world-trees 0", "--open-world-trees");
+    expect_bad_input("bench --backends cpu --presets none --open-world-frames 0", "--open-world-frames");
+    expect_bad_input("bench --backends cpu --presets none --open-world-trees 10 --open-world-changes 11",
+                     "--open-world-changes");
+}
+
+}  // namespace

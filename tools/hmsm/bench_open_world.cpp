@@ -1,0 +1,438 @@
+// hmsm bench --open-world (bench_open_world.h): an endless grid of trees streamed around a
+// moving viewer, levels of detail by distance bands, one step per frame.
+#include "bench_open_world.h"
+
+#include "bench_model.h"
+#include "bench_open_world_probe.h"
+#include "simulation_access.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <numbers>
+#include <unordered_map>
+#include <unordered_set>
+
+namespace hmsm::cli::bench {
+namespace {
+
+using nlohmann::json;
+using Clock = std::chrono::steady_clock;
+
+double seconds(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double>(b - a).count(); }
+
+/// The endless grid: the tree of cell (i, j) stands at (i, 0, j) * spacing with a yaw drawn
+/// from its cell, so a tree streamed out and back in is the same tree. The simulated trees are
+/// the cells strictly within `radius` of the viewer (on the ground plane).
+struct Grid {
+    double spacing = 25.0, radius = 0.0;
+
+    static uint64_t key(int64_t i, int64_t j) {
+        return (uint64_t(uint32_t(int32_t(i))) << 32) | uint64_t(uint32_t(int32_t(j)));
+    }
+    Instance tree(int64_t i, int64_t j) const {
+        uint64_t h = key(i, j) * 0x9E3779B97F4A7C15ull;
+        h ^= h >> 29;
+        Instance t;
+        t.origin = {double(i) * spacing, 0.0, double(j) * spacing};
+        t.yaw = double(h % 62832) * 1e-4;
+        t.wind_phase = double((h >> 20) % 1000) * 1e-3;
+        return t;
+    }
+    /// The cells of row j within the radius of (x, z): [first, last] (first > last: none).
+    std::pair<int64_t, int64_t> row(int64_t j, double x, double z) const {
+        const double dz = double(j) * spacing - z;
+        if (std::abs(dz) >= radius) return {1, 0};
+        const double half = std::sqrt(radius * radius - dz * dz);
+        int64_t first = int64_t(std::ceil((x - half) / spacing)), last = int64_t(std::floor((x + half) / spacing));
+        if (std::hypot(double(first) * spacing - x, dz) >= radius) ++first;
+        if (std::hypot(double(last) * spacing - x, dz) >= radius) --last;
+        return {first, last};
+    }
+    std::pair<int64_t, int64_t> rows(double z0, double z1) const {
+        return {int64_t(std::floor((std::min(z0, z1) - radius) / spacing)),
+                int64_t(std::ceil((std::max(z0, z1) + radius) / spacing))};
+    }
+};
+
+struct Cell {
+    int64_t i, j;
+};
+
+/// The cells within the radius of `from` but not of `to` (leaving) and the reverse (entering).
+void stream_cells(const Grid& g, glm::dvec2 from, glm::dvec2 to, std::vector<Cell>& leaving,
+                  std::vector<Cell>& entering) {
+    leaving.clear();
+    entering.clear();
+    const auto [j0, j1] = g.rows(from.y, to.y);
+    for (int64_t j = j0; j <= j1; ++j) {
+        const auto [a0, b0] = g.row(j, from.x, from.y);
+        const auto [a1, b1] = g.row(j, to.x, to.y);
+        for (int64_t i = a0; i <= b0; ++i)
+            if (i < a1 || i > b1) leaving.push_back({i, j});
+        for (int64_t i = a1; i <= b1; ++i)
+            if (i < a0 || i > b0) entering.push_back({i, j});
+    }
+}
+
+struct Calls {
+    std::vector<double> update_lod, remove, add, step, frame;
+};
+
+double percentile(std::vector<double> values, double p) {
+    if (values.empty()) return 0.0;
+    std::sort(values.begin(), values.end());
+    const size_t rank = size_t(std::ceil(p * double(values.size())));
+    return values[std::min(values.size(), std::max<size_t>(rank, 1)) - 1];
+}
+
+json distribution(const std::vector<double>& v) {
+    json d = {{"calls", v.size()}};
+    if (v.empty()) return d;
+    d["median_seconds"] = percentile(v, 0.5);
+    d["p99_seconds"] = percentile(v, 0.99);
+    d["max_seconds"] = *std::max_element(v.begin(), v.end());
+    d["over_1ms"] = std::count_if(v.begin(), v.end(), [](double s) { return s > 1e-3; });
+    return d;
+}
+
+bool uses_host_memory(BackendKind kind, const std::string& device) {
+    if (kind == BackendKind::cpu || kind == BackendKind::cpu64 || kind == BackendKind::cpu_parallel) return true;
+    for (const char* cpu_driver : {"llvmpipe", "lavapipe", "SwiftShader"})
+        if (device.find(cpu_driver) != std::string::npos) return true;
+    return false;
+}
+
+/// One open world on one backend.
+class OpenWorld {
+public:
+    /// `sim` holds one tree: that of cell (0, 0), under the viewer.
+    OpenWorld(Simulation& sim, const Grid& grid) : sim_(sim), grid_(grid) {
+        live_[Grid::key(0, 0)] = sim.instance_ids()[0];
+    }
+
+    /// Streams the trees around `viewer` in, nearest first, in batches that each land on their
+    /// levels before the next (so that at most one batch runs whole at a time).
+    Status populate(glm::dvec2 viewer, uint64_t batch_chains) {
+        std::vector<Cell> cells;
+        const auto [j0, j1] = grid_.rows(viewer.y, viewer.y);
+        for (int64_t j = j0; j <= j1; ++j) {
+            const auto [a, b] = grid_.row(j, viewer.x, viewer.y);
+            for (int64_t i = a; i <= b; ++i)
+                if (!live_.contains(Grid::key(i, j))) cells.push_back({i, j});
+        }
+        auto distance = [&](const Cell& c) {
+            return std::hypot(double(c.i) * grid_.spacing - viewer.x, double(c.j) * grid_.spacing - viewer.y);
+        };
+        std::sort(cells.begin(), cells.end(), [&](const Cell& a, const Cell& b) { return distance(a) < distance(b); });
+        const uint64_t whole = std::max<uint64_t>(1, sim_.hierarchy(0).chains.size());
+        const size_t batch = size_t(std::max<uint64_t>(1, batch_chains / whole));
+        viewer_ = viewer;
+        for (size_t at = 0; at < cells.size(); at += batch) {
+            const std::vector<Cell> part(cells.begin() + at, cells.begin() + std::min(cells.size(), at + batch));
+            HMSM_TRY(add(part));
+            HMSM_TRY(sim_.update_lod(eye()).status());
+        }
+        return {};
+    }
+
+    /// Adds the trees of `cells` (at level 0) and records their handles.
+    Status add(const std::vector<Cell>& cells) {
+        if (cells.empty()) return {};
+        std::vector<Instance> trees;
+        trees.reserve(cells.size());
+        for (const Cell& c : cells) trees.push_back(grid_.tree(c.i, c.j));
+        std::vector<InstanceId> ids(cells.size());
+        HMSM_TRY(sim_.add_instances(trees, ids));
+        for (size_t k = 0; k < cells.size(); ++k) live_[Grid::key(cells[k].i, cells[k].j)] = ids[k];
+        return {};
+    }
+
+    /// Swap-removes the trees of `cells` by handle.
+    Status remove(const std::vector<Cell>& cells) {
+        if (cells.empty()) return {};
+        std::vector<InstanceId> ids;
+        ids.reserve(cells.size());
+        for (const Cell& c : cells) {
+            auto found = live_.find(Grid::key(c.i, c.j));
+            if (found == live_.end()) return Status{ErrorCode::internal, "open world: a leaving tree is not live"};
+            ids.push_back(found->second);
+            live_.erase(found);
+        }
+        return sim_.swap_remove_instances(ids);
+    }
+
+    /// One frame: the viewer moves by `move`; the trees that left are removed and those that
+    /// came are added (first, so that update_lod puts them on their level before the step);
+    /// update_lod; one step. Each call's wall time goes to `calls` (when given); `changes`
+    /// receives the trees added, removed and switched.
+    Status frame(glm::dvec2 move, Calls* calls, uint64_t* changes, uint64_t* switched) {
+        const glm::dvec2 to = viewer_ + move;
+        stream_cells(grid_, viewer_, to, leaving_, entering_);
+        viewer_ = to;
+        const auto t0 = Clock::now();
+        HMSM_TRY(remove(leaving_));
+        const auto t1 = Clock::now();
+        HMSM_TRY(add(entering_));
+        const auto t2 = Clock::now();
+        Result<uint64_t> lod = sim_.update_lod(eye());
+        HMSM_TRY(lod.status());
+        const auto t3 = Clock::now();
+        HMSM_TRY(sim_.step(1));
+        const auto t4 = Clock::now();
+        if (calls) {
+            if (!leaving_.empty()) calls->remove.push_back(seconds(t0, t1));
+            if (!entering_.empty()) calls->add.push_back(seconds(t1, t2));
+            calls->update_lod.push_back(seconds(t2, t3));
+            calls->step.push_back(seconds(t3, t4));
+            calls->frame.push_back(seconds(t0, t4));
+        }
+        if (changes) *changes = leaving_.size() + entering_.size() + *lod;
+        if (switched) *switched = *lod;
+        return {};
+    }
+
+    /// The same frame with the switches measured: the largest vertex jump of switched trees
+    /// that were live before the frame against their motion in the step before.
+    Status pop_frame(glm::dvec2 move, const PopProbe& probe, json& jumps) {
+        std::vector<float> before, stepped, after;
+        HMSM_TRY(sim_.read(Output::joint_matrices, before));
+        const std::vector<uint64_t> old_offsets = chain_offsets(sim_);
+        const std::vector<InstanceId> old_ids(sim_.instance_ids().begin(), sim_.instance_ids().end());
+        std::vector<uint32_t> old_models;
+        for (const Instance& t : sim_.instances()) old_models.push_back(t.model);
+        HMSM_TRY(sim_.step(1));
+        HMSM_TRY(sim_.read(Output::joint_matrices, stepped));
+        const glm::dvec2 to = viewer_ + move;
+        stream_cells(grid_, viewer_, to, leaving_, entering_);
+        viewer_ = to;
+        HMSM_TRY(remove(leaving_));
+        HMSM_TRY(add(entering_));
+        std::vector<uint32_t> models;
+        for (const Instance& t : sim_.instances()) models.push_back(t.model);
+        HMSM_TRY(sim_.update_lod(eye()).status());
+        HMSM_TRY(sim_.read(Output::joint_matrices, after));
+        const std::vector<uint64_t> offsets = chain_offsets(sim_);
+        std::unordered_map<uint64_t, uint32_t> old_index;
+        for (uint32_t i = 0; i < old_ids.size(); ++i) old_index.emplace(uint64_t(old_ids[i]), i);
+        std::vector<std::pair<uint32_t, uint32_t>> switched;  // (old index, index)
+        for (uint32_t i = 0; i < models.size(); ++i) {
+            if (sim_.instances()[i].model == models[i]) continue;
+            auto was = old_index.find(uint64_t(sim_.instance_ids()[i]));
+            if (was != old_index.end()) switched.emplace_back(was->second, i);
+        }
+        constexpr size_t kMeasured = 64;  // trees skinned per frame, spread over the switched
+        const size_t stride = std::max<size_t>(1, switched.size() / kMeasured);
+        for (size_t k = 0; k < switched.size(); k += stride) {
+            const auto [o, i] = switched[k];
+            auto span_of = [](const std::vector<float>& all, const std::vector<uint64_t>& off, uint32_t at) {
+                return std::span<const float>(all.data() + 12 * off[at], 12 * (off[at + 1] - off[at]));
+            };
+            const int32_t from = probe.level_of(old_models[o]), into = probe.level_of(sim_.instances()[i].model);
+            if (from < 0 || into < 0) return Status{ErrorCode::internal, "open world: a tree on no level of model 0"};
+            const double motion = probe.largest_jump(span_of(before, old_offsets, o), uint32_t(from),
+                                                     span_of(stepped, old_offsets, o), uint32_t(from));
+            const double jump = probe.largest_jump(span_of(stepped, old_offsets, o), uint32_t(from),
+                                                   span_of(after, offsets, i), uint32_t(into));
+            jumps.push_back({{"from", from}, {"to", into}, {"jump_m", jump}, {"motion_m", motion}});
+        }
+        return sim_.step(1);
+    }
+
+    Vec3 eye() const { return Vec3(viewer_.x, 0.0, viewer_.y); }
+
+private:
+    Simulation& sim_;
+    Grid grid_;
+    glm::dvec2 viewer_{0.0};
+    std::unordered_map<uint64_t, InstanceId> live_;
+    std::vector<Cell> leaving_, entering_;
+};
+
+/// Largest vertex jump at a switch and the motion of that tree in one frame; medians of both.
+json pop_json(const json& jumps) {
+    json pop = {{"switches_measured", jumps.size()}};
+    if (jumps.empty()) return pop;
+    std::vector<double> jump, motion;
+    size_t largest = 0;
+    for (size_t k = 0; k < jumps.size(); ++k) {
+        jump.push_back(jumps[k]["jump_m"].get<double>());
+        motion.push_back(jumps[k]["motion_m"].get<double>());
+        if (jump.back() > jump[largest]) largest = k;
+    }
+    pop["largest_jump_m"] = jump[largest];
+    pop["motion_of_largest_m"] = motion[largest];
+    pop["largest_jump_levels"] = {jumps[largest]["from"], jumps[largest]["to"]};
+    pop["median_jump_m"] = percentile(jump, 0.5);
+    pop["median_motion_m"] = percentile(motion, 0.5);
+    // Per kind of switch ("3-4": from 16 joints to the trunk alone): the largest jump, the
+    // motion of that tree, and how many were measured.
+    json by_switch = json::object();
+    for (size_t k = 0; k < jumps.size(); ++k) {
+        const std::string kind = std::to_string(jumps[k]["from"].get<int>()) + "-" + std::to_string(jumps[k]["to"].get<int>());
+        if (!by_switch.contains(kind)) by_switch[kind] = json::object();
+        json& entry = by_switch[kind];
+        entry["measured"] = entry.value("measured", 0) + 1;
+        if (jump[k] >= entry.value("largest_jump_m", -1.0)) {
+            entry["largest_jump_m"] = jump[k];
+            entry["motion_m"] = motion[k];
+        }
+    }
+    pop["by_switch"] = by_switch;
+    return pop;
+}
+
+json run_backend(const TreeModel& model, const std::string& model_name, BackendKind kind,
+                 const OpenWorldSettings& s) {
+    json row = {{"backend", to_string(kind)}, {"model", model_name}, {"trees_asked", s.trees}};
+    auto stop = [&](const Status& status) {
+        row[status.code() == ErrorCode::out_of_memory || status.code() == ErrorCode::unsupported ||
+                    status.code() == ErrorCode::no_device
+                ? "skipped"
+                : "failed"] = status.message();
+        return row;
+    };
+    Grid grid;
+    grid.spacing = s.spacing > 0.0 ? s.spacing : 25.0;
+    grid.radius = grid.spacing * std::sqrt(double(s.trees) / std::numbers::pi);
+    // Band edges where the cumulative shares of a disc of trees around the viewer are reached.
+    LodBands bands;
+    bands.hysteresis = 0.05;
+    double cumulative = 0.0;
+    for (size_t k = 0; k + 1 < std::size(kOpenWorldShares); ++k) {
+        cumulative += kOpenWorldShares[k];
+        bands.edges.push_back(grid.radius * std::sqrt(cumulative));
+    }
+    // Speed: trees cross a circle of radius r moving by v at 4 r v / spacing^2 per frame (in and
+    // out); streaming adds and removes at the radius and switches the arrivals once, and every
+    // band edge switches its crossers.
+    double crossing = 6.0 * grid.radius;
+    for (double edge : bands.edges) crossing += 4.0 * edge;
+    const double speed = double(s.changes) * grid.spacing * grid.spacing / crossing;
+    const glm::dvec2 direction = glm::normalize(glm::dvec2(1.0, 0.31));
+    row["spacing"] = grid.spacing;
+    row["radius_m"] = grid.radius;
+    row["band_edges_m"] = bands.edges;
+    row["hysteresis"] = bands.hysteresis;
+    row["viewer_m_per_frame"] = speed;
+    row["changes_asked"] = s.changes;
+    row["level_budgets"] = {0, kOpenWorldBudgets[0], kOpenWorldBudgets[1], kOpenWorldBudgets[2], kOpenWorldBudgets[3]};
+    row["level_shares_asked"] = kOpenWorldShares;
+
+    Scene scene = single_tree_scene(model);
+    scene.instances.clear();
+    scene.instances.push_back(grid.tree(0, 0));  // the tree under the viewer; the rest is streamed in
+    scene.lod_budgets = {{std::begin(kOpenWorldBudgets), std::end(kOpenWorldBudgets)}};
+    SimulationConfig config;
+    config.backend = kind;
+    config.outputs = Outputs::joints;
+    auto created = Simulation::create(scene, config);
+    if (!created) return stop(created.status());
+    Simulation& sim = **created;
+    row["device"] = sim.device_name();
+    const std::vector<LevelShape> levels = level_shapes(sim);
+    // The memory the case will take, from this one-tree simulation, before anything is added.
+    const json estimate = memory_json(sim, levels, kOpenWorldShares, s.trees);
+    row["memory"] = estimate;
+    const double available = host_available_memory();
+    if (uses_host_memory(kind, sim.device_name()) && available > 0.0 &&
+        estimate["estimate_device_bytes"].get<double>() > 0.6 * available) {
+        char reason[200];
+        std::snprintf(reason, sizeof reason, "needs about %.1f GB of host memory, %.1f GB available",
+                      estimate["estimate_device_bytes"].get<double>() * 1e-9, available * 1e-9);
+        return stop(Status{ErrorCode::out_of_memory, reason});
+    }
+    if (Status status = sim.set_lod_bands(bands); !status) return stop(status);
+    OpenWorld world(sim, grid);
+    const auto setup = Clock::now();
+    // Trees come in on level 0 and the capacity never shrinks: batches of half the chains the
+    // case will run keep the room the whole trees need to a third of the scene.
+    double expected_chains = 0.0;
+    for (size_t k = 0; k < levels.size(); ++k) expected_chains += double(s.trees) * kOpenWorldShares[k] * double(levels[k].chains);
+    if (Status status = world.populate({0.0, 0.0}, uint64_t(expected_chains / 2.0)); !status) return stop(status);
+    row["setup_seconds"] = seconds(setup, Clock::now());
+
+    // Warm-up frames moving (capacity grown, pools and graphs made), timed frames moving, timed
+    // frames standing still.
+    const glm::dvec2 move = direction * speed;
+    const uint32_t warmup = std::min<uint32_t>(20, std::max<uint32_t>(2, s.frames / 5));
+    for (uint32_t k = 0; k < warmup; ++k)
+        if (Status status = world.frame(move, nullptr, nullptr, nullptr); !status) return stop(status);
+    Calls moving, still;
+    std::vector<double> changes, switched;
+    const uint64_t uploads = detail::full_uploads_of(sim);
+    for (uint32_t k = 0; k < s.frames; ++k) {
+        uint64_t changed = 0, lod = 0;
+        if (Status status = world.frame(move, &moving, &changed, &lod); !status) return stop(status);
+        changes.push_back(double(changed));
+        switched.push_back(double(lod));
+    }
+    row["scene_uploads"] = detail::full_uploads_of(sim) - uploads;
+    for (uint32_t k = 0; k < std::min<uint32_t>(s.frames, 100); ++k)
+        if (Status status = world.frame({0.0, 0.0}, &still, nullptr, nullptr); !status) return stop(status);
+
+    row["frames"] = s.frames;
+    row["warmup_frames"] = warmup;
+    row["instances"] = sim.instance_count();
+    row["chains"] = sim.chain_count();
+    row["changes_per_frame"] = {{"median", percentile(changes, 0.5)},
+                                {"max", *std::max_element(changes.begin(), changes.end())}};
+    row["lod_switches_per_frame"] = {{"median", percentile(switched, 0.5)},
+                                     {"max", *std::max_element(switched.begin(), switched.end())}};
+    row["calls"] = {{"update_lod", distribution(moving.update_lod)}, {"swap_remove", distribution(moving.remove)},
+                    {"add", distribution(moving.add)},               {"step", distribution(moving.step)},
+                    {"frame", distribution(moving.frame)}};
+    row["still"] = {{"update_lod", distribution(still.update_lod)}, {"step", distribution(still.step)},
+                    {"frame", distribution(still.frame)}};
+    row["changes_add_seconds"] = percentile(moving.frame, 0.5) - percentile(still.frame, 0.5);
+    std::vector<double> shares(levels.size(), 0.0);
+    for (const Instance& t : sim.instances())
+        for (size_t k = 0; k < levels.size(); ++k)
+            if (levels[k].run_model == t.model) shares[k] += 1.0 / double(sim.instance_count());
+    row["level_shares"] = shares;
+    // What the scene holds after the frames (host: the peak before the roofline's own blocks).
+    json memory = memory_json(sim, levels, kOpenWorldShares, s.trees);
+    memory.erase("levels");
+    row["memory_after"] = memory;
+
+    // Bytes per step of the passes that run (1-5) against the copy roofline.
+    const Traffic traffic = step_traffic(sim);
+    double bytes = 0.0;
+    for (Pass p : kAllPasses)
+        if (p != Pass::node_world && p != Pass::contour) bytes += traffic.pass_bytes[uint32_t(p)];
+    row["bytes_per_step"] = bytes;
+    const double step_median = percentile(still.step, 0.5);
+    if (step_median > 0.0) row["effective_bandwidth"] = bytes / step_median;
+    Result<CopyBandwidth> copy = uses_host_memory(kind, sim.device_name())
+                                     ? host_memcpy_bandwidth(s.host_copy_bytes, 5)
+                                     : device_copy_bandwidth(sim, s.device_copy_bytes);
+    if (copy) {
+        row["copy_bandwidth"] = copy->bytes_per_second;
+        row["copy_method"] = copy->method;
+        if (step_median > 0.0) row["copy_bandwidth_fraction"] = bytes / step_median / copy->bytes_per_second;
+    }
+
+    // The pop, on frames of their own (read-backs and host skinning are not timed).
+    auto probe = PopProbe::create(sim, model, kOpenWorldBudgets);
+    if (!probe) {
+        row["pop"] = {{"failed", probe.status().message()}};
+    } else {
+        json jumps = json::array();
+        for (uint32_t k = 0; k < s.pop_frames; ++k)
+            if (Status status = world.pop_frame(move, *probe, jumps); !status) return stop(status);
+        row["pop"] = pop_json(jumps);
+    }
+    return row;
+}
+
+}  // namespace
+
+json measure_open_world(const TreeModel& model, const std::string& model_name,
+                        const std::vector<BackendKind>& backends, const OpenWorldSettings& settings) {
+    json rows = json::array();
+    for (BackendKind kind : backends) rows.push_back(run_backend(model, model_name, kind, settings));
+    return rows;
+}
+
+}  // namespace hmsm::cli::bench

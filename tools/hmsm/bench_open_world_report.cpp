@@ -1,0 +1,90 @@
+// hmsm bench --open-world: the flags' settings and the markdown tables (bench_open_world.h).
+#include "bench_open_world.h"
+
+#include <cmath>
+#include <cstdio>
+
+namespace hmsm::cli::bench {
+
+using nlohmann::json;
+
+Result<OpenWorldSettings> open_world_settings(int64_t trees, int64_t frames, int64_t changes, bool changes_given) {
+    auto bad = [](const std::string& message) { return Status{ErrorCode::invalid_argument, message}; };
+    if (trees < 1 || trees > kMaxInstances)
+        return bad("--open-world-trees " + std::to_string(trees) + ": must be in [1, " + std::to_string(kMaxInstances) + "]");
+    if (frames < 1 || frames > 100000)
+        return bad("--open-world-frames " + std::to_string(frames) + ": must be in [1, 100000]");
+    if (changes_given && (changes < 1 || changes > trees))
+        return bad("--open-world-changes " + std::to_string(changes) + ": must be in [1, --open-world-trees]");
+    OpenWorldSettings settings;
+    settings.trees = uint32_t(trees);
+    settings.frames = uint32_t(frames);
+    settings.changes = changes_given ? uint32_t(changes)
+                                     : uint32_t(std::max<int64_t>(1, std::llround(2000.0 * double(trees) / 500000.0)));
+    return settings;
+}
+
+std::string render_open_world(const json& rows) {
+    if (!rows.is_array() || rows.empty()) return "";
+    std::string out =
+        "\n### Open world: trees streamed around a moving viewer, levels by distance\n\n"
+        "Joints only. Per frame: swap-remove the trees that left the radius, add those that came, "
+        "`update_lod(viewer)`, one `step`. Frame: the four calls; standing still: the same frames "
+        "with the viewer at rest (update_lod and step); changes add: frame median moving minus standing "
+        "still. Pop: the largest vertex jump of a switched tree (skinned from its joint matrices) "
+        "against that tree's motion over the frame before. % copy: passes 1-5 bytes per step over "
+        "the standing step's median, against the copy roofline.\n\n"
+        "| backend | trees | chains | changes per frame | step ms (still) | frame ms median / p99 / max | "
+        "changes add ms | calls > 1 ms | pop mm (motion mm) | % copy | memory GB (whole trees) |\n"
+        "|---|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|\n";
+    char line[600];
+    auto seconds_of = [](const json& d, const char* key) {
+        return d.is_object() && d.contains(key) ? d[key].get<double>() * 1e3 : 0.0;
+    };
+    std::string calls_table;
+    for (const json& r : rows) {
+        const std::string backend = r.value("backend", std::string());
+        if (r.contains("skipped") || r.contains("failed")) {
+            const json memory = r.value("memory", json::object());
+            std::snprintf(line, sizeof line, "%.2f (%.1f)", memory.value("estimate_device_bytes", 0.0) * 1e-9,
+                          memory.value("estimate_whole_trees_device_bytes", 0.0) * 1e-9);
+            out += "| " + backend + " | " + std::to_string(r.value("trees_asked", 0ull)) + " | – | – | – | " +
+                   r.value("skipped", r.value("failed", std::string())) + " | | | | | " +
+                   (memory.empty() ? std::string() : std::string(line)) + " |\n";
+            continue;
+        }
+        const json calls = r.value("calls", json::object()), still = r.value("still", json::object());
+        const json frame = calls.value("frame", json::object()), pop = r.value("pop", json::object());
+        const json memory = r.value("memory", json::object());
+        uint64_t over = 0;
+        for (const auto& [name, d] : calls.items())
+            if (name != "frame") over += d.value("over_1ms", 0ull);
+        std::snprintf(line, sizeof line,
+                      "| %s | %llu | %llu | %.0f | %.3f | %.3f / %.3f / %.3f | %.3f | %llu | %.3g (%.3g) | %.1f | "
+                      "%.2f (%.1f) |\n",
+                      backend.c_str(), (unsigned long long)r.value("instances", 0ull),
+                      (unsigned long long)r.value("chains", 0ull),
+                      r.value("changes_per_frame", json::object()).value("median", 0.0),
+                      seconds_of(still.value("step", json::object()), "median_seconds"),
+                      seconds_of(frame, "median_seconds"), seconds_of(frame, "p99_seconds"),
+                      seconds_of(frame, "max_seconds"), r.value("changes_add_seconds", 0.0) * 1e3,
+                      (unsigned long long)over, pop.value("largest_jump_m", 0.0) * 1e3,
+                      pop.value("motion_of_largest_m", 0.0) * 1e3, r.value("copy_bandwidth_fraction", 0.0) * 100.0,
+                      memory.value("estimate_device_bytes", 0.0) * 1e-9,
+                      memory.value("estimate_whole_trees_device_bytes", 0.0) * 1e-9);
+        out += line;
+        for (const char* name : {"update_lod", "swap_remove", "add", "step", "frame"}) {
+            const json d = calls.value(name, json::object());
+            std::snprintf(line, sizeof line, "| %s | %s | %llu | %.3f | %.3f | %.3f |\n", backend.c_str(), name,
+                          (unsigned long long)d.value("calls", 0ull), seconds_of(d, "median_seconds"),
+                          seconds_of(d, "p99_seconds"), seconds_of(d, "max_seconds"));
+            calls_table += line;
+        }
+    }
+    if (!calls_table.empty())
+        out += "\nPer call while moving (ms of wall time):\n\n| backend | call | calls | median | p99 | max |\n"
+               "|---|---|--:|--:|--:|--:|\n" + calls_table;
+    return out;
+}
+
+}  // namespace hmsm::cli::bench
