@@ -47,8 +47,9 @@ std::vector<Dispatch> Simulation::Impl::program_for(const std::vector<detail::In
 
 Status Simulation::Impl::check_size(std::span<const Instance> instances) const {
     uint64_t vertices = 0, chains = 0, nodes = 0;
+    const bool with_vertices = config_.outputs == Outputs::all;  // the layout's vertices (create)
     for (const Instance& inst : instances) {
-        vertices += meshes_[inst.model].vertices.size();
+        if (with_vertices) vertices += meshes_[inst.model].vertices.size();
         chains += 2 * hierarchies_[inst.model].chains.size();
         nodes += hierarchies_[inst.model].node_owner.size();
     }
@@ -186,9 +187,12 @@ Result<std::unique_ptr<Simulation>> Simulation::Impl::create(const Scene& scene,
     HMSM_TRY(sim->check_size(scene.instances));
     sim->modes_ = detail::wind_modes(config.wind);
 
+    // Without vertex outputs no mesh is flattened: the layout then holds no vertex at all, so
+    // forests of joints-only trees are not bounded by vertices they never produce.
+    const std::vector<MeshTemplate> no_meshes(config.outputs == Outputs::all ? 0 : sim->meshes_.size());
     sim->data_ = std::make_unique<SceneData>(
-        detail::flatten_scene(scene, sim->hierarchies_, sim->meshes_, config.parameters,
-                              config.model, config.wind));
+        detail::flatten_scene(scene, sim->hierarchies_, config.outputs == Outputs::all ? sim->meshes_ : no_meshes,
+                              config.parameters, config.model, config.wind));
     sim->data_->vertex_layout = config.vertex_layout;
     sim->data_->outputs = config.outputs;
 
@@ -277,7 +281,12 @@ const MeshTemplate& Simulation::mesh(uint32_t model) const { return impl_->meshe
 uint64_t Simulation::instance_count() const { return impl_->instances_.size(); }
 uint64_t Simulation::chain_count() const { return impl_->data_->total_chains; }
 uint64_t Simulation::node_count() const { return impl_->data_->total_nodes; }
-uint64_t Simulation::vertex_count() const { return impl_->data_->total_vertices; }
+uint64_t Simulation::vertex_count() const {
+    if (impl_->data_->produces_vertices()) return impl_->data_->total_vertices;
+    uint64_t vertices = 0;  // the meshes' (skins draw them), although the layout holds none
+    for (const Instance& instance : impl_->instances_) vertices += impl_->meshes_[instance.model].vertices.size();
+    return vertices;
+}
 uint32_t Simulation::jump_rounds() const { return impl_->data_->jump_rounds; }
 uint32_t Simulation::capped_chain_count() const {
     uint32_t n = 0;

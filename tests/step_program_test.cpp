@@ -190,6 +190,31 @@ TEST(StepProgram, PathWalkRunsThePairsInOneDispatchEachAndEqualsLevelByLevelBitw
 
 // Joints only: the walk needs no node_relative, so a step is the two walk dispatches; programs
 // of some passes (the rest pose from integrate on) run the passes apart from their leader alone.
+// Without vertex outputs the layout holds no vertex (a joints-only forest is not bounded by
+// mesh vertices it never produces), and the joints move exactly as with every output.
+TEST(StepProgram, ALayoutWithoutVertexOutputsHoldsNoVertex) {
+    Scene scene = single_tree_scene(test::deep_tree(4));
+    scene.instances.push_back(scene.instances[0]);
+    scene.instances.back().origin = Vec3(4.0, 0.0, 0.0);
+    SimulationConfig config;
+    config.backend = BackendKind::cpu;
+    std::vector<float> expected;
+    for (Outputs outputs : {Outputs::all, Outputs::joints_and_nodes, Outputs::joints}) {
+        config.outputs = outputs;
+        auto sim = Simulation::create(scene, config);
+        ASSERT_TRUE(sim.ok()) << sim.status().message();
+        const auto& data = hmsm::detail::scene_data_of(**sim);
+        EXPECT_GT((*sim)->vertex_count(), 0u);  // the meshes' vertices, produced or not
+        EXPECT_EQ(data.total_vertices, outputs == Outputs::all ? (*sim)->vertex_count() : 0u);
+        EXPECT_EQ(data.vertex_capacity, data.total_vertices);
+        ASSERT_TRUE((*sim)->step(20).ok());
+        std::vector<float> joints;
+        ASSERT_TRUE((*sim)->read(Output::joint_matrices, joints).ok());
+        if (expected.empty()) expected = joints;
+        EXPECT_EQ(joints, expected);
+    }
+}
+
 TEST(StepProgram, PathWalkProgramsFollowTheOutputsAndThePassesAsked) {
     const Scene scene = single_tree_scene(test::deep_tree(4));
     SimulationConfig config;
