@@ -8,15 +8,10 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <cstring>
 #include <limits>
 
 namespace hmsm {
 namespace {
-
-constexpr Output kOutputs[] = {Output::node_positions, Output::vertex_positions, Output::vertex_normals,
-                               Output::chain_rotations, Output::chain_origins,   Output::chain_angles,
-                               Output::joint_matrices};
 
 /// Elements per instance of `output` (one model).
 uint64_t elements_per_instance(const Simulation& sim, Output output) {
@@ -31,21 +26,13 @@ uint64_t elements_per_instance(const Simulation& sim, Output output) {
 /// Every output of instance `i`, as float bits.
 std::vector<std::vector<float>> outputs_of(const Simulation& sim, uint64_t i) {
     std::vector<std::vector<float>> out;
-    for (Output output : kOutputs) {
+    for (Output output : test::kEveryOutput) {
         std::vector<float> all;
         EXPECT_TRUE(sim.read(output, all).ok());
         const uint64_t n = elements_per_instance(sim, output) * output_components(output);
         out.emplace_back(all.begin() + i * n, all.begin() + (i + 1) * n);
     }
     return out;
-}
-
-bool bitwise_equal(const std::vector<std::vector<float>>& a, const std::vector<std::vector<float>>& b) {
-    if (a.size() != b.size()) return false;
-    for (size_t k = 0; k < a.size(); ++k)
-        if (a[k].size() != b[k].size() || std::memcmp(a[k].data(), b[k].data(), a[k].size() * sizeof(float)) != 0)
-            return false;
-    return true;
 }
 
 bool any_nan(const std::vector<std::vector<float>>& values) {
@@ -85,25 +72,25 @@ TEST_P(ResetInstances, ReturnsExactlyToRestOthersUntouched) {
     ASSERT_TRUE(sim->step(3).ok());
     ASSERT_TRUE(any_nan(outputs_of(*sim, 1)));
     const auto moving = outputs_of(*sim, 0), paused = outputs_of(*sim, 2);
-    ASSERT_FALSE(bitwise_equal(moving, rest[0]));
-    ASSERT_FALSE(bitwise_equal(paused, rest[2]));
+    ASSERT_FALSE(test::same_bits(moving, rest[0]));
+    ASSERT_FALSE(test::same_bits(paused, rest[2]));
 
     // Refused: nothing changes.
     for (std::vector<uint32_t> bad : {std::vector<uint32_t>{1, 3}, std::vector<uint32_t>{0, 0}}) {
         Status refused = sim->reset_instances(bad);
         EXPECT_EQ(refused.code(), ErrorCode::invalid_argument);
         EXPECT_TRUE(any_nan(outputs_of(*sim, 1)));
-        EXPECT_TRUE(bitwise_equal(outputs_of(*sim, 0), moving));
+        EXPECT_TRUE(test::same_bits(outputs_of(*sim, 0), moving));
     }
     EXPECT_NE(sim->reset_instances(std::vector<uint32_t>{1, 3}).message().find("instance 3"), std::string::npos);
 
     ASSERT_TRUE(sim->reset_instances(std::vector<uint32_t>{1}).ok());
-    EXPECT_TRUE(bitwise_equal(outputs_of(*sim, 1), rest[1]));
-    EXPECT_TRUE(bitwise_equal(outputs_of(*sim, 0), moving));
-    EXPECT_TRUE(bitwise_equal(outputs_of(*sim, 2), paused));
+    EXPECT_TRUE(test::same_bits(outputs_of(*sim, 1), rest[1]));
+    EXPECT_TRUE(test::same_bits(outputs_of(*sim, 0), moving));
+    EXPECT_TRUE(test::same_bits(outputs_of(*sim, 2), paused));
 
     ASSERT_TRUE(sim->reset_instances(std::vector<uint32_t>{2, 0}).ok());
-    for (uint64_t i = 0; i < 3; ++i) EXPECT_TRUE(bitwise_equal(outputs_of(*sim, i), rest[i])) << "instance " << i;
+    for (uint64_t i = 0; i < 3; ++i) EXPECT_TRUE(test::same_bits(outputs_of(*sim, i), rest[i])) << "instance " << i;
     EXPECT_FALSE(sim->instances()[2].active);
 
     // From rest the reset instances move on, finite.

@@ -110,4 +110,14 @@ bool all_finite(const std::vector<double>& values) {
     return true;
 }
 
+std::vector<std::vector<float>> every_output(const Simulation& sim) {
+    std::vector<std::vector<float>> out;
+    for (Output o : kEveryOutput) {
+        out.emplace_back();
+        const Status read = sim.read(o, out.back());
+        EXPECT_TRUE(read.ok()) << "output " << int(o) << ": " << read.message();
+    }
+    return out;
+}
+
 }  // namespace hmsm::test
