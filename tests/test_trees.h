@@ -65,6 +65,22 @@ bool same_bits(const std::vector<std::vector<T>>& a, const std::vector<std::vect
 /// Every output of kEveryOutput, as float, one vector per output; a failed read fails the test.
 std::vector<std::vector<float>> every_output(const Simulation& sim);
 
+/// Per instance, the index of its first element of `output` (a node, vertex or chain), and one
+/// past the last instance's: instance i owns elements first[i] up to first[i + 1].
+std::vector<uint64_t> first_elements(const Simulation& sim, Output output);
+
+/// Instance i's scalars of `values`, the whole of `output` as read, where `first` is
+/// first_elements(sim, output) of the simulation it was read from.
+template <class T>
+std::vector<T> instance_slice(const std::vector<T>& values, const std::vector<uint64_t>& first, size_t i,
+                              Output output) {
+    const uint64_t per = output_components(output);
+    return {values.begin() + std::ptrdiff_t(first[i] * per), values.begin() + std::ptrdiff_t(first[i + 1] * per)};
+}
+
+/// Per instance, every_output's vectors cut to that instance.
+std::vector<std::vector<std::vector<float>>> outputs_by_instance(const Simulation& sim);
+
 }  // namespace hmsm::test
 
 namespace hmsm {
