@@ -4,6 +4,7 @@
 // in dt.
 #include "simulation_access.h"
 #include "test_trees.h"
+#include "tree_response.h"
 
 #include "model/coupled_constants.h"
 
@@ -37,19 +38,6 @@ std::vector<double> read(const Simulation& sim, Output output) {
     Status s = sim.read(output, values);
     EXPECT_TRUE(s.ok()) << s.message();
     return values;
-}
-
-/// Frequency (Hz) of a signal sampled every dt, from its first and last upward crossing of its
-/// mean (interpolated).
-double crossing_frequency(std::vector<double> x, double dt) {
-    double mean = 0.0;
-    for (double v : x) mean += v / double(x.size());
-    for (double& v : x) v -= mean;
-    std::vector<double> up;
-    for (size_t i = 1; i < x.size(); ++i)
-        if (x[i - 1] < 0.0 && x[i] >= 0.0) up.push_back((double(i - 1) + x[i - 1] / (x[i - 1] - x[i])) * dt);
-    if (up.size() < 3) return 0.0;
-    return double(up.size() - 1) / (up.back() - up.front());
 }
 
 }  // namespace
@@ -124,7 +112,10 @@ TEST(CoupledLinks, SplitRodTopSwaysAtTheCantileverFrequency) {
         top_x.push_back(read(**sim, Output::node_positions)[3 * kRodSegments]);
     }
     const double f0 = detail::uniform_cantilever_frequency(kRodLength, kRodRadius, config.parameters.material);
-    const double measured = crossing_frequency(top_x, config.parameters.dt);
+    double mean = 0.0;  // the sway is measured about its mean
+    for (double v : top_x) mean += v / double(top_x.size());
+    for (double& v : top_x) v -= mean;
+    const double measured = cli::decay_frequency(top_x, config.parameters.dt);
     std::printf("split rod: measured f0 %.4f Hz, cantilever %.4f Hz\n", measured, f0);
     EXPECT_NEAR(measured, f0, 0.03 * f0);
 }

@@ -4,6 +4,7 @@
 #include "cli_fixture.h"
 #include "simulation_access.h"
 #include "test_trees.h"
+#include "tree_response.h"
 
 #include "backend.h"
 #include "model/coupled_constants.h"
@@ -35,16 +36,6 @@ std::vector<double> read(const Simulation& sim, Output output) {
     Status s = sim.read(output, values);
     EXPECT_TRUE(s.ok()) << s.message();
     return values;
-}
-
-/// Frequency (Hz) of a signal sampled every dt, from the time between its first and last
-/// upward zero crossing (interpolated).
-double crossing_frequency(const std::vector<double>& x, double dt) {
-    std::vector<double> up;
-    for (size_t i = 1; i < x.size(); ++i)
-        if (x[i - 1] < 0.0 && x[i] >= 0.0) up.push_back((double(i - 1) + x[i - 1] / (x[i - 1] - x[i])) * dt);
-    if (up.size() < 3) return 0.0;
-    return double(up.size() - 1) / (up.back() - up.front());
 }
 
 }  // namespace
@@ -124,7 +115,7 @@ TEST(Coupled, UniformRodSwaysAtTheCantileverFrequency) {
         theta_z.push_back(read(**sim, Output::chain_angles)[1]);
     }
     const double f0 = detail::uniform_cantilever_frequency(L, r, config.parameters.material);
-    EXPECT_NEAR(crossing_frequency(theta_z, config.parameters.dt), f0, 0.03 * f0);
+    EXPECT_NEAR(cli::decay_frequency(theta_z, config.parameters.dt), f0, 0.03 * f0);
 }
 
 // Without wind, a swaying tree comes to rest: the largest |angle| of each half second shrinks.

@@ -8,7 +8,6 @@
 
 #include <algorithm>
 #include <cstdlib>
-#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -39,15 +38,10 @@ Snapshot snapshot(const Simulation& sim) {
     return s;
 }
 
-template <class T>
-bool bitwise_equal(const std::vector<T>& a, const std::vector<T>& b) {
-    return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0;
-}
-
 void expect_identical(const Snapshot& a, const Snapshot& b) {
     for (size_t k = 0; k < std::size(kOutputs); ++k) {
-        EXPECT_TRUE(bitwise_equal(a.as_float[k], b.as_float[k])) << "output " << k << " (float)";
-        EXPECT_TRUE(bitwise_equal(a.as_double[k], b.as_double[k])) << "output " << k << " (double)";
+        EXPECT_TRUE(test::same_bits(a.as_float[k], b.as_float[k])) << "output " << k << " (float)";
+        EXPECT_TRUE(test::same_bits(a.as_double[k], b.as_double[k])) << "output " << k << " (double)";
         EXPECT_TRUE(test::all_finite(a.as_double[k]));
     }
 }

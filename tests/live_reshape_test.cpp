@@ -14,41 +14,6 @@ namespace {
 using detail::full_uploads_of;
 using detail::scene_data_of;
 
-/// Every output of `sim` in the precision its backend stores, one vector per output.
-std::vector<std::vector<float>> outputs_of(const Simulation& sim) {
-    std::vector<std::vector<float>> out;
-    for (Output o : {Output::node_positions, Output::vertex_positions, Output::vertex_normals,
-                     Output::chain_rotations, Output::chain_origins, Output::chain_angles,
-                     Output::joint_matrices}) {
-        out.emplace_back();
-        const Status read = sim.read(o, out.back());
-        EXPECT_TRUE(read.ok()) << "output " << int(o) << ": " << read.message();
-    }
-    return out;
-}
-
-/// The elements of instance `i` of output `values` (per-instance element counts in `sizes`).
-std::vector<float> instance_slice(const std::vector<float>& values, const std::vector<uint64_t>& sizes,
-                                  size_t i) {
-    uint64_t first = 0;
-    for (size_t k = 0; k < i; ++k) first += sizes[k];
-    return {values.begin() + std::ptrdiff_t(first), values.begin() + std::ptrdiff_t(first + sizes[i])};
-}
-
-/// Scalars per instance of every output of outputs_of (nodes, vertices x2, rotations, origins,
-/// angles, joints).
-std::vector<std::vector<uint64_t>> instance_sizes(const Simulation& sim) {
-    std::vector<std::vector<uint64_t>> sizes(7);
-    for (const Instance& inst : sim.instances()) {
-        const uint64_t chains = sim.hierarchy(inst.model).chains.size();
-        const uint64_t nodes = sim.hierarchy(inst.model).node_owner.size();
-        const uint64_t vertices = sim.mesh(inst.model).vertices.size();
-        const uint64_t per[] = {3 * nodes, 3 * vertices, 3 * vertices, 9 * chains, 3 * chains, 4 * chains, 12 * chains};
-        for (size_t o = 0; o < 7; ++o) sizes[o].push_back(per[o]);
-    }
-    return sizes;
-}
-
 Scene two_model_forest() {
     Scene scene = *grid_scene(test::small_tree(), 7, 5.0, 11);
     scene.models.push_back(test::deep_tree(4));
@@ -126,20 +91,16 @@ TEST_P(LiveReshape, RemovalKeepsSurvivorsBitwiseWithoutUpload) {
     if (!skip.empty()) GTEST_SKIP() << skip;
     ASSERT_TRUE(sim);
     ASSERT_TRUE(sim->step(25).ok());
-    const auto before = outputs_of(*sim);
-    const auto before_sizes = instance_sizes(*sim);
+    const auto before = test::outputs_by_instance(*sim);
     const uint64_t gone[] = {0, 4, 6};
     ASSERT_TRUE(sim->remove_instances(gone).ok());
     EXPECT_EQ(full_uploads_of(*sim), 0u);
-    const auto after = outputs_of(*sim);
-    const auto after_sizes = instance_sizes(*sim);
+    const auto after = test::outputs_by_instance(*sim);
     const size_t survivors[] = {1, 2, 3, 5, 7, 8};
     ASSERT_EQ(sim->instance_count(), std::size(survivors));
-    for (size_t o = 0; o < after.size(); ++o)
-        for (size_t k = 0; k < std::size(survivors); ++k)
-            EXPECT_EQ(instance_slice(after[o], after_sizes[o], k),
-                      instance_slice(before[o], before_sizes[o], survivors[k]))
-                << "output " << o << ", survivor " << survivors[k];
+    for (size_t k = 0; k < std::size(survivors); ++k)
+        for (size_t o = 0; o < std::size(test::kEveryOutput); ++o)
+            EXPECT_EQ(after[k][o], before[survivors[k]][o]) << "output " << o << ", survivor " << survivors[k];
 }
 
 // Removing and adding in place gives bitwise what uploading the scene anew gives, through
@@ -162,11 +123,11 @@ TEST_P(LiveReshape, InPlaceEqualsUploadingAnew) {
         ASSERT_TRUE(anew->step(15).ok());
         change(*in_place, round);
         change(*anew, round);
-        EXPECT_EQ(outputs_of(*in_place), outputs_of(*anew)) << "right after round " << round;
+        EXPECT_EQ(test::every_output(*in_place), test::every_output(*anew)) << "right after round " << round;
     }
     ASSERT_TRUE(in_place->step(20).ok());
     ASSERT_TRUE(anew->step(20).ok());
-    EXPECT_EQ(outputs_of(*in_place), outputs_of(*anew));
+    EXPECT_EQ(test::every_output(*in_place), test::every_output(*anew));
     EXPECT_EQ(full_uploads_of(*in_place), 0u) << "every change fitted the capacity";
     EXPECT_EQ(full_uploads_of(*anew), 6u);
 }
@@ -210,13 +171,14 @@ TEST_P(LiveReshape, AddedInstancesStartAtRest) {
     EXPECT_EQ(full_uploads_of(*sim), 0u);
     std::vector<float> angles;
     ASSERT_TRUE(sim->read(Output::chain_angles, angles).ok());
-    const auto sizes = instance_sizes(*sim);
-    const auto last = instance_slice(angles, sizes[5], sim->instance_count() - 1);
-    for (float a : last) EXPECT_EQ(a, 0.0f);
+    const size_t last = sim->instance_count() - 1;
+    const auto chains = test::first_elements(*sim, Output::chain_angles);
+    for (float a : test::instance_slice(angles, chains, last, Output::chain_angles)) EXPECT_EQ(a, 0.0f);
     // Its nodes are the model's rest pose at the origin.
     std::vector<float> nodes;
     ASSERT_TRUE(sim->read(Output::node_positions, nodes).ok());
-    const auto rest = instance_slice(nodes, sizes[0], sim->instance_count() - 1);
+    const auto rest =
+        test::instance_slice(nodes, test::first_elements(*sim, Output::node_positions), last, Output::node_positions);
     const TreeModel& model = sim->scene().models[0];
     size_t root = 0;
     while (model.nodes[root].parent >= 0) ++root;
@@ -241,7 +203,7 @@ TEST_P(LiveReshape, ReservedRoomTakesAdditionsWithoutUpload) {
     EXPECT_GE(scene_data_of(*reserved).instance_capacity, room);
     ASSERT_TRUE(reserved->reserve_instances(4).ok());
     EXPECT_EQ(full_uploads_of(*reserved), 1u) << "the room is there already";
-    EXPECT_EQ(outputs_of(*reserved), outputs_of(*plain));
+    EXPECT_EQ(test::every_output(*reserved), test::every_output(*plain));
     for (uint32_t k = 0; k < 12; ++k) {
         const Instance one[] = {{k % 2, {20.0 + 4.0 * k, 0, 0}, 0.1 * k}};
         ASSERT_TRUE(reserved->add_instances(one).ok());
@@ -255,7 +217,7 @@ TEST_P(LiveReshape, ReservedRoomTakesAdditionsWithoutUpload) {
     EXPECT_EQ(full_uploads_of(*reserved), 1u) << "every addition fitted the reserved room";
     ASSERT_TRUE(reserved->step(10).ok());
     ASSERT_TRUE(plain->step(10).ok());
-    EXPECT_EQ(outputs_of(*reserved), outputs_of(*plain));
+    EXPECT_EQ(test::every_output(*reserved), test::every_output(*plain));
     const Status too_many = reserved->reserve_instances(uint64_t(kMaxInstances) + 1);
     EXPECT_EQ(too_many.code(), ErrorCode::unsupported);
     EXPECT_EQ(full_uploads_of(*reserved), 1u);
@@ -287,18 +249,16 @@ TEST_P(LiveReshape, SwapRemovalMovesOnlyTheFillers) {
     if (!skip.empty()) GTEST_SKIP() << skip;
     ASSERT_TRUE(sim);
     ASSERT_TRUE(sim->step(25).ok());
-    const auto before = outputs_of(*sim);
-    const auto sizes = instance_sizes(*sim);
+    const auto before = test::outputs_by_instance(*sim);
     ASSERT_TRUE(sim->swap_remove_instances(handles({5, 2})).ok());
     EXPECT_EQ(full_uploads_of(*sim), 0u);
     EXPECT_EQ(scene_data_of(*sim).groups.size(), 1u) << "one model: still one run of instances";
     const size_t from[] = {0, 1, 8, 3, 4, 9, 6, 7};  // holes 2 and 5 take 8 and 9
     ASSERT_EQ(sim->instance_count(), std::size(from));
-    const auto after = outputs_of(*sim);
-    for (size_t o = 0; o < after.size(); ++o)
-        for (size_t k = 0; k < std::size(from); ++k)
-            EXPECT_EQ(instance_slice(after[o], sizes[o], k), instance_slice(before[o], sizes[o], from[k]))
-                << "output " << o << ", new index " << k;
+    const auto after = test::outputs_by_instance(*sim);
+    for (size_t k = 0; k < std::size(from); ++k)
+        for (size_t o = 0; o < std::size(test::kEveryOutput); ++o)
+            EXPECT_EQ(after[k][o], before[from[k]][o]) << "output " << o << ", new index " << k;
     for (size_t k = 0; k < std::size(from); ++k) {
         EXPECT_EQ(sim->id_of(k).value(), InstanceId(from[k]));
         EXPECT_EQ(sim->index_of(InstanceId(from[k])).value(), k);
@@ -308,7 +268,7 @@ TEST_P(LiveReshape, SwapRemovalMovesOnlyTheFillers) {
     for (const auto& bad : {handles({1, 5}), handles({77}), handles({3, 3}), handles({0, 1, 3, 4, 6, 7, 8, 9})}) {
         const Status refused = sim->swap_remove_instances(bad);
         EXPECT_EQ(refused.code(), ErrorCode::invalid_argument) << refused.message();
-        EXPECT_EQ(outputs_of(*sim), after);
+        EXPECT_EQ(test::outputs_by_instance(*sim), after);
         EXPECT_EQ(sim->instance_count(), std::size(from));
     }
     EXPECT_NE(sim->swap_remove_instances(handles({1, 5})).message().find("instance id 5 was removed"),
@@ -328,7 +288,7 @@ TEST_P(LiveReshape, SwapRemovalEqualsUploadingAnewAndFollowsCpu64) {
         auto oracle = test::create_simulation_or_skip(scenes[which], windy(), BackendKind::cpu64, skip);
         ASSERT_TRUE(in_place && anew && oracle);
         for (Simulation* sim : {in_place.get(), anew.get(), oracle.get()}) churn_by_swaps(*sim);
-        EXPECT_EQ(outputs_of(*in_place), outputs_of(*anew));
+        EXPECT_EQ(test::every_output(*in_place), test::every_output(*anew));
         // Two models: hole 5 takes the deep tree, the instance after it shifts (in place when it
         // shifts down, through an upload when up).
         if (which == 0) EXPECT_EQ(full_uploads_of(*in_place), 0u);

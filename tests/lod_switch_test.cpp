@@ -16,7 +16,12 @@
 namespace hmsm {
 namespace {
 
+using test::first_elements;
+using test::instance_slice;
+
 constexpr int32_t kBudgets[] = {6, 3, 1};
+/// The outputs compared per instance: its nodes, and its chains' angles.
+constexpr Output kNodes = Output::node_positions, kAngles = Output::chain_angles;
 
 Scene lod_forest() {
     Scene scene = *grid_scene(test::small_tree(), 5, 5.0, 11);
@@ -45,23 +50,6 @@ std::vector<double> read_output(const Simulation& sim, Output output) {
     return values;
 }
 
-/// Per instance, its first element of a chain-scope (or node-, vertex-scope) output.
-std::vector<uint64_t> first_elements(const Simulation& sim, char scope) {
-    std::vector<uint64_t> first{0};
-    for (const Instance& inst : sim.instances()) {
-        const uint64_t n = scope == 'c'   ? sim.hierarchy(inst.model).chains.size()
-                           : scope == 'n' ? sim.hierarchy(inst.model).node_owner.size()
-                                          : sim.mesh(inst.model).vertices.size();
-        first.push_back(first.back() + n);
-    }
-    return first;
-}
-
-std::vector<double> slice(const std::vector<double>& values, const std::vector<uint64_t>& first, size_t i,
-                          uint32_t per) {
-    return {values.begin() + std::ptrdiff_t(first[i] * per), values.begin() + std::ptrdiff_t(first[i + 1] * per)};
-}
-
 double vertex_jump(const std::vector<double>& a, const std::vector<double>& b) {
     double largest = 0.0;
     for (size_t k = 0; k + 2 < a.size(); k += 3)
@@ -83,8 +71,8 @@ TEST_P(LodSwitch, SwitchAndReverseCarryKeptChains) {
     const uint64_t index = 2;  // a deep tree
     const InstanceId id = *sim->id_of(index);
     const Instance settings = sim->instances()[index];
-    const auto chains_before = first_elements(*sim, 'c');
-    const auto nodes_before = first_elements(*sim, 'n');
+    const auto chains_before = first_elements(*sim, kAngles);
+    const auto nodes_before = first_elements(*sim, kNodes);
     const auto angles_fine = read_output(*sim, Output::chain_angles);
     const auto rotations_fine = read_output(*sim, Output::chain_rotations);
     const auto nodes_fine = read_output(*sim, Output::node_positions);
@@ -101,7 +89,7 @@ TEST_P(LodSwitch, SwitchAndReverseCarryKeptChains) {
     const Hierarchy& coarse = sim->hierarchy(now.model);
     const Hierarchy& fine = sim->hierarchy(1);
     ASSERT_LT(coarse.chains.size(), fine.chains.size());
-    const auto chains = first_elements(*sim, 'c');
+    const auto chains = first_elements(*sim, kAngles);
     const auto angles_coarse = read_output(*sim, Output::chain_angles);
     const auto rotations_coarse = read_output(*sim, Output::chain_rotations);
     // Which fine chain each coarse one keeps.
@@ -119,11 +107,13 @@ TEST_P(LodSwitch, SwitchAndReverseCarryKeptChains) {
     }
     // Every other instance: its outputs as they were (moved behind the switched one).
     const auto nodes_now = read_output(*sim, Output::node_positions);
-    const auto nodes_after = first_elements(*sim, 'n');
+    const auto nodes_after = first_elements(*sim, kNodes);
     for (size_t i = 0; i < sim->instance_count(); ++i) {
         if (i == index) continue;
-        EXPECT_EQ(slice(nodes_now, nodes_after, i, 3), slice(nodes_fine, nodes_before, i, 3)) << "instance " << i;
-        EXPECT_EQ(slice(angles_coarse, chains, i, 4), slice(angles_fine, chains_before, i, 4)) << "instance " << i;
+        EXPECT_EQ(instance_slice(nodes_now, nodes_after, i, kNodes),
+                  instance_slice(nodes_fine, nodes_before, i, kNodes)) << "instance " << i;
+        EXPECT_EQ(instance_slice(angles_coarse, chains, i, kAngles),
+                  instance_slice(angles_fine, chains_before, i, kAngles)) << "instance " << i;
     }
 
     ASSERT_TRUE(sim->set_instance_lod(id, 0).ok());
@@ -195,14 +185,14 @@ TEST_P(LodSwitch, FinerThanCreatedGrowsTheScene) {
     const uint32_t finer[] = {1, 1};
     for (Simulation* s : {sim.get(), oracle.get()}) {
         ASSERT_TRUE(s->step(50).ok());
-        const auto chains_before = first_elements(*s, 'c');
+        const auto chains_before = first_elements(*s, kAngles);
         const auto angles = read_output(*s, Output::chain_angles);
         ASSERT_TRUE(s->set_instance_lods(ids, finer).ok());
         ASSERT_GT(s->chain_count(), chains_before.back());
-        const auto chains = first_elements(*s, 'c');
+        const auto chains = first_elements(*s, kAngles);
         const auto after = read_output(*s, Output::chain_angles);
-        EXPECT_EQ(slice(after, chains, 0, 4), slice(angles, chains_before, 0, 4));
-        EXPECT_EQ(slice(after, chains, 3, 4), slice(angles, chains_before, 3, 4));
+        EXPECT_EQ(instance_slice(after, chains, 0, kAngles), instance_slice(angles, chains_before, 0, kAngles));
+        EXPECT_EQ(instance_slice(after, chains, 3, kAngles), instance_slice(angles, chains_before, 3, kAngles));
         for (int k = 0; k < 4; ++k)  // the trunk is kept by every level
             EXPECT_EQ(after[chains[2] * 4 + uint64_t(k)], angles[chains_before[2] * 4 + uint64_t(k)]);
         ASSERT_TRUE(s->step(50).ok());

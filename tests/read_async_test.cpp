@@ -8,20 +8,11 @@
 
 #include <gtest/gtest.h>
 
-#include <cstring>
-
 using namespace hmsm;
+using test::kEveryOutput;
+using test::same_bits;
 
 namespace {
-
-constexpr Output kEveryOutput[] = {Output::node_positions,  Output::vertex_positions, Output::vertex_normals,
-                                   Output::chain_rotations, Output::chain_origins,    Output::chain_angles,
-                                   Output::joint_matrices};
-
-template <class T>
-bool same_bits(const std::vector<T>& a, const std::vector<T>& b) {
-    return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0;
-}
 
 class ReadAsync : public ::testing::TestWithParam<std::tuple<BackendKind, VertexLayout>> {};
 

@@ -3,6 +3,7 @@
 // without a device skips), bit for bit what one serial pass over the backend's stored
 // elements gives (the backend read directly in the precision it stores).
 #include "simulation_access.h"
+#include "test_trees.h"
 
 #include <hmsm/hmsm.h>
 #include <hmsm/hmsm_c.h>
@@ -10,22 +11,14 @@
 #include <gtest/gtest.h>
 
 #include <bit>
-#include <cstring>
 
 #include "common/octahedral.h"
 
 using namespace hmsm;
+using test::kEveryOutput;
+using test::same_bits;
 
 namespace {
-
-constexpr Output kEveryOutput[] = {Output::node_positions,  Output::vertex_positions, Output::vertex_normals,
-                                   Output::chain_rotations, Output::chain_origins,    Output::chain_angles,
-                                   Output::joint_matrices};
-
-template <class T>
-bool same_bits(const std::vector<T>& a, const std::vector<T>& b) {
-    return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0;
-}
 
 /// One serial pass from the stored elements to the output's layout (include/hmsm/simulation.h).
 template <class Out, class Stored>

@@ -8,45 +8,10 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <cstring>
 #include <limits>
 
 namespace hmsm {
 namespace {
-
-constexpr Output kOutputs[] = {Output::node_positions, Output::vertex_positions, Output::vertex_normals,
-                               Output::chain_rotations, Output::chain_origins,   Output::chain_angles,
-                               Output::joint_matrices};
-
-/// Elements per instance of `output` (one model).
-uint64_t elements_per_instance(const Simulation& sim, Output output) {
-    switch (output) {
-        case Output::node_positions: return sim.node_count() / sim.instance_count();
-        case Output::vertex_positions:
-        case Output::vertex_normals: return sim.vertex_count() / sim.instance_count();
-        default: return sim.chain_count() / sim.instance_count();
-    }
-}
-
-/// Every output of instance `i`, as float bits.
-std::vector<std::vector<float>> outputs_of(const Simulation& sim, uint64_t i) {
-    std::vector<std::vector<float>> out;
-    for (Output output : kOutputs) {
-        std::vector<float> all;
-        EXPECT_TRUE(sim.read(output, all).ok());
-        const uint64_t n = elements_per_instance(sim, output) * output_components(output);
-        out.emplace_back(all.begin() + i * n, all.begin() + (i + 1) * n);
-    }
-    return out;
-}
-
-bool bitwise_equal(const std::vector<std::vector<float>>& a, const std::vector<std::vector<float>>& b) {
-    if (a.size() != b.size()) return false;
-    for (size_t k = 0; k < a.size(); ++k)
-        if (a[k].size() != b[k].size() || std::memcmp(a[k].data(), b[k].data(), a[k].size() * sizeof(float)) != 0)
-            return false;
-    return true;
-}
 
 bool any_nan(const std::vector<std::vector<float>>& values) {
     for (const auto& v : values)
@@ -70,8 +35,8 @@ TEST_P(ResetInstances, ReturnsExactlyToRestOthersUntouched) {
     auto sim = test::create_simulation_or_skip(scene, config, GetParam(), skip);
     ASSERT_TRUE(sim);
 
-    std::vector<std::vector<std::vector<float>>> rest;
-    for (uint64_t i = 0; i < 3; ++i) rest.push_back(outputs_of(*fresh, i));
+    const auto rest = test::outputs_by_instance(*fresh);
+    auto now = [&] { return test::outputs_by_instance(*sim); };
     ASSERT_TRUE(sim->step(40).ok());
     ASSERT_TRUE(sim->set_instance_active(2, true).ok());
     ASSERT_TRUE(sim->step(10).ok());
@@ -83,33 +48,34 @@ TEST_P(ResetInstances, ReturnsExactlyToRestOthersUntouched) {
     ASSERT_TRUE(detail::backend_of(*sim).write(detail::BufferId::chain_state, chains, chains, nan.data(),
                                                detail::Scalar::f64).ok());
     ASSERT_TRUE(sim->step(3).ok());
-    ASSERT_TRUE(any_nan(outputs_of(*sim, 1)));
-    const auto moving = outputs_of(*sim, 0), paused = outputs_of(*sim, 2);
-    ASSERT_FALSE(bitwise_equal(moving, rest[0]));
-    ASSERT_FALSE(bitwise_equal(paused, rest[2]));
+    ASSERT_TRUE(any_nan(now()[1]));
+    const auto moving = now()[0], paused = now()[2];
+    ASSERT_FALSE(test::same_bits(moving, rest[0]));
+    ASSERT_FALSE(test::same_bits(paused, rest[2]));
 
     // Refused: nothing changes.
     for (std::vector<uint32_t> bad : {std::vector<uint32_t>{1, 3}, std::vector<uint32_t>{0, 0}}) {
         Status refused = sim->reset_instances(bad);
         EXPECT_EQ(refused.code(), ErrorCode::invalid_argument);
-        EXPECT_TRUE(any_nan(outputs_of(*sim, 1)));
-        EXPECT_TRUE(bitwise_equal(outputs_of(*sim, 0), moving));
+        EXPECT_TRUE(any_nan(now()[1]));
+        EXPECT_TRUE(test::same_bits(now()[0], moving));
     }
     EXPECT_NE(sim->reset_instances(std::vector<uint32_t>{1, 3}).message().find("instance 3"), std::string::npos);
 
     ASSERT_TRUE(sim->reset_instances(std::vector<uint32_t>{1}).ok());
-    EXPECT_TRUE(bitwise_equal(outputs_of(*sim, 1), rest[1]));
-    EXPECT_TRUE(bitwise_equal(outputs_of(*sim, 0), moving));
-    EXPECT_TRUE(bitwise_equal(outputs_of(*sim, 2), paused));
+    EXPECT_TRUE(test::same_bits(now()[1], rest[1]));
+    EXPECT_TRUE(test::same_bits(now()[0], moving));
+    EXPECT_TRUE(test::same_bits(now()[2], paused));
 
     ASSERT_TRUE(sim->reset_instances(std::vector<uint32_t>{2, 0}).ok());
-    for (uint64_t i = 0; i < 3; ++i) EXPECT_TRUE(bitwise_equal(outputs_of(*sim, i), rest[i])) << "instance " << i;
+    const auto after = now();
+    for (uint64_t i = 0; i < 3; ++i) EXPECT_TRUE(test::same_bits(after[i], rest[i])) << "instance " << i;
     EXPECT_FALSE(sim->instances()[2].active);
 
     // From rest the reset instances move on, finite.
     ASSERT_TRUE(sim->set_instance_active(2, true).ok());
     ASSERT_TRUE(sim->step(5).ok());
-    EXPECT_FALSE(any_nan(outputs_of(*sim, 1)));
+    EXPECT_FALSE(any_nan(now()[1]));
 }
 
 INSTANTIATE_TEST_SUITE_P(Backends, ResetInstances,

@@ -110,4 +110,39 @@ bool all_finite(const std::vector<double>& values) {
     return true;
 }
 
+std::vector<std::vector<float>> every_output(const Simulation& sim) {
+    std::vector<std::vector<float>> out;
+    for (Output o : kEveryOutput) {
+        out.emplace_back();
+        const Status read = sim.read(o, out.back());
+        EXPECT_TRUE(read.ok()) << "output " << int(o) << ": " << read.message();
+    }
+    return out;
+}
+
+std::vector<uint64_t> first_elements(const Simulation& sim, Output output) {
+    std::vector<uint64_t> first{0};
+    for (const Instance& inst : sim.instances()) {
+        uint64_t elements = sim.hierarchy(inst.model).chains.size();
+        switch (output) {
+            case Output::node_positions: elements = sim.hierarchy(inst.model).node_owner.size(); break;
+            case Output::vertex_positions:
+            case Output::vertex_normals: elements = sim.mesh(inst.model).vertices.size(); break;
+            default: break;
+        }
+        first.push_back(first.back() + elements);
+    }
+    return first;
+}
+
+std::vector<std::vector<std::vector<float>>> outputs_by_instance(const Simulation& sim) {
+    const std::vector<std::vector<float>> all = every_output(sim);
+    std::vector<std::vector<std::vector<float>>> out(sim.instance_count());
+    for (size_t o = 0; o < all.size(); ++o) {
+        const std::vector<uint64_t> first = first_elements(sim, kEveryOutput[o]);
+        for (size_t i = 0; i < out.size(); ++i) out[i].push_back(instance_slice(all[o], first, i, kEveryOutput[o]));
+    }
+    return out;
+}
+
 }  // namespace hmsm::test

@@ -1,11 +1,15 @@
-// Small hand-built trees shared by the tests, and how the tests print a backend.
+// Small hand-built trees shared by the tests, how they create a simulation and print a backend,
+// and how they read and compare its outputs.
 #pragma once
 
 #include <hmsm/hmsm.h>
 
+#include <cstring>
 #include <initializer_list>
 #include <ostream>
 #include <string>
+#include <type_traits>
+#include <vector>
 
 namespace hmsm::test {
 
@@ -38,6 +42,44 @@ std::unique_ptr<Simulation> create_simulation_or_skip(const Scene& scene, Simula
 /// Max over elements of |a - b| for xyz arrays.
 double max_abs_difference(const std::vector<double>& a, const std::vector<double>& b);
 bool all_finite(const std::vector<double>& values);
+
+/// Every output a simulation can produce.
+inline constexpr Output kEveryOutput[] = {Output::node_positions,  Output::vertex_positions, Output::vertex_normals,
+                                          Output::chain_rotations, Output::chain_origins,    Output::chain_angles,
+                                          Output::joint_matrices};
+
+/// The same size and the same bytes: equal bit for bit, NaNs and the sign of zero included.
+template <class T>
+bool same_bits(const std::vector<T>& a, const std::vector<T>& b) {
+    static_assert(std::is_trivially_copyable_v<T>);
+    return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0;
+}
+template <class T>
+bool same_bits(const std::vector<std::vector<T>>& a, const std::vector<std::vector<T>>& b) {
+    if (a.size() != b.size()) return false;
+    for (size_t k = 0; k < a.size(); ++k)
+        if (!same_bits(a[k], b[k])) return false;
+    return true;
+}
+
+/// Every output of kEveryOutput, as float, one vector per output; a failed read fails the test.
+std::vector<std::vector<float>> every_output(const Simulation& sim);
+
+/// Per instance, the index of its first element of `output` (a node, vertex or chain), and one
+/// past the last instance's: instance i owns elements first[i] up to first[i + 1].
+std::vector<uint64_t> first_elements(const Simulation& sim, Output output);
+
+/// Instance i's scalars of `values`, the whole of `output` as read, where `first` is
+/// first_elements(sim, output) of the simulation it was read from.
+template <class T>
+std::vector<T> instance_slice(const std::vector<T>& values, const std::vector<uint64_t>& first, size_t i,
+                              Output output) {
+    const uint64_t per = output_components(output);
+    return {values.begin() + std::ptrdiff_t(first[i] * per), values.begin() + std::ptrdiff_t(first[i + 1] * per)};
+}
+
+/// Per instance, every_output's vectors cut to that instance.
+std::vector<std::vector<std::vector<float>>> outputs_by_instance(const Simulation& sim);
 
 }  // namespace hmsm::test
 

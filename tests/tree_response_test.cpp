@@ -32,6 +32,9 @@ TEST(TreeResponse, ReleaseFitRecoversADecay) {
     EXPECT_NEAR(r.fft_frequency_hz, f, 0.02 * f);
     EXPECT_NEAR(r.damping_ratio, zeta, 0.002);
     EXPECT_GE(r.cycles, 10);
+    // The same crossings from the samples alone (times counted from the first sample).
+    EXPECT_NEAR(cli::decay_frequency(r.displacement, dt), r.frequency_hz, 1e-9 * f);
+    EXPECT_EQ(cli::decay_frequency({0.1, -0.1, 0.1}, dt), 0.0);
 }
 
 TEST(TreeResponse, SlopeOfAPowerLaw) {

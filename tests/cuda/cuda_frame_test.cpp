@@ -4,6 +4,7 @@
 // the chunked path and each other. Every test skips with the reason when there is no device.
 #include "simulation_access.h"
 #include "cuda_test_support.h"
+#include "test_trees.h"
 
 #include <hmsm/cuda.h>
 
@@ -14,9 +15,7 @@
 namespace hmsm::cuda_test {
 namespace {
 
-constexpr Output kEveryOutput[] = {Output::node_positions,  Output::vertex_positions, Output::vertex_normals,
-                                   Output::chain_rotations, Output::chain_origins,    Output::chain_angles,
-                                   Output::joint_matrices};
+using test::kEveryOutput;
 
 std::unique_ptr<Simulation> create_or_fail(const Scene& scene, const SimulationConfig& config) {
     auto sim = Simulation::create(scene, config);

@@ -35,30 +35,59 @@ void stream_before_frame(Simulation& s, uint32_t f) {
     }
 }
 
-TEST_F(VulkanTest, StreamedInstancesTravelWithTheRecordedFrames) {
-    std::string no_device;
-    auto engine = EngineDevice::create(no_device);
-    if (!no_device.empty()) GTEST_SKIP() << no_device;
-    ASSERT_TRUE(engine);
-    SimulationConfig config;
-    config.wind.strength = 6.0;
-    const Scene scene = *grid_scene(small_tree(), 4, 5.0, 4);
-    auto recorded = vulkan::create_simulation(scene, config, engine->context());
-    ASSERT_TRUE(recorded.ok()) << recorded.status().message();
-    Simulation& sim = *recorded.value();
-    std::string skip;
-    auto reference = create_simulation_or_skip(scene, config, BackendKind::vulkan, skip);
-    ASSERT_TRUE(reference);
-    SimulationConfig exact = config;
+/// A simulation on the engine's device, driven by record_steps in the tests, and a reference
+/// on hmsm's own Vulkan device that takes the same changes through step(); both of a grid of
+/// small trees in a steady wind.
+class Streaming : public VulkanTest {
+protected:
+    /// Creates both on a grid of `trees` trees; skips where there is no device. The test
+    /// returns when IsSkipped() or HasFatalFailure().
+    void create(uint32_t trees) {
+        std::string no_device;
+        engine_ = EngineDevice::create(no_device);
+        if (!no_device.empty()) GTEST_SKIP() << no_device;
+        ASSERT_TRUE(engine_);
+        config_.wind.strength = 6.0;
+        scene_ = *grid_scene(small_tree(), trees, 5.0, 4);
+        auto recorded = vulkan::create_simulation(scene_, config_, engine_->context());
+        ASSERT_TRUE(recorded.ok()) << recorded.status().message();
+        recorded_ = std::move(recorded).value();
+        std::string skip;
+        reference_ = create_simulation_or_skip(scene_, config_, BackendKind::vulkan, skip);
+        ASSERT_TRUE(reference_);
+        backend_ = &dynamic_cast<const detail::vk::VulkanBackend&>(detail::backend_of(*recorded_));
+    }
+    /// The simulations go before the engine's device, and before the validation messages are
+    /// checked.
+    void TearDown() override {
+        recorded_.reset();
+        reference_.reset();
+        engine_.reset();
+        VulkanTest::TearDown();
+    }
+
+    std::unique_ptr<EngineDevice> engine_;
+    SimulationConfig config_;
+    Scene scene_;
+    std::unique_ptr<Simulation> recorded_, reference_;
+    const detail::vk::VulkanBackend* backend_ = nullptr;
+};
+
+TEST_F(Streaming, StreamedInstancesTravelWithTheRecordedFrames) {
+    create(4);
+    if (IsSkipped() || HasFatalFailure()) return;
+    Simulation& sim = *recorded_;
+    Simulation* reference = reference_.get();
+    SimulationConfig exact = config_;
     exact.backend = BackendKind::cpu64;
-    auto oracle = Simulation::create(scene, exact);
+    auto oracle = Simulation::create(scene_, exact);
     ASSERT_TRUE(oracle.ok()) << oracle.status().message();
-    for (Simulation* s : {&sim, reference.get(), oracle.value().get()}) ASSERT_TRUE(s->reserve_instances(12).ok());
-    const auto& backend = dynamic_cast<const detail::vk::VulkanBackend&>(detail::backend_of(sim));
+    for (Simulation* s : {&sim, reference, oracle.value().get()}) ASSERT_TRUE(s->reserve_instances(12).ok());
+    const detail::vk::VulkanBackend& backend = *backend_;
 
     constexpr uint32_t kFrames = 12;
     {
-        EngineFrames frames(*engine, 3);
+        EngineFrames frames(*engine_, 3);
         if (HasFailure()) return;
         // The first frame makes the simulation one driven by record_steps.
         VkCommandBuffer first = frames.begin(0);
@@ -69,7 +98,7 @@ TEST_F(VulkanTest, StreamedInstancesTravelWithTheRecordedFrames) {
         const uint64_t submissions = backend.submissions();
         const vulkan::SharedBuffers buffers = *vulkan::shared_buffers(sim);
         for (uint32_t f = 1; f < kFrames; ++f) {
-            for (Simulation* s : {&sim, reference.get(), oracle.value().get()}) stream_before_frame(*s, f);
+            for (Simulation* s : {&sim, reference, oracle.value().get()}) stream_before_frame(*s, f);
             if (HasFatalFailure()) return;
             if (f % 4 == 1 || f % 4 == 3) EXPECT_GT(backend.held_back_changes(), 0u) << "frame " << f;
             VkCommandBuffer cmd = frames.begin(f);
@@ -98,26 +127,16 @@ TEST_F(VulkanTest, StreamedInstancesTravelWithTheRecordedFrames) {
         EXPECT_LT(relative_difference(std::vector<double>(a.begin(), a.end()), exact_values), 1e-4)
             << "output " << int(output);
     }
-    recorded.value().reset();  // before the engine's device
 }
 
-TEST_F(VulkanTest, GrowthPastTheCapacityWhileRecordingSubmitsAndStillMatches) {
-    std::string no_device;
-    auto engine = EngineDevice::create(no_device);
-    if (!no_device.empty()) GTEST_SKIP() << no_device;
-    ASSERT_TRUE(engine);
-    SimulationConfig config;
-    config.wind.strength = 6.0;
-    const Scene scene = *grid_scene(small_tree(), 2, 5.0, 4);
-    auto recorded = vulkan::create_simulation(scene, config, engine->context());
-    ASSERT_TRUE(recorded.ok()) << recorded.status().message();
-    Simulation& sim = *recorded.value();
-    std::string skip;
-    auto reference = create_simulation_or_skip(scene, config, BackendKind::vulkan, skip);
-    ASSERT_TRUE(reference);
-    const auto& backend = dynamic_cast<const detail::vk::VulkanBackend&>(detail::backend_of(sim));
+TEST_F(Streaming, GrowthPastTheCapacityWhileRecordingSubmitsAndStillMatches) {
+    create(2);
+    if (IsSkipped() || HasFatalFailure()) return;
+    Simulation& sim = *recorded_;
+    Simulation* reference = reference_.get();
+    const detail::vk::VulkanBackend& backend = *backend_;
     {
-        EngineFrames frames(*engine, 3);
+        EngineFrames frames(*engine_, 3);
         if (HasFailure()) return;
         for (uint32_t f = 0; f < 6; ++f) {
             if (f == 3) {
@@ -142,7 +161,6 @@ TEST_F(VulkanTest, GrowthPastTheCapacityWhileRecordingSubmitsAndStillMatches) {
     ASSERT_TRUE(sim.read(Output::vertex_positions, a).ok());
     ASSERT_TRUE(reference->read(Output::vertex_positions, b).ok());
     EXPECT_EQ(a, b);
-    recorded.value().reset();
 }
 
 }  // namespace

@@ -81,10 +81,6 @@ std::vector<double> read_f64(const Simulation& sim, Output output) {
     return values;
 }
 
-constexpr Output kOutputs[] = {Output::node_positions, Output::vertex_positions, Output::vertex_normals,
-                               Output::chain_rotations, Output::chain_origins, Output::chain_angles,
-                               Output::joint_matrices};
-
 TEST_F(VulkanTest, SplitScenesMatchTheUnsplitRunBitwise) {
     const Scene scenes[] = {two_model_scene(), *grid_scene(small_tree(), 11, 5.0, 3)};
     for (TestComposition composition : {kJumpingPerRound, kJumpingInDispatch, TestComposition(Composition::level_by_level),
@@ -121,7 +117,7 @@ TEST_F(VulkanTest, SplitScenesMatchTheUnsplitRunBitwise) {
                 EXPECT_GT(segments.size(), 2u);
                 ASSERT_TRUE(split->step(25).ok());
                 ASSERT_TRUE(split->step(35).ok());
-                for (Output o : kOutputs) EXPECT_EQ(read_f32(*split, o), read_f32(*whole, o)) << int(o);
+                for (Output o : kEveryOutput) EXPECT_EQ(read_f32(*split, o), read_f32(*whole, o)) << int(o);
                 double height = 0.0;
                 for (const TreeModel& m : scene.models) height = std::max(height, tree_height(m));
                 for (Output o : {Output::node_positions, Output::vertex_positions})
@@ -164,13 +160,13 @@ TEST_F(VulkanTest, SplitScenesFollowLiveChangesBitwise) {
     };
     ASSERT_TRUE(whole->step(20).ok());
     ASSERT_TRUE(split->step(20).ok());
-    for (Output o : kOutputs) EXPECT_EQ(read_f32(*split, o), read_f32(*whole, o)) << "before " << int(o);
+    for (Output o : kEveryOutput) EXPECT_EQ(read_f32(*split, o), read_f32(*whole, o)) << "before " << int(o);
     change(*whole);
     change(*split);
     ASSERT_TRUE(whole->step(30).ok());
     ASSERT_TRUE(split->step(30).ok());
     EXPECT_GT(vulkan_of(*split).window_plan().segments().size(), 2u);
-    for (Output o : kOutputs) EXPECT_EQ(read_f32(*split, o), read_f32(*whole, o)) << int(o);
+    for (Output o : kEveryOutput) EXPECT_EQ(read_f32(*split, o), read_f32(*whole, o)) << int(o);
 }
 
 TEST_F(VulkanTest, SegmentsCutInstanceGroupsIntoSeveralParts) {
@@ -377,7 +373,7 @@ TEST_F(VulkanTest, SplitSceneOnAnEngineDeviceRecordsStepsAndSharesWholeBuffers) 
     if (HasFatalFailure()) return;
 
     ASSERT_TRUE(reference->step(20).ok());
-    for (Output o : kOutputs) EXPECT_EQ(read_f32(sim, o), read_f32(*reference, o)) << int(o);
+    for (Output o : kEveryOutput) EXPECT_EQ(read_f32(sim, o), read_f32(*reference, o)) << int(o);
 
     // The shared outputs are whole buffers, larger than the windows hmsm binds them in.
     auto buffers = vulkan::shared_buffers(sim);

@@ -14,7 +14,6 @@ using Clock = std::chrono::steady_clock;
 
 double seconds(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double>(b - a).count(); }
 
-/// Simulation::step(1), which returns when the step is complete.
 class BlockingStep final : public FrameDriver {
 public:
     const char* path() const override { return "step"; }
@@ -37,9 +36,9 @@ const char* change_name(Change change) {
     return "";
 }
 
-/// The live change of frame `frame`: a wind strength that alternates, a force field that
-/// walks through the forest, or ten instances (all of a smaller forest) streamed: added at the
-/// end where the first ten stand, then the first ten removed.
+/// The live change of frame `frame`: a wind strength that alternates about `base_wind`'s, a
+/// force field that walks through the forest, or ten instances (all of a smaller forest)
+/// streamed: added at the end where the first ten stand, then the first ten removed.
 Status apply_change(Simulation& s, Change change, uint32_t frame, const Wind& base_wind) {
     switch (change) {
         case Change::none: return {};
@@ -74,13 +73,21 @@ double percentile(std::vector<double> values, double p) {
     return values[std::min(values.size(), std::max<size_t>(rank, 1)) - 1];
 }
 
+/// The median and p99 of a case's call and frame times into its row.
+void put_times(nlohmann::json& row, const FrameTimes& times) {
+    row["call_median_seconds"] = percentile(times.call, 0.5);
+    row["call_p99_seconds"] = percentile(times.call, 0.99);
+    row["frame_median_seconds"] = percentile(times.whole, 0.5);
+    row["frame_p99_seconds"] = percentile(times.whole, 0.99);
+}
+
 /// The joint matrices read back after a step, `frames` times each way: read() (call = frame),
 /// and request_read() (call) then take_read() (frame); with the bytes read per frame.
 void measure_readback(Simulation& s, const nlohmann::json& head, uint32_t frames, nlohmann::json& rows) {
     std::vector<float> joints;
     for (const char* how : {"read", "request_take"}) {
         const bool requested = std::string(how) == "request_take";
-        std::vector<double> calls(frames), wholes(frames);
+        FrameTimes times{std::vector<double>(frames), std::vector<double>(frames)};
         Status status;
         for (uint32_t k = 0; status && k < frames + 2; ++k) {  // two warm-up reads grow the slots
             status = s.step(1);
@@ -90,8 +97,8 @@ void measure_readback(Simulation& s, const nlohmann::json& head, uint32_t frames
             const auto called = Clock::now();
             if (status && requested) status = s.take_read(Output::joint_matrices, joints);
             if (k >= 2) {
-                calls[k - 2] = seconds(start, called);
-                wholes[k - 2] = seconds(start, Clock::now());
+                times.call[k - 2] = seconds(start, called);
+                times.whole[k - 2] = seconds(start, Clock::now());
             }
         }
         nlohmann::json row = head;
@@ -101,10 +108,7 @@ void measure_readback(Simulation& s, const nlohmann::json& head, uint32_t frames
         } else {
             row["frames"] = frames;
             row["bytes"] = uint64_t(joints.size() * sizeof(float));
-            row["call_median_seconds"] = percentile(calls, 0.5);
-            row["call_p99_seconds"] = percentile(calls, 0.99);
-            row["frame_median_seconds"] = percentile(wholes, 0.5);
-            row["frame_p99_seconds"] = percentile(wholes, 0.99);
+            put_times(row, times);
         }
         rows.push_back(row);
     }
@@ -114,27 +118,16 @@ void measure_readback(Simulation& s, const nlohmann::json& head, uint32_t frames
 void measure_driver(Simulation& s, FrameDriver& driver, const nlohmann::json& head, const FrameSettings& settings,
                     nlohmann::json& rows) {
     const Wind base_wind = s.wind();
-    auto frame = [&](Change change, uint32_t k, double* call, double* whole) -> Status {
-        const auto start = Clock::now();
-        HMSM_TRY(apply_change(s, change, k, base_wind));
-        HMSM_TRY(driver.call(s));
-        const auto called = Clock::now();
-        HMSM_TRY(driver.finish(s));
-        *call = seconds(start, called);
-        *whole = seconds(start, Clock::now());
-        return {};
+    auto change_of = [&](Change change) -> FrameChange {
+        return [change, &base_wind](Simulation& sim, uint32_t k) { return apply_change(sim, change, k, base_wind); };
     };
     // Warm-up (graphs captured, pools started, staging allocated, capacity grown), then an
-    // estimate of a frame.
-    double call = 0.0, whole = 0.0, estimate = 0.0;
-    Status status;
-    for (uint32_t k = 0; status && k < 3; ++k) status = frame(Change::none, k, &call, &whole);
-    // The first streamed frame grows the capacity (the scene uploaded anew once): the last
-    // one is the steady cost, the slowest change.
-    for (uint32_t k = 0; status && k < 3; ++k) {
-        status = frame(Change::stream_10, k, &call, &whole);
-        estimate = whole;
-    }
+    // estimate of a frame. The first streamed frame grows the capacity (the scene uploaded
+    // anew once): the last one is the steady cost, the slowest change.
+    FrameTimes warm;
+    Status status = time_frames(s, driver, 3, change_of(Change::none), warm);
+    if (status) status = time_frames(s, driver, 3, change_of(Change::stream_10), warm);
+    const double estimate = warm.whole.empty() ? 0.0 : warm.whole.back();
     auto skipped = [&](const std::string& why) {
         nlohmann::json row = head;
         row["skipped"] = why;
@@ -149,8 +142,8 @@ void measure_driver(Simulation& s, FrameDriver& driver, const nlohmann::json& he
         return skipped(why);
     }
     for (Change change : kChanges) {
-        std::vector<double> calls(frames), wholes(frames);
-        for (uint32_t k = 0; status && k < frames; ++k) status = frame(change, k, &calls[k], &wholes[k]);
+        FrameTimes times;
+        status = time_frames(s, driver, frames, change_of(change), times);
         nlohmann::json row = head;
         row["change"] = change_name(change);
         if (!status) {
@@ -159,10 +152,7 @@ void measure_driver(Simulation& s, FrameDriver& driver, const nlohmann::json& he
             return;
         }
         row["frames"] = frames;
-        row["call_median_seconds"] = percentile(calls, 0.5);
-        row["call_p99_seconds"] = percentile(calls, 0.99);
-        row["frame_median_seconds"] = percentile(wholes, 0.5);
-        row["frame_p99_seconds"] = percentile(wholes, 0.99);
+        put_times(row, times);
         if (change == Change::stream_10) row["streamed"] = std::min<uint64_t>(kStreamed, s.instance_count());
         rows.push_back(row);
     }
@@ -170,6 +160,21 @@ void measure_driver(Simulation& s, FrameDriver& driver, const nlohmann::json& he
 }
 
 }  // namespace
+
+std::unique_ptr<FrameDriver> blocking_step() { return std::make_unique<BlockingStep>(); }
+
+Status time_frames(Simulation& s, FrameDriver& driver, uint32_t frames, const FrameChange& change, FrameTimes& times) {
+    for (uint32_t k = 0; k < frames; ++k) {
+        const auto start = Clock::now();
+        if (change) HMSM_TRY(change(s, k));
+        HMSM_TRY(driver.call(s));
+        const auto called = Clock::now();
+        HMSM_TRY(driver.finish(s));
+        times.call.push_back(seconds(start, called));
+        times.whole.push_back(seconds(start, Clock::now()));
+    }
+    return {};
+}
 
 nlohmann::json measure_frames(const TreeModel& model, const std::vector<BackendKind>& backends,
                               const FrameSettings& settings) {
@@ -194,8 +199,7 @@ nlohmann::json measure_frames(const TreeModel& model, const std::vector<BackendK
                 continue;
             }
             head["device"] = (*sim)->device_name();
-            BlockingStep blocking;
-            measure_driver(**sim, blocking, head, settings, rows);
+            measure_driver(**sim, *blocking_step(), head, settings, rows);
             for (auto& driver : engine_drivers(**sim)) {
                 head["path"] = driver->path();
                 measure_driver(**sim, *driver, head, settings, rows);

@@ -11,6 +11,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -32,6 +33,23 @@ public:
 /// The engine paths of a simulation of `kind` this build can drive (CUDA: an engine stream;
 /// Vulkan: an engine command buffer); empty where there is none.
 std::vector<std::unique_ptr<FrameDriver>> engine_drivers(Simulation& simulation);
+
+/// Simulation::step(1) as the frame's step call ("step"): returns when the step is complete.
+std::unique_ptr<FrameDriver> blocking_step();
+
+/// The frame's live change before its step call (frame counts from 0); none when empty.
+using FrameChange = std::function<Status(Simulation& simulation, uint32_t frame)>;
+
+/// Seconds per frame: of the engine's hmsm calls (the change and the step call), and of the
+/// whole frame until its outputs are ready.
+struct FrameTimes {
+    std::vector<double> call, whole;
+};
+
+/// Runs `frames` frames of `change` then `driver`'s step on `simulation`, timing each; stops at
+/// the first error, which it returns (the times hold the frames before it).
+Status time_frames(Simulation& simulation, FrameDriver& driver, uint32_t frames, const FrameChange& change,
+                   FrameTimes& times);
 
 struct FrameSettings {
     std::vector<uint32_t> counts;  // forest sizes

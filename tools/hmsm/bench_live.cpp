@@ -5,6 +5,7 @@
 // detail; a wind change between two steps; and pausing and resuming a tenth of the forest.
 #include "bench_live.h"
 
+#include "bench_frames.h"
 #include "simulation_access.h"
 
 #include <algorithm>
@@ -19,6 +20,11 @@ using Clock = std::chrono::steady_clock;
 
 double seconds_since(Clock::time_point start) {
     return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+/// Mean seconds of a whole frame over the `frames` asked for.
+double seconds_per_frame(const FrameTimes& times, uint32_t frames) {
+    return std::accumulate(times.whole.begin(), times.whole.end(), 0.0) / frames;
 }
 
 }  // namespace
@@ -114,19 +120,20 @@ nlohmann::json measure_live_control(const TreeModel& model, const std::vector<Ba
         // Then one step per call, as an engine's frames call it, nothing changed in between
         // (on CUDA a forest then takes the angles the step before integrated ahead).
         constexpr uint32_t kCalls = 10;
-        start = Clock::now();
-        for (uint32_t k = 0; k < kCalls; ++k) (void)s.step();
-        const double per_call = seconds_since(start) / kCalls;
+        const auto step = blocking_step();
+        FrameTimes unchanged;
+        (void)time_frames(s, *step, kCalls, nullptr, unchanged);
+        const double per_call = seconds_per_frame(unchanged, kCalls);
         // And with a force field moved before each call (a character walking through the forest).
         ForceField field;
         field.radius = 10.0;
         field.directional = {0.0, 0.0, 5.0};
-        start = Clock::now();
-        for (uint32_t k = 0; k < kCalls; ++k) {
+        FrameTimes walking;
+        (void)time_frames(s, *step, kCalls, [&field](Simulation& sim, uint32_t k) {
             field.center = {2.0 * k, 2.0, 0.0};
-            if (s.set_force_fields({&field, 1})) (void)s.step();
-        }
-        const double moving_field = seconds_since(start) / kCalls;
+            return sim.set_force_fields({&field, 1});
+        }, walking);
+        const double moving_field = seconds_per_frame(walking, kCalls);
         (void)s.set_force_fields({});
         Wind wind = s.wind();
         wind.profile = WindProfile::turbulent;

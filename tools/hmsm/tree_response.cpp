@@ -63,6 +63,48 @@ double rms_about_mean(const std::vector<double>& x, double& mean) {
     return std::sqrt(sum / double(std::max<size_t>(1, x.size())));
 }
 
+double largest_magnitude(const std::vector<double>& x) {
+    double largest = 0;
+    for (double v : x) largest = std::max(largest, std::abs(v));
+    return largest;
+}
+
+/// A free decay's upward zero crossings and the peak of each cycle between two of them.
+struct DecayCycles {
+    std::vector<double> crossing, peak_t, peak;
+    /// Crossings the fits use: those that close a cycle with a peak.
+    size_t used() const { return std::min(crossing.size(), peak.size() + 1); }
+    /// Cycles per second between the first and the last used crossing; 0 with fewer than 3 crossings.
+    double frequency_hz() const {
+        return crossing.size() < 3 ? 0.0 : double(used() - 1) / (crossing[used() - 1] - crossing[0]);
+    }
+};
+
+/// Upward zero crossings with hysteresis (a crossing counts once the signal has been below
+/// -h since the last one), interpolated linearly; the cycle's peak is the largest value between
+/// two crossings. Stops once the peaks sink below 2 % of the first: the rest is the ripple of
+/// faster modes. `largest` is the largest |x| (> 0).
+DecayCycles decay_cycles(const std::vector<double>& time, const std::vector<double>& x, double largest) {
+    const double h = 0.02 * largest;
+    DecayCycles c;
+    bool armed = false;
+    double best = 0, best_t = 0;
+    for (size_t i = 1; i < x.size(); ++i) {
+        if (x[i] < -h) armed = true;
+        if (armed && x[i - 1] < 0 && x[i] >= 0) {
+            const double t = time[i - 1] + (time[i] - time[i - 1]) * (-x[i - 1]) / (x[i] - x[i - 1]);
+            if (!c.crossing.empty() && best > 0) {
+                if (!c.peak.empty() && best < 0.02 * c.peak.front()) break;
+                c.peak_t.push_back(best_t), c.peak.push_back(best);
+            }
+            c.crossing.push_back(t);
+            armed = false, best = 0;
+        }
+        if (!c.crossing.empty() && x[i] > best) best = x[i], best_t = time[i];
+    }
+    return c;
+}
+
 }  // namespace
 
 void fit_release(ReleaseTest& r, double dt) {
@@ -70,35 +112,13 @@ void fit_release(ReleaseTest& r, double dt) {
     r.cycles = 0;
     const std::vector<double>& x = r.displacement;
     if (x.size() < 8) return;
-    double largest = 0;
-    for (double v : x) largest = std::max(largest, std::abs(v));
+    const double largest = largest_magnitude(x);
     if (!(largest > 0)) return;
-    // Upward zero crossings with hysteresis (a crossing counts once the signal has been below
-    // -h since the last one), interpolated linearly; the cycle's peak is the largest value
-    // between two crossings. Stop once the peaks sink below 2 % of the first: the rest is the
-    // ripple of faster modes.
-    const double h = 0.02 * largest;
-    std::vector<double> crossing, peak_t, peak;
-    bool armed = false;
-    double best = 0, best_t = 0;
-    for (size_t i = 1; i < x.size(); ++i) {
-        if (x[i] < -h) armed = true;
-        if (armed && x[i - 1] < 0 && x[i] >= 0) {
-            const double t = r.time[i - 1] + (r.time[i] - r.time[i - 1]) * (-x[i - 1]) / (x[i] - x[i - 1]);
-            if (!crossing.empty() && best > 0) {
-                if (!peak.empty() && best < 0.02 * peak.front()) break;
-                peak_t.push_back(best_t), peak.push_back(best);
-            }
-            crossing.push_back(t);
-            armed = false, best = 0;
-        }
-        if (!crossing.empty() && x[i] > best) best = x[i], best_t = r.time[i];
-    }
-    if (crossing.size() >= 3) {
-        const size_t used = std::min(crossing.size(), peak.size() + 1);
-        r.cycles = int(used - 1);
-        r.frequency_hz = double(used - 1) / (crossing[used - 1] - crossing[0]);
-        r.damping_ratio = decay_damping_ratio(peak_t, peak, r.frequency_hz);
+    const DecayCycles cycles = decay_cycles(r.time, x, largest);
+    if (cycles.crossing.size() >= 3) {
+        r.cycles = int(cycles.used() - 1);
+        r.frequency_hz = cycles.frequency_hz();
+        r.damping_ratio = decay_damping_ratio(cycles.peak_t, cycles.peak, r.frequency_hz);
     }
     // The decay's spectrum, zero-padded four times, peak refined by a parabola through log power.
     std::vector<double> padded = x;
@@ -114,6 +134,15 @@ void fit_release(ReleaseTest& r, double dt) {
     }
     const double df = spectrum.frequency_hz.size() > 1 ? spectrum.frequency_hz[1] - spectrum.frequency_hz[0] : 0.0;
     if (!spectrum.frequency_hz.empty()) r.fft_frequency_hz = spectrum.frequency_hz[k] + offset * df;
+}
+
+double decay_frequency(const std::vector<double>& displacement, double dt) {
+    if (displacement.size() < 8) return 0.0;
+    const double largest = largest_magnitude(displacement);
+    if (!(largest > 0)) return 0.0;
+    std::vector<double> time(displacement.size());
+    for (size_t i = 0; i < time.size(); ++i) time[i] = double(i) * dt;
+    return decay_cycles(time, displacement, largest).frequency_hz();
 }
 
 double log_log_slope(const Spectrum& s, double low, double high, int& bins) {

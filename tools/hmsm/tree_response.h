@@ -68,6 +68,10 @@ Result<TreeResponse> analyze_tree_response(const TreeModel& tree, const std::str
 /// Frequency, damping and cycles of a free decay about zero (exposed for tests).
 void fit_release(ReleaseTest& release, double dt);
 
+/// Frequency (Hz) of a free decay about zero sampled every `dt`, from the release fit's upward
+/// zero crossings (0 with fewer than 3).
+double decay_frequency(const std::vector<double>& displacement, double dt);
+
 /// Least-squares slope of log10 power against log10 frequency over [low, high], after averaging
 /// the power in bins of 1/20 decade; `bins` receives the bins used. 0 with fewer than 3 bins.
 double log_log_slope(const Spectrum& spectrum, double low, double high, int& bins);
