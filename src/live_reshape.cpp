@@ -240,31 +240,13 @@ Status Simulation::Impl::reset(std::span<const uint32_t> indices) {
     // Pending live changes first, so that the rest pose below is the last word for these
     // instances whatever was changed before.
     HMSM_TRY(apply_pending());
-    // Per sorted index: its group and its first state chain; runs of neighbours in one group
-    // become one group slice. Slices cover no paused instance (their flag is not read), so a
-    // paused instance is reset too and stays paused.
-    std::vector<detail::InstanceGroup> slices;
-    for (uint32_t i : indices) {
-        const detail::InstanceGroup* owner = nullptr;
-        for (const detail::InstanceGroup& g : data_->groups)
-            if (i >= g.instance_begin && i < g.instance_begin + g.instance_count) owner = &g;
-        if (!owner) return {ErrorCode::internal, "reset: instance " + std::to_string(i) + " is in no group"};
-        if (!slices.empty() && i != owner->instance_begin &&
-            slices.back().instance_begin + slices.back().instance_count == i) {
-            ++slices.back().instance_count;  // i - 1 is in the same group and in this slice
-            continue;
-        }
-        const detail::ModelRange& m = data_->models[owner->model];
-        const uint32_t k = i - owner->instance_begin;
-        detail::InstanceGroup one = *owner;
-        one.instance_begin = i;
-        one.instance_count = 1;
-        one.chain_begin += k * m.chain_count;
-        one.node_begin += k * m.node_count;
-        one.vertex_begin += k * m.vertex_count;
-        one.covers_paused = false;
-        slices.push_back(one);
-    }
+    // Runs of neighbours in one group become one group slice. Slices cover no paused instance
+    // (their flag is not read), so a paused instance is reset too and stays paused.
+    const std::vector<detail::InstanceGroup> slices = detail::slices_covering(*data_, indices);
+    uint64_t covered = 0;
+    for (const detail::InstanceGroup& g : slices) covered += g.instance_count;
+    if (covered != indices.size())
+        return {ErrorCode::internal, "reset: " + std::to_string(indices.size() - covered) + " instances are in no group"};
     // S = V = 0 and g = 0, as for an added instance; the run from pass 2 computes T, R, O, the
     // joint matrices, nodes and vertices from them.
     for (const detail::InstanceGroup& g : slices) {

@@ -40,28 +40,10 @@ uint32_t halves_of(BufferId id) {
 /// all), neighbours in one group as one slice. Slices read no paused flag, so paused instances
 /// are recomputed too.
 std::vector<InstanceGroup> slices_of(const SceneData& d, uint32_t first, const std::vector<char>& wanted) {
-    std::vector<InstanceGroup> out;
-    for (const InstanceGroup& g : d.groups) {
-        const detail::ModelRange& m = d.models[g.model];
-        for (uint32_t i = std::max(first, g.instance_begin); i < g.instance_begin + g.instance_count; ++i) {
-            if (!wanted.empty() && !wanted[i]) continue;
-            if (!out.empty() && out.back().model == g.model && i != g.instance_begin &&
-                out.back().instance_begin + out.back().instance_count == i) {
-                ++out.back().instance_count;
-                continue;
-            }
-            const uint32_t k = i - g.instance_begin;
-            InstanceGroup one = g;
-            one.instance_begin = i;
-            one.instance_count = 1;
-            one.chain_begin += k * m.chain_count;
-            one.node_begin += k * m.node_count;
-            one.vertex_begin += k * m.vertex_count;
-            one.covers_paused = false;
-            out.push_back(one);
-        }
-    }
-    return out;
+    std::vector<uint32_t> indices;
+    for (uint32_t i = first; i < d.instance_count(); ++i)
+        if (wanted.empty() || wanted[i]) indices.push_back(i);
+    return detail::slices_covering(d, indices);
 }
 
 uint64_t grown(uint64_t current, uint64_t needed) {

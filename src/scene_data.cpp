@@ -57,6 +57,36 @@ gpu::PassConstants group_constants(const SceneData& d, const InstanceGroup& g, u
     return pc;
 }
 
+InstanceGroup group_slice(const SceneData& d, const InstanceGroup& group, uint32_t first, uint32_t count) {
+    const ModelRange& m = d.models[group.model];
+    const uint32_t k = first - group.instance_begin;
+    InstanceGroup slice = group;
+    slice.instance_begin = first;
+    slice.instance_count = count;
+    slice.chain_begin += k * m.chain_count;
+    slice.node_begin += k * m.node_count;
+    slice.vertex_begin += k * m.vertex_count;
+    slice.covers_paused = false;
+    return slice;
+}
+
+std::vector<InstanceGroup> slices_covering(const SceneData& d, std::span<const uint32_t> indices) {
+    std::vector<InstanceGroup> out;
+    size_t next = 0;
+    for (const InstanceGroup& g : d.groups) {
+        const uint32_t end = g.instance_begin + g.instance_count;
+        while (next < indices.size() && indices[next] < g.instance_begin) ++next;  // in no group
+        for (; next < indices.size() && indices[next] < end; ++next) {
+            const uint32_t i = indices[next];
+            if (!out.empty() && i != g.instance_begin && out.back().instance_begin + out.back().instance_count == i)
+                ++out.back().instance_count;  // i - 1 is in the same group and in this slice
+            else
+                out.push_back(group_slice(d, g, i, 1));
+        }
+    }
+    return out;
+}
+
 /// The walk records of every model chain (gpu_layout.h HMSM_WALK_RECORD_INTS): depth, the
 /// ancestors going up, the attach nodes of the chain and of its ancestors.
 void fill_walk_records(SceneData& d) {
