@@ -211,9 +211,10 @@ Status Simulation::Impl::switch_models(const std::vector<std::pair<uint32_t, uin
         }
         maps[i] = &map;
     }
+    // Every instance keeps its place, origin and yaw: only the groups and totals change.
     auto laid = std::make_unique<SceneData>();
     laid->models = data_->models;
-    detail::lay_out_instances(*laid, next);
+    detail::lay_out_groups(*laid, next);
     const auto chains_of = [&](uint32_t model) { return data_->models[model].chain_count; };
     const std::vector<uint64_t> old_chain = running_offsets(instances_, chains_of);
     const std::vector<uint64_t> new_chain = running_offsets(next, chains_of);
@@ -224,7 +225,8 @@ Status Simulation::Impl::switch_models(const std::vector<std::pair<uint32_t, uin
     std::vector<std::vector<double>> values64(carried.size());
     std::vector<std::vector<float>> values32(carried.size());
     ahead_schedule_.live_change();  // the state moves, the angles integrated ahead with it
-    const bool in_place = backend_->capabilities().reshapes_in_place && data_->holds(*laid);
+    const bool in_place = backend_->capabilities().reshapes_in_place && laid->total_chains <= data_->chain_capacity &&
+                          laid->total_nodes <= data_->node_capacity && laid->total_vertices <= data_->vertex_capacity;
     if (in_place) {
         // Only the switched instances' state goes through the host; the instances between and
         // behind them shift on the device, their nodes and vertices with them.
@@ -270,6 +272,7 @@ Status Simulation::Impl::switch_models(const std::vector<std::pair<uint32_t, uin
     } else {
         // Past the capacity (or where the backend cannot move state): every instance's state
         // is read, laid out anew and uploaded with room to grow.
+        detail::lay_out_instances(*laid, next);
         const uint64_t old_live = data_->total_chains;
         for (size_t b = 0; b < carried.size(); ++b) {
             const uint32_t per = detail::shape_scalars(detail::buffer_info(carried[b]).shape);

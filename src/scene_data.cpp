@@ -105,24 +105,17 @@ void fill_walk_records(SceneData& d) {
     }
 }
 
-void lay_out_instances(SceneData& d, std::span<const Instance> instances, uint64_t max_group_elements) {
-    d.instance_origin.clear();
-    d.instance_yaw.clear();
+void lay_out_groups(SceneData& d, std::span<const Instance> instances, uint64_t max_group_elements) {
     d.groups.clear();
     d.total_chains = d.total_nodes = d.total_vertices = 0;
-    d.instance_origin.reserve(instances.size());
-    d.instance_yaw.reserve(instances.size());
     for (size_t i = 0; i < instances.size(); ++i) {
-        const Instance& inst = instances[i];
-        const ModelRange& range = d.models[inst.model];
-        d.instance_origin.push_back({inst.origin, 0.0});
-        d.instance_yaw.push_back({std::cos(inst.yaw), std::sin(inst.yaw), 0.0, 0.0});
+        const ModelRange& range = d.models[instances[i].model];
         uint64_t per_instance = std::max({range.chain_count, range.node_count, range.vertex_count});
         InstanceGroup* group = d.groups.empty() ? nullptr : &d.groups.back();
-        if (!group || group->model != inst.model ||
+        if (!group || group->model != instances[i].model ||
             uint64_t(group->instance_count + 1) * per_instance > max_group_elements) {
             InstanceGroup g;
-            g.model = inst.model;
+            g.model = instances[i].model;
             g.instance_begin = uint32_t(i);
             g.chain_begin = uint32_t(d.total_chains);
             g.node_begin = uint32_t(d.total_nodes);
@@ -134,6 +127,18 @@ void lay_out_instances(SceneData& d, std::span<const Instance> instances, uint64
         d.total_chains += range.chain_count;
         d.total_nodes += range.node_count;
         d.total_vertices += range.vertex_count;
+    }
+}
+
+void lay_out_instances(SceneData& d, std::span<const Instance> instances, uint64_t max_group_elements) {
+    lay_out_groups(d, instances, max_group_elements);
+    d.instance_origin.clear();
+    d.instance_yaw.clear();
+    d.instance_origin.reserve(instances.size());
+    d.instance_yaw.reserve(instances.size());
+    for (const Instance& inst : instances) {
+        d.instance_origin.push_back({inst.origin, 0.0});
+        d.instance_yaw.push_back({std::cos(inst.yaw), std::sin(inst.yaw), 0.0, 0.0});
     }
     d.instance_wind.assign(size_t(HMSM_INSTANCE_WIND_VEC4S) * 4 * d.instance_origin.size(), 0.0);
 }

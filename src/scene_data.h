@@ -128,6 +128,11 @@ SceneData flatten_scene(const Scene& scene, const std::vector<Hierarchy>& hierar
 void lay_out_instances(SceneData& d, std::span<const Instance> instances,
                        uint64_t max_group_elements = (1ull << 31));
 
+/// lay_out_instances' groups and total chain, node and vertex counts alone, leaving the
+/// instance arrays as they are: for a change that keeps every instance's place, origin and yaw
+/// (a level switch).
+void lay_out_groups(SceneData& d, std::span<const Instance> instances, uint64_t max_group_elements = (1ull << 31));
+
 /// The part of `group` (a group of d) covering its instances [first, first + count), with its
 /// state offsets. Its covers_paused is false: its dispatches read no paused flag, so paused
 /// instances in it are computed too.
