@@ -134,8 +134,8 @@ SimulationConfig windy() {
     return config;
 }
 
-/// The backend under test by name: a registered kind or "cuda_emulation" (the CUDA kernels on
-/// the host); no_device where it is absent.
+/// The backend under test by name: a registered kind (cuda: a real device) or "cuda_emulation"
+/// (the CUDA kernels on the host); no_device where it is absent.
 Result<std::unique_ptr<detail::Backend>> backend_named(const std::string& name) {
     if (name == "cuda_emulation") {
 #ifdef HMSM_HAVE_CUDA
@@ -144,7 +144,8 @@ Result<std::unique_ptr<detail::Backend>> backend_named(const std::string& name) 
         return Status{ErrorCode::no_device, "cuda emulation: this build of hmsm has no CUDA kernels"};
 #endif
     }
-    for (BackendKind kind : {BackendKind::cpu64, BackendKind::cpu, BackendKind::cpu_parallel, BackendKind::vulkan})
+    for (BackendKind kind :
+         {BackendKind::cpu64, BackendKind::cpu, BackendKind::cpu_parallel, BackendKind::vulkan, BackendKind::cuda})
         if (name == to_string(kind)) return detail::create_backend(kind);
     return Status{ErrorCode::invalid_argument, "no backend " + name};
 }
@@ -263,7 +264,7 @@ std::string param_name(const ::testing::TestParamInfo<std::string>& info) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Backends, LodSwitchCost,
-                         ::testing::Values("cpu64", "cpu", "cpu-parallel", "vulkan", "cuda_emulation"), param_name);
+                         ::testing::Values("cpu64", "cpu", "cpu-parallel", "vulkan", "cuda", "cuda_emulation"), param_name);
 
 }  // namespace
 }  // namespace hmsm
