@@ -178,44 +178,56 @@ constexpr Output kCompared[] = {Output::chain_angles, Output::chain_rotations, O
 
 class LodSwitchCost : public ::testing::TestWithParam<std::string> {};
 
-// Two batched switches, the second growing some instances and shrinking others: the scene moved
-// in place (no upload; moves up and down) is bit for bit the scene laid out anew, right after
-// the switch and steps later.
-TEST_P(LodSwitchCost, ManySwitchesInOneCallMatchLayingOutAnew) {
-    std::unique_ptr<Simulation> moved, anew;
+// Two batched switches, the second growing some instances and shrinking others (moves up and
+// down, no upload), against the same switches made one at a time and against the scene laid
+// out and uploaded anew: bit for bit right after each switch and steps later.
+TEST_P(LodSwitchCost, ManySwitchesInOneCallMatchOneAtATimeAndLayingOutAnew) {
+    std::unique_ptr<Simulation> moved, single, anew;
     std::string skip;
     Watched* watched = create_watched(GetParam(), true, moved, skip);
     if (!skip.empty()) GTEST_SKIP() << skip;
-    ASSERT_TRUE(watched && create_watched(GetParam(), false, anew, skip));
-    auto both = [&](auto&& action) {
-        for (Simulation* s : {moved.get(), anew.get()}) ASSERT_TRUE(action(*s).ok());
+    ASSERT_TRUE(watched && create_watched(GetParam(), true, single, skip));
+    ASSERT_TRUE(create_watched(GetParam(), false, anew, skip));
+    const std::vector<Simulation*> others = {single.get(), anew.get()};
+    auto step_all = [&](uint32_t steps) {
+        for (Simulation* s : {moved.get(), single.get(), anew.get()}) ASSERT_TRUE(s->step(steps).ok());
+    };
+    auto switch_all = [&](std::span<const InstanceId> ids, std::span<const uint32_t> levels) {
+        ASSERT_TRUE(moved->set_instance_lods(ids, levels).ok());
+        ASSERT_TRUE(anew->set_instance_lods(ids, levels).ok());
+        for (size_t k = 0; k < ids.size(); ++k) ASSERT_TRUE(single->set_instance_lod(ids[k], levels[k]).ok());
     };
     auto expect_same = [&](const char* when) {
-        for (Output o : kCompared) EXPECT_EQ(read_output(*moved, o), read_output(*anew, o)) << when << ", output " << int(o);
+        for (Simulation* other : others)
+            for (Output o : kCompared)
+                EXPECT_EQ(read_output(*moved, o), read_output(*other, o))
+                    << when << ", output " << int(o) << (other == anew.get() ? " against the upload" : " against one at a time");
     };
     const InstanceId first_ids[] = {InstanceId(0), InstanceId(2), InstanceId(3), InstanceId(6),
                                     InstanceId(7), InstanceId(9), InstanceId(12), InstanceId(15)};
     const uint32_t first_levels[] = {3, 2, 1, 3, 2, 3, 1, 2};
-    // Chains per deep tree: 5 on levels 0 and 1, 3 on level 2, 1 on level 3. Instances 0 and 9
-    // grow, the others shrink: the runs between shift up by 4 and 2, then down by 2 to 10.
+    // Deep trees have fewer chains on each coarser level: instances 0 and 9 grow, the others
+    // shrink, so the runs between shift up, then down.
     const InstanceId mixed_ids[] = {InstanceId(0), InstanceId(2),  InstanceId(5),  InstanceId(8),
                                     InstanceId(9), InstanceId(11), InstanceId(13), InstanceId(15)};
     const uint32_t mixed_levels[] = {0, 3, 3, 3, 0, 3, 3, 0};
-    both([](Simulation& s) { return s.step(40); });
-    both([&](Simulation& s) { return s.set_instance_lods(first_ids, first_levels); });
+    step_all(40);
+    switch_all(first_ids, first_levels);
     expect_same("after the first switch");
-    both([](Simulation& s) { return s.step(30); });
+    step_all(30);
+    expect_same("steps after the first switch");
     watched->recording = true;
-    both([&](Simulation& s) { return s.set_instance_lods(mixed_ids, mixed_levels); });
+    switch_all(mixed_ids, mixed_levels);
     watched->recording = false;
     expect_same("after the mixed switch");
     EXPECT_EQ(detail::full_uploads_of(*moved), 0u);
+    EXPECT_EQ(detail::full_uploads_of(*single), 0u);
     EXPECT_GT(detail::full_uploads_of(*anew), 0u);
     bool up = false, down = false;
     for (const auto& [id, m] : watched->moved)
         if (id == BufferId::chain_state) (m.dst > m.src ? up : down) = true;
     EXPECT_TRUE(up && down) << "the mixed switch shifts instances both ways";
-    both([](Simulation& s) { return s.step(30); });
+    step_all(30);
     expect_same("steps after the mixed switch");
 }
 
