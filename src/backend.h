@@ -129,8 +129,8 @@ public:
                          Scalar as) = 0;
 
     /// Moves element ranges of buffer `id` on the device, in order, each as if through a
-    /// temporary (source and destination may overlap): the state of surviving instances when
-    /// others are removed (live_control.cpp). Nothing goes through the host.
+    /// temporary (source and destination may overlap): the state of instances that change place
+    /// (live_reshape.cpp, lod_switch.cpp). Nothing goes through the host.
     virtual Status move_elements(BufferId id, std::span<const ElementMove> moves) = 0;
     /// Bracket a change of the instance list (live_reshape.cpp). A backend may hold back the
     /// writes, moves and runs made in between and carry them, in order, with the next work it

@@ -2,6 +2,7 @@
 // replaced by the survivors (in order, or with holes filled from the end for a swap removal)
 // followed by the added instances, every survivor keeps its state bit for bit, and the device
 // scene is kept where the capacity allows (in place) or uploaded anew with room to grow.
+#include "instance_moves.h"
 #include "simulation_impl.h"
 
 #include <algorithm>
@@ -12,23 +13,12 @@ namespace hmsm {
 namespace {
 
 using detail::BufferId;
+using detail::carried_buffers;
+using detail::halves_of;
+using detail::kMovedOutputs;
 
 /// Most elements of one state buffer the capacity grows to (a chain buffer holds two halves).
 constexpr uint64_t kMaxStateElements = std::numeric_limits<uint32_t>::max() / 2;
-
-/// The chain-scope state an instance carries: S, V, g, T, the joint matrices and both halves
-/// of R and O. Nodes and vertices are recomputed from R and O.
-/// The coupled dynamics adds the loads of the last step (docs/model.md 3.13).
-std::vector<BufferId> carried_buffers(bool coupled) {
-    std::vector<BufferId> ids = {BufferId::chain_state, BufferId::chain_force, BufferId::chain_local,
-                                 BufferId::joint_matrix, BufferId::chain_rotation, BufferId::chain_origin};
-    if (coupled) ids.push_back(BufferId::chain_load);
-    return ids;
-}
-
-/// The outputs that passes 4, 6 and 7 compute from R and O, element for element.
-constexpr BufferId kMovedOutputs[] = {BufferId::node_relative, BufferId::node_world, BufferId::vertex_position,
-                                      BufferId::vertex_normal};
 
 /// Moves that bring each survivor's elements [old[i], old[i + 1]) behind the survivor before
 /// it in the new list, neighbours coalesced; `end` receives the elements the survivors hold.
@@ -72,10 +62,6 @@ std::vector<uint64_t> running_offsets(const std::vector<Instance>& instances, Pe
     std::vector<uint64_t> old(instances.size() + 1, 0);
     for (size_t i = 0; i < instances.size(); ++i) old[i + 1] = old[i] + per(instances[i].model);
     return old;
-}
-
-uint32_t halves_of(BufferId id) {
-    return detail::buffer_info(id).scope == detail::Scope::chain_halves ? 2u : 1u;
 }
 
 /// Capacity after growing to hold `needed`: 1.5 times the current one, so that adding
@@ -241,31 +227,13 @@ Status Simulation::Impl::reset(std::span<const uint32_t> indices) {
     // Pending live changes first, so that the rest pose below is the last word for these
     // instances whatever was changed before.
     HMSM_TRY(apply_pending());
-    // Per sorted index: its group and its first state chain; runs of neighbours in one group
-    // become one group slice. Slices cover no paused instance (their flag is not read), so a
-    // paused instance is reset too and stays paused.
-    std::vector<detail::InstanceGroup> slices;
-    for (uint32_t i : indices) {
-        const detail::InstanceGroup* owner = nullptr;
-        for (const detail::InstanceGroup& g : data_->groups)
-            if (i >= g.instance_begin && i < g.instance_begin + g.instance_count) owner = &g;
-        if (!owner) return {ErrorCode::internal, "reset: instance " + std::to_string(i) + " is in no group"};
-        if (!slices.empty() && i != owner->instance_begin &&
-            slices.back().instance_begin + slices.back().instance_count == i) {
-            ++slices.back().instance_count;  // i - 1 is in the same group and in this slice
-            continue;
-        }
-        const detail::ModelRange& m = data_->models[owner->model];
-        const uint32_t k = i - owner->instance_begin;
-        detail::InstanceGroup one = *owner;
-        one.instance_begin = i;
-        one.instance_count = 1;
-        one.chain_begin += k * m.chain_count;
-        one.node_begin += k * m.node_count;
-        one.vertex_begin += k * m.vertex_count;
-        one.covers_paused = false;
-        slices.push_back(one);
-    }
+    // Runs of neighbours in one group become one group slice. Slices cover no paused instance
+    // (their flag is not read), so a paused instance is reset too and stays paused.
+    const std::vector<detail::InstanceGroup> slices = detail::slices_covering(*data_, indices);
+    uint64_t covered = 0;
+    for (const detail::InstanceGroup& g : slices) covered += g.instance_count;
+    if (covered != indices.size())
+        return {ErrorCode::internal, "reset: " + std::to_string(indices.size() - covered) + " instances are in no group"};
     // S = V = 0 and g = 0, as for an added instance; the run from pass 2 computes T, R, O, the
     // joint matrices, nodes and vertices from them.
     for (const detail::InstanceGroup& g : slices) {

@@ -1,9 +1,11 @@
 // Levels of detail at run time (docs/driving.md, levels of detail): every level of a model is a
 // model of the device scene from create() on, and a switch runs an instance on another of them.
-// The instance keeps its index: the chain-scope state of every instance from the first switched
-// one on is laid out anew, the chains both levels keep carrying their state element for element
-// (a level keeps the full model's chains with their constants, docs/model.md 3.12), and chains
-// the finer level unfolds start rigid with their parent.
+// The instance keeps its index: the chains both levels keep carry their state element for
+// element (a level keeps the full model's chains with their constants, docs/model.md 3.12), and
+// chains the finer level unfolds start rigid with their parent. Within the capacity a switch
+// costs in proportion to the switched instances: only their state goes through the host, the
+// instances between and behind them shift on the device (instance_moves.h).
+#include "instance_moves.h"
 #include "simulation_impl.h"
 
 #include <hmsm/levels.h>
@@ -19,50 +21,13 @@ namespace hmsm {
 namespace {
 
 using detail::BufferId;
+using detail::carried_buffers;
+using detail::ElementMove;
+using detail::halves_of;
 using detail::InstanceGroup;
 using detail::SceneData;
 
 std::string id_name(InstanceId id) { return "instance id " + std::to_string(uint64_t(id)); }
-
-/// The chain-scope state that carries through a switch (the buffers live_reshape.cpp moves).
-std::vector<BufferId> carried_buffers(bool coupled) {
-    std::vector<BufferId> ids = {BufferId::chain_state, BufferId::chain_force, BufferId::chain_local,
-                                 BufferId::joint_matrix, BufferId::chain_rotation, BufferId::chain_origin};
-    if (coupled) ids.push_back(BufferId::chain_load);
-    return ids;
-}
-
-uint32_t halves_of(BufferId id) {
-    return detail::buffer_info(id).scope == detail::Scope::chain_halves ? 2u : 1u;
-}
-
-/// The part of d's groups covering instances [first, end) that are flagged in `wanted` (empty:
-/// all), neighbours in one group as one slice. Slices read no paused flag, so paused instances
-/// are recomputed too.
-std::vector<InstanceGroup> slices_of(const SceneData& d, uint32_t first, const std::vector<char>& wanted) {
-    std::vector<InstanceGroup> out;
-    for (const InstanceGroup& g : d.groups) {
-        const detail::ModelRange& m = d.models[g.model];
-        for (uint32_t i = std::max(first, g.instance_begin); i < g.instance_begin + g.instance_count; ++i) {
-            if (!wanted.empty() && !wanted[i]) continue;
-            if (!out.empty() && out.back().model == g.model && i != g.instance_begin &&
-                out.back().instance_begin + out.back().instance_count == i) {
-                ++out.back().instance_count;
-                continue;
-            }
-            const uint32_t k = i - g.instance_begin;
-            InstanceGroup one = g;
-            one.instance_begin = i;
-            one.instance_count = 1;
-            one.chain_begin += k * m.chain_count;
-            one.node_begin += k * m.node_count;
-            one.vertex_begin += k * m.vertex_count;
-            one.covers_paused = false;
-            out.push_back(one);
-        }
-    }
-    return out;
-}
 
 uint64_t grown(uint64_t current, uint64_t needed) {
     return needed <= current ? current : std::max(needed, current + current / 2);
@@ -112,11 +77,26 @@ struct ChainMap {
     std::vector<glm::dmat3> rest_rotation;  // Q_c per new chain, read where old_chain is -1
 };
 
+/// Carries one switched instance's values of chain-scope buffer `id` (`per` scalars a chain)
+/// from `from` (its old chains) into `into` (its new chains, zero on entry): each chain takes
+/// the values of the old chain the map names, or those of a chain at rest relative to its
+/// parent (state, force and load 0, T = Q; the pose is recomputed).
+template <class V>
+void carry_switched(const V* from, V* into, const ChainMap& map, uint32_t per, BufferId id) {
+    for (size_t j = 0; j < map.old_chain.size(); ++j) {
+        V* chain = into + j * per;
+        if (map.old_chain[j] >= 0) {
+            std::copy_n(from + uint64_t(map.old_chain[j]) * per, per, chain);
+        } else if (id == BufferId::chain_local) {  // T = Q Rz(0) Rx(0): rigid with the parent
+            for (int col = 0; col < 3; ++col)
+                for (int row = 0; row < 3; ++row) chain[4 * col + row] = V(map.rest_rotation[j][col][row]);
+        }
+    }
+}
+
 /// Carries the chain-scope state of `old` (live chains, halves back to back) into the layout of
 /// the new instance list: instance i moves whole from old_chain[i] to new_chain[i] unless it has
-/// a map (maps[i] non-null); then each of its chains takes the values of the old chain the map
-/// names, or those of a chain at rest relative to its parent (state, force and load 0, T = Q,
-/// pose recomputed).
+/// a map (maps[i] non-null), then carry_switched.
 template <class V>
 std::vector<V> carry_layout(const std::vector<V>& old, uint32_t per, uint32_t halves, BufferId id,
                             const std::vector<uint64_t>& old_chain, const std::vector<uint64_t>& new_chain,
@@ -127,36 +107,92 @@ std::vector<V> carry_layout(const std::vector<V>& old, uint32_t per, uint32_t ha
         const V* src = old.data() + h * old_live * per;
         V* dst = out.data() + h * new_live * per;
         for (size_t i = 0; i + 1 < old_chain.size(); ++i) {
-            if (!maps[i]) {
-                std::copy_n(src + old_chain[i] * per, (old_chain[i + 1] - old_chain[i]) * per, dst + new_chain[i] * per);
-                continue;
-            }
-            const ChainMap& map = *maps[i];
-            for (size_t j = 0; j < map.old_chain.size(); ++j) {
-                V* into = dst + (new_chain[i] + j) * per;
-                if (map.old_chain[j] >= 0) {
-                    std::copy_n(src + (old_chain[i] + uint64_t(map.old_chain[j])) * per, per, into);
-                } else if (id == BufferId::chain_local) {  // T = Q Rz(0) Rx(0): rigid with the parent
-                    for (int col = 0; col < 3; ++col)
-                        for (int row = 0; row < 3; ++row) into[4 * col + row] = V(map.rest_rotation[j][col][row]);
-                }
-            }
+            if (maps[i]) carry_switched(src + old_chain[i] * per, dst + new_chain[i] * per, *maps[i], per, id);
+            else std::copy_n(src + old_chain[i] * per, (old_chain[i + 1] - old_chain[i]) * per, dst + new_chain[i] * per);
         }
     }
     return out;
+}
+
+/// Neighbouring switched instances [first, end): read, carried and written as one range.
+struct SwitchedRun {
+    uint32_t first = 0, end = 0;
+};
+
+std::vector<SwitchedRun> runs_of(const std::vector<uint32_t>& switched) {
+    std::vector<SwitchedRun> runs;
+    for (uint32_t i : switched) {
+        if (!runs.empty() && runs.back().end == i) ++runs.back().end;
+        else runs.push_back({i, i + 1});
+    }
+    return runs;
+}
+
+/// The switched instances' values of buffer `id` in their new layout, run by run and half by
+/// half back to back: only their old ranges are read.
+template <class V>
+Status read_switched(const detail::Backend& backend, BufferId id, uint64_t capacity, detail::Scalar scalar,
+                     const std::vector<SwitchedRun>& runs, const std::vector<uint64_t>& old_chain,
+                     const std::vector<uint64_t>& new_chain, const std::vector<const ChainMap*>& maps,
+                     std::vector<V>& carried) {
+    const uint32_t per = detail::shape_scalars(detail::buffer_info(id).shape);
+    std::vector<V> old;
+    for (const SwitchedRun& run : runs) {
+        const uint64_t old_first = old_chain[run.first], new_first = new_chain[run.first];
+        const uint64_t chains = old_chain[run.end] - old_first;
+        old.resize(chains * per);
+        for (uint32_t h = 0; h < halves_of(id); ++h) {
+            HMSM_TRY(backend.read(id, h * capacity + old_first, chains, old.data(), scalar));
+            const size_t at = carried.size();
+            carried.resize(at + (new_chain[run.end] - new_first) * per, V(0));
+            for (uint32_t i = run.first; i < run.end; ++i)
+                carry_switched(old.data() + (old_chain[i] - old_first) * per,
+                               carried.data() + at + (new_chain[i] - new_first) * per, *maps[i], per, id);
+        }
+    }
+    return {};
+}
+
+/// Writes what read_switched carried into the switched instances' new ranges.
+template <class V>
+Status write_switched(detail::Backend& backend, BufferId id, uint64_t capacity, detail::Scalar scalar,
+                      const std::vector<SwitchedRun>& runs, const std::vector<uint64_t>& new_chain,
+                      const std::vector<V>& carried) {
+    const uint32_t per = detail::shape_scalars(detail::buffer_info(id).shape);
+    size_t at = 0;
+    for (const SwitchedRun& run : runs) {
+        const uint64_t chains = new_chain[run.end] - new_chain[run.first];
+        for (uint32_t h = 0; h < halves_of(id); ++h) {
+            HMSM_TRY(backend.write(id, h * capacity + new_chain[run.first], chains, carried.data() + at, scalar));
+            at += chains * per;
+        }
+    }
+    return {};
+}
+
+/// Elements per instance of `instances` as running sums (`per` picks chains, nodes or
+/// vertices of a model): offsets[i] is the first element of instance i, offsets[n] the total.
+template <class Per>
+std::vector<uint64_t> running_offsets(const std::vector<Instance>& instances, Per per) {
+    std::vector<uint64_t> offsets(instances.size() + 1, 0);
+    for (size_t i = 0; i < instances.size(); ++i) offsets[i + 1] = offsets[i] + per(instances[i].model);
+    return offsets;
 }
 
 }  // namespace
 
 Status Simulation::Impl::switch_models(const std::vector<std::pair<uint32_t, uint32_t>>& models) {
     if (models.empty()) return {};
+    struct InstanceChange {
+        detail::Backend& backend;
+        explicit InstanceChange(detail::Backend& b) : backend(b) { backend.begin_instance_change(); }
+        ~InstanceChange() { backend.end_instance_change(); }
+    } change(*backend_);
     std::vector<Instance> next = instances_;
-    std::vector<char> switched(instances_.size(), 0);
-    uint32_t first = uint32_t(instances_.size());
+    std::vector<uint32_t> switched;  // ascending, as `models`
     for (auto [i, model] : models) {
         next[i].model = model;
-        switched[i] = 1;
-        first = std::min(first, i);
+        switched.push_back(i);
     }
     HMSM_TRY(check_size(next));
     std::vector<ChainMap> chain_maps(models.size());
@@ -175,44 +211,82 @@ Status Simulation::Impl::switch_models(const std::vector<std::pair<uint32_t, uin
         }
         maps[i] = &map;
     }
+    // Every instance keeps its place, origin and yaw: only the groups and totals change.
     auto laid = std::make_unique<SceneData>();
     laid->models = data_->models;
-    detail::lay_out_instances(*laid, next);
-    std::vector<uint64_t> old_chain(instances_.size() + 1, 0), new_chain(instances_.size() + 1, 0);
-    for (size_t i = 0; i < instances_.size(); ++i) {
-        old_chain[i + 1] = old_chain[i] + data_->models[instances_[i].model].chain_count;
-        new_chain[i + 1] = new_chain[i] + data_->models[next[i].model].chain_count;
-    }
+    detail::lay_out_groups(*laid, next);
+    const auto chains_of = [&](uint32_t model) { return data_->models[model].chain_count; };
+    const std::vector<uint64_t> old_chain = running_offsets(instances_, chains_of);
+    const std::vector<uint64_t> new_chain = running_offsets(next, chains_of);
 
     // The state as the backend stores it, so that everything carried is bit for bit.
     const detail::Scalar scalar = backend_->kind() == BackendKind::cpu64 ? detail::Scalar::f64 : detail::Scalar::f32;
     const std::vector<BufferId> carried = carried_buffers(data_->coupled());
     std::vector<std::vector<double>> values64(carried.size());
     std::vector<std::vector<float>> values32(carried.size());
-    const uint64_t old_live = data_->total_chains;
-    for (size_t b = 0; b < carried.size(); ++b) {
-        const uint32_t per = detail::shape_scalars(detail::buffer_info(carried[b]).shape);
-        const uint32_t halves = halves_of(carried[b]);
-        auto read_all = [&](auto& values) -> Status {
-            values.resize(size_t(halves * old_live * per));
-            for (uint32_t h = 0; h < halves; ++h)
-                HMSM_TRY(backend_->read(carried[b], h * data_->chain_capacity, old_live,
-                                        values.data() + h * old_live * per, scalar));
-            values = carry_layout(values, per, halves, carried[b], old_chain, new_chain, maps);
-            return {};
-        };
-        HMSM_TRY(scalar == detail::Scalar::f64 ? read_all(values64[b]) : read_all(values32[b]));
-    }
-
     ahead_schedule_.live_change();  // the state moves, the angles integrated ahead with it
-    const bool in_place = backend_->capabilities().reshapes_in_place && data_->holds(*laid);
+    const bool in_place = backend_->capabilities().reshapes_in_place && laid->total_chains <= data_->chain_capacity &&
+                          laid->total_nodes <= data_->node_capacity && laid->total_vertices <= data_->vertex_capacity;
     if (in_place) {
+        // Only the switched instances' state goes through the host; the instances between and
+        // behind them shift on the device, their nodes and vertices with them.
+        const std::vector<SwitchedRun> runs = runs_of(switched);
+        const uint64_t capacity = data_->chain_capacity;
+        for (size_t b = 0; b < carried.size(); ++b)
+            HMSM_TRY(scalar == detail::Scalar::f64
+                         ? read_switched(*backend_, carried[b], capacity, scalar, runs, old_chain, new_chain, maps,
+                                         values64[b])
+                         : read_switched(*backend_, carried[b], capacity, scalar, runs, old_chain, new_chain, maps,
+                                         values32[b]));
+        const std::vector<ElementMove> chain_moves = detail::shift_moves(old_chain, new_chain, switched);
+        for (BufferId id : carried) {
+            std::vector<ElementMove> in_buffer;
+            for (uint64_t h = 0; h < halves_of(id); ++h)
+                for (ElementMove m : chain_moves) {
+                    m.src += h * capacity;
+                    m.dst += h * capacity;
+                    in_buffer.push_back(m);
+                }
+            if (!in_buffer.empty()) HMSM_TRY(backend_->move_elements(id, in_buffer));
+        }
+        const auto nodes_of = [&](uint32_t model) { return data_->models[model].node_count; };
+        const auto vertices_of = [&](uint32_t model) { return data_->models[model].vertex_count; };
+        const std::vector<ElementMove> node_moves =
+            detail::shift_moves(running_offsets(instances_, nodes_of), running_offsets(next, nodes_of), switched);
+        const std::vector<ElementMove> vertex_moves = detail::shift_moves(
+            running_offsets(instances_, vertices_of), running_offsets(next, vertices_of), switched);
+        for (BufferId id : detail::kMovedOutputs) {
+            const bool node_scope = detail::buffer_info(id).scope == detail::Scope::node;
+            const std::vector<ElementMove>& moves = node_scope ? node_moves : vertex_moves;
+            if (data_->element_count(id) > 0 && !moves.empty()) HMSM_TRY(backend_->move_elements(id, moves));
+        }
+        for (size_t b = 0; b < carried.size(); ++b)
+            HMSM_TRY(scalar == detail::Scalar::f64
+                         ? write_switched(*backend_, carried[b], capacity, scalar, runs, new_chain, values64[b])
+                         : write_switched(*backend_, carried[b], capacity, scalar, runs, new_chain, values32[b]));
         detail::SceneData& d = *data_;
         d.groups = std::move(laid->groups);
         d.total_chains = laid->total_chains;
         d.total_nodes = laid->total_nodes;
         d.total_vertices = laid->total_vertices;
     } else {
+        // Past the capacity (or where the backend cannot move state): every instance's state
+        // is read, laid out anew and uploaded with room to grow.
+        detail::lay_out_instances(*laid, next);
+        const uint64_t old_live = data_->total_chains;
+        for (size_t b = 0; b < carried.size(); ++b) {
+            const uint32_t per = detail::shape_scalars(detail::buffer_info(carried[b]).shape);
+            const uint32_t halves = halves_of(carried[b]);
+            auto read_all = [&](auto& values) -> Status {
+                values.resize(size_t(halves * old_live * per));
+                for (uint32_t h = 0; h < halves; ++h)
+                    HMSM_TRY(backend_->read(carried[b], h * data_->chain_capacity, old_live,
+                                            values.data() + h * old_live * per, scalar));
+                values = carry_layout(values, per, halves, carried[b], old_chain, new_chain, maps);
+                return {};
+            };
+            HMSM_TRY(scalar == detail::Scalar::f64 ? read_all(values64[b]) : read_all(values32[b]));
+        }
         detail::SceneData whole = *data_;
         whole.instance_origin = std::move(laid->instance_origin);
         whole.instance_yaw = std::move(laid->instance_yaw);
@@ -227,31 +301,35 @@ Status Simulation::Impl::switch_models(const std::vector<std::pair<uint32_t, uin
         HMSM_TRY(backend_->upload(whole));
         *data_ = std::move(whole);
         ++full_uploads_;
-        first = 0;
         instance_wind_dirty_ = true;
-    }
-    const uint64_t new_live = data_->total_chains, from = new_chain[first];
-    for (size_t b = 0; b < carried.size(); ++b) {
-        const uint32_t per = detail::shape_scalars(detail::buffer_info(carried[b]).shape);
-        for (uint32_t h = 0; h < halves_of(carried[b]); ++h) {
-            const size_t at = size_t((h * new_live + from) * per);
-            const void* src = scalar == detail::Scalar::f64 ? static_cast<const void*>(values64[b].data() + at)
-                                                            : static_cast<const void*>(values32[b].data() + at);
-            HMSM_TRY(backend_->write(carried[b], h * data_->chain_capacity + from, new_live - from, src, scalar));
+        const uint64_t new_live = data_->total_chains;
+        for (size_t b = 0; b < carried.size(); ++b) {
+            const uint32_t per = detail::shape_scalars(detail::buffer_info(carried[b]).shape);
+            for (uint32_t h = 0; h < halves_of(carried[b]); ++h) {
+                const size_t at = size_t(h * new_live * per);
+                const void* src = scalar == detail::Scalar::f64 ? static_cast<const void*>(values64[b].data() + at)
+                                                                : static_cast<const void*>(values32[b].data() + at);
+                HMSM_TRY(backend_->write(carried[b], h * data_->chain_capacity, new_live, src, scalar));
+            }
         }
     }
     instances_ = std::move(next);
     instances_changed();
     header_dirty_ = program_dirty_ = true;
 
-    // Outputs of the instances that moved: passes 4, 6 and 7 from the carried pose, element for
-    // element what they were. Then the switched instances are posed from their angles.
     const detail::RunStep at_rest[1] = {};
-    const uint32_t outputs = (1u << uint32_t(Pass::node_relative)) | (1u << uint32_t(Pass::node_world)) |
-                             (1u << uint32_t(Pass::contour));
-    const std::vector<InstanceGroup> moved = slices_of(*data_, first, {});
-    if (!moved.empty()) HMSM_TRY(backend_->run(program_for(moved, Pass::node_relative, outputs), at_rest));
-    HMSM_TRY(backend_->run(program_for(slices_of(*data_, 0, switched), Pass::compose), at_rest));
+    if (!in_place) {
+        // Every output buffer is new: passes 4, 6 and 7 from the carried pose, element for
+        // element what they were.
+        std::vector<InstanceGroup> all;
+        for (const InstanceGroup& g : data_->groups)
+            all.push_back(detail::group_slice(*data_, g, g.instance_begin, g.instance_count));
+        const uint32_t outputs = (1u << uint32_t(Pass::node_relative)) | (1u << uint32_t(Pass::node_world)) |
+                                 (1u << uint32_t(Pass::contour));
+        HMSM_TRY(backend_->run(program_for(all, Pass::node_relative, outputs), at_rest));
+    }
+    // The switched instances are posed from their angles.
+    HMSM_TRY(backend_->run(program_for(detail::slices_covering(*data_, switched), Pass::compose), at_rest));
     return apply_pending();
 }
 

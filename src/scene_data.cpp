@@ -57,6 +57,36 @@ gpu::PassConstants group_constants(const SceneData& d, const InstanceGroup& g, u
     return pc;
 }
 
+InstanceGroup group_slice(const SceneData& d, const InstanceGroup& group, uint32_t first, uint32_t count) {
+    const ModelRange& m = d.models[group.model];
+    const uint32_t k = first - group.instance_begin;
+    InstanceGroup slice = group;
+    slice.instance_begin = first;
+    slice.instance_count = count;
+    slice.chain_begin += k * m.chain_count;
+    slice.node_begin += k * m.node_count;
+    slice.vertex_begin += k * m.vertex_count;
+    slice.covers_paused = false;
+    return slice;
+}
+
+std::vector<InstanceGroup> slices_covering(const SceneData& d, std::span<const uint32_t> indices) {
+    std::vector<InstanceGroup> out;
+    size_t next = 0;
+    for (const InstanceGroup& g : d.groups) {
+        const uint32_t end = g.instance_begin + g.instance_count;
+        while (next < indices.size() && indices[next] < g.instance_begin) ++next;  // in no group
+        for (; next < indices.size() && indices[next] < end; ++next) {
+            const uint32_t i = indices[next];
+            if (!out.empty() && i != g.instance_begin && out.back().instance_begin + out.back().instance_count == i)
+                ++out.back().instance_count;  // i - 1 is in the same group and in this slice
+            else
+                out.push_back(group_slice(d, g, i, 1));
+        }
+    }
+    return out;
+}
+
 /// The walk records of every model chain (gpu_layout.h HMSM_WALK_RECORD_INTS): depth, the
 /// ancestors going up, the attach nodes of the chain and of its ancestors.
 void fill_walk_records(SceneData& d) {
@@ -75,24 +105,17 @@ void fill_walk_records(SceneData& d) {
     }
 }
 
-void lay_out_instances(SceneData& d, std::span<const Instance> instances, uint64_t max_group_elements) {
-    d.instance_origin.clear();
-    d.instance_yaw.clear();
+void lay_out_groups(SceneData& d, std::span<const Instance> instances, uint64_t max_group_elements) {
     d.groups.clear();
     d.total_chains = d.total_nodes = d.total_vertices = 0;
-    d.instance_origin.reserve(instances.size());
-    d.instance_yaw.reserve(instances.size());
     for (size_t i = 0; i < instances.size(); ++i) {
-        const Instance& inst = instances[i];
-        const ModelRange& range = d.models[inst.model];
-        d.instance_origin.push_back({inst.origin, 0.0});
-        d.instance_yaw.push_back({std::cos(inst.yaw), std::sin(inst.yaw), 0.0, 0.0});
+        const ModelRange& range = d.models[instances[i].model];
         uint64_t per_instance = std::max({range.chain_count, range.node_count, range.vertex_count});
         InstanceGroup* group = d.groups.empty() ? nullptr : &d.groups.back();
-        if (!group || group->model != inst.model ||
+        if (!group || group->model != instances[i].model ||
             uint64_t(group->instance_count + 1) * per_instance > max_group_elements) {
             InstanceGroup g;
-            g.model = inst.model;
+            g.model = instances[i].model;
             g.instance_begin = uint32_t(i);
             g.chain_begin = uint32_t(d.total_chains);
             g.node_begin = uint32_t(d.total_nodes);
@@ -104,6 +127,18 @@ void lay_out_instances(SceneData& d, std::span<const Instance> instances, uint64
         d.total_chains += range.chain_count;
         d.total_nodes += range.node_count;
         d.total_vertices += range.vertex_count;
+    }
+}
+
+void lay_out_instances(SceneData& d, std::span<const Instance> instances, uint64_t max_group_elements) {
+    lay_out_groups(d, instances, max_group_elements);
+    d.instance_origin.clear();
+    d.instance_yaw.clear();
+    d.instance_origin.reserve(instances.size());
+    d.instance_yaw.reserve(instances.size());
+    for (const Instance& inst : instances) {
+        d.instance_origin.push_back({inst.origin, 0.0});
+        d.instance_yaw.push_back({std::cos(inst.yaw), std::sin(inst.yaw), 0.0, 0.0});
     }
     d.instance_wind.assign(size_t(HMSM_INSTANCE_WIND_VEC4S) * 4 * d.instance_origin.size(), 0.0);
 }

@@ -128,6 +128,21 @@ SceneData flatten_scene(const Scene& scene, const std::vector<Hierarchy>& hierar
 void lay_out_instances(SceneData& d, std::span<const Instance> instances,
                        uint64_t max_group_elements = (1ull << 31));
 
+/// lay_out_instances' groups and total chain, node and vertex counts alone, leaving the
+/// instance arrays as they are: for a change that keeps every instance's place, origin and yaw
+/// (a level switch).
+void lay_out_groups(SceneData& d, std::span<const Instance> instances, uint64_t max_group_elements = (1ull << 31));
+
+/// The part of `group` (a group of d) covering its instances [first, first + count), with its
+/// state offsets. Its covers_paused is false: its dispatches read no paused flag, so paused
+/// instances in it are computed too.
+InstanceGroup group_slice(const SceneData& d, const InstanceGroup& group, uint32_t first, uint32_t count);
+
+/// The slices of d's groups covering the instances `indices` (ascending, each once, each below
+/// d.instance_count()), neighbours in one group as one slice (group_slice: paused instances are
+/// computed too). Costs O(groups + indices).
+std::vector<InstanceGroup> slices_covering(const SceneData& d, std::span<const uint32_t> indices);
+
 /// The constants every dispatch over `group` shares (offsets, counts, wind, parameters), with
 /// kind per_element and `final_half` as both halves; a dispatch then sets its own kind, element
 /// count, round, halves and level.

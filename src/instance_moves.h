@@ -1,0 +1,74 @@
+// What an instance carries when the instance list changes, and the moves that carry it on the
+// device: the chain-scope state every change keeps (live_reshape.cpp, lod_switch.cpp), the
+// outputs that move with it, and the moves of a change that keeps every instance's index but
+// gives some of them another size (a level-of-detail switch): the instances between two
+// resized ones keep their elements and shift by what the resized ones before them gained or
+// lost, so each run of them is one move, and runs shift up or down by different amounts.
+#pragma once
+
+#include "backend.h"
+
+#include <algorithm>
+#include <cstdint>
+#include <iterator>
+#include <span>
+#include <vector>
+
+namespace hmsm::detail {
+
+/// The chain-scope state an instance carries: S, V, g, T, the joint matrices and both halves
+/// of R and O. Nodes and vertices are recomputed from R and O.
+/// The coupled dynamics adds the loads of the last step (docs/model.md 3.13).
+inline std::vector<BufferId> carried_buffers(bool coupled) {
+    std::vector<BufferId> ids = {BufferId::chain_state, BufferId::chain_force, BufferId::chain_local,
+                                 BufferId::joint_matrix, BufferId::chain_rotation, BufferId::chain_origin};
+    if (coupled) ids.push_back(BufferId::chain_load);
+    return ids;
+}
+
+/// The outputs that passes 4, 6 and 7 compute from R and O, element for element: they move
+/// with the state of an instance that changes place, bitwise what they were.
+inline constexpr BufferId kMovedOutputs[] = {BufferId::node_relative, BufferId::node_world,
+                                             BufferId::vertex_position, BufferId::vertex_normal};
+
+/// Halves of a chain-scope buffer: 2 for the ping-pong buffers, chain_capacity elements apart.
+inline uint32_t halves_of(BufferId id) { return buffer_info(id).scope == Scope::chain_halves ? 2u : 1u; }
+
+/// Moves bringing the elements of every instance not listed in `resized` (ascending, each
+/// once) from [old[i], old[i + 1]) to [now[i], now[i + 1]), a run of neighbours as one move,
+/// in an order that Backend::move_elements may apply one after another: no move writes over
+/// the source of a move after it. `old` and `now` are running sums over the instances (one
+/// more entry than instances), equal in each instance that is not resized.
+///
+/// Why an order exists and which: the moves keep their order in sources and destinations,
+/// so a move j writes over the source of a move k only if every move from j to k shifts the
+/// same way (all up or all down): the destinations between them lie past D_j's end, beyond
+/// S_k's start, so beyond their own sources (and symmetrically going down). Runs of moves that
+/// shift the same way are thus independent; one going down runs in ascending order, one going
+/// up in descending order. Costs O(resized).
+inline std::vector<ElementMove> shift_moves(std::span<const uint64_t> old, std::span<const uint64_t> now,
+                                            std::span<const uint32_t> resized) {
+    std::vector<ElementMove> ascending;
+    const uint32_t count = uint32_t(old.size() - 1);
+    uint32_t begin = 0;  // first instance of the run that is not resized
+    for (size_t k = 0; k <= resized.size(); ++k) {
+        const uint32_t end = k < resized.size() ? resized[k] : count;
+        if (end > begin && old[begin] != now[begin] && old[end] > old[begin])
+            ascending.push_back({old[begin], now[begin], old[end] - old[begin]});
+        begin = end + 1;
+    }
+    std::vector<ElementMove> ordered;
+    ordered.reserve(ascending.size());
+    for (size_t k = 0; k < ascending.size();) {
+        const bool up = ascending[k].dst > ascending[k].src;
+        size_t end = k + 1;
+        while (end < ascending.size() && (ascending[end].dst > ascending[end].src) == up) ++end;
+        if (up) std::reverse_copy(ascending.begin() + std::ptrdiff_t(k), ascending.begin() + std::ptrdiff_t(end),
+                                  std::back_inserter(ordered));
+        else ordered.insert(ordered.end(), ascending.begin() + std::ptrdiff_t(k), ascending.begin() + std::ptrdiff_t(end));
+        k = end;
+    }
+    return ordered;
+}
+
+}  // namespace hmsm::detail

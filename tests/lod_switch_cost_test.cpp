@@ -1,0 +1,282 @@
+// What a level-of-detail switch costs (docs/driving.md, levels of detail): within the capacity
+// only the switched instances' state goes through the host, the others shift on the device in
+// an order that overwrites no source before it is read, and the result is bit for bit that of
+// laying out every instance anew.
+#include "instance_moves.h"
+#include "simulation_access.h"
+#include "test_trees.h"
+
+#ifdef HMSM_HAVE_CUDA
+#include "agreement/cuda_emulation_backend.h"
+#endif
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <random>
+
+namespace hmsm {
+namespace {
+
+using detail::BufferId;
+using detail::ElementMove;
+
+// Random layouts: every instance that is not resized finds its elements at its new place after
+// the moves run one after another, each as if through a temporary (Backend::move_elements).
+TEST(ShiftMoves, SequentialMovesCarryEveryInstanceThatKeepsItsSize) {
+    std::mt19937 random(7);
+    uint64_t up = 0, down = 0;
+    for (int trial = 0; trial < 400; ++trial) {
+        const uint32_t count = 1 + random() % 24;
+        std::vector<uint64_t> old{0}, now{0};
+        std::vector<uint32_t> resized;
+        for (uint32_t i = 0; i < count; ++i) {
+            const uint64_t size = 1 + random() % 6;
+            const bool resize = random() % 3 == 0;
+            if (resize) resized.push_back(i);
+            old.push_back(old.back() + size);
+            now.push_back(now.back() + (resize ? 1 + random() % 9 : size));
+        }
+        std::vector<int64_t> buffer(std::max(old.back(), now.back()), -1);
+        for (uint64_t e = 0; e < old.back(); ++e) buffer[e] = int64_t(e);
+        const std::vector<ElementMove> moves = detail::shift_moves(old, now, resized);
+        EXPECT_LE(moves.size(), resized.size() + 1);
+        for (const ElementMove& m : moves) {
+            const std::vector<int64_t> temporary(buffer.begin() + std::ptrdiff_t(m.src),
+                                                 buffer.begin() + std::ptrdiff_t(m.src + m.count));
+            std::copy(temporary.begin(), temporary.end(), buffer.begin() + std::ptrdiff_t(m.dst));
+            (m.dst > m.src ? up : down) += 1;
+        }
+        for (uint32_t i = 0, k = 0; i < count; ++i) {
+            if (k < resized.size() && resized[k] == i) {
+                ++k;
+                continue;
+            }
+            for (uint64_t e = 0; e < old[i + 1] - old[i]; ++e)
+                ASSERT_EQ(buffer[now[i] + e], int64_t(old[i] + e)) << "trial " << trial << " instance " << i;
+        }
+    }
+    EXPECT_GT(up, 0u);
+    EXPECT_GT(down, 0u);
+}
+
+/// A backend that logs the reads and moves made while `recording`, and optionally refuses to
+/// reshape in place (every switch then lays out and uploads the scene anew).
+class Watched final : public detail::Backend {
+public:
+    struct Range {
+        BufferId id;
+        uint64_t first, count;
+    };
+    Watched(std::unique_ptr<detail::Backend> inner, bool in_place) : inner_(std::move(inner)), in_place_(in_place) {}
+    BackendKind kind() const override { return inner_->kind(); }
+    std::string device_name() const override { return inner_->device_name(); }
+    Status upload(const detail::SceneData& scene) override { return inner_->upload(scene); }
+    Status run(std::span<const detail::Dispatch> program, std::span<const detail::RunStep> steps) override {
+        return inner_->run(program, steps);
+    }
+    Status read(BufferId id, uint64_t first, uint64_t count, void* dst, detail::Scalar as) const override {
+        if (recording) reads.push_back({id, first, count});
+        return inner_->read(id, first, count, dst, as);
+    }
+    Status write(BufferId id, uint64_t first, uint64_t count, const void* src, detail::Scalar as) override {
+        return inner_->write(id, first, count, src, as);
+    }
+    Status request_read(uint32_t slot, BufferId id, uint64_t first, uint64_t count) const override {
+        return inner_->request_read(slot, id, first, count);
+    }
+    Result<const float*> take_read(uint32_t slot) const override { return inner_->take_read(slot); }
+    Status move_elements(BufferId id, std::span<const ElementMove> moves) override {
+        if (!in_place_) return {ErrorCode::internal, "this backend moves nothing"};
+        if (recording)
+            for (const ElementMove& m : moves) moved.push_back({id, m});
+        return inner_->move_elements(id, moves);
+    }
+    void begin_instance_change() override { inner_->begin_instance_change(); }
+    void end_instance_change() override { inner_->end_instance_change(); }
+    void set_profiling(bool enabled) override { inner_->set_profiling(enabled); }
+    PassTimes pass_times() const override { return inner_->pass_times(); }
+    detail::BackendCapabilities capabilities() const override {
+        detail::BackendCapabilities can = inner_->capabilities();
+        can.reshapes_in_place = can.reshapes_in_place && in_place_;
+        return can;
+    }
+
+    bool recording = false;
+    mutable std::vector<Range> reads;
+    std::vector<std::pair<BufferId, ElementMove>> moved;
+
+private:
+    std::unique_ptr<detail::Backend> inner_;
+    bool in_place_;
+};
+
+constexpr int32_t kBudgets[] = {6, 3, 1};
+
+/// Sixteen instances of two models with four levels each, one of them paused.
+Scene mixed_forest() {
+    Scene scene = *grid_scene(test::deep_tree(4), 12, 6.0, 3);
+    scene.models.push_back(test::small_tree());
+    scene.model_names.push_back("small");
+    for (int k = 0; k < 4; ++k)
+        scene.instances.insert(scene.instances.begin() + 3 * k + 1, Instance{1, {-6.0 * k, 0, 8}, 0.3 * k});
+    scene.instances[5].active = false;
+    scene.lod_budgets = {{std::begin(kBudgets), std::end(kBudgets)}, {std::begin(kBudgets), std::end(kBudgets)}};
+    return scene;
+}
+
+SimulationConfig windy() {
+    SimulationConfig config;
+    config.wind.profile = WindProfile::y4;
+    config.wind.strength = 12.0;
+    config.wind.direction = {1.0, 0.2, 0.6};
+    config.wind.frequency = 0.7;
+    return config;
+}
+
+/// The backend under test by name: a registered kind (cuda: a real device) or "cuda_emulation"
+/// (the CUDA kernels on the host); no_device where it is absent.
+Result<std::unique_ptr<detail::Backend>> backend_named(const std::string& name) {
+    if (name == "cuda_emulation") {
+#ifdef HMSM_HAVE_CUDA
+        return test::create_cuda_emulation_backend();
+#else
+        return Status{ErrorCode::no_device, "cuda emulation: this build of hmsm has no CUDA kernels"};
+#endif
+    }
+    for (BackendKind kind :
+         {BackendKind::cpu64, BackendKind::cpu, BackendKind::cpu_parallel, BackendKind::vulkan, BackendKind::cuda})
+        if (name == to_string(kind)) return detail::create_backend(kind);
+    return Status{ErrorCode::invalid_argument, "no backend " + name};
+}
+
+Watched* create_watched(const std::string& name, bool in_place, std::unique_ptr<Simulation>& sim,
+                        std::string& skip) {
+    auto backend = backend_named(name);
+    if (!backend) {
+        skip = backend.status().message();
+        return nullptr;
+    }
+    auto watched = std::make_unique<Watched>(std::move(backend).value(), in_place);
+    Watched* handle = watched.get();
+    auto created = detail::SimulationAccess::create(mixed_forest(), windy(), std::move(watched));
+    EXPECT_TRUE(created.ok()) << created.status().message();
+    if (!created) return nullptr;
+    sim = std::move(created).value();
+    return handle;
+}
+
+std::vector<double> read_output(const Simulation& sim, Output output) {
+    std::vector<double> values;
+    const Status read = sim.read(output, values);
+    EXPECT_TRUE(read.ok()) << read.message();
+    return values;
+}
+
+constexpr Output kCompared[] = {Output::chain_angles, Output::chain_rotations, Output::node_positions,
+                                Output::vertex_positions};
+
+class LodSwitchCost : public ::testing::TestWithParam<std::string> {};
+
+// Two batched switches, the second growing some instances and shrinking others (moves up and
+// down, no upload), against the same switches made one at a time and against the scene laid
+// out and uploaded anew: bit for bit right after each switch and steps later.
+TEST_P(LodSwitchCost, ManySwitchesInOneCallMatchOneAtATimeAndLayingOutAnew) {
+    std::unique_ptr<Simulation> moved, single, anew;
+    std::string skip;
+    Watched* watched = create_watched(GetParam(), true, moved, skip);
+    if (!skip.empty()) GTEST_SKIP() << skip;
+    ASSERT_TRUE(watched && create_watched(GetParam(), true, single, skip));
+    ASSERT_TRUE(create_watched(GetParam(), false, anew, skip));
+    const std::vector<Simulation*> others = {single.get(), anew.get()};
+    auto step_all = [&](uint32_t steps) {
+        for (Simulation* s : {moved.get(), single.get(), anew.get()}) ASSERT_TRUE(s->step(steps).ok());
+    };
+    auto switch_all = [&](std::span<const InstanceId> ids, std::span<const uint32_t> levels) {
+        ASSERT_TRUE(moved->set_instance_lods(ids, levels).ok());
+        ASSERT_TRUE(anew->set_instance_lods(ids, levels).ok());
+        for (size_t k = 0; k < ids.size(); ++k) ASSERT_TRUE(single->set_instance_lod(ids[k], levels[k]).ok());
+    };
+    auto expect_same = [&](const char* when) {
+        for (Simulation* other : others)
+            for (Output o : kCompared)
+                EXPECT_EQ(read_output(*moved, o), read_output(*other, o))
+                    << when << ", output " << int(o) << (other == anew.get() ? " against the upload" : " against one at a time");
+    };
+    const InstanceId first_ids[] = {InstanceId(0), InstanceId(2), InstanceId(3), InstanceId(6),
+                                    InstanceId(7), InstanceId(9), InstanceId(12), InstanceId(15)};
+    const uint32_t first_levels[] = {3, 2, 1, 3, 2, 3, 1, 2};
+    // Deep trees have fewer chains on each coarser level: instances 0 and 9 grow, the others
+    // shrink, so the runs between shift up, then down.
+    const InstanceId mixed_ids[] = {InstanceId(0), InstanceId(2),  InstanceId(5),  InstanceId(8),
+                                    InstanceId(9), InstanceId(11), InstanceId(13), InstanceId(15)};
+    const uint32_t mixed_levels[] = {0, 3, 3, 3, 0, 3, 3, 0};
+    step_all(40);
+    switch_all(first_ids, first_levels);
+    expect_same("after the first switch");
+    step_all(30);
+    expect_same("steps after the first switch");
+    watched->recording = true;
+    switch_all(mixed_ids, mixed_levels);
+    watched->recording = false;
+    expect_same("after the mixed switch");
+    EXPECT_EQ(detail::full_uploads_of(*moved), 0u);
+    EXPECT_EQ(detail::full_uploads_of(*single), 0u);
+    EXPECT_GT(detail::full_uploads_of(*anew), 0u);
+    bool up = false, down = false;
+    for (const auto& [id, m] : watched->moved)
+        if (id == BufferId::chain_state) (m.dst > m.src ? up : down) = true;
+    EXPECT_TRUE(up && down) << "the mixed switch shifts instances both ways";
+    step_all(30);
+    expect_same("steps after the mixed switch");
+}
+
+// A switch reads back the switched instances' own chains, not the scene: every read lies in
+// the old range of a switched instance (in either half of the ping-pong buffers).
+TEST_P(LodSwitchCost, ReadsOnlyTheSwitchedInstances) {
+    std::unique_ptr<Simulation> sim;
+    std::string skip;
+    Watched* watched = create_watched(GetParam(), true, sim, skip);
+    if (!skip.empty()) GTEST_SKIP() << skip;
+    ASSERT_TRUE(watched);
+    ASSERT_TRUE(sim->step(20).ok());
+    std::vector<uint64_t> first_chain{0};
+    for (const Instance& inst : sim->instances())
+        first_chain.push_back(first_chain.back() + sim->hierarchy(inst.model).chains.size());
+    const uint64_t capacity = detail::scene_data_of(*sim).chain_capacity;
+    watched->recording = true;
+    const InstanceId ids[] = {InstanceId(1), InstanceId(2), InstanceId(9)};
+    const uint32_t levels[] = {2, 3, 1};
+    ASSERT_TRUE(sim->set_instance_lods(ids, levels).ok());
+    watched->recording = false;
+    EXPECT_EQ(detail::full_uploads_of(*sim), 0u);
+    ASSERT_FALSE(watched->reads.empty());
+    uint64_t read_chains = 0;
+    for (const Watched::Range& r : watched->reads) {
+        const detail::Scope scope = detail::buffer_info(r.id).scope;
+        EXPECT_TRUE(scope == detail::Scope::chain || scope == detail::Scope::chain_halves)
+            << detail::buffer_info(r.id).name;
+        const uint64_t first = r.first >= capacity ? r.first - capacity : r.first;
+        const bool inside = (first >= first_chain[1] && first + r.count <= first_chain[3]) ||
+                            (first >= first_chain[9] && first + r.count <= first_chain[10]);
+        EXPECT_TRUE(inside) << detail::buffer_info(r.id).name << " [" << first << ", " << first + r.count << ")";
+        read_chains += r.count;
+    }
+    uint32_t halves = 0;  // of every carried buffer
+    for (BufferId id : detail::carried_buffers(false)) halves += detail::halves_of(id);
+    const uint64_t switched_chains = first_chain[3] - first_chain[1] + first_chain[10] - first_chain[9];
+    EXPECT_EQ(read_chains, switched_chains * halves) << "each half of each carried buffer once";
+    EXPECT_FALSE(watched->moved.empty()) << "the instances behind the switched ones shift on the device";
+}
+
+std::string param_name(const ::testing::TestParamInfo<std::string>& info) {
+    std::string name = info.param;
+    std::replace(name.begin(), name.end(), '-', '_');
+    return name;
+}
+
+INSTANTIATE_TEST_SUITE_P(Backends, LodSwitchCost,
+                         ::testing::Values("cpu64", "cpu", "cpu-parallel", "vulkan", "cuda", "cuda_emulation"), param_name);
+
+}  // namespace
+}  // namespace hmsm
