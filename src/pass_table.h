@@ -84,9 +84,9 @@ constexpr uint32_t buffer_bit(BufferId id) { return 1u << static_cast<uint32_t>(
 /// The two dispatches of the walk that integrates ahead (gpu_layout.h HMSM_DISPATCH_WALK_TOP_POSES
 /// and HMSM_DISPATCH_WALK_AHEAD, CUDA forests; step_program.cpp), each a compose walk with more to do: the
 /// top poses also read the wind (the next step's profile value) and write the pose halves of
-/// the chains of depth 0 and 1; the walk ahead reads those and the wind, writes the joint
-/// matrix and the next step's angles (to chain_state's twin, which the backend swaps in: counted
-/// as a write of chain_state).
+/// the top chains (step_program.h walk_top_depth); the walk ahead reads those and the wind,
+/// writes the joint matrix and the next step's angles (to chain_state's twin, which the backend
+/// swaps in: counted as a write of chain_state).
 inline constexpr uint32_t kWalkTopPosesReads =
     HMSM_B(chain_state) | HMSM_B(chain_jump) | HMSM_B(chain_attach) | HMSM_B(chain_parent) |
     HMSM_B(chain_rest_rotation) | HMSM_B(node_local) | HMSM_B(instance_origin) | HMSM_B(instance_yaw) |

@@ -150,12 +150,14 @@
 ///   records (beyond HMSM_WALK_PATH_CAPACITY through chain_jump and chain_attach).
 /// NODE_PAIR: node_relative then node_world for node i.
 /// The walk that integrates ahead (CUDA forests; docs/cuda.md), two compose dispatches:
-/// WALK_TOP_POSES: one thread per chain of depth 0 and 1 (the first level_count model chains)
-///   walks the pose from the angles of chain_state and stores it to half src_half of
-///   chain_rotation and chain_origin; the trunk's thread also stores the wind scale lambda_i Y
+/// WALK_TOP_POSES: one thread per chain of depth 0 to the model's top depth (the first
+///   level_count model chains; at least depth 0 and 1: step_program.h walk_top_depth) walks the
+///   pose from the angles of chain_state and stores it to half src_half of chain_rotation and
+///   chain_origin; the trunk's thread also stores the wind scale lambda_i Y
 ///   of the next step (wind-table slot wind_slot + 1) of its instance in the w of its chain_origin.
-/// WALK_AHEAD: every chain walks from the stored pose of its depth-1 ancestor, writes its joint
-///   matrix, then runs the next step's wind_force and integrate with that pose and Y, writing
+/// WALK_AHEAD: every chain walks from the stored pose of its nearest ancestor among the top
+///   chains (its own if it is one; level_count as for WALK_TOP_POSES), writes its joint matrix,
+///   then runs the next step's wind_force and integrate with that pose and Y, writing
 ///   the next angles to a second state buffer.
 /// CONTOUR_SEPARATE: contour writing vertex_position (x, y, z, 1) and vertex_normal
 ///   (nx, ny, nz, 0), thread i on vertex i.
