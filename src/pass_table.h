@@ -98,11 +98,11 @@ inline constexpr uint32_t kWalkAheadWrites = HMSM_B(joint_matrix) | HMSM_B(chain
 
 /// The coupled dynamics (docs/model.md 3.13; PassConstants.dynamics) adds to the columns above
 /// (to a path walk's wind pair both): wind_force gathers its children's loads of the last step
-/// (one half of chain_load, anywhere in the instance) through their rest rotations, reads its
-/// own rates for the aerodynamic damping and stores its load in the other half; integrate reads
-/// the chain's record.
-inline constexpr uint32_t kCoupledWindForceReads = HMSM_B(chain_state) | HMSM_B(chain_load) |
-                                                   HMSM_B(chain_dynamics) | HMSM_B(chain_rest_rotation);
+/// (one half of chain_load, anywhere in the instance) through the rest rotations their records
+/// hold, reads its own rates for the aerodynamic damping and stores its load in the other half;
+/// integrate reads the chain's record.
+inline constexpr uint32_t kCoupledWindForceReads =
+    HMSM_B(chain_state) | HMSM_B(chain_load) | HMSM_B(chain_dynamics);
 inline constexpr uint32_t kCoupledWindForceWrites = HMSM_B(chain_load);
 inline constexpr uint32_t kCoupledIntegrateReads = HMSM_B(chain_dynamics);
 
