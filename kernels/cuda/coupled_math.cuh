@@ -17,17 +17,20 @@ HMSM_HOST_DEVICE const float4* coupled_vec4(const BufferPointers& b, const gpu::
     return b.chain_dynamics + uint64_t(j) * pc.total_model_chains + model_chain;
 }
 
-/// A chain's record (gpu_layout.h HMSM_CHAIN_DYNAMICS_VEC4S) as scalars, loaded by whole vec4s
-/// through the read-only path; the loads of vec4s a caller does not read are dropped.
+/// A chain's record (gpu_layout.h HMSM_CHAIN_DYNAMICS_VEC4S) as scalars: the vec4s whose bits are
+/// set in kVec4s loaded whole through the read-only path (the compiler keeps read-only loads
+/// whose values go unused), the others 0.
 struct CoupledRecord {
     float s[4 * HMSM_CHAIN_DYNAMICS_VEC4S];
 };
+template <uint32_t kVec4s>
 HMSM_HOST_DEVICE CoupledRecord load_coupled_record(const BufferPointers& b, const gpu::PassConstants& pc,
                                                    uint32_t model_chain) {
     CoupledRecord record;
 #pragma unroll
     for (uint32_t j = 0; j < HMSM_CHAIN_DYNAMICS_VEC4S; ++j) {
-        const float4 x = load(coupled_vec4(b, pc, model_chain, j));
+        const float4 x =
+            (kVec4s >> j & 1u) ? load(coupled_vec4(b, pc, model_chain, j)) : make_float4(0.0f, 0.0f, 0.0f, 0.0f);
         record.s[4 * j] = x.x;
         record.s[4 * j + 1] = x.y;
         record.s[4 * j + 2] = x.z;
@@ -49,7 +52,8 @@ HMSM_HOST_DEVICE uint32_t load_half_written(const BufferPointers& b, const gpu::
 /// children are consecutive chains, so a thread's loads run along two arrays of vec4).
 HMSM_HOST_DEVICE float2 coupled_force(const BufferPointers& b, const gpu::PassConstants& pc, uint32_t k,
                                       uint64_t chain, uint32_t c, float3 w_local, uint32_t written) {
-    const CoupledRecord record = load_coupled_record(b, pc, pc.model_chain_begin + c);
+    // (I/dt, 1/K), (aero dt/I, children), wind moment.
+    const CoupledRecord record = load_coupled_record<0b11100u>(b, pc, pc.model_chain_begin + c);
     float g[2];
     coupled_wind_torque(record.s, w_local.x, w_local.y, w_local.z, g);
     // Each child's load of the last step, passed on by its joint.
@@ -74,7 +78,7 @@ HMSM_HOST_DEVICE float2 coupled_force(const BufferPointers& b, const gpu::PassCo
 /// under g held, clamped at max_angle; returns the new state.
 HMSM_HOST_DEVICE float4 coupled_step(const BufferPointers& b, const gpu::PassConstants& pc, uint32_t model_chain,
                                      float4 state, float2 g_force) {
-    const CoupledRecord record = load_coupled_record(b, pc, model_chain);
+    const CoupledRecord record = load_coupled_record<0b00111u>(b, pc, model_chain);  // transitions, 1/K
     const float max_angle = pc.params.y;
     coupled_step_axis(record.s, 0u, g_force.x, max_angle, state.x, state.z);
     coupled_step_axis(record.s, 1u, g_force.y, max_angle, state.y, state.w);
