@@ -52,8 +52,14 @@ std::vector<std::byte> device_image(const SceneData& d, BufferId id) {
         case BufferId::vertex_rest_normal: return float4_image(d.vertex_rest_normal);
         case BufferId::vertex_parent_position: return float4_image(d.vertex_parent_position);
         case BufferId::vertex_parent_normal: return float4_image(d.vertex_parent_normal);
-        case BufferId::chain_dynamics: {  // the coupled dynamics' records, as floats
-            const std::vector<float> words(d.chain_dynamics.begin(), d.chain_dynamics.end());
+        case BufferId::chain_dynamics: {  // the coupled dynamics' records, as floats, by vec4 (gpu_layout.h)
+            constexpr size_t kVec4s = HMSM_CHAIN_DYNAMICS_VEC4S;
+            const size_t chains = d.chain_dynamics.size() / (4 * kVec4s);
+            std::vector<float> words(d.chain_dynamics.size());
+            for (size_t c = 0; c < chains; ++c)
+                for (size_t j = 0; j < kVec4s; ++j)
+                    for (size_t k = 0; k < 4; ++k)
+                        words[4 * (j * chains + c) + k] = float(d.chain_dynamics[4 * (kVec4s * c + j) + k]);
             return raw_bytes(words);
         }
         // Instance buffers: the live instances, then zeros up to the capacity.

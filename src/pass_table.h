@@ -84,9 +84,9 @@ constexpr uint32_t buffer_bit(BufferId id) { return 1u << static_cast<uint32_t>(
 /// The two dispatches of the walk that integrates ahead (gpu_layout.h HMSM_DISPATCH_WALK_TOP_POSES
 /// and HMSM_DISPATCH_WALK_AHEAD, CUDA forests; step_program.cpp), each a compose walk with more to do: the
 /// top poses also read the wind (the next step's profile value) and write the pose halves of
-/// the chains of depth 0 and 1; the walk ahead reads those and the wind, writes the joint
-/// matrix and the next step's angles (to chain_state's twin, which the backend swaps in: counted
-/// as a write of chain_state).
+/// the top chains (step_program.h walk_top_depth); the walk ahead reads those and the wind,
+/// writes the joint matrix and the next step's angles (to chain_state's twin, which the backend
+/// swaps in: counted as a write of chain_state).
 inline constexpr uint32_t kWalkTopPosesReads =
     HMSM_B(chain_state) | HMSM_B(chain_jump) | HMSM_B(chain_attach) | HMSM_B(chain_parent) |
     HMSM_B(chain_rest_rotation) | HMSM_B(node_local) | HMSM_B(instance_origin) | HMSM_B(instance_yaw) |
@@ -98,11 +98,11 @@ inline constexpr uint32_t kWalkAheadWrites = HMSM_B(joint_matrix) | HMSM_B(chain
 
 /// The coupled dynamics (docs/model.md 3.13; PassConstants.dynamics) adds to the columns above
 /// (to a path walk's wind pair both): wind_force gathers its children's loads of the last step
-/// (one half of chain_load, anywhere in the instance) through their rest rotations, reads its
-/// own rates for the aerodynamic damping and stores its load in the other half; integrate reads
-/// the chain's record.
-inline constexpr uint32_t kCoupledWindForceReads = HMSM_B(chain_state) | HMSM_B(chain_load) |
-                                                   HMSM_B(chain_dynamics) | HMSM_B(chain_rest_rotation);
+/// (one half of chain_load, anywhere in the instance) through the rest rotations their records
+/// hold, reads its own rates for the aerodynamic damping and stores its load in the other half;
+/// integrate reads the chain's record.
+inline constexpr uint32_t kCoupledWindForceReads =
+    HMSM_B(chain_state) | HMSM_B(chain_load) | HMSM_B(chain_dynamics);
 inline constexpr uint32_t kCoupledWindForceWrites = HMSM_B(chain_load);
 inline constexpr uint32_t kCoupledIntegrateReads = HMSM_B(chain_dynamics);
 

@@ -17,17 +17,20 @@ namespace {
 
 glm::dvec4 point(const glm::dvec3& p) { return {p, 0.0}; }
 
-/// A chain's record of the coupled dynamics (gpu_layout.h HMSM_CHAIN_DYNAMICS_VEC4S).
-void append_coupled_record(std::vector<double>& out, const ChainDynamics& k, double dt) {
+/// A chain's record of the coupled dynamics (gpu_layout.h HMSM_CHAIN_DYNAMICS_VEC4S), with the
+/// quotients the passes would otherwise take every step folded in double; `q` is the chain's
+/// rest rotation Q_c.
+void append_coupled_record(std::vector<double>& out, const ChainDynamics& k, const Mat3& q, double dt) {
     for (int a = 0; a < 2; ++a) {
         const auto phi = oscillator_transition(k.inertia[a], k.stiffness[a], k.damping[a], dt);
         out.insert(out.end(), phi.begin(), phi.end());
     }
     const glm::dvec3 moment = kReferencePressure * k.wind_moment;
-    const double rest[16] = {k.inertia[0], k.inertia[1], k.stiffness[0], k.stiffness[1],
-                             k.damping[0], k.damping[1], k.aero_damping[0], k.aero_damping[1],
+    const double rest[16] = {k.inertia[0] / dt, k.inertia[1] / dt, 1.0 / k.stiffness[0], 1.0 / k.stiffness[1],
+                             k.aero_damping[0] * dt / k.inertia[0], k.aero_damping[1] * dt / k.inertia[1],
+                             double(k.first_child), double(k.child_count),
                              moment.x, moment.y, moment.z, 0.0,
-                             double(k.first_child), double(k.child_count), 0.0, 0.0};
+                             q[0][0], q[2][0], q[0][2], q[2][2]};  // glm: q[column][row]
     out.insert(out.end(), std::begin(rest), std::end(rest));
 }
 
@@ -172,7 +175,8 @@ SceneData flatten_scene(const Scene& scene, const std::vector<Hierarchy>& hierar
             d.chain_attach.push_back(chain.attach_node);
             d.chain_rest_rotation.push_back(chain.rest_rotation);
             d.chain_constants.push_back({chain.inertia, chain.stiffness, chain.damping, chain.wind_area});
-            if (options.dynamics == Dynamics::coupled) append_coupled_record(d.chain_dynamics, chain.dynamics, parameters.dt);
+            if (options.dynamics == Dynamics::coupled)
+                append_coupled_record(d.chain_dynamics, chain.dynamics, chain.rest_rotation, parameters.dt);
         }
         for (size_t n = 0; n < h.node_owner.size(); ++n) {
             d.node_owner.push_back(h.node_owner[n]);

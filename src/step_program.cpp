@@ -4,6 +4,7 @@
 #include "pass_table.h"
 
 #include <algorithm>
+#include <cstdlib>
 
 namespace hmsm::detail {
 
@@ -20,6 +21,15 @@ constexpr uint32_t kMaxChainsForRoundsInDispatch = 16 * HMSM_MAX_ROUNDS_WORKGROU
 constexpr uint32_t kWalkRecordsMaxInstances = 1;
 
 }  // namespace
+
+uint32_t walk_top_depth(std::span<const uint32_t> level_begin) {
+    if (level_begin.size() < 3) return 0;  // the trunk alone
+    const uint32_t max_depth = uint32_t(level_begin.size()) - 2, chains = level_begin.back();
+    auto level_size = [&](uint32_t depth) { return level_begin[depth + 1] - level_begin[depth]; };
+    uint32_t top = 1;
+    while (top + 1 < max_depth && uint64_t(chains - level_begin[top + 2]) > 2ull * top * level_size(top + 1)) ++top;
+    return top;
+}
 
 /// Whether Composition::pointer_jumping runs a group's rounds in one dispatch (one workgroup per
 /// instance, round after round) rather than one dispatch per round over every chain. The rounds
@@ -109,16 +119,28 @@ void append_pass(std::vector<Dispatch>& program, const SceneData& d,
 
 namespace {
 
+/// The depth of model m's top poses: walk_top_depth, or HMSM_CUDA_WALK_TOP_DEPTH=N (N >= 1) from
+/// the environment, at most the model's deepest level, for measurements; read once.
+uint32_t top_depth_of(const ModelRange& m) {
+    static const uint32_t fixed = [] {
+        const char* value = std::getenv("HMSM_CUDA_WALK_TOP_DEPTH");
+        const unsigned long parsed = value ? std::strtoul(value, nullptr, 10) : 0;
+        return parsed >= 1 && parsed <= HMSM_WALK_PATH_CAPACITY ? uint32_t(parsed) : 0u;
+    }();
+    const uint32_t max_depth = uint32_t(m.level_begin.size()) - 2;
+    return fixed != 0 ? std::min(fixed, max_depth) : walk_top_depth(m.level_begin);
+}
+
 /// The walk that integrates ahead (gpu_layout.h): the top poses of every group (one thread per
-/// chain of depth 0 and 1: the first level_count model chains, chains being stored by depth),
-/// then the walk ahead of every group.
+/// chain of depth 0 .. walk_top_depth: the first level_count model chains, chains being stored
+/// by depth), then the walk ahead of every group.
 void append_walk_ahead(std::vector<Dispatch>& program, const SceneData& d, const std::vector<InstanceGroup>& groups) {
     for (uint32_t kind : {HMSM_DISPATCH_WALK_TOP_POSES, HMSM_DISPATCH_WALK_AHEAD}) {
         for (const auto& g : groups) {
             const auto& m = d.models[g.model];
             Dispatch dispatch{Pass::compose, group_constants(d, g, HMSM_FINAL_HALF(d.jump_rounds))};
             dispatch.constants.kind = kind;
-            dispatch.constants.level_count = m.level_begin[std::min<size_t>(2, m.level_begin.size() - 1)];
+            dispatch.constants.level_count = m.level_begin[top_depth_of(m) + 1];
             const uint32_t per_instance = kind == HMSM_DISPATCH_WALK_AHEAD ? m.chain_count : dispatch.constants.level_count;
             dispatch.constants.element_count = g.instance_count * per_instance;
             if (dispatch.constants.element_count > 0) program.push_back(dispatch);

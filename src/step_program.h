@@ -53,6 +53,18 @@ inline constexpr int32_t kPathWalkMaxDepth = HMSM_WALK_PATH_CAPACITY;
 /// model is deeper than kPathWalkMaxDepth, else pointer jumping.
 Composition automatic_composition(bool backend_prefers_path_walk, int32_t deepest_chain_depth);
 
+/// The deepest level whose chains the walk ahead's top poses cover (gpu_layout.h
+/// HMSM_DISPATCH_WALK_TOP_POSES) for a model of levels `level_begin` (ModelRange::level_begin:
+/// max depth + 2 entries): at least 1 (0 for a lone trunk). Every deeper chain walks only the
+/// levels below it, a chain of depth d then d - top levels, one of the top d levels from the
+/// trunk. Raising top from t to t + 1 saves one level of every chain deeper than t + 1 and costs
+/// each chain of depth t + 1 t more (its walk from the trunk instead of one level); the top
+/// poses are a dispatch of their own that the walk ahead waits for, so their levels count
+/// twice: top rises while the deeper chains outnumber 2 t times the chains of depth t + 1. Deep
+/// models gain most: the coupled dynamics splits chains into links (paper-1: depth 4 becomes
+/// 10; top 4, where the walk ahead walks 2.8 levels per chain rather than 5.8).
+uint32_t walk_top_depth(std::span<const uint32_t> level_begin);
+
 /// What a backend runs for each AheadStep of a program with the walk ahead: `whole` the program,
 /// `without_wind` the program less its wind_force dispatches (AheadStep::take), `plain` the
 /// plain walk (no top poses, the walk ahead a plain pose walk: the dispatches build_program

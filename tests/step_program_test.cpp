@@ -255,7 +255,7 @@ TEST(StepProgram, PathWalkProgramsFollowTheOutputsAndThePassesAsked) {
 
 // The walk that integrates ahead (gpu_layout.h HMSM_DISPATCH_WALK_AHEAD): where a backend asks for it, a
 // step of a forest whose every instance is active runs the wind pair, the top poses (the chains
-// of depth 0 and 1 of each instance) and the walk ahead; a single tree, a forest with a paused
+// of depth 0 to walk_top_depth of each instance) and the walk ahead; a single tree, a forest with a paused
 // instance and programs without the wind pair keep the plain walk.
 TEST(StepProgram, WalkAheadOnlyForStepsOfForestsWithEveryInstanceActive) {
     auto count = [](const std::vector<detail::Dispatch>& program, bool (*is)(const detail::Dispatch&)) {
@@ -266,8 +266,10 @@ TEST(StepProgram, WalkAheadOnlyForStepsOfForestsWithEveryInstanceActive) {
     ASSERT_TRUE(forest);
     const auto& data = hmsm::detail::scene_data_of(*forest);
     const auto& tree = forest->hierarchy(0);
+    const uint32_t top_depth = detail::walk_top_depth(data.models[0].level_begin);
+    ASSERT_GE(top_depth, 1u);
     uint32_t top = 0;
-    for (const Chain& chain : tree.chains) top += chain.depth <= 1 ? 1 : 0;
+    for (const Chain& chain : tree.chains) top += chain.depth <= int32_t(top_depth) ? 1 : 0;
     ASSERT_GT(top, 1u);
     ASSERT_LT(top, tree.chains.size());
     const auto ahead = detail::build_program(data, data.groups, Composition::path_walk, false, Pass::wind_force, all, true);
@@ -308,6 +310,20 @@ TEST(StepProgram, WalkAheadOnlyForStepsOfForestsWithEveryInstanceActive) {
     EXPECT_EQ(count(detail::build_program(data, groups, Composition::path_walk, false, Pass::wind_force, all, true),
                     detail::is_walk_ahead),
               0);
+}
+
+// The top poses of the walk ahead go deeper where the levels below them hold many more chains
+// than the next level would add walking from the trunk: the paper-1 tree's levels (1, 12, 113,
+// 760, 1,459 chains) get depth 2, the same tree split into links under the coupled dynamics
+// (depth 10) depth 4; never below 1 but for a lone trunk, never the deepest level.
+TEST(StepProgram, WalkTopDepthCoversTheThinTopLevels) {
+    auto top_depth = [](std::vector<uint32_t> level_begin) { return detail::walk_top_depth(level_begin); };
+    EXPECT_EQ(top_depth({0, 1}), 0u);
+    EXPECT_EQ(top_depth({0, 1, 7}), 1u);
+    EXPECT_EQ(top_depth({0, 1, 13, 126, 886, 2345}), 2u);
+    EXPECT_EQ(top_depth({0, 1, 2, 5, 22, 117, 383, 922, 1612, 2156, 2356, 2362}), 4u);
+    EXPECT_EQ(top_depth({0, 1, 12, 1000, 1500}), 1u);  // a bushy level 2: walking it from the trunk costs more
+    EXPECT_EQ(top_depth({0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10}), 3u);  // a rod of 10 links: 7 > 2, 6 > 4, not 5 > 6
 }
 
 // Every dispatch of every composition carries a kind that fits its pass (pass_table.h

@@ -288,9 +288,10 @@ HMSM_HOST_DEVICE void prefetch_walk(const BufferPointers& b, const gpu::PassCons
 /// nodes from c's walk record `from` (load_walk_record). Else (a forest, where 128 bytes per
 /// thread would cost more than the dependent loads, which other warps hide): the ancestors
 /// gathered by following chain_parent up, the attach nodes looked up level by level.
-/// kFromTopPoses (HMSM_DISPATCH_WALK_AHEAD): the walk starts from the pose of c's depth-1 ancestor
-/// (c's own at depth 0 or 1) as the HMSM_DISPATCH_WALK_TOP_POSES dispatch stored it in half src_half: the
-/// same operations on the same values, so the same pose bit for bit.
+/// kFromTopPoses (HMSM_DISPATCH_WALK_AHEAD): the walk starts from the pose of c's nearest ancestor
+/// among the top poses (c's own if it is one of them: the first pc.level_count model chains) as
+/// the HMSM_DISPATCH_WALK_TOP_POSES dispatch stored it in half src_half, following chain_parent
+/// only up to it: the same operations on the same values, so the same pose bit for bit.
 template <bool kFromRecords, bool kFromTopPoses = false>
 HMSM_HOST_DEVICE void walk_pose(const BufferPointers& b, const gpu::PassConstants& pc, uint32_t k, int32_t c,
                                 const WalkRecord* from, Mat3& rotation, float4& origin) {
@@ -300,9 +301,11 @@ HMSM_HOST_DEVICE void walk_pose(const BufferPointers& b, const gpu::PassConstant
 #pragma unroll
         for (uint32_t q = 0; q < HMSM_WALK_RECORD_INTS; ++q) record[q] = loaded.words[q];
     } else {
+        // record[0]: the levels from the walk's first pose down to c (from the trunk: c's depth).
         const int32_t* parent = b.chain_parent + pc.model_chain_begin;
+        const int32_t top_poses = kFromTopPoses ? int32_t(pc.level_count) : 0;
         uint32_t up = 0;
-        for (int32_t a = load(parent + c); a >= 0; a = load(parent + a))
+        for (int32_t a = c < top_poses ? -1 : load(parent + c); a >= 0; a = a < top_poses ? -1 : load(parent + a))
             if (++up <= HMSM_WALK_PATH_CAPACITY) record[up] = a;
         record[0] = int32_t(up);
     }
@@ -321,13 +324,11 @@ HMSM_HOST_DEVICE void walk_pose(const BufferPointers& b, const gpu::PassConstant
         const float4 state = load(b.chain_state + state_chain(pc, k, x));
         return local_transform(b, pc, k, pc.model_chain_begin + uint32_t(x), trunk, make_float2(state.x, state.y));
     };
-    uint32_t first_level = 1;
     if constexpr (kFromTopPoses) {
-        const uint64_t top = half_begin(pc, pc.src_half) + state_chain(pc, k, ancestor(depth == 0 ? 0 : depth - 1));
+        const uint64_t top = half_begin(pc, pc.src_half) + state_chain(pc, k, ancestor(depth));
         rotation = load_mat3(b.chain_rotation, top);
         const float4 o = load(b.chain_origin + top);
         origin = make_float4(o.x, o.y, o.z, 0.0f);
-        first_level = 2;
     } else {
         rotation = local_of(ancestor(depth), true);
         const float4 o = load(b.instance_origin + pc.instance_begin + k);
@@ -336,7 +337,7 @@ HMSM_HOST_DEVICE void walk_pose(const BufferPointers& b, const gpu::PassConstant
     // Unrolled so that the loads of several levels are in flight together (they do not depend
     // on the products); the products stay in level order.
 #pragma unroll 4
-    for (uint32_t level = first_level; level <= depth; ++level) {
+    for (uint32_t level = 1; level <= depth; ++level) {
         const int32_t x = ancestor(depth - level);
         const float3 local = xyz(load(b.node_local + pc.model_node_begin + attach(depth - level)));
         origin = origin + with_w(rotation * local, 0.0f);
@@ -354,7 +355,8 @@ HMSM_HOST_DEVICE void path_walk(const BufferPointers& b, const gpu::PassConstant
     store_joint_of(b, state_chain(pc, k, c), rotation, origin);
 }
 
-/// HMSM_DISPATCH_WALK_TOP_POSES for chain c (depth 0 or 1) of group instance k: its pose to half
+/// HMSM_DISPATCH_WALK_TOP_POSES for chain c (one of the first pc.level_count: depth at most the top
+/// depth, step_program.h walk_top_depth) of group instance k: its pose to half
 /// src_half of chain_rotation and chain_origin; the trunk's origin carries in w the wind scale
 /// lambda_i Y of the next step (wind-table slot wind_slot + 1) for the walk that integrates ahead.
 HMSM_HOST_DEVICE void walk_top_pose(const BufferPointers& b, const gpu::PassConstants& pc, uint32_t k, int32_t c) {

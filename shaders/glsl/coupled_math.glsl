@@ -1,12 +1,14 @@
 // The coupled dynamics of passes 1 and 2 (docs/model.md 3.13): the generalized force from the
 // wind moment, the children's loads and the aerodynamic damping, and the exact step of the
 // damped oscillator with the force held. Mirrors src/common/coupled_math.h (the math of the
-// CPU passes and the CUDA kernels) line by line; include after common.glsl.
+// CPU passes and the CUDA kernels) line by line; include after common.glsl. The record holds the
+// per-step quotients folded on the host: nothing here divides.
 #ifndef HMSM_COUPLED_MATH_GLSL
 #define HMSM_COUPLED_MATH_GLSL
 
-/// vec4 `v` of model chain `model_chain`'s record (gpu_layout.h HMSM_CHAIN_DYNAMICS_VEC4S).
-vec4 coupled_record(uint model_chain, uint v) { return chain_dynamics[HMSM_CHAIN_DYNAMICS_VEC4S * model_chain + v]; }
+/// vec4 `v` of model chain `model_chain`'s record (gpu_layout.h HMSM_CHAIN_DYNAMICS_VEC4S), stored
+/// by vec4.
+vec4 coupled_record(uint model_chain, uint v) { return chain_dynamics[v * pc.total_model_chains + model_chain]; }
 
 /// The half of chain_load the step of wind-table slot pc.wind_slot writes; it reads the other
 /// (gpu_layout.h).
@@ -21,26 +23,25 @@ vec2 coupled_force(uint k, uint c, vec3 w_local) {
     // Wind: the torque (q_ref M) x w_local about the joint, its x and z components.
     vec3 moment = coupled_record(model_chain, 4u).xyz;
     vec2 g = vec2(moment.y * w_local.z - moment.z * w_local.y, moment.x * w_local.y - moment.y * w_local.x);
-    // Each child's load of the last step, rotated from the child's frame into this one by Q.
-    vec4 children = coupled_record(model_chain, 5u);
-    int first = int(children.x), count = int(children.y);
+    // Each child's load of the last step, rotated from the child's frame into this one by Q:
+    // the passing vec4 of the child's record, (Q_00, Q_02, Q_20, Q_22).
+    vec4 damping_children = coupled_record(model_chain, 3u);
+    int first = int(damping_children.z), count = int(damping_children.w);
     for (int j = first; j < first + count; ++j) {
         vec4 load_j = chain_load[half_offset(1u - written) + state_chain(k, uint(j))];
-        vec3 passed = as_mat3(chain_rest_rotation[pc.model_chain_begin + uint(j)]) * vec3(load_j.x, 0.0, load_j.y);
-        g += passed.xz;
+        vec4 passing = coupled_record(pc.model_chain_begin + uint(j), HMSM_CHAIN_DYNAMICS_PASSING);
+        g.x += passing.x * load_j.x + passing.y * load_j.y;
+        g.y += passing.z * load_j.x + passing.w * load_j.y;
     }
     // Aerodynamic damping D_a = aero sqrt(|w|), held as the torque that takes from the rate what
-    // exp(-D_a dt / I) would over one step.
+    // exp(-x), x = D_a dt / I, would over one step: (I / dt) (1 - exp(-x)) per unit rate.
     float speed = sqrt(sqrt(dot(w_local, w_local)));
     vec4 s = chain_state[state_chain(k, c)];
-    vec4 inertia_stiffness = coupled_record(model_chain, 2u);
-    vec4 damping_record = coupled_record(model_chain, 3u);
-    float dt = pc.params.x;
+    vec4 inertia_stiffness = coupled_record(model_chain, 2u);  // (I_x / dt, I_z / dt, 1 / K_x, 1 / K_z)
     for (int a = 0; a < 2; ++a) {
-        float damping = damping_record[2 + a] * speed;
-        float x = damping * dt / inertia_stiffness[a];
-        float share = x > 1e-4 ? (1.0 - exp(-x)) / x : 1.0 - 0.5 * x;
-        g[a] -= damping * share * s[2 + a];
+        float x = damping_children[a] * speed;
+        float taken = x > 1e-4 ? 1.0 - exp(-x) : x * (1.0 - 0.5 * x);
+        g[a] -= inertia_stiffness[a] * taken * s[2 + a];
     }
     chain_load[half_offset(written) + state_chain(k, c)] = vec4(g, 0.0, 0.0);
     return g;
@@ -54,7 +55,7 @@ vec4 coupled_step(uint model_chain, vec4 s, vec2 g) {
     for (int j = 0; j < 2; ++j) {
         // The offset from the equilibrium g/K turns by the transition of this axis.
         vec4 transition = coupled_record(model_chain, uint(j));
-        float equilibrium = g[j] / inertia_stiffness[2 + j];
+        float equilibrium = g[j] * inertia_stiffness[2 + j];
         float offset = s[j] - equilibrium;
         float next_rate = transition.z * offset + transition.w * s[2 + j];
         s[j] = equilibrium + transition.x * offset + transition.y * s[2 + j];

@@ -1,8 +1,9 @@
 // The per-chain math of the coupled dynamics (docs/model.md 3.13), shared by the CPU passes
 // (src/cpu/coupled_dynamics.cpp) and the CUDA kernels (kernels/cuda/coupled_math.cuh);
 // shaders/glsl/coupled_math.glsl mirrors it line by line. `record` is a chain's
-// HMSM_CHAIN_DYNAMICS_VEC4S vec4 (gpu_layout.h) as 4 * HMSM_CHAIN_DYNAMICS_VEC4S scalars;
-// pairs are (axis x, axis z) = (theta_x, theta_z).
+// HMSM_CHAIN_DYNAMICS_VEC4S vec4 (gpu_layout.h) as 4 * HMSM_CHAIN_DYNAMICS_VEC4S scalars, with
+// the per-step quotients folded in on the host: nothing here divides. Pairs are (axis x, axis z)
+// = (theta_x, theta_z).
 #pragma once
 
 #include "gpu_layout.h"
@@ -30,34 +31,35 @@ HMSM_HOST_DEVICE void coupled_wind_torque(const T* record, T wx, T wy, T wz, T g
 /// The model-local ids [first, first + count) of the chain's children.
 template <class T>
 HMSM_HOST_DEVICE void coupled_children(const T* record, int32_t& first, int32_t& count) {
-    first = int32_t(coupled_field(record, 5, 0));
-    count = int32_t(coupled_field(record, 5, 1));
+    first = int32_t(coupled_field(record, 3, 2));
+    count = int32_t(coupled_field(record, 3, 3));
 }
 
 /// Adds a child's load (load_x, load_z) of the last step, which its joint passes on, rotated
-/// from the child's frame into this one by the child's rest rotation Q (columns q0 and q2: the
-/// load has no y component).
+/// from the child's frame into this one by the child's rest rotation Q: `passing` is vec4
+/// HMSM_CHAIN_DYNAMICS_PASSING of the child's record, (Q_00, Q_02, Q_20, Q_22) (the load has no
+/// y component, and only its x and z are wanted).
 template <class T>
-HMSM_HOST_DEVICE void coupled_add_child_load(const T q0[3], const T q2[3], T load_x, T load_z, T g[2]) {
-    g[0] += q0[0] * load_x + q2[0] * load_z;
-    g[1] += q0[2] * load_x + q2[2] * load_z;
+HMSM_HOST_DEVICE void coupled_add_child_load(const T passing[4], T load_x, T load_z, T g[2]) {
+    g[0] += passing[0] * load_x + passing[1] * load_z;
+    g[1] += passing[2] * load_x + passing[3] * load_z;
 }
 
 /// Subtracts the aerodynamic damping D_a = aero_a sqrt(|w|), held as the torque that takes from
-/// the rate what exp(-D_a dt / I_a) would over one step: never more than the rate itself.
-/// `wind_dot` is |w_local|^2.
+/// the rate what exp(-x) with x = D_a dt / I_a would over one step: (I_a / dt) (1 - exp(-x)) per
+/// unit rate, never more than the rate itself; x (1 - x / 2) for x so small that 1 - exp(-x)
+/// cancels. `wind_dot` is |w_local|^2.
 template <class T>
-HMSM_HOST_DEVICE void coupled_subtract_aero_damping(const T* record, T wind_dot, const T rate[2], T dt, T g[2]) {
+HMSM_HOST_DEVICE void coupled_subtract_aero_damping(const T* record, T wind_dot, const T rate[2], T g[2]) {
 #ifndef __CUDA_ARCH__
     using std::exp;  // the float overloads on the host; CUDA's device overloads are global
     using std::sqrt;
 #endif
     const T speed = sqrt(sqrt(wind_dot));
     for (int a = 0; a < 2; ++a) {
-        const T damping = coupled_field(record, 3, 2 + a) * speed;
-        const T x = damping * dt / coupled_field(record, 2, a);
-        const T share = x > T(1e-4) ? (T(1) - exp(-x)) / x : T(1) - T(0.5) * x;
-        g[a] -= damping * share * rate[a];
+        const T x = coupled_field(record, 3, a) * speed;
+        const T taken = x > T(1e-4) ? T(1) - exp(-x) : x * (T(1) - T(0.5) * x);
+        g[a] -= coupled_field(record, 2, a) * taken * rate[a];
     }
 }
 
@@ -70,7 +72,7 @@ HMSM_HOST_DEVICE void coupled_step_axis(const T* record, uint32_t j, T g, T max_
     using std::abs;
     using std::copysign;
 #endif
-    const T equilibrium = g / coupled_field(record, 2, 2 + j);
+    const T equilibrium = g * coupled_field(record, 2, 2 + j);
     const T offset = angle - equilibrium;
     const T next_rate = coupled_field(record, j, 2) * offset + coupled_field(record, j, 3) * rate;
     angle = equilibrium + coupled_field(record, j, 0) * offset + coupled_field(record, j, 1) * rate;

@@ -58,15 +58,23 @@
 #define HMSM_PASS_DYNAMICS_PAPER 0u
 #define HMSM_PASS_DYNAMICS_COUPLED 1u
 /// A chain's record of the coupled dynamics (binding HMSM_BINDING_CHAIN_DYNAMICS), vec4 j of
-/// HMSM_CHAIN_DYNAMICS_VEC4S; axis x is theta_x, axis z theta_z (docs/model.md 3.13):
+/// HMSM_CHAIN_DYNAMICS_VEC4S; axis x is theta_x, axis z theta_z (docs/model.md 3.13). On the
+/// devices the records are stored by vec4 (structure of arrays): vec4 j of model chain c is
+/// vec4 j * total_model_chains + c, so that a warp's loads of one vec4 of consecutive chains
+/// are contiguous (the host's SceneData::chain_dynamics holds them record by record).
 ///   j = 0: transition about x over dt, (a11, a12, a21, a22): with y = S - g / K,
 ///          (y, V) <- (a11 y + a12 V, a21 y + a22 V)
 ///   j = 1: transition about z
-///   j = 2: (I_x, I_z, K_x, K_z)
-///   j = 3: (D_x, D_z, aero_x, aero_z): structural damping; aerodynamic damping per sqrt(|w|)
+///   j = 2: (I_x / dt, I_z / dt, 1 / K_x, 1 / K_z)
+///   j = 3: (aero_x dt / I_x, aero_z dt / I_z, first child, child count): the aerodynamic damping
+///          per sqrt(|w|) over one step; the children as floats (model-local chain ids, < 2^24)
 ///   j = 4: (q_ref M_c, 0): the wind moment, torque = (q_ref M_c) x w_local
-///   j = 5: (first child, child count, 0, 0) as floats (model-local chain ids, < 2^24)
+///   j = 5: (Q_00, Q_02, Q_20, Q_22): rows x and z of columns x and z of the rest rotation Q_c,
+///          which pass the chain's load (x, z) on into its parent's frame; the parent reads it
+///          beside the load, so a gather over the children reads one vec4 of each record
+/// Per-step constants are folded here on the host so that the passes divide nowhere.
 #define HMSM_CHAIN_DYNAMICS_VEC4S 6u
+#define HMSM_CHAIN_DYNAMICS_PASSING 5u
 
 /// The wind of docs/model.md 3.5 on the device. Float backends never see the clock tau or a
 /// phase beyond a few units: the host reduces tau mod 2 and the turbulent and atmospheric mode
@@ -150,12 +158,14 @@
 ///   records (beyond HMSM_WALK_PATH_CAPACITY through chain_jump and chain_attach).
 /// NODE_PAIR: node_relative then node_world for node i.
 /// The walk that integrates ahead (CUDA forests; docs/cuda.md), two compose dispatches:
-/// WALK_TOP_POSES: one thread per chain of depth 0 and 1 (the first level_count model chains)
-///   walks the pose from the angles of chain_state and stores it to half src_half of
-///   chain_rotation and chain_origin; the trunk's thread also stores the wind scale lambda_i Y
+/// WALK_TOP_POSES: one thread per chain of depth 0 to the model's top depth (the first
+///   level_count model chains; at least depth 0 and 1: step_program.h walk_top_depth) walks the
+///   pose from the angles of chain_state and stores it to half src_half of chain_rotation and
+///   chain_origin; the trunk's thread also stores the wind scale lambda_i Y
 ///   of the next step (wind-table slot wind_slot + 1) of its instance in the w of its chain_origin.
-/// WALK_AHEAD: every chain walks from the stored pose of its depth-1 ancestor, writes its joint
-///   matrix, then runs the next step's wind_force and integrate with that pose and Y, writing
+/// WALK_AHEAD: every chain walks from the stored pose of its nearest ancestor among the top
+///   chains (its own if it is one; level_count as for WALK_TOP_POSES), writes its joint matrix,
+///   then runs the next step's wind_force and integrate with that pose and Y, writing
 ///   the next angles to a second state buffer.
 /// CONTOUR_SEPARATE: contour writing vertex_position (x, y, z, 1) and vertex_normal
 ///   (nx, ny, nz, 0), thread i on vertex i.

@@ -20,12 +20,12 @@ typename State<T>::vec2 coupled_force(const State<T>& s, const gpu::PassConstant
     coupled_children(record, first, count);
     for (int32_t j = first; j < first + count; ++j) {
         const auto& load = s.chain_load[load_half * s.total_chains + state_chain(pc, instance, j)];
-        const auto& q = s.chain_rest_rotation[pc.model_chain_begin + uint32_t(j)];
-        coupled_add_child_load(&q[0].x, &q[2].x, load.x, load.y, g);
+        const T* child = s.chain_dynamics[pc.model_chain_begin + uint32_t(j)].data();
+        coupled_add_child_load(child + 4 * HMSM_CHAIN_DYNAMICS_PASSING, load.x, load.y, g);
     }
     const auto& sv = s.chain_state[c];
     const T rate[2] = {sv.z, sv.w};
-    coupled_subtract_aero_damping(record, glm::dot(w_local, w_local), rate, s.dt, g);
+    coupled_subtract_aero_damping(record, glm::dot(w_local, w_local), rate, g);
     return {g[0], g[1]};
 }
 
