@@ -312,14 +312,7 @@ Status Simulation::Impl::reshape_in_place(std::unique_ptr<detail::SceneData> nex
         first = end;
         while (first < count && first < survivors.size() && survivors[first] == first) ++first;
     }
-    detail::SceneData& d = *data_;
-    d.instance_origin = std::move(next->instance_origin);
-    d.instance_yaw = std::move(next->instance_yaw);
-    d.instance_wind = std::move(next->instance_wind);
-    d.groups = std::move(next->groups);
-    d.total_chains = next->total_chains;
-    d.total_nodes = next->total_nodes;
-    d.total_vertices = next->total_vertices;
+    data_->take_instance_layout(std::move(*next));
     return {};
 }
 
@@ -331,13 +324,7 @@ Status Simulation::Impl::reshape_anew(std::unique_ptr<detail::SceneData> next,
     // are read and written: a scene split into windows maps no element past them.
     {
         detail::SceneData whole = *data_;  // the model arrays and uniforms, then the new layout
-        whole.instance_origin = std::move(next->instance_origin);
-        whole.instance_yaw = std::move(next->instance_yaw);
-        whole.instance_wind = std::move(next->instance_wind);
-        whole.groups = std::move(next->groups);
-        whole.total_chains = next->total_chains;
-        whole.total_nodes = next->total_nodes;
-        whole.total_vertices = next->total_vertices;
+        whole.take_instance_layout(std::move(*next));
         *next = std::move(whole);
     }
     const uint64_t limit = kMaxStateElements;

@@ -288,13 +288,7 @@ Status Simulation::Impl::switch_models(const std::vector<std::pair<uint32_t, uin
             HMSM_TRY(scalar == detail::Scalar::f64 ? read_all(values64[b]) : read_all(values32[b]));
         }
         detail::SceneData whole = *data_;
-        whole.instance_origin = std::move(laid->instance_origin);
-        whole.instance_yaw = std::move(laid->instance_yaw);
-        whole.instance_wind = std::move(laid->instance_wind);
-        whole.groups = std::move(laid->groups);
-        whole.total_chains = laid->total_chains;
-        whole.total_nodes = laid->total_nodes;
-        whole.total_vertices = laid->total_vertices;
+        whole.take_instance_layout(std::move(*laid));
         whole.chain_capacity = std::max(grown(data_->chain_capacity, whole.total_chains), reserved_.chains);
         whole.node_capacity = std::max(grown(data_->node_capacity, whole.total_nodes), reserved_.nodes);
         whole.vertex_capacity = std::max(grown(data_->vertex_capacity, whole.total_vertices), reserved_.vertices);

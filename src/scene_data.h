@@ -16,6 +16,7 @@
 #include <glm/vec4.hpp>
 
 #include <cstdint>
+#include <utility>
 #include <span>
 #include <vector>
 
@@ -74,6 +75,17 @@ struct SceneData {
     /// halves of chain_rotation and chain_origin lie chain_capacity elements apart.
     uint64_t chain_capacity = 0, node_capacity = 0, vertex_capacity = 0;
     uint32_t instance_capacity = 0;
+    /// Takes `laid`'s instance layout (lay_out_instances: instance origins, yaws and winds,
+    /// groups and the live totals), keeping these models and capacities.
+    void take_instance_layout(SceneData&& laid) {
+        instance_origin = std::move(laid.instance_origin);
+        instance_yaw = std::move(laid.instance_yaw);
+        instance_wind = std::move(laid.instance_wind);
+        groups = std::move(laid.groups);
+        total_chains = laid.total_chains;
+        total_nodes = laid.total_nodes;
+        total_vertices = laid.total_vertices;
+    }
     /// Capacities equal to the live counts (flatten_scene; tests that build a SceneData).
     void fit_capacity() {
         chain_capacity = total_chains;

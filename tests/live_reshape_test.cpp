@@ -24,15 +24,6 @@ Scene two_model_forest() {
     return scene;
 }
 
-SimulationConfig windy() {
-    SimulationConfig config;
-    config.wind.profile = WindProfile::y4;
-    config.wind.strength = 12.0;
-    config.wind.direction = {1.0, 0.2, 0.6};
-    config.wind.frequency = 0.7;
-    return config;
-}
-
 /// A backend that cannot reshape in place: every add and remove takes the upload path.
 class UploadsAnew final : public detail::Backend {
 public:
@@ -71,13 +62,13 @@ private:
 class LiveReshape : public ::testing::TestWithParam<BackendKind> {
 protected:
     std::unique_ptr<Simulation> create(const Scene& scene, bool in_place, std::string& skip) {
-        auto sim = test::create_simulation_or_skip(scene, windy(), GetParam(), skip);
+        auto sim = test::create_simulation_or_skip(scene, test::windy_config(), GetParam(), skip);
         if (!sim || in_place) return sim;
         // The same backend kind behind a wrapper that refuses to reshape in place.
         auto backend = detail::create_backend(GetParam());
         if (!backend) return nullptr;
         auto anew = detail::SimulationAccess::create(
-            scene, windy(), std::make_unique<UploadsAnew>(std::move(backend).value()));
+            scene, test::windy_config(), std::make_unique<UploadsAnew>(std::move(backend).value()));
         EXPECT_TRUE(anew.ok()) << anew.status().message();
         return anew ? std::move(anew).value() : nullptr;
     }
@@ -285,7 +276,7 @@ TEST_P(LiveReshape, SwapRemovalEqualsUploadingAnewAndFollowsCpu64) {
         auto in_place = create(scenes[which], true, skip);
         if (!skip.empty()) GTEST_SKIP() << skip;
         auto anew = create(scenes[which], false, skip);
-        auto oracle = test::create_simulation_or_skip(scenes[which], windy(), BackendKind::cpu64, skip);
+        auto oracle = test::create_simulation_or_skip(scenes[which], test::windy_config(), BackendKind::cpu64, skip);
         ASSERT_TRUE(in_place && anew && oracle);
         for (Simulation* sim : {in_place.get(), anew.get(), oracle.get()}) churn_by_swaps(*sim);
         EXPECT_EQ(test::every_output(*in_place), test::every_output(*anew));

@@ -125,15 +125,6 @@ Scene mixed_forest() {
     return scene;
 }
 
-SimulationConfig windy() {
-    SimulationConfig config;
-    config.wind.profile = WindProfile::y4;
-    config.wind.strength = 12.0;
-    config.wind.direction = {1.0, 0.2, 0.6};
-    config.wind.frequency = 0.7;
-    return config;
-}
-
 /// The backend under test by name: a registered kind (cuda: a real device) or "cuda_emulation"
 /// (the CUDA kernels on the host); no_device where it is absent.
 Result<std::unique_ptr<detail::Backend>> backend_named(const std::string& name) {
@@ -159,7 +150,7 @@ Watched* create_watched(const std::string& name, bool in_place, std::unique_ptr<
     }
     auto watched = std::make_unique<Watched>(std::move(backend).value(), in_place);
     Watched* handle = watched.get();
-    auto created = detail::SimulationAccess::create(mixed_forest(), windy(), std::move(watched));
+    auto created = detail::SimulationAccess::create(mixed_forest(), test::windy_config(), std::move(watched));
     EXPECT_TRUE(created.ok()) << created.status().message();
     if (!created) return nullptr;
     sim = std::move(created).value();

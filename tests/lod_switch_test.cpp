@@ -34,15 +34,6 @@ Scene lod_forest() {
     return scene;
 }
 
-SimulationConfig windy() {
-    SimulationConfig config;
-    config.wind.profile = WindProfile::y4;
-    config.wind.strength = 12.0;
-    config.wind.direction = {1.0, 0.2, 0.6};
-    config.wind.frequency = 0.7;
-    return config;
-}
-
 std::vector<double> read_output(const Simulation& sim, Output output) {
     std::vector<double> values;
     const Status read = sim.read(output, values);
@@ -64,7 +55,7 @@ class LodSwitch : public ::testing::TestWithParam<BackendKind> {};
 // and the switched instance keeps handle, index and settings.
 TEST_P(LodSwitch, SwitchAndReverseCarryKeptChains) {
     std::string skip;
-    auto sim = test::create_simulation_or_skip(lod_forest(), windy(), GetParam(), skip);
+    auto sim = test::create_simulation_or_skip(lod_forest(), test::windy_config(), GetParam(), skip);
     if (!skip.empty()) GTEST_SKIP() << skip;
     ASSERT_TRUE(sim);
     ASSERT_TRUE(sim->step(40).ok());
@@ -141,9 +132,9 @@ TEST_P(LodSwitch, SwitchAndReverseCarryKeptChains) {
 TEST_P(LodSwitch, AgreesWithCpu64ThroughSwitches) {
     if (GetParam() == BackendKind::cpu64) GTEST_SKIP() << "cpu64 is the oracle";
     std::string skip;
-    auto sim = test::create_simulation_or_skip(lod_forest(), windy(), GetParam(), skip);
+    auto sim = test::create_simulation_or_skip(lod_forest(), test::windy_config(), GetParam(), skip);
     if (!skip.empty()) GTEST_SKIP() << skip;
-    auto oracle = test::create_simulation_or_skip(lod_forest(), windy(), BackendKind::cpu64, skip);
+    auto oracle = test::create_simulation_or_skip(lod_forest(), test::windy_config(), BackendKind::cpu64, skip);
     ASSERT_TRUE(sim && oracle);
     auto both = [&](auto&& action) {
         ASSERT_TRUE(action(*sim).ok());
@@ -177,9 +168,9 @@ TEST_P(LodSwitch, FinerThanCreatedGrowsTheScene) {
     Scene scene = lod_forest();
     scene.joint_budgets = {0, 2};
     scene.lod_budgets[1] = {64, 1};
-    auto sim = test::create_simulation_or_skip(scene, windy(), GetParam(), skip);
+    auto sim = test::create_simulation_or_skip(scene, test::windy_config(), GetParam(), skip);
     if (!skip.empty()) GTEST_SKIP() << skip;
-    auto oracle = test::create_simulation_or_skip(scene, windy(), BackendKind::cpu64, skip);
+    auto oracle = test::create_simulation_or_skip(scene, test::windy_config(), BackendKind::cpu64, skip);
     ASSERT_TRUE(sim && oracle);
     const InstanceId ids[] = {InstanceId(2), InstanceId(6)};
     const uint32_t finer[] = {1, 1};
@@ -208,7 +199,7 @@ TEST_P(LodSwitch, VertexJumpAgainstFrameMotion) {
     std::string skip;
     Scene scene = single_tree_scene(test::deep_tree(4));
     scene.lod_budgets = {{std::begin(kBudgets), std::end(kBudgets)}};
-    auto sim = test::create_simulation_or_skip(scene, windy(), GetParam(), skip);
+    auto sim = test::create_simulation_or_skip(scene, test::windy_config(), GetParam(), skip);
     if (!skip.empty()) GTEST_SKIP() << skip;
     ASSERT_TRUE(sim->step(120).ok());
     for (uint32_t level : {1u, 2u, 3u, 0u}) {
@@ -241,7 +232,7 @@ INSTANTIATE_TEST_SUITE_P(Backends, LodSwitch,
                          backend_name);
 
 std::unique_ptr<Simulation> cpu64_forest() {
-    SimulationConfig config = windy();
+    SimulationConfig config = test::windy_config();
     config.backend = BackendKind::cpu64;
     auto sim = Simulation::create(lod_forest(), config);
     EXPECT_TRUE(sim.ok()) << sim.status().message();
@@ -283,7 +274,7 @@ TEST(LodSwitchInput, BadHandlesAndLevelsChangeNothing) {
 TEST(LodSwitchInput, BudgetBelowTrunkOnlyLevelIsRefused) {
     Scene scene = lod_forest();
     scene.lod_budgets[1] = {4, 0};
-    SimulationConfig config = windy();
+    SimulationConfig config = test::windy_config();
     config.backend = BackendKind::cpu64;
     auto sim = Simulation::create(scene, config);
     ASSERT_FALSE(sim.ok());
@@ -316,7 +307,7 @@ TEST(LodSwitchInput, ForestSetsBudgetsPerModel) {
 TEST(LodSwitchBands, HysteresisKeepsAnOscillatingViewerFromFlipping) {
     Scene scene = single_tree_scene(test::small_tree());
     scene.lod_budgets = {{std::begin(kBudgets), std::end(kBudgets)}};
-    SimulationConfig config = windy();
+    SimulationConfig config = test::windy_config();
     config.backend = BackendKind::cpu64;
     auto sim = std::move(Simulation::create(scene, config)).value();
     ASSERT_TRUE(sim->set_lod_bands({{10.0, 20.0, 30.0}, 0.2}).ok());

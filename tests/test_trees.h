@@ -44,6 +44,17 @@ double max_abs_difference(const std::vector<double>& a, const std::vector<double
 bool all_finite(const std::vector<double>& values);
 
 /// Every output a simulation can produce.
+/// A gusty Y4 wind at an angle (12, frequency 0.7): the live-reshape and level-switch suites
+/// run under it so that every chain moves.
+inline SimulationConfig windy_config() {
+    SimulationConfig config;
+    config.wind.profile = WindProfile::y4;
+    config.wind.strength = 12.0;
+    config.wind.direction = {1.0, 0.2, 0.6};
+    config.wind.frequency = 0.7;
+    return config;
+}
+
 inline constexpr Output kEveryOutput[] = {Output::node_positions,  Output::vertex_positions, Output::vertex_normals,
                                           Output::chain_rotations, Output::chain_origins,    Output::chain_angles,
                                           Output::joint_matrices};
