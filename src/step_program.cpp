@@ -234,6 +234,22 @@ std::vector<Dispatch> build_program(const SceneData& d, const std::vector<Instan
     return program;
 }
 
+std::vector<std::span<const Dispatch>> dispatch_batches(std::span<const Dispatch> program) {
+    auto joins = [](const Dispatch& run_last, const Dispatch& next) {
+        const gpu::PassConstants &a = run_last.constants, &b = next.constants;
+        return next.pass == run_last.pass && b.kind == a.kind && b.round == a.round &&
+               b.src_half == a.src_half && b.dst_half == a.dst_half && b.instance_begin > a.instance_begin;
+    };
+    std::vector<std::span<const Dispatch>> runs;
+    size_t begin = 0;
+    for (size_t i = 1; i <= program.size(); ++i) {
+        if (i < program.size() && joins(program[i - 1], program[i])) continue;
+        runs.push_back(program.subspan(begin, i - begin));
+        begin = i;
+    }
+    return runs;
+}
+
 Composition automatic_composition(bool backend_prefers_path_walk, int32_t deepest_chain_depth) {
     return backend_prefers_path_walk && deepest_chain_depth <= kPathWalkMaxDepth ? Composition::path_walk
                                                                                  : Composition::pointer_jumping;

@@ -41,6 +41,14 @@ std::vector<Dispatch> build_program(const SceneData& d, const std::vector<Instan
                                     Pass first, uint32_t passes, bool walk_ahead = false,
                                     JumpingForm jumping_form = JumpingForm::by_size);
 
+/// The runs of consecutive dispatches of `program` that one launch may run together: the same
+/// pass, kind, round and halves over different groups (ascending instance_begin). Groups share
+/// no state, so no dispatch of a run reads what another writes, and a backend may run a run as
+/// one launch whose workgroups each find their dispatch's constants. The runs cover `program`
+/// in order; build_program orders a pass's dispatches round by round (level by level) over all
+/// groups, so a forest of many groups takes as many runs as a scene of one.
+std::vector<std::span<const Dispatch>> dispatch_batches(std::span<const Dispatch> program);
+
 /// Deepest chain depth (levels below the trunk) for which Composition::automatic keeps the path
 /// walk on a backend that prefers it: the walk costs depth-many dependent products per chain, the
 /// rounds of pointer jumping log2 of the depth, so past a break-even depth the rounds win. On the
