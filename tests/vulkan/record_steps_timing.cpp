@@ -6,11 +6,14 @@
 // Not a test: it asserts nothing and runs without validation (which would dominate the cost).
 //
 //   hmsm_vulkan_record_timing [--preset paper-1] [--trees 1] [--frames 600] [--steps 2]
-//                             [--joints] [--idle]
+//                             [--joints] [--idle] [--spin] [--sleep-us N]
 //
 // --joints simulates only the joint matrices (SimulationConfig::outputs = joints, so large
 // forests fit a CPU driver); --idle waits for the queue to drain before each record_steps, so
-// the time is hmsm's own work without device work running beside it.
+// the time is hmsm's own work without device work running beside it. --spin waits for a frame's
+// fence by polling it rather than blocking, so the thread never sleeps; --sleep-us N sleeps N
+// microseconds before each record_steps, as a thread that blocked on a fence does: together they
+// tell hmsm's own cost from the cost of running after the thread slept (cold caches, clocks).
 #include "vulkan/device.h"
 
 #include <hmsm/hmsm.h>
@@ -23,6 +26,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <string>
+#include <thread>
 #include <vector>
 
 namespace {
@@ -30,7 +34,8 @@ namespace {
 struct Options {
     std::string preset = "paper-1";
     uint32_t trees = 1, frames = 600, steps = 2;
-    bool joints = false, idle = false;
+    bool joints = false, idle = false, spin = false;
+    uint32_t sleep_us = 0;
 };
 
 bool parse(int argc, char** argv, Options& o) {
@@ -43,6 +48,8 @@ bool parse(int argc, char** argv, Options& o) {
         else if (arg == "--steps" && has_value) o.steps = uint32_t(std::strtoul(argv[++i], nullptr, 10));
         else if (arg == "--joints") o.joints = true;
         else if (arg == "--idle") o.idle = true;
+        else if (arg == "--spin") o.spin = true;
+        else if (arg == "--sleep-us" && has_value) o.sleep_us = uint32_t(std::strtoul(argv[++i], nullptr, 10));
         else {
             std::fprintf(stderr, "unknown or incomplete argument %s\n", arg.c_str());
             return false;
@@ -104,17 +111,23 @@ int main(int argc, char** argv) {
     for (VkFence& f : fences)
         if (vk.vkCreateFence(device.handle(), &fence_info, nullptr, &f) != VK_SUCCESS) return fail("vkCreateFence");
 
-    std::printf("device %s, %s x %u%s, record_steps(sim, cmd, %u), %u frames, %u in flight%s\n",
+    std::printf("device %s, %s x %u%s, record_steps(sim, cmd, %u), %u frames, %u in flight%s%s, sleep %u us\n",
                 device.name().c_str(), o.preset.c_str(), o.trees, o.joints ? " (joints only)" : "", o.steps,
-                o.frames, kFrames, o.idle ? ", queue idle before each call" : "");
+                o.frames, kFrames, o.idle ? ", queue idle before each call" : "",
+                o.spin ? ", fences polled" : "", o.sleep_us);
     uint64_t frame = 0;
     for (const bool live : {false, true}) {
         std::vector<double> micros, change_micros;
         for (uint32_t i = 0; i < o.frames; ++i, ++frame) {
             const uint32_t k = uint32_t(frame % kFrames);
-            vk.vkWaitForFences(device.handle(), 1, &fences[k], VK_TRUE, UINT64_MAX);
+            if (o.spin)
+                while (vk.vkGetFenceStatus(device.handle(), fences[k]) == VK_NOT_READY) {
+                }
+            else
+                vk.vkWaitForFences(device.handle(), 1, &fences[k], VK_TRUE, UINT64_MAX);
             vk.vkResetFences(device.handle(), 1, &fences[k]);
             if (o.idle) vk.vkQueueWaitIdle(device.queue());
+            if (o.sleep_us) std::this_thread::sleep_for(std::chrono::microseconds(o.sleep_us));
             vk.vkResetCommandBuffer(commands[k], 0);
             VkCommandBufferBeginInfo begin{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
             begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
