@@ -328,3 +328,64 @@ TEST(Levels, LevelSkinIsTheFullMeshAtRestAndFollowsKeptChains) {
 }
 
 }  // namespace
+
+// Under coupled a chain gathers its children's loads by id (docs/model.md 3.13): every level's
+// records name children among the level's own chains (each the level chain whose parent is
+// that chain), and the drag a folded subtree's load carried moves into its carrier's wind
+// moment, so the trunk-only level's trunk holds the moment of the whole tree's drag about the
+// ground, the sum over every chain of its own drag moment brought into the trunk's frame.
+TEST(Levels, CoupledLevelsNameTheirOwnChildrenAndKeepTheFoldedDrag) {
+    const TreeModel tree = test::deep_tree(5);
+    ModelOptions options;
+    options.dynamics = Dynamics::coupled;
+    auto full = build_hierarchy(tree, options, {});
+    ASSERT_TRUE(full.ok()) << full.status().message();
+    const int32_t chains = int32_t(full->chains.size());
+    ASSERT_GT(chains, 6);
+    // Each chain's own drag moment (its wind moment less its children's subtree drag at their
+    // attach nodes), in the trunk's frame, summed over the tree.
+    std::vector<glm::dmat3> to_trunk(static_cast<size_t>(chains), glm::dmat3(1.0));
+    glm::dvec3 whole(0.0);
+    for (int32_t c = 0; c < chains; ++c) {
+        const Chain& chain = full->chains[size_t(c)];
+        to_trunk[size_t(c)] = c == 0 ? glm::dmat3(1.0) : to_trunk[size_t(chain.parent)] * glm::dmat3(chain.rest_rotation);
+        glm::dvec3 own(chain.dynamics.wind_moment);
+        const glm::dvec3 attach(tree.nodes[size_t(chain.attach_node)].position);
+        for (int32_t k = chain.dynamics.first_child; k < chain.dynamics.first_child + chain.dynamics.child_count; ++k) {
+            const Chain& child = full->chains[size_t(k)];
+            const glm::dvec3 arm = glm::transpose(glm::dmat3(chain.frame)) *
+                                   (glm::dvec3(tree.nodes[size_t(child.attach_node)].position) - attach);
+            own -= child.dynamics.subtree_drag_area * arm;
+        }
+        // Brought to the trunk's joint: the chain's drag at its attach node's lever too.
+        const glm::dvec3 base(tree.nodes[size_t(full->chains[0].attach_node)].position);
+        const glm::dvec3 lever = glm::transpose(glm::dmat3(full->chains[0].frame)) * (attach - base);
+        whole += to_trunk[size_t(c)] * own + (c == 0 ? 0.0 : chain.dynamics.drag_area) * lever;
+    }
+    for (int32_t budget = chains; budget >= 1; --budget) {
+        SCOPED_TRACE("budget " + std::to_string(budget));
+        auto level = build_level(tree, *full, {}, budget);
+        ASSERT_TRUE(level.ok()) << level.status().message();
+        const auto& h = level->hierarchy.chains;
+        for (size_t c = 0; c < h.size(); ++c) {
+            const ChainDynamics& d = h[c].dynamics;
+            int32_t children = 0;
+            for (size_t k = 0; k < h.size(); ++k) children += h[k].parent == int32_t(c);
+            ASSERT_EQ(d.child_count, children) << "chain " << c;
+            for (int32_t k = d.first_child; k < d.first_child + d.child_count; ++k) {
+                ASSERT_LT(size_t(k), h.size()) << "chain " << c << " names a child past the level";
+                EXPECT_EQ(h[size_t(k)].parent, int32_t(c)) << "chain " << c;
+            }
+        }
+        if (budget == 1) {
+            const glm::dvec3 trunk(h[0].dynamics.wind_moment);
+            EXPECT_LT(glm::length(trunk - whole), 1e-9 * glm::length(whole))
+                << "trunk-only level's wind moment (" << trunk.x << ", " << trunk.y << ", " << trunk.z << ") against the tree's ("
+                << whole.x << ", " << whole.y << ", " << whole.z << ")";
+        }
+        if (budget == chains) {
+            for (size_t c = 0; c < h.size(); ++c)
+                EXPECT_EQ(glm::dvec3(h[c].dynamics.wind_moment), glm::dvec3(full->chains[c].dynamics.wind_moment));
+        }
+    }
+}

@@ -2,6 +2,8 @@
 // parents, the level hierarchies cut from it, their trunk frequency and geometric error.
 #include <hmsm/levels.h>
 
+#include "coupled_constants.h"
+
 #include <glm/geometric.hpp>
 #include <glm/matrix.hpp>
 
@@ -134,6 +136,43 @@ double natural_frequency(const Chain& chain) {
     return std::sqrt(chain.stiffness / chain.inertia) / (2.0 * std::numbers::pi);
 }
 
+/// The coupled dynamics (docs/model.md 3.12, 3.13): a kept chain's record names its children
+/// among the level's chains, and its wind moment M takes the drag of the subtrees folded into
+/// it at their true lever arms, `Q_k M_sub(k)` with M_sub(k) = M_k + Σ_j Q_j M_sub(j) over the
+/// whole folded subtree: the moment about the attach node that a full child's load carried.
+/// I, K and D stay (the subtree's mass is lumped in I either way). Paper hierarchies: no-op.
+void fold_coupled_records(const Hierarchy& full, const std::vector<char>& folded, DetailLevel& level) {
+    const size_t chains = full.chains.size();
+    if (full.chains[0].dynamics.link_count == 0) return;
+    std::vector<glm::dvec3> subtree_moment(chains);
+    for (size_t c = chains; c-- > 0;) {  // children have larger ids
+        const ChainDynamics& d = full.chains[c].dynamics;
+        glm::dvec3 moment(d.wind_moment);
+        for (int32_t k = d.first_child; k < d.first_child + d.child_count; ++k)
+            moment += glm::dmat3(full.chains[size_t(k)].rest_rotation) * subtree_moment[size_t(k)];
+        subtree_moment[c] = moment;
+    }
+    for (size_t C = 0; C < level.hierarchy.chains.size(); ++C) {
+        const ChainDynamics& kept = full.chains[size_t(level.source_chain[C])].dynamics;
+        Chain& chain = level.hierarchy.chains[C];
+        ChainDynamics& d = chain.dynamics;
+        glm::dvec3 moment(kept.wind_moment);
+        d.first_child = 0;
+        d.child_count = 0;
+        // The kept children of a breadth-first parent stay one contiguous id range.
+        for (int32_t k = kept.first_child; k < kept.first_child + kept.child_count; ++k) {
+            if (folded[size_t(k)]) {
+                moment += glm::dmat3(full.chains[size_t(k)].rest_rotation) * subtree_moment[size_t(k)];
+                continue;
+            }
+            if (d.child_count == 0) d.first_child = level.chain_of[size_t(k)];
+            ++d.child_count;
+        }
+        d.wind_moment = Vec3(moment);
+        chain.wind_area = detail::kReferencePressure * glm::length(moment);
+    }
+}
+
 /// The level that keeps every chain not among the first `fold_count` entries of `order`.
 DetailLevel cut_level(const TreeModel& tree, const Hierarchy& full, const Parameters& parameters,
                       const std::vector<int32_t>& order, int32_t budget,
@@ -159,6 +198,7 @@ DetailLevel cut_level(const TreeModel& tree, const Hierarchy& full, const Parame
         if (chain.parent >= 0) kept.parent = level.chain_of[size_t(chain.parent)];
         h.chains.push_back(std::move(kept));
     }
+    fold_coupled_records(full, folded, level);
     h.continuation = full.continuation;
     h.node_owner.resize(tree.nodes.size());
     h.node_local.resize(tree.nodes.size());
