@@ -21,13 +21,6 @@ using detail::BufferId;
 
 namespace {
 
-std::vector<double> read_output(const Simulation& sim, Output output) {
-    std::vector<double> values;
-    Status s = sim.read(output, values);
-    EXPECT_TRUE(s.ok()) << s.message();
-    return values;
-}
-
 struct SceneCase {
     std::string name;
     Scene scene;
@@ -109,16 +102,16 @@ TEST_P(Agreement, EndToEndAfter1000Steps) {
         ASSERT_TRUE(oracle->step(1000).ok());
         const double height = scene_height(c.scene);
         for (Output o : {Output::node_positions, Output::vertex_positions}) {
-            auto a = read_output(*sim, o), b = read_output(*oracle, o);
+            auto a = test::read_output(*sim, o), b = test::read_output(*oracle, o);
             ASSERT_EQ(a.size(), b.size());
             EXPECT_LE(test::max_abs_difference(a, b) / height, 1e-4) << "output " << int(o);
         }
-        auto normals = read_output(*sim, Output::vertex_normals);
-        EXPECT_LE(test::max_abs_difference(normals, read_output(*oracle, Output::vertex_normals)), 1e-3);
+        auto normals = test::read_output(*sim, Output::vertex_normals);
+        EXPECT_LE(test::max_abs_difference(normals, test::read_output(*oracle, Output::vertex_normals)), 1e-3);
         // The scene really moved: positions differ from the rest pose.
         auto rest = test::create_simulation_or_skip(c.scene, c.config, BackendKind::cpu64, skip);
-        EXPECT_GT(test::max_abs_difference(read_output(*rest, Output::node_positions),
-                                           read_output(*oracle, Output::node_positions)),
+        EXPECT_GT(test::max_abs_difference(test::read_output(*rest, Output::node_positions),
+                                           test::read_output(*oracle, Output::node_positions)),
                   1e-3 * height);
     }
 }
@@ -161,10 +154,10 @@ TEST_P(Agreement, PackedVertexLayoutAfter300Steps) {
         ASSERT_TRUE(separate->read(Output::node_positions, separate_nodes).ok());
         EXPECT_EQ(packed_nodes, separate_nodes);
 
-        auto normals = read_output(*packed, Output::vertex_normals);
-        auto separate_normals = read_output(*separate, Output::vertex_normals);
+        auto normals = test::read_output(*packed, Output::vertex_normals);
+        auto separate_normals = test::read_output(*separate, Output::vertex_normals);
         ASSERT_EQ(normals.size(), 3 * packed->vertex_count());
-        EXPECT_LE(test::max_abs_difference(normals, read_output(*oracle, Output::vertex_normals)), 1e-3);
+        EXPECT_LE(test::max_abs_difference(normals, test::read_output(*oracle, Output::vertex_normals)), 1e-3);
         EXPECT_LE(test::max_abs_difference(normals, separate_normals), 1e-4);
         std::vector<float> normals_f32;
         ASSERT_TRUE(packed->read(Output::vertex_normals, normals_f32).ok());
@@ -201,9 +194,9 @@ TEST(AgreementOracle, PackedVertexLayoutOnCpu64) {
     ASSERT_TRUE(packed && separate);
     ASSERT_TRUE(packed->step(200).ok());
     ASSERT_TRUE(separate->step(200).ok());
-    EXPECT_EQ(read_output(*packed, Output::vertex_positions), read_output(*separate, Output::vertex_positions));
-    auto normals = read_output(*packed, Output::vertex_normals);
-    EXPECT_LE(test::max_abs_difference(normals, read_output(*separate, Output::vertex_normals)), 1e-4);
+    EXPECT_EQ(test::read_output(*packed, Output::vertex_positions), test::read_output(*separate, Output::vertex_positions));
+    auto normals = test::read_output(*packed, Output::vertex_normals);
+    EXPECT_LE(test::max_abs_difference(normals, test::read_output(*separate, Output::vertex_normals)), 1e-4);
     std::vector<float> normals_f32;
     ASSERT_TRUE(packed->read(Output::vertex_normals, normals_f32).ok());
     EXPECT_LE(test::max_abs_difference(std::vector<double>(normals_f32.begin(), normals_f32.end()), normals), 1e-6);
@@ -240,7 +233,7 @@ TEST_P(Agreement, RoundsInOneDispatchMatchOneDispatchPerRound) {
         const double height = scene_height(scene);
         for (Output o : {Output::chain_rotations, Output::chain_origins, Output::node_positions,
                          Output::vertex_positions}) {
-            auto a = read_output(*one, o), b = read_output(*per_round, o);
+            auto a = test::read_output(*one, o), b = test::read_output(*per_round, o);
             ASSERT_EQ(a.size(), b.size());
             ASSERT_TRUE(test::all_finite(a));
             const double scale = o == Output::chain_rotations ? 1.0 : height;

@@ -24,22 +24,6 @@ namespace {
 constexpr double kRodLength = 10.0, kRodRadius = 0.1;
 constexpr int kRodSegments = 12;
 
-SimulationConfig coupled_config(double dt = 1.0 / 120.0) {
-    SimulationConfig config;
-    config.backend = BackendKind::cpu64;
-    config.model.dynamics = Dynamics::coupled;
-    config.outputs = Outputs::joints_and_nodes;
-    config.parameters.dt = dt;
-    return config;
-}
-
-std::vector<double> read(const Simulation& sim, Output output) {
-    std::vector<double> values;
-    Status s = sim.read(output, values);
-    EXPECT_TRUE(s.ok()) << s.message();
-    return values;
-}
-
 }  // namespace
 
 // The rod is split into the trunk's six links; each link's rigid inertia is the rod beyond its
@@ -96,7 +80,7 @@ TEST(CoupledLinks, LongRodIsSplitIntoLinksThatKeepTheCantileverFrequency) {
 
 // Released from its wind-bent shape, the split rod's top sways at the cantilever frequency.
 TEST(CoupledLinks, SplitRodTopSwaysAtTheCantileverFrequency) {
-    SimulationConfig config = coupled_config();
+    SimulationConfig config = test::coupled_config();
     config.wind.profile = WindProfile::constant;
     config.wind.strength = 20.0;
     const TreeModel rod = test::rod(kRodSegments, kRodLength, kRodRadius);
@@ -109,7 +93,7 @@ TEST(CoupledLinks, SplitRodTopSwaysAtTheCantileverFrequency) {
     std::vector<double> top_x;
     for (int i = 0; i < 720; ++i) {
         ASSERT_TRUE((*sim)->step(1).ok());
-        top_x.push_back(read(**sim, Output::node_positions)[3 * kRodSegments]);
+        top_x.push_back(test::read_output(**sim, Output::node_positions)[3 * kRodSegments]);
     }
     const double f0 = detail::uniform_cantilever_frequency(kRodLength, kRodRadius, config.parameters.material);
     double mean = 0.0;  // the sway is measured about its mean
@@ -124,7 +108,7 @@ TEST(CoupledLinks, SplitRodTopSwaysAtTheCantileverFrequency) {
 // within 15 % of the beam's q L^4 / (8 E J), it curves (every link turns the same way, the base
 // least), and its base turns less than a rigid link on the spring of the same frequency.
 TEST(CoupledLinks, SteadyLoadBendsTheRodLikeTheBeam) {
-    SimulationConfig config = coupled_config(1.0 / 60.0);
+    SimulationConfig config = test::coupled_config(BackendKind::cpu64, 1.0 / 60.0);
     config.wind.profile = WindProfile::constant;
     config.wind.strength = 20.0;
     const TreeModel rod = test::rod(kRodSegments, kRodLength, kRodRadius);
@@ -136,9 +120,9 @@ TEST(CoupledLinks, SteadyLoadBendsTheRodLikeTheBeam) {
     std::vector<double> angles(detail::kTrunkLinks, 0.0);
     for (int i = 0; i < average_steps; ++i) {
         ASSERT_TRUE((*sim)->step(1).ok());
-        const auto xyz = read(**sim, Output::node_positions);
+        const auto xyz = test::read_output(**sim, Output::node_positions);
         tip += std::hypot(xyz[3 * kRodSegments], xyz[3 * kRodSegments + 2]) / average_steps;
-        const auto joint = read(**sim, Output::chain_angles);
+        const auto joint = test::read_output(**sim, Output::chain_angles);
         for (int c = 0; c < detail::kTrunkLinks; ++c)
             angles[size_t(c)] += std::hypot(joint[4 * size_t(c)], joint[4 * size_t(c) + 1]) / average_steps;
     }
@@ -159,7 +143,7 @@ TEST(CoupledLinks, SteadyLoadBendsTheRodLikeTheBeam) {
 /// Displacements from rest of `nodes` every 1/30 s for `seconds`, at time step dt.
 std::vector<double> node_paths(const TreeModel& tree, const std::vector<int32_t>& nodes, double dt,
                                const Wind& wind, int seconds) {
-    SimulationConfig config = coupled_config(dt);
+    SimulationConfig config = test::coupled_config(BackendKind::cpu64, dt);
     config.wind = wind;
     auto sim = Simulation::create(single_tree_scene(tree), config);
     EXPECT_TRUE(sim.ok()) << sim.status().message();
@@ -168,7 +152,7 @@ std::vector<double> node_paths(const TreeModel& tree, const std::vector<int32_t>
     const int per_frame = int(std::lround((1.0 / 30.0) / dt));
     for (int frame = 0; frame < 30 * seconds; ++frame) {
         EXPECT_TRUE((*sim)->step(per_frame).ok());
-        const auto xyz = read(**sim, Output::node_positions);
+        const auto xyz = test::read_output(**sim, Output::node_positions);
         for (int32_t n : nodes)
             for (int k = 0; k < 3; ++k) path.push_back(xyz[3 * size_t(n) + k] - tree.nodes[size_t(n)].position[k]);
     }

@@ -21,24 +21,6 @@
 
 using namespace hmsm;
 
-namespace {
-
-SimulationConfig coupled_config(BackendKind backend = BackendKind::cpu64) {
-    SimulationConfig config;
-    config.backend = backend;
-    config.model.dynamics = Dynamics::coupled;
-    config.outputs = Outputs::joints_and_nodes;
-    return config;
-}
-
-std::vector<double> read(const Simulation& sim, Output output) {
-    std::vector<double> values;
-    Status s = sim.read(output, values);
-    EXPECT_TRUE(s.ok()) << s.message();
-    return values;
-}
-
-}  // namespace
 
 // The tapered-beam constants of a uniform rod: K = 3 E J / L, the Rayleigh frequency within 1%
 // of 1.8751^2 / (2 pi) sqrt(E J / (mu L^4)), the wind moment along the rod's axis.
@@ -100,7 +82,7 @@ TEST(CoupledConstants, ChildrenAreLumpedIntoTheirParent) {
 // A uniform rod released from its wind-bent shape sways at the cantilever's first frequency.
 TEST(Coupled, UniformRodSwaysAtTheCantileverFrequency) {
     const double L = 5.0, r = 0.2;
-    SimulationConfig config = coupled_config();
+    SimulationConfig config = test::coupled_config();
     config.wind.profile = WindProfile::constant;
     config.wind.strength = 100.0;
     auto sim = Simulation::create(single_tree_scene(test::rod(4, L, r)), config);
@@ -112,7 +94,7 @@ TEST(Coupled, UniformRodSwaysAtTheCantileverFrequency) {
     std::vector<double> theta_z;
     for (int i = 0; i < 240; ++i) {
         ASSERT_TRUE((*sim)->step(1).ok());
-        theta_z.push_back(read(**sim, Output::chain_angles)[1]);
+        theta_z.push_back(test::read_output(**sim, Output::chain_angles)[1]);
     }
     const double f0 = detail::uniform_cantilever_frequency(L, r, config.parameters.material);
     EXPECT_NEAR(cli::decay_frequency(theta_z, config.parameters.dt), f0, 0.03 * f0);
@@ -120,7 +102,7 @@ TEST(Coupled, UniformRodSwaysAtTheCantileverFrequency) {
 
 // Without wind, a swaying tree comes to rest: the largest |angle| of each half second shrinks.
 TEST(Coupled, MotionDecaysWithoutWind) {
-    SimulationConfig config = coupled_config();
+    SimulationConfig config = test::coupled_config();
     config.wind.profile = WindProfile::constant;
     config.wind.strength = 20.0;
     auto sim = Simulation::create(single_tree_scene(test::small_tree()), config);
@@ -134,7 +116,7 @@ TEST(Coupled, MotionDecaysWithoutWind) {
         double peak = 0.0;
         for (int i = 0; i < 60; ++i) {
             ASSERT_TRUE((*sim)->step(1).ok());
-            for (double v : read(**sim, Output::chain_angles)) peak = std::max(peak, std::abs(v));
+            for (double v : test::read_output(**sim, Output::chain_angles)) peak = std::max(peak, std::abs(v));
         }
         peaks.push_back(peak);
     }
@@ -145,7 +127,7 @@ TEST(Coupled, MotionDecaysWithoutWind) {
 
 /// The displacement of node `node` from rest, every 1/30 s for three seconds, at time step dt.
 std::vector<double> tip_path(const TreeModel& tree, int node, double dt, const Wind& wind) {
-    SimulationConfig config = coupled_config();
+    SimulationConfig config = test::coupled_config();
     config.parameters.dt = dt;
     config.wind = wind;
     auto sim = Simulation::create(single_tree_scene(tree), config);
@@ -155,7 +137,7 @@ std::vector<double> tip_path(const TreeModel& tree, int node, double dt, const W
     const int per_frame = int(std::lround((1.0 / 30.0) / dt));
     for (int frame = 0; frame < 90; ++frame) {
         EXPECT_TRUE((*sim)->step(per_frame).ok());
-        const auto xyz = read(**sim, Output::node_positions);
+        const auto xyz = test::read_output(**sim, Output::node_positions);
         for (int k = 0; k < 3; ++k) path.push_back(xyz[3 * node + k] - tree.nodes[node].position[k]);
     }
     return path;
@@ -201,7 +183,7 @@ TEST(Coupled, FloatBackendsAgreeWithCpu64) {
     auto grid = grid_scene(*preset, 3, 20.0, 1);
     ASSERT_TRUE(grid.ok());
     const Scene& scene = *grid;
-    SimulationConfig config = coupled_config();
+    SimulationConfig config = test::coupled_config();
     config.wind.profile = WindProfile::turbulent;
     config.wind.strength = 4.0;
     std::vector<std::unique_ptr<Simulation>> sims;
@@ -233,14 +215,14 @@ TEST(Coupled, FloatBackendsAgreeWithCpu64) {
             ASSERT_TRUE(sim->step(250).ok());
         }
     }
-    const auto oracle = read(*sims[0], Output::node_positions);
-    const auto angles = read(*sims[0], Output::chain_angles);
+    const auto oracle = test::read_output(*sims[0], Output::node_positions);
+    const auto angles = test::read_output(*sims[0], Output::chain_angles);
     double scale = 0.0, swing = 0.0;
     for (double v : oracle) scale = std::max(scale, std::abs(v));
     for (size_t i = 0; i < angles.size(); i += 4) swing = std::max({swing, std::abs(angles[i]), std::abs(angles[i + 1])});
     ASSERT_GT(swing, 1e-4);
     for (size_t s = 1; s < sims.size(); ++s) {
-        EXPECT_LT(test::max_abs_difference(read(*sims[s], Output::node_positions), oracle), 1e-5 * scale)
+        EXPECT_LT(test::max_abs_difference(test::read_output(*sims[s], Output::node_positions), oracle), 1e-5 * scale)
             << to_string(sims[s]->backend_kind());
     }
     std::vector<float> serial, threaded;
@@ -267,7 +249,7 @@ TEST(Coupled, BadMaterialsAreRefusedNamingTheValue) {
         {[](Parameters& p) { p.structural_damping = 1e9; }, "structural_damping = 1e+09"},
     };
     for (const Case& c : cases) {
-        SimulationConfig config = coupled_config();
+        SimulationConfig config = test::coupled_config();
         c.set(config.parameters);
         auto sim = Simulation::create(scene, config);
         ASSERT_FALSE(sim.ok()) << c.fragment;

@@ -36,12 +36,6 @@ SimulationConfig windy(BackendKind kind) {
     return config;
 }
 
-std::vector<double> read(const Simulation& sim, Output output) {
-    std::vector<double> values;
-    EXPECT_TRUE(sim.read(output, values).ok());
-    return values;
-}
-
 class LevelSimulation : public ::testing::TestWithParam<BackendKind> {};
 
 TEST_P(LevelSimulation, KeptChainsMoveAsTheWholeModelAndBackendsAgreeWithCpu64) {
@@ -66,7 +60,7 @@ TEST_P(LevelSimulation, KeptChainsMoveAsTheWholeModelAndBackendsAgreeWithCpu64) 
             ASSERT_TRUE(sim->step(150).ok());
             ASSERT_TRUE(oracle->step(150).ok());
         }
-        const auto rotations = read(*sim, Output::chain_rotations);
+        const auto rotations = test::read_output(*sim, Output::chain_rotations);
         const size_t chains = whole.chains.size();
         ASSERT_EQ(rotations.size(), 9 * (chains + 64 + 1));
         double moved = 0.0;
@@ -82,8 +76,8 @@ TEST_P(LevelSimulation, KeptChainsMoveAsTheWholeModelAndBackendsAgreeWithCpu64) 
         if (round == 1) EXPECT_GT(moved, 1e-3) << "the wind must bend the kept chains";
 
         // The level's mesh is the level skin driven by the whole model's kept chains.
-        const auto joints = read(*sim, Output::joint_matrices);
-        const auto vertices = read(*sim, Output::vertex_positions);
+        const auto joints = test::read_output(*sim, Output::joint_matrices);
+        const auto vertices = test::read_output(*sim, Output::vertex_positions);
         std::vector<float> palette;
         for (int32_t source : skin.source_chains)
             for (size_t k = 0; k < 12; ++k) palette.push_back(float(joints[12 * size_t(source) + k]));
@@ -96,7 +90,7 @@ TEST_P(LevelSimulation, KeptChainsMoveAsTheWholeModelAndBackendsAgreeWithCpu64) 
 
         // Every backend agrees with cpu64 on the levels' nodes and vertices.
         for (Output output : {Output::node_positions, Output::vertex_positions}) {
-            const auto got = read(*sim, output), expected = read(*oracle, output);
+            const auto got = test::read_output(*sim, output), expected = test::read_output(*oracle, output);
             ASSERT_EQ(got.size(), expected.size());
             EXPECT_LT(test::max_abs_difference(got, expected), 1e-4 * height) << (output == Output::node_positions ? "nodes" : "vertices");
         }

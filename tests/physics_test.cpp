@@ -23,13 +23,6 @@ std::unique_ptr<Simulation> make(const Scene& scene, SimulationConfig config) {
     return sim.ok() ? std::move(sim).value() : nullptr;
 }
 
-std::vector<double> read(const Simulation& sim, Output output) {
-    std::vector<double> values;
-    Status s = sim.read(output, values);
-    EXPECT_TRUE(s.ok()) << s.message();
-    return values;
-}
-
 }  // namespace
 
 TEST(Physics, RestPoseIsReproducedWithOriginAndYaw) {
@@ -43,7 +36,7 @@ TEST(Physics, RestPoseIsReproducedWithOriginAndYaw) {
     glm::dmat3 ry(glm::rotate(glm::dmat4(1.0), yaw, glm::dvec3(0, 1, 0)));
     for (int steps : {0, 50}) {
         ASSERT_TRUE(sim->step(steps).ok());
-        auto xyz = read(*sim, Output::node_positions);
+        auto xyz = test::read_output(*sim, Output::node_positions);
         ASSERT_EQ(xyz.size(), 3 * tree.nodes.size());
         for (size_t n = 0; n < tree.nodes.size(); ++n) {
             glm::dvec3 expected = origin + ry * tree.nodes[n].position;
@@ -52,7 +45,7 @@ TEST(Physics, RestPoseIsReproducedWithOriginAndYaw) {
         }
     }
     // The mesh at rest is the template moved by the instance transform.
-    auto vertices = read(*sim, Output::vertex_positions);
+    auto vertices = test::read_output(*sim, Output::vertex_positions);
     const Hierarchy& h = sim->hierarchy(0);
     const MeshTemplate& mesh = sim->mesh(0);
     for (size_t v = 0; v < mesh.vertices.size(); ++v) {
@@ -91,7 +84,7 @@ TEST(Physics, SingleChainSettlesOscillatesAndDecaysAnalytically) {
     const int steps = int(6.0 / dt);
     for (int n = 0; n < steps; ++n) {
         ASSERT_TRUE(sim->step(1).ok());
-        auto angles = read(*sim, Output::chain_angles);
+        auto angles = test::read_output(*sim, Output::chain_angles);
         EXPECT_NEAR(angles[0], 0.0, 1e-15);  // theta_x untouched by wind along x
         theta.push_back(angles[1]);
     }
@@ -114,7 +107,7 @@ TEST(Physics, SingleChainSettlesOscillatesAndDecaysAnalytically) {
     EXPECT_NEAR(peaks[2] / peaks[1], expected_ratio, 0.03);
     // After many decay times it rests at the analytic angle.
     ASSERT_TRUE(sim->step(int(40.0 / dt)).ok());
-    auto angles = read(*sim, Output::chain_angles);
+    auto angles = test::read_output(*sim, Output::chain_angles);
     EXPECT_NEAR(angles[1], equilibrium, 1e-6 * std::abs(equilibrium));
     EXPECT_NEAR(equilibrium, -A * config.wind.strength / K, 1e-3 * std::abs(equilibrium));
 }
@@ -128,7 +121,7 @@ TEST(Physics, AnglesAreClampedAtMaxAngle) {
     auto sim = make(single_tree_scene(tree), config);
     ASSERT_TRUE(sim);
     ASSERT_TRUE(sim->step(200).ok());
-    auto angles = read(*sim, Output::chain_angles);
+    auto angles = test::read_output(*sim, Output::chain_angles);
     EXPECT_NEAR(std::abs(angles[1]), 0.3, 1e-15);
 }
 
@@ -147,10 +140,10 @@ TEST(Physics, ChildChainsStayAttachedEveryStep) {
     double largest_angle = 0.0;
     for (int step = 0; step < 120; ++step) {
         ASSERT_TRUE(sim->step(1).ok());
-        auto nodes = read(*sim, Output::node_positions);
-        auto origins = read(*sim, Output::chain_origins);
-        auto vertices = read(*sim, Output::vertex_positions);
-        auto angles = read(*sim, Output::chain_angles);
+        auto nodes = test::read_output(*sim, Output::node_positions);
+        auto origins = test::read_output(*sim, Output::chain_origins);
+        auto vertices = test::read_output(*sim, Output::vertex_positions);
+        auto angles = test::read_output(*sim, Output::chain_angles);
         ASSERT_TRUE(test::all_finite(vertices));
         for (size_t c = 0; c < h.chains.size(); ++c)
             largest_angle = std::max({largest_angle, std::abs(angles[4 * c]), std::abs(angles[4 * c + 1])});
@@ -185,14 +178,14 @@ TEST(Physics, PointerJumpingEqualsSerialComposition) {
     ASSERT_TRUE(level->step(300).ok());
     for (Output o : {Output::chain_rotations, Output::chain_origins, Output::node_positions,
                      Output::vertex_positions}) {
-        auto a = read(*jump, o), b = read(*level, o);
+        auto a = test::read_output(*jump, o), b = test::read_output(*level, o);
         EXPECT_LT(test::max_abs_difference(a, b), 1e-12) << int(o);
     }
     // And R_c equals the serial product of local transforms down the chain path.
     std::vector<double> local(12 * jump->chain_count());
     ASSERT_TRUE(hmsm::detail::backend_of(*jump).read(detail::BufferId::chain_local, 0, jump->chain_count(),
                                      local.data(), detail::Scalar::f64).ok());
-    auto rotations = read(*jump, Output::chain_rotations);
+    auto rotations = test::read_output(*jump, Output::chain_rotations);
     const Hierarchy& h = jump->hierarchy(0);
     auto t = [&](int c) {
         glm::dmat3 m;
@@ -221,10 +214,10 @@ TEST(Physics, FloatAgreesWithDouble) {
     ASSERT_TRUE(single->step(1000).ok());
     ASSERT_TRUE(oracle->step(1000).ok());
     double height = tree_height(tree);
-    EXPECT_LT(test::max_abs_difference(read(*single, Output::node_positions),
-                                       read(*oracle, Output::node_positions)) / height, 1e-4);
-    EXPECT_LT(test::max_abs_difference(read(*single, Output::vertex_positions),
-                                       read(*oracle, Output::vertex_positions)) / height, 1e-4);
+    EXPECT_LT(test::max_abs_difference(test::read_output(*single, Output::node_positions),
+                                       test::read_output(*oracle, Output::node_positions)) / height, 1e-4);
+    EXPECT_LT(test::max_abs_difference(test::read_output(*single, Output::vertex_positions),
+                                       test::read_output(*oracle, Output::vertex_positions)) / height, 1e-4);
 }
 
 TEST(Simulation, RejectsBadConfigurationWithANamedError) {

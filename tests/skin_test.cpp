@@ -20,13 +20,6 @@ using namespace hmsm;
 
 namespace {
 
-std::vector<double> read_output(const Simulation& sim, Output output) {
-    std::vector<double> values;
-    Status s = sim.read(output, values);
-    EXPECT_TRUE(s.ok()) << s.message();
-    return values;
-}
-
 double scene_height(const Scene& scene) {
     double h = 0.0;
     for (const TreeModel& m : scene.models) h = std::max(h, tree_height(m));
@@ -108,9 +101,9 @@ TEST_P(Joints, JointMatricesAreRotationsAndOriginsInEveryComposition) {
         ASSERT_TRUE(sim && oracle);
         ASSERT_TRUE(sim->step(150).ok());
         ASSERT_TRUE(oracle->step(150).ok());
-        auto joints = read_output(*sim, Output::joint_matrices);
-        auto rotations = read_output(*sim, Output::chain_rotations);
-        auto origins = read_output(*sim, Output::chain_origins);
+        auto joints = test::read_output(*sim, Output::joint_matrices);
+        auto rotations = test::read_output(*sim, Output::chain_rotations);
+        auto origins = test::read_output(*sim, Output::chain_origins);
         ASSERT_EQ(joints.size(), 12 * sim->chain_count());
         for (uint64_t c = 0; c < sim->chain_count(); ++c) {
             for (int i = 0; i < 3; ++i) {
@@ -119,11 +112,11 @@ TEST_P(Joints, JointMatricesAreRotationsAndOriginsInEveryComposition) {
                 ASSERT_EQ(joints[12 * c + 4 * i + 3], origins[3 * c + i]) << "chain " << c;
             }
         }
-        auto expected = read_output(*oracle, Output::joint_matrices);
+        auto expected = test::read_output(*oracle, Output::joint_matrices);
         EXPECT_LE(test::max_abs_difference(joints, expected) / std::max(1.0, height), 1e-4);
         // The pose moved away from rest.
         auto rest = test::create_simulation_or_skip(scene, config, BackendKind::cpu64, skip);
-        EXPECT_GT(test::max_abs_difference(read_output(*rest, Output::joint_matrices), expected), 1e-3);
+        EXPECT_GT(test::max_abs_difference(test::read_output(*rest, Output::joint_matrices), expected), 1e-3);
     }
 }
 
@@ -142,11 +135,11 @@ TEST_P(Joints, SkinnedVerticesEqualContourVertices) {
         ASSERT_TRUE(sim);
         ASSERT_TRUE(sim->step(200).ok());
         std::vector<double> positions, normals;
-        skin_on_cpu(*sim, read_output(*sim, Output::joint_matrices), positions, normals);
-        auto contour = read_output(*sim, Output::vertex_positions);
+        skin_on_cpu(*sim, test::read_output(*sim, Output::joint_matrices), positions, normals);
+        auto contour = test::read_output(*sim, Output::vertex_positions);
         ASSERT_EQ(positions.size(), contour.size());
         EXPECT_LE(test::max_abs_difference(positions, contour) / height, 1e-5);
-        EXPECT_LE(test::max_abs_difference(normals, read_output(*sim, Output::vertex_normals)), 1e-4);
+        EXPECT_LE(test::max_abs_difference(normals, test::read_output(*sim, Output::vertex_normals)), 1e-4);
     }
 }
 
@@ -176,13 +169,13 @@ TEST_P(Joints, OutputsOnDemandSkipPassesAndKeepTheJoints) {
         EXPECT_FALSE(has_contour);
         EXPECT_EQ(has_node_world, outputs == Outputs::joints_and_nodes);
         EXPECT_EQ(detail::scene_data_of(*sim).element_count(detail::BufferId::vertex_position), 0u);
-        EXPECT_EQ(read_output(*sim, Output::joint_matrices), read_output(*all, Output::joint_matrices));
+        EXPECT_EQ(test::read_output(*sim, Output::joint_matrices), test::read_output(*all, Output::joint_matrices));
         std::vector<float> values;
         Status refused = sim->read(Output::vertex_positions, values);
         EXPECT_EQ(refused.code(), ErrorCode::invalid_argument);
         EXPECT_NE(refused.message().find("vertex_positions"), std::string::npos) << refused.message();
         if (outputs == Outputs::joints_and_nodes) {
-            EXPECT_EQ(read_output(*sim, Output::node_positions), read_output(*all, Output::node_positions));
+            EXPECT_EQ(test::read_output(*sim, Output::node_positions), test::read_output(*all, Output::node_positions));
         } else {
             EXPECT_EQ(sim->read(Output::node_positions, values).code(), ErrorCode::invalid_argument);
         }
@@ -206,7 +199,7 @@ TEST(Skin, BindPoseIsTheRestPose) {
     SkinTemplate skin = build_skin(tree, s.hierarchy(0), s.mesh(0), config.model);
     ASSERT_EQ(skin.vertices.size(), s.mesh(0).vertices.size());
     ASSERT_EQ(skin.inverse_bind.size(), s.hierarchy(0).chains.size());
-    auto joints = read_output(s, Output::joint_matrices);
+    auto joints = test::read_output(s, Output::joint_matrices);
     for (size_t c = 0; c < skin.bind.size(); ++c) {
         for (int k = 0; k < 12; ++k) EXPECT_NEAR(joints[12 * c + k], skin.bind[c][k], 1e-12) << c;
         // inverse_bind * bind = identity
@@ -218,8 +211,8 @@ TEST(Skin, BindPoseIsTheRestPose) {
                 EXPECT_NEAR(v, i == j ? 1.0 : 0.0, 1e-12);
             }
     }
-    auto rest = read_output(s, Output::vertex_positions);
-    auto rest_normals = read_output(s, Output::vertex_normals);
+    auto rest = test::read_output(s, Output::vertex_positions);
+    auto rest_normals = test::read_output(s, Output::vertex_normals);
     uint32_t two_joint = 0;
     for (size_t v = 0; v < skin.vertices.size(); ++v) {
         const SkinVertex& sv = skin.vertices[v];

@@ -120,6 +120,13 @@ std::vector<std::vector<float>> every_output(const Simulation& sim) {
     return out;
 }
 
+std::vector<double> read_output(const Simulation& sim, Output output) {
+    std::vector<double> values;
+    const Status read = sim.read(output, values);
+    EXPECT_TRUE(read.ok()) << "output " << int(output) << ": " << read.message();
+    return values;
+}
+
 std::vector<uint64_t> first_elements(const Simulation& sim, Output output) {
     std::vector<uint64_t> first{0};
     for (const Instance& inst : sim.instances()) {

@@ -75,6 +75,18 @@ bool same_bits(const std::vector<std::vector<T>>& a, const std::vector<std::vect
 
 /// Every output of kEveryOutput, as float, one vector per output; a failed read fails the test.
 std::vector<std::vector<float>> every_output(const Simulation& sim);
+/// One output as double; a failed read fails the test.
+std::vector<double> read_output(const Simulation& sim, Output output);
+
+/// The coupled dynamics on `backend` with joints and nodes out, at time step dt.
+inline SimulationConfig coupled_config(BackendKind backend = BackendKind::cpu64, double dt = 1.0 / 120.0) {
+    SimulationConfig config;
+    config.backend = backend;
+    config.model.dynamics = Dynamics::coupled;
+    config.outputs = Outputs::joints_and_nodes;
+    config.parameters.dt = dt;
+    return config;
+}
 
 /// Per instance, the index of its first element of `output` (a node, vertex or chain), and one
 /// past the last instance's: instance i owns elements first[i] up to first[i + 1].
