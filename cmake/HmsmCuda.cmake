@@ -21,6 +21,7 @@ add_library(hmsm_cuda_objects OBJECT
   src/cuda/host_slot.cpp
   src/cuda/cuda_interop.cpp
   src/cuda/launch_dispatch.cpp
+  src/cuda/launch_plan.cpp
   src/cuda/step_graph.cpp)
 set_target_properties(hmsm_cuda_objects PROPERTIES
   CUDA_STANDARD 17 CUDA_STANDARD_REQUIRED ON

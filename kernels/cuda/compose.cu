@@ -115,4 +115,54 @@ cudaError_t launch_compose(const BufferPointers& b, const gpu::PassConstants& pc
 
 void emulate_compose(const BufferPointers& b, const gpu::PassConstants& pc) { emulate<compose_pass>(b, pc); }
 
+namespace {
+
+/// The items of the walk kinds in a batched launch: the loop bodies of walk_kernel (whose
+/// records kernel's first-chain prefetch only moves loads earlier) and walk_ahead_kernel.
+template <bool kFromRecords>
+struct PoseWalkItems {
+    using Index = uint32_t;
+    static HMSM_HOST_DEVICE Index count(const gpu::PassConstants& pc) { return pc.element_count; }
+    static HMSM_HOST_DEVICE void item(const BufferPointers& b, const gpu::PassConstants& pc, Index i) {
+        const Element e = element_of(i, pc.model_chain_count);
+        if (!instance_paused(b, pc, e.instance)) path_walk<kFromRecords>(b, pc, e.instance, int32_t(e.index));
+    }
+};
+template <bool kTopPoses>
+struct WalkAheadItems {
+    using Index = uint32_t;
+    static HMSM_HOST_DEVICE Index count(const gpu::PassConstants& pc) { return pc.element_count; }
+    static HMSM_HOST_DEVICE void item(const BufferPointers& b, const gpu::PassConstants& pc, Index i) {
+        const Element e = element_of(i, kTopPoses ? pc.level_count : pc.model_chain_count);
+        if constexpr (kTopPoses) walk_top_pose(b, pc, e.instance, int32_t(e.index));
+        else walk_ahead(b, pc, e.instance, int32_t(e.index));
+    }
+};
+
+}  // namespace
+
+cudaError_t launch_batch_compose(const BufferPointers& b, const BatchLaunch& batch, const BatchShape& shape,
+                                 cudaStream_t stream) {
+    constexpr unsigned kThreads = HMSM_WORKGROUP_SIZE;
+    switch (shape.kind) {
+        case HMSM_DISPATCH_POSE_WALK_FROM_RECORDS:
+            return launch_batch_items<PoseWalkItems<true>, kThreads>(b, batch, shape, stream);
+        case HMSM_DISPATCH_POSE_WALK: return launch_batch_items<PoseWalkItems<false>, kThreads>(b, batch, shape, stream);
+        case HMSM_DISPATCH_WALK_TOP_POSES:
+            return launch_batch_items<WalkAheadItems<true>, kThreads>(b, batch, shape, stream);
+        case HMSM_DISPATCH_WALK_AHEAD: return launch_batch_items<WalkAheadItems<false>, kThreads>(b, batch, shape, stream);
+        default: return launch_batch<compose_pass>(b, batch, shape, stream);
+    }
+}
+
+void emulate_batch_compose(const BufferPointers& b, const BatchLaunch& batch, const BatchShape& shape) {
+    switch (shape.kind) {
+        case HMSM_DISPATCH_POSE_WALK_FROM_RECORDS: return emulate_batch_items<PoseWalkItems<true>>(b, batch, shape.threads);
+        case HMSM_DISPATCH_POSE_WALK: return emulate_batch_items<PoseWalkItems<false>>(b, batch, shape.threads);
+        case HMSM_DISPATCH_WALK_TOP_POSES: return emulate_batch_items<WalkAheadItems<true>>(b, batch, shape.threads);
+        case HMSM_DISPATCH_WALK_AHEAD: return emulate_batch_items<WalkAheadItems<false>>(b, batch, shape.threads);
+        default: return emulate_batch<compose_pass>(b, batch, shape);
+    }
+}
+
 }  // namespace hmsm::detail::cuda

@@ -132,6 +132,18 @@ struct contour_pass {
     HMSM_CUDA_PASS_ELEMENT(contour)
 };
 
+/// The packed layout's items in a batched launch (contour_packed_kernel's loop body).
+struct PackedContourItems {
+    using Index = uint64_t;
+    static HMSM_HOST_DEVICE Index count(const gpu::PassConstants& pc) { return gpu::packed_contour_threads(pc); }
+    static HMSM_HOST_DEVICE void item(const BufferPointers& b, const gpu::PassConstants& pc, Index w) {
+        contour_packed_item(b, pc, w);
+    }
+};
+
+/// Threads of a separate-layout contour block (launch_contour says why).
+constexpr unsigned kSeparateThreads = 256;
+
 }  // namespace
 
 cudaError_t launch_contour(const BufferPointers& b, const gpu::PassConstants& pc, cudaStream_t stream) {
@@ -140,7 +152,7 @@ cudaError_t launch_contour(const BufferPointers& b, const gpu::PassConstants& pc
     if (pc.kind != HMSM_DISPATCH_CONTOUR_PACKED) {
         // Blocks of 256: a quarter of the blocks to schedule and drain (measured faster for one tree
         // and for forests: docs/benchmarks/history/2026-11-26-nvidia-h100-45f6584.md, analysis).
-        constexpr unsigned kThreads = 256;
+        constexpr unsigned kThreads = kSeparateThreads;
         auto* kernel = may_pause ? contour_separate_kernel<kThreads, true> : contour_separate_kernel<kThreads, false>;
         return launch_pass(kernel, launch_blocks(pc.element_count, kThreads), kThreads, stream, b, pc);
     }
@@ -156,6 +168,21 @@ void emulate_contour(const BufferPointers& b, const gpu::PassConstants& pc) {
     if (pc.element_count == 0) return;
     if (pc.kind != HMSM_DISPATCH_CONTOUR_PACKED) return emulate<contour_pass>(b, pc);
     for (uint64_t w = 0; w < gpu::packed_contour_threads(pc); ++w) contour_packed_item(b, pc, w);
+}
+
+/// A batch in either layout: the separate layout's items are contour_element, its kernel's
+/// loop body (whose first-vertex prefetch only moves loads earlier), in blocks of 256 threads
+/// (launch_plan.cpp plans them so).
+cudaError_t launch_batch_contour(const BufferPointers& b, const BatchLaunch& batch, const BatchShape& shape,
+                                 cudaStream_t stream) {
+    if (shape.kind == HMSM_DISPATCH_CONTOUR_PACKED)
+        return launch_batch_items<PackedContourItems, HMSM_WORKGROUP_SIZE>(b, batch, shape, stream);
+    return launch_batch_items<ElementItems<contour_pass>, kSeparateThreads>(b, batch, shape, stream);
+}
+
+void emulate_batch_contour(const BufferPointers& b, const BatchLaunch& batch, const BatchShape& shape) {
+    if (shape.kind == HMSM_DISPATCH_CONTOUR_PACKED) return emulate_batch_items<PackedContourItems>(b, batch, shape.threads);
+    emulate_batch_items<ElementItems<contour_pass>>(b, batch, shape.threads);
 }
 
 }  // namespace hmsm::detail::cuda

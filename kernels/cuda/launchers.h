@@ -1,11 +1,12 @@
 // Host entry points of the seven CUDA passes (kernels/cuda/NAME.cu, one per pass).
 //
 // Every pass kernel has the same two parameters, passed by value: the device pointers of all
-// buffers (BufferPointers) and the dispatch's PassConstants. A launcher enqueues its kernel on
-// `stream` over pc.element_count threads (blocks of HMSM_WORKGROUP_SIZE, a grid-stride loop
-// beyond the grid) and returns the launch error, if any. Because the signature is uniform, a
-// captured kernel node can be re-parameterized generically (the step graph only changes the
-// wind_force constants between replays; see src/cuda/step_graph.h).
+// buffers (BufferPointers) and the dispatch's PassConstants, or for a batched launch (a run of
+// dispatches over different groups in one launch, src/common/batch_index.h) its BatchLaunch. A
+// launcher enqueues its kernel on `stream` over pc.element_count threads (blocks of
+// HMSM_WORKGROUP_SIZE, a grid-stride loop beyond the grid) and returns the launch error, if any.
+// Because the signatures are uniform, a captured kernel node can be re-parameterized generically
+// (the step graph only changes the wind slot between replays; see src/cuda/step_graph.h).
 //
 // emulate_NAME runs the same per-element code serially on the host over host memory laid out
 // exactly like the device buffers; tests use it to check the kernel bodies on machines without
@@ -13,6 +14,7 @@
 #pragma once
 
 #include "../../src/buffers.h"
+#include "../../src/common/batch_index.h"
 #include "../../src/common/gpu_layout.h"
 
 #include <hmsm/pass.h>
@@ -41,10 +43,27 @@ struct BufferPointers {
     float4* chain_state_next = nullptr;
 };
 
-#define HMSM_CUDA_DECLARE_PASS(name)                                                         \
-    cudaError_t launch_##name(const BufferPointers& buffers, const gpu::PassConstants& pc, \
-                              cudaStream_t stream);                                         \
-    void emulate_##name(const BufferPointers& host_buffers, const gpu::PassConstants& pc);
+/// How a batched launch (src/common/batch_index.h) runs: the kind of every entry, the threads of
+/// a block, the blocks of the grid (the last block prefix), and whether some entry covers paused
+/// instances (the kernel variant with the check; src/cuda/launch_plan.h plans them).
+struct BatchShape {
+    uint32_t kind = 0;
+    uint32_t threads = HMSM_WORKGROUP_SIZE;
+    uint32_t blocks = 0;
+    bool may_pause = false;
+};
+
+/// launch_batch_NAME enqueues one launch of a batch of dispatches of pass NAME (`batch` holds
+/// device pointers); emulate_batch_NAME runs it on the host (`batch` holds host pointers), block
+/// by block through the same entry search.
+#define HMSM_CUDA_DECLARE_PASS(name)                                                                    \
+    cudaError_t launch_##name(const BufferPointers& buffers, const gpu::PassConstants& pc,            \
+                              cudaStream_t stream);                                                    \
+    void emulate_##name(const BufferPointers& host_buffers, const gpu::PassConstants& pc);            \
+    cudaError_t launch_batch_##name(const BufferPointers& buffers, const BatchLaunch& batch,           \
+                                    const BatchShape& shape, cudaStream_t stream);                     \
+    void emulate_batch_##name(const BufferPointers& host_buffers, const BatchLaunch& batch,            \
+                              const BatchShape& shape);
 HMSM_PASSES(HMSM_CUDA_DECLARE_PASS)
 #undef HMSM_CUDA_DECLARE_PASS
 

@@ -148,9 +148,10 @@ __device__ __forceinline__ void prefetch_l1(const void* p) {
 /// measuring what it brings); read once.
 bool programmatic_launch_enabled();
 
-template <class Kernel>
+/// `Params`: the kernel's second parameter, a dispatch's PassConstants or a batch's BatchLaunch.
+template <class Kernel, class Params>
 cudaError_t launch_pass(Kernel kernel, unsigned blocks, unsigned threads, cudaStream_t stream,
-                        const BufferPointers& b, const gpu::PassConstants& pc, size_t shared_bytes = 0) {
+                        const BufferPointers& b, const Params& pc, size_t shared_bytes = 0) {
     if (!programmatic_launch_enabled()) {
         kernel<<<blocks, threads, shared_bytes, stream>>>(b, pc);
         return cudaGetLastError();
@@ -187,12 +188,14 @@ inline unsigned launch_blocks(uint32_t n, uint32_t threads = HMSM_WORKGROUP_SIZE
     return blocks < max_blocks ? blocks : max_blocks;
 }
 
-/// In-dispatch pointer jumping (compose, root_positions): block k runs every round for group
-/// instance k (and k + gridDim.x, ...), calling jump(k, chain, round, src_half, dst_half) for
-/// each of the instance's chains, with __syncthreads() between rounds.
+/// In-dispatch pointer jumping (compose, root_positions): block `block` of a grid of `blocks`
+/// runs every round for group instance `block` (and block + blocks, ...), calling jump(k, chain,
+/// round, src_half, dst_half) for each of the instance's chains, with __syncthreads() between
+/// rounds.
 template <class Jump>
-__device__ void run_rounds_in_block(const BufferPointers& b, const gpu::PassConstants& pc, Jump jump) {
-    for (uint32_t k = blockIdx.x; k < dispatch_instances(pc); k += gridDim.x) {
+__device__ void run_rounds_in_block(const BufferPointers& b, const gpu::PassConstants& pc, uint32_t block,
+                                    uint32_t blocks, Jump jump) {
+    for (uint32_t k = block; k < dispatch_instances(pc); k += blocks) {
         if (instance_paused(b, pc, k)) continue;  // the whole block: its barriers stay uniform
         for (uint32_t round = 0; round < pc.round; ++round) {
             for (uint32_t c = threadIdx.x; c < pc.model_chain_count; c += blockDim.x)
@@ -256,9 +259,10 @@ static __global__ void __launch_bounds__(HMSM_MAX_ROUNDS_WORKGROUP_SIZE)
     rounds_kernel(const BufferPointers b, const gpu::PassConstants pc_in) {
     begin_pass();
     const gpu::PassConstants pc = constants_for<kMayPause>(pc_in);
-    run_rounds_in_block(b, pc, [&](uint32_t k, uint32_t c, uint32_t round, uint32_t src, uint32_t dst) {
-        P::template jump<true>(b, pc, k, c, round, src, dst);
-    });
+    run_rounds_in_block(b, pc, blockIdx.x, gridDim.x,
+                        [&](uint32_t k, uint32_t c, uint32_t round, uint32_t src, uint32_t dst) {
+                            P::template jump<true>(b, pc, k, c, round, src, dst);
+                        });
 }
 
 /// launch_NAME: an empty dispatch launches nothing; in-dispatch rounds take one block per
@@ -293,6 +297,108 @@ void emulate(const BufferPointers& b, const gpu::PassConstants& pc) {
     for (uint32_t i = 0; i < pc.element_count; ++i) P::element(b, pc, i);
 }
 
+// --- batched launches (src/common/batch_index.h) ----------------------------------------
+// A run of dispatches over different groups in one launch: block blockIdx.x finds its entry,
+// loads the entry's constants (static during the step: read before begin_pass's wait) and runs
+// the loop of the entry's own launch as block `block` of a grid of `blocks`: the same thread ->
+// item mapping, the same per-item code, so every result is bit for bit the single launch's.
+// The work of a dispatch is a count of items and the code of item i (Items::count, Items::item;
+// Items::Index the loop's index type, as in the kernel of the dispatch's own launch).
+
+/// The items of a per-element dispatch: element i runs P::element.
+template <class P>
+struct ElementItems {
+    using Index = uint32_t;
+    static HMSM_HOST_DEVICE Index count(const gpu::PassConstants& pc) { return pc.element_count; }
+    static HMSM_HOST_DEVICE void item(const BufferPointers& b, const gpu::PassConstants& pc, Index i) {
+        P::element(b, pc, i);
+    }
+};
+
+/// kMayPause: some entry covers paused instances; each entry keeps its own params.w, so an
+/// entry without paused instances skips none, as in its own launch.
+template <class Items, unsigned kThreads, bool kMayPause>
+static __global__ void __launch_bounds__(kThreads)
+    batch_kernel(const BufferPointers b, const BatchLaunch batch) {
+    const BatchBlock block = batch_block(batch.block_begin, batch.entries, blockIdx.x);
+    const gpu::PassConstants pc = constants_for<kMayPause>(batch_constants(batch, block.entry));
+    begin_pass();
+    using Index = typename Items::Index;
+    const Index count = Items::count(pc);
+    for (Index i = Index(block.block) * blockDim.x + threadIdx.x; i < count; i += Index(block.blocks) * blockDim.x)
+        Items::item(b, pc, i);
+}
+
+/// JUMP_ROUNDS_IN_DISPATCH entries, one block per instance (blocks of the launch's size, the
+/// rounds_workgroup_size every entry of the launch shares: launch_plan.cpp).
+template <class P, bool kMayPause>
+static __global__ void __launch_bounds__(HMSM_MAX_ROUNDS_WORKGROUP_SIZE)
+    batch_rounds_kernel(const BufferPointers b, const BatchLaunch batch) {
+    const BatchBlock block = batch_block(batch.block_begin, batch.entries, blockIdx.x);
+    const gpu::PassConstants pc = constants_for<kMayPause>(batch_constants(batch, block.entry));
+    begin_pass();
+    run_rounds_in_block(b, pc, block.block, block.blocks,
+                        [&](uint32_t k, uint32_t c, uint32_t round, uint32_t src, uint32_t dst) {
+                            P::template jump<true>(b, pc, k, c, round, src, dst);
+                        });
+}
+
+template <class Items, unsigned kThreads>
+cudaError_t launch_batch_items(const BufferPointers& b, const BatchLaunch& batch, const BatchShape& shape,
+                               cudaStream_t stream) {
+    if (shape.blocks == 0) return cudaSuccess;
+    return launch_pass(shape.may_pause ? batch_kernel<Items, kThreads, true> : batch_kernel<Items, kThreads, false>,
+                       shape.blocks, kThreads, stream, b, batch);
+}
+
+/// The same on the host: block after block, thread after thread, through the same entry search.
+template <class Items>
+void emulate_batch_items(const BufferPointers& b, const BatchLaunch& batch, uint32_t threads) {
+    using Index = typename Items::Index;
+    for (uint32_t g = 0; g < batch.block_begin[batch.entries]; ++g) {
+        const BatchBlock block = batch_block(batch.block_begin, batch.entries, g);
+        const gpu::PassConstants pc = batch_constants(batch, block.entry);
+        for (uint32_t t = 0; t < threads; ++t)
+            for (Index i = Index(block.block) * threads + t; i < Items::count(pc); i += Index(block.blocks) * threads)
+                Items::item(b, pc, i);
+    }
+}
+
+/// launch_batch_NAME: in-dispatch rounds take the rounds kernel, everything else per-element
+/// blocks of HMSM_WORKGROUP_SIZE.
+template <class P>
+cudaError_t launch_batch(const BufferPointers& b, const BatchLaunch& batch, const BatchShape& shape,
+                         cudaStream_t stream) {
+    if constexpr (P::kRounds) {
+        if (shape.kind == HMSM_DISPATCH_JUMP_ROUNDS_IN_DISPATCH) {
+            if (shape.blocks == 0) return cudaSuccess;
+            return launch_pass(shape.may_pause ? batch_rounds_kernel<P, true> : batch_rounds_kernel<P, false>,
+                               shape.blocks, shape.threads, stream, b, batch);
+        }
+    }
+    return launch_batch_items<ElementItems<P>, HMSM_WORKGROUP_SIZE>(b, batch, shape, stream);
+}
+
+template <class P>
+void emulate_batch(const BufferPointers& b, const BatchLaunch& batch, const BatchShape& shape) {
+    if constexpr (P::kRounds) {
+        if (shape.kind == HMSM_DISPATCH_JUMP_ROUNDS_IN_DISPATCH) {
+            for (uint32_t g = 0; g < batch.block_begin[batch.entries]; ++g) {
+                const BatchBlock block = batch_block(batch.block_begin, batch.entries, g);
+                const gpu::PassConstants pc = batch_constants(batch, block.entry);
+                for (uint32_t k = block.block; k < dispatch_instances(pc); k += block.blocks) {
+                    if (instance_paused(b, pc, k)) continue;
+                    for (uint32_t round = 0; round < pc.round; ++round)
+                        for (uint32_t c = 0; c < pc.model_chain_count; ++c)
+                            P::template jump<false>(b, pc, k, c, round, HMSM_HALF_READ(round), HMSM_HALF_WRITTEN(round));
+                }
+            }
+            return;
+        }
+    }
+    emulate_batch_items<ElementItems<P>>(b, batch, shape.threads);
+}
+
 #define HMSM_CUDA_PASS_ELEMENT(name)                                                             \
     static HMSM_HOST_DEVICE void element(const BufferPointers& b, const gpu::PassConstants& pc, \
                                          uint32_t i) {                                           \
@@ -305,6 +411,13 @@ void emulate(const BufferPointers& b, const gpu::PassConstants& pc) {
     }                                                                                            \
     void emulate_##name(const BufferPointers& b, const gpu::PassConstants& pc) {                 \
         emulate<name##_pass>(b, pc);                                                             \
+    }                                                                                            \
+    cudaError_t launch_batch_##name(const BufferPointers& b, const BatchLaunch& batch,           \
+                                    const BatchShape& shape, cudaStream_t stream) {              \
+        return launch_batch<name##_pass>(b, batch, shape, stream);                               \
+    }                                                                                            \
+    void emulate_batch_##name(const BufferPointers& b, const BatchLaunch& batch, const BatchShape& shape) { \
+        emulate_batch<name##_pass>(b, batch, shape);                                             \
     }
 
 /// The last line of a pass file whose threads each handle one element: NAME_element is all

@@ -32,6 +32,7 @@ Result<std::unique_ptr<Backend>> CudaBackend::create() {
     auto backend = std::unique_ptr<CudaBackend>(new CudaBackend(device, properties.name, stream));
     const char* ahead = std::getenv("HMSM_CUDA_WALK_AHEAD");
     backend->walk_ahead_ = !(ahead && std::string_view(ahead) == "0");
+    backend->batch_runs_ = batch_runs_enabled();
     return std::unique_ptr<Backend>(std::move(backend));
 }
 
@@ -134,7 +135,7 @@ Result<StepGraph*> CudaBackend::graph_for(std::span<const Dispatch> program) {
         }
         if (graph_used_[i] < graph_used_[oldest]) oldest = i;
     }
-    HMSM_TRY(graphs_[oldest].capture(program, buffers_.pointers(), stream_));
+    HMSM_TRY(graphs_[oldest].capture(program, buffers_.pointers(), batch_runs_, stream_));
     graph_used_[oldest] = ++graph_clock_;
     return &graphs_[oldest];
 }
@@ -175,21 +176,28 @@ Status CudaBackend::run(std::span<const Dispatch> program, std::span<const RunSt
 }
 
 Status CudaBackend::run_profiled(std::span<const Dispatch> program, uint32_t slot) {
-    while (events_.size() < program.size() + 1) {
+    if (!same_dispatches(program, profiled_program_) || profiled_plan_.launches.empty()) {
+        profiled_program_.assign(program.begin(), program.end());
+        profiled_plan_ = plan_launches(profiled_program_, batch_runs_, max_launch_blocks());
+        HMSM_TRY(profiled_table_.upload(profiled_plan_, stream_));
+    }
+    const std::vector<PlannedLaunch>& launches = profiled_plan_.launches;
+    while (events_.size() < launches.size() + 1) {
         cudaEvent_t event = nullptr;
         CUDA_TRY(cudaEventCreate(&event));
         events_.push_back(event);
     }
     CUDA_TRY(cudaEventRecord(events_[0], stream_));
-    for (size_t j = 0; j < program.size(); ++j) {
-        CUDA_TRY(launch_dispatch(program[j], buffers_.pointers(), slot, stream_));
+    for (size_t j = 0; j < launches.size(); ++j) {
+        CUDA_TRY(enqueue_launch(profiled_plan_, launches[j], profiled_program_, profiled_table_, buffers_.pointers(),
+                                slot, stream_));
         CUDA_TRY(cudaEventRecord(events_[j + 1], stream_));
     }
-    CUDA_TRY(cudaEventSynchronize(events_[program.size()]));
-    for (size_t j = 0; j < program.size(); ++j) {
+    CUDA_TRY(cudaEventSynchronize(events_[launches.size()]));
+    for (size_t j = 0; j < launches.size(); ++j) {
         float milliseconds = 0.0f;
         CUDA_TRY(cudaEventElapsedTime(&milliseconds, events_[j], events_[j + 1]));
-        times_.seconds[uint32_t(program[j].pass)] += 1e-3 * double(milliseconds);
+        times_.seconds[uint32_t(launches[j].pass)] += 1e-3 * double(milliseconds);
     }
     return {};
 }

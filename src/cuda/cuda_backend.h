@@ -7,6 +7,7 @@
 #include "../backend.h"
 #include "../step_program.h"
 #include "device_buffers.h"
+#include "launch_plan.h"
 #include "step_graph.h"
 
 #include <array>
@@ -25,7 +26,8 @@ public:
     std::string device_name() const override { return device_name_; }
     Status upload(const SceneData& scene) override;
     /// Without profiling, each step is one replay of a captured step graph (captured on the
-    /// first run() of a program); with profiling, the dispatches are launched one by one
+    /// first run() of a program); with profiling, the launches (launch_plan.h: a run of
+    /// dispatches over different groups is one batched launch) are enqueued one by one
     /// between events and every step is timed. A program of the walk that integrates ahead
     /// runs each step as `ahead` says (cuda_backend.cpp).
     Status run(std::span<const Dispatch> program, std::span<const RunStep> steps) override;
@@ -87,6 +89,13 @@ private:
     std::array<uint64_t, 6> graph_used_{};
     uint64_t graph_clock_ = 0;
     bool walk_ahead_ = true;
+    /// Runs of dispatches over different groups are batched (launch_plan.h) unless
+    /// HMSM_CUDA_BATCH_RUNS=0 (read when the backend is created).
+    bool batch_runs_ = true;
+    /// Profiling: the program last profiled, its launches and their table.
+    std::vector<Dispatch> profiled_program_;
+    LaunchPlan profiled_plan_;
+    LaunchTable profiled_table_;
     /// The last program of the walk ahead that ran, and what its steps run instead where they
     /// take the angles integrated ahead or walk plain: derived once per program.
     AheadVariants ahead_;

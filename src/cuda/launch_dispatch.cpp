@@ -52,4 +52,24 @@ void emulate_dispatch(const Dispatch& dispatch, const BufferPointers& host_buffe
     }
 }
 
+cudaError_t launch_batch(Pass pass, const BufferPointers& buffers, const BatchLaunch& batch,
+                         const BatchShape& shape, cudaStream_t stream) {
+    switch (pass) {
+#define HMSM_CUDA_LAUNCH_BATCH_CASE(name) \
+    case Pass::name: return launch_batch_##name(buffers, batch, shape, stream);
+        HMSM_PASSES(HMSM_CUDA_LAUNCH_BATCH_CASE)
+#undef HMSM_CUDA_LAUNCH_BATCH_CASE
+    }
+    return cudaErrorInvalidValue;
+}
+
+void emulate_batch(Pass pass, const BufferPointers& host_buffers, const BatchLaunch& batch, const BatchShape& shape) {
+    switch (pass) {
+#define HMSM_CUDA_EMULATE_BATCH_CASE(name) \
+    case Pass::name: emulate_batch_##name(host_buffers, batch, shape); return;
+        HMSM_PASSES(HMSM_CUDA_EMULATE_BATCH_CASE)
+#undef HMSM_CUDA_EMULATE_BATCH_CASE
+    }
+}
+
 }  // namespace hmsm::detail::cuda

@@ -2,6 +2,7 @@
 
 #include "cuda_error.h"
 #include "launch_dispatch.h"
+#include "launch_plan.h"
 
 #include <algorithm>
 #include <cstring>
@@ -29,10 +30,9 @@ cudaError_t last_captured_node(cudaStream_t stream, cudaGraphNode_t* node) {
 
 bool same_bytes(const void* a, const void* b, size_t n) { return std::memcmp(a, b, n) == 0; }
 
-/// Whether dispatch y must wait for dispatch x: one writes a buffer the other reads or writes.
-bool depends(const Dispatch& x, const Dispatch& y) {
-    return ((dispatch_writes(x) & (dispatch_reads(y) | dispatch_writes(y))) |
-            (dispatch_reads(x) & dispatch_writes(y))) != 0;
+/// Whether launch y must wait for launch x: one writes a buffer the other reads or writes.
+bool depends(const PlannedLaunch& x, const PlannedLaunch& y) {
+    return ((x.writes & (y.reads | y.writes)) | (x.reads & y.writes)) != 0;
 }
 
 /// Events and the side stream of one capture, released on every path.
@@ -73,38 +73,47 @@ void StepGraph::release() {
     graph_ = nullptr;
     wind_nodes_.clear();
     program_.clear();
+    plan_ = {};
 }
 
 bool StepGraph::matches(std::span<const Dispatch> program, const BufferPointers& buffers) const {
     return exec_ && same_bytes(&buffers, &buffers_, sizeof buffers) && same_dispatches(program, program_);
 }
 
-Status StepGraph::capture(std::span<const Dispatch> program, const BufferPointers& buffers,
+Status StepGraph::capture(std::span<const Dispatch> program, const BufferPointers& buffers, bool batch_runs,
                           cudaStream_t stream) {
     release();
-    // A dispatch that does not depend on the one before it (the path walk's node pair and contour,
-    // both reading only the joint matrices) runs beside it: the graph forks after the dispatch
+    program_.assign(program.begin(), program.end());
+    plan_ = plan_launches(program_, batch_runs, max_launch_blocks());
+    HMSM_TRY(table_.upload(plan_, stream));  // before the capture: the graph's launches read it
+    const std::vector<PlannedLaunch>& launches = plan_.launches;
+    // A launch that does not depend on the one before it (the path walk's node pair and contour,
+    // both reading only the joint matrices) runs beside it: the graph forks after the launch
     // both follow and joins before the next, so a step waits for one of the two launches, not
     // both in turn. Every other edge stays in program order.
     ForkResources fork;
     CUDA_TRY(fork.create());
-    std::vector<bool> beside(program.size(), false);  // dispatch i runs beside dispatch i - 1
-    for (size_t i = 1; i < program.size(); ++i) beside[i] = !beside[i - 1] && !depends(program[i - 1], program[i]);
+    std::vector<bool> beside(launches.size(), false);  // launch i runs beside launch i - 1
+    for (size_t i = 1; i < launches.size(); ++i) beside[i] = !beside[i - 1] && !depends(launches[i - 1], launches[i]);
     CUDA_TRY(cudaStreamBeginCapture(stream, cudaStreamCaptureModeThreadLocal));
     cudaError_t error = cudaSuccess;
     std::vector<WindNode> wind_nodes;
-    for (size_t i = 0; i < program.size() && error == cudaSuccess; ++i) {
-        const Dispatch& d = program[i];
-        if (i + 1 < program.size() && beside[i + 1]) error = cudaEventRecord(fork.before, stream);
+    for (size_t i = 0; i < launches.size() && error == cudaSuccess; ++i) {
+        const PlannedLaunch& launch = launches[i];
+        if (i + 1 < launches.size() && beside[i + 1]) error = cudaEventRecord(fork.before, stream);
         cudaStream_t on = stream;
         if (error == cudaSuccess && beside[i]) {
             on = fork.side;
             error = cudaStreamWaitEvent(fork.side, fork.before, 0);
         }
-        if (error == cudaSuccess) error = launch_dispatch(d, buffers, 0, on);
-        if (error == cudaSuccess && reads_wind_slot(d) && d.constants.element_count > 0) {
+        if (error == cudaSuccess) error = enqueue_launch(plan_, launch, program_, table_, buffers, 0, on);
+        const bool launched = launch.entries > 0 ? launch.shape.blocks > 0
+                                                 : program_[launch.dispatch].constants.element_count > 0;
+        if (error == cudaSuccess && launch.reads_wind_slot && launched) {
             WindNode wind{};
-            wind.constants = d.constants;
+            if (launch.entries > 0) wind.batch = plan_.batch(launch, table_.constants(), table_.block_begin(), 0);
+            else wind.constants = program_[launch.dispatch].constants;
+            wind.batched = launch.entries > 0;
             error = last_captured_node(on, &wind.node);
             if (error == cudaSuccess) error = cudaGraphKernelNodeGetParams(wind.node, &wind.launch);
             wind_nodes.push_back(wind);
@@ -123,7 +132,6 @@ Status StepGraph::capture(std::span<const Dispatch> program, const BufferPointer
     }
     graph_ = graph;
     CUDA_TRY(cudaGraphInstantiate(&exec_, graph_, 0));
-    program_.assign(program.begin(), program.end());
     buffers_ = buffers;
     wind_nodes_ = std::move(wind_nodes);
     return {};
@@ -132,7 +140,8 @@ Status StepGraph::capture(std::span<const Dispatch> program, const BufferPointer
 Status StepGraph::replay(uint32_t wind_slot, cudaStream_t stream) {
     for (WindNode& wind : wind_nodes_) {
         wind.constants.wind_slot = wind_slot;
-        void* arguments[] = {&buffers_, &wind.constants};
+        wind.batch.wind_slot = wind_slot;
+        void* arguments[] = {&buffers_, wind.batched ? static_cast<void*>(&wind.batch) : &wind.constants};
         cudaKernelNodeParams params = wind.launch;
         params.kernelParams = arguments;
         params.extra = nullptr;

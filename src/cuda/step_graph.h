@@ -1,17 +1,20 @@
 // One step of a program as an instantiated CUDA graph, replayed once per step.
 //
-// The program is captured once from the stream (every dispatch in order, so ordering replaces
-// barriers; a dispatch that does not depend on the one before it runs beside it, step_graph.cpp). Between replays only the step's wind-table
-// slot (gpu_layout.h) changes: it lives in the constants (pc.wind_slot) of the dispatches that read
-// it (backend.h reads_wind_slot: wind_force, the top poses and the walk ahead), so before
-// each replay every such kernel node gets new parameters through
+// The program is captured once from the stream (its launches in order, launch_plan.h: each run
+// of dispatches over different groups one batched launch; ordering replaces barriers; a launch
+// that does not depend on the one before it runs beside it, step_graph.cpp). Between replays
+// only the step's wind-table slot (gpu_layout.h) changes: it lives in the constants
+// (pc.wind_slot) of the dispatches that read it (backend.h reads_wind_slot: wind_force, the top
+// poses and the walk ahead), or for a batch in its BatchLaunch, which overrides its entries'
+// slot, so before each replay every such kernel node gets new parameters through
 // cudaGraphExecKernelNodeSetParams. That is possible generically because every pass kernel
-// takes (BufferPointers, PassConstants) by value (launchers.h). Launches already enqueued keep
+// takes (BufferPointers, PassConstants or BatchLaunch) by value (launchers.h). Launches already enqueued keep
 // the parameters they were launched with, so steps can be enqueued back to back.
 #pragma once
 
 #include "../backend.h"
 #include "../../kernels/cuda/launchers.h"
+#include "launch_plan.h"
 
 #include <span>
 #include <vector>
@@ -32,21 +35,29 @@ public:
 
     /// True when the captured graph runs exactly `program` over `buffers`.
     bool matches(std::span<const Dispatch> program, const BufferPointers& buffers) const;
-    /// Captures `program` from `stream` and instantiates it (replacing any earlier graph).
-    Status capture(std::span<const Dispatch> program, const BufferPointers& buffers,
+    /// Captures `program` from `stream` and instantiates it (replacing any earlier graph), its
+    /// runs batched unless `batch_runs` is false (launch_plan.h; the batches' table is uploaded
+    /// first, after the launches of the graph it replaces have completed).
+    Status capture(std::span<const Dispatch> program, const BufferPointers& buffers, bool batch_runs,
                    cudaStream_t stream);
     /// Enqueues one step reading wind-table slot `wind_slot` on `stream`.
     Status replay(uint32_t wind_slot, cudaStream_t stream);
 
 private:
+    /// A node whose kernel reads the wind slot: a single dispatch's (its constants) or a
+    /// batch's (its BatchLaunch, which sets the slot of every entry).
     struct WindNode {
         cudaGraphNode_t node;
         cudaKernelNodeParams launch;  // function and grid of the captured node
+        bool batched;
         gpu::PassConstants constants;
+        BatchLaunch batch;
     };
     void release();
 
     std::vector<Dispatch> program_;
+    LaunchPlan plan_;
+    LaunchTable table_;  // the batches' table, kept across captures (regrown where needed)
     BufferPointers buffers_;
     cudaGraph_t graph_ = nullptr;
     cudaGraphExec_t exec_ = nullptr;

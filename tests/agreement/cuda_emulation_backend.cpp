@@ -1,6 +1,7 @@
 #include "cuda_emulation_backend.h"
 
 #include "cuda/launch_dispatch.h"
+#include "cuda/launch_plan.h"
 #include "device_words.h"
 #include "step_program.h"
 
@@ -17,7 +18,9 @@ using detail::BufferId;
 
 class CudaEmulationBackend final : public detail::Backend {
 public:
-    explicit CudaEmulationBackend(EmulatedAheadSteps* ahead) : ahead_(ahead) {}
+    CudaEmulationBackend(EmulatedAheadSteps* ahead, bool batch_runs, uint32_t max_blocks)
+        : ahead_(ahead), batch_runs_(batch_runs),
+          max_blocks_(max_blocks != 0 ? max_blocks : detail::cuda::max_launch_blocks()) {}
     BackendKind kind() const override { return BackendKind::cuda; }
     std::string device_name() const override { return "CUDA kernels emulated on the host"; }
     detail::BackendCapabilities capabilities() const override {
@@ -51,20 +54,29 @@ public:
     Status run(std::span<const detail::Dispatch> program, std::span<const detail::RunStep> steps) override {
         const bool walks = ahead_ && std::any_of(program.begin(), program.end(), detail::is_walk_ahead);
         const detail::AheadVariants variants = walks ? detail::ahead_variants(program) : detail::AheadVariants{};
+        auto plan_of = [&](std::span<const detail::Dispatch> dispatches) {
+            return detail::cuda::plan_launches(dispatches, batch_runs_, max_blocks_);
+        };
+        const detail::cuda::LaunchPlan whole = plan_of(program), without_wind = plan_of(variants.without_wind),
+                                       plain = plan_of(variants.plain);
         for (const detail::RunStep& run_step : steps) {
             const detail::AheadStep how = walks ? run_step.ahead : detail::AheadStep::whole;
             std::span<const detail::Dispatch> step = program;
+            const detail::cuda::LaunchPlan* plan = &whole;
             if (how == detail::AheadStep::take) {
                 std::swap(bytes_[uint32_t(BufferId::chain_state)], next_state_);
                 pointers_.chain_state = reinterpret_cast<float4*>(bytes_[uint32_t(BufferId::chain_state)].data());
                 pointers_.chain_state_next = reinterpret_cast<float4*>(next_state_.data());
                 step = variants.without_wind;
+                plan = &without_wind;
                 ++ahead_->taken;
             } else if (how == detail::AheadStep::plain) {
                 step = variants.plain;
+                plan = &plain;
                 ++ahead_->plain;
             }
-            for (const detail::Dispatch& d : step) detail::cuda::emulate_dispatch(d, pointers_, run_step.wind_slot);
+            for (const detail::cuda::PlannedLaunch& launch : plan->launches)
+                detail::cuda::emulate_launch(*plan, launch, step, pointers_, run_step.wind_slot);
         }
         return {};
     }
@@ -108,6 +120,8 @@ private:
     }
 
     EmulatedAheadSteps* ahead_;
+    bool batch_runs_;
+    uint32_t max_blocks_;
     std::vector<std::byte> next_state_;  // chain_state's twin (BufferPointers::chain_state_next)
     std::array<std::vector<std::byte>, detail::kBufferCount> bytes_;
     std::array<uint64_t, detail::kBufferCount> counts_{};
@@ -116,8 +130,9 @@ private:
 
 }  // namespace
 
-std::unique_ptr<detail::Backend> create_cuda_emulation_backend(EmulatedAheadSteps* ahead) {
-    return std::make_unique<CudaEmulationBackend>(ahead);
+std::unique_ptr<detail::Backend> create_cuda_emulation_backend(EmulatedAheadSteps* ahead, bool batch_runs,
+                                                               uint32_t max_blocks) {
+    return std::make_unique<CudaEmulationBackend>(ahead, batch_runs, max_blocks);
 }
 
 }  // namespace hmsm::test

@@ -17,7 +17,11 @@ struct EmulatedAheadSteps {
 };
 
 /// `ahead`: where not null, the backend can walk ahead (BackendCapabilities::walks_ahead), keeping
-/// chain_state's twin as the CUDA backend does, and counts its steps there.
-std::unique_ptr<detail::Backend> create_cuda_emulation_backend(EmulatedAheadSteps* ahead = nullptr);
+/// chain_state's twin as the CUDA backend does, and counts its steps there. `batch_runs`: runs of
+/// dispatches over different groups run as the CUDA backend's batched launches (src/cuda/
+/// launch_plan.h), block by block through the same entry search; false: dispatch by dispatch.
+/// `max_blocks`: the grid cap of the batches' per-element entries (0: HMSM_CUDA_MAX_BLOCKS's).
+std::unique_ptr<detail::Backend> create_cuda_emulation_backend(EmulatedAheadSteps* ahead = nullptr,
+                                                               bool batch_runs = true, uint32_t max_blocks = 0);
 
 }  // namespace hmsm::test

@@ -58,6 +58,63 @@ Scene forest_scene(uint64_t seed) {
     return scene;
 }
 
+Scene many_groups_scene(uint64_t seed, uint32_t instances) {
+    detail::Random random(seed * 7919 + 3);
+    Scene scene;
+    scene.models = {random_tree(seed, 157, 23), random_tree(seed + 1, 611, 101)};
+    scene.model_names = {"small", "large"};
+    scene.lod_budgets = {{9}, {31}};
+    for (uint32_t i = 0; i < instances; ++i) {
+        Instance instance;
+        instance.model = i % 2;
+        instance.origin = {random.uniform(-60.0, 60.0), random.uniform(-1.0, 1.0), random.uniform(-60.0, 60.0)};
+        instance.yaw = random.uniform(-3.0, 3.0);
+        scene.instances.push_back(instance);
+    }
+    return scene;
+}
+
+void alternate_levels(Simulation& sim) {
+    std::vector<InstanceId> ids;
+    std::vector<uint32_t> levels;
+    for (uint64_t i = 0; i < sim.instance_ids().size(); ++i) {
+        if ((i / 2) % 2 == 0) continue;
+        ids.push_back(sim.instance_ids()[i]);
+        levels.push_back(1);
+    }
+    const Status status = sim.set_instance_lods(ids, levels);
+    ASSERT_TRUE(status.ok()) << status.message();
+}
+
+void expect_batches_match_single_launches(Simulation& single, Simulation& batched, Simulation& reference) {
+    for (Simulation* sim : {&single, &batched, &reference}) {
+        alternate_levels(*sim);
+        if (::testing::Test::HasFatalFailure()) return;
+    }
+    const double height = scene_height(reference.scene());
+    const uint32_t calls[] = {1, 3, 2, 4, 1};
+    for (uint32_t k = 0; k < std::size(calls); ++k) {
+        if (k == 3)
+            for (Simulation* sim : {&single, &batched, &reference}) ASSERT_TRUE(sim->set_instance_active(4, false).ok());
+        for (Simulation* sim : {&single, &batched, &reference}) {
+            const Status status = sim->step(calls[k]);
+            ASSERT_TRUE(status.ok()) << status.message();
+        }
+        for (Output output : {Output::node_positions, Output::vertex_positions, Output::vertex_normals,
+                              Output::chain_origins, Output::joint_matrices, Output::chain_angles}) {
+            std::vector<double> expected, actual, exact;
+            ASSERT_TRUE(single.read(output, expected).ok());
+            ASSERT_TRUE(batched.read(output, actual).ok());
+            ASSERT_EQ(actual, expected) << "output " << int(output) << " after call " << k;
+            if (output == Output::joint_matrices || output == Output::chain_angles) continue;
+            ASSERT_TRUE(reference.read(output, exact).ok());
+            const bool normals = output == Output::vertex_normals;  // as in cuda_device_test.cpp
+            EXPECT_LE(max_abs_difference(actual, exact) / (normals ? 1.0 : height), normals ? 1e-3 : 1e-4)
+                << "output " << int(output) << " after call " << k;
+        }
+    }
+}
+
 SimulationConfig test_config(BackendKind backend, Composition composition, bool profile) {
     SimulationConfig config;
     config.backend = backend;

@@ -21,6 +21,23 @@ TreeModel random_tree(uint64_t seed, int node_count, int leaf_count);
 /// scattered origins and yaws.
 Scene forest_scene(uint64_t seed);
 
+/// An open world in small: `instances` instances alternating between the two models of
+/// forest_scene, each model with one coarser level of detail (Scene::lod_budgets), at scattered
+/// origins and yaws. With alternate_levels, consecutive instances never share a run model, so
+/// every instance is a group of its own.
+Scene many_groups_scene(uint64_t seed, uint32_t instances);
+
+/// Puts every instance i with (i / 2) odd on its level 1: the run models go small, large, small
+/// coarse, large coarse, ...
+void alternate_levels(Simulation& sim);
+
+/// Batched launches against single ones: steps `single` (runs dispatch by dispatch), `batched`
+/// and the cpu64 `reference`, all of many_groups_scene, call by call (a few steps each; the
+/// levels alternated first, one instance paused for the last calls, so that some entries cover
+/// paused instances), and expects the batched outputs bit for bit the single ones and within
+/// docs/model.md 7's bound of the reference's.
+void expect_batches_match_single_launches(Simulation& single, Simulation& batched, Simulation& reference);
+
 /// Wind strong enough that chains bend visibly, with a travelling front so every instance has
 /// its own phase.
 SimulationConfig test_config(BackendKind backend, Composition composition, bool profile);

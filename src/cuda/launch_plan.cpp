@@ -1,0 +1,170 @@
+#include "launch_plan.h"
+
+#include "cuda_error.h"
+#include "launch_dispatch.h"
+#include "../step_program.h"
+
+#include <algorithm>
+#include <cstdlib>
+#include <string_view>
+
+namespace hmsm::detail::cuda {
+
+bool batch_runs_enabled() {
+    const char* value = std::getenv("HMSM_CUDA_BATCH_RUNS");
+    return !(value && std::string_view(value) == "0");
+}
+
+uint32_t dispatch_threads(const gpu::PassConstants& pc) {
+    if (pc.kind == HMSM_DISPATCH_JUMP_ROUNDS_IN_DISPATCH) return gpu::rounds_workgroup_size(pc.model_chain_count);
+    if (pc.kind == HMSM_DISPATCH_CONTOUR_SEPARATE) return 256;  // contour.cu kSeparateThreads
+    return HMSM_WORKGROUP_SIZE;
+}
+
+BatchLaunch LaunchPlan::batch(const PlannedLaunch& launch, const gpu::PassConstants* constants_base,
+                              const uint32_t* block_begin_base, uint32_t wind_slot) const {
+    BatchLaunch batch;
+    batch.constants = constants_base + launch.entry_begin;
+    batch.block_begin = block_begin_base + launch.prefix_begin;
+    batch.entries = launch.entries;
+    batch.wind_slot = wind_slot;
+    batch.sets_wind_slot = launch.reads_wind_slot ? 1u : 0u;
+    return batch;
+}
+
+namespace {
+
+/// The most blocks of one grid (gridDim.x).
+constexpr uint64_t kMaxGridBlocks = 0x7fffffffu;
+
+PlannedLaunch single_launch(std::span<const Dispatch> program, const Dispatch& d) {
+    PlannedLaunch launch;
+    launch.pass = d.pass;
+    launch.dispatch = uint32_t(&d - program.data());
+    launch.shape.kind = d.constants.kind;
+    launch.reads_wind_slot = reads_wind_slot(d);
+    launch.reads = dispatch_reads(d);
+    launch.writes = dispatch_writes(d);
+    return launch;
+}
+
+/// Builds the batches of `entries` (dispatches of one run, of one block size) into `plan`.
+class BatchBuilder {
+public:
+    BatchBuilder(LaunchPlan& plan, uint32_t threads, uint32_t max_blocks)
+        : plan_(plan), threads_(threads), max_blocks_(max_blocks) {}
+
+    void add(const Dispatch& d) {
+        const uint32_t blocks = dispatch_blocks(d.constants, threads_, max_blocks_);
+        if (open_ && uint64_t(plan_.block_begin.back()) + blocks > kMaxGridBlocks) close();
+        if (!open_) {
+            launch_ = PlannedLaunch{};
+            launch_.pass = d.pass;
+            launch_.entry_begin = uint32_t(plan_.constants.size());
+            launch_.prefix_begin = uint32_t(plan_.block_begin.size());
+            launch_.shape.kind = d.constants.kind;
+            launch_.shape.threads = threads_;
+            launch_.reads_wind_slot = reads_wind_slot(d);
+            plan_.block_begin.push_back(0);
+            open_ = true;
+        }
+        plan_.constants.push_back(d.constants);
+        plan_.block_begin.push_back(plan_.block_begin.back() + blocks);
+        ++launch_.entries;
+        launch_.shape.may_pause = launch_.shape.may_pause || d.constants.params.w != 0.0f;
+        launch_.reads |= dispatch_reads(d);
+        launch_.writes |= dispatch_writes(d);
+    }
+
+    void close() {
+        if (!open_) return;
+        launch_.shape.blocks = plan_.block_begin.back();
+        plan_.launches.push_back(launch_);
+        open_ = false;
+    }
+
+private:
+    LaunchPlan& plan_;
+    uint32_t threads_, max_blocks_;
+    PlannedLaunch launch_;
+    bool open_ = false;
+};
+
+}  // namespace
+
+LaunchPlan plan_launches(std::span<const Dispatch> program, bool batch_runs, uint32_t max_blocks) {
+    LaunchPlan plan;
+    for (const std::span<const Dispatch> run : dispatch_batches(program)) {
+        std::vector<const Dispatch*> entries;
+        for (const Dispatch& d : run)
+            if (d.constants.element_count > 0) entries.push_back(&d);
+        if (!batch_runs || entries.size() < 2) {
+            for (const Dispatch& d : run) plan.launches.push_back(single_launch(program, d));
+            continue;
+        }
+        // One launch per block size (in-dispatch rounds of models of different sizes), each
+        // keeping the run's order; a size of one entry takes that dispatch's own launch.
+        auto threads_of = [](const Dispatch* d) { return dispatch_threads(d->constants); };
+        std::stable_sort(entries.begin(), entries.end(),
+                         [&](const Dispatch* a, const Dispatch* b) { return threads_of(a) < threads_of(b); });
+        for (size_t first = 0; first < entries.size();) {
+            size_t end = first + 1;
+            while (end < entries.size() && threads_of(entries[end]) == threads_of(entries[first])) ++end;
+            if (end - first == 1) {
+                plan.launches.push_back(single_launch(program, *entries[first]));
+            } else {
+                BatchBuilder batch(plan, threads_of(entries[first]), max_blocks);
+                for (size_t i = first; i < end; ++i) batch.add(*entries[i]);
+                batch.close();
+            }
+            first = end;
+        }
+    }
+    return plan;
+}
+
+cudaError_t enqueue_launch(const LaunchPlan& plan, const PlannedLaunch& launch, std::span<const Dispatch> program,
+                           const LaunchTable& table, const BufferPointers& buffers, uint32_t wind_slot,
+                           cudaStream_t stream) {
+    if (launch.entries == 0) return launch_dispatch(program[launch.dispatch], buffers, wind_slot, stream);
+    return launch_batch(launch.pass, buffers, plan.batch(launch, table.constants(), table.block_begin(), wind_slot),
+                        launch.shape, stream);
+}
+
+void emulate_launch(const LaunchPlan& plan, const PlannedLaunch& launch, std::span<const Dispatch> program,
+                    const BufferPointers& host_buffers, uint32_t wind_slot) {
+    if (launch.entries == 0) return emulate_dispatch(program[launch.dispatch], host_buffers, wind_slot);
+    emulate_batch(launch.pass, host_buffers,
+                  plan.batch(launch, plan.constants.data(), plan.block_begin.data(), wind_slot), launch.shape);
+}
+
+LaunchTable::~LaunchTable() { release(); }
+
+void LaunchTable::release() {
+    if (constants_) (void)cudaFree(constants_);
+    if (block_begin_) (void)cudaFree(block_begin_);
+    constants_ = nullptr;
+    block_begin_ = nullptr;
+    constants_capacity_ = block_begin_capacity_ = 0;
+}
+
+Status LaunchTable::upload(const LaunchPlan& plan, cudaStream_t stream) {
+    if (plan.constants.empty()) return {};
+    // Launches enqueued earlier may still read the table this one replaces.
+    CUDA_TRY(cudaStreamSynchronize(stream));
+    if (plan.constants.size() > constants_capacity_ || plan.block_begin.size() > block_begin_capacity_) {
+        release();
+        CUDA_TRY(cudaMalloc(reinterpret_cast<void**>(&constants_), plan.constants.size() * sizeof(gpu::PassConstants)));
+        constants_capacity_ = plan.constants.size();
+        CUDA_TRY(cudaMalloc(reinterpret_cast<void**>(&block_begin_), plan.block_begin.size() * sizeof(uint32_t)));
+        block_begin_capacity_ = plan.block_begin.size();
+    }
+    CUDA_TRY(cudaMemcpyAsync(constants_, plan.constants.data(), plan.constants.size() * sizeof(gpu::PassConstants),
+                             cudaMemcpyHostToDevice, stream));
+    CUDA_TRY(cudaMemcpyAsync(block_begin_, plan.block_begin.data(), plan.block_begin.size() * sizeof(uint32_t),
+                             cudaMemcpyHostToDevice, stream));
+    CUDA_TRY(cudaStreamSynchronize(stream));
+    return {};
+}
+
+}  // namespace hmsm::detail::cuda
