@@ -3,6 +3,8 @@
 // distributions in order, the memory estimate and the markdown. No timing thresholds.
 #include "cli_fixture.h"
 
+#include <hmsm/simulation.h>
+
 #include <nlohmann/json.hpp>
 #include <gtest/gtest.h>
 
@@ -106,7 +108,7 @@ TEST_F(BenchOpenWorld, SmallWorldOnCpuReportsCallsSharesPopAndMemory) {
               double(std::numeric_limits<uint32_t>::max() / memory["levels"][0]["mesh_vertices"].get<uint64_t>()));
 
     // Coarsening switches fade by default; the pop reports the switches and the fading trees.
-    EXPECT_EQ(row["fade_steps"], LodBands{}.fade_steps);
+    EXPECT_EQ(row["fade_steps"], hmsm::LodBands{}.fade_steps);
     EXPECT_GE(number(row["pop"], "fading_trees_measured"), 0.0);
     EXPECT_GE(number(row["pop"], "switches_measured"), 0.0);
 

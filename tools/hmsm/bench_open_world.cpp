@@ -199,6 +199,9 @@ public:
     /// trees that were fading.
     Status pop_frame(glm::dvec2 move, const PopProbe& probe, json& jumps, std::vector<double>& fading) {
         std::vector<float> before, stepped, after;
+        // Fades that ended in the frame before switch now (step() would switch them first), so
+        // that the step below keeps the layout the reads around it share.
+        HMSM_TRY(sim_.request_instance_lods({}, {}).status());
         HMSM_TRY(sim_.read(Output::joint_matrices, before));
         const std::vector<uint64_t> old_offsets = chain_offsets(sim_);
         const std::vector<InstanceId> old_ids(sim_.instance_ids().begin(), sim_.instance_ids().end());
