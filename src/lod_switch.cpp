@@ -357,7 +357,9 @@ Status Simulation::set_instance_lods(std::span<const InstanceId> ids, std::span<
         return {ErrorCode::invalid_argument,
                 "set_instance_lod: " + id_name(s.instance_ids_[*twice]) + " is listed twice"};
     std::sort(changes.begin(), changes.end());
-    return impl_->switch_models(changes);
+    HMSM_TRY(impl_->switch_models(changes));
+    for (InstanceId id : ids) impl_->fades_.erase(uint64_t(id));  // switched now: no fade goes on
+    return {};
 }
 
 Result<uint32_t> Simulation::instance_lod(InstanceId id) const {
@@ -394,6 +396,12 @@ Status Simulation::set_lod_bands(const LodBands& bands) {
                                                      std::to_string(edge) +
                                                      " m) is not finite, positive and above the edge before"};
     }
+    if (bands.fade_steps > kMaxLodFadeSteps)
+        return {ErrorCode::invalid_argument, "set_lod_bands: fade_steps " + std::to_string(bands.fade_steps) +
+                                                 " is above " + std::to_string(kMaxLodFadeSteps)};
+    if (!std::isfinite(bands.fade_bound_m) || bands.fade_bound_m <= 0.0 || bands.fade_bound_m > 1.0)
+        return {ErrorCode::invalid_argument,
+                "set_lod_bands: fade_bound_m " + std::to_string(bands.fade_bound_m) + " m is not in (0, 1]"};
     impl_->lod_bands_ = bands;
     return {};
 }
@@ -404,21 +412,25 @@ Result<uint64_t> Simulation::update_lod(Vec3 viewer) {
     const Impl& s = *impl_;
     if (!std::isfinite(viewer.x) || !std::isfinite(viewer.y) || !std::isfinite(viewer.z))
         return Status{ErrorCode::invalid_argument, "update_lod: the viewer position is not finite"};
+    HMSM_TRY(impl_->fold_ready_fades());
     const std::vector<double>& edges = s.lod_bands_.edges;
     const double h = s.lod_bands_.hysteresis;
-    std::vector<std::pair<uint32_t, uint32_t>> changes;
+    std::vector<std::pair<uint32_t, uint32_t>> changes;  // (index, level)
     for (uint32_t i = 0; i < s.instances_.size(); ++i) {
         const Impl::LodModel& now = s.lod_models_[s.instances_[i].model];
+        uint32_t heading = now.level;  // a fading instance's bands are those of its target
+        if (!s.fades_.empty())
+            if (auto fade = s.fades_.find(uint64_t(s.instance_ids_[i])); fade != s.fades_.end())
+                heading = s.lod_models_[fade->second.target_model].level;
         const std::vector<uint32_t>& run_models = s.levels_of_[now.scene_model];
         const uint32_t top = uint32_t(std::min<size_t>(run_models.size() - 1, edges.size()));
         const double distance = glm::length(glm::dvec3(s.instances_[i].origin) - glm::dvec3(viewer));
-        uint32_t level = std::min(now.level, top);
+        uint32_t level = std::min(heading, top);
         while (level < top && distance > edges[level] * (1.0 + h)) ++level;
         while (level > 0 && distance < edges[level - 1] * (1.0 - h)) --level;
-        if (level != now.level) changes.emplace_back(i, run_models[level]);
+        if (level != heading) changes.emplace_back(i, level);
     }
-    HMSM_TRY(impl_->switch_models(changes));
-    return uint64_t(changes.size());
+    return impl_->request_lods(std::move(changes));
 }
 
 }  // namespace hmsm

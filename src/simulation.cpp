@@ -268,7 +268,9 @@ Status Simulation::Impl::step(uint32_t count) {
     return {};
 }
 
-Status Simulation::step(uint32_t count) { return impl_->step(count); }
+Status Simulation::step(uint32_t count) {
+    return impl_->fades_.empty() ? impl_->step(count) : impl_->step_fading(count);
+}
 uint64_t Simulation::steps_done() const { return impl_->steps_done_; }
 double Simulation::time() const { return double(impl_->steps_done_) * impl_->config_.parameters.dt; }
 PassTimes Simulation::pass_times() const { return impl_->times_; }

@@ -117,6 +117,33 @@ struct __attribute__((visibility("hidden"))) Simulation::Impl {
     std::vector<PendingLevel> pending_levels_;
     LodBands lod_bands_;
 
+    /// Fades to coarser levels (lod_fade.cpp, docs/model.md 3.12): per fading instance's
+    /// handle, the run model it fades from and to, the steps left and whether the deflection
+    /// left is within LodBands::fade_bound_m (it then switches at the next call that folds).
+    struct LodFade {
+        uint32_t from_model = 0, target_model = 0;
+        uint32_t steps_left = 0;
+        bool ready = false;
+    };
+    std::unordered_map<uint64_t, LodFade> fades_;
+    /// Per run model, per chain: e_c, the largest rest distance from the chain's attach node
+    /// to a node or mesh vertex of its subtree (filled on first use).
+    mutable std::vector<std::vector<double>> subtree_extent_;
+    /// Levels asked for (current index, level), in any order: finer or equal levels switch at
+    /// once, coarser ones fade by lod_bands_. Returns how many instances changed level or target.
+    Result<uint64_t> request_lods(std::vector<std::pair<uint32_t, uint32_t>> requests);
+    /// Switches the fades that are ready and drops those whose instance is gone or switched.
+    Status fold_ready_fades();
+    /// One step of every fade: scales the folded chains' state of the active fading instances
+    /// and poses them (`scale` false: only measures the deflection left, for new fades among
+    /// `indices`).
+    Status relax_fades(const std::vector<uint32_t>& indices, bool scale);
+    /// step() while fades run: one step at a time, each followed by relax_fades.
+    Status step_fading(uint32_t count);
+    const std::vector<double>& subtree_extent(uint32_t model) const;
+    /// The current index of instance `id`, or -1 if it is not live.
+    int64_t live_index(uint64_t id) const;
+
     SimulationConfig config_;
     /// The dispatch form of Composition::pointer_jumping (by size unless a test or the bench
     /// forces one through Simulation::Access).

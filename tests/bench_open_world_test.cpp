@@ -3,6 +3,8 @@
 // distributions in order, the memory estimate and the markdown. No timing thresholds.
 #include "cli_fixture.h"
 
+#include <hmsm/simulation.h>
+
 #include <nlohmann/json.hpp>
 #include <gtest/gtest.h>
 
@@ -105,6 +107,11 @@ TEST_F(BenchOpenWorld, SmallWorldOnCpuReportsCallsSharesPopAndMemory) {
     EXPECT_EQ(number(memory, "largest_trees_by_mesh_vertices"),
               double(std::numeric_limits<uint32_t>::max() / memory["levels"][0]["mesh_vertices"].get<uint64_t>()));
 
+    // Coarsening switches fade by default; the pop reports the switches and the fading trees.
+    EXPECT_EQ(row["fade_steps"], hmsm::LodBands{}.fade_steps);
+    EXPECT_GE(number(row["pop"], "fading_trees_measured"), 0.0);
+    EXPECT_GE(number(row["pop"], "switches_measured"), 0.0);
+
     EXPECT_NE(r.out.find("### Open world"), std::string::npos) << r.out;
     EXPECT_NE(r.out.find("| cpu | update_lod | 4 |"), std::string::npos) << r.out;
 }
@@ -114,6 +121,8 @@ TEST_F(BenchOpenWorld, BadSizesExitTwoWithOneLine) {
     expect_bad_input("bench --backends cpu --presets none --open-world-frames 0", "--open-world-frames");
     expect_bad_input("bench --backends cpu --presets none --open-world-trees 10 --open-world-changes 11",
                      "--open-world-changes");
+    expect_bad_input("bench --backends cpu --presets none --open-world-fade-steps -1", "--open-world-fade-steps");
+    expect_bad_input("bench --backends cpu --presets none --open-world-fade-steps 70000", "--open-world-fade-steps");
 }
 
 }  // namespace

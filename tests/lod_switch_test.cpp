@@ -318,17 +318,17 @@ TEST(LodSwitchBands, HysteresisKeepsAnOscillatingViewerFromFlipping) {
         ASSERT_TRUE(sim->step(1).ok());
     }
     EXPECT_EQ(switches, 0u);
-    EXPECT_EQ(*sim->update_lod({12.5, 0.0, 0.0}), 1u);  // past 10 * 1.2
-    EXPECT_EQ(*sim->instance_lod(InstanceId(0)), 1u);
+    EXPECT_EQ(*sim->update_lod({12.5, 0.0, 0.0}), 1u);  // past 10 * 1.2: a fade to level 1
+    EXPECT_EQ(*sim->instance_lod_target(InstanceId(0)), 1u);
     for (int frame = 0; frame < 50; ++frame) {
         const double distance = 10.0 + 1.5 * std::sin(0.9 * frame);
         switches += *sim->update_lod({distance, 0.0, 0.0});
     }
     EXPECT_EQ(switches, 0u);
     EXPECT_EQ(*sim->update_lod({7.5, 0.0, 0.0}), 1u);  // below 10 * 0.8
-    EXPECT_EQ(*sim->instance_lod(InstanceId(0)), 0u);
-    EXPECT_EQ(*sim->update_lod({100.0, 0.0, 0.0}), 1u);  // far past every edge: the last level at once
-    EXPECT_EQ(*sim->instance_lod(InstanceId(0)), 3u);
+    EXPECT_EQ(*sim->instance_lod_target(InstanceId(0)), 0u);
+    EXPECT_EQ(*sim->update_lod({100.0, 0.0, 0.0}), 1u);  // far past every edge: the last level
+    EXPECT_EQ(*sim->instance_lod_target(InstanceId(0)), 3u);
 }
 
 // The C ABI: budgets on the scene, switches by id, bands; bad input refused without a change.

@@ -29,10 +29,20 @@ enum class InstanceId : uint64_t {};
 /// edges[k - 1] <= d < edges[k] (level 0 nearer than edges[0]; levels past a model's last are
 /// its last). It leaves its level only once d passes the band's edge by more than
 /// `hysteresis` times that edge, so a viewer oscillating about an edge does not flip it.
+///
+/// Coarsening by the bands fades (docs/model.md 3.12, fading to a coarser level): the instance
+/// keeps its level while the chains the coarser level folds relax to rest relative to their
+/// parents over `fade_steps` steps, and it switches once the deflection left moves no vertex by
+/// more than `fade_bound_m`. fade_steps 0 switches at once (the folded branches' deflection
+/// vanishes in one frame). Refining always switches at once.
 struct LodBands {
     std::vector<double> edges;  ///< strictly increasing, finite, > 0 (metres); empty: level 0
     double hysteresis = 0.1;    ///< fraction of an edge, in [0, 1)
+    uint32_t fade_steps = 60;   ///< steps a coarsening fade takes at most, 0 to kMaxLodFadeSteps
+    double fade_bound_m = 1e-3; ///< deflection left at the switch (metres), finite, in (0, 1]
 };
+/// The longest fade LodBands::fade_steps may ask for (about 10 minutes at the default dt).
+inline constexpr uint32_t kMaxLodFadeSteps = 1u << 16;
 
 /// A running simulation of a scene. Threading: one Simulation may be used by one thread at a
 /// time (calls on it are not synchronized); distinct Simulations may run concurrently on any
@@ -119,7 +129,11 @@ public:
     // instance on the level's model and keeps its handle, index, origin, yaw, wind scale and
     // phase and active flag; the chains both levels keep carry their angles, rates, force and
     // load, chains the finer level unfolds start rigid with their parent (angles and rates 0).
-    // It takes effect at once (read() returns the new level's pose, the same for kept chains).
+    // set_instance_lod(s) take effect at once (read() returns the new level's pose, the same for
+    // kept chains) and end the listed instances' fades; request_instance_lods and update_lod
+    // fade to coarser levels (LodBands): each step() relaxes the folded chains of the fading
+    // instances that are active, and a fade that ended switches at the next step(),
+    // update_lod() or request_instance_lods().
     // Many switches in one call cost one reshape of the state from the first switched
     // instance on. A rejected call (an unknown handle, a level the model lacks, a handle
     // listed twice) changes nothing. Threading as every non-const member.
@@ -130,14 +144,25 @@ public:
     Status set_instance_lods(std::span<const InstanceId> ids, std::span<const uint32_t> levels);
     /// The level instance `id` runs on.
     Result<uint32_t> instance_lod(InstanceId id) const;
+    /// Asks for `levels` (one per id, as set_instance_lods) with the bands' fade: a finer or
+    /// equal level is taken at once (ending a fade), a coarser one fades (LodBands) unless the
+    /// deflection to remove is within fade_bound_m already. Returns how many instances changed
+    /// level or target. A rejected call changes nothing.
+    Result<uint64_t> request_instance_lods(std::span<const InstanceId> ids, std::span<const uint32_t> levels);
+    /// The level instance `id` is heading for: instance_lod(id) unless it is fading.
+    Result<uint32_t> instance_lod_target(InstanceId id) const;
+    /// Instances fading to a coarser level now.
+    uint64_t fading_instance_count() const;
     /// Levels of scene model `model` (1 + Scene::lod_budgets[model].size()); 0 for no such model.
     uint32_t lod_level_count(uint32_t model) const;
     /// The bands update_lod() chooses by; invalid bands are refused and change nothing.
     Status set_lod_bands(const LodBands& bands);
     const LodBands& lod_bands() const;
     /// Chooses each instance's level from its distance to `viewer` (world metres) by the
-    /// bands, with hysteresis, and switches those that change in one set_instance_lods call.
-    /// Once per frame, before step(). Returns how many instances switched.
+    /// bands, with hysteresis (from the level a fading instance heads for), and asks for the
+    /// changes in one request_instance_lods call: finer levels at once, coarser ones by a
+    /// fade. Fades that ended since are switched first. Once per frame, before step().
+    /// Returns how many instances changed level or target.
     Result<uint64_t> update_lod(Vec3 viewer);
 
     /// The current instance list. An instance on level 0 names its scene model; on a level

@@ -61,9 +61,22 @@ hmsm_status hmsm_simulation_set_lod_bands(hmsm_simulation* simulation, const dou
         const std::string fn = "hmsm_simulation_set_lod_bands";
         if (!simulation) return bad(fn + ": simulation is NULL");
         if (!edges && count > 0) return bad(fn + ": edges is NULL with count > 0");
-        LodBands bands;
+        LodBands bands = simulation->simulation->lod_bands();
         bands.edges.assign(edges, edges + count);
         bands.hysteresis = hysteresis;
+        Status done = simulation->simulation->set_lod_bands(bands);
+        if (!done) return {done.code(), fn + ": " + done.message()};
+        return {};
+    });
+}
+
+hmsm_status hmsm_simulation_set_lod_fade(hmsm_simulation* simulation, uint32_t steps, double bound_m) {
+    return guarded([&]() -> Status {
+        const std::string fn = "hmsm_simulation_set_lod_fade";
+        if (!simulation) return bad(fn + ": simulation is NULL");
+        LodBands bands = simulation->simulation->lod_bands();
+        bands.fade_steps = steps;
+        bands.fade_bound_m = bound_m;
         Status done = simulation->simulation->set_lod_bands(bands);
         if (!done) return {done.code(), fn + ": " + done.message()};
         return {};

@@ -30,7 +30,8 @@
     X(SimulationConfig, model) X(SimulationConfig, parameters) X(SimulationConfig, wind)   \
     X(SimulationConfig, composition) X(SimulationConfig, profile_passes)                   \
     X(Scene, instances) X(Scene, joint_budgets) X(Scene, lod_budgets)                      \
-    X(LodBands, edges) X(LodBands, hysteresis)                                             \
+    X(LodBands, edges) X(LodBands, hysteresis) X(LodBands, fade_steps)                     \
+    X(LodBands, fade_bound_m)                                                              \
     X(DetailLevel, hierarchy) X(DetailLevel, chain_of) X(DetailLevel, geometric_error_m)
 
 #define HMSM_LAYOUT_STRUCTS(X)                                                             \

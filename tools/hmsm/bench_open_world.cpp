@@ -194,16 +194,35 @@ public:
     }
 
     /// The same frame with the switches measured: the largest vertex jump of switched trees
-    /// that were live before the frame against their motion in the step before.
-    Status pop_frame(glm::dvec2 move, const PopProbe& probe, json& jumps) {
+    /// that were live before the frame against their motion in the step before (a fade that
+    /// ended in that step switches in update_lod). `fading` receives the motion over the step of
+    /// trees that were fading.
+    Status pop_frame(glm::dvec2 move, const PopProbe& probe, json& jumps, std::vector<double>& fading) {
         std::vector<float> before, stepped, after;
+        // Fades that ended in the frame before switch now (step() would switch them first), so
+        // that the step below keeps the layout the reads around it share.
+        HMSM_TRY(sim_.request_instance_lods({}, {}).status());
         HMSM_TRY(sim_.read(Output::joint_matrices, before));
         const std::vector<uint64_t> old_offsets = chain_offsets(sim_);
         const std::vector<InstanceId> old_ids(sim_.instance_ids().begin(), sim_.instance_ids().end());
         std::vector<uint32_t> old_models;
         for (const Instance& t : sim_.instances()) old_models.push_back(t.model);
+        std::vector<uint32_t> fading_before;
+        for (uint32_t i = 0; i < old_ids.size() && sim_.fading_instance_count() > 0; ++i)
+            if (*sim_.instance_lod_target(old_ids[i]) != *sim_.instance_lod(old_ids[i])) fading_before.push_back(i);
         HMSM_TRY(sim_.step(1));
         HMSM_TRY(sim_.read(Output::joint_matrices, stepped));
+        auto span_of = [](const std::vector<float>& all, const std::vector<uint64_t>& off, uint32_t at) {
+            return std::span<const float>(all.data() + 12 * off[at], 12 * (off[at + 1] - off[at]));
+        };
+        constexpr size_t kMeasured = 64;  // trees skinned per frame, spread over those measured
+        for (size_t k = 0; k < fading_before.size(); k += std::max<size_t>(1, fading_before.size() / kMeasured)) {
+            const uint32_t o = fading_before[k];
+            const int32_t level = probe.level_of(old_models[o]);
+            if (level < 0 || sim_.instances()[o].model != old_models[o]) continue;  // switched in the step
+            fading.push_back(probe.largest_jump(span_of(before, old_offsets, o), uint32_t(level),
+                                                span_of(stepped, old_offsets, o), uint32_t(level)));
+        }
         const glm::dvec2 to = viewer_ + move;
         stream_cells(grid_, viewer_, to, leaving_, entering_);
         viewer_ = to;
@@ -222,13 +241,9 @@ public:
             auto was = old_index.find(uint64_t(sim_.instance_ids()[i]));
             if (was != old_index.end()) switched.emplace_back(was->second, i);
         }
-        constexpr size_t kMeasured = 64;  // trees skinned per frame, spread over the switched
         const size_t stride = std::max<size_t>(1, switched.size() / kMeasured);
         for (size_t k = 0; k < switched.size(); k += stride) {
             const auto [o, i] = switched[k];
-            auto span_of = [](const std::vector<float>& all, const std::vector<uint64_t>& off, uint32_t at) {
-                return std::span<const float>(all.data() + 12 * off[at], 12 * (off[at + 1] - off[at]));
-            };
             const int32_t from = probe.level_of(old_models[o]), into = probe.level_of(sim_.instances()[i].model);
             if (from < 0 || into < 0) return Status{ErrorCode::internal, "open world: a tree on no level of model 0"};
             const double motion = probe.largest_jump(span_of(before, old_offsets, o), uint32_t(from),
@@ -250,9 +265,14 @@ private:
     std::vector<Cell> leaving_, entering_;
 };
 
-/// Largest vertex jump at a switch and the motion of that tree in one frame; medians of both.
-json pop_json(const json& jumps) {
-    json pop = {{"switches_measured", jumps.size()}};
+/// Largest vertex jump at a switch and the motion of that tree in one frame; medians of both;
+/// the motion of fading trees over one frame.
+json pop_json(const json& jumps, const std::vector<double>& fading) {
+    json pop = {{"switches_measured", jumps.size()}, {"fading_trees_measured", fading.size()}};
+    if (!fading.empty()) {
+        pop["largest_fading_motion_m"] = *std::max_element(fading.begin(), fading.end());
+        pop["median_fading_motion_m"] = percentile(fading, 0.5);
+    }
     if (jumps.empty()) return pop;
     std::vector<double> jump, motion;
     size_t largest = 0;
@@ -299,6 +319,7 @@ json run_backend(const TreeModel& model, const std::string& model_name, BackendK
     // Band edges where the cumulative shares of a disc of trees around the viewer are reached.
     LodBands bands;
     bands.hysteresis = 0.05;
+    bands.fade_steps = s.fade_steps;
     double cumulative = 0.0;
     for (size_t k = 0; k + 1 < std::size(kOpenWorldShares); ++k) {
         cumulative += kOpenWorldShares[k];
@@ -315,6 +336,8 @@ json run_backend(const TreeModel& model, const std::string& model_name, BackendK
     row["radius_m"] = grid.radius;
     row["band_edges_m"] = bands.edges;
     row["hysteresis"] = bands.hysteresis;
+    row["fade_steps"] = bands.fade_steps;
+    row["fade_bound_m"] = bands.fade_bound_m;
     row["viewer_m_per_frame"] = speed;
     row["changes_asked"] = s.changes;
     row["level_budgets"] = {0, kOpenWorldBudgets[0], kOpenWorldBudgets[1], kOpenWorldBudgets[2], kOpenWorldBudgets[3]};
@@ -419,9 +442,10 @@ json run_backend(const TreeModel& model, const std::string& model_name, BackendK
         row["pop"] = {{"failed", probe.status().message()}};
     } else {
         json jumps = json::array();
+        std::vector<double> fading;
         for (uint32_t k = 0; k < s.pop_frames; ++k)
-            if (Status status = world.pop_frame(move, *probe, jumps); !status) return stop(status);
-        row["pop"] = pop_json(jumps);
+            if (Status status = world.pop_frame(move, *probe, jumps, fading); !status) return stop(status);
+        row["pop"] = pop_json(jumps, fading);
     }
     return row;
 }

@@ -30,12 +30,15 @@ struct OpenWorldSettings {
     uint32_t changes = 2000;   ///< streaming and LOD changes per frame the viewer's speed is set for
     double spacing = 25.0;     ///< grid spacing (m)
     uint32_t pop_frames = 3;   ///< frames whose switches are measured for the pop (untimed)
+    /// LodBands::fade_steps of coarsening switches; 0: instantaneous switches
+    uint32_t fade_steps = LodBands{}.fade_steps;
     uint64_t device_copy_bytes = 1 << 30, host_copy_bytes = 256 << 20;  ///< roofline block sizes
 };
 
 /// Settings from the --open-world-* flags (without `changes_given`: 2,000 per 500,000 trees);
 /// a value out of range is invalid_argument naming the flag.
-Result<OpenWorldSettings> open_world_settings(int64_t trees, int64_t frames, int64_t changes, bool changes_given);
+Result<OpenWorldSettings> open_world_settings(int64_t trees, int64_t frames, int64_t changes, bool changes_given,
+                                              int64_t fade_steps = LodBands{}.fade_steps);
 
 /// One JSON row per backend (or one skipped row naming why the case does not run there).
 nlohmann::json measure_open_world(const TreeModel& model, const std::string& model_name,

@@ -8,7 +8,8 @@ namespace hmsm::cli::bench {
 
 using nlohmann::json;
 
-Result<OpenWorldSettings> open_world_settings(int64_t trees, int64_t frames, int64_t changes, bool changes_given) {
+Result<OpenWorldSettings> open_world_settings(int64_t trees, int64_t frames, int64_t changes, bool changes_given,
+                                              int64_t fade_steps) {
     auto bad = [](const std::string& message) { return Status{ErrorCode::invalid_argument, message}; };
     if (trees < 1 || trees > kMaxInstances)
         return bad("--open-world-trees " + std::to_string(trees) + ": must be in [1, " + std::to_string(kMaxInstances) + "]");
@@ -16,7 +17,11 @@ Result<OpenWorldSettings> open_world_settings(int64_t trees, int64_t frames, int
         return bad("--open-world-frames " + std::to_string(frames) + ": must be in [1, 100000]");
     if (changes_given && (changes < 1 || changes > trees))
         return bad("--open-world-changes " + std::to_string(changes) + ": must be in [1, --open-world-trees]");
+    if (fade_steps < 0 || fade_steps > int64_t(kMaxLodFadeSteps))
+        return bad("--open-world-fade-steps " + std::to_string(fade_steps) + ": must be in [0, " +
+                   std::to_string(kMaxLodFadeSteps) + "]");
     OpenWorldSettings settings;
+    settings.fade_steps = uint32_t(fade_steps);
     settings.trees = uint32_t(trees);
     settings.frames = uint32_t(frames);
     settings.changes = changes_given ? uint32_t(changes)
@@ -32,11 +37,12 @@ std::string render_open_world(const json& rows) {
         "`update_lod(viewer)`, one `step`. Frame: the four calls; standing still: the same frames "
         "with the viewer at rest (update_lod and step); changes add: frame median moving minus standing "
         "still. Pop: the largest vertex jump of a switched tree (skinned from its joint matrices) "
-        "against that tree's motion over the frame before. % copy: passes 1-5 bytes per step over "
+        "against that tree's motion over the frame before; coarsening fades over the steps given "
+        "(`fade`, 0: instantaneous switches). % copy: passes 1-5 bytes per step over "
         "the standing step's median, against the copy roofline.\n\n"
         "| backend | trees | chains | changes per frame | step ms (still) | frame ms median / p99 / max | "
-        "changes add ms | calls > 1 ms | pop mm (motion mm) | % copy | memory GB (whole trees) |\n"
-        "|---|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|\n";
+        "changes add ms | calls > 1 ms | fade | pop mm (motion mm) | % copy | memory GB (whole trees) |\n"
+        "|---|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|\n";
     char line[600];
     auto seconds_of = [](const json& d, const char* key) {
         return d.is_object() && d.contains(key) ? d[key].get<double>() * 1e3 : 0.0;
@@ -49,7 +55,7 @@ std::string render_open_world(const json& rows) {
             std::snprintf(line, sizeof line, "%.2f (%.1f)", memory.value("estimate_device_bytes", 0.0) * 1e-9,
                           memory.value("estimate_whole_trees_device_bytes", 0.0) * 1e-9);
             out += "| " + backend + " | " + std::to_string(r.value("trees_asked", 0ull)) + " | – | – | – | " +
-                   r.value("skipped", r.value("failed", std::string())) + " | | | | | " +
+                   r.value("skipped", r.value("failed", std::string())) + " | | | | | | " +
                    (memory.empty() ? std::string() : std::string(line)) + " |\n";
             continue;
         }
@@ -60,7 +66,7 @@ std::string render_open_world(const json& rows) {
         for (const auto& [name, d] : calls.items())
             if (name != "frame") over += d.value("over_1ms", 0ull);
         std::snprintf(line, sizeof line,
-                      "| %s | %llu | %llu | %.0f | %.3f | %.3f / %.3f / %.3f | %.3f | %llu | %.3g (%.3g) | %.1f | "
+                      "| %s | %llu | %llu | %.0f | %.3f | %.3f / %.3f / %.3f | %.3f | %llu | %llu | %.3g (%.3g) | %.1f | "
                       "%.2f (%.1f) |\n",
                       backend.c_str(), (unsigned long long)r.value("instances", 0ull),
                       (unsigned long long)r.value("chains", 0ull),
@@ -68,7 +74,8 @@ std::string render_open_world(const json& rows) {
                       seconds_of(still.value("step", json::object()), "median_seconds"),
                       seconds_of(frame, "median_seconds"), seconds_of(frame, "p99_seconds"),
                       seconds_of(frame, "max_seconds"), r.value("changes_add_seconds", 0.0) * 1e3,
-                      (unsigned long long)over, pop.value("largest_jump_m", 0.0) * 1e3,
+                      (unsigned long long)over, (unsigned long long)r.value("fade_steps", 0ull),
+                      pop.value("largest_jump_m", 0.0) * 1e3,
                       pop.value("motion_of_largest_m", 0.0) * 1e3, r.value("copy_bandwidth_fraction", 0.0) * 100.0,
                       memory.value("estimate_device_bytes", 0.0) * 1e-9,
                       memory.value("estimate_whole_trees_device_bytes", 0.0) * 1e-9);

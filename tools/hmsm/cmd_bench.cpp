@@ -47,6 +47,7 @@ struct BenchFlags {
     std::string wind = "y1";
     bool open_world = false;  // the open-world case (bench_open_world.h)
     int64_t open_world_trees = 500000, open_world_frames = 300, open_world_changes = 0;
+    int64_t open_world_fade_steps = LodBands{}.fade_steps;
     std::string dynamics = "paper";  // coupled: also the dynamics table (bench_dynamics.h)
     bool quick = false, no_progress = false;
     std::string json_path, out_stem, commit = "unknown", render;
@@ -187,6 +188,9 @@ void register_bench_flags(CLI::App& app) {
     add_integer_option(app, "--open-world-changes", flags.open_world_changes,
                        "streaming and LOD changes per frame the viewer's speed is set for (default 2000 per "
                        "500000 trees; implies --open-world)");
+    add_integer_option(app, "--open-world-fade-steps", flags.open_world_fade_steps,
+                       "steps a coarsening LOD switch fades over (LodBands::fade_steps, default " +
+                           std::to_string(LodBands{}.fade_steps) + "; 0: instantaneous switches; implies --open-world)");
     app.add_option("--case-budget", flags.case_budget,
                    "seconds one case may take: slower cases run fewer steps, forest sizes "
                    "extrapolated past it are skipped (default 20)");
@@ -230,9 +234,10 @@ int run_bench(CLI::App& app) {
     if (flags.frames < 0 || flags.frames > 100000)
         return fail_input("--frames " + std::to_string(flags.frames) + ": must be in [0, 100000]");
     flags.open_world |= app.count("--open-world-trees") + app.count("--open-world-frames") +
-                            app.count("--open-world-changes") > 0;
+                            app.count("--open-world-changes") + app.count("--open-world-fade-steps") > 0;
     auto world_settings = bench::open_world_settings(flags.open_world_trees, flags.open_world_frames,
-                                                     flags.open_world_changes, app.count("--open-world-changes") > 0);
+                                                     flags.open_world_changes, app.count("--open-world-changes") > 0,
+                                                     flags.open_world_fade_steps);
     if (!world_settings) return fail(world_settings.status());
     if (!(flags.case_budget > 0.0) || !std::isfinite(flags.case_budget))
         return fail_input("--case-budget: must be a positive number of seconds");
