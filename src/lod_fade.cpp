@@ -162,13 +162,14 @@ Status Simulation::Impl::relax_fades(const std::vector<uint32_t>& indices, bool 
     return backend_->run(program_for(detail::slices_covering(*data_, indices), Pass::compose), at_rest);
 }
 
-Status Simulation::Impl::fold_ready_fades() {
+Status Simulation::Impl::fold_ready_fades(bool every) {
     std::vector<std::pair<uint32_t, uint32_t>> folds;
     for (auto it = fades_.begin(); it != fades_.end();) {
         const int64_t index = live_index(it->first);
         const bool gone = index < 0 || instances_[size_t(index)].model != it->second.from_model;
-        if (!gone && it->second.ready) folds.emplace_back(uint32_t(index), it->second.target_model);
-        it = gone || it->second.ready ? fades_.erase(it) : std::next(it);
+        const bool folds_now = every || it->second.ready;
+        if (!gone && folds_now) folds.emplace_back(uint32_t(index), it->second.target_model);
+        it = gone || folds_now ? fades_.erase(it) : std::next(it);
     }
     std::sort(folds.begin(), folds.end());
     return switch_models(folds);

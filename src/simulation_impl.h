@@ -132,8 +132,9 @@ struct __attribute__((visibility("hidden"))) Simulation::Impl {
     /// Levels asked for (current index, level), in any order: finer or equal levels switch at
     /// once, coarser ones fade by lod_bands_. Returns how many instances changed level or target.
     Result<uint64_t> request_lods(std::vector<std::pair<uint32_t, uint32_t>> requests);
-    /// Switches the fades that are ready and drops those whose instance is gone or switched.
-    Status fold_ready_fades();
+    /// Switches the fades that are ready (`every`: all of them, ready or not) and drops those
+    /// whose instance is gone or switched.
+    Status fold_ready_fades(bool every = false);
     /// One step of every fade: scales the folded chains' state of the active fading instances
     /// and poses them (`scale` false: only measures the deflection left, for new fades among
     /// `indices`).

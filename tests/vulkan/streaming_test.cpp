@@ -213,5 +213,54 @@ TEST_F(VulkanTest, LevelSwitchesTravelWithTheRecordedFrames) {
     recorded.value().reset();  // before the engine's device
 }
 
+// A coarsening request fades under step(), but steps recorded for an engine cannot pass the
+// fading chains through the host: record_steps folds the fades under way first, exactly as the
+// same switches made at once between frames.
+TEST_F(VulkanTest, RecordedStepsFoldFadesAtOnce) {
+    std::string no_device;
+    auto engine = EngineDevice::create(no_device);
+    if (!no_device.empty()) GTEST_SKIP() << no_device;
+    ASSERT_TRUE(engine);
+    SimulationConfig config;
+    config.wind.strength = 6.0;
+    Scene scene = *grid_scene(small_tree(), 5, 5.0, 4);
+    scene.lod_budgets = {{3, 1}};
+    auto recorded = vulkan::create_simulation(scene, config, engine->context());
+    ASSERT_TRUE(recorded.ok()) << recorded.status().message();
+    Simulation& sim = *recorded.value();
+    std::string skip;
+    auto reference = create_simulation_or_skip(scene, config, BackendKind::vulkan, skip);
+    ASSERT_TRUE(reference);
+    {
+        EngineFrames frames(*engine, 3);
+        if (HasFailure()) return;
+        for (uint32_t f = 0; f < 6; ++f) {
+            if (f == 2) {
+                const InstanceId ids[] = {InstanceId(1), InstanceId(4)};
+                const uint32_t levels[] = {2, 1};
+                auto requested = sim.request_instance_lods(ids, levels);
+                ASSERT_TRUE(requested.ok()) << requested.status().message();
+                ASSERT_EQ(sim.fading_instance_count(), 2u) << "the trees sway: their switches fade";
+                ASSERT_TRUE(reference->set_instance_lods(ids, levels).ok());
+            }
+            VkCommandBuffer cmd = frames.begin(f);
+            const Status status = vulkan::record_steps(sim, cmd, 2);
+            frames.submit(f);
+            ASSERT_TRUE(status.ok()) << "frame " << f << ": " << status.message();
+            EXPECT_EQ(sim.fading_instance_count(), 0u) << "frame " << f;
+            ASSERT_TRUE(reference->step(2).ok());
+        }
+        frames.wait_all();
+    }
+    for (size_t i = 0; i < sim.instance_count(); ++i) EXPECT_EQ(sim.instances()[i].model, reference->instances()[i].model);
+    for (Output output : {Output::node_positions, Output::joint_matrices}) {
+        std::vector<float> a, b;
+        ASSERT_TRUE(sim.read(output, a).ok());
+        ASSERT_TRUE(reference->read(output, b).ok());
+        EXPECT_EQ(a, b) << "output " << int(output);
+    }
+    recorded.value().reset();  // before the engine's device
+}
+
 }  // namespace
 }  // namespace hmsm::test
