@@ -23,10 +23,12 @@ void vulkan_set_batch_runs(std::optional<bool> enabled, uint64_t max_workgroups)
 
 namespace vk {
 
-bool requested_batch_runs() {
+std::optional<bool> requested_batch_runs() {
     if (int hook = g_batch_runs.load()) return hook == 1;
     const char* env = std::getenv("HMSM_VULKAN_BATCH_RUNS");
-    return !(env && std::string(env) == "0");
+    if (env && std::string(env) == "0") return false;
+    if (env && std::string(env) == "1") return true;
+    return std::nullopt;
 }
 
 uint64_t requested_batch_workgroups() { return g_batch_workgroups.load(); }

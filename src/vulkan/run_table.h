@@ -27,17 +27,20 @@
 #include <vector>
 
 namespace hmsm::detail {
-/// Test hook: backends created afterwards batch runs when `enabled` (the default), or record
-/// each dispatch alone, and start a new launch where a batched one would pass `max_workgroups`
-/// workgroups (0: the device's maxComputeWorkGroupCount). Without the hook (`enabled` empty),
-/// the environment variable HMSM_VULKAN_BATCH_RUNS=0 turns batching off.
+/// Test hook: backends created afterwards batch runs when `enabled`, or record each dispatch
+/// alone, and start a new launch where a batched one would pass `max_workgroups` workgroups
+/// (0: the device's maxComputeWorkGroupCount). Without the hook (`enabled` empty), the
+/// environment variable HMSM_VULKAN_BATCH_RUNS decides (0 off, 1 on), else the device: a GPU
+/// batches, a CPU driver does not (llvmpipe runs the looked-up constants lane by lane, so the
+/// branches and the in-dispatch rounds' barrier loops cost more there than the launches saved).
 void vulkan_set_batch_runs(std::optional<bool> enabled, uint64_t max_workgroups = 0);
 }  // namespace hmsm::detail
 
 namespace hmsm::detail::vk {
 
-/// Whether backends created now batch runs (vulkan_set_batch_runs, HMSM_VULKAN_BATCH_RUNS).
-bool requested_batch_runs();
+/// Whether backends created now batch runs (vulkan_set_batch_runs, HMSM_VULKAN_BATCH_RUNS);
+/// empty: as the device prefers.
+std::optional<bool> requested_batch_runs();
 /// The most workgroups of a batched launch the hook asks for (0: the device's limit).
 uint64_t requested_batch_workgroups();
 

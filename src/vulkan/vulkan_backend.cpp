@@ -119,7 +119,7 @@ VulkanBackend::VulkanBackend(std::shared_ptr<Device> device)
       window_alignment_(requested_window_alignment()),
       fault_(g_injected_fault.load()),
       submissions_before_fault_(g_injected_fault_after.load()) {
-    batching_ = {requested_batch_runs(), requested_batch_workgroups()};
+    batching_ = {requested_batch_runs().value_or(!device_->is_cpu()), requested_batch_workgroups()};
 }
 
 Status VulkanBackend::check_device_lost() const {

@@ -7,8 +7,8 @@
 // command buffer take their live changes from a ring of frame slots (frame_ring.h) and replay
 // the program's commands built once (recorder.h RecordingPlan): no submission, no wait. Each
 // run of dispatches of one pass over many instance groups is one launch whose workgroups find
-// their constants in the run table (run_table.h), unless batching is off
-// (HMSM_VULKAN_BATCH_RUNS=0).
+// their constants in the run table (run_table.h), on a GPU (HMSM_VULKAN_BATCH_RUNS=0 or 1
+// decides).
 #pragma once
 
 #include "device.h"

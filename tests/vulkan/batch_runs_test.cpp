@@ -189,8 +189,13 @@ TEST_F(VulkanTest, BatchedRunsTravelWithRecordedFrames) {
         SCOPED_TRACE(to_string(composition));
         SimulationConfig config = windy_config();
         config.composition = composition;
-        auto recorded = vulkan::create_simulation(scene, config, engine->context());
+        Result<std::unique_ptr<Simulation>> recorded = Status{ErrorCode::internal, "not created"};
+        {
+            BatchRuns batching(true);
+            recorded = vulkan::create_simulation(scene, config, engine->context());
+        }
         ASSERT_TRUE(recorded.ok()) << recorded.status().message();
+        EXPECT_TRUE(vulkan_of(*recorded.value()).batches_runs());
         Simulation& sim = *recorded.value();
         std::string skip;
         std::unique_ptr<Simulation> reference;
@@ -225,15 +230,16 @@ TEST_F(VulkanTest, BatchedRunsTravelWithRecordedFrames) {
     }
 }
 
-TEST_F(VulkanTest, BatchingFollowsTheEnvironment) {
+TEST_F(VulkanTest, BatchingFollowsTheEnvironmentElseTheDevice) {
     std::string skip;
-    for (const char* value : {"0", "1"}) {
-        ::setenv("HMSM_VULKAN_BATCH_RUNS", value, 1);
+    for (const char* value : {"0", "1", ""}) {
+        if (*value) ::setenv("HMSM_VULKAN_BATCH_RUNS", value, 1);
         auto sim = create(single_tree_scene(small_tree()), Composition::pointer_jumping, BackendKind::vulkan, skip);
         ::unsetenv("HMSM_VULKAN_BATCH_RUNS");
         if (!skip.empty()) GTEST_SKIP() << skip;
         ASSERT_TRUE(sim);
-        EXPECT_EQ(vulkan_of(*sim).batches_runs(), value[0] == '1');
+        const bool expected = *value ? value[0] == '1' : !vulkan_of(*sim).device().is_cpu();
+        EXPECT_EQ(vulkan_of(*sim).batches_runs(), expected) << "HMSM_VULKAN_BATCH_RUNS=" << value;
     }
 }
 
