@@ -89,6 +89,7 @@ foreach(pass IN LISTS HMSM_PASSES ITEMS copy_bandwidth)
             "${_hmsm_glsl_dir}/octahedral.glsl" "${_hmsm_glsl_dir}/chain_math.glsl"
             "${_hmsm_glsl_dir}/coupled_math.glsl"
             "${CMAKE_CURRENT_SOURCE_DIR}/src/common/gpu_layout.h"
+            "${CMAKE_CURRENT_SOURCE_DIR}/src/common/run_table_layout.h"
     COMMENT "hmsm: compiling shaders/glsl/${pass}.comp to SPIR-V"
     VERBATIM)
   list(APPEND _hmsm_spirv_headers "${_out}")
@@ -102,6 +103,7 @@ set(_hmsm_vulkan_sources
   src/vulkan/device_buffer.cpp
   src/vulkan/pipelines.cpp
   src/vulkan/recorder.cpp
+  src/vulkan/run_table.cpp
   src/vulkan/frame_ring.cpp
   src/vulkan/windows.cpp
   src/vulkan/vulkan_backend.cpp

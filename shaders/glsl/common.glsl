@@ -6,6 +6,7 @@
 #define HMSM_COMMON_GLSL
 
 #include "gpu_layout.h"
+#include "run_table_layout.h"  // batched runs: the run table
 #include "octahedral.glsl"  // oct_encode / oct_decode for VertexLayout::packed
 
 #ifdef HMSM_SPECIALIZED_WORKGROUP_SIZE
@@ -23,8 +24,46 @@ layout(local_size_x = HMSM_WORKGROUP_SIZE, local_size_y = 1, local_size_z = 1) i
 #endif
 
 layout(push_constant, std430) uniform PushBlock {
-    PassConstants pc;
+    PassConstants pushed;
 };
+// The run table (run_table_layout.h): the constants of each dispatch of the
+// batched runs of the step program, and the first workgroup of the launch that runs it.
+layout(set = HMSM_RUN_TABLE_SET, binding = HMSM_RUN_TABLE_CONSTANTS, std430) readonly buffer RunConstants {
+    PassConstants run_constants[];
+};
+layout(set = HMSM_RUN_TABLE_SET, binding = HMSM_RUN_TABLE_WORKGROUPS, std430) readonly buffer RunWorkgroups {
+    uint run_first_workgroup[];
+};
+
+/// The constants of the dispatch this workgroup belongs to, whether it was launched alone (push
+/// constants) or as part of a run (its run-table entry); set by load_constants().
+PassConstants pc;
+/// The launch's workgroup where the dispatch's workgroups begin (0 for a dispatch alone).
+uint dispatch_first_workgroup = 0u;
+
+/// The launch's workgroup index. The host spreads large launches over a 2-D grid of workgroups
+/// (maxComputeWorkGroupCount[0] may be as low as 65535), so the index is linearized here.
+uint launch_workgroup_index() { return gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x; }
+
+/// Every main() starts here. A run's workgroups find their dispatch by a binary search for the
+/// last entry of the run whose first workgroup is at most theirs (uniform per workgroup); the
+/// step's wind slot comes with the push constants.
+void load_constants() {
+    if (pushed.kind != HMSM_DISPATCH_RUN_TABLE) {
+        pc = pushed;
+        return;
+    }
+    uint w = launch_workgroup_index();
+    uint lo = pushed.instance_begin, hi = pushed.instance_begin + pushed.element_count - 1u;
+    while (lo < hi) {
+        uint mid = hi - (hi - lo) / 2u;
+        if (run_first_workgroup[mid] <= w) lo = mid;
+        else hi = mid - 1u;
+    }
+    pc = run_constants[lo];
+    pc.wind_slot = pushed.wind_slot;
+    dispatch_first_workgroup = run_first_workgroup[lo];
+}
 
 // Static data (model and instance scope), written only by uploads.
 layout(set = 0, binding = HMSM_BINDING_CHAIN_PARENT, std430) readonly buffer ChainParent { int chain_parent[]; };
@@ -74,9 +113,8 @@ bool instance_paused(uint k) {
     return pc.params.w != 0.0 && instance_wind[HMSM_INSTANCE_WIND_VEC4S * (pc.instance_begin + k)].z != 0.0;
 }
 
-/// Global thread index. The host spreads large dispatches over a 2-D grid of workgroups
-/// (maxComputeWorkGroupCount[0] may be as low as 65535), so the index is linearized here.
-uint workgroup_index() { return gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x; }
+/// The workgroup's index within its dispatch, and the global thread index of the dispatch.
+uint workgroup_index() { return launch_workgroup_index() - dispatch_first_workgroup; }
 uint thread_index() { return workgroup_index() * gl_WorkGroupSize.x + gl_LocalInvocationID.x; }
 
 /// State index of model chain `c` of group instance `k` (cpu_state.h state_chain).

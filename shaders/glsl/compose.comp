@@ -13,6 +13,7 @@
 #include "chain_math.glsl"  // compose_jump
 
 void main() {
+    load_constants();
     if (pc.kind == HMSM_DISPATCH_JUMP_ROUNDS_IN_DISPATCH) {
         uint k = workgroup_index();
         if (k >= pc.element_count / pc.model_chain_count || instance_paused(k)) return;  // uniform per workgroup

@@ -39,6 +39,7 @@ void place_vertex(uint k, uint e, uint v, ivec2 chains, vec3 rest_position, vec3
 }
 
 void main() {
+    load_constants();
     uint n = pc.model_vertex_count;
     uint w = thread_index();
     if (pc.kind != HMSM_DISPATCH_CONTOUR_PACKED) {

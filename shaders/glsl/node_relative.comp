@@ -5,6 +5,7 @@
 #include "common.glsl"
 
 void main() {
+    load_constants();
     uint i = thread_index();
     if (i >= pc.element_count) return;
     uint k = i / pc.model_node_count;

@@ -7,6 +7,7 @@
 #include "chain_math.glsl"
 
 void main() {
+    load_constants();
     uint i = thread_index();
     if (i >= pc.element_count) return;
     uint k = i / pc.model_chain_count;

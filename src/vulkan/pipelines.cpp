@@ -2,6 +2,8 @@
 
 #include "vk_error.h"
 
+#include "../common/run_table_layout.h"
+
 #include <algorithm>
 
 // Generated at build time by cmake/HmsmVulkan.cmake (glslangValidator --vn hmsm_spirv_NAME).
@@ -27,13 +29,13 @@ std::span<const uint32_t> pass_spirv(Pass pass) {
 
 Result<std::unique_ptr<Pipelines>> Pipelines::create(const Device& device) {
     const DeviceLimits& limits = device.limits();
-    if (limits.max_storage_buffers_per_stage < kBufferCount ||
-        limits.max_storage_buffers_per_set < kBufferCount)
+    if (limits.max_storage_buffers_per_stage < kStorageBuffersPerStage ||
+        limits.max_storage_buffers_per_set < kStorageBuffersPerStage)
         return Status{ErrorCode::unsupported,
                       "vulkan: " + device.name() + " allows " +
                           std::to_string(limits.max_storage_buffers_per_stage) +
                           " storage buffers per stage (maxPerStageDescriptorStorageBuffers); hmsm needs " +
-                          std::to_string(kBufferCount)};
+                          std::to_string(kStorageBuffersPerStage)};
     if (limits.max_push_constants_size < sizeof(gpu::PassConstants))
         return Status{ErrorCode::unsupported, "vulkan: maxPushConstantsSize below " +
                                                   std::to_string(sizeof(gpu::PassConstants))};
@@ -59,10 +61,24 @@ Result<std::unique_ptr<Pipelines>> Pipelines::create(const Device& device) {
     set_info.pBindings = bindings.data();
     HMSM_VK_TRY(vk.vkCreateDescriptorSetLayout(dev, &set_info, nullptr, &p->set_layout_));
 
+    std::array<VkDescriptorSetLayoutBinding, kRunTableBindings> table_bindings{};
+    for (uint32_t b = 0; b < kRunTableBindings; ++b) {
+        table_bindings[b].binding = b;
+        table_bindings[b].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+        table_bindings[b].descriptorCount = 1;
+        table_bindings[b].stageFlags = VK_SHADER_STAGE_COMPUTE_BIT;
+    }
+    VkDescriptorSetLayoutCreateInfo table_info{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
+    table_info.bindingCount = kRunTableBindings;
+    table_info.pBindings = table_bindings.data();
+    HMSM_VK_TRY(vk.vkCreateDescriptorSetLayout(dev, &table_info, nullptr, &p->table_set_layout_));
+
+    static_assert(HMSM_RUN_TABLE_SET == 1, "set 0 binds the scene's buffers, set 1 the run table");
+    const std::array<VkDescriptorSetLayout, 2> set_layouts{p->set_layout_, p->table_set_layout_};
     VkPushConstantRange push{VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(gpu::PassConstants)};
     VkPipelineLayoutCreateInfo layout_info{VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO};
-    layout_info.setLayoutCount = 1;
-    layout_info.pSetLayouts = &p->set_layout_;
+    layout_info.setLayoutCount = uint32_t(set_layouts.size());
+    layout_info.pSetLayouts = set_layouts.data();
     layout_info.pushConstantRangeCount = 1;
     layout_info.pPushConstantRanges = &push;
     HMSM_VK_TRY(vk.vkCreatePipelineLayout(dev, &layout_info, nullptr, &p->layout_));
@@ -162,6 +178,7 @@ Pipelines::~Pipelines() {
             if (pipeline) vk.vkDestroyPipeline(dev, pipeline, nullptr);
     if (layout_) vk.vkDestroyPipelineLayout(dev, layout_, nullptr);
     if (set_layout_) vk.vkDestroyDescriptorSetLayout(dev, set_layout_, nullptr);
+    if (table_set_layout_) vk.vkDestroyDescriptorSetLayout(dev, table_set_layout_, nullptr);
 }
 
 }  // namespace hmsm::detail::vk

@@ -1,7 +1,8 @@
 // The seven compute pipelines (one per pass, SPIR-V embedded at build time; compose and
 // root_positions also in larger workgroup sizes for in-dispatch rounds), their shared
-// layout (descriptor set 0 with one storage buffer per BufferId, push constants =
-// gpu::PassConstants). The descriptor sets binding the scene's buffers are in windows.h.
+// layout (descriptor set 0 with one storage buffer per BufferId, set 1 the run table of batched
+// runs, push constants = gpu::PassConstants). The descriptor sets binding the scene's buffers
+// are in windows.h, the run table's in run_table.h.
 #pragma once
 
 #include "device.h"
@@ -41,12 +42,17 @@ public:
     Status prepare(std::span<const Dispatch> program);
     VkPipelineLayout layout() const { return layout_; }
     VkDescriptorSetLayout set_layout() const { return set_layout_; }
+    /// Set HMSM_RUN_TABLE_SET: the run table's constants and first workgroups.
+    VkDescriptorSetLayout table_set_layout() const { return table_set_layout_; }
+    static constexpr uint32_t kRunTableBindings = 2;
+    static constexpr uint32_t kStorageBuffersPerStage = kBufferCount + kRunTableBindings;
 
 private:
     explicit Pipelines(const Device& device) : device_(device) {}
 
     const Device& device_;
     VkDescriptorSetLayout set_layout_ = VK_NULL_HANDLE;
+    VkDescriptorSetLayout table_set_layout_ = VK_NULL_HANDLE;
     VkPipelineLayout layout_ = VK_NULL_HANDLE;
     Result<VkPipeline> create_pipeline(Pass pass, uint32_t workgroup_size) const;
     /// A pipeline of `code` with specialization constant 0 (the workgroup size); no

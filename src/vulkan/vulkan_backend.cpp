@@ -40,6 +40,9 @@ Result<std::unique_ptr<VulkanBackend>> VulkanBackend::create(std::shared_ptr<Dev
     auto pipelines = Pipelines::create(dev);
     if (!pipelines) return pipelines.status();
     b->pipelines_ = std::move(pipelines).value();
+    auto table = RunTable::create(dev, b->pipelines_->table_set_layout());
+    if (!table) return table.status();
+    b->run_table_ = std::move(table).value();
     auto transfer = Transfer::create(dev);
     if (!transfer) return transfer.status();
     b->transfer_ = std::move(transfer).value();
@@ -74,6 +77,7 @@ VulkanBackend::~VulkanBackend() {
     // Buffers, pipelines and the transfer go before the device (member order would not ensure it
     // for the shared device).
     sets_.reset();
+    run_table_.reset();
     ring_.reset();
     for (Buffer& b : buffers_) b = Buffer();
     pipelines_.reset();
@@ -114,7 +118,9 @@ VulkanBackend::VulkanBackend(std::shared_ptr<Device> device)
       window_bytes_(requested_window_bytes()),
       window_alignment_(requested_window_alignment()),
       fault_(g_injected_fault.load()),
-      submissions_before_fault_(g_injected_fault_after.load()) {}
+      submissions_before_fault_(g_injected_fault_after.load()) {
+    batching_ = {requested_batch_runs().value_or(!device_->is_cpu()), requested_batch_workgroups()};
+}
 
 Status VulkanBackend::check_device_lost() const {
     if (device_lost_)
@@ -211,17 +217,17 @@ Status VulkanBackend::ensure_timestamp_capacity(Slot& slot, uint32_t queries) {
     return {};
 }
 
-Status VulkanBackend::submit_chunk(Slot& slot, std::span<const Dispatch> program,
-                                   std::span<const RunStep> steps) {
+Status VulkanBackend::submit_chunk(Slot& slot, std::span<const RunStep> steps) {
     const VolkDeviceTable& vk = device_->vk();
     const bool timed = profiling_ && device_->limits().timestamp_period_ns > 0.0;
-    if (timed) HMSM_TRY(ensure_timestamp_capacity(slot, uint32_t(steps.size() * program.size() + 1)));
+    const size_t per_step = recording_.timestamp_passes().size();
+    if (timed) HMSM_TRY(ensure_timestamp_capacity(slot, uint32_t(steps.size() * per_step + 1)));
     HMSM_VK_TRY(vk.vkResetCommandBuffer(slot.command_buffer, 0));
     VkCommandBufferBeginInfo begin{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
     begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
     HMSM_VK_TRY(vk.vkBeginCommandBuffer(slot.command_buffer, &begin));
     record_steps(*device_, pipelines_->layout(), recording_, slot.command_buffer, steps,
-                 timed ? slot.timestamps : VK_NULL_HANDLE);
+                 timed ? slot.timestamps : VK_NULL_HANDLE, run_table_->set());
     HMSM_VK_TRY(vk.vkEndCommandBuffer(slot.command_buffer));
     VkSubmitInfo submit{VK_STRUCTURE_TYPE_SUBMIT_INFO};
     submit.commandBufferCount = 1;
@@ -237,13 +243,14 @@ Status VulkanBackend::submit_chunk(Slot& slot, std::span<const Dispatch> program
     return {};
 }
 
-Status VulkanBackend::finish_slot(Slot& slot, std::span<const Dispatch> program) {
+Status VulkanBackend::finish_slot(Slot& slot) {
     if (!slot.in_flight) return {};
     const VolkDeviceTable& vk = device_->vk();
     slot.in_flight = false;
     HMSM_VK_TRY(vk.vkWaitForFences(device_->handle(), 1, &slot.fence, VK_TRUE, UINT64_MAX));
     if (slot.steps == 0) return {};
-    const uint32_t queries = uint32_t(slot.steps * program.size() + 1);
+    const std::span<const Pass> passes = recording_.timestamp_passes();
+    const uint32_t queries = uint32_t(slot.steps * passes.size() + 1);
     std::vector<uint64_t> ticks(queries);
     HMSM_VK_TRY(vk.vkGetQueryPoolResults(device_->handle(), slot.timestamps, 0, queries,
                                          ticks.size() * sizeof(uint64_t), ticks.data(),
@@ -256,7 +263,7 @@ Status VulkanBackend::finish_slot(Slot& slot, std::span<const Dispatch> program)
     // from the completion of everything before it to its own completion.
     for (uint32_t j = 0; j + 1 < queries; ++j) {
         uint64_t delta = (ticks[j + 1] - ticks[j]) & mask;
-        times_.seconds[uint32_t(program[j % program.size()].pass)] +=
+        times_.seconds[uint32_t(passes[j % passes.size()])] +=
             double(delta) * limits.timestamp_period_ns * 1e-9;
     }
     return {};
@@ -274,10 +281,11 @@ Status VulkanBackend::run(std::span<const Dispatch> program, std::span<const Run
         return {};
     }
     if (!record_target_) HMSM_TRY(submit_held_back());
-    HMSM_TRY(recording_.prepare(*device_, *pipelines_, Windows{*plan_, *sets_}, program));
+    HMSM_TRY(prepare_recording(program));
     if (record_target_) {
         ring_->record_copies(record_target_);
-        record_steps(*device_, pipelines_->layout(), recording_, record_target_, steps, VK_NULL_HANDLE);
+        record_steps(*device_, pipelines_->layout(), recording_, record_target_, steps, VK_NULL_HANDLE,
+                     run_table_->set());
         return device_->take_validation_messages();
     }
     const size_t steps_per_chunk = std::max<size_t>(1, kDispatchesPerChunk / program.size());
@@ -285,19 +293,35 @@ Status VulkanBackend::run(std::span<const Dispatch> program, std::span<const Run
     size_t chunk = 0;
     for (size_t first = 0; first < steps.size() && status.ok(); first += steps_per_chunk, ++chunk) {
         Slot& slot = slots_[chunk % slots_.size()];
-        status = finish_slot(slot, program);
+        status = finish_slot(slot);
         if (status.ok())
-            status = submit_chunk(slot, program,
-                                  steps.subspan(first, std::min(steps_per_chunk, steps.size() - first)));
+            status = submit_chunk(slot, steps.subspan(first, std::min(steps_per_chunk, steps.size() - first)));
     }
     // Oldest first; after a failure still wait for whatever was submitted.
     for (size_t k = 0; k < slots_.size(); ++k) {
-        Status finished = finish_slot(slots_[(chunk + k) % slots_.size()], program);
+        Status finished = finish_slot(slots_[(chunk + k) % slots_.size()]);
         if (status.ok()) status = finished;
     }
     HMSM_TRY(status);
+    // Every recorded frame precedes hmsm's own submissions (docs/vulkan.md): none reads a run
+    // table that was replaced.
+    run_table_->release_replaced();
     if (profiling_ && device_->limits().timestamp_period_ns > 0.0) times_.steps = steps.size();
     return device_->take_validation_messages();
+}
+
+Status VulkanBackend::prepare_recording(std::span<const Dispatch> program) {
+    auto built = recording_.prepare(*device_, *pipelines_, Windows{*plan_, *sets_}, program, batching_);
+    if (!built) return built.status();
+    if (!*built) return {};
+    // The table travels with the recording that first runs the program (frames in flight may
+    // still read the old contents), or is written now before the steps are submitted.
+    Status status = record_target_ ? run_table_->stage(*ring_, recording_.table_constants(),
+                                                       recording_.table_first_workgroups())
+                                   : run_table_->upload(*transfer_, recording_.table_constants(),
+                                                        recording_.table_first_workgroups());
+    if (!status) recording_.clear();  // built again, with its table, by the next run
+    return status;
 }
 
 Status VulkanBackend::read(BufferId id, uint64_t first, uint64_t count, void* dst, Scalar as) const {
@@ -324,6 +348,7 @@ Status VulkanBackend::read(BufferId id, uint64_t first, uint64_t count, void* ds
 Status VulkanBackend::begin_recording(VkCommandBuffer command_buffer) {
     record_target_ = command_buffer;
     ring_->next_frame();
+    run_table_->next_recording(ring_->frames());
     return record_held_back();
 }
 

@@ -5,7 +5,10 @@
 // maxStorageBufferRange are bound in windows, one descriptor set per segment of instances, and
 // each dispatch is recorded as one part per segment (windows.h). Steps recorded into an engine's
 // command buffer take their live changes from a ring of frame slots (frame_ring.h) and replay
-// the program's commands built once (recorder.h RecordingPlan): no submission, no wait.
+// the program's commands built once (recorder.h RecordingPlan): no submission, no wait. Each
+// run of dispatches of one pass over many instance groups is one launch whose workgroups find
+// their constants in the run table (run_table.h), on a GPU (HMSM_VULKAN_BATCH_RUNS=0 or 1
+// decides).
 #pragma once
 
 #include "device.h"
@@ -14,6 +17,7 @@
 #include "frame_ring.h"
 #include "pipelines.h"
 #include "recorder.h"
+#include "run_table.h"
 #include "windows.h"
 
 #include "../backend.h"
@@ -72,6 +76,10 @@ public:
     /// Queue submissions hmsm made itself on this backend (step, read, write outside a
     /// recording, ...); a test hook: record_steps makes none.
     uint64_t submissions() const { return submissions_ + transfer_->submissions(); }
+    /// vkCmdDispatch calls per step of the program last run (a test hook).
+    size_t launches_per_step() const { return recording_.launches(); }
+    /// Whether runs of dispatches are batched (vulkan_set_batch_runs, HMSM_VULKAN_BATCH_RUNS).
+    bool batches_runs() const { return batching_.batch_runs; }
 
     /// For `hmsm bench`'s roofline (copy_bandwidth.cpp): the faster of vkCmdCopyBuffer and a
     /// compute-shader copy between two scratch device-local buffers, each the median of
@@ -106,9 +114,11 @@ private:
     /// Static model buffers within maxStorageBufferRange; the segments of the state buffers.
     Status plan_windows(const SceneData& scene);
     Status upload_static(BufferId id, const SceneData& scene);
-    Status submit_chunk(Slot& slot, std::span<const Dispatch> program, std::span<const RunStep> steps);
-    /// Waits for `slot` and adds its timestamps to times_ (program = what it ran).
-    Status finish_slot(Slot& slot, std::span<const Dispatch> program);
+    Status submit_chunk(Slot& slot, std::span<const RunStep> steps);
+    /// Waits for `slot` and adds its timestamps to times_ (of recording_'s timed parts).
+    Status finish_slot(Slot& slot);
+    /// The recording plan of `program`, and the run table's contents where the plan is new.
+    Status prepare_recording(std::span<const Dispatch> program);
     Status ensure_timestamp_capacity(Slot& slot, uint32_t queries);
     /// A write, move or run of an instance change held back for the next recording.
     struct HeldBack {
@@ -155,6 +165,8 @@ private:
     VkCommandBuffer record_target_ = VK_NULL_HANDLE;
     std::unique_ptr<FrameRing> ring_;
     RecordingPlan recording_;  // the commands of a step of the last program run
+    RecordingPlan::Batching batching_;
+    std::unique_ptr<RunTable> run_table_;
     uint64_t submissions_ = 0;
     bool in_instance_change_ = false;
     bool engine_recorded_ = false;  // record_steps has recorded into an engine's command buffer
