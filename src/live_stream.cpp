@@ -171,10 +171,16 @@ Result<bool> Simulation::Impl::swap_remove_in_place(const std::vector<uint32_t>&
     auto size = [&](uint32_t i) { return detail::counts_of(d.models[instances_[i].model]); };
     const ElementCounts live{d.total_chains, d.total_nodes, d.total_vertices};
     ElementCounts staged;
-    for (uint32_t f : fillers) staged += size(f);
-    // Staging lies above every live element, in each scope.
+    bool same_sizes = true;  // each filler as large as the instance it replaces: nothing shifts
+    for (size_t j = 0; j < fillers.size(); ++j) {
+        staged += size(fillers[j]);
+        same_sizes = same_sizes && size(fillers[j]) == size(holes[j]);
+    }
+    // Staging lies above every live element, in each scope; without shifts the fillers go
+    // straight into the holes, which lie below every filler.
     const ElementCounts room = live + staged;
-    if (room.chains > d.chain_capacity || room.nodes > d.node_capacity || room.vertices > d.vertex_capacity) {
+    if (!same_sizes &&
+        (room.chains > d.chain_capacity || room.nodes > d.node_capacity || room.vertices > d.vertex_capacity)) {
         growth_ = {room.chains, room.nodes, room.vertices, 0};
         return false;
     }
@@ -203,13 +209,17 @@ Result<bool> Simulation::Impl::swap_remove_in_place(const std::vector<uint32_t>&
             }
             if (j == holes.size()) break;
             const ElementCounts hole_at = offsets.before(holes[j]) + delta;
-            for (int s = 0; s < 3; ++s) add_move(scopes[s].unstage, pick(staging, s), pick(hole_at, s), pick(size(fillers[j]), s));
+            const ElementCounts source = same_sizes ? filler_at[j] : staging;
+            for (int s = 0; s < 3; ++s) add_move(scopes[s].unstage, pick(source, s), pick(hole_at, s), pick(size(fillers[j]), s));
             staging += size(fillers[j]);
             delta += size(fillers[j]);
             delta -= size(holes[j]);
             begin = holes[j] + 1;
         }
-        for (int s = 0; s < 3; ++s) scopes[s].shift = detail::ordered_shifts(ascending[s]);
+        for (int s = 0; s < 3; ++s) {
+            scopes[s].shift = detail::ordered_shifts(ascending[s]);
+            if (same_sizes) scopes[s].stage.clear();
+        }
     }
 
     detail::InstanceChangeBracket change(*backend_);

@@ -28,8 +28,8 @@ struct __attribute__((visibility("hidden"))) Simulation::Impl {
                                                       detail::JumpingForm jumping_form = detail::JumpingForm::by_size);
 
     Status step(uint32_t count);
-    /// Uploads what live control changed (wind table header, instance winds) and rebuilds the
-    /// step program over the runs of active instances (live_control.cpp).
+    /// Uploads what live control changed (wind table header, instance winds; live_control.cpp).
+    /// The step program is rebuilt by current_program().
     Status apply_pending();
     /// The step program, rebuilt first if a change left it stale (live changes leave the
     /// rebuild to the next step, so a frame's changes rebuild it once).
@@ -165,7 +165,7 @@ struct __attribute__((visibility("hidden"))) Simulation::Impl {
     /// take next_instance_id_ on, so the ids stay ascending until a swap removal moves one.
     std::vector<InstanceId> instance_ids_;
     /// Whether instance_ids_ is ascending (index_of searches it); otherwise index_of uses
-    /// id_index_, the index of each current id, rebuilt by every add or remove.
+    /// id_index_, the index of each current id (kept by the streaming paths, rebuilt by reshape).
     bool ids_ascending_ = true;
     std::unordered_map<uint64_t, uint32_t> id_index_;
     uint64_t next_instance_id_ = 0;
