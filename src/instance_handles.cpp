@@ -84,6 +84,15 @@ Status Simulation::swap_remove_instances(std::span<const InstanceId> ids) {
     if (indices->size() == n)
         return {ErrorCode::invalid_argument,
                 "cannot remove every instance: a simulation keeps at least one (deactivate it instead)"};
+    if (s.streaming_paths_ && s.backend_->capabilities().reshapes_in_place) {
+        std::vector<uint32_t> sorted(indices->begin(), indices->end());
+        std::sort(sorted.begin(), sorted.end());
+        Result<bool> in_place = s.swap_remove_in_place(sorted);
+        if (!in_place) return in_place.status();
+        if (*in_place) return {};
+        // No room to stage the fillers: the general path, in place where the moves allow,
+        // else uploading anew with the room the staging asked for (growth_).
+    }
     std::vector<bool> removed(n, false);
     for (uint64_t i : *indices) removed[i] = true;
     // The holes below the new count take, in ascending order, the survivors at or past it in

@@ -31,32 +31,22 @@ inline std::vector<BufferId> carried_buffers(bool coupled) {
 inline constexpr BufferId kMovedOutputs[] = {BufferId::node_relative, BufferId::node_world,
                                              BufferId::vertex_position, BufferId::vertex_normal};
 
+/// Brackets a change of the instance list (Backend::begin_instance_change).
+struct InstanceChangeBracket {
+    Backend& backend;
+    explicit InstanceChangeBracket(Backend& b) : backend(b) { backend.begin_instance_change(); }
+    ~InstanceChangeBracket() { backend.end_instance_change(); }
+    InstanceChangeBracket(const InstanceChangeBracket&) = delete;
+    InstanceChangeBracket& operator=(const InstanceChangeBracket&) = delete;
+};
+
 /// Halves of a chain-scope buffer: 2 for the ping-pong buffers, chain_capacity elements apart.
 inline uint32_t halves_of(BufferId id) { return buffer_info(id).scope == Scope::chain_halves ? 2u : 1u; }
 
-/// Moves bringing the elements of every instance not listed in `resized` (ascending, each
-/// once) from [old[i], old[i + 1]) to [now[i], now[i + 1]), a run of neighbours as one move,
-/// in an order that Backend::move_elements may apply one after another: no move writes over
-/// the source of a move after it. `old` and `now` are running sums over the instances (one
-/// more entry than instances), equal in each instance that is not resized.
-///
-/// Why an order exists and which: the moves keep their order in sources and destinations,
-/// so a move j writes over the source of a move k only if every move from j to k shifts the
-/// same way (all up or all down): the destinations between them lie past D_j's end, beyond
-/// S_k's start, so beyond their own sources (and symmetrically going down). Runs of moves that
-/// shift the same way are thus independent; one going down runs in ascending order, one going
-/// up in descending order. Costs O(resized).
-inline std::vector<ElementMove> shift_moves(std::span<const uint64_t> old, std::span<const uint64_t> now,
-                                            std::span<const uint32_t> resized) {
-    std::vector<ElementMove> ascending;
-    const uint32_t count = uint32_t(old.size() - 1);
-    uint32_t begin = 0;  // first instance of the run that is not resized
-    for (size_t k = 0; k <= resized.size(); ++k) {
-        const uint32_t end = k < resized.size() ? resized[k] : count;
-        if (end > begin && old[begin] != now[begin] && old[end] > old[begin])
-            ascending.push_back({old[begin], now[begin], old[end] - old[begin]});
-        begin = end + 1;
-    }
+/// `ascending` (moves in ascending order of source and destination) in an order that
+/// Backend::move_elements may apply one after another (shift_moves below says why one exists):
+/// each run of moves shifting the same way, down in ascending order, up in descending order.
+inline std::vector<ElementMove> ordered_shifts(const std::vector<ElementMove>& ascending) {
     std::vector<ElementMove> ordered;
     ordered.reserve(ascending.size());
     for (size_t k = 0; k < ascending.size();) {
@@ -69,6 +59,39 @@ inline std::vector<ElementMove> shift_moves(std::span<const uint64_t> old, std::
         k = end;
     }
     return ordered;
+}
+
+/// Moves bringing the elements of every instance not listed in `resized` (ascending, each
+/// once) from [old[i], old[i + 1]) to [now[i], now[i + 1]), a run of neighbours as one move,
+/// in an order that Backend::move_elements may apply one after another: no move writes over
+/// the source of a move after it. `old` and `now` are running sums over the `count` instances
+/// (read at 0, `count` and each resized instance and the one after it only), equal in each
+/// instance that is not resized.
+///
+/// Why an order exists and which: the moves keep their order in sources and destinations,
+/// so a move j writes over the source of a move k only if every move from j to k shifts the
+/// same way (all up or all down): the destinations between them lie past D_j's end, beyond
+/// S_k's start, so beyond their own sources (and symmetrically going down). Runs of moves that
+/// shift the same way are thus independent; one going down runs in ascending order, one going
+/// up in descending order. Costs O(resized) lookups.
+template <class Offsets>
+std::vector<ElementMove> shift_moves(const Offsets& old, const Offsets& now, uint32_t count,
+                                     std::span<const uint32_t> resized) {
+    std::vector<ElementMove> ascending;
+    uint32_t begin = 0;  // first instance of the run that is not resized
+    for (size_t k = 0; k <= resized.size(); ++k) {
+        const uint32_t end = k < resized.size() ? resized[k] : count;
+        if (end > begin && old[begin] != now[begin] && old[end] > old[begin])
+            ascending.push_back({old[begin], now[begin], old[end] - old[begin]});
+        begin = end + 1;
+    }
+    return ordered_shifts(ascending);
+}
+
+/// shift_moves over running sums held whole (one more entry than instances).
+inline std::vector<ElementMove> shift_moves(std::span<const uint64_t> old, std::span<const uint64_t> now,
+                                            std::span<const uint32_t> resized) {
+    return shift_moves(old, now, uint32_t(old.size() - 1), resized);
 }
 
 }  // namespace hmsm::detail

@@ -39,11 +39,16 @@ std::string instance_name(uint64_t instance) { return "instance " + std::to_stri
 /// 2026-11-26-nvidia-h100-d110289.md, analysis, paused instances; docs/architecture.md).
 constexpr uint32_t kPausedRunThatSplits = 16;
 
+/// Unchanged instances between two changed ones that apply_pending rewrites rather than
+/// starting another write of instance_wind (16: not tuned).
+constexpr uint32_t kWindGapRewritten = 16;
+
 /// The step program's groups: each group's instances from its first active one to its last,
 /// split where at least kPausedRunThatSplits paused instances lie in a row. A group with no
 /// active instance runs nothing; paused instances left inside a run cost no write.
 std::vector<detail::InstanceGroup> active_groups(const detail::SceneData& d,
-                                                 const std::vector<Instance>& instances) {
+                                                 const std::vector<Instance>& instances, uint64_t paused) {
+    if (paused == 0) return d.groups;  // every group is one run
     std::vector<detail::InstanceGroup> runs;
     for (const detail::InstanceGroup& g : d.groups) {
         const detail::ModelRange& m = d.models[g.model];
@@ -102,23 +107,34 @@ Status Simulation::Impl::apply_pending() {
         dirty_instances_.clear();
     }
     if (!dirty_instances_.empty()) {
-        // One write from the first changed instance to the last (those between rewritten as
-        // they are): a write is a transfer of its own, and a tenth of a forest paused for
-        // culling would take one each.
-        const auto [first, last] = std::minmax_element(dirty_instances_.begin(), dirty_instances_.end());
-        const uint32_t begin = *first, count = *last - *first + 1;
-        wind_scratch_.resize(size_t(count) * detail::kInstanceWindScalars);
-        for (uint32_t k = 0; k < count; ++k)
-            detail::fill_instance_wind(config_.wind, modes_, instances_[begin + k],
-                                       &wind_scratch_[size_t(k) * detail::kInstanceWindScalars]);
-        HMSM_TRY(backend_->write(BufferId::instance_wind, begin, count, wind_scratch_.data(), detail::Scalar::f64));
+        // One write per run of changed instances, the unchanged ones of a short gap between two
+        // rewritten as they are: a write is a transfer of its own, and a tenth of a forest
+        // paused for culling would take one each; a long gap is not rewritten, so a change
+        // costs in proportion to the instances it touched.
+        std::sort(dirty_instances_.begin(), dirty_instances_.end());
+        for (size_t k = 0; k < dirty_instances_.size();) {
+            const uint32_t begin = dirty_instances_[k];
+            uint32_t last = begin;
+            while (++k < dirty_instances_.size() && dirty_instances_[k] - last <= kWindGapRewritten)
+                last = dirty_instances_[k];
+            const uint32_t count = last - begin + 1;
+            wind_scratch_.resize(size_t(count) * detail::kInstanceWindScalars);
+            for (uint32_t i = 0; i < count; ++i)
+                detail::fill_instance_wind(config_.wind, modes_, instances_[begin + i],
+                                           &wind_scratch_[size_t(i) * detail::kInstanceWindScalars]);
+            HMSM_TRY(backend_->write(BufferId::instance_wind, begin, count, wind_scratch_.data(), detail::Scalar::f64));
+        }
         dirty_instances_.clear();
     }
+    return {};
+}
+
+const std::vector<detail::Dispatch>& Simulation::Impl::current_program() {
     if (program_dirty_) {
-        step_program_ = program_for(active_groups(*data_, instances_), Pass::wind_force);
+        step_program_ = program_for(active_groups(*data_, instances_, paused_count_), Pass::wind_force);
         program_dirty_ = false;
     }
-    return {};
+    return step_program_;
 }
 
 Status Simulation::set_wind(const Wind& wind) {
@@ -196,6 +212,7 @@ Status Simulation::set_instance_active(uint64_t instance, bool active) {
     HMSM_TRY(check_instance(instance, impl_->instances_.size()));
     if (impl_->instances_[instance].active != active) {
         impl_->instances_[instance].active = active;
+        impl_->paused_count_ += active ? uint64_t(-1) : 1;
         impl_->dirty_instances_.push_back(uint32_t(instance));  // its paused flag
         impl_->program_dirty_ = true;
     }
@@ -225,6 +242,11 @@ Status Simulation::add_instances(std::span<const Instance> instances) {
         if (!std::isfinite(inst.wind_phase) ||
             !std::isfinite(detail::instance_wind_phase(s.config_.wind, inst)))
             return {ErrorCode::invalid_argument, where + "wind phase is not finite"};
+    }
+    if (s.streaming_paths_) {
+        Result<bool> appended = s.append_in_place(instances);
+        if (!appended) return appended.status();
+        if (*appended) return {};
     }
     std::vector<uint32_t> survivors(s.instances_.size());
     for (uint32_t i = 0; i < survivors.size(); ++i) survivors[i] = i;

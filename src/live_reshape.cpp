@@ -177,6 +177,7 @@ Status Simulation::Impl::reshape(const std::vector<uint32_t>& survivors, std::sp
     }
     instances_ = std::move(next);
     instances_changed();
+    instance_list_laid_out();
     std::vector<InstanceId> ids;
     ids.reserve(instances_.size());
     for (uint32_t i : survivors) ids.push_back(instance_ids_[i]);
@@ -195,8 +196,7 @@ Status Simulation::Impl::reshape(const std::vector<uint32_t>& survivors, std::sp
         // Winds of the instances that changed place or came: written as one range, together
         // with those changed before whose place stayed (apply_pending).
         std::erase_if(dirty_instances_, [&](uint32_t i) { return i >= instances_.size(); });
-        dirty_instances_.push_back(first_moved);
-        dirty_instances_.push_back(last_moved);
+        for (uint32_t i = first_moved; i <= last_moved; ++i) dirty_instances_.push_back(i);
     } else {
         std::erase_if(dirty_instances_, [&](uint32_t i) { return i >= instances_.size(); });
     }
@@ -328,11 +328,16 @@ Status Simulation::Impl::reshape_anew(std::unique_ptr<detail::SceneData> next,
         *next = std::move(whole);
     }
     const uint64_t limit = kMaxStateElements;
-    next->chain_capacity = std::max(grown(data_->chain_capacity, next->total_chains, limit), reserved_.chains);
-    next->node_capacity = std::max(grown(data_->node_capacity, next->total_nodes, limit), reserved_.nodes);
-    next->vertex_capacity = std::max(grown(data_->vertex_capacity, next->total_vertices, limit), reserved_.vertices);
+    // growth_: the room a swap removal's staging asked for, grown as the live counts are.
+    next->chain_capacity = std::max({grown(data_->chain_capacity, next->total_chains, limit), reserved_.chains,
+                                     grown(data_->chain_capacity, std::min(growth_.chains, limit), limit)});
+    next->node_capacity = std::max({grown(data_->node_capacity, next->total_nodes, limit), reserved_.nodes,
+                                    grown(data_->node_capacity, std::min(growth_.nodes, limit), limit)});
+    next->vertex_capacity = std::max({grown(data_->vertex_capacity, next->total_vertices, limit), reserved_.vertices,
+                                      grown(data_->vertex_capacity, std::min(growth_.vertices, limit), limit)});
     next->instance_capacity = uint32_t(std::max<uint64_t>(
         grown(data_->instance_capacity, next->instance_count(), uint64_t(1) << 24), reserved_.instances));
+    growth_ = {};
     const detail::Scalar scalar = backend_->kind() == BackendKind::cpu64 ? detail::Scalar::f64 : detail::Scalar::f32;
     struct Saved {
         std::vector<double> f64;

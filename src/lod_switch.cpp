@@ -132,8 +132,8 @@ std::vector<SwitchedRun> runs_of(const std::vector<uint32_t>& switched) {
 /// half back to back: only their old ranges are read.
 template <class V>
 Status read_switched(const detail::Backend& backend, BufferId id, uint64_t capacity, detail::Scalar scalar,
-                     const std::vector<SwitchedRun>& runs, const std::vector<uint64_t>& old_chain,
-                     const std::vector<uint64_t>& new_chain, const std::vector<const ChainMap*>& maps,
+                     const std::vector<SwitchedRun>& runs, const detail::ByInstance<uint64_t>& old_chain,
+                     const detail::ByInstance<uint64_t>& new_chain, const detail::ByInstance<const ChainMap*>& maps,
                      std::vector<V>& carried) {
     const uint32_t per = detail::shape_scalars(detail::buffer_info(id).shape);
     std::vector<V> old;
@@ -156,7 +156,7 @@ Status read_switched(const detail::Backend& backend, BufferId id, uint64_t capac
 /// Writes what read_switched carried into the switched instances' new ranges.
 template <class V>
 Status write_switched(detail::Backend& backend, BufferId id, uint64_t capacity, detail::Scalar scalar,
-                      const std::vector<SwitchedRun>& runs, const std::vector<uint64_t>& new_chain,
+                      const std::vector<SwitchedRun>& runs, const detail::ByInstance<uint64_t>& new_chain,
                       const std::vector<V>& carried) {
     const uint32_t per = detail::shape_scalars(detail::buffer_info(id).shape);
     size_t at = 0;
@@ -183,20 +183,16 @@ std::vector<uint64_t> running_offsets(const std::vector<Instance>& instances, Pe
 
 Status Simulation::Impl::switch_models(const std::vector<std::pair<uint32_t, uint32_t>>& models) {
     if (models.empty()) return {};
-    struct InstanceChange {
-        detail::Backend& backend;
-        explicit InstanceChange(detail::Backend& b) : backend(b) { backend.begin_instance_change(); }
-        ~InstanceChange() { backend.end_instance_change(); }
-    } change(*backend_);
-    std::vector<Instance> next = instances_;
+    detail::InstanceChangeBracket change(*backend_);
     std::vector<uint32_t> switched;  // ascending, as `models`
+    detail::ElementCounts totals{data_->total_chains, data_->total_nodes, data_->total_vertices};
     for (auto [i, model] : models) {
-        next[i].model = model;
         switched.push_back(i);
+        totals += detail::counts_of(data_->models[model]) - detail::counts_of(data_->models[instances_[i].model]);
     }
-    HMSM_TRY(check_size(next));
+    HMSM_TRY(check_size(instances_.size(), totals));
     std::vector<ChainMap> chain_maps(models.size());
-    std::vector<const ChainMap*> maps(instances_.size(), nullptr);
+    detail::ByInstance<const ChainMap*> maps;
     for (size_t k = 0; k < models.size(); ++k) {
         const auto [i, model] = models[k];
         const LodModel& from = lod_models_[instances_[i].model];
@@ -209,15 +205,9 @@ Status Simulation::Impl::switch_models(const std::vector<std::pair<uint32_t, uin
             map.old_chain.push_back(full < kept_at.size() ? kept_at[full] : -1);
             map.rest_rotation.emplace_back(hierarchies_[model].chains[j].rest_rotation);
         }
-        maps[i] = &map;
+        maps.add(i, &map);
     }
     // Every instance keeps its place, origin and yaw: only the groups and totals change.
-    auto laid = std::make_unique<SceneData>();
-    laid->models = data_->models;
-    detail::lay_out_groups(*laid, next);
-    const auto chains_of = [&](uint32_t model) { return data_->models[model].chain_count; };
-    const std::vector<uint64_t> old_chain = running_offsets(instances_, chains_of);
-    const std::vector<uint64_t> new_chain = running_offsets(next, chains_of);
 
     // The state as the backend stores it, so that everything carried is bit for bit.
     const detail::Scalar scalar = backend_->kind() == BackendKind::cpu64 ? detail::Scalar::f64 : detail::Scalar::f32;
@@ -225,9 +215,30 @@ Status Simulation::Impl::switch_models(const std::vector<std::pair<uint32_t, uin
     std::vector<std::vector<double>> values64(carried.size());
     std::vector<std::vector<float>> values32(carried.size());
     ahead_schedule_.live_change();  // the state moves, the angles integrated ahead with it
-    const bool in_place = backend_->capabilities().reshapes_in_place && laid->total_chains <= data_->chain_capacity &&
-                          laid->total_nodes <= data_->node_capacity && laid->total_vertices <= data_->vertex_capacity;
+    const bool in_place = streaming_paths_ && backend_->capabilities().reshapes_in_place && totals.chains <= data_->chain_capacity &&
+                          totals.nodes <= data_->node_capacity && totals.vertices <= data_->vertex_capacity;
     if (in_place) {
+        // The first elements, old and new, of the switched instances and those after them.
+        detail::InstanceOffsets& offsets = this->offsets();
+        const uint32_t count = uint32_t(instances_.size());
+        detail::ByInstance<uint64_t> old_chain, new_chain, old_node, new_node, old_vertex, new_vertex;
+        detail::ElementCounts delta;
+        auto add_offsets = [&](uint32_t at) {
+            const detail::ElementCounts old = offsets.before(at), now = old + delta;
+            old_chain.add(at, old.chains);
+            new_chain.add(at, now.chains);
+            old_node.add(at, old.nodes);
+            new_node.add(at, now.nodes);
+            old_vertex.add(at, old.vertices);
+            new_vertex.add(at, now.vertices);
+        };
+        add_offsets(0);
+        for (auto [i, model] : models) {
+            add_offsets(i);
+            delta += detail::counts_of(data_->models[model]) - detail::counts_of(data_->models[instances_[i].model]);
+            add_offsets(i + 1);
+        }
+        add_offsets(count);
         // Only the switched instances' state goes through the host; the instances between and
         // behind them shift on the device, their nodes and vertices with them.
         const std::vector<SwitchedRun> runs = runs_of(switched);
@@ -238,7 +249,7 @@ Status Simulation::Impl::switch_models(const std::vector<std::pair<uint32_t, uin
                                          values64[b])
                          : read_switched(*backend_, carried[b], capacity, scalar, runs, old_chain, new_chain, maps,
                                          values32[b]));
-        const std::vector<ElementMove> chain_moves = detail::shift_moves(old_chain, new_chain, switched);
+        const std::vector<ElementMove> chain_moves = detail::shift_moves(old_chain, new_chain, count, switched);
         for (BufferId id : carried) {
             std::vector<ElementMove> in_buffer;
             for (uint64_t h = 0; h < halves_of(id); ++h)
@@ -249,12 +260,8 @@ Status Simulation::Impl::switch_models(const std::vector<std::pair<uint32_t, uin
                 }
             if (!in_buffer.empty()) HMSM_TRY(backend_->move_elements(id, in_buffer));
         }
-        const auto nodes_of = [&](uint32_t model) { return data_->models[model].node_count; };
-        const auto vertices_of = [&](uint32_t model) { return data_->models[model].vertex_count; };
-        const std::vector<ElementMove> node_moves =
-            detail::shift_moves(running_offsets(instances_, nodes_of), running_offsets(next, nodes_of), switched);
-        const std::vector<ElementMove> vertex_moves = detail::shift_moves(
-            running_offsets(instances_, vertices_of), running_offsets(next, vertices_of), switched);
+        const std::vector<ElementMove> node_moves = detail::shift_moves(old_node, new_node, count, switched);
+        const std::vector<ElementMove> vertex_moves = detail::shift_moves(old_vertex, new_vertex, count, switched);
         for (BufferId id : detail::kMovedOutputs) {
             const bool node_scope = detail::buffer_info(id).scope == detail::Scope::node;
             const std::vector<ElementMove>& moves = node_scope ? node_moves : vertex_moves;
@@ -264,14 +271,26 @@ Status Simulation::Impl::switch_models(const std::vector<std::pair<uint32_t, uin
             HMSM_TRY(scalar == detail::Scalar::f64
                          ? write_switched(*backend_, carried[b], capacity, scalar, runs, new_chain, values64[b])
                          : write_switched(*backend_, carried[b], capacity, scalar, runs, new_chain, values32[b]));
-        detail::SceneData& d = *data_;
-        d.groups = std::move(laid->groups);
-        d.total_chains = laid->total_chains;
-        d.total_nodes = laid->total_nodes;
-        d.total_vertices = laid->total_vertices;
+        for (auto [i, model] : models) {
+            offsets.add(i, detail::counts_of(data_->models[model]) - detail::counts_of(data_->models[instances_[i].model]));
+            instances_[i].model = model;
+            lod_tracker_.examine_next(i, uint64_t(instance_ids_[i]));
+        }
+        detail::relay_groups(*data_, instances_, switched);
     } else {
         // Past the capacity (or where the backend cannot move state): every instance's state
         // is read, laid out anew and uploaded with room to grow.
+        std::vector<Instance> next = instances_;
+        std::vector<const ChainMap*> all_maps(instances_.size(), nullptr);
+        for (size_t k = 0; k < models.size(); ++k) {
+            next[models[k].first].model = models[k].second;
+            all_maps[models[k].first] = &chain_maps[k];
+        }
+        const auto chains_of = [&](uint32_t model) { return data_->models[model].chain_count; };
+        const std::vector<uint64_t> old_chain = running_offsets(instances_, chains_of);
+        const std::vector<uint64_t> new_chain = running_offsets(next, chains_of);
+        auto laid = std::make_unique<SceneData>();
+        laid->models = data_->models;
         detail::lay_out_instances(*laid, next);
         const uint64_t old_live = data_->total_chains;
         for (size_t b = 0; b < carried.size(); ++b) {
@@ -282,7 +301,7 @@ Status Simulation::Impl::switch_models(const std::vector<std::pair<uint32_t, uin
                 for (uint32_t h = 0; h < halves; ++h)
                     HMSM_TRY(backend_->read(carried[b], h * data_->chain_capacity, old_live,
                                             values.data() + h * old_live * per, scalar));
-                values = carry_layout(values, per, halves, carried[b], old_chain, new_chain, maps);
+                values = carry_layout(values, per, halves, carried[b], old_chain, new_chain, all_maps);
                 return {};
             };
             HMSM_TRY(scalar == detail::Scalar::f64 ? read_all(values64[b]) : read_all(values32[b]));
@@ -306,8 +325,9 @@ Status Simulation::Impl::switch_models(const std::vector<std::pair<uint32_t, uin
                 HMSM_TRY(backend_->write(carried[b], h * data_->chain_capacity, new_live, src, scalar));
             }
         }
+        instances_ = std::move(next);
+        instance_list_laid_out();
     }
-    instances_ = std::move(next);
     instances_changed();
     header_dirty_ = program_dirty_ = true;
 
@@ -403,34 +423,10 @@ Status Simulation::set_lod_bands(const LodBands& bands) {
         return {ErrorCode::invalid_argument,
                 "set_lod_bands: fade_bound_m " + std::to_string(bands.fade_bound_m) + " m is not in (0, 1]"};
     impl_->lod_bands_ = bands;
+    impl_->lod_tracker_.invalidate();
     return {};
 }
 
 const LodBands& Simulation::lod_bands() const { return impl_->lod_bands_; }
-
-Result<uint64_t> Simulation::update_lod(Vec3 viewer) {
-    const Impl& s = *impl_;
-    if (!std::isfinite(viewer.x) || !std::isfinite(viewer.y) || !std::isfinite(viewer.z))
-        return Status{ErrorCode::invalid_argument, "update_lod: the viewer position is not finite"};
-    HMSM_TRY(impl_->fold_ready_fades());
-    const std::vector<double>& edges = s.lod_bands_.edges;
-    const double h = s.lod_bands_.hysteresis;
-    std::vector<std::pair<uint32_t, uint32_t>> changes;  // (index, level)
-    for (uint32_t i = 0; i < s.instances_.size(); ++i) {
-        const Impl::LodModel& now = s.lod_models_[s.instances_[i].model];
-        uint32_t heading = now.level;  // a fading instance's bands are those of its target
-        if (!s.fades_.empty())
-            if (auto fade = s.fades_.find(uint64_t(s.instance_ids_[i])); fade != s.fades_.end())
-                heading = s.lod_models_[fade->second.target_model].level;
-        const std::vector<uint32_t>& run_models = s.levels_of_[now.scene_model];
-        const uint32_t top = uint32_t(std::min<size_t>(run_models.size() - 1, edges.size()));
-        const double distance = glm::length(glm::dvec3(s.instances_[i].origin) - glm::dvec3(viewer));
-        uint32_t level = std::min(heading, top);
-        while (level < top && distance > edges[level] * (1.0 + h)) ++level;
-        while (level > 0 && distance < edges[level - 1] * (1.0 - h)) --level;
-        if (level != heading) changes.emplace_back(i, level);
-    }
-    return impl_->request_lods(std::move(changes));
-}
 
 }  // namespace hmsm

@@ -75,17 +75,20 @@ InstanceGroup group_slice(const SceneData& d, const InstanceGroup& group, uint32
 
 std::vector<InstanceGroup> slices_covering(const SceneData& d, std::span<const uint32_t> indices) {
     std::vector<InstanceGroup> out;
-    size_t next = 0;
-    for (const InstanceGroup& g : d.groups) {
-        const uint32_t end = g.instance_begin + g.instance_count;
-        while (next < indices.size() && indices[next] < g.instance_begin) ++next;  // in no group
-        for (; next < indices.size() && indices[next] < end; ++next) {
-            const uint32_t i = indices[next];
-            if (!out.empty() && i != g.instance_begin && out.back().instance_begin + out.back().instance_count == i)
-                ++out.back().instance_count;  // i - 1 is in the same group and in this slice
-            else
-                out.push_back(group_slice(d, g, i, 1));
+    const InstanceGroup* g = nullptr;  // the group of the last index covered
+    for (const uint32_t i : indices) {
+        if (!g || i >= g->instance_begin + g->instance_count) {
+            auto after = std::upper_bound(d.groups.begin(), d.groups.end(), i,
+                                          [](uint32_t at, const InstanceGroup& group) { return at < group.instance_begin; });
+            if (after == d.groups.begin()) continue;
+            const InstanceGroup& found = *(after - 1);
+            if (i >= found.instance_begin + found.instance_count) continue;  // in no group
+            g = &found;
         }
+        if (!out.empty() && i != g->instance_begin && out.back().instance_begin + out.back().instance_count == i)
+            ++out.back().instance_count;  // i - 1 is in the same group and in this slice
+        else
+            out.push_back(group_slice(d, *g, i, 1));
     }
     return out;
 }
@@ -131,6 +134,68 @@ void lay_out_groups(SceneData& d, std::span<const Instance> instances, uint64_t 
         d.total_nodes += range.node_count;
         d.total_vertices += range.vertex_count;
     }
+}
+
+void relay_groups(SceneData& d, std::span<const Instance> instances, std::span<const uint32_t> changed) {
+    // The groups before the first change stay as they are; those from it on are laid anew.
+    const uint32_t count = uint32_t(instances.size());
+    const uint32_t first = std::min(changed.empty() ? count : changed.front(), count);
+    auto from = std::upper_bound(d.groups.begin(), d.groups.end(), first,
+                                 [](uint32_t at, const InstanceGroup& g) { return at < g.instance_begin; });
+    if (from != d.groups.begin()) --from;
+    const std::vector<InstanceGroup> old(from, d.groups.end());
+    d.groups.erase(from, d.groups.end());
+    if (!old.empty()) {
+        d.total_chains = old.front().chain_begin;
+        d.total_nodes = old.front().node_begin;
+        d.total_vertices = old.front().vertex_begin;
+    } else {
+        d.total_chains = d.total_nodes = d.total_vertices = 0;
+    }
+    // Appends instances [begin, begin + count) of `model` as lay_out_groups would: onto the last
+    // group while it runs the same model and stays within the largest dispatch.
+    auto emit = [&](uint32_t model, uint32_t begin, uint32_t count) {
+        const ModelRange& range = d.models[model];
+        const uint64_t per_instance = std::max<uint64_t>({range.chain_count, range.node_count, range.vertex_count, 1});
+        const uint32_t most = uint32_t(std::max<uint64_t>(1, std::min<uint64_t>(kMaxInstances, kMaxGroupElements / per_instance)));
+        while (count > 0) {
+            InstanceGroup* group = d.groups.empty() ? nullptr : &d.groups.back();
+            if (!group || group->model != model || group->instance_count >= most) {
+                InstanceGroup g;
+                g.model = model;
+                g.instance_begin = begin;
+                g.chain_begin = uint32_t(d.total_chains);
+                g.node_begin = uint32_t(d.total_nodes);
+                g.vertex_begin = uint32_t(d.total_vertices);
+                d.groups.push_back(g);
+                group = &d.groups.back();
+            }
+            const uint32_t take = std::min(count, most - group->instance_count);
+            group->instance_count += take;
+            d.total_chains += uint64_t(take) * range.chain_count;
+            d.total_nodes += uint64_t(take) * range.node_count;
+            d.total_vertices += uint64_t(take) * range.vertex_count;
+            begin += take;
+            count -= take;
+        }
+    };
+    size_t next = 0;  // the next changed instance
+    for (const InstanceGroup& g : old) {
+        uint32_t begin = g.instance_begin;
+        const uint32_t end = std::min(g.instance_begin + g.instance_count, count);
+        while (begin < end) {
+            if (next < changed.size() && changed[next] < end) {
+                const uint32_t i = changed[next++];
+                if (i > begin) emit(g.model, begin, i - begin);
+                emit(instances[i].model, i, 1);
+                begin = i + 1;
+            } else {
+                emit(g.model, begin, end - begin);
+                begin = end;
+            }
+        }
+    }
+    for (; next < changed.size(); ++next) emit(instances[changed[next]].model, changed[next], 1);
 }
 
 void lay_out_instances(SceneData& d, std::span<const Instance> instances, uint64_t max_group_elements) {

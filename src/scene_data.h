@@ -145,6 +145,17 @@ void lay_out_instances(SceneData& d, std::span<const Instance> instances,
 /// (a level switch).
 void lay_out_groups(SceneData& d, std::span<const Instance> instances, uint64_t max_group_elements = (1ull << 31));
 
+/// The largest dispatch lay_out_groups' default makes: threads of one group.
+inline constexpr uint64_t kMaxGroupElements = uint64_t(1) << 31;
+
+/// d.groups and the live totals after a change of the instance list from the one d.groups
+/// describes to `instances`: the instances `changed` (ascending, each below instances.size())
+/// may have another model, every instance past the old list is listed, the old list may be cut
+/// to instances.size(), and every other instance keeps its model. Gives lay_out_groups'
+/// groups (under its default largest dispatch) in O(groups + changed), reading `instances`
+/// only at `changed`.
+void relay_groups(SceneData& d, std::span<const Instance> instances, std::span<const uint32_t> changed);
+
 /// The part of `group` (a group of d) covering its instances [first, first + count), with its
 /// state offsets. Its covers_paused is false: its dispatches read no paused flag, so paused
 /// instances in it are computed too.
@@ -152,7 +163,7 @@ InstanceGroup group_slice(const SceneData& d, const InstanceGroup& group, uint32
 
 /// The slices of d's groups covering the instances `indices` (ascending, each once, each below
 /// d.instance_count()), neighbours in one group as one slice (group_slice: paused instances are
-/// computed too). Costs O(groups + indices).
+/// computed too). Costs O(indices log groups).
 std::vector<InstanceGroup> slices_covering(const SceneData& d, std::span<const uint32_t> indices);
 
 /// The constants every dispatch over `group` shares (offsets, counts, wind, parameters), with

@@ -183,6 +183,7 @@ Result<std::unique_ptr<Simulation>> Simulation::Impl::create(const Scene& scene,
     sim->instances_ = scene.instances;
     for (uint64_t i = 0; i < scene.instances.size(); ++i) sim->instance_ids_.push_back(InstanceId(i));
     sim->next_instance_id_ = scene.instances.size();
+    sim->instance_list_laid_out();
     HMSM_TRY(sim->check_wind(config.wind));
     HMSM_TRY(sim->check_size(scene.instances));
     sim->modes_ = detail::wind_modes(config.wind);
@@ -225,6 +226,7 @@ Simulation::~Simulation() = default;
 
 Status Simulation::Impl::step(uint32_t count) {
     HMSM_TRY(apply_pending());
+    const std::vector<detail::Dispatch>& program = current_program();
     const Wind& wind = config_.wind;
     const double dt = config_.parameters.dt;
     uint32_t done = 0;
@@ -253,9 +255,9 @@ Status Simulation::Impl::step(uint32_t count) {
                                  uint64_t(steps + 1) * HMSM_WIND_STEP_VEC4S, wind_scratch_.data(),
                                  detail::Scalar::f64));
         // The walk that integrates ahead: the step layer says how each step runs.
-        const bool ahead = std::any_of(step_program_.begin(), step_program_.end(), detail::is_walk_ahead);
+        const bool ahead = std::any_of(program.begin(), program.end(), detail::is_walk_ahead);
         if (ahead) ahead_schedule_.plan(run_steps_);
-        if (Status run = backend_->run(step_program_, run_steps_); !run.ok() || !ahead) {
+        if (Status run = backend_->run(program, run_steps_); !run.ok() || !ahead) {
             ahead_schedule_.forget();
             HMSM_TRY(run);
         }

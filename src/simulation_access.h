@@ -8,7 +8,7 @@
 struct __attribute__((visibility("hidden"))) hmsm::Simulation::Access {
     static detail::Backend& backend(const Simulation& sim) { return *sim.impl_->backend_; }
     static const std::vector<detail::Dispatch>& step_program(const Simulation& sim) {
-        return sim.impl_->step_program_;
+        return sim.impl_->current_program();
     }
     static const detail::SceneData& scene_data(const Simulation& sim) { return *sim.impl_->data_; }
     static Simulation::Impl& impl(Simulation& sim) { return *sim.impl_; }

@@ -6,6 +6,8 @@
 
 #include "backend.h"
 #include "cpu/thread_pool.h"
+#include "instance_offsets.h"
+#include "lod_tracker.h"
 #include "live_wind.h"
 #include "scene_data.h"
 #include "step_program.h"
@@ -26,9 +28,12 @@ struct __attribute__((visibility("hidden"))) Simulation::Impl {
                                                       detail::JumpingForm jumping_form = detail::JumpingForm::by_size);
 
     Status step(uint32_t count);
-    /// Uploads what live control changed (wind table header, instance winds) and rebuilds the
-    /// step program over the runs of active instances (live_control.cpp).
+    /// Uploads what live control changed (wind table header, instance winds; live_control.cpp).
+    /// The step program is rebuilt by current_program().
     Status apply_pending();
+    /// The step program, rebuilt first if a change left it stale (live changes leave the
+    /// rebuild to the next step, so a frame's changes rebuild it once).
+    const std::vector<detail::Dispatch>& current_program();
     /// The step program over `groups` from pass `first` on (only the passes in `passes`, a bit
     /// per Pass).
     std::vector<detail::Dispatch> program_for(const std::vector<detail::InstanceGroup>& groups,
@@ -47,6 +52,31 @@ struct __attribute__((visibility("hidden"))) Simulation::Impl {
                         const std::vector<uint64_t>& old_chain);
     /// Checks that `instances` fit the 32-bit element counts of the device layout.
     Status check_size(std::span<const Instance> instances) const;
+    /// check_size for `count` instances holding `elements` in the layout (O(1)).
+    Status check_size(uint64_t count, const detail::ElementCounts& elements) const;
+
+    // Streaming (live_stream.cpp): appends and swap removals within the capacity, at a cost in
+    // proportion to the instances they touch (docs/driving.md, streaming budgets).
+    /// Appends `added` (validated) in place; false when they do not fit the capacity.
+    Result<bool> append_in_place(std::span<const Instance> added);
+    /// Swap-removes `removed` (ascending, each once, fewer than all) in place; false when the
+    /// staging of the instances that fill the holes does not fit the capacity (growth_ then
+    /// says how much room the next upload takes).
+    Result<bool> swap_remove_in_place(const std::vector<uint32_t>& removed);
+    /// The first elements of the instances, rebuilt when a change laid the list out anew.
+    detail::InstanceOffsets& offsets();
+    /// Marks what the general paths (reshape, a switch past the capacity) leave stale: the
+    /// offsets, the level tracker, the paused count.
+    void instance_list_laid_out();
+    detail::InstanceOffsets offsets_;
+    bool offsets_valid_ = false;
+    /// Paused instances (Instance::active false): none lets the step program take the groups
+    /// as they are.
+    uint64_t paused_count_ = 0;
+    detail::LodTracker lod_tracker_;
+    /// Whether add, swap removal and level switches take the streaming paths (tests compare
+    /// them with the general ones: reshape, and a level switch laid out anew).
+    bool streaming_paths_ = true;
     /// Checks the force of `fields` against the float range (docs/model.md 3.11).
     Status check_forces(std::span<const ForceField> fields) const;
     /// Checks the wind force of every chain of the instances under `wind`: O(models) while the
@@ -163,7 +193,7 @@ struct __attribute__((visibility("hidden"))) Simulation::Impl {
     /// take next_instance_id_ on, so the ids stay ascending until a swap removal moves one.
     std::vector<InstanceId> instance_ids_;
     /// Whether instance_ids_ is ascending (index_of searches it); otherwise index_of uses
-    /// id_index_, the index of each current id, rebuilt by every add or remove.
+    /// id_index_, the index of each current id (kept by the streaming paths, rebuilt by reshape).
     bool ids_ascending_ = true;
     std::unordered_map<uint64_t, uint32_t> id_index_;
     uint64_t next_instance_id_ = 0;
@@ -172,6 +202,8 @@ struct __attribute__((visibility("hidden"))) Simulation::Impl {
         uint64_t chains = 0, nodes = 0, vertices = 0, instances = 0;
     };
     Reserved reserved_;
+    /// Room the next upload takes at least (a swap removal's staging asked for it); cleared by it.
+    Reserved growth_;
     detail::WindClock clock_;
     detail::WindModes modes_{};
     bool program_dirty_ = true, header_dirty_ = true, instance_wind_dirty_ = true;

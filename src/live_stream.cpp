@@ -1,0 +1,284 @@
+// Streaming an open world (docs/driving.md, streaming budgets): appends and swap removals
+// within the capacity edit the instance list, its groups, offsets and handles where the change
+// touches it, and move on the device only the state of the instances that change place, so a
+// call costs in proportion to the instances it adds or removes (and the groups behind the first
+// of them), not to the scene. Results are bit for bit those of reshape() (live_reshape.cpp).
+#include "instance_moves.h"
+#include "simulation_impl.h"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+namespace hmsm {
+
+namespace {
+
+using detail::BufferId;
+using detail::ElementCounts;
+using detail::ElementMove;
+
+/// Appends a move of `count` elements from `src` to `dst`, joined to the move before when both
+/// continue it.
+void add_move(std::vector<ElementMove>& moves, uint64_t src, uint64_t dst, uint64_t count) {
+    if (count == 0) return;
+    if (!moves.empty() && moves.back().src + moves.back().count == src && moves.back().dst + moves.back().count == dst)
+        moves.back().count += count;
+    else
+        moves.push_back({src, dst, count});
+}
+
+/// The moves of one scope (chains, nodes or vertices) of a swap removal, applied in order:
+/// the instances that fill the holes go to staging above every live element, the survivors
+/// between the holes shift (ordered_shifts), and the staged instances go to their holes.
+struct ScopeMoves {
+    std::vector<ElementMove> stage, shift, unstage;
+};
+
+uint64_t pick(const ElementCounts& c, int scope) {
+    return scope == 0 ? c.chains : scope == 1 ? c.nodes : c.vertices;
+}
+
+/// Applies `moves` to buffer `id`, each half of a ping-pong buffer `capacity` elements apart.
+Status apply_moves(detail::Backend& backend, BufferId id, const std::vector<ElementMove>& moves, uint64_t capacity) {
+    if (moves.empty()) return {};
+    if (detail::halves_of(id) == 1) return backend.move_elements(id, moves);
+    std::vector<ElementMove> both;
+    both.reserve(2 * moves.size());
+    for (uint64_t h = 0; h < 2; ++h)
+        for (ElementMove m : moves) {
+            m.src += h * capacity;
+            m.dst += h * capacity;
+            both.push_back(m);
+        }
+    return backend.move_elements(id, both);
+}
+
+/// Writes origins and yaws of instances [first, end) from d's instance arrays.
+Status write_placement(detail::Backend& backend, const detail::SceneData& d, uint32_t first, uint32_t end) {
+    std::vector<double> values(uint64_t(end - first) * 4);
+    for (BufferId id : {BufferId::instance_origin, BufferId::instance_yaw}) {
+        const auto& source = id == BufferId::instance_origin ? d.instance_origin : d.instance_yaw;
+        for (uint32_t i = first; i < end; ++i)
+            for (int c = 0; c < 4; ++c) values[4 * (i - first) + c] = source[i][c];
+        HMSM_TRY(backend.write(id, first, end - first, values.data(), detail::Scalar::f64));
+    }
+    return {};
+}
+
+}  // namespace
+
+detail::InstanceOffsets& Simulation::Impl::offsets() {
+    if (!offsets_valid_) {
+        offsets_.assign(instances_, data_->models);
+        offsets_valid_ = true;
+    }
+    return offsets_;
+}
+
+void Simulation::Impl::instance_list_laid_out() {
+    offsets_valid_ = false;
+    lod_tracker_.invalidate();
+    paused_count_ = uint64_t(std::count_if(instances_.begin(), instances_.end(), [](const Instance& i) { return !i.active; }));
+}
+
+Status Simulation::Impl::check_size(uint64_t count, const detail::ElementCounts& elements) const {
+    if (elements.vertices >= std::numeric_limits<uint32_t>::max() ||
+        2 * elements.chains >= std::numeric_limits<uint32_t>::max() ||
+        elements.nodes >= std::numeric_limits<uint32_t>::max() || count > kMaxInstances)
+        return Status{ErrorCode::unsupported,
+                      "scene too large: " + std::to_string(count) + " instances with " + std::to_string(elements.vertices) +
+                          " mesh vertices and " + std::to_string(elements.chains) +
+                          " chains over all instances (at most 2^32 - 1 elements and " + std::to_string(kMaxInstances) +
+                          " instances are supported)"};
+    return {};
+}
+
+Result<bool> Simulation::Impl::append_in_place(std::span<const Instance> added) {
+    detail::SceneData& d = *data_;
+    const uint32_t first = uint32_t(instances_.size());
+    const ElementCounts live{d.total_chains, d.total_nodes, d.total_vertices};
+    ElementCounts grown = live;
+    for (const Instance& inst : added) grown += detail::counts_of(d.models[inst.model]);
+    HMSM_TRY(check_size(uint64_t(first) + added.size(), grown));
+    if (!backend_->capabilities().reshapes_in_place || grown.chains > d.chain_capacity ||
+        grown.nodes > d.node_capacity || grown.vertices > d.vertex_capacity ||
+        uint64_t(first) + added.size() > d.instance_capacity)
+        return false;
+    detail::InstanceChangeBracket change(*backend_);
+    ahead_schedule_.live_change();
+    detail::InstanceOffsets& offsets = this->offsets();
+
+    // Added instances start at rest: S = V = 0 and g = 0 (T, R, O are computed from them).
+    const uint64_t added_chains = grown.chains - live.chains;
+    if (added_chains > 0) {
+        const std::vector<double> zeros(added_chains * 4, 0.0);
+        HMSM_TRY(backend_->write(BufferId::chain_state, live.chains, added_chains, zeros.data(), detail::Scalar::f64));
+        HMSM_TRY(backend_->write(BufferId::chain_force, live.chains, added_chains, zeros.data(), detail::Scalar::f64));
+        if (d.coupled())  // both halves of the loads
+            for (uint64_t half : {uint64_t(0), d.chain_capacity})
+                HMSM_TRY(backend_->write(BufferId::chain_load, half + live.chains, added_chains, zeros.data(),
+                                         detail::Scalar::f64));
+    }
+    std::vector<uint32_t> appended;
+    appended.reserve(added.size());
+    for (const Instance& inst : added) {
+        const uint32_t i = uint32_t(instances_.size());
+        appended.push_back(i);
+        instances_.push_back(inst);
+        const InstanceId id = InstanceId(next_instance_id_++);
+        instance_ids_.push_back(id);  // ascending ids stay ascending
+        if (!ids_ascending_) id_index_.emplace(uint64_t(id), i);
+        d.instance_origin.push_back({inst.origin, 0.0});
+        d.instance_yaw.push_back({std::cos(inst.yaw), std::sin(inst.yaw), 0.0, 0.0});
+        offsets.push_back(detail::counts_of(d.models[inst.model]));
+        lod_tracker_.append(uint64_t(id));
+        if (!inst.active) ++paused_count_;
+        dirty_instances_.push_back(i);
+    }
+    d.instance_wind.resize(size_t(HMSM_INSTANCE_WIND_VEC4S) * 4 * instances_.size(), 0.0);
+    detail::relay_groups(d, instances_, appended);
+    HMSM_TRY(write_placement(*backend_, d, first, uint32_t(instances_.size())));
+    instances_changed();
+    header_dirty_ = program_dirty_ = true;
+
+    // The added instances' groups: posed at rest from S = V = 0.
+    auto at = std::upper_bound(d.groups.begin(), d.groups.end(), first,
+                               [](uint32_t i, const detail::InstanceGroup& g) { return i < g.instance_begin; });
+    std::vector<detail::InstanceGroup> posed;
+    for (auto g = at - 1; g != d.groups.end(); ++g)
+        posed.push_back(detail::group_slice(d, *g, std::max(first, g->instance_begin),
+                                            g->instance_begin + g->instance_count - std::max(first, g->instance_begin)));
+    const detail::RunStep at_rest[1] = {};
+    HMSM_TRY(backend_->run(program_for(posed, Pass::integrate), at_rest));
+    HMSM_TRY(apply_pending());
+    return true;
+}
+
+Result<bool> Simulation::Impl::swap_remove_in_place(const std::vector<uint32_t>& removed) {
+    detail::SceneData& d = *data_;
+    const uint32_t n = uint32_t(instances_.size());
+    const uint32_t kept = n - uint32_t(removed.size());
+    // The holes below the new count take, in ascending order, the survivors at or past it.
+    std::vector<uint32_t> holes, fillers;
+    size_t past = 0;
+    for (; past < removed.size() && removed[past] < kept; ++past) holes.push_back(removed[past]);
+    for (uint32_t i = kept, r = uint32_t(past); i < n; ++i) {
+        if (r < removed.size() && removed[r] == i) ++r;
+        else fillers.push_back(i);
+    }
+    detail::InstanceOffsets& offsets = this->offsets();
+    auto size = [&](uint32_t i) { return detail::counts_of(d.models[instances_[i].model]); };
+    const ElementCounts live{d.total_chains, d.total_nodes, d.total_vertices};
+    ElementCounts staged;
+    bool same_sizes = true;  // each filler as large as the instance it replaces: nothing shifts
+    for (size_t j = 0; j < fillers.size(); ++j) {
+        staged += size(fillers[j]);
+        same_sizes = same_sizes && size(fillers[j]) == size(holes[j]);
+    }
+    // Staging lies above every live element, in each scope; without shifts the fillers go
+    // straight into the holes, which lie below every filler.
+    const ElementCounts room = live + staged;
+    if (!same_sizes &&
+        (room.chains > d.chain_capacity || room.nodes > d.node_capacity || room.vertices > d.vertex_capacity)) {
+        growth_ = {room.chains, room.nodes, room.vertices, 0};
+        return false;
+    }
+
+    // The moves of each scope; delta: what the holes before gained over the removed instances.
+    ScopeMoves scopes[3];
+    {
+        std::vector<ElementMove> ascending[3];
+        std::vector<ElementCounts> filler_at(fillers.size());
+        ElementCounts at_staging = live;
+        for (size_t j = 0; j < fillers.size(); ++j) {
+            filler_at[j] = offsets.before(fillers[j]);
+            for (int s = 0; s < 3; ++s)
+                add_move(scopes[s].stage, pick(filler_at[j], s), pick(at_staging, s), pick(size(fillers[j]), s));
+            at_staging += size(fillers[j]);
+        }
+        ElementCounts delta, staging = live;
+        uint32_t begin = 0;  // first survivor of the run that keeps its instance
+        for (size_t j = 0; j <= holes.size(); ++j) {
+            const uint32_t end = j < holes.size() ? holes[j] : kept;
+            if (end > begin) {
+                const ElementCounts from = offsets.before(begin), to = offsets.before(end);
+                for (int s = 0; s < 3; ++s)
+                    if (pick(delta, s) != 0 && pick(to, s) > pick(from, s))
+                        ascending[s].push_back({pick(from, s), pick(from + delta, s), pick(to - from, s)});
+            }
+            if (j == holes.size()) break;
+            const ElementCounts hole_at = offsets.before(holes[j]) + delta;
+            const ElementCounts source = same_sizes ? filler_at[j] : staging;
+            for (int s = 0; s < 3; ++s) add_move(scopes[s].unstage, pick(source, s), pick(hole_at, s), pick(size(fillers[j]), s));
+            staging += size(fillers[j]);
+            delta += size(fillers[j]);
+            delta -= size(holes[j]);
+            begin = holes[j] + 1;
+        }
+        for (int s = 0; s < 3; ++s) {
+            scopes[s].shift = detail::ordered_shifts(ascending[s]);
+            if (same_sizes) scopes[s].stage.clear();
+        }
+    }
+
+    detail::InstanceChangeBracket change(*backend_);
+    ahead_schedule_.live_change();  // the state moves, the angles integrated ahead with it
+    auto move_scope = [&](BufferId id, const ScopeMoves& moves) -> Status {
+        for (const std::vector<ElementMove>* part : {&moves.stage, &moves.shift, &moves.unstage})
+            HMSM_TRY(apply_moves(*backend_, id, *part, d.chain_capacity));
+        return {};
+    };
+    for (BufferId id : detail::carried_buffers(d.coupled())) HMSM_TRY(move_scope(id, scopes[0]));
+    // The survivors' outputs (nodes, vertices) move with them, bitwise what they were.
+    for (BufferId id : detail::kMovedOutputs) {
+        if (d.element_count(id) == 0) continue;
+        HMSM_TRY(move_scope(id, detail::buffer_info(id).scope == detail::Scope::node ? scopes[1] : scopes[2]));
+    }
+
+    // The host's lists: each hole takes its filler, the end is cut.
+    if (ids_ascending_ && !holes.empty()) {
+        id_index_.clear();
+        id_index_.reserve(instance_ids_.size());
+        for (uint32_t i = 0; i < n; ++i) id_index_.emplace(uint64_t(instance_ids_[i]), i);
+        ids_ascending_ = false;
+    }
+    for (uint32_t r : removed) {
+        if (!instances_[r].active) --paused_count_;
+        if (!ids_ascending_) id_index_.erase(uint64_t(instance_ids_[r]));
+    }
+    for (size_t j = 0; j < holes.size(); ++j) {
+        const uint32_t h = holes[j], f = fillers[j];
+        offsets.add(h, size(f) - size(h));
+        instances_[h] = instances_[f];
+        instance_ids_[h] = instance_ids_[f];
+        id_index_[uint64_t(instance_ids_[h])] = h;
+        d.instance_origin[h] = d.instance_origin[f];
+        d.instance_yaw[h] = d.instance_yaw[f];
+        if (lod_tracker_.valid) lod_tracker_.key[h] = lod_tracker_.key[f];
+    }
+    for (uint32_t k = kept; k < n; ++k) offsets.pop_back();
+    instances_.resize(kept);
+    instance_ids_.resize(kept);
+    d.instance_origin.resize(kept);
+    d.instance_yaw.resize(kept);
+    d.instance_wind.resize(size_t(HMSM_INSTANCE_WIND_VEC4S) * 4 * kept);
+    if (lod_tracker_.valid) lod_tracker_.key.resize(kept);
+    detail::relay_groups(d, instances_, holes);
+    instances_changed();
+    header_dirty_ = program_dirty_ = true;
+
+    // Origins, yaws and winds of the holes, run by run.
+    std::erase_if(dirty_instances_, [&](uint32_t i) { return i >= kept; });
+    for (size_t j = 0; j < holes.size();) {
+        size_t end = j + 1;
+        while (end < holes.size() && holes[end] == holes[end - 1] + 1) ++end;
+        HMSM_TRY(write_placement(*backend_, d, holes[j], holes[end - 1] + 1));
+        j = end;
+    }
+    dirty_instances_.insert(dirty_instances_.end(), holes.begin(), holes.end());
+    HMSM_TRY(apply_pending());
+    return true;
+}
+
+}  // namespace hmsm

@@ -1,0 +1,126 @@
+// update_lod (docs/driving.md, levels of detail): each instance's level from its distance to the
+// viewer through the distance bands with hysteresis. The first call after the instance list
+// was laid out anew (or the bands changed) examines every instance; later calls examine only
+// those whose band edge the viewer's travel since their last examination may have reached
+// (lod_tracker.h), and give the same switches as examining every instance.
+#include "simulation_impl.h"
+
+#include <glm/geometric.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+
+namespace hmsm {
+
+namespace {
+
+/// Calls after which the summed travel is rebuilt from a full examination, so that its
+/// rounding stays far below the margin below.
+constexpr uint64_t kCallsBeforeRebuild = 1000000;
+
+/// What examining one instance gives: its level at this viewer and how far the viewer may
+/// travel before that level can change (less a margin over the rounding of the distances and
+/// of the summed travel, so that the heap never examines an instance too late).
+struct Examined {
+    uint32_t level = 0;
+    double slack = 0.0;
+};
+
+}  // namespace
+
+Result<uint64_t> Simulation::update_lod(Vec3 viewer) {
+    Impl& s = *impl_;
+    if (!std::isfinite(viewer.x) || !std::isfinite(viewer.y) || !std::isfinite(viewer.z))
+        return Status{ErrorCode::invalid_argument, "update_lod: the viewer position is not finite"};
+    HMSM_TRY(s.fold_ready_fades());
+    const std::vector<double>& edges = s.lod_bands_.edges;
+    const double h = s.lod_bands_.hysteresis;
+    detail::LodTracker& tracker = s.lod_tracker_;
+    const double infinity = std::numeric_limits<double>::infinity();
+    // A fading instance's bands are those of the level it fades to.
+    auto heading = [&](uint32_t i) {
+        const uint32_t level = s.lod_models_[s.instances_[i].model].level;
+        if (s.fades_.empty()) return level;
+        auto fade = s.fades_.find(uint64_t(s.instance_ids_[i]));
+        return fade == s.fades_.end() ? level : s.lod_models_[fade->second.target_model].level;
+    };
+    auto examine = [&](uint32_t i, double travelled) {
+        const Impl::LodModel& now = s.lod_models_[s.instances_[i].model];
+        const std::vector<uint32_t>& run_models = s.levels_of_[now.scene_model];
+        const uint32_t top = uint32_t(std::min<size_t>(run_models.size() - 1, edges.size()));
+        const double distance = glm::length(glm::dvec3(s.instances_[i].origin) - glm::dvec3(viewer));
+        uint32_t level = std::min(heading(i), top);
+        while (level < top && distance > edges[level] * (1.0 + h)) ++level;
+        while (level > 0 && distance < edges[level - 1] * (1.0 - h)) --level;
+        // The level stays while distance <= edges[level] (1 + h) and >= edges[level - 1] (1 - h),
+        // and the distance changes by at most the viewer's travel.
+        const double up = level < top ? edges[level] * (1.0 + h) - distance : infinity;
+        const double down = level > 0 ? distance - edges[level - 1] * (1.0 - h) : infinity;
+        const double margin = 1e-9 * (1.0 + distance + travelled + glm::length(glm::dvec3(viewer)));
+        return Examined{level, std::max(0.0, std::min(up, down) - margin)};
+    };
+    const uint32_t n = uint32_t(s.instances_.size());
+    std::vector<std::pair<uint32_t, uint32_t>> changes;  // (index, level): request_lods switches or fades
+    auto change_of = [&](uint32_t i, uint32_t level) {
+        if (level != heading(i)) changes.emplace_back(i, level);
+    };
+
+    if (!tracker.valid || tracker.calls >= kCallsBeforeRebuild) {
+        std::vector<double> keys(n);
+        for (uint32_t i = 0; i < n; ++i) {
+            const Examined e = examine(i, 0.0);
+            change_of(i, e.level);
+            keys[i] = e.slack;
+        }
+        tracker.invalidate();
+        Result<uint64_t> changed = s.request_lods(changes);
+        if (!changed) return changed.status();
+        tracker.key = std::move(keys);
+        tracker.heap.reserve(n);
+        for (uint32_t i = 0; i < n; ++i) tracker.heap.push_back({tracker.key[i], uint64_t(s.instance_ids_[i])});
+        std::make_heap(tracker.heap.begin(), tracker.heap.end(), std::greater<>());
+        tracker.travelled = 0.0;
+        tracker.viewer = viewer;
+        tracker.calls = 0;
+        tracker.valid = true;
+        return *changed;
+    }
+
+    tracker.travelled += glm::length(glm::dvec3(viewer) - glm::dvec3(tracker.viewer));
+    tracker.viewer = viewer;
+    ++tracker.calls;
+    std::vector<std::pair<uint32_t, double>> examined;  // (index, slack)
+    while (!tracker.heap.empty() && tracker.heap.front().key <= tracker.travelled) {
+        std::pop_heap(tracker.heap.begin(), tracker.heap.end(), std::greater<>());
+        const detail::LodTracker::Entry entry = tracker.heap.back();
+        tracker.heap.pop_back();
+        Result<uint64_t> index = index_of(InstanceId(entry.id));
+        if (!index || !(tracker.key[*index] == entry.key)) continue;  // removed, or a stale entry
+        const uint32_t i = uint32_t(*index);
+        tracker.key[i] = std::numeric_limits<double>::quiet_NaN();  // later entries of i are stale
+        const Examined e = examine(i, tracker.travelled);
+        change_of(i, e.level);
+        examined.emplace_back(i, e.slack);
+    }
+    Result<uint64_t> changed = s.request_lods(changes);
+    if (!changed) {
+        tracker.invalidate();
+        return changed.status();
+    }
+    if (tracker.valid) {  // a switch past the capacity lays the list out anew: the next call examines all
+        for (const auto& [i, slack] : examined) {
+            tracker.key[i] = tracker.travelled + slack;
+            tracker.push(tracker.key[i], uint64_t(s.instance_ids_[i]));
+        }
+        if (tracker.heap.size() > 2 * size_t(n) + 1024) {  // stale entries: rebuilt from the keys
+            tracker.heap.clear();
+            for (uint32_t i = 0; i < n; ++i) tracker.heap.push_back({tracker.key[i], uint64_t(s.instance_ids_[i])});
+            std::make_heap(tracker.heap.begin(), tracker.heap.end(), std::greater<>());
+        }
+    }
+    return *changed;
+}
+
+}  // namespace hmsm
