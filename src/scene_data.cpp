@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numeric>
 
 namespace hmsm::detail {
 
@@ -211,11 +212,26 @@ void lay_out_instances(SceneData& d, std::span<const Instance> instances, uint64
     d.instance_wind.assign(size_t(HMSM_INSTANCE_WIND_VEC4S) * 4 * d.instance_origin.size(), 0.0);
 }
 
+std::vector<int32_t> stepped_nodes(const Hierarchy& h, Outputs outputs) {
+    std::vector<int32_t> nodes;
+    if (outputs != Outputs::joints) {
+        nodes.resize(h.node_owner.size());
+        std::iota(nodes.begin(), nodes.end(), 0);
+        return nodes;
+    }
+    nodes.reserve(h.chains.size());
+    for (const Chain& chain : h.chains) nodes.push_back(chain.attach_node);
+    std::sort(nodes.begin(), nodes.end());
+    nodes.erase(std::unique(nodes.begin(), nodes.end()), nodes.end());
+    return nodes;
+}
+
 SceneData flatten_scene(const Scene& scene, const std::vector<Hierarchy>& hierarchies,
                         const std::vector<MeshTemplate>& meshes, const Parameters& parameters,
-                        const ModelOptions& options, const Wind& wind,
+                        const ModelOptions& options, const Wind& wind, Outputs outputs,
                         uint64_t max_group_elements) {
     SceneData d;
+    d.outputs = outputs;
     int32_t max_depth = 0;
     for (const Hierarchy& h : hierarchies) max_depth = std::max(max_depth, h.max_depth);
     d.jump_rounds = jump_rounds_for_depth(max_depth);
@@ -227,8 +243,12 @@ SceneData flatten_scene(const Scene& scene, const std::vector<Hierarchy>& hierar
         ModelRange range;
         range.chain_begin = uint32_t(d.chain_parent.size());
         range.chain_count = uint32_t(h.chains.size());
+        // The model's nodes are its stepped nodes, each chain attached to its node's place among them.
+        const std::vector<int32_t> kept = stepped_nodes(h, outputs);
+        std::vector<int32_t> kept_at(h.node_owner.size(), -1);
+        for (size_t k = 0; k < kept.size(); ++k) kept_at[size_t(kept[k])] = int32_t(k);
         range.node_begin = uint32_t(d.node_owner.size());
-        range.node_count = uint32_t(h.node_owner.size());
+        range.node_count = uint32_t(kept.size());
         range.vertex_begin = uint32_t(d.vertex_chain.size());
         range.vertex_count = uint32_t(mesh.vertices.size());
         for (int32_t depth = 0, c = 0; depth <= h.max_depth + 1; ++depth) {
@@ -237,15 +257,15 @@ SceneData flatten_scene(const Scene& scene, const std::vector<Hierarchy>& hierar
         }
         for (const Chain& chain : h.chains) {
             d.chain_parent.push_back(chain.parent);
-            d.chain_attach.push_back(chain.attach_node);
+            d.chain_attach.push_back(kept_at[size_t(chain.attach_node)]);
             d.chain_rest_rotation.push_back(chain.rest_rotation);
             d.chain_constants.push_back({chain.inertia, chain.stiffness, chain.damping, chain.wind_area});
             if (options.dynamics == Dynamics::coupled)
                 append_coupled_record(d.chain_dynamics, chain.dynamics, chain.rest_rotation, parameters.dt);
         }
-        for (size_t n = 0; n < h.node_owner.size(); ++n) {
-            d.node_owner.push_back(h.node_owner[n]);
-            d.node_local.push_back(point(h.node_local[n]));
+        for (int32_t n : kept) {
+            d.node_owner.push_back(h.node_owner[size_t(n)]);
+            d.node_local.push_back(point(h.node_local[size_t(n)]));
         }
         for (const MeshVertex& v : mesh.vertices) {
             d.vertex_chain.push_back({v.chain, v.fix_chain});

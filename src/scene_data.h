@@ -25,6 +25,8 @@ namespace hmsm::detail {
 /// Static data of one model, as offsets into the concatenated model arrays.
 struct ModelRange {
     uint32_t chain_begin = 0, chain_count = 0;
+    /// The model's state nodes (stepped_nodes): its tree's nodes, or with joints alone only the
+    /// chains' attach nodes.
     uint32_t node_begin = 0, node_count = 0;
     uint32_t vertex_begin = 0, vertex_count = 0;
     /// Model chains of each depth level: [level_begin[d], level_begin[d + 1]).
@@ -45,12 +47,14 @@ struct SceneData {
     std::vector<int32_t> chain_parent;
     std::vector<int32_t> chain_jump;  // jump_rounds x total_model_chains, round-major
     std::vector<int32_t> chain_walk;  // HMSM_WALK_RECORD_INTS per model chain (gpu_layout.h)
+    /// Each chain's attach node as a model node of node_owner and node_local (stepped_nodes).
     std::vector<int32_t> chain_attach;
     std::vector<glm::dmat3> chain_rest_rotation;
     std::vector<glm::dvec4> chain_constants;  // (I, K, D, A)
     /// Dynamics::coupled: HMSM_CHAIN_DYNAMICS_VEC4S x 4 scalars per model chain (gpu_layout.h);
     /// empty under the paper's dynamics.
     std::vector<double> chain_dynamics;
+    /// Per model node (the model's stepped_nodes, in that order): owner chain and l_n.
     std::vector<int32_t> node_owner;
     std::vector<glm::dvec4> node_local;
     std::vector<glm::ivec2> vertex_chain;
@@ -111,8 +115,9 @@ struct SceneData {
     /// The contour pass's output layout; packed leaves vertex_normal without elements.
     VertexLayout vertex_layout = VertexLayout::separate;
     bool packed_vertices() const { return vertex_layout == VertexLayout::packed; }
-    /// What a step produces: without nodes node_world has no elements, without vertices the
-    /// vertex-scope state buffers have none.
+    /// What a step produces: without nodes node_world has no elements and each model keeps
+    /// only its stepped_nodes (node_relative then holds the chains' attach nodes alone), without
+    /// vertices the vertex-scope state buffers have none.
     Outputs outputs = Outputs::all;
     bool produces_nodes() const { return outputs != Outputs::joints; }
     bool produces_vertices() const { return outputs == Outputs::all; }
@@ -126,12 +131,19 @@ struct SceneData {
 
 namespace hmsm::detail {
 
-/// Flattens models and instances (docs/model.md 2: ordered chain-by-depth, instance-major state).
-/// Groups are runs of consecutive instances of one model, split so that no dispatch exceeds
+/// The tree nodes of `h` whose state a step that produces `outputs` keeps, ascending: every
+/// node where node positions are produced; with joints alone the distinct attach nodes of the
+/// chains, the only nodes the passes then read (root_positions gathers u of each chain's attach
+/// node, the path walks read its l; node_world, which reads every node, does not run).
+std::vector<int32_t> stepped_nodes(const Hierarchy& h, Outputs outputs);
+
+/// Flattens models and instances (docs/model.md 2: ordered chain-by-depth, instance-major state),
+/// each model with its stepped_nodes for `outputs` (and d.outputs = `outputs`). Groups are runs
+/// of consecutive instances of one model, split so that no dispatch exceeds
 /// `max_group_elements` threads.
 SceneData flatten_scene(const Scene& scene, const std::vector<Hierarchy>& hierarchies,
                         const std::vector<MeshTemplate>& meshes, const Parameters& parameters,
-                        const ModelOptions& options, const Wind& wind,
+                        const ModelOptions& options, const Wind& wind, Outputs outputs,
                         uint64_t max_group_elements = (1ull << 31));
 
 /// Lays out `instances` over d's models: instance_origin, instance_yaw, a zero instance_wind,

@@ -48,10 +48,14 @@ std::vector<Dispatch> Simulation::Impl::program_for(const std::vector<detail::In
 Status Simulation::Impl::check_size(std::span<const Instance> instances) const {
     uint64_t vertices = 0, chains = 0, nodes = 0;
     const bool with_vertices = config_.outputs == Outputs::all;  // the layout's vertices (create)
+    // The layout's nodes: each model's stepped nodes (flattened already after create).
+    std::vector<uint64_t> nodes_of(hierarchies_.size());
+    for (size_t m = 0; m < nodes_of.size(); ++m)
+        nodes_of[m] = data_ ? data_->models[m].node_count : detail::stepped_nodes(hierarchies_[m], config_.outputs).size();
     for (const Instance& inst : instances) {
         if (with_vertices) vertices += meshes_[inst.model].vertices.size();
         chains += 2 * hierarchies_[inst.model].chains.size();
-        nodes += hierarchies_[inst.model].node_owner.size();
+        nodes += nodes_of[inst.model];
     }
     if (vertices >= std::numeric_limits<uint32_t>::max() || chains >= std::numeric_limits<uint32_t>::max() ||
         nodes >= std::numeric_limits<uint32_t>::max() || instances.size() > kMaxInstances)
@@ -193,9 +197,8 @@ Result<std::unique_ptr<Simulation>> Simulation::Impl::create(const Scene& scene,
     const std::vector<MeshTemplate> no_meshes(config.outputs == Outputs::all ? 0 : sim->meshes_.size());
     sim->data_ = std::make_unique<SceneData>(
         detail::flatten_scene(scene, sim->hierarchies_, config.outputs == Outputs::all ? sim->meshes_ : no_meshes,
-                              config.parameters, config.model, config.wind));
+                              config.parameters, config.model, config.wind, config.outputs));
     sim->data_->vertex_layout = config.vertex_layout;
-    sim->data_->outputs = config.outputs;
 
     if (backend) {
         sim->backend_ = std::move(backend);
@@ -284,7 +287,12 @@ const Hierarchy& Simulation::hierarchy(uint32_t model) const { return impl_->hie
 const MeshTemplate& Simulation::mesh(uint32_t model) const { return impl_->meshes_[model]; }
 uint64_t Simulation::instance_count() const { return impl_->instances_.size(); }
 uint64_t Simulation::chain_count() const { return impl_->data_->total_chains; }
-uint64_t Simulation::node_count() const { return impl_->data_->total_nodes; }
+uint64_t Simulation::node_count() const {
+    if (impl_->data_->produces_nodes()) return impl_->data_->total_nodes;
+    uint64_t nodes = 0;  // the skeletons', although the layout holds only the attach nodes
+    for (const Instance& instance : impl_->instances_) nodes += impl_->hierarchies_[instance.model].node_owner.size();
+    return nodes;
+}
 uint64_t Simulation::vertex_count() const {
     if (impl_->data_->produces_vertices()) return impl_->data_->total_vertices;
     uint64_t vertices = 0;  // the meshes' (skins draw them), although the layout holds none

@@ -94,8 +94,9 @@ TEST_F(BenchOpenWorld, SmallWorldOnCpuReportsCallsSharesPopAndMemory) {
     EXPECT_GT(number(row, "copy_bandwidth_fraction"), 0.0);
 
     // Memory: the estimate at the asked shares lies below that of as many whole trees, and the
-    // allocation after the run is of the estimate's order; every level keeps the model's nodes
-    // and mesh vertices, which bound the tree count.
+    // allocation after the run is of the estimate's order. Every level keeps the model's mesh
+    // vertices; its state keeps only its chains' attach nodes (joints only), one for the trunk
+    // alone, which bound the tree count.
     const json& memory = row["memory"];
     EXPECT_GT(number(memory, "estimate_device_bytes"), 0.0);
     EXPECT_LT(number(memory, "estimate_device_bytes"), number(memory, "estimate_whole_trees_device_bytes"));
@@ -103,7 +104,12 @@ TEST_F(BenchOpenWorld, SmallWorldOnCpuReportsCallsSharesPopAndMemory) {
     ASSERT_EQ(memory["levels"].size(), 5u);
     EXPECT_EQ(memory["levels"][0]["chains"], 2345);
     EXPECT_EQ(memory["levels"][4]["chains"], 1);
-    EXPECT_EQ(memory["levels"][4]["nodes"], memory["levels"][0]["nodes"]);
+    EXPECT_EQ(memory["levels"][4]["nodes"], 1);
+    EXPECT_LE(memory["levels"][3]["nodes"].get<uint64_t>(), 16u);
+    EXPECT_LT(memory["levels"][0]["nodes"].get<uint64_t>(), 2345u);
+    EXPECT_EQ(memory["levels"][4]["mesh_vertices"], memory["levels"][0]["mesh_vertices"]);
+    EXPECT_EQ(number(memory, "largest_trees_by_nodes"),
+              double(std::numeric_limits<uint32_t>::max() / memory["levels"][0]["nodes"].get<uint64_t>()));
     EXPECT_EQ(number(memory, "largest_trees_by_mesh_vertices"),
               double(std::numeric_limits<uint32_t>::max() / memory["levels"][0]["mesh_vertices"].get<uint64_t>()));
 

@@ -90,7 +90,9 @@ HMSM_API std::optional<VertexLayout> parse_vertex_layout(std::string_view name);
 /// (mesh vertices and normals). Passes a step does not need are not dispatched at all and the
 /// buffers of outputs not produced are not allocated; Simulation::read() of such an output
 /// fails with invalid_argument. Chain rotations, origins, angles and joint matrices are always
-/// produced.
+/// produced. With `joints` the state holds, per model and level of detail, only the nodes the
+/// passes read: each chain's attach node (node_relative's u, 16 bytes a node), not the whole
+/// skeleton; Simulation::node_count() still counts the skeleton's nodes.
 enum class Outputs { joints, joints_and_nodes, all };
 inline constexpr NamedValue<Outputs> kOutputsNames[] = {
     {Outputs::joints, "joints"}, {Outputs::joints_and_nodes, "nodes"}, {Outputs::all, "all"}};

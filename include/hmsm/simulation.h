@@ -207,7 +207,9 @@ public:
 
     uint64_t instance_count() const;
     uint64_t chain_count() const;   ///< over all instances
-    uint64_t node_count() const;    ///< over all instances
+    /// Skeleton nodes over all instances (produced or not: a joints-only simulation keeps only
+    /// the chains' attach nodes, and reads no node positions; SimulationConfig::outputs).
+    uint64_t node_count() const;
     uint64_t vertex_count() const;  ///< mesh vertices over all instances (produced or not)
     uint32_t jump_rounds() const;   ///< pointer-jumping rounds of passes 3 and 5
     /// Chains whose inertia the frequency cap raised (docs/model.md 3.4), over all models, once

@@ -20,10 +20,11 @@ using nlohmann::json;
 
 std::vector<LevelShape> level_shapes(const Simulation& sim) {
     std::vector<LevelShape> levels;
+    const detail::SceneData& d = detail::scene_data_of(sim);
     for (uint32_t k = 0; k < sim.lod_level_count(0); ++k) {
         Result<uint32_t> run = sim.lod_model(0, k);
         if (!run) break;
-        levels.push_back({*run, sim.hierarchy(*run).chains.size(), sim.hierarchy(*run).node_owner.size(),
+        levels.push_back({*run, sim.hierarchy(*run).chains.size(), d.models[*run].node_count,
                           sim.mesh(*run).vertices.size()});
     }
     return levels;
@@ -91,8 +92,8 @@ json memory_json(const Simulation& sim, const std::vector<LevelShape>& levels, s
               {"estimate_whole_trees_device_bytes",
                levels.empty() ? 0.0 : double(trees) * tree_bytes(levels[0]) + model},
               {"host_peak_bytes", host_peak_bytes()}};
-    // Simulation::create and add_instances count every instance's mesh vertices and nodes
-    // against 32-bit element offsets, whatever the outputs: every level keeps all of them.
+    // Simulation::create and add_instances count every instance's mesh vertices (where they
+    // are produced) and state nodes against 32-bit element offsets.
     if (!levels.empty()) {
         const uint64_t limit = std::numeric_limits<uint32_t>::max();
         m["largest_trees_by_mesh_vertices"] = limit / std::max<uint64_t>(1, levels[0].vertices);
