@@ -183,4 +183,40 @@ TEST(CudaFrame, OneCopyReadsMatchTheChunkedPathAndGrowTheirSlots) {
     }
 }
 
+// A coarsening request fades under step(), which passes the fading chains through the host
+// after each step; enqueued steps may not wait for that: enqueue_steps folds the fades under way
+// first, exactly as the same switches made at once between frames.
+TEST(CudaFrame, EnqueuedStepsFoldFadesAtOnce) {
+    HMSM_SKIP_WITHOUT_CUDA();
+    auto tree = generate_preset("paper-5");
+    ASSERT_TRUE(tree.ok()) << tree.status().message();
+    Scene scene = *grid_scene(*tree, 5, 12.0, 4);
+    scene.lod_budgets = {{16, 1}};
+    SimulationConfig config;
+    config.backend = BackendKind::cuda;
+    config.wind.strength = 6.0;
+    auto enqueued = create_or_fail(scene, config);
+    auto reference = create_or_fail(scene, config);
+    ASSERT_TRUE(enqueued && reference);
+    cudaStream_t stream = nullptr;
+    ASSERT_EQ(cudaStreamCreateWithFlags(&stream, cudaStreamNonBlocking), cudaSuccess);
+    for (uint32_t k = 0; k < 6; ++k) {
+        if (k == 2) {
+            const InstanceId ids[] = {InstanceId(1), InstanceId(4)};
+            const uint32_t levels[] = {2, 1};
+            auto requested = enqueued->request_instance_lods(ids, levels);
+            ASSERT_TRUE(requested.ok()) << requested.status().message();
+            ASSERT_EQ(enqueued->fading_instance_count(), 2u) << "the trees sway: their switches fade";
+            ASSERT_TRUE(reference->set_instance_lods(ids, levels).ok());
+        }
+        ASSERT_TRUE(cuda::enqueue_steps(*enqueued, stream, 2).ok());
+        EXPECT_EQ(enqueued->fading_instance_count(), 0u) << "frame " << k;
+        ASSERT_TRUE(reference->step(2).ok());
+    }
+    ASSERT_EQ(cudaStreamSynchronize(stream), cudaSuccess);
+    expect_same_outputs(*reference, *enqueued);
+    ASSERT_TRUE(cuda::set_stream(*enqueued, nullptr).ok());
+    EXPECT_EQ(cudaStreamDestroy(stream), cudaSuccess);
+}
+
 }  // namespace hmsm::cuda_test
