@@ -129,16 +129,13 @@ TEST_P(JointsState, KeepsAttachNodesAndJointMatricesOfEveryOutput) {
 
         // Steps; a switch to coarser levels (in place); steps; instances added and removed
         // (past the capacity: the state is laid out anew); a switch back to finer levels;
-        // steps. Under the coupled dynamics a coarser level's chains keep the whole model's
-        // child ranges (src/model/levels.cpp builds no coupled records of its own), so only the
-        // paper dynamics switches levels here.
-        const bool switches = dynamics == Dynamics::paper;
+        // steps.
         for (Simulation* sim : {all.get(), joints.get()}) ASSERT_TRUE(sim->step(7).ok());
         expect_same_joints(*joints, *all, named + " after 7 steps");
         const InstanceId coarser[] = {InstanceId(0), InstanceId(1), InstanceId(3)};
         const uint32_t coarse_levels[] = {2, 3, 1};
         for (Simulation* sim : {all.get(), joints.get()}) {
-            if (switches) ASSERT_TRUE(sim->set_instance_lods(coarser, coarse_levels).ok());
+            ASSERT_TRUE(sim->set_instance_lods(coarser, coarse_levels).ok());
             ASSERT_TRUE(sim->step(4).ok());
         }
         expect_kept_nodes(*joints, *all, named + " on coarser levels");
@@ -155,7 +152,7 @@ TEST_P(JointsState, KeepsAttachNodesAndJointMatricesOfEveryOutput) {
         const InstanceId finer[] = {InstanceId(1), InstanceId(3), *joints->id_of(joints->instance_count() - 1)};
         const uint32_t fine_levels[] = {0, 0, 2};
         for (Simulation* sim : {all.get(), joints.get()}) {
-            if (switches) ASSERT_TRUE(sim->set_instance_lods(finer, fine_levels).ok());
+            ASSERT_TRUE(sim->set_instance_lods(finer, fine_levels).ok());
             ASSERT_TRUE(sim->step(5).ok());
         }
         expect_kept_nodes(*joints, *all, named + " back on finer levels");

@@ -183,10 +183,6 @@ TEST_P(LodFadeBackends, AgreesWithCpu64ThroughFades) {
         ASSERT_EQ(a.size(), b.size()) << when;
         EXPECT_LE(test::max_abs_difference(a, b), tolerance) << when;
     };
-    // Under the coupled dynamics the float CPU backends part from cpu64 on the coarser levels once
-    // instances have switched, faded or not (LodSwitch checks switches under the paper's
-    // dynamics only): the coupled runs compare the fades, and the levels they end on.
-    const bool compare_switched = dynamics == Dynamics::paper;
     const InstanceId ids[] = {InstanceId(0), InstanceId(1), InstanceId(3), InstanceId(5)};
     const uint32_t coarser[] = {1, 2, 2, 3};
     const uint32_t coarsest[] = {3, 3};
@@ -211,7 +207,7 @@ TEST_P(LodFadeBackends, AgreesWithCpu64ThroughFades) {
     EXPECT_EQ(oracle->fading_instance_count(), 0u);
     for (size_t i = 0; i < sim->instance_count(); ++i) EXPECT_EQ(sim->instances()[i].model, oracle->instances()[i].model);
     both([](Simulation& s) { return s.step(10); });
-    if (compare_switched) compare("after every fade switched", 1e-3);
+    compare("after every fade switched", 1e-3);
 }
 
 INSTANTIATE_TEST_SUITE_P(Backends, LodFadeBackends,
