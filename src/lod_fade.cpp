@@ -198,7 +198,7 @@ Result<uint64_t> Simulation::Impl::request_lods(std::vector<std::pair<uint32_t, 
     std::vector<std::pair<uint32_t, uint32_t>> switches;  // (index, run model), ascending
     std::vector<uint32_t> started;                         // fades to measure, ascending
     uint64_t changed = 0;
-    for (const auto [i, level] : requests) {
+    for (const auto& [i, level] : requests) {
         const LodModel& now = lod_models_[instances_[i].model];
         const uint32_t run_model = levels_of_[now.scene_model][level];
         const uint64_t id = uint64_t(instance_ids_[i]);
