@@ -43,6 +43,21 @@ struct InstanceChangeBracket {
 /// Halves of a chain-scope buffer: 2 for the ping-pong buffers, chain_capacity elements apart.
 inline uint32_t halves_of(BufferId id) { return buffer_info(id).scope == Scope::chain_halves ? 2u : 1u; }
 
+/// Neighbouring instances [first, end): read, carried and written as one range.
+struct IndexRun {
+    uint32_t first = 0, end = 0;
+};
+
+/// The runs of neighbours in `ascending` (instance indices, ascending, each once).
+inline std::vector<IndexRun> index_runs(std::span<const uint32_t> ascending) {
+    std::vector<IndexRun> runs;
+    for (uint32_t i : ascending) {
+        if (!runs.empty() && runs.back().end == i) ++runs.back().end;
+        else runs.push_back({i, i + 1});
+    }
+    return runs;
+}
+
 /// `ascending` (moves in ascending order of source and destination) in an order that
 /// Backend::move_elements may apply one after another (shift_moves below says why one exists):
 /// each run of moves shifting the same way, down in ascending order, up in descending order.

@@ -7,6 +7,7 @@
 // the fading instances, read and written run by run as a switch does), and the fading instances
 // are posed from their relaxed angles (passes 3-7), so read() shows what the next step starts
 // from.
+#include "instance_moves.h"
 #include "simulation_impl.h"
 
 #include <glm/geometric.hpp>
@@ -20,20 +21,8 @@ namespace hmsm {
 namespace {
 
 using detail::BufferId;
-
-/// Neighbouring instances [first, end), read and written as one range.
-struct IndexRun {
-    uint32_t first = 0, end = 0;
-};
-
-std::vector<IndexRun> index_runs(const std::vector<uint32_t>& ascending) {
-    std::vector<IndexRun> runs;
-    for (uint32_t i : ascending) {
-        if (!runs.empty() && runs.back().end == i) ++runs.back().end;
-        else runs.push_back({i, i + 1});
-    }
-    return runs;
-}
+using detail::IndexRun;
+using detail::index_runs;
 
 /// Whether each chain of run model `from` is folded by run model `into` (both levels of one
 /// scene model: the chains of `into` are a subset of those of `from`'s full model).

@@ -114,30 +114,16 @@ std::vector<V> carry_layout(const std::vector<V>& old, uint32_t per, uint32_t ha
     return out;
 }
 
-/// Neighbouring switched instances [first, end): read, carried and written as one range.
-struct SwitchedRun {
-    uint32_t first = 0, end = 0;
-};
-
-std::vector<SwitchedRun> runs_of(const std::vector<uint32_t>& switched) {
-    std::vector<SwitchedRun> runs;
-    for (uint32_t i : switched) {
-        if (!runs.empty() && runs.back().end == i) ++runs.back().end;
-        else runs.push_back({i, i + 1});
-    }
-    return runs;
-}
-
 /// The switched instances' values of buffer `id` in their new layout, run by run and half by
 /// half back to back: only their old ranges are read.
 template <class V>
 Status read_switched(const detail::Backend& backend, BufferId id, uint64_t capacity, detail::Scalar scalar,
-                     const std::vector<SwitchedRun>& runs, const detail::ByInstance<uint64_t>& old_chain,
+                     const std::vector<detail::IndexRun>& runs, const detail::ByInstance<uint64_t>& old_chain,
                      const detail::ByInstance<uint64_t>& new_chain, const detail::ByInstance<const ChainMap*>& maps,
                      std::vector<V>& carried) {
     const uint32_t per = detail::shape_scalars(detail::buffer_info(id).shape);
     std::vector<V> old;
-    for (const SwitchedRun& run : runs) {
+    for (const detail::IndexRun& run : runs) {
         const uint64_t old_first = old_chain[run.first], new_first = new_chain[run.first];
         const uint64_t chains = old_chain[run.end] - old_first;
         old.resize(chains * per);
@@ -156,11 +142,11 @@ Status read_switched(const detail::Backend& backend, BufferId id, uint64_t capac
 /// Writes what read_switched carried into the switched instances' new ranges.
 template <class V>
 Status write_switched(detail::Backend& backend, BufferId id, uint64_t capacity, detail::Scalar scalar,
-                      const std::vector<SwitchedRun>& runs, const detail::ByInstance<uint64_t>& new_chain,
+                      const std::vector<detail::IndexRun>& runs, const detail::ByInstance<uint64_t>& new_chain,
                       const std::vector<V>& carried) {
     const uint32_t per = detail::shape_scalars(detail::buffer_info(id).shape);
     size_t at = 0;
-    for (const SwitchedRun& run : runs) {
+    for (const detail::IndexRun& run : runs) {
         const uint64_t chains = new_chain[run.end] - new_chain[run.first];
         for (uint32_t h = 0; h < halves_of(id); ++h) {
             HMSM_TRY(backend.write(id, h * capacity + new_chain[run.first], chains, carried.data() + at, scalar));
@@ -241,7 +227,7 @@ Status Simulation::Impl::switch_models(const std::vector<std::pair<uint32_t, uin
         add_offsets(count);
         // Only the switched instances' state goes through the host; the instances between and
         // behind them shift on the device, their nodes and vertices with them.
-        const std::vector<SwitchedRun> runs = runs_of(switched);
+        const std::vector<detail::IndexRun> runs = detail::index_runs(switched);
         const uint64_t capacity = data_->chain_capacity;
         for (size_t b = 0; b < carried.size(); ++b)
             HMSM_TRY(scalar == detail::Scalar::f64
