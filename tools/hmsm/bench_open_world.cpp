@@ -395,6 +395,26 @@ json run_backend(const TreeModel& model, const std::string& model_name, BackendK
     for (uint32_t k = 0; k < std::min<uint32_t>(s.frames, 100); ++k)
         if (Status status = world.frame({0.0, 0.0}, &still, nullptr, nullptr); !status) return stop(status);
 
+    // Where a standing step's device time goes: ten profiled steps (timers serialize the
+    // passes, so their sum exceeds the unprofiled step).
+    {
+        detail::Backend& backend = detail::backend_of(sim);
+        backend.set_profiling(true);
+        const Status status = sim.step(10);
+        backend.set_profiling(false);
+        if (!status) return stop(status);
+        const PassTimes t = sim.pass_times();
+        json per_pass = json::object();
+        for (Pass p : kAllPasses)
+            if (t.steps > 0 && t.seconds[uint32_t(p)] > 0.0)
+                per_pass[std::string(pass_name(p))] = t.seconds[uint32_t(p)] / double(t.steps);
+        row["still_pass_seconds"] = per_pass;
+        // Groups are the runs of neighbouring instances of one model (level); every pass
+        // dispatches once per group.
+        row["groups"] = detail::scene_data_of(sim).groups.size();
+        row["dispatches_per_step"] = detail::step_program_of(sim).size();
+    }
+
     row["frames"] = s.frames;
     row["warmup_frames"] = warmup;
     row["instances"] = sim.instance_count();

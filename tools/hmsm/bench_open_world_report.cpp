@@ -47,7 +47,7 @@ std::string render_open_world(const json& rows) {
     auto seconds_of = [](const json& d, const char* key) {
         return d.is_object() && d.contains(key) ? d[key].get<double>() * 1e3 : 0.0;
     };
-    std::string calls_table;
+    std::string calls_table, passes_table;
     for (const json& r : rows) {
         const std::string backend = r.value("backend", std::string());
         if (r.contains("skipped") || r.contains("failed")) {
@@ -80,6 +80,17 @@ std::string render_open_world(const json& rows) {
                       memory.value("estimate_device_bytes", 0.0) * 1e-9,
                       memory.value("estimate_whole_trees_device_bytes", 0.0) * 1e-9);
         out += line;
+        const json passes = r.value("still_pass_seconds", json::object());
+        if (!passes.empty()) {
+            std::string cells;
+            for (const auto& [name, seconds] : passes.items()) {
+                std::snprintf(line, sizeof line, "%s%s %.3f", cells.empty() ? "" : ", ", name.c_str(),
+                              seconds.get<double>() * 1e3);
+                cells += line;
+            }
+            passes_table += "| " + backend + " | " + std::to_string(r.value("groups", 0ull)) + " | " +
+                            std::to_string(r.value("dispatches_per_step", 0ull)) + " | " + cells + " |\n";
+        }
         for (const char* name : {"update_lod", "swap_remove", "add", "step", "frame"}) {
             const json d = calls.value(name, json::object());
             std::snprintf(line, sizeof line, "| %s | %s | %llu | %.3f | %.3f | %.3f |\n", backend.c_str(), name,
@@ -91,6 +102,9 @@ std::string render_open_world(const json& rows) {
     if (!calls_table.empty())
         out += "\nPer call while moving (ms of wall time):\n\n| backend | call | calls | median | p99 | max |\n"
                "|---|---|--:|--:|--:|--:|\n" + calls_table;
+    if (!passes_table.empty())
+        out += "\nDevice ms per pass of a standing step (profiled: the timers serialize the passes):\n\n"
+               "| backend | groups | dispatches | passes |\n|---|--:|--:|---|\n" + passes_table;
     return out;
 }
 
