@@ -118,8 +118,12 @@ public:
     /// and, in a program with the walk ahead, as steps[k].ahead says (only a backend whose
     /// capabilities().walks_ahead is true gets such programs). Dispatches see the writes of all
     /// earlier dispatches. Returns when all work is complete (CUDA under enqueue_steps: once it
-    /// is enqueued on the backend's stream).
-    virtual Status run(std::span<const Dispatch> program, std::span<const RunStep> steps) = 0;
+    /// is enqueued on the backend's stream). A non-zero `program_id` names this exact program:
+    /// the caller gives it to no other (the simulation numbers its step programs), so a backend
+    /// that keeps what it derived from a program (plans, graphs, recordings) may recognize it by
+    /// the id alone instead of comparing every dispatch; 0 names none (compare).
+    virtual Status run(std::span<const Dispatch> program, std::span<const RunStep> steps,
+                       uint64_t program_id = 0) = 0;
 
     /// Copies elements [first, first+count) of `id` (count * shape_scalars scalars; integer
     /// buffers are read as their numeric values) into `dst` as float or double.

@@ -132,6 +132,8 @@ Status Simulation::Impl::apply_pending() {
 const std::vector<detail::Dispatch>& Simulation::Impl::current_program() {
     if (program_dirty_) {
         step_program_ = program_for(active_groups(*data_, instances_, paused_count_), Pass::wind_force);
+        ++step_program_id_;
+        step_program_walks_ahead_ = std::any_of(step_program_.begin(), step_program_.end(), detail::is_walk_ahead);
         program_dirty_ = false;
     }
     return step_program_;

@@ -258,9 +258,9 @@ Status Simulation::Impl::step(uint32_t count) {
                                  uint64_t(steps + 1) * HMSM_WIND_STEP_VEC4S, wind_scratch_.data(),
                                  detail::Scalar::f64));
         // The walk that integrates ahead: the step layer says how each step runs.
-        const bool ahead = std::any_of(program.begin(), program.end(), detail::is_walk_ahead);
+        const bool ahead = step_program_walks_ahead_;
         if (ahead) ahead_schedule_.plan(run_steps_);
-        if (Status run = backend_->run(program, run_steps_); !run.ok() || !ahead) {
+        if (Status run = backend_->run(program, run_steps_, step_program_id_); !run.ok() || !ahead) {
             ahead_schedule_.forget();
             HMSM_TRY(run);
         }

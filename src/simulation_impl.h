@@ -187,6 +187,9 @@ struct __attribute__((visibility("hidden"))) Simulation::Impl {
     std::unique_ptr<detail::SceneData> data_;
     std::unique_ptr<detail::Backend> backend_;
     std::vector<detail::Dispatch> step_program_;
+    /// Numbers step_program_'s contents: a rebuild takes the next id (Backend::run program_id).
+    uint64_t step_program_id_ = 0;
+    bool step_program_walks_ahead_ = false;  // whether step_program_ has the walk ahead
     std::vector<ForceField> force_fields_;
     std::vector<Instance> instances_;  // the current instance list (live control)
     /// The handle of each current instance: survivors keep their order and added instances

@@ -425,12 +425,13 @@ public:
             return {ErrorCode::out_of_memory, "failing test device: out of device memory (injected)"};
         return inner_->upload(scene);
     }
-    Status run(std::span<const detail::Dispatch> program, std::span<const detail::RunStep> steps) override {
+    Status run(std::span<const detail::Dispatch> program, std::span<const detail::RunStep> steps,
+               uint64_t program_id = 0) override {
         if (lost_ || ++runs_ == fail_at_run_) {
             lost_ = true;
             return {ErrorCode::device_error, "failing test device: device lost (injected)"};
         }
-        return inner_->run(program, steps);
+        return inner_->run(program, steps, program_id);
     }
     Status read(detail::BufferId id, uint64_t first, uint64_t count, void* dst, detail::Scalar as) const override {
         if (lost_) return {ErrorCode::device_error, "failing test device: device lost (injected)"};

@@ -31,8 +31,9 @@ public:
     BackendKind kind() const override { return inner_->kind(); }
     std::string device_name() const override { return inner_->device_name(); }
     Status upload(const detail::SceneData& scene) override { return inner_->upload(scene); }
-    Status run(std::span<const detail::Dispatch> program, std::span<const detail::RunStep> steps) override {
-        return inner_->run(program, steps);
+    Status run(std::span<const detail::Dispatch> program, std::span<const detail::RunStep> steps,
+               uint64_t program_id = 0) override {
+        return inner_->run(program, steps, program_id);
     }
     Status read(detail::BufferId id, uint64_t first, uint64_t count, void* dst, detail::Scalar as) const override {
         return inner_->read(id, first, count, dst, as);

@@ -105,12 +105,14 @@ public:
         return {};
     }
 
-    Status run(std::span<const Dispatch> program, std::span<const RunStep> steps) override {
+    Status run(std::span<const Dispatch> program, std::span<const RunStep> steps, uint64_t program_id = 0) override {
         times_ = {};
         if (pool_ && !steps.empty()) {
             try {
-                if (!plan_ || !plan_->matches(program))
+                const bool known = plan_ && program_id != 0 && program_id == plan_id_;
+                if (!known && (!plan_ || !plan_->matches(program)))
                     plan_ = std::make_unique<StepPlan>(program, pool_->threads(), min_chunk_elements_);
+                plan_id_ = program_id;
             } catch (const std::bad_alloc&) {
                 return {ErrorCode::out_of_memory, "cpu-parallel: not enough host memory for the step plan"};
             }
@@ -307,6 +309,7 @@ private:
     std::unique_ptr<ThreadPool> pool_;  // null: the serial backends
     uint32_t min_chunk_elements_ = 0;
     std::unique_ptr<StepPlan> plan_;    // cpu-parallel: the plan of the last program run
+    uint64_t plan_id_ = 0;              // its program_id (0: none given)
     bool profiling_ = false;
     PassTimes times_;
 };

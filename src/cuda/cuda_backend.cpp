@@ -126,16 +126,16 @@ Result<double> CudaBackend::measure_copy_bandwidth(uint64_t bytes) {
     return 2.0 * double(bytes) / median_seconds;
 }
 
-Result<StepGraph*> CudaBackend::graph_for(std::span<const Dispatch> program) {
+Result<StepGraph*> CudaBackend::graph_for(std::span<const Dispatch> program, uint64_t program_id) {
     size_t oldest = 0;
     for (size_t i = 0; i < graphs_.size(); ++i) {
-        if (graphs_[i].matches(program, buffers_.pointers())) {
+        if (graphs_[i].matches(program, buffers_.pointers(), program_id)) {
             graph_used_[i] = ++graph_clock_;
             return &graphs_[i];
         }
         if (graph_used_[i] < graph_used_[oldest]) oldest = i;
     }
-    HMSM_TRY(graphs_[oldest].capture(program, buffers_.pointers(), batch_runs_, stream_));
+    HMSM_TRY(graphs_[oldest].capture(program, buffers_.pointers(), batch_runs_, stream_, program_id));
     graph_used_[oldest] = ++graph_clock_;
     return &graphs_[oldest];
 }
@@ -144,13 +144,18 @@ Result<StepGraph*> CudaBackend::graph_for(std::span<const Dispatch> program) {
 // from its pose and the next wind-table slot. A step that takes them (AheadStep::take, the step
 // layer's decision) swaps the two state buffers and runs without its wind_force dispatches; a
 // plain one runs the plain walk, a whole one the program.
-Status CudaBackend::run(std::span<const Dispatch> program, std::span<const RunStep> steps) {
+Status CudaBackend::run(std::span<const Dispatch> program, std::span<const RunStep> steps, uint64_t program_id) {
     HMSM_TRY(make_current());
     times_ = {};
     if (steps.empty() || program.empty()) return {};
-    const bool walks_ahead =
-        std::any_of(program.begin(), program.end(), [](const Dispatch& d) { return is_walk_ahead(d); });
-    if (walks_ahead && !same_dispatches(program, ahead_.whole)) ahead_ = ahead_variants(program);  // once per program
+    // Derived once per program; a program named by an id is recognized without looking at its
+    // dispatches (a forest's step program has thousands).
+    if (program_id == 0 || program_id != ahead_id_) {
+        walks_ahead_ = std::any_of(program.begin(), program.end(), [](const Dispatch& d) { return is_walk_ahead(d); });
+        if (walks_ahead_ && !same_dispatches(program, ahead_.whole)) ahead_ = ahead_variants(program);
+        ahead_id_ = program_id;
+    }
+    const bool walks_ahead = walks_ahead_;
     for (const RunStep& run_step : steps) {
         const uint32_t slot = run_step.wind_slot;
         const AheadStep how = walks_ahead ? run_step.ahead : AheadStep::whole;
@@ -162,10 +167,14 @@ Status CudaBackend::run(std::span<const Dispatch> program, std::span<const RunSt
         const std::span<const Dispatch> step = how == AheadStep::take    ? std::span<const Dispatch>(ahead_.without_wind)
                                                : how == AheadStep::plain ? std::span<const Dispatch>(ahead_.plain)
                                                                          : program;
-        if (profiling_) {
-            HMSM_TRY(run_profiled(step, slot));
+        if (profiling_ || program_id == 0) {
+            // Timed launch by launch, or a program run once (a pose at rest after a live
+            // change): capturing a graph would cost more than it saves and evict a step's.
+            HMSM_TRY(run_launches(step, slot, profiling_));
         } else {
-            auto graph = graph_for(step);
+            // Each variant of a named program is a program of its own, with an id of its own.
+            const uint64_t variant = how == AheadStep::take ? 1 : how == AheadStep::plain ? 2 : 0;
+            auto graph = graph_for(step, program_id != 0 ? 3 * program_id + variant : 0);
             if (!graph) return graph.status();
             HMSM_TRY((*graph)->replay(slot, stream_));
         }
@@ -175,13 +184,19 @@ Status CudaBackend::run(std::span<const Dispatch> program, std::span<const RunSt
     return {};
 }
 
-Status CudaBackend::run_profiled(std::span<const Dispatch> program, uint32_t slot) {
-    if (!same_dispatches(program, profiled_program_) || profiled_plan_.launches.empty()) {
-        profiled_program_.assign(program.begin(), program.end());
-        profiled_plan_ = plan_launches(profiled_program_, batch_runs_, max_launch_blocks());
-        HMSM_TRY(profiled_table_.upload(profiled_plan_, stream_));
+Status CudaBackend::run_launches(std::span<const Dispatch> program, uint32_t slot, bool timed) {
+    if (!same_dispatches(program, launched_program_) || launched_plan_.launches.empty()) {
+        launched_program_.assign(program.begin(), program.end());
+        launched_plan_ = plan_launches(launched_program_, batch_runs_, max_launch_blocks());
+        HMSM_TRY(launched_table_.upload(launched_plan_, stream_));
     }
-    const std::vector<PlannedLaunch>& launches = profiled_plan_.launches;
+    const std::vector<PlannedLaunch>& launches = launched_plan_.launches;
+    if (!timed) {
+        for (const PlannedLaunch& launch : launches)
+            CUDA_TRY(enqueue_launch(launched_plan_, launch, launched_program_, launched_table_, buffers_.pointers(),
+                                    slot, stream_));
+        return {};
+    }
     while (events_.size() < launches.size() + 1) {
         cudaEvent_t event = nullptr;
         CUDA_TRY(cudaEventCreate(&event));
@@ -189,7 +204,7 @@ Status CudaBackend::run_profiled(std::span<const Dispatch> program, uint32_t slo
     }
     CUDA_TRY(cudaEventRecord(events_[0], stream_));
     for (size_t j = 0; j < launches.size(); ++j) {
-        CUDA_TRY(enqueue_launch(profiled_plan_, launches[j], profiled_program_, profiled_table_, buffers_.pointers(),
+        CUDA_TRY(enqueue_launch(launched_plan_, launches[j], launched_program_, launched_table_, buffers_.pointers(),
                                 slot, stream_));
         CUDA_TRY(cudaEventRecord(events_[j + 1], stream_));
     }

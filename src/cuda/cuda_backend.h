@@ -25,12 +25,13 @@ public:
     BackendKind kind() const override { return BackendKind::cuda; }
     std::string device_name() const override { return device_name_; }
     Status upload(const SceneData& scene) override;
-    /// Without profiling, each step is one replay of a captured step graph (captured on the
-    /// first run() of a program); with profiling, the launches (launch_plan.h: a run of
+    /// Without profiling, each step of a named program (program_id) is one replay of a
+    /// captured step graph (captured on the first run() of the program), an unnamed one is
+    /// launched directly; with profiling, the launches (launch_plan.h: a run of
     /// dispatches over different groups is one batched launch) are enqueued one by one
     /// between events and every step is timed. A program of the walk that integrates ahead
     /// runs each step as `ahead` says (cuda_backend.cpp).
-    Status run(std::span<const Dispatch> program, std::span<const RunStep> steps) override;
+    Status run(std::span<const Dispatch> program, std::span<const RunStep> steps, uint64_t program_id = 0) override;
     Status read(BufferId id, uint64_t first, uint64_t count, void* dst, Scalar as) const override;
     Status write(BufferId id, uint64_t first, uint64_t count, const void* src, Scalar as) override;
     Status move_elements(BufferId id, std::span<const ElementMove> moves) override;
@@ -71,10 +72,11 @@ private:
         : device_(device), device_name_(std::move(name)), own_stream_(own_stream), stream_(own_stream) {}
     /// The captured graph of `program` over the current buffers, captured now if none of the
     /// last few is.
-    Result<StepGraph*> graph_for(std::span<const Dispatch> program);
-    /// One step of `program` launched dispatch by dispatch between events, its device times
-    /// added to times_ (synchronizes).
-    Status run_profiled(std::span<const Dispatch> program, uint32_t slot);
+    /// The graph of `program` (named `program_id` where non-zero), captured if none holds it.
+    Result<StepGraph*> graph_for(std::span<const Dispatch> program, uint64_t program_id);
+    /// One step of `program` launch by launch (launch_plan.h); `timed`: between events, its
+    /// device times added to times_ (synchronizes).
+    Status run_launches(std::span<const Dispatch> program, uint32_t slot, bool timed);
     Status make_current() const;
 
     int device_;
@@ -92,13 +94,16 @@ private:
     /// Runs of dispatches over different groups are batched (launch_plan.h) unless
     /// HMSM_CUDA_BATCH_RUNS=0 (read when the backend is created).
     bool batch_runs_ = true;
-    /// Profiling: the program last profiled, its launches and their table.
-    std::vector<Dispatch> profiled_program_;
-    LaunchPlan profiled_plan_;
-    LaunchTable profiled_table_;
+    /// The program last run launch by launch (profiled, or run once), its launches and their
+    /// table.
+    std::vector<Dispatch> launched_program_;
+    LaunchPlan launched_plan_;
+    LaunchTable launched_table_;
     /// The last program of the walk ahead that ran, and what its steps run instead where they
     /// take the angles integrated ahead or walk plain: derived once per program.
     AheadVariants ahead_;
+    uint64_t ahead_id_ = 0;     // the program_id of the last program run (0: none given)
+    bool walks_ahead_ = false;  // whether that program walks ahead (then ahead_ is its variants)
     uint64_t steps_taken_ahead_ = 0;   // steps that took the angles integrated ahead
     uint64_t steps_walked_plain_ = 0;  // steps_walked_plain()
     std::vector<cudaEvent_t> events_;  // profiling: one before and one after each dispatch

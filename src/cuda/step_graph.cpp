@@ -73,17 +73,20 @@ void StepGraph::release() {
     graph_ = nullptr;
     wind_nodes_.clear();
     program_.clear();
+    program_id_ = 0;
     plan_ = {};
 }
 
-bool StepGraph::matches(std::span<const Dispatch> program, const BufferPointers& buffers) const {
-    return exec_ && same_bytes(&buffers, &buffers_, sizeof buffers) && same_dispatches(program, program_);
+bool StepGraph::matches(std::span<const Dispatch> program, const BufferPointers& buffers, uint64_t program_id) const {
+    if (!exec_ || !same_bytes(&buffers, &buffers_, sizeof buffers)) return false;
+    return (program_id != 0 && program_id == program_id_) || same_dispatches(program, program_);
 }
 
 Status StepGraph::capture(std::span<const Dispatch> program, const BufferPointers& buffers, bool batch_runs,
-                          cudaStream_t stream) {
+                          cudaStream_t stream, uint64_t program_id) {
     release();
     program_.assign(program.begin(), program.end());
+    program_id_ = program_id;
     plan_ = plan_launches(program_, batch_runs, max_launch_blocks());
     HMSM_TRY(table_.upload(plan_, stream));  // before the capture: the graph's launches read it
     const std::vector<PlannedLaunch>& launches = plan_.launches;

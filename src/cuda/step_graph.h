@@ -33,13 +33,14 @@ public:
     StepGraph(const StepGraph&) = delete;
     StepGraph& operator=(const StepGraph&) = delete;
 
-    /// True when the captured graph runs exactly `program` over `buffers`.
-    bool matches(std::span<const Dispatch> program, const BufferPointers& buffers) const;
+    /// True when the captured graph runs exactly `program` over `buffers`: the program it was
+    /// captured from has the same non-zero `program_id` (Backend::run), or the same dispatches.
+    bool matches(std::span<const Dispatch> program, const BufferPointers& buffers, uint64_t program_id = 0) const;
     /// Captures `program` from `stream` and instantiates it (replacing any earlier graph), its
     /// runs batched unless `batch_runs` is false (launch_plan.h; the batches' table is uploaded
     /// first, after the launches of the graph it replaces have completed).
     Status capture(std::span<const Dispatch> program, const BufferPointers& buffers, bool batch_runs,
-                   cudaStream_t stream);
+                   cudaStream_t stream, uint64_t program_id = 0);
     /// Enqueues one step reading wind-table slot `wind_slot` on `stream`.
     Status replay(uint32_t wind_slot, cudaStream_t stream);
 
@@ -56,6 +57,7 @@ private:
     void release();
 
     std::vector<Dispatch> program_;
+    uint64_t program_id_ = 0;  // the id program_ was captured with (0: none)
     LaunchPlan plan_;
     LaunchTable table_;  // the batches' table, kept across captures (regrown where needed)
     BufferPointers buffers_;

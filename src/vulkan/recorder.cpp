@@ -29,19 +29,23 @@ bool same_dispatch(const Dispatch& a, const Dispatch& b) {
 
 }  // namespace
 
-bool RecordingPlan::holds(std::span<const Dispatch> program, Batching batching) const {
+bool RecordingPlan::holds(std::span<const Dispatch> program, Batching batching, uint64_t program_id) const {
     if (program.size() != program_.size() || program.empty()) return false;
     if (batching.batch_runs != batching_.batch_runs || batching.max_workgroups != batching_.max_workgroups)
         return false;
+    if (program_id != 0 && program_id == program_id_) return true;
     for (size_t i = 0; i < program.size(); ++i)
         if (!same_dispatch(program[i], program_[i])) return false;
     return true;
 }
 
 Result<bool> RecordingPlan::prepare(const Device& device, Pipelines& pipelines, const Windows& windows,
-                                    std::span<const Dispatch> program, Batching batching) {
-    if (holds(program, batching)) return false;
-    program_.clear();
+                                    std::span<const Dispatch> program, Batching batching, uint64_t program_id) {
+    if (holds(program, batching, program_id)) {
+        program_id_ = program_id;
+        return false;
+    }
+    clear();
     HMSM_TRY(pipelines.prepare(program));
     parts_.clear();
     timestamp_passes_.clear();
@@ -55,6 +59,7 @@ Result<bool> RecordingPlan::prepare(const Device& device, Pipelines& pipelines, 
         for (size_t i = 0; i < program.size(); ++i) add_run(device, pipelines, windows, program.subspan(i, 1));
     }
     program_.assign(program.begin(), program.end());
+    program_id_ = program_id;
     return true;
 }
 

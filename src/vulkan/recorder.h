@@ -60,11 +60,16 @@ public:
     };
 
     /// Builds the plan of `program` (creating the pipelines it needs) unless it already holds
-    /// that program's; true when it built one (the run table then has new contents).
+    /// that program's (known by a non-zero `program_id` it was built or last held with, else by
+    /// comparing the dispatches; Backend::run); true when it built one (the run table then has
+    /// new contents).
     Result<bool> prepare(const Device& device, Pipelines& pipelines, const Windows& windows,
-                         std::span<const Dispatch> program, Batching batching);
+                         std::span<const Dispatch> program, Batching batching, uint64_t program_id = 0);
     /// Forgets the plan (the scene's buffers or descriptor sets changed).
-    void clear() { program_.clear(); }
+    void clear() {
+        program_.clear();
+        program_id_ = 0;
+    }
     std::span<const Part> parts() const { return parts_; }
     /// The pass of each timestamp after the first, in the order a step writes them.
     std::span<const Pass> timestamp_passes() const { return timestamp_passes_; }
@@ -76,13 +81,14 @@ public:
     std::span<const uint32_t> table_first_workgroups() const { return table_first_workgroups_; }
 
 private:
-    bool holds(std::span<const Dispatch> program, Batching batching) const;
+    bool holds(std::span<const Dispatch> program, Batching batching, uint64_t program_id) const;
     /// Appends the parts of `run` (consecutive dispatches that dispatch_batches joins).
     void add_run(const Device& device, const Pipelines& pipelines, const Windows& windows,
                  std::span<const Dispatch> run);
     void add_part(Part part);
 
     std::vector<Dispatch> program_;
+    uint64_t program_id_ = 0;  // the id program_ was built or last held with (0: none)
     Batching batching_;
     std::vector<Part> parts_;
     std::vector<Pass> timestamp_passes_;

@@ -269,7 +269,7 @@ Status VulkanBackend::finish_slot(Slot& slot) {
     return {};
 }
 
-Status VulkanBackend::run(std::span<const Dispatch> program, std::span<const RunStep> steps) {
+Status VulkanBackend::run(std::span<const Dispatch> program, std::span<const RunStep> steps, uint64_t program_id) {
     times_ = {};
     if (program.empty() || steps.empty()) return {};
     if (!plan_ || !sets_) return {ErrorCode::internal, "vulkan: run() before upload()"};
@@ -281,7 +281,7 @@ Status VulkanBackend::run(std::span<const Dispatch> program, std::span<const Run
         return {};
     }
     if (!record_target_) HMSM_TRY(submit_held_back());
-    HMSM_TRY(prepare_recording(program));
+    HMSM_TRY(prepare_recording(program, program_id));
     if (record_target_) {
         ring_->record_copies(record_target_);
         record_steps(*device_, pipelines_->layout(), recording_, record_target_, steps, VK_NULL_HANDLE,
@@ -310,8 +310,8 @@ Status VulkanBackend::run(std::span<const Dispatch> program, std::span<const Run
     return device_->take_validation_messages();
 }
 
-Status VulkanBackend::prepare_recording(std::span<const Dispatch> program) {
-    auto built = recording_.prepare(*device_, *pipelines_, Windows{*plan_, *sets_}, program, batching_);
+Status VulkanBackend::prepare_recording(std::span<const Dispatch> program, uint64_t program_id) {
+    auto built = recording_.prepare(*device_, *pipelines_, Windows{*plan_, *sets_}, program, batching_, program_id);
     if (!built) return built.status();
     if (!*built) return {};
     // The table travels with the recording that first runs the program (frames in flight may

@@ -38,7 +38,7 @@ public:
     BackendKind kind() const override { return BackendKind::vulkan; }
     std::string device_name() const override { return device_->name(); }
     Status upload(const SceneData& scene) override;
-    Status run(std::span<const Dispatch> program, std::span<const RunStep> steps) override;
+    Status run(std::span<const Dispatch> program, std::span<const RunStep> steps, uint64_t program_id = 0) override;
     Status read(BufferId id, uint64_t first, uint64_t count, void* dst, Scalar as) const override;
     Status write(BufferId id, uint64_t first, uint64_t count, const void* src, Scalar as) override;
     /// Each move copies through a device-local scratch buffer (vkCmdCopyBuffer forbids
@@ -118,7 +118,7 @@ private:
     /// Waits for `slot` and adds its timestamps to times_ (of recording_'s timed parts).
     Status finish_slot(Slot& slot);
     /// The recording plan of `program`, and the run table's contents where the plan is new.
-    Status prepare_recording(std::span<const Dispatch> program);
+    Status prepare_recording(std::span<const Dispatch> program, uint64_t program_id);
     Status ensure_timestamp_capacity(Slot& slot, uint32_t queries);
     /// A write, move or run of an instance change held back for the next recording.
     struct HeldBack {

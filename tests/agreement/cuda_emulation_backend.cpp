@@ -51,7 +51,8 @@ public:
 
     /// The CUDA backend hands each step's wind-table slot to the kernels, and runs each
     /// step of a walk-ahead program as `ahead` says (src/cuda/cuda_backend.cpp).
-    Status run(std::span<const detail::Dispatch> program, std::span<const detail::RunStep> steps) override {
+    Status run(std::span<const detail::Dispatch> program, std::span<const detail::RunStep> steps,
+               uint64_t /*program_id: derives its plans anew each run*/ = 0) override {
         const bool walks = ahead_ && std::any_of(program.begin(), program.end(), detail::is_walk_ahead);
         const detail::AheadVariants variants = walks ? detail::ahead_variants(program) : detail::AheadVariants{};
         auto plan_of = [&](std::span<const detail::Dispatch> dispatches) {
