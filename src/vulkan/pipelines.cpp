@@ -5,6 +5,7 @@
 #include "../common/run_table_layout.h"
 
 #include <algorithm>
+#include <vector>
 
 // Generated at build time by cmake/HmsmVulkan.cmake (glslangValidator --vn hmsm_spirv_NAME).
 #include "hmsm_spirv/compose.h"
@@ -26,6 +27,26 @@ std::span<const uint32_t> pass_spirv(Pass pass) {
     }
     return {};
 }
+
+namespace {
+
+/// A descriptor set layout of `count` storage buffers, bindings 0 .. count - 1, for compute.
+Status storage_buffer_set_layout(const Device& device, uint32_t count, VkDescriptorSetLayout& layout) {
+    std::vector<VkDescriptorSetLayoutBinding> bindings(count);
+    for (uint32_t b = 0; b < count; ++b) {
+        bindings[b].binding = b;
+        bindings[b].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+        bindings[b].descriptorCount = 1;
+        bindings[b].stageFlags = VK_SHADER_STAGE_COMPUTE_BIT;
+    }
+    VkDescriptorSetLayoutCreateInfo info{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
+    info.bindingCount = count;
+    info.pBindings = bindings.data();
+    HMSM_VK_TRY(device.vk().vkCreateDescriptorSetLayout(device.handle(), &info, nullptr, &layout));
+    return {};
+}
+
+}  // namespace
 
 Result<std::unique_ptr<Pipelines>> Pipelines::create(const Device& device) {
     const DeviceLimits& limits = device.limits();
@@ -49,29 +70,8 @@ Result<std::unique_ptr<Pipelines>> Pipelines::create(const Device& device) {
     const VolkDeviceTable& vk = device.vk();
     VkDevice dev = device.handle();
 
-    std::array<VkDescriptorSetLayoutBinding, kBufferCount> bindings{};
-    for (uint32_t b = 0; b < kBufferCount; ++b) {
-        bindings[b].binding = b;
-        bindings[b].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
-        bindings[b].descriptorCount = 1;
-        bindings[b].stageFlags = VK_SHADER_STAGE_COMPUTE_BIT;
-    }
-    VkDescriptorSetLayoutCreateInfo set_info{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
-    set_info.bindingCount = kBufferCount;
-    set_info.pBindings = bindings.data();
-    HMSM_VK_TRY(vk.vkCreateDescriptorSetLayout(dev, &set_info, nullptr, &p->set_layout_));
-
-    std::array<VkDescriptorSetLayoutBinding, kRunTableBindings> table_bindings{};
-    for (uint32_t b = 0; b < kRunTableBindings; ++b) {
-        table_bindings[b].binding = b;
-        table_bindings[b].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
-        table_bindings[b].descriptorCount = 1;
-        table_bindings[b].stageFlags = VK_SHADER_STAGE_COMPUTE_BIT;
-    }
-    VkDescriptorSetLayoutCreateInfo table_info{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
-    table_info.bindingCount = kRunTableBindings;
-    table_info.pBindings = table_bindings.data();
-    HMSM_VK_TRY(vk.vkCreateDescriptorSetLayout(dev, &table_info, nullptr, &p->table_set_layout_));
+    HMSM_TRY(storage_buffer_set_layout(device, kBufferCount, p->set_layout_));
+    HMSM_TRY(storage_buffer_set_layout(device, kRunTableBindings, p->table_set_layout_));
 
     static_assert(HMSM_RUN_TABLE_SET == 1, "set 0 binds the scene's buffers, set 1 the run table");
     const std::array<VkDescriptorSetLayout, 2> set_layouts{p->set_layout_, p->table_set_layout_};
