@@ -3,6 +3,7 @@
 #include "bench_open_world.h"
 
 #include "bench_model.h"
+#include "bench_frames.h"
 #include "bench_open_world_probe.h"
 #include "simulation_access.h"
 
@@ -413,6 +414,20 @@ json run_backend(const TreeModel& model, const std::string& model_name, BackendK
         // dispatches once per group.
         row["groups"] = detail::scene_data_of(sim).groups.size();
         row["dispatches_per_step"] = detail::step_program_of(sim).size();
+    }
+    // The same standing step as an engine issues it (CUDA: enqueued on its stream; Vulkan:
+    // recorded into its command buffer): the host time of the call, and the whole frame until
+    // the outputs are ready.
+    {
+        json engine = json::array();
+        for (const std::unique_ptr<FrameDriver>& driver : engine_drivers(sim)) {
+            FrameTimes times;
+            if (Status status = time_frames(sim, *driver, 20, {}, times); !status) return stop(status);
+            engine.push_back({{"path", driver->path()},
+                              {"call_median_seconds", percentile(times.call, 0.5)},
+                              {"frame_median_seconds", percentile(times.whole, 0.5)}});
+        }
+        row["still_engine"] = engine;
     }
 
     row["frames"] = s.frames;

@@ -88,8 +88,16 @@ std::string render_open_world(const json& rows) {
                               seconds.get<double>() * 1e3);
                 cells += line;
             }
+            std::string engine;
+            for (const json& e : r.value("still_engine", json::array())) {
+                std::snprintf(line, sizeof line, "%s%s %.3f / %.3f", engine.empty() ? "" : ", ",
+                              e.value("path", std::string()).c_str(), e.value("call_median_seconds", 0.0) * 1e3,
+                              e.value("frame_median_seconds", 0.0) * 1e3);
+                engine += line;
+            }
             passes_table += "| " + backend + " | " + std::to_string(r.value("groups", 0ull)) + " | " +
-                            std::to_string(r.value("dispatches_per_step", 0ull)) + " | " + cells + " |\n";
+                            std::to_string(r.value("dispatches_per_step", 0ull)) + " | " + cells + " | " + engine +
+                            " |\n";
         }
         for (const char* name : {"update_lod", "swap_remove", "add", "step", "frame"}) {
             const json d = calls.value(name, json::object());
@@ -103,8 +111,11 @@ std::string render_open_world(const json& rows) {
         out += "\nPer call while moving (ms of wall time):\n\n| backend | call | calls | median | p99 | max |\n"
                "|---|---|--:|--:|--:|--:|\n" + calls_table;
     if (!passes_table.empty())
-        out += "\nDevice ms per pass of a standing step (profiled: the timers serialize the passes):\n\n"
-               "| backend | groups | dispatches | passes |\n|---|--:|--:|---|\n" + passes_table;
+        out += "\nA standing step: device ms per pass (profiled: the timers serialize the passes), and as an "
+               "engine issues it (CUDA: enqueued on its stream; Vulkan: recorded into its command buffer), "
+               "ms of the call / of the frame until the outputs are ready:\n\n"
+               "| backend | groups | dispatches | passes | engine call / frame |\n|---|--:|--:|---|---|\n" +
+               passes_table;
     return out;
 }
 
