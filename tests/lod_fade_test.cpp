@@ -342,6 +342,22 @@ TEST(LodFadeRequests, InterruptRetargetPauseRemoveAndRest) {
     EXPECT_EQ(*sim->instance_lod(deep), 0u);
 }
 
+// A fade word names the level faded to in 7 bits: a model with more than 128 levels (level 0
+// included) is refused at create, naming the model; 128 levels are fine.
+TEST(LodFadeInput, MoreLevelsThanAFadeWordNamesAreRefused) {
+    Scene scene = single_tree_scene(test::small_tree());
+    scene.lod_budgets = {std::vector<int32_t>(128, 1)};
+    auto refused = Simulation::create(scene, SimulationConfig{});
+    ASSERT_FALSE(refused.ok());
+    EXPECT_EQ(refused.status().code(), ErrorCode::invalid_argument);
+    EXPECT_NE(refused.status().message().find("'" + scene.model_names[0] + "': 129 levels of detail, at most 128"),
+              std::string::npos)
+        << refused.status().message();
+    scene.lod_budgets[0].pop_back();
+    auto created = Simulation::create(scene, SimulationConfig{});
+    EXPECT_TRUE(created.ok()) << created.status().message();
+}
+
 // Bad fade settings and bad requests are refused, naming the problem, and change nothing.
 TEST(LodFadeInput, BadSettingsAndRequestsChangeNothing) {
     auto sim = windy_forest();
