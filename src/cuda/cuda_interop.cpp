@@ -53,7 +53,7 @@ Status set_stream(Simulation& simulation, CUstream_st* stream) {
 Status enqueue_steps(Simulation& simulation, CUstream_st* stream, uint32_t count) {
     auto backend = cuda_backend_of(simulation);
     if (!backend) return backend.status();
-    // Fades run inside the enqueued steps (pass 2); the fades that are over switch now, before
+    // Fades run inside the enqueued steps (pass 2); the fades that are over switch here, before
     // the steps, as a switch made between frames (docs/driving.md).
     HMSM_TRY(detail::SimulationAccess::impl(simulation).fold_ready_fades());
     HMSM_TRY((*backend)->set_stream(stream));

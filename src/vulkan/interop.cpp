@@ -98,7 +98,7 @@ Status record_steps(Simulation& simulation, VkCommandBuffer command_buffer, uint
     // through the backend and advances the clock; while recording, the backend stages the
     // uploads in the frame's ring slot and records copies and steps instead of submitting.
     VulkanBackend& vulkan = *backend.value();
-    // Fades run inside the recorded steps (pass 2); the fades that are over switch now, before
+    // Fades run inside the recorded steps (pass 2); the fades that are over switch here, before
     // the recording, as a switch made between frames.
     if (Status folded = detail::SimulationAccess::impl(simulation).fold_ready_fades(); !folded.ok())
         return folded;
