@@ -218,10 +218,11 @@ inline bool runs_path_walk(const Dispatch& d) { return runs_walk_pair(dispatch_k
 inline bool is_top_poses_walk(const Dispatch& d) { return dispatch_kind(d) == DispatchKind::walk_top_poses; }
 inline bool is_walk_ahead(const Dispatch& d) { return dispatch_kind(d) == DispatchKind::walk_ahead; }
 /// Whether a dispatch reads the step's wind-table slot from constants.wind_slot (Backend::run
-/// sets it): wind_force, the top poses (which read the next step's, the slot after) and the walk
-/// ahead (which evaluates the atmospheric wind of the slot after itself).
+/// sets it): wind_force, integrate (the fades' clock, gpu_layout.h HMSM_FADE_*), the top poses
+/// (which read the next step's, the slot after) and the walk ahead (which evaluates the
+/// atmospheric wind and the fades of the slot after itself).
 inline bool reads_wind_slot(const Dispatch& d) {
-    return d.pass == Pass::wind_force || is_top_poses_walk(d) || is_walk_ahead(d);
+    return d.pass == Pass::wind_force || d.pass == Pass::integrate || is_top_poses_walk(d) || is_walk_ahead(d);
 }
 /// The passes a dispatch runs (bit i = Pass i): a path walk's two, or its own.
 inline uint32_t dispatch_passes(const Dispatch& d) {

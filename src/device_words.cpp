@@ -19,11 +19,15 @@ std::vector<std::byte> float4_image(const std::vector<glm::dvec4>& values) {
     return raw_bytes(words);
 }
 
-std::vector<std::byte> mat3x4_image(const std::vector<glm::dmat3>& values) {
+/// Matrices as three vec4 columns; column 0's w holds `column0_w` (empty: 0).
+std::vector<std::byte> mat3x4_image(const std::vector<glm::dmat3>& values,
+                                    const std::vector<uint32_t>& column0_w = {}) {
     std::vector<float> words(values.size() * 12, 0.0f);
-    for (size_t i = 0; i < values.size(); ++i)
+    for (size_t i = 0; i < values.size(); ++i) {
         for (int c = 0; c < 3; ++c)
             for (int r = 0; r < 3; ++r) words[12 * i + 4 * c + r] = float(values[i][c][r]);
+        if (i < column0_w.size()) words[12 * i + 3] = float(column0_w[i]);
+    }
     return raw_bytes(words);
 }
 
@@ -43,7 +47,7 @@ std::vector<std::byte> device_image(const SceneData& d, BufferId id) {
         case BufferId::chain_jump: return raw_bytes(d.chain_jump);
         case BufferId::chain_walk: return raw_bytes(d.chain_walk);
         case BufferId::chain_attach: return raw_bytes(d.chain_attach);
-        case BufferId::chain_rest_rotation: return mat3x4_image(d.chain_rest_rotation);
+        case BufferId::chain_rest_rotation: return mat3x4_image(d.chain_rest_rotation, d.chain_keep_level);
         case BufferId::chain_constants: return float4_image(d.chain_constants);
         case BufferId::node_owner: return raw_bytes(d.node_owner);
         case BufferId::node_local: return float4_image(d.node_local);

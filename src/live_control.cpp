@@ -99,7 +99,7 @@ Status Simulation::Impl::apply_pending() {
     if (instance_wind_dirty_) {
         wind_scratch_.resize(instances_.size() * detail::kInstanceWindScalars);
         for (size_t i = 0; i < instances_.size(); ++i)
-            detail::fill_instance_wind(config_.wind, modes_, instances_[i],
+            detail::fill_instance_wind(config_.wind, modes_, instances_[i], fade_word(uint32_t(i)),
                                        &wind_scratch_[i * detail::kInstanceWindScalars]);
         HMSM_TRY(backend_->write(BufferId::instance_wind, 0, instances_.size(), wind_scratch_.data(),
                                  detail::Scalar::f64));
@@ -120,7 +120,7 @@ Status Simulation::Impl::apply_pending() {
             const uint32_t count = last - begin + 1;
             wind_scratch_.resize(size_t(count) * detail::kInstanceWindScalars);
             for (uint32_t i = 0; i < count; ++i)
-                detail::fill_instance_wind(config_.wind, modes_, instances_[begin + i],
+                detail::fill_instance_wind(config_.wind, modes_, instances_[begin + i], fade_word(begin + i),
                                            &wind_scratch_[size_t(i) * detail::kInstanceWindScalars]);
             HMSM_TRY(backend_->write(BufferId::instance_wind, begin, count, wind_scratch_.data(), detail::Scalar::f64));
         }
@@ -215,7 +215,8 @@ Status Simulation::set_instance_active(uint64_t instance, bool active) {
     if (impl_->instances_[instance].active != active) {
         impl_->instances_[instance].active = active;
         impl_->paused_count_ += active ? uint64_t(-1) : 1;
-        impl_->dirty_instances_.push_back(uint32_t(instance));  // its paused flag
+        impl_->pause_fade(uint32_t(instance), active);
+        impl_->dirty_instances_.push_back(uint32_t(instance));  // its paused flag and fade word
         impl_->program_dirty_ = true;
     }
     return {};

@@ -26,12 +26,13 @@ double instance_wind_phase(const Wind& wind, const Instance& instance) {
     return instance.wind_phase + wind_phase(wind, instance.origin);
 }
 
-void fill_instance_wind(const Wind& wind, const WindModes& modes, const Instance& instance, double* out) {
+void fill_instance_wind(const Wind& wind, const WindModes& modes, const Instance& instance, double fade_word,
+                        double* out) {
     const double phi = instance_wind_phase(wind, instance);
     out[0] = instance.wind_scale;
     out[1] = mod2(phi);
     out[2] = instance.active ? 0.0 : 1.0;  // paused (gpu_layout.h)
-    out[3] = 0.0;
+    out[3] = fade_word;  // gpu_layout.h HMSM_FADE_*
     if (wind.profile == WindProfile::atmospheric) {
         const WindFrame frame = wind_frame(wind.direction);
         const Vec3 x = advected_point(wind, instance.origin);

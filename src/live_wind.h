@@ -42,9 +42,10 @@ WindModes wind_modes(const Wind& wind);
 /// The instance's wind phase phi = p + (v > 0 ? -f (o.d)/v : 0), d normalized.
 double instance_wind_phase(const Wind& wind, const Instance& instance);
 
-/// instance_wind element of `instance`: (lambda, phi mod 2, paused, 0), then frac(m_k phi)
+/// instance_wind element of `instance`: (lambda, phi mod 2, paused, fade word), then frac(m_k phi)
 /// (atmospheric: the spatial phases, gpu_layout.h).
-void fill_instance_wind(const Wind& wind, const WindModes& modes, const Instance& instance, double* out);
+void fill_instance_wind(const Wind& wind, const WindModes& modes, const Instance& instance, double fade_word,
+                        double* out);
 /// Wind table header: amplitudes a_k, (s d, field count), s e_y and s e_z, the force fields.
 void fill_wind_header(const Wind& wind, const WindModes& modes, std::span<const ForceField> fields,
                       double* out);

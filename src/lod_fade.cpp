@@ -1,12 +1,13 @@
 // Fades to coarser levels of detail (docs/model.md 3.12, fading to a coarser level): a
-// coarsening request keeps the instance on its level while the chains the coarser level folds
-// relax to rest relative to their parents, S and V scaled by (n - 1) / n with n the steps left
-// after each step, and switches it once the deflection left, bounded by
-// D = max_c sum_{folded k on the path to c} (|theta_x,k| + |theta_z,k|) e_k, is within
-// LodBands::fade_bound_m. The folded chains' state goes through the host (cost in proportion to
-// the fading instances, read and written run by run as a switch does), and the fading instances
-// are posed from their relaxed angles (passes 3-7), so read() shows what the next step starts
-// from.
+// coarsening request keeps the instance on its level for LodBands::fade_steps steps while pass
+// 2, on the backend, scales S and V of the chains the coarser level folds by (n - 1) / n after
+// each step, n the steps left (src/common/fade_math.h). The host writes an instance's fade word
+// (gpu_layout.h HMSM_FADE_*, in instance_wind) only when its fade starts, ends, retargets,
+// pauses or resumes; each step's clock travels in the wind table's step slot, so a fade costs
+// no host round trip per step and step(n) runs its steps in one go. A fade is over after its
+// last step, its folded chains then exactly at rest, and switches at the next call that folds
+// (a call boundary). An instance at rest switches at the request: its deflection bound D,
+// measured then through the host, is within LodBands::fade_bound_m.
 #include "instance_moves.h"
 #include "simulation_impl.h"
 
@@ -24,6 +25,11 @@ using detail::BufferId;
 using detail::IndexRun;
 using detail::index_runs;
 
+/// Steps Simulation::step runs between two folds of the fades that are over (at most
+/// HMSM_FADE_PERIOD - HMSM_FADE_HORIZON steps may pass after a fade's end before the host
+/// switches it, or its word would read as a fade under way again).
+constexpr uint32_t kStepsBetweenFolds = HMSM_FADE_HORIZON / 2;
+
 /// Whether each chain of run model `from` is folded by run model `into` (both levels of one
 /// scene model: the chains of `into` are a subset of those of `from`'s full model).
 std::vector<uint8_t> folded_chains(const std::vector<int32_t>& from_source, const std::vector<int32_t>& into_source) {
@@ -36,33 +42,16 @@ std::vector<uint8_t> folded_chains(const std::vector<int32_t>& from_source, cons
     return folded;
 }
 
-/// One fading instance's chains as read: its state S (θx, θz, ωx, ωz) and local transforms T
-/// (mat3x4, columns of four) from `first` on, as the backend stores them.
+/// D, the bound of the vertex displacement a switch would make, from the instance's chain state
+/// (θx, θz, ωx, ωz per chain): the largest P_c = (|θx| + |θz|) e_c + P_parent over the folded chains.
 template <class V>
-struct ChainValues {
-    std::vector<V> state, local;
-};
-
-/// Scales the folded chains' S and V by `factor` and sets their T = Q Rz(θz) Rx(θx) (no folded
-/// chain is a trunk); returns D, the bound of the vertex displacement the switch would make.
-template <class V>
-double relax_instance(V* state, V* local, const Hierarchy& h, const std::vector<uint8_t>& folded,
-                      const std::vector<double>& extent, double factor, bool scale) {
+double deflection_bound(const V* state, const Hierarchy& h, const std::vector<uint8_t>& folded,
+                        const std::vector<double>& extent) {
     std::vector<double> path(h.chains.size(), 0.0);
     double largest = 0.0;
     for (size_t c = 0; c < h.chains.size(); ++c) {
         if (!folded[c]) continue;
-        V* s = state + 4 * c;
-        if (scale) {
-            for (int k = 0; k < 4; ++k) s[k] = factor == 0.0 ? V(0) : V(double(s[k]) * factor);
-            const double cx = std::cos(double(s[0])), sx = std::sin(double(s[0]));
-            const double cz = std::cos(double(s[1])), sz = std::sin(double(s[1]));
-            const glm::dmat3 rx(1, 0, 0, 0, cx, sx, 0, -sx, cx), rz(cz, sz, 0, -sz, cz, 0, 0, 0, 1);
-            const glm::dmat3 t = glm::dmat3(h.chains[c].rest_rotation) * rz * rx;
-            V* m = local + 12 * c;
-            for (int col = 0; col < 3; ++col)
-                for (int row = 0; row < 3; ++row) m[4 * col + row] = V(t[col][row]);
-        }
+        const V* s = state + 4 * c;
         const int32_t parent = h.chains[c].parent;
         const double above = parent >= 0 && folded[size_t(parent)] ? path[size_t(parent)] : 0.0;
         path[c] = above + (std::abs(double(s[0])) + std::abs(double(s[1]))) * extent[c];
@@ -72,6 +61,45 @@ double relax_instance(V* state, V* local, const Hierarchy& h, const std::vector<
 }
 
 }  // namespace
+
+Result<std::vector<uint32_t>> Simulation::Impl::chain_keep_ranks() {
+    // Every level of a scene model keeps the chains its budget leaves of one fold order, so the
+    // levels, ranked by their chain count (finest first), are nested: a chain is kept by the
+    // levels of rank up to its keep rank.
+    fold_rank_.assign(lod_models_.size(), 0);
+    std::vector<std::vector<uint32_t>> keep(lod_models_.size());
+    for (const std::vector<uint32_t>& levels : levels_of_) {
+        if (levels.size() > HMSM_MAX_LOD_LEVELS)
+            return Status{ErrorCode::invalid_argument,
+                          "model '" + scene_.model_names[lod_models_[levels[0]].scene_model] + "': " +
+                              std::to_string(levels.size()) + " levels of detail, at most " +
+                              std::to_string(HMSM_MAX_LOD_LEVELS) + " (level 0 included)"};
+        std::vector<uint32_t> ranked = levels;
+        std::stable_sort(ranked.begin(), ranked.end(), [&](uint32_t a, uint32_t b) {
+            return lod_models_[a].source_chain.size() > lod_models_[b].source_chain.size();
+        });
+        for (uint32_t r = 0; r < ranked.size(); ++r) fold_rank_[ranked[r]] = r;
+        for (uint32_t r = 1; r < ranked.size(); ++r) {
+            const std::vector<uint8_t> folded =
+                folded_chains(lod_models_[ranked[r]].source_chain, lod_models_[ranked[r - 1]].source_chain);
+            if (std::find(folded.begin(), folded.end(), 1) != folded.end())
+                return Status{ErrorCode::internal, "model '" + scene_.model_names[lod_models_[levels[0]].scene_model] +
+                                                       "': its levels of detail are not nested"};
+        }
+        for (uint32_t m : levels) {
+            keep[m].assign(lod_models_[m].source_chain.size(), 0);
+            for (uint32_t r = 0; r < ranked.size(); ++r) {
+                const std::vector<uint8_t> folded =
+                    folded_chains(lod_models_[m].source_chain, lod_models_[ranked[r]].source_chain);
+                for (size_t c = 0; c < folded.size(); ++c)
+                    if (!folded[c]) keep[m][c] = r;
+            }
+        }
+    }
+    std::vector<uint32_t> flat;
+    for (const std::vector<uint32_t>& k : keep) flat.insert(flat.end(), k.begin(), k.end());
+    return flat;
+}
 
 int64_t Simulation::Impl::live_index(uint64_t id) const {
     if (ids_ascending_) {
@@ -102,8 +130,27 @@ const std::vector<double>& Simulation::Impl::subtree_extent(uint32_t model) cons
     return extent;
 }
 
-Status Simulation::Impl::relax_fades(const std::vector<uint32_t>& indices, bool scale) {
-    if (indices.empty()) return {};
+
+double Simulation::Impl::fade_word(uint32_t index) const {
+    if (fades_.empty()) return 0.0;
+    auto fade = fades_.find(uint64_t(instance_ids_[index]));
+    if (fade == fades_.end() || instances_[index].model != fade->second.from_model) return 0.0;
+    const uint64_t end = fade->second.end_step & HMSM_FADE_END_MASK;
+    return double((uint64_t(fold_rank_[fade->second.target_model]) << HMSM_FADE_LEVEL_SHIFT) | end);
+}
+
+void Simulation::Impl::pause_fade(uint32_t index, bool active) {
+    auto fade = fades_.find(uint64_t(instance_ids_[index]));
+    if (fade == fades_.end()) return;
+    LodFade& f = fade->second;
+    // A paused instance runs no step: its fade waits, the steps left kept aside.
+    if (active) f.end_step = steps_done_ + f.paused_left;
+    else f.paused_left = uint32_t(f.end_step > steps_done_ ? f.end_step - steps_done_ : 0);
+}
+
+Result<std::vector<uint8_t>> Simulation::Impl::fades_at_rest(const std::vector<uint32_t>& indices) {
+    std::vector<uint8_t> at_rest(indices.size(), 0);
+    if (indices.empty()) return at_rest;
     const detail::Scalar scalar = backend_->kind() == BackendKind::cpu64 ? detail::Scalar::f64 : detail::Scalar::f32;
     // The first state chain of instance i, and one past its last, from the group holding it.
     const std::vector<detail::InstanceGroup>& groups = data_->groups;
@@ -116,69 +163,52 @@ Status Simulation::Impl::relax_fades(const std::vector<uint32_t>& indices, bool 
     auto end_of = [&](uint32_t i) { return chain_of(i) + data_->models[instances_[i].model].chain_count; };
     auto run = [&](auto zero) -> Status {
         using V = decltype(zero);
-        std::vector<V> state, local;
+        std::vector<V> state;
+        size_t k = 0;  // indices ascend, and so do their runs
         for (const IndexRun& r : index_runs(indices)) {
             const uint64_t first = chain_of(r.first), count = end_of(r.end - 1) - first;
             state.resize(size_t(count * 4));
-            local.resize(size_t(count * 12));
             HMSM_TRY(backend_->read(BufferId::chain_state, first, count, state.data(), scalar));
-            if (scale) HMSM_TRY(backend_->read(BufferId::chain_local, first, count, local.data(), scalar));
-            for (uint32_t i = r.first; i < r.end; ++i) {
-                LodFade& fade = fades_.at(uint64_t(instance_ids_[i]));
+            for (uint32_t i = r.first; i < r.end; ++i, ++k) {
+                const LodFade& fade = fades_.at(uint64_t(instance_ids_[i]));
                 const uint32_t model = instances_[i].model;
                 const std::vector<uint8_t> folded =
                     folded_chains(lod_models_[model].source_chain, lod_models_[fade.target_model].source_chain);
-                const double factor = scale ? double(fade.steps_left - 1) / double(fade.steps_left) : 1.0;
-                const size_t at = size_t(chain_of(i) - first);
-                const double left = relax_instance(state.data() + 4 * at, local.data() + 12 * at, hierarchies_[model],
-                                                   folded, subtree_extent(model), factor, scale);
-                if (scale) --fade.steps_left;
-                fade.ready = left <= lod_bands_.fade_bound_m || fade.steps_left == 0;
-            }
-            if (scale) {
-                HMSM_TRY(backend_->write(BufferId::chain_state, first, count, state.data(), scalar));
-                HMSM_TRY(backend_->write(BufferId::chain_local, first, count, local.data(), scalar));
+                const double d = deflection_bound(state.data() + 4 * (chain_of(i) - first), hierarchies_[model], folded,
+                                                  subtree_extent(model));
+                at_rest[k] = d <= lod_bands_.fade_bound_m;
             }
         }
         return {};
     };
     HMSM_TRY(scalar == detail::Scalar::f64 ? run(0.0) : run(0.0f));
-    if (!scale) return {};
-    // The angles integrated ahead are not the relaxed ones: the next step integrates from the
-    // state as written (the fade's own change each step is not counted as a live change).
-    ahead_schedule_.forget();
-    const detail::RunStep at_rest[1] = {};
-    return backend_->run(program_for(detail::slices_covering(*data_, indices), Pass::compose), at_rest);
+    return at_rest;
 }
 
-Status Simulation::Impl::fold_ready_fades(bool every) {
+Status Simulation::Impl::fold_ready_fades() {
     std::vector<std::pair<uint32_t, uint32_t>> folds;
     for (auto it = fades_.begin(); it != fades_.end();) {
         const int64_t index = live_index(it->first);
         const bool gone = index < 0 || instances_[size_t(index)].model != it->second.from_model;
-        const bool folds_now = every || it->second.ready;
-        if (!gone && folds_now) folds.emplace_back(uint32_t(index), it->second.target_model);
-        it = gone || folds_now ? fades_.erase(it) : std::next(it);
+        const bool over = !gone && (instances_[size_t(index)].active ? it->second.end_step <= steps_done_
+                                                                      : it->second.paused_left == 0);
+        if (over) folds.emplace_back(uint32_t(index), it->second.target_model);
+        if (index >= 0 && (gone || over)) dirty_instances_.push_back(uint32_t(index));  // its fade word
+        it = gone || over ? fades_.erase(it) : std::next(it);
     }
     std::sort(folds.begin(), folds.end());
     return switch_models(folds);
 }
 
 Status Simulation::Impl::step_fading(uint32_t count) {
-    for (uint32_t k = 0; k < count; ++k) {
+    uint32_t done = 0;
+    do {
         HMSM_TRY(fold_ready_fades());
-        if (fades_.empty()) return step(count - k);
-        HMSM_TRY(step(1));
-        std::vector<uint32_t> active;
-        for (const auto& [id, fade] : fades_) {
-            const int64_t index = live_index(id);
-            if (index >= 0 && instances_[size_t(index)].model == fade.from_model && instances_[size_t(index)].active &&
-                !fade.ready)
-                active.push_back(uint32_t(index));
-        }
-        std::sort(active.begin(), active.end());
-        HMSM_TRY(relax_fades(active, true));
-    }
+        if (fades_.empty()) return step(count - done);
+        const uint32_t steps = std::min(count - done, kStepsBetweenFolds);
+        HMSM_TRY(step(steps));
+        done += steps;
+    } while (done < count);
     return {};
 }
 
@@ -195,6 +225,7 @@ Result<uint64_t> Simulation::Impl::request_lods(std::vector<std::pair<uint32_t, 
         if (level <= now.level) {
             if (fade != fades_.end()) {
                 fades_.erase(fade);
+                dirty_instances_.push_back(i);  // its fade word
                 ++changed;
             }
             if (level < now.level) {
@@ -203,21 +234,24 @@ Result<uint64_t> Simulation::Impl::request_lods(std::vector<std::pair<uint32_t, 
             }
         } else if (fade == fades_.end() || fade->second.target_model != run_model) {
             ++changed;
+            dirty_instances_.push_back(i);  // its fade word
             if (lod_bands_.fade_steps == 0) {
                 if (fade != fades_.end()) fades_.erase(fade);
                 switches.emplace_back(i, run_model);
                 continue;
             }
-            fades_[id] = {instances_[i].model, run_model, lod_bands_.fade_steps, false};
+            const uint32_t steps = lod_bands_.fade_steps;
+            fades_[id] = {instances_[i].model, run_model, steps_done_ + steps, steps};
             started.push_back(i);
         }
     }
     // A fade whose deflection is within the bound already (an instance at rest) switches now.
-    HMSM_TRY(relax_fades(started, false));
-    for (uint32_t i : started) {
-        auto fade = fades_.find(uint64_t(instance_ids_[i]));
-        if (!fade->second.ready) continue;
-        switches.emplace_back(i, fade->second.target_model);
+    Result<std::vector<uint8_t>> at_rest = fades_at_rest(started);
+    if (!at_rest) return at_rest.status();
+    for (size_t k = 0; k < started.size(); ++k) {
+        if (!(*at_rest)[k]) continue;
+        auto fade = fades_.find(uint64_t(instance_ids_[started[k]]));
+        switches.emplace_back(started[k], fade->second.target_model);
         fades_.erase(fade);
     }
     std::sort(switches.begin(), switches.end());

@@ -364,7 +364,9 @@ Status Simulation::set_instance_lods(std::span<const InstanceId> ids, std::span<
                 "set_instance_lod: " + id_name(s.instance_ids_[*twice]) + " is listed twice"};
     std::sort(changes.begin(), changes.end());
     HMSM_TRY(impl_->switch_models(changes));
-    for (InstanceId id : ids) impl_->fades_.erase(uint64_t(id));  // switched now: no fade goes on
+    for (InstanceId id : ids)  // switched now: no fade goes on, its fade word is rewritten
+        if (impl_->fades_.erase(uint64_t(id)) != 0)
+            impl_->dirty_instances_.push_back(uint32_t(impl_->live_index(uint64_t(id))));
     return {};
 }
 

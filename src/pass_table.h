@@ -48,11 +48,12 @@ constexpr uint32_t buffer_bit(BufferId id) { return 1u << static_cast<uint32_t>(
        HMSM_B(instance_wind) | HMSM_B(wind_table)),                                               \
       (HMSM_B(chain_force)),                                                                      \
       (HMSM_B(joint_matrix) | HMSM_B(chain_constants) | HMSM_B(instance_wind) |                   \
-       HMSM_B(wind_table) | HMSM_B(chain_state)),                                                 \
+       HMSM_B(wind_table) | HMSM_B(chain_state) | HMSM_B(chain_rest_rotation)),                   \
       (HMSM_B(chain_state)))                                                                      \
     X(integrate, chain, false, joints, none,                                                \
       (HMSM_B(chain_force) | HMSM_B(chain_state) | HMSM_B(chain_constants) |                      \
-       HMSM_B(chain_rest_rotation) | HMSM_B(chain_parent) | HMSM_B(instance_yaw)),                \
+       HMSM_B(chain_rest_rotation) | HMSM_B(chain_parent) | HMSM_B(instance_yaw) |                \
+       HMSM_B(instance_wind) | HMSM_B(wind_table)),                                               \
       (HMSM_B(chain_state) | HMSM_B(chain_local)), 0u, 0u)                                        \
     X(compose, chain, true, joints, root_positions,                                         \
       (HMSM_B(chain_local) | HMSM_B(chain_rotation) | HMSM_B(chain_jump) |                        \

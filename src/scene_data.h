@@ -50,6 +50,9 @@ struct SceneData {
     /// Each chain's attach node as a model node of node_owner and node_local (stepped_nodes).
     std::vector<int32_t> chain_attach;
     std::vector<glm::dmat3> chain_rest_rotation;
+    /// Per model chain: its keep rank, the rank of the coarsest level of its scene model that
+    /// keeps it (gpu_layout.h HMSM_FADE_*; the simulation fills it, empty reads as 0).
+    std::vector<uint32_t> chain_keep_level;
     std::vector<glm::dvec4> chain_constants;  // (I, K, D, A)
     /// Dynamics::coupled: HMSM_CHAIN_DYNAMICS_VEC4S x 4 scalars per model chain (gpu_layout.h);
     /// empty under the paper's dynamics.

@@ -199,6 +199,11 @@ Result<std::unique_ptr<Simulation>> Simulation::Impl::create(const Scene& scene,
         detail::flatten_scene(scene, sim->hierarchies_, config.outputs == Outputs::all ? sim->meshes_ : no_meshes,
                               config.parameters, config.model, config.wind, config.outputs));
     sim->data_->vertex_layout = config.vertex_layout;
+    auto keep = sim->chain_keep_ranks();
+    if (!keep) return keep.status();
+    if (keep->size() != sim->data_->chain_parent.size())
+        return Status{ErrorCode::internal, "create: the keep ranks do not cover the model chains"};
+    sim->data_->chain_keep_level = std::move(keep).value();
 
     if (backend) {
         sim->backend_ = std::move(backend);
@@ -252,6 +257,7 @@ Status Simulation::Impl::step(uint32_t count) {
                 HMSM_TRY(detail::check_wind_clock(wind_clock_rate(wind), double(n - 1) * dt, tau));
             detail::fill_wind_step(wind, modes_, tau, &wind_scratch_[size_t(k) * detail::kWindStepScalars]);
             wind_scratch_[size_t(k) * detail::kWindStepScalars + 1] = double(n % 2);  // the load half step n writes
+            wind_scratch_[size_t(k) * detail::kWindStepScalars + 2] = double(n & HMSM_FADE_END_MASK);  // fades' clock
             if (k < steps) run_steps_[k] = {k, detail::AheadStep::whole};
         }
         HMSM_TRY(backend_->write(detail::BufferId::wind_table, HMSM_WIND_STEPS,

@@ -148,28 +148,40 @@ struct __attribute__((visibility("hidden"))) Simulation::Impl {
     LodBands lod_bands_;
 
     /// Fades to coarser levels (lod_fade.cpp, docs/model.md 3.12): per fading instance's
-    /// handle, the run model it fades from and to, the steps left and whether the deflection
-    /// left is within LodBands::fade_bound_m (it then switches at the next call that folds).
+    /// handle, the run model it fades from and to, the number of the fade's last step (while the
+    /// instance is active) and the steps it has left (kept aside while it is paused).
     struct LodFade {
         uint32_t from_model = 0, target_model = 0;
-        uint32_t steps_left = 0;
-        bool ready = false;
+        uint64_t end_step = 0;
+        uint32_t paused_left = 0;
     };
     std::unordered_map<uint64_t, LodFade> fades_;
+    /// Per run model: its rank among its scene model's levels by chain count, finest first (the
+    /// fade word's level, gpu_layout.h HMSM_FADE_*).
+    std::vector<uint32_t> fold_rank_;
+    /// Fills fold_rank_ and returns, per model chain of every run model in order, the rank of
+    /// the coarsest level that keeps the chain (SceneData::chain_keep_level); refuses a model
+    /// with more than HMSM_MAX_LOD_LEVELS levels.
+    Result<std::vector<uint32_t>> chain_keep_ranks();
+    /// The fade word of instance `index` (0: it does not fade), for instance_wind.
+    double fade_word(uint32_t index) const;
+    /// Keeps the steps left of instance `index`'s fade while it is paused (`active` false) and
+    /// counts them on from the current step when it resumes.
+    void pause_fade(uint32_t index, bool active);
+    /// Per mark of `indices` (ascending, fading): whether the instance is at rest, its deflection
+    /// bound D within LodBands::fade_bound_m (read through the host).
+    Result<std::vector<uint8_t>> fades_at_rest(const std::vector<uint32_t>& indices);
     /// Per run model, per chain: e_c, the largest rest distance from the chain's attach node
     /// to a node or mesh vertex of its subtree (filled on first use).
     mutable std::vector<std::vector<double>> subtree_extent_;
     /// Levels asked for (current index, level), in any order: finer or equal levels switch at
     /// once, coarser ones fade by lod_bands_. Returns how many instances changed level or target.
     Result<uint64_t> request_lods(std::vector<std::pair<uint32_t, uint32_t>> requests);
-    /// Switches the fades that are ready (`every`: all of them, ready or not) and drops those
-    /// whose instance is gone or switched.
-    Status fold_ready_fades(bool every = false);
-    /// One step of every fade: scales the folded chains' state of the active fading instances
-    /// and poses them (`scale` false: only measures the deflection left, for new fades among
-    /// `indices`).
-    Status relax_fades(const std::vector<uint32_t>& indices, bool scale);
-    /// step() while fades run: one step at a time, each followed by relax_fades.
+    /// Switches the fades that are over (all their steps run) and drops those whose instance is
+    /// gone or switched; their fade words are rewritten.
+    Status fold_ready_fades();
+    /// step() while fades run: folds the fades that are over, then runs the steps in one go
+    /// (chunks of at most kStepsBetweenFolds, lod_fade.cpp).
     Status step_fading(uint32_t count);
     const std::vector<double>& subtree_extent(uint32_t model) const;
     /// The current index of instance `id`, or -1 if it is not live.

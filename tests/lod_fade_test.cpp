@@ -1,5 +1,6 @@
 // Fades to coarser levels of detail (docs/model.md 3.12, docs/driving.md): an instantaneous
-// coarsening pops the folded branches' deflection; a fade relaxes them over the steps first, so
+// coarsening pops the folded branches' deflection; a fade relaxes them over the steps first (in
+// the backend's pass 2, exactly to rest after fade_steps steps run in one call), so
 // that the switch moves no vertex by more than the bound, nor more than the tree moves in a
 // frame, and the relaxation itself adds at most a centimetre a frame. Every backend agrees with
 // cpu64 through fades, a refine during a fade returns without a jump, and bad fade settings
@@ -217,6 +218,77 @@ INSTANTIATE_TEST_SUITE_P(Backends, LodFadeBackends,
                                             ::testing::Values(Dynamics::paper, Dynamics::coupled)),
                          backend_name);
 
+/// Per instance: how many of its chains have S = V = 0 exactly, and how many do not.
+std::vector<std::pair<uint32_t, uint32_t>> resting_chains(const Simulation& sim) {
+    std::vector<double> angles;
+    EXPECT_TRUE(sim.read(Output::chain_angles, angles).ok());
+    std::vector<std::pair<uint32_t, uint32_t>> counts;
+    size_t at = 0;
+    for (const Instance& instance : sim.instances()) {
+        auto& [resting, moving] = counts.emplace_back(0u, 0u);
+        for (size_t c = 0; c < sim.hierarchy(instance.model).chains.size(); ++c, at += 4) {
+            const bool rest = at + 3 < angles.size() && angles[at] == 0.0 && angles[at + 1] == 0.0 &&
+                              angles[at + 2] == 0.0 && angles[at + 3] == 0.0;
+            ++(rest ? resting : moving);
+        }
+    }
+    EXPECT_EQ(at, angles.size());
+    return counts;
+}
+
+class LodFadeDevice : public ::testing::TestWithParam<std::tuple<BackendKind, Dynamics>> {};
+
+// The fade runs in the backend's pass 2: fade_steps steps run in one call leave the chains the
+// target level folds exactly at rest (S = V = 0), as many as the level folds, while every chain
+// it keeps still moves; the instances switch at the next call, and the run agrees with cpu64.
+TEST_P(LodFadeDevice, FoldedChainsRestExactlyAfterOneCall) {
+    const auto [kind, dynamics] = GetParam();
+    SimulationConfig config = test::windy_config();
+    config.model.dynamics = dynamics;
+    std::string skip;
+    auto sim = test::create_simulation_or_skip(fade_forest(kDeepWindScale), config, kind, skip);
+    if (!skip.empty()) GTEST_SKIP() << skip;
+    auto oracle = test::create_simulation_or_skip(fade_forest(kDeepWindScale), config, BackendKind::cpu64, skip);
+    ASSERT_TRUE(sim && oracle);
+    constexpr uint32_t kSteps = 30;
+    for (Simulation* s : {sim.get(), oracle.get()}) {
+        ASSERT_TRUE(s->set_lod_bands({{6.0, 9.0, 12.0}, 0.1, kSteps, 1e-5}).ok());
+        ASSERT_TRUE(s->step(60).ok());
+    }
+    const InstanceId ids[] = {InstanceId(0), InstanceId(1), InstanceId(3)};
+    const uint32_t levels[] = {2, 3, 2};
+    std::vector<uint32_t> chains_before;
+    for (const Instance& instance : sim->instances())
+        chains_before.push_back(uint32_t(sim->hierarchy(instance.model).chains.size()));
+    for (Simulation* s : {sim.get(), oracle.get()}) {
+        ASSERT_TRUE(s->request_instance_lods(ids, levels).ok());
+        ASSERT_EQ(s->fading_instance_count(), 3u) << "the trees sway: their switches fade";
+        ASSERT_TRUE(s->step(kSteps).ok());
+        EXPECT_EQ(s->fading_instance_count(), 3u) << "over, switched at the next call";
+    }
+    std::vector<double> a, b;
+    ASSERT_TRUE(sim->read(Output::node_positions, a).ok());
+    ASSERT_TRUE(oracle->read(Output::node_positions, b).ok());
+    ASSERT_EQ(a.size(), b.size());
+    EXPECT_LE(test::max_abs_difference(a, b), 1e-3);
+    const auto counts = resting_chains(*sim);
+    ASSERT_TRUE(sim->step(1).ok());
+    EXPECT_EQ(sim->fading_instance_count(), 0u);
+    for (size_t i = 0; i < counts.size(); ++i) {
+        const uint32_t kept = uint32_t(sim->hierarchy(sim->instances()[i].model).chains.size());
+        EXPECT_EQ(counts[i].first, chains_before[i] - kept) << "instance " << i << ": the folded chains at rest";
+        EXPECT_EQ(counts[i].second, kept) << "instance " << i << ": the kept chains move";
+    }
+    EXPECT_EQ(*sim->instance_lod(InstanceId(1)), 3u);
+}
+
+INSTANTIATE_TEST_SUITE_P(Backends, LodFadeDevice,
+                         ::testing::Combine(::testing::Values(BackendKind::cpu64, BackendKind::cpu,
+                                                              BackendKind::cpu_parallel, BackendKind::vulkan,
+                                                              BackendKind::cuda),
+                                            ::testing::Values(Dynamics::paper, Dynamics::coupled)),
+                         backend_name);
+
 std::unique_ptr<Simulation> windy_forest() {
     SimulationConfig config = test::windy_config();
     config.backend = BackendKind::cpu64;
@@ -268,6 +340,22 @@ TEST(LodFadeRequests, InterruptRetargetPauseRemoveAndRest) {
     EXPECT_EQ(sim->fading_instance_count(), 0u);
     EXPECT_EQ(*sim->instance_lod(paused), 0u);
     EXPECT_EQ(*sim->instance_lod(deep), 0u);
+}
+
+// A fade word names the level faded to in 7 bits: a model with more than 128 levels (level 0
+// included) is refused at create, naming the model; 128 levels are fine.
+TEST(LodFadeInput, MoreLevelsThanAFadeWordNamesAreRefused) {
+    Scene scene = single_tree_scene(test::small_tree());
+    scene.lod_budgets = {std::vector<int32_t>(128, 1)};
+    auto refused = Simulation::create(scene, SimulationConfig{});
+    ASSERT_FALSE(refused.ok());
+    EXPECT_EQ(refused.status().code(), ErrorCode::invalid_argument);
+    EXPECT_NE(refused.status().message().find("'" + scene.model_names[0] + "': 129 levels of detail, at most 128"),
+              std::string::npos)
+        << refused.status().message();
+    scene.lod_budgets[0].pop_back();
+    auto created = Simulation::create(scene, SimulationConfig{});
+    EXPECT_TRUE(created.ok()) << created.status().message();
 }
 
 // Bad fade settings and bad requests are refused, naming the problem, and change nothing.

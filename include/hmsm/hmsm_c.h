@@ -376,9 +376,10 @@ HMSM_API hmsm_status hmsm_simulation_instance_lod(const hmsm_simulation* simulat
  * strictly increasing and positive; hysteresis a fraction of an edge in [0, 1). */
 HMSM_API hmsm_status hmsm_simulation_set_lod_bands(hmsm_simulation* simulation, const double* edges, size_t count,
                                                    double hysteresis);
-/* The fade of coarsening switches (hmsm::LodBands::fade_steps and fade_bound_m): at most
- * steps (0 to 65536; 0 switches at once) steps of relaxing the chains the coarser level folds,
- * and the switch once they deflect no vertex by more than bound_m metres (in (0, 1]). Keeps
+/* The fade of coarsening switches (hmsm::LodBands::fade_steps and fade_bound_m): steps (0 to
+ * 65536; 0 switches at once) steps of relaxing the chains the coarser level folds, then the
+ * switch; an instance that deflects no vertex by more than bound_m metres (in (0, 1]) at the
+ * request switches at once. Keeps
  * the edges and hysteresis; hmsm_simulation_set_lod_bands keeps the fade. */
 HMSM_API hmsm_status hmsm_simulation_set_lod_fade(hmsm_simulation* simulation, uint32_t steps, double bound_m);
 /* Chooses every instance's level from its distance to viewer (x, y, z metres): finer levels

@@ -32,14 +32,15 @@ enum class InstanceId : uint64_t {};
 ///
 /// Coarsening by the bands fades (docs/model.md 3.12, fading to a coarser level): the instance
 /// keeps its level while the chains the coarser level folds relax to rest relative to their
-/// parents over `fade_steps` steps, and it switches once the deflection left moves no vertex by
-/// more than `fade_bound_m`. fade_steps 0 switches at once (the folded branches' deflection
-/// vanishes in one frame). Refining always switches at once.
+/// parents over `fade_steps` steps (on the backend, in each step), and it switches then; an
+/// instance whose switch would move no vertex by more than `fade_bound_m` (at rest) switches
+/// at the request. fade_steps 0 switches at once (the folded branches' deflection vanishes in
+/// one frame). Refining always switches at once.
 struct LodBands {
     std::vector<double> edges;  ///< strictly increasing, finite, > 0 (metres); empty: level 0
     double hysteresis = 0.1;    ///< fraction of an edge, in [0, 1)
-    uint32_t fade_steps = 60;   ///< steps a coarsening fade takes at most, 0 to kMaxLodFadeSteps
-    double fade_bound_m = 1e-3; ///< deflection left at the switch (metres), finite, in (0, 1]
+    uint32_t fade_steps = 60;   ///< steps a coarsening fade takes, 0 to kMaxLodFadeSteps
+    double fade_bound_m = 1e-3; ///< deflection (metres) that switches at the request, in (0, 1]
 };
 /// The longest fade LodBands::fade_steps may ask for (about 10 minutes at the default dt).
 inline constexpr uint32_t kMaxLodFadeSteps = 1u << 16;
@@ -131,9 +132,9 @@ public:
     // load, chains the finer level unfolds start rigid with their parent (angles and rates 0).
     // set_instance_lod(s) take effect at once (read() returns the new level's pose, the same for
     // kept chains) and end the listed instances' fades; request_instance_lods and update_lod
-    // fade to coarser levels (LodBands): each step() relaxes the folded chains of the fading
-    // instances that are active, and a fade that ended switches at the next step(),
-    // update_lod() or request_instance_lods().
+    // fade to coarser levels (LodBands): each step of the backend relaxes the folded chains of
+    // the fading instances that are active (recorded and enqueued steps too), and a fade that
+    // ended switches at the next step(), update_lod() or request_instance_lods().
     // Many switches in one call cost one reshape of the state from the first switched
     // instance on. A rejected call (an unknown handle, a level the model lacks, a handle
     // listed twice) changes nothing. Threading as every non-const member.

@@ -9,6 +9,7 @@
 
 #include "coupled_math.cuh"
 #include "pass_math.cuh"
+#include "../../src/common/fade_math.h"
 
 #include <cmath>
 
@@ -120,13 +121,27 @@ HMSM_HOST_DEVICE float4 integrate_step(const BufferPointers& b, const gpu::PassC
     return make_float4(angle[0], angle[1], rate[0], rate[1]);
 }
 
+/// The fade of group instance k (docs/model.md 3.12, fading to a coarser level): the state a
+/// step of wind-table slot `slot` computed for model chain model_chain, times the step's factor
+/// sigma where the instance fades to a level that folds the chain (fade_math.h); else times 1,
+/// which leaves every float as it is.
+HMSM_HOST_DEVICE float4 faded_state(const BufferPointers& b, const gpu::PassConstants& pc, uint32_t k,
+                                    uint32_t model_chain, uint32_t slot, float4 state) {
+    const uint32_t word = uint32_t(load(b.instance_wind + uint64_t(HMSM_INSTANCE_WIND_VEC4S) * (pc.instance_begin + k)).w);
+    float sigma = 1.0f;
+    if (word != 0u && fade_relaxes(word, uint32_t(load(b.chain_rest_rotation + 3 * uint64_t(model_chain)).w)))
+        sigma = fade_factor<float>(word, uint32_t(load(b.wind_table + HMSM_WIND_STEPS + HMSM_WIND_STEP_VEC4S * slot).z));
+    return make_float4(sigma * state.x, sigma * state.y, sigma * state.z, sigma * state.w);
+}
+
 /// The step for state chain `chain` (the paper's or the coupled one), stored to chain_state
 /// (theta_x, theta_z, v_x, v_z).
-HMSM_HOST_DEVICE void integrate_angles(const BufferPointers& b, const gpu::PassConstants& pc,
+HMSM_HOST_DEVICE void integrate_angles(const BufferPointers& b, const gpu::PassConstants& pc, uint32_t k,
                                        uint32_t model_chain, uint64_t chain, float2 g_force) {
-    b.chain_state[chain] = pc.dynamics == HMSM_PASS_DYNAMICS_COUPLED  // docs/model.md 3.13
-                               ? coupled_step(b, pc, model_chain, b.chain_state[chain], g_force)
-                               : integrate_step(b, pc, model_chain, b.chain_state[chain], g_force);
+    const float4 state = pc.dynamics == HMSM_PASS_DYNAMICS_COUPLED  // docs/model.md 3.13
+                             ? coupled_step(b, pc, model_chain, b.chain_state[chain], g_force)
+                             : integrate_step(b, pc, model_chain, b.chain_state[chain], g_force);
+    b.chain_state[chain] = faded_state(b, pc, k, model_chain, pc.wind_slot, state);
 }
 
 /// Pass 2, the transform: T = Q Rz(theta_z) Rx(theta_x) of static chain model_chain at angles
@@ -161,8 +176,9 @@ HMSM_HOST_DEVICE Mat3 chain_integrate(const BufferPointers& b, const gpu::PassCo
                                       uint32_t k, uint32_t c, uint64_t chain, float2 g_force) {
     const uint32_t model_chain = pc.model_chain_begin + c;
     const bool coupled = pc.dynamics == HMSM_PASS_DYNAMICS_COUPLED;  // docs/model.md 3.13
-    const float4 state = coupled ? coupled_step(b, pc, model_chain, b.chain_state[chain], g_force)
-                                 : integrate_step(b, pc, model_chain, b.chain_state[chain], g_force);
+    const float4 state = faded_state(b, pc, k, model_chain, pc.wind_slot,
+                                     coupled ? coupled_step(b, pc, model_chain, b.chain_state[chain], g_force)
+                                             : integrate_step(b, pc, model_chain, b.chain_state[chain], g_force));
     const Mat3 local =
         local_transform(b, pc, k, model_chain, load(b.chain_parent + model_chain) < 0, make_float2(state.x, state.y));
     b.chain_state[chain] = state;
@@ -392,14 +408,18 @@ HMSM_HOST_DEVICE void walk_ahead(const BufferPointers& b, const gpu::PassConstan
         wind = scale * xyz(load(b.wind_table + HMSM_WIND_VECTOR));
     }
     const uint32_t model_chain = pc.model_chain_begin + uint32_t(c);
+    // The next step's slot, which its fade factor reads (a run leaves it for the step after).
+    const uint32_t ahead_slot = pc.wind_slot + 1u < HMSM_WIND_STEP_SLOTS ? pc.wind_slot + 1u : pc.wind_slot;
     if (pc.dynamics == HMSM_PASS_DYNAMICS_COUPLED) {  // the next step writes the other load half
         const float2 g = coupled_force(b, pc, k, chain, uint32_t(c), chain_local_wind(b, xyz(origin), rotation, wind),
                                        1u - load_half_written(b, pc));
-        b.chain_state_next[chain] = coupled_step(b, pc, model_chain, load(b.chain_state + chain), g);
+        b.chain_state_next[chain] =
+            faded_state(b, pc, k, model_chain, ahead_slot, coupled_step(b, pc, model_chain, load(b.chain_state + chain), g));
         return;
     }
     const float2 g = chain_wind_force_at(b, pc, uint32_t(c), xyz(origin), rotation, wind);
-    b.chain_state_next[chain] = integrate_step(b, pc, model_chain, load(b.chain_state + chain), g);
+    b.chain_state_next[chain] =
+        faded_state(b, pc, k, model_chain, ahead_slot, integrate_step(b, pc, model_chain, load(b.chain_state + chain), g));
 }
 
 }  // namespace hmsm::detail::cuda

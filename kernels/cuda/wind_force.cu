@@ -16,7 +16,7 @@ static HMSM_HOST_DEVICE void wind_force_element(const BufferPointers& b,
     if (pc.kind == HMSM_DISPATCH_WIND_PAIR) {
         const Pose pose = load_joint(b, chain);
         const float2 g = chain_wind_force(b, pc, e.instance, e.index, pose.origin, pose.rotation);
-        integrate_angles(b, pc, pc.model_chain_begin + e.index, chain, g);
+        integrate_angles(b, pc, e.instance, pc.model_chain_begin + e.index, chain, g);
         return;
     }
     const uint64_t pose = half_begin(pc, pc.src_half) + chain;

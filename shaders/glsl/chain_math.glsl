@@ -104,16 +104,32 @@ mat3 local_transform(uint k, uint model_chain, bool trunk, vec2 angle) {
     return t;
 }
 
-/// Pass 2's step of either dynamics (PassConstants.dynamics; docs/model.md 3.7, 3.13).
-vec4 step_angles(uint model_chain, vec4 s, vec2 g) {
-    return pc.dynamics == HMSM_PASS_DYNAMICS_COUPLED ? coupled_step(model_chain, s, g) : integrate_step(model_chain, s, g);
+/// The fade of group instance k (docs/model.md 3.12, fading to a coarser level): the state s a
+/// step computed for static chain model_chain, times the step's factor sigma where the instance
+/// fades to a level that folds the chain; else s as it is. Mirrors src/common/fade_math.h.
+vec4 faded_state(uint k, uint model_chain, vec4 s) {
+    uint word = uint(instance_wind[HMSM_INSTANCE_WIND_VEC4S * (pc.instance_begin + k)].w);
+    if (word == 0u) return s;
+    uint keep = uint(chain_rest_rotation[model_chain][0].w);
+    if (keep >= (word >> HMSM_FADE_LEVEL_SHIFT)) return s;
+    uint clock = uint(wind_table[HMSM_WIND_STEPS + HMSM_WIND_STEP_VEC4S * pc.wind_slot].z);
+    uint left = ((word & HMSM_FADE_END_MASK) - clock) & HMSM_FADE_END_MASK;
+    if (left == 0u || left >= HMSM_FADE_HORIZON) return vec4(0.0);
+    return (float(left) / float(left + 1u)) * s;
+}
+
+/// Pass 2's step of either dynamics (PassConstants.dynamics; docs/model.md 3.7, 3.13) for static
+/// chain model_chain of group instance k, faded where the instance fades.
+vec4 step_angles(uint k, uint model_chain, vec4 s, vec2 g) {
+    return faded_state(k, model_chain, pc.dynamics == HMSM_PASS_DYNAMICS_COUPLED ? coupled_step(model_chain, s, g)
+                                                                                : integrate_step(model_chain, s, g));
 }
 
 /// Pass 2 for model chain c of group instance k under generalized force g: the step (chain_state
 /// is updated), then T; T's inputs are read before the state is written.
 mat3 chain_integrate(uint k, uint c, uint chain, vec2 g) {
     uint model_chain = pc.model_chain_begin + c;
-    vec4 s = step_angles(model_chain, chain_state[chain], g);
+    vec4 s = step_angles(k, model_chain, chain_state[chain], g);
     mat3 t = local_transform(k, model_chain, chain_parent[model_chain] < 0, s.xy);
     chain_state[chain] = s;
     return t;

@@ -20,7 +20,7 @@ void main() {
     if (pc.kind == HMSM_DISPATCH_WIND_PAIR) {
         mat3x4 j = joint_matrix[chain];
         vec2 g = chain_wind_force(k, c, joint_origin(j), joint_rotation(j));
-        chain_state[chain] = step_angles(pc.model_chain_begin + c, chain_state[chain], g);
+        chain_state[chain] = step_angles(k, pc.model_chain_begin + c, chain_state[chain], g);
         return;
     }
     uint pose = half_offset(pc.src_half) + chain;

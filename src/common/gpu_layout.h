@@ -19,7 +19,7 @@
 #define HMSM_BINDING_CHAIN_PARENT 0          // int   per model chain: parent chain, -1 trunk
 #define HMSM_BINDING_CHAIN_JUMP 1            // int   per (round, model chain): 2^round-th ancestor or -1; round-major, stride total_model_chains
 #define HMSM_BINDING_CHAIN_ATTACH 2          // int   per model chain: attach node (model-local)
-#define HMSM_BINDING_CHAIN_REST_ROTATION 3   // mat3x4 per model chain: Q_c
+#define HMSM_BINDING_CHAIN_REST_ROTATION 3   // mat3x4 per model chain: Q_c; column 0's w: its keep rank (below)
 #define HMSM_BINDING_CHAIN_CONSTANTS 4       // vec4  per model chain: (I, K, D, A)
 #define HMSM_BINDING_NODE_OWNER 5            // int   per model node: owning chain (model-local)
 #define HMSM_BINDING_NODE_LOCAL 6            // vec4  per model node: l_n (xyz)
@@ -81,10 +81,11 @@
 /// phases mod 1 in double and hands over only those.
 ///
 /// instance_wind, 9 vec4 per instance i (element 9 i + j):
-///   j = 0: (lambda_i, phi_i mod 2, paused, 0)  wind scale; wind phase phi_i = p_i - f (o_i.d)/v;
+///   j = 0: (lambda_i, phi_i mod 2, paused, fade)  wind scale; wind phase phi_i = p_i - f (o_i.d)/v;
 ///          paused 1 while the instance is inactive, else 0: a dispatch may cover paused
 ///          instances between active ones (live_control.cpp); where it does (params.w = 1), it
-///          skips their elements
+///          skips their elements; fade: the instance's fade word (HMSM_FADE_* below), 0 when it
+///          does not fade
 ///   j = 1..8: frac(m_k phi_i) for the turbulent modes k = 4 (j - 1) .. 4 (j - 1) + 3;
 ///          atmospheric: the spatial phases frac(kx_k (p_i - o_i.e_x) - ky_k o_i.e_y - kz_k o_i.e_z)
 /// wind_table, vec4 elements:
@@ -95,10 +96,24 @@
 ///       cross-wind directions times strength (hmsm::wind_frame)
 ///   [HMSM_WIND_FIELDS, +2 per field): (centre xyz, radius), (F xyz, kind) with kind 0 =
 ///       directional (force h F), 1 = radial (force h F.x unit(x - centre))
-///   [HMSM_WIND_STEPS + 9 s, +9): step slot s: (tau mod 2, h, 0, 0) with h = n mod 2 for step n
-///       (the half of chain_load the step writes; it reads the other), then frac(m_k tau + u_k)
+///   [HMSM_WIND_STEPS + 9 s, +9): step slot s: (tau mod 2, h, n mod HMSM_FADE_PERIOD, 0) with
+///       h = n mod 2 for step n (the half of chain_load the step writes; it reads the other; n
+///       mod HMSM_FADE_PERIOD is the fades' clock), then frac(m_k tau + u_k)
 ///       (atmospheric: frac(kx_k tau + u_k), tau in metres) as instance_wind's elements 1..8.
 ///       A wind_force dispatch reads slot pc.wind_slot.
+/// Fades to a coarser level (docs/model.md 3.12), run in pass 2. A scene model's levels ranked by chain
+/// count, finest first, are nested. Fade word: L * HMSM_FADE_PERIOD + (e mod HMSM_FADE_PERIOD), L the
+/// rank of the level faded to, e the number of the fade's last step (below 2^24: exact in a float).
+/// A model chain's keep rank (chain_rest_rotation, column 0's w) is the rank of the coarsest level
+/// keeping it; the fade scales a chain whose keep rank is below L. At step n, with m = (e - n) mod
+/// HMSM_FADE_PERIOD the steps left after it: sigma = m / (m + 1) while 0 < m < HMSM_FADE_HORIZON,
+/// else 0 (the fade is over: the folded chains stay at rest).
+#define HMSM_FADE_PERIOD 131072u
+#define HMSM_FADE_END_MASK 131071u
+#define HMSM_FADE_LEVEL_SHIFT 17u
+#define HMSM_FADE_HORIZON 65536u
+/// Levels of detail a model may have (level 0 included): the fade word's L stays below 2^7.
+#define HMSM_MAX_LOD_LEVELS 128u
 #define HMSM_WIND_MODES 32
 #define HMSM_WIND_MODE_VEC4S 8
 #define HMSM_WIND_MODES_U_VEC4S 4  // atmospheric: mode vec4s [0, 4) u', [4, 6) v', [6, 8) w'

@@ -207,6 +207,8 @@ private:
         s_.node_owner = d.node_owner;
         s_.vertex_chain = d.vertex_chain;
         s_.chain_rest_rotation.assign(d.chain_rest_rotation.begin(), d.chain_rest_rotation.end());
+        s_.chain_keep_level = d.chain_keep_level;
+        s_.chain_keep_level.resize(d.chain_rest_rotation.size(), 0u);
         s_.chain_constants = convert_vec4<T, vec4>(d.chain_constants);
         s_.node_local = convert_vec4<T, vec4>(d.node_local);
         constexpr size_t record = 4 * HMSM_CHAIN_DYNAMICS_VEC4S;
@@ -243,7 +245,7 @@ private:
         s_.total_chains = d.chain_capacity;  // the stride between ping-pong halves
     }
 
-    /// Runs pass function `f` (src/cpu/NAME.cpp); only wind_force takes the step's wind slot.
+    /// Runs pass function `f` (src/cpu/NAME.cpp); wind_force and integrate take the step's slot.
     template <class F>
     void call_pass(F f, const Dispatch& d, uint32_t wind_slot, Range r) {
         if constexpr (std::is_invocable_v<F, State<T>&, const gpu::PassConstants&, uint32_t, Range>)

@@ -29,6 +29,9 @@ struct State {
     std::vector<int32_t> chain_parent, chain_jump, chain_attach, node_owner, chain_walk;
     std::vector<glm::ivec2> vertex_chain;
     std::vector<mat3> chain_rest_rotation;
+    /// Per static chain: its keep rank, the rank of the coarsest level of its scene model that
+    /// keeps it (gpu_layout.h HMSM_FADE_*; on the devices column 0's w of chain_rest_rotation).
+    std::vector<uint32_t> chain_keep_level;
     std::vector<vec4> chain_constants, node_local;
     /// The coupled dynamics' records (gpu_layout.h HMSM_CHAIN_DYNAMICS_VEC4S; empty under paper).
     std::vector<std::array<T, 4 * HMSM_CHAIN_DYNAMICS_VEC4S>> chain_dynamics;
@@ -138,7 +141,7 @@ void run_hierarchical(const State<T>& s, const gpu::PassConstants& pc, Range r, 
 
 // The seven passes; each runs the work items `r` of one dispatch serially.
 template <class T> void wind_force(State<T>& s, const gpu::PassConstants& pc, uint32_t wind_slot, Range r);
-template <class T> void integrate(State<T>& s, const gpu::PassConstants& pc, Range r);
+template <class T> void integrate(State<T>& s, const gpu::PassConstants& pc, uint32_t wind_slot, Range r);
 template <class T> void compose(State<T>& s, const gpu::PassConstants& pc, Range r);
 template <class T> void node_relative(State<T>& s, const gpu::PassConstants& pc, Range r);
 template <class T> void root_positions(State<T>& s, const gpu::PassConstants& pc, Range r);
@@ -167,6 +170,12 @@ typename State<T>::vec2 coupled_integrate_angles(State<T>& s, uint32_t model_cha
 /// instance `instance` at angles S.
 template <class T>
 typename State<T>::vec2 integrate_angles(State<T>& s, uint32_t model_chain, uint64_t c, const typename State<T>::vec2& g);
+/// Pass 2's step of state chain c (static chain model_chain, group instance `instance`) under g
+/// by either dynamics, then the fade of the step of wind-table slot wind_slot where one relaxes
+/// the chain (stores S/V, returns S).
+template <class T>
+typename State<T>::vec2 step_angles(State<T>& s, const gpu::PassConstants& pc, uint32_t wind_slot, uint32_t instance,
+                                    uint32_t model_chain, uint64_t c, const typename State<T>::vec2& g);
 template <class T>
 typename State<T>::mat3 local_transform(const State<T>& s, uint32_t model_chain, uint32_t instance,
                                         const typename State<T>::vec2& angle);

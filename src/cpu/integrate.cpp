@@ -1,7 +1,10 @@
-// Pass 2: symplectic Euler on the two joint angles of each chain, clamped at max_angle, then
-// the local transform T = Q Rz(theta_z) Rx(theta_x) (trunk: Ry(yaw) in front). The two halves
+// Pass 2: symplectic Euler on the two joint angles of each chain, clamped at max_angle (or the
+// coupled dynamics' exact step), a fade's factor where one relaxes the chain, then the local
+// transform T = Q Rz(theta_z) Rx(theta_x) (trunk: Ry(yaw) in front). The two halves
 // are apart for the path walk, which stores the angles and computes T where it multiplies it.
 #include "cpu_state.h"
+
+#include "../common/fade_math.h"
 
 #include <cmath>
 
@@ -46,21 +49,39 @@ typename State<T>::mat3 local_transform(const State<T>& s, uint32_t model_chain,
 }
 
 template <class T>
-void integrate(State<T>& s, const gpu::PassConstants& pc, Range r) {
+typename State<T>::vec2 step_angles(State<T>& s, const gpu::PassConstants& pc, uint32_t wind_slot, uint32_t instance,
+                                    uint32_t model_chain, uint64_t c, const typename State<T>::vec2& g) {
+    const auto angle = pc.dynamics == HMSM_PASS_DYNAMICS_COUPLED ? coupled_integrate_angles(s, model_chain, c, g)
+                                                                 : integrate_angles(s, model_chain, c, g);
+    // The fade (docs/model.md 3.12, fading to a coarser level): S and V of a chain the level the
+    // instance fades to folds, times the step's factor (src/common/fade_math.h).
+    const uint32_t word = uint32_t(s.instance_wind[pc.instance_begin + instance][3]);
+    if (word == 0u || !fade_relaxes(word, s.chain_keep_level[model_chain])) return angle;
+    const uint32_t clock = uint32_t(s.wind_table[HMSM_WIND_STEPS + HMSM_WIND_STEP_VEC4S * wind_slot].z);
+    const T sigma = fade_factor<T>(word, clock);
+    auto& sv = s.chain_state[c];
+    sv = sigma == T(0) ? typename State<T>::vec4(T(0)) : sigma * sv;
+    return {sv.x, sv.y};
+}
+
+template <class T>
+void integrate(State<T>& s, const gpu::PassConstants& pc, uint32_t wind_slot, Range r) {
     for (uint32_t i = r.begin; i < r.end; ++i) {
         Element e = element_of(i, pc.model_chain_count);
         if (instance_paused(s, pc, e.instance)) continue;
         uint64_t c = state_chain(pc, e.instance, int32_t(e.index));
         const uint32_t model_chain = pc.model_chain_begin + e.index;
-        const auto angle = pc.dynamics == HMSM_PASS_DYNAMICS_COUPLED
-                               ? coupled_integrate_angles(s, model_chain, c, s.chain_force[c])
-                               : integrate_angles(s, model_chain, c, s.chain_force[c]);
+        const auto angle = step_angles(s, pc, wind_slot, e.instance, model_chain, c, s.chain_force[c]);
         s.chain_local[c] = local_transform(s, model_chain, pc.instance_begin + e.instance, angle);
     }
 }
 
-template void integrate<float>(State<float>&, const gpu::PassConstants&, Range);
-template void integrate<double>(State<double>&, const gpu::PassConstants&, Range);
+template void integrate<float>(State<float>&, const gpu::PassConstants&, uint32_t, Range);
+template void integrate<double>(State<double>&, const gpu::PassConstants&, uint32_t, Range);
+template State<float>::vec2 step_angles<float>(State<float>&, const gpu::PassConstants&, uint32_t, uint32_t, uint32_t,
+                                               uint64_t, const State<float>::vec2&);
+template State<double>::vec2 step_angles<double>(State<double>&, const gpu::PassConstants&, uint32_t, uint32_t,
+                                                 uint32_t, uint64_t, const State<double>::vec2&);
 template State<float>::vec2 integrate_angles<float>(State<float>&, uint32_t, uint64_t, const State<float>::vec2&);
 template State<double>::vec2 integrate_angles<double>(State<double>&, uint32_t, uint64_t, const State<double>::vec2&);
 template State<float>::mat3 local_transform<float>(const State<float>&, uint32_t, uint32_t, const State<float>::vec2&);

@@ -33,8 +33,9 @@ typename State<T>::vec3 instance_wind_vector(const State<T>& s, const gpu::PassC
     return instance[0] * y * vec3(table[HMSM_WIND_VECTOR]);
 }
 
-/// g for every chain of the work items, handed to use(state chain, static chain, g); the
-/// previous pose from the pose half src_half, or from the joint matrix (`from_joint`: a path walk).
+/// g for every chain of the work items, handed to use(state chain, group instance, static chain,
+/// g); the previous pose from the pose half src_half, or from the joint matrix (`from_joint`: a
+/// path walk).
 template <class T, class Use>
 void wind_forces(State<T>& s, const gpu::PassConstants& pc, uint32_t wind_slot, Range r, bool from_joint, Use&& use) {
     using vec3 = typename State<T>::vec3;
@@ -73,18 +74,18 @@ void wind_forces(State<T>& s, const gpu::PassConstants& pc, uint32_t wind_slot, 
         if (pc.dynamics == HMSM_PASS_DYNAMICS_COUPLED) {
             const auto g = coupled_force(s, pc, e.instance, c, pc.model_chain_begin + e.index, w_local, 1 - load_written);
             s.chain_load[load_written * s.total_chains + c] = {g.x, g.y, T(0), T(0)};  // the parent's next load
-            use(c, pc.model_chain_begin + e.index, g);
+            use(c, e.instance, pc.model_chain_begin + e.index, g);
             continue;
         }
         T area = s.chain_constants[pc.model_chain_begin + e.index].w;
-        use(c, pc.model_chain_begin + e.index, typename State<T>::vec2(area * w_local.z, -area * w_local.x));
+        use(c, e.instance, pc.model_chain_begin + e.index, typename State<T>::vec2(area * w_local.z, -area * w_local.x));
     }
 }
 
 template <class T>
 void wind_force(State<T>& s, const gpu::PassConstants& pc, uint32_t wind_slot, Range r) {
     wind_forces(s, pc, wind_slot, r, false,
-                [&](uint64_t c, uint32_t, const typename State<T>::vec2& g) { s.chain_force[c] = g; });
+                [&](uint64_t c, uint32_t, uint32_t, const typename State<T>::vec2& g) { s.chain_force[c] = g; });
 }
 
 /// Composition::path_walk: integrate in the same pass over the same chains, g kept in hand;
@@ -92,10 +93,10 @@ void wind_force(State<T>& s, const gpu::PassConstants& pc, uint32_t wind_slot, R
 /// joint matrix (a walk step writes no R or O half).
 template <class T>
 void wind_force_and_integrate(State<T>& s, const gpu::PassConstants& pc, uint32_t wind_slot, Range r) {
-    wind_forces(s, pc, wind_slot, r, true, [&](uint64_t c, uint32_t model_chain, const typename State<T>::vec2& g) {
-        if (pc.dynamics == HMSM_PASS_DYNAMICS_COUPLED) coupled_integrate_angles(s, model_chain, c, g);
-        else integrate_angles(s, model_chain, c, g);
-    });
+    wind_forces(s, pc, wind_slot, r, true,
+                [&](uint64_t c, uint32_t instance, uint32_t model_chain, const typename State<T>::vec2& g) {
+                    step_angles(s, pc, wind_slot, instance, model_chain, c, g);
+                });
 }
 
 template void wind_force<float>(State<float>&, const gpu::PassConstants&, uint32_t, Range);

@@ -53,10 +53,9 @@ Status set_stream(Simulation& simulation, CUstream_st* stream) {
 Status enqueue_steps(Simulation& simulation, CUstream_st* stream, uint32_t count) {
     auto backend = cuda_backend_of(simulation);
     if (!backend) return backend.status();
-    // A fade relaxes the folded chains through the host between steps, a wait that enqueued
-    // steps must not make: coarsening switches under way fold now, as a switch made between
-    // frames (docs/driving.md).
-    HMSM_TRY(detail::SimulationAccess::impl(simulation).fold_ready_fades(true));
+    // Fades run inside the enqueued steps (pass 2); the fades that are over switch here, before
+    // the steps, as a switch made between frames (docs/driving.md).
+    HMSM_TRY(detail::SimulationAccess::impl(simulation).fold_ready_fades());
     HMSM_TRY((*backend)->set_stream(stream));
     (*backend)->set_waits_for_steps(false);
     const Status stepped = simulation.step(count);

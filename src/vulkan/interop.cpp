@@ -98,9 +98,9 @@ Status record_steps(Simulation& simulation, VkCommandBuffer command_buffer, uint
     // through the backend and advances the clock; while recording, the backend stages the
     // uploads in the frame's ring slot and records copies and steps instead of submitting.
     VulkanBackend& vulkan = *backend.value();
-    // A fade relaxes the folded chains through the host between steps, which recorded steps do
-    // not allow: coarsening switches under way fold now, as a switch made between frames.
-    if (Status folded = detail::SimulationAccess::impl(simulation).fold_ready_fades(true); !folded.ok())
+    // Fades run inside the recorded steps (pass 2); the fades that are over switch here, before
+    // the recording, as a switch made between frames.
+    if (Status folded = detail::SimulationAccess::impl(simulation).fold_ready_fades(); !folded.ok())
         return folded;
     // Instance changes held back since the last recording come first (docs/vulkan.md).
     Status status = vulkan.begin_recording(command_buffer);

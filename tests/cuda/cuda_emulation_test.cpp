@@ -79,18 +79,19 @@ void poison(HostImage& image, BufferId id) {
 
 class CudaEmulation : public ::testing::TestWithParam<test::TestComposition> {};
 
-/// Runs the first `steps` steps of `sim`'s step program through the kernel bodies on the host,
-/// with the wind clock of each step as Simulation::step computes it (tau = f t, or U t for the
-/// atmospheric profile, reduced on the
-/// host into wind-table slot 0).
-void emulate_steps(const Simulation& sim, HostImage& image, uint32_t steps) {
+/// Runs `steps` steps of `sim`'s step program through the kernel bodies on the host, after the
+/// first `done` steps, with the wind clock of each step as Simulation::step computes it (tau =
+/// f t, or U t for the atmospheric profile, reduced on the host into wind-table slot 0) and the
+/// fades' clock (gpu_layout.h HMSM_FADE_*).
+void emulate_steps(const Simulation& sim, HostImage& image, uint32_t steps, uint64_t done = 0) {
     const double dt = sim.config().parameters.dt;
     const Wind& wind = sim.wind();
     const detail::WindModes modes = detail::wind_modes(wind);
     auto* table = reinterpret_cast<float*>(image.bytes[uint32_t(BufferId::wind_table)].data());
     double slot[detail::kWindStepScalars];
     for (uint32_t k = 0; k < steps; ++k) {
-        detail::fill_wind_step(wind, modes, (wind_clock_rate(wind) * dt) * double(k), slot);
+        detail::fill_wind_step(wind, modes, (wind_clock_rate(wind) * dt) * double(done + k), slot);
+        slot[2] = double((done + k + 1) & HMSM_FADE_END_MASK);
         for (uint32_t i = 0; i < detail::kWindStepScalars; ++i) table[4 * HMSM_WIND_STEPS + i] = float(slot[i]);
         for (const detail::Dispatch& d : hmsm::detail::step_program_of(sim)) detail::cuda::emulate_dispatch(d, image.pointers, 0);
     }
@@ -186,6 +187,39 @@ TEST_P(CudaEmulation, PausedInstanceInsideADispatchIsSkipped) {
         EXPECT_TRUE(std::equal(a.begin() + 2 * per, a.begin() + 3 * per, b.begin() + 2 * per)) << "paused instance moved";
         EXPECT_FALSE(std::equal(a.begin() + 3 * per, a.begin() + 4 * per, b.begin() + 3 * per)) << "active instance frozen";
     }
+}
+
+// A fade to the trunk-only level through the kernel bodies: the integrate kernels scale the
+// folded chains' state by the fade's factor each step, as cpu64 does, and leave them exactly at
+// rest after the fade's steps while the trunk moves on.
+TEST_P(CudaEmulation, FadeRelaxesTheFoldedChainsAsCpu64Does) {
+    Scene scene = forest_scene(11);
+    scene.lod_budgets.assign(scene.models.size(), {8, 1});
+    auto reference = test::create_simulation(
+        scene, test_config(BackendKind::cpu64, GetParam().composition, false), GetParam());
+    ASSERT_TRUE(reference.ok()) << reference.status().message();
+    Simulation& sim = **reference;
+    LodBands bands;
+    bands.edges = {100.0};
+    bands.fade_steps = 24;
+    ASSERT_TRUE(sim.set_lod_bands(bands).ok());
+    ASSERT_TRUE(sim.step(60).ok());
+    const InstanceId first{0};
+    const uint32_t trunk_only = 2;
+    ASSERT_TRUE(sim.request_instance_lods({&first, 1}, {&trunk_only, 1}).ok());
+    ASSERT_EQ(sim.fading_instance_count(), 1u);
+    ASSERT_TRUE(sim.step(0).ok());  // writes the fade word
+    HostImage image = image_of(sim);
+    emulate_steps(sim, image, bands.fade_steps, sim.steps_done());
+    ASSERT_TRUE(sim.step(bands.fade_steps).ok());
+    std::vector<double> expected;
+    ASSERT_TRUE(sim.read(Output::node_positions, expected).ok());
+    EXPECT_LE(max_abs_difference(xyz_of(image, BufferId::node_world), expected) / scene_height(scene), 1e-4);
+    const auto* state = reinterpret_cast<const float*>(image.bytes[uint32_t(BufferId::chain_state)].data());
+    const size_t chains = sim.hierarchy(sim.instances()[0].model).chains.size();
+    ASSERT_GT(chains, 1u);
+    EXPECT_TRUE(state[0] != 0.0f || state[1] != 0.0f) << "the trunk moves on";
+    for (size_t k = 4; k < 4 * chains; ++k) ASSERT_EQ(state[k], 0.0f) << "folded chain " << k / 4 << " not at rest";
 }
 
 class CudaEmulationWind : public ::testing::TestWithParam<WindProfile> {};

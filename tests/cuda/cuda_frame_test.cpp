@@ -183,10 +183,10 @@ TEST(CudaFrame, OneCopyReadsMatchTheChunkedPathAndGrowTheirSlots) {
     }
 }
 
-// A coarsening request fades under step(), which passes the fading chains through the host
-// after each step; enqueued steps may not wait for that: enqueue_steps folds the fades under way
-// first, exactly as the same switches made at once between frames.
-TEST(CudaFrame, EnqueuedStepsFoldFadesAtOnce) {
+// A coarsening request fades in pass 2 on the device, with no host round trip per step: the
+// fades run inside enqueued steps, and enqueue_steps switches the fades that are over before its
+// steps, exactly as step() does with the same requests on a plain simulation.
+TEST(CudaFrame, EnqueuedStepsFadeAsStepDoes) {
     HMSM_SKIP_WITHOUT_CUDA();
     auto tree = generate_preset("paper-5");
     ASSERT_TRUE(tree.ok()) << tree.status().message();
@@ -198,22 +198,32 @@ TEST(CudaFrame, EnqueuedStepsFoldFadesAtOnce) {
     auto enqueued = create_or_fail(scene, config);
     auto reference = create_or_fail(scene, config);
     ASSERT_TRUE(enqueued && reference);
+    LodBands bands;
+    bands.edges = {100.0};
+    bands.fade_steps = 4;  // two frames of two steps
+    ASSERT_TRUE(enqueued->set_lod_bands(bands).ok());
+    ASSERT_TRUE(reference->set_lod_bands(bands).ok());
     cudaStream_t stream = nullptr;
     ASSERT_EQ(cudaStreamCreateWithFlags(&stream, cudaStreamNonBlocking), cudaSuccess);
     for (uint32_t k = 0; k < 6; ++k) {
         if (k == 2) {
             const InstanceId ids[] = {InstanceId(1), InstanceId(4)};
             const uint32_t levels[] = {2, 1};
-            auto requested = enqueued->request_instance_lods(ids, levels);
-            ASSERT_TRUE(requested.ok()) << requested.status().message();
-            ASSERT_EQ(enqueued->fading_instance_count(), 2u) << "the trees sway: their switches fade";
-            ASSERT_TRUE(reference->set_instance_lods(ids, levels).ok());
+            for (Simulation* s : {enqueued.get(), reference.get()}) {
+                auto requested = s->request_instance_lods(ids, levels);
+                ASSERT_TRUE(requested.ok()) << requested.status().message();
+                ASSERT_EQ(s->fading_instance_count(), 2u) << "the trees sway: their switches fade";
+            }
         }
         ASSERT_TRUE(cuda::enqueue_steps(*enqueued, stream, 2).ok());
-        EXPECT_EQ(enqueued->fading_instance_count(), 0u) << "frame " << k;
+        EXPECT_EQ(enqueued->fading_instance_count(), k == 2 || k == 3 ? 2u : 0u) << "frame " << k;
         ASSERT_TRUE(reference->step(2).ok());
     }
     ASSERT_EQ(cudaStreamSynchronize(stream), cudaSuccess);
+    EXPECT_EQ(*enqueued->instance_lod(InstanceId(1)), 2u);
+    EXPECT_EQ(*enqueued->instance_lod(InstanceId(4)), 1u);
+    for (size_t i = 0; i < enqueued->instance_count(); ++i)
+        EXPECT_EQ(enqueued->instances()[i].model, reference->instances()[i].model);
     expect_same_outputs(*reference, *enqueued);
     ASSERT_TRUE(cuda::set_stream(*enqueued, nullptr).ok());
     EXPECT_EQ(cudaStreamDestroy(stream), cudaSuccess);

@@ -123,9 +123,9 @@ TEST(LaunchPlan, ARunOfManyGroupsIsOneLaunchCoveringEveryElementOnce) {
 
 TEST(LaunchPlan, RunsOfOneDispatchKeepTheirOwnLaunchAndTheSlotOnlyWhereRead) {
     std::vector<Dispatch> program = {dispatch_of(Pass::wind_force, HMSM_DISPATCH_PER_ELEMENT, 0, 2, 100),
-                                     dispatch_of(Pass::integrate, HMSM_DISPATCH_PER_ELEMENT, 0, 2, 100),
-                                     dispatch_of(Pass::integrate, HMSM_DISPATCH_PER_ELEMENT, 2, 1, 300),
-                                     dispatch_of(Pass::integrate, HMSM_DISPATCH_PER_ELEMENT, 3, 0, 300),
+                                     dispatch_of(Pass::node_relative, HMSM_DISPATCH_PER_ELEMENT, 0, 2, 100),
+                                     dispatch_of(Pass::node_relative, HMSM_DISPATCH_PER_ELEMENT, 2, 1, 300),
+                                     dispatch_of(Pass::node_relative, HMSM_DISPATCH_PER_ELEMENT, 3, 0, 300),
                                      dispatch_of(Pass::node_world, HMSM_DISPATCH_PER_ELEMENT, 0, 2, 100)};
     const LaunchPlan plan = detail::cuda::plan_launches(program, true, 1u << 16);
     ASSERT_EQ(plan.launches.size(), 3u);
