@@ -33,6 +33,8 @@ public:
     Status run(std::span<const Dispatch> program, std::span<const RunStep> steps) override;
     Status read(BufferId id, uint64_t first, uint64_t count, void* dst, Scalar as) const override;
     Status write(BufferId id, uint64_t first, uint64_t count, const void* src, Scalar as) override;
+    Status read_ranges(BufferId id, std::span<const ElementRange> ranges, void* dst, Scalar as) const override;
+    Status write_ranges(BufferId id, std::span<const ElementRange> ranges, const void* src, Scalar as) override;
     Status move_elements(BufferId id, std::span<const ElementMove> moves) override;
     Status request_read(uint32_t slot, BufferId id, uint64_t first, uint64_t count) const override;
     Result<const float*> take_read(uint32_t slot) const override;
