@@ -3,6 +3,7 @@
 #include "vk_error.h"
 
 #include <algorithm>
+#include <vector>
 
 namespace hmsm::detail::vk {
 namespace {
@@ -210,6 +211,75 @@ Status Transfer::download(const Buffer& src, VkDeviceSize offset, VkDeviceSize b
         }));
         consume(staging_.mapped(), done, chunk);
         done += chunk;
+    }
+    return {};
+}
+
+namespace {
+
+/// The copies of one staging-full of packed regions: bytes [first, first + bytes) of the
+/// regions back to back, as copies between the device buffer (srcOffset: its offset) and the
+/// staging buffer (dstOffset: the offset in staging).
+struct StagedChunk {
+    VkDeviceSize first = 0, bytes = 0;
+    std::vector<VkBufferCopy> copies;
+};
+
+/// `regions` (size: the bytes, srcOffset: the device offset) cut into staging-fulls of at most
+/// `staging` bytes; a region crossing a chunk's end goes on in the next.
+std::vector<StagedChunk> staged_chunks(std::span<const VkBufferCopy> regions, VkDeviceSize staging) {
+    std::vector<StagedChunk> chunks;
+    VkDeviceSize packed = 0;
+    for (const VkBufferCopy& r : regions) {
+        for (VkDeviceSize done = 0; done < r.size;) {
+            if (chunks.empty() || chunks.back().bytes == staging) chunks.push_back({packed, 0, {}});
+            StagedChunk& chunk = chunks.back();
+            const VkDeviceSize n = std::min(r.size - done, staging - chunk.bytes);
+            chunk.copies.push_back({r.srcOffset + done, chunk.bytes, n});
+            chunk.bytes += n;
+            done += n;
+            packed += n;
+        }
+    }
+    return chunks;
+}
+
+VkDeviceSize total_bytes(std::span<const VkBufferCopy> regions) {
+    VkDeviceSize total = 0;
+    for (const VkBufferCopy& r : regions) total += r.size;
+    return total;
+}
+
+}  // namespace
+
+Status Transfer::download_ranges(const Buffer& src, std::span<const VkBufferCopy> regions,
+                                 const std::function<void(const void*, VkDeviceSize, VkDeviceSize)>& consume) {
+    const VkDeviceSize total = total_bytes(regions);
+    if (total == 0) return {};
+    HMSM_TRY(ensure_staging(total));
+    for (const StagedChunk& chunk : staged_chunks(regions, staging_.size())) {
+        HMSM_TRY(submit([&](VkCommandBuffer cmd) {
+            device_.vk().vkCmdCopyBuffer(cmd, src.handle(), staging_.handle(), uint32_t(chunk.copies.size()),
+                                         chunk.copies.data());
+        }));
+        consume(staging_.mapped(), chunk.first, chunk.bytes);
+    }
+    return {};
+}
+
+Status Transfer::upload_ranges(const Buffer& dst, std::span<const VkBufferCopy> regions,
+                               const std::function<void(void*, VkDeviceSize, VkDeviceSize)>& fill) {
+    const VkDeviceSize total = total_bytes(regions);
+    if (total == 0) return {};
+    HMSM_TRY(ensure_staging(total));
+    for (const StagedChunk& chunk : staged_chunks(regions, staging_.size())) {
+        fill(staging_.mapped(), chunk.first, chunk.bytes);
+        std::vector<VkBufferCopy> back(chunk.copies.size());
+        for (size_t k = 0; k < back.size(); ++k)
+            back[k] = {chunk.copies[k].dstOffset, chunk.copies[k].srcOffset, chunk.copies[k].size};
+        HMSM_TRY(submit([&](VkCommandBuffer cmd) {
+            device_.vk().vkCmdCopyBuffer(cmd, staging_.handle(), dst.handle(), uint32_t(back.size()), back.data());
+        }));
     }
     return {};
 }

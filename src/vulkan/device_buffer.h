@@ -8,6 +8,7 @@
 
 #include <functional>
 #include <memory>
+#include <span>
 
 namespace hmsm::detail::vk {
 
@@ -53,6 +54,13 @@ public:
     /// The inverse: `consume(staging, first_byte, chunk_bytes)` receives each chunk.
     Status download(const Buffer& src, VkDeviceSize offset, VkDeviceSize bytes,
                     const std::function<void(const void*, VkDeviceSize, VkDeviceSize)>& consume);
+    /// download() of many regions of `src` ([offset, offset + bytes) each, which may overlap):
+    /// `consume` receives their bytes back to back, packed, one submission per staging-full.
+    Status download_ranges(const Buffer& src, std::span<const VkBufferCopy> regions,
+                           const std::function<void(const void*, VkDeviceSize, VkDeviceSize)>& consume);
+    /// upload() into many regions of `dst` (disjoint): `fill` writes their bytes back to back.
+    Status upload_ranges(const Buffer& dst, std::span<const VkBufferCopy> regions,
+                         const std::function<void(void*, VkDeviceSize, VkDeviceSize)>& fill);
     /// Records `commands` into a one-shot command buffer, submits it and waits.
     Status submit(const std::function<void(VkCommandBuffer)>& commands);
     /// Submissions made so far (a test hook).

@@ -180,10 +180,17 @@ Status VulkanBackend::move_elements(BufferId id, std::span<const ElementMove> mo
                                       [&](uint64_t first, uint64_t count) { return check_range(id, first, count); });
     if (!checked) return checked.status();
     if (*checked == 0) return {};
-    // Scratch only for moves that overlap themselves, at most kMoveScratchBytes at a time.
+    // Scratch for the largest batch of plan_move_batches (one by one: for the largest move that
+    // overlaps itself), at most kMoveScratchBytes; none where the moves can be copied directly.
     uint64_t staged = 0;
-    for (const ElementMove& m : moves)
-        if (overlaps_itself(m)) staged = std::max(staged, std::min(m.count * element_bytes, kMoveScratchBytes));
+    if (!destinations_apart_from_sources(moves)) {
+        if (batch_transfers_)
+            staged = plan_move_batches(moves, std::max<uint64_t>(1, kMoveScratchBytes / element_bytes)).largest *
+                     element_bytes;
+        else
+            for (const ElementMove& m : moves)
+                if (overlaps_itself(m)) staged = std::max(staged, std::min(m.count * element_bytes, kMoveScratchBytes));
+    }
     HMSM_TRY(ensure_move_scratch(staged));
     if (holding_back()) {
         HeldBack change{HeldBack::Kind::move, id};
