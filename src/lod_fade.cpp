@@ -116,29 +116,37 @@ Status Simulation::Impl::relax_fades(const std::vector<uint32_t>& indices, bool 
     auto end_of = [&](uint32_t i) { return chain_of(i) + data_->models[instances_[i].model].chain_count; };
     auto run = [&](auto zero) -> Status {
         using V = decltype(zero);
-        std::vector<V> state, local;
-        for (const IndexRun& r : index_runs(indices)) {
-            const uint64_t first = chain_of(r.first), count = end_of(r.end - 1) - first;
-            state.resize(size_t(count * 4));
-            local.resize(size_t(count * 12));
-            HMSM_TRY(backend_->read(BufferId::chain_state, first, count, state.data(), scalar));
-            if (scale) HMSM_TRY(backend_->read(BufferId::chain_local, first, count, local.data(), scalar));
+        // Every run's chains in one read and one write per buffer, back to back.
+        const std::vector<IndexRun> runs = index_runs(indices);
+        std::vector<detail::ElementRange> ranges;
+        uint64_t total = 0;
+        for (const IndexRun& r : runs) {
+            ranges.push_back({chain_of(r.first), end_of(r.end - 1) - chain_of(r.first)});
+            total += ranges.back().count;
+        }
+        std::vector<V> state(size_t(total * 4)), local(size_t(total * 12));
+        HMSM_TRY(backend_->read_ranges(BufferId::chain_state, ranges, state.data(), scalar));
+        if (scale) HMSM_TRY(backend_->read_ranges(BufferId::chain_local, ranges, local.data(), scalar));
+        uint64_t packed = 0;  // the run's first chain in state and local
+        for (size_t k = 0; k < runs.size(); packed += ranges[k].count, ++k) {
+            const IndexRun& r = runs[k];
+            const uint64_t first = ranges[k].first;
             for (uint32_t i = r.first; i < r.end; ++i) {
                 LodFade& fade = fades_.at(uint64_t(instance_ids_[i]));
                 const uint32_t model = instances_[i].model;
                 const std::vector<uint8_t> folded =
                     folded_chains(lod_models_[model].source_chain, lod_models_[fade.target_model].source_chain);
                 const double factor = scale ? double(fade.steps_left - 1) / double(fade.steps_left) : 1.0;
-                const size_t at = size_t(chain_of(i) - first);
+                const size_t at = size_t(packed + chain_of(i) - first);
                 const double left = relax_instance(state.data() + 4 * at, local.data() + 12 * at, hierarchies_[model],
                                                    folded, subtree_extent(model), factor, scale);
                 if (scale) --fade.steps_left;
                 fade.ready = left <= lod_bands_.fade_bound_m || fade.steps_left == 0;
             }
-            if (scale) {
-                HMSM_TRY(backend_->write(BufferId::chain_state, first, count, state.data(), scalar));
-                HMSM_TRY(backend_->write(BufferId::chain_local, first, count, local.data(), scalar));
-            }
+        }
+        if (scale) {
+            HMSM_TRY(backend_->write_ranges(BufferId::chain_state, ranges, state.data(), scalar));
+            HMSM_TRY(backend_->write_ranges(BufferId::chain_local, ranges, local.data(), scalar));
         }
         return {};
     };

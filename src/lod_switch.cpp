@@ -114,46 +114,54 @@ std::vector<V> carry_layout(const std::vector<V>& old, uint32_t per, uint32_t ha
     return out;
 }
 
+/// The ranges of the switched instances in buffer `id`, run by run and half by half: their old
+/// ranges (`first` = old_chain) or their new ones (new_chain).
+std::vector<detail::ElementRange> switched_ranges(BufferId id, uint64_t capacity, const std::vector<detail::IndexRun>& runs,
+                                                  const detail::ByInstance<uint64_t>& first) {
+    std::vector<detail::ElementRange> ranges;
+    ranges.reserve(runs.size() * halves_of(id));
+    for (const detail::IndexRun& run : runs)
+        for (uint32_t h = 0; h < halves_of(id); ++h)
+            ranges.push_back({h * capacity + first[run.first], first[run.end] - first[run.first]});
+    return ranges;
+}
+
 /// The switched instances' values of buffer `id` in their new layout, run by run and half by
-/// half back to back: only their old ranges are read.
+/// half back to back: only their old ranges are read, all in one read_ranges.
 template <class V>
 Status read_switched(const detail::Backend& backend, BufferId id, uint64_t capacity, detail::Scalar scalar,
                      const std::vector<detail::IndexRun>& runs, const detail::ByInstance<uint64_t>& old_chain,
                      const detail::ByInstance<uint64_t>& new_chain, const detail::ByInstance<const ChainMap*>& maps,
                      std::vector<V>& carried) {
     const uint32_t per = detail::shape_scalars(detail::buffer_info(id).shape);
-    std::vector<V> old;
+    const std::vector<detail::ElementRange> ranges = switched_ranges(id, capacity, runs, old_chain);
+    uint64_t old_elements = 0, new_elements = 0;
+    for (const detail::ElementRange& r : ranges) old_elements += r.count;
+    for (const detail::IndexRun& run : runs) new_elements += halves_of(id) * (new_chain[run.end] - new_chain[run.first]);
+    std::vector<V> old(size_t(old_elements * per));
+    HMSM_TRY(backend.read_ranges(id, ranges, old.data(), scalar));
+    carried.assign(size_t(new_elements * per), V(0));
+    size_t from = 0, into = 0;
     for (const detail::IndexRun& run : runs) {
         const uint64_t old_first = old_chain[run.first], new_first = new_chain[run.first];
-        const uint64_t chains = old_chain[run.end] - old_first;
-        old.resize(chains * per);
         for (uint32_t h = 0; h < halves_of(id); ++h) {
-            HMSM_TRY(backend.read(id, h * capacity + old_first, chains, old.data(), scalar));
-            const size_t at = carried.size();
-            carried.resize(at + (new_chain[run.end] - new_first) * per, V(0));
             for (uint32_t i = run.first; i < run.end; ++i)
-                carry_switched(old.data() + (old_chain[i] - old_first) * per,
-                               carried.data() + at + (new_chain[i] - new_first) * per, *maps[i], per, id);
+                carry_switched(old.data() + from + (old_chain[i] - old_first) * per,
+                               carried.data() + into + (new_chain[i] - new_first) * per, *maps[i], per, id);
+            from += (old_chain[run.end] - old_first) * per;
+            into += (new_chain[run.end] - new_first) * per;
         }
     }
     return {};
 }
 
-/// Writes what read_switched carried into the switched instances' new ranges.
+/// Writes what read_switched carried into the switched instances' new ranges, in one
+/// write_ranges.
 template <class V>
 Status write_switched(detail::Backend& backend, BufferId id, uint64_t capacity, detail::Scalar scalar,
                       const std::vector<detail::IndexRun>& runs, const detail::ByInstance<uint64_t>& new_chain,
                       const std::vector<V>& carried) {
-    const uint32_t per = detail::shape_scalars(detail::buffer_info(id).shape);
-    size_t at = 0;
-    for (const detail::IndexRun& run : runs) {
-        const uint64_t chains = new_chain[run.end] - new_chain[run.first];
-        for (uint32_t h = 0; h < halves_of(id); ++h) {
-            HMSM_TRY(backend.write(id, h * capacity + new_chain[run.first], chains, carried.data() + at, scalar));
-            at += chains * per;
-        }
-    }
-    return {};
+    return backend.write_ranges(id, switched_ranges(id, capacity, runs, new_chain), carried.data(), scalar);
 }
 
 /// Elements per instance of `instances` as running sums (`per` picks chains, nodes or
