@@ -5,19 +5,17 @@
 #include <algorithm>
 
 namespace hmsm::detail::cuda {
-namespace {
 
-constexpr uint32_t kCopyThreads = 256;
-constexpr uint64_t kMostCopyBlocks = 8192;
+static constexpr uint32_t kCopyThreads = 256;
+static constexpr uint64_t kMostCopyBlocks = 8192;
 
-__global__ void __launch_bounds__(kCopyThreads)
+// Static, like the pass kernels (pass_math.cuh): its launch stub stays local to the library.
+static __global__ void __launch_bounds__(kCopyThreads)
     copy_ranges_kernel(uint32_t* buffer, uint32_t* packed, const WordRange* ranges, uint32_t range_count,
                        uint64_t total, RangeCopy direction) {
     for (uint64_t t = uint64_t(blockIdx.x) * blockDim.x + threadIdx.x; t < total; t += uint64_t(gridDim.x) * blockDim.x)
         copy_range_word(buffer, packed, ranges, range_count, t, direction);
 }
-
-}  // namespace
 
 cudaError_t launch_copy_ranges(uint32_t* buffer, uint32_t* packed, const WordRange* ranges, uint32_t range_count,
                                uint64_t total, RangeCopy direction, cudaStream_t stream) {
