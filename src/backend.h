@@ -103,6 +103,24 @@ struct BackendCapabilities {
 inline constexpr uint32_t kReadSlots = 8;
 inline constexpr uint32_t kSyncReadSlot = kReadSlots - 1;
 
+/// The ranges of one buffer in read_buffers (`dst`) or write_buffers (`src`), their elements
+/// back to back in host memory as in read_ranges/write_ranges.
+struct BufferRangesRead {
+    BufferId id{};
+    std::span<const ElementRange> ranges;
+    void* dst = nullptr;
+};
+struct BufferRangesWrite {
+    BufferId id{};
+    std::span<const ElementRange> ranges;
+    const void* src = nullptr;
+};
+/// The moves of one buffer in move_buffers.
+struct BufferMoves {
+    BufferId id{};
+    std::span<const ElementMove> moves;
+};
+
 /// Host bytes of one element of buffer `id` read or written as `as`.
 inline uint64_t range_scalar_bytes(BufferId id, Scalar as) {
     return uint64_t(shape_scalars(buffer_info(id).shape)) * (as == Scalar::f64 ? 8 : 4);
@@ -161,6 +179,24 @@ public:
             HMSM_TRY(write(id, r.first, r.count, in, as));
             in += r.count * bytes;
         }
+        return {};
+    }
+
+    /// read_ranges of several buffers, with one round trip in all where the backend can (their
+    /// bytes within its staging memory); this default reads buffer by buffer.
+    virtual Status read_buffers(std::span<const BufferRangesRead> reads, Scalar as) const {
+        for (const BufferRangesRead& r : reads) HMSM_TRY(read_ranges(r.id, r.ranges, r.dst, as));
+        return {};
+    }
+    /// write_ranges of several buffers, in order; this default writes buffer by buffer.
+    virtual Status write_buffers(std::span<const BufferRangesWrite> writes, Scalar as) {
+        for (const BufferRangesWrite& w : writes) HMSM_TRY(write_ranges(w.id, w.ranges, w.src, as));
+        return {};
+    }
+    /// move_elements of several buffers (each buffer's moves in order; buffers are apart), with
+    /// one submission or wait in all where the backend can; this default moves buffer by buffer.
+    virtual Status move_buffers(std::span<const BufferMoves> moves) {
+        for (const BufferMoves& m : moves) HMSM_TRY(move_elements(m.id, m.moves));
         return {};
     }
 

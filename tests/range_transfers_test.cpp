@@ -260,6 +260,61 @@ TEST_P(RangeTransfers, MovesAgreeWithMovesOneAfterAnother) {
     });
 }
 
+// read_buffers, write_buffers and move_buffers over several buffers (halves and shapes mixed)
+// agree with the calls buffer by buffer.
+TEST_P(RangeTransfers, CallsOverSeveralBuffersAgreeWithCallsBufferByBuffer) {
+    for_scalar(scalar_, [&](auto zero) {
+        using V = decltype(zero);
+        std::mt19937 random(41);
+        const BufferId ids[] = {BufferId::chain_state, BufferId::chain_local, BufferId::chain_origin};
+        std::vector<std::vector<ElementRange>> ranges;
+        std::vector<std::vector<V>> expected, batched;
+        std::vector<detail::BufferRangesRead> reads;
+        for (BufferId id : ids) {
+            ranges.push_back(random_ranges(random, id, true));
+            uint64_t elements = 0;
+            for (const ElementRange& r : ranges.back()) elements += r.count;
+            expected.emplace_back(elements * width(id));
+            ASSERT_TRUE(backend().read_ranges(id, ranges.back(), expected.back().data(), scalar_).ok());
+            batched.emplace_back(elements * width(id), V(-7));
+        }
+        for (size_t k = 0; k < std::size(ids); ++k) reads.push_back({ids[k], ranges[k], batched[k].data()});
+        ASSERT_TRUE(backend().read_buffers(reads, scalar_).ok());
+        EXPECT_EQ(batched, expected);
+
+        // Written back shifted by one buffer's values: each buffer's ranges take new values.
+        std::vector<std::vector<V>> before, values;
+        std::vector<detail::BufferRangesWrite> writes;
+        for (size_t k = 0; k < std::size(ids); ++k) {
+            before.push_back(whole<V>(ids[k]));
+            values.push_back(expected[k]);
+            for (V& v : values.back()) v = v * V(0.5) + V(1);
+            writes.push_back({ids[k], ranges[k], values.back().data()});
+        }
+        ASSERT_TRUE(backend().write_buffers(writes, scalar_).ok());
+        std::vector<std::vector<V>> written;
+        for (size_t k = 0; k < std::size(ids); ++k) {
+            written.push_back(whole<V>(ids[k]));
+            ASSERT_TRUE(backend().write(ids[k], 0, size(ids[k]), before[k].data(), scalar_).ok());
+            ASSERT_TRUE(backend().write_ranges(ids[k], ranges[k], values[k].data(), scalar_).ok());
+            EXPECT_EQ(written.back(), whole<V>(ids[k])) << detail::buffer_info(ids[k]).name;
+        }
+
+        std::vector<std::vector<ElementMove>> moves;
+        std::vector<detail::BufferMoves> all_moves;
+        std::vector<std::vector<V>> moved;
+        for (BufferId id : ids) moves.push_back(random_moves(random, size(id), 20, 200));
+        for (size_t k = 0; k < std::size(ids); ++k) {
+            moved.push_back(whole<V>(ids[k]));
+            move_one_by_one(moved.back(), std::span<const ElementMove>(moves[k]), width(ids[k]));
+            all_moves.push_back({ids[k], moves[k]});
+        }
+        ASSERT_TRUE(backend().move_buffers(all_moves).ok());
+        for (size_t k = 0; k < std::size(ids); ++k)
+            EXPECT_EQ(whole<V>(ids[k]), moved[k]) << detail::buffer_info(ids[k]).name;
+    });
+}
+
 std::string param_name(const ::testing::TestParamInfo<std::string>& info) {
     std::string name = info.param;
     std::replace(name.begin(), name.end(), '-', '_');

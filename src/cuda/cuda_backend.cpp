@@ -95,6 +95,16 @@ Status CudaBackend::write_ranges(BufferId id, std::span<const ElementRange> rang
     return buffers_.write_ranges(id, ranges, src, as, stream_);
 }
 
+Status CudaBackend::read_buffers(std::span<const BufferRangesRead> reads, Scalar as) const {
+    HMSM_TRY(make_current());
+    return buffers_.read_buffers(reads, as, stream_);
+}
+
+Status CudaBackend::move_buffers(std::span<const BufferMoves> moves) {
+    HMSM_TRY(make_current());
+    return buffers_.move_buffers(moves, stream_);
+}
+
 Status CudaBackend::move_elements(BufferId id, std::span<const ElementMove> moves) {
     HMSM_TRY(make_current());
     return buffers_.move(id, moves, stream_);

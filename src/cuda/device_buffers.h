@@ -51,6 +51,11 @@ public:
     /// copy and one wait (range_transfers.cpp).
     Status read_ranges(BufferId id, std::span<const ElementRange> ranges, void* dst, Scalar as,
                        cudaStream_t stream) const;
+    /// Backend::read_buffers: each buffer's ranges gathered with one launch into one scratch,
+    /// one device-to-host copy and one wait in all (within 16 MiB; else buffer by buffer).
+    Status read_buffers(std::span<const BufferRangesRead> reads, Scalar as, cudaStream_t stream) const;
+    /// Backend::move_buffers: every buffer's batches as in move(), one wait in all.
+    Status move_buffers(std::span<const BufferMoves> moves, cudaStream_t stream);
     /// Backend::write_ranges: per scratch-full one host-to-device copy and one scatter launch,
     /// in stream order without waiting (`src` may be reused at once).
     Status write_ranges(BufferId id, std::span<const ElementRange> ranges, const void* src, Scalar as,

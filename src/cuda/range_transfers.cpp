@@ -96,35 +96,110 @@ Status DeviceBuffers::upload_range_table(const std::vector<WordRange>& ranges, c
 }
 
 Status DeviceBuffers::move(BufferId id, std::span<const ElementMove> moves, cudaStream_t stream) {
-    const uint64_t element_bytes = device_element_bytes(id);
-    auto checked = largest_move_bytes(moves, element_bytes,
-                                      [&](uint64_t first, uint64_t count) { return check_range(id, first, count); });
-    if (!checked) return checked.status();
-    if (*checked == 0) return {};
-    if (!batch_transfers_) return move_one_by_one(id, moves, stream);
-    const MoveBatches plan = plan_move_batches(moves, std::max<uint64_t>(1, kMoveScratchBytes / element_bytes));
-    HMSM_TRY(ensure_scratch(plan.largest * element_bytes, stream));
-    // One table for every batch, each batch's words packed from the scratch's start.
-    const uint64_t words = element_bytes / 4;
+    const BufferMoves one{id, moves};
+    return move_buffers({&one, 1}, stream);
+}
+
+Status DeviceBuffers::move_buffers(std::span<const BufferMoves> moves, cudaStream_t stream) {
+    // Per buffer: its batches (plan_move_batches) and where its entries start in the one table.
+    struct Planned {
+        BufferId id;
+        MoveBatches plan;
+        size_t first_entry = 0;
+        std::vector<uint64_t> batch_words;
+    };
+    std::vector<Planned> planned;
+    uint64_t scratch_bytes = 0;
+    for (const BufferMoves& m : moves) {
+        const uint64_t element_bytes = device_element_bytes(m.id);
+        auto checked = largest_move_bytes(m.moves, element_bytes, [&](uint64_t first, uint64_t count) {
+            return check_range(m.id, first, count);
+        });
+        if (!checked) return checked.status();
+        if (*checked == 0) continue;
+        if (!batch_transfers_) {
+            HMSM_TRY(move_one_by_one(m.id, m.moves, stream));
+            continue;
+        }
+        planned.push_back({m.id, plan_move_batches(m.moves, std::max<uint64_t>(1, kMoveScratchBytes / element_bytes))});
+        scratch_bytes = std::max(scratch_bytes, planned.back().plan.largest * element_bytes);
+    }
+    if (planned.empty()) return {};
+    HMSM_TRY(ensure_scratch(scratch_bytes, stream));
+    // One table for every batch of every buffer, each batch's words packed from the scratch's start.
     std::vector<WordRange> table;
-    std::vector<uint64_t> batch_words;
-    size_t begin = 0;
-    for (size_t end : plan.ends) {
-        batch_words.push_back(append_word_ranges(table, std::span(plan.pieces).subspan(begin, end - begin), words));
-        begin = end;
+    for (Planned& p : planned) {
+        p.first_entry = table.size();
+        size_t begin = 0;
+        for (size_t end : p.plan.ends) {
+            p.batch_words.push_back(append_word_ranges(table, std::span(p.plan.pieces).subspan(begin, end - begin),
+                                                       device_element_bytes(p.id) / 4));
+            begin = end;
+        }
     }
     HMSM_TRY(upload_range_table(table, stream));
-    auto* buffer = static_cast<uint32_t*>(bases_[uint32_t(id)]);
     auto* scratch = static_cast<uint32_t*>(move_scratch_);
-    const auto* entries = static_cast<const WordRange*>(range_table_);
-    begin = 0;
-    for (size_t b = 0; b < plan.ends.size(); ++b) {
-        const uint32_t count = uint32_t(plan.ends[b] - begin);
-        CUDA_TRY(launch_copy_ranges(buffer, scratch, entries + begin, count, batch_words[b], RangeCopy::gather, stream));
-        CUDA_TRY(launch_copy_ranges(buffer, scratch, entries + begin, count, batch_words[b], RangeCopy::scatter, stream));
-        begin = plan.ends[b];
+    for (const Planned& p : planned) {
+        auto* buffer = static_cast<uint32_t*>(bases_[uint32_t(p.id)]);
+        const auto* entries = static_cast<const WordRange*>(range_table_) + p.first_entry;
+        size_t begin = 0;
+        for (size_t b = 0; b < p.plan.ends.size(); ++b) {
+            const uint32_t count = uint32_t(p.plan.ends[b] - begin);
+            CUDA_TRY(launch_copy_ranges(buffer, scratch, entries + begin, count, p.batch_words[b], RangeCopy::gather,
+                                        stream));
+            CUDA_TRY(launch_copy_ranges(buffer, scratch, entries + begin, count, p.batch_words[b], RangeCopy::scatter,
+                                        stream));
+            begin = p.plan.ends[b];
+        }
     }
     CUDA_TRY(cudaStreamSynchronize(stream));
+    return {};
+}
+
+Status DeviceBuffers::read_buffers(std::span<const BufferRangesRead> reads, Scalar as, cudaStream_t stream) const {
+    uint64_t total_bytes = 0;
+    for (const BufferRangesRead& r : reads)
+        for (const ElementRange& range : r.ranges) {
+            HMSM_TRY(check_range(r.id, range.first, range.count));
+            total_bytes += range.count * device_element_bytes(r.id);
+        }
+    if (!batch_transfers_ || total_bytes > kRangeBatchBytes) {
+        for (const BufferRangesRead& r : reads) HMSM_TRY(read_ranges(r.id, r.ranges, r.dst, as, stream));
+        return {};
+    }
+    if (total_bytes == 0) return {};
+    HMSM_TRY(ensure_scratch(total_bytes, stream));
+    // One table; buffer k's entries from first_entry[k], its words packed from word_base[k].
+    std::vector<WordRange> table;
+    std::vector<size_t> first_entry;
+    std::vector<uint64_t> word_base, words;
+    uint64_t packed = 0;
+    for (const BufferRangesRead& r : reads) {
+        const RangeGroup all{0, r.ranges.size(), 0, false};
+        const std::vector<WordRange> own = word_ranges(r.ranges, all, device_element_bytes(r.id) / 4, true);
+        first_entry.push_back(table.size());
+        word_base.push_back(packed);
+        words.push_back(own.empty() ? 0 : own.back().packed + own.back().words);
+        table.insert(table.end(), own.begin(), own.end());
+        packed += words.back();
+    }
+    HMSM_TRY(upload_range_table(table, stream));
+    for (size_t k = 0; k < reads.size(); ++k) {
+        const size_t entries = (k + 1 < reads.size() ? first_entry[k + 1] : table.size()) - first_entry[k];
+        CUDA_TRY(launch_copy_ranges(static_cast<uint32_t*>(bases_[uint32_t(reads[k].id)]),
+                                    static_cast<uint32_t*>(move_scratch_) + word_base[k],
+                                    static_cast<const WordRange*>(range_table_) + first_entry[k], uint32_t(entries),
+                                    words[k], RangeCopy::gather, stream));
+    }
+    auto host = range_read_slot_.acquire(total_bytes);
+    if (!host) return host.status();
+    CUDA_TRY(cudaMemcpyAsync(*host, move_scratch_, total_bytes, cudaMemcpyDeviceToHost, stream));
+    HMSM_TRY(range_read_slot_.mark(stream));
+    HMSM_TRY(range_read_slot_.wait());
+    for (size_t k = 0; k < reads.size(); ++k) {
+        const Shape shape = buffer_info(reads[k].id).shape;
+        words_to_scalars(shape, reinterpret_cast<const uint32_t*>(*host) + word_base[k], words[k], reads[k].dst, as);
+    }
     return {};
 }
 

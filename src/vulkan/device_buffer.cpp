@@ -284,4 +284,69 @@ Status Transfer::upload_ranges(const Buffer& dst, std::span<const VkBufferCopy> 
     return {};
 }
 
+VkDeviceSize Transfer::most_staged_bytes() { return kMaxStagingBytes; }
+
+namespace {
+
+/// The staging copies of `parts`, back to back: per part the copies (srcOffset in the buffer,
+/// dstOffset in staging), and where each part starts in staging.
+struct PackedParts {
+    std::vector<std::vector<VkBufferCopy>> copies;
+    std::vector<VkDeviceSize> first;
+    VkDeviceSize bytes = 0;
+};
+
+PackedParts pack_parts(std::span<const Transfer::BufferRegions> parts) {
+    PackedParts packed;
+    for (const Transfer::BufferRegions& part : parts) {
+        packed.first.push_back(packed.bytes);
+        std::vector<VkBufferCopy>& copies = packed.copies.emplace_back();
+        for (const VkBufferCopy& r : part.regions) {
+            if (r.size == 0) continue;
+            copies.push_back({r.srcOffset, packed.bytes, r.size});
+            packed.bytes += r.size;
+        }
+    }
+    return packed;
+}
+
+}  // namespace
+
+Status Transfer::download_parts(std::span<const BufferRegions> parts,
+                                const std::function<void(size_t, const void*)>& consume) {
+    const PackedParts packed = pack_parts(parts);
+    if (packed.bytes > kMaxStagingBytes)
+        return {ErrorCode::internal, "vulkan: download_parts of more than the staging buffer"};
+    if (packed.bytes == 0) return {};
+    HMSM_TRY(ensure_staging(packed.bytes));
+    HMSM_TRY(submit([&](VkCommandBuffer cmd) {
+        for (size_t k = 0; k < parts.size(); ++k)
+            if (!packed.copies[k].empty())
+                device_.vk().vkCmdCopyBuffer(cmd, parts[k].buffer->handle(), staging_.handle(),
+                                             uint32_t(packed.copies[k].size()), packed.copies[k].data());
+    }));
+    for (size_t k = 0; k < parts.size(); ++k)
+        consume(k, static_cast<const std::byte*>(staging_.mapped()) + packed.first[k]);
+    return {};
+}
+
+Status Transfer::upload_parts(std::span<const BufferRegions> parts, const std::function<void(size_t, void*)>& fill) {
+    const PackedParts packed = pack_parts(parts);
+    if (packed.bytes > kMaxStagingBytes)
+        return {ErrorCode::internal, "vulkan: upload_parts of more than the staging buffer"};
+    if (packed.bytes == 0) return {};
+    HMSM_TRY(ensure_staging(packed.bytes));
+    for (size_t k = 0; k < parts.size(); ++k) fill(k, static_cast<std::byte*>(staging_.mapped()) + packed.first[k]);
+    return submit([&](VkCommandBuffer cmd) {
+        for (size_t k = 0; k < parts.size(); ++k) {
+            std::vector<VkBufferCopy> back;
+            back.reserve(packed.copies[k].size());
+            for (const VkBufferCopy& c : packed.copies[k]) back.push_back({c.dstOffset, c.srcOffset, c.size});
+            if (!back.empty())
+                device_.vk().vkCmdCopyBuffer(cmd, staging_.handle(), parts[k].buffer->handle(), uint32_t(back.size()),
+                                             back.data());
+        }
+    });
+}
+
 }  // namespace hmsm::detail::vk

@@ -51,6 +51,11 @@ public:
     Status read_ranges(BufferId id, std::span<const ElementRange> ranges, void* dst, Scalar as) const override;
     /// As read_ranges; held back or staged into a recording range by range, as write() is.
     Status write_ranges(BufferId id, std::span<const ElementRange> ranges, const void* src, Scalar as) override;
+    /// Every buffer's ranges in one submission, within the staging buffer's size.
+    Status read_buffers(std::span<const BufferRangesRead> reads, Scalar as) const override;
+    Status write_buffers(std::span<const BufferRangesWrite> writes, Scalar as) override;
+    /// Every buffer's moves in one submission (held back: buffer by buffer, as move_elements).
+    Status move_buffers(std::span<const BufferMoves> moves) override;
     void set_profiling(bool enabled) override { profiling_ = enabled; }
     /// Once the simulation has recorded steps into an engine's command buffer, an instance
     /// change within the capacity holds its writes, moves and at-rest runs back for the next
@@ -151,6 +156,8 @@ private:
     /// record_moves one by one, each move one copy or pieces through scratch
     /// (HMSM_BATCH_TRANSFERS=0).
     void record_moves_one_by_one(VkCommandBuffer cmd, BufferId id, std::span<const ElementMove> moves) const;
+    /// Checks `moves` of buffer `id` and returns the scratch bytes record_moves needs for them.
+    Result<uint64_t> move_scratch_bytes(BufferId id, std::span<const ElementMove> moves) const;
     /// Whether read_ranges/write_ranges may copy `ranges` at once: batching on, an unsplit
     /// scene (a split one maps a range to pieces) and, for writes, ranges apart.
     bool copies_ranges_at_once(std::span<const ElementRange> ranges, bool writes) const;

@@ -262,6 +262,18 @@ TEST_F(VulkanTest, ScatteredRangesTakeOneSubmission) {
     before = backend.submissions();
     ASSERT_TRUE(mutable_backend.write_ranges(BufferId::chain_state, ranges, values.data(), detail::Scalar::f32).ok());
     EXPECT_EQ(backend.submissions() - before, 1u);
+    // Two buffers at once: still one submission each way.
+    std::vector<float> forces(total * 2);
+    const detail::BufferRangesRead reads[] = {{BufferId::chain_state, ranges, values.data()},
+                                              {BufferId::chain_force, ranges, forces.data()}};
+    before = backend.submissions();
+    ASSERT_TRUE(mutable_backend.read_buffers(reads, detail::Scalar::f32).ok());
+    EXPECT_EQ(backend.submissions() - before, 1u);
+    const detail::BufferRangesWrite writes[] = {{BufferId::chain_state, ranges, values.data()},
+                                                {BufferId::chain_force, ranges, forces.data()}};
+    before = backend.submissions();
+    ASSERT_TRUE(mutable_backend.write_buffers(writes, detail::Scalar::f32).ok());
+    EXPECT_EQ(backend.submissions() - before, 1u);
 }
 
 }  // namespace
