@@ -17,7 +17,9 @@ add_library(hmsm_cuda_objects OBJECT
   ${_hmsm_pass_kernels}
   src/cuda/cuda_backend.cpp
   src/cuda/cuda_error.cpp
+  kernels/cuda/copy_ranges.cu
   src/cuda/device_buffers.cpp
+  src/cuda/range_transfers.cpp
   src/cuda/host_slot.cpp
   src/cuda/cuda_interop.cpp
   src/cuda/launch_dispatch.cpp

@@ -10,6 +10,7 @@
 #include <hmsm/config.h>
 #include <hmsm/status.h>
 
+#include <cstddef>
 #include <cstdint>
 #include <memory>
 #include <span>
@@ -32,6 +33,11 @@ enum class Scalar { f32, f64 };
 /// Elements [src, src + count) of a buffer go to [dst, dst + count) of the same buffer.
 struct ElementMove {
     uint64_t src = 0, dst = 0, count = 0;
+};
+
+/// Elements [first, first + count) of a buffer: one of the ranges of read_ranges/write_ranges.
+struct ElementRange {
+    uint64_t first = 0, count = 0;
 };
 
 /// The bytes of the largest move in `moves` that changes anything (0: none does), after
@@ -97,6 +103,29 @@ struct BackendCapabilities {
 inline constexpr uint32_t kReadSlots = 8;
 inline constexpr uint32_t kSyncReadSlot = kReadSlots - 1;
 
+/// The ranges of one buffer in read_buffers (`dst`) or write_buffers (`src`), their elements
+/// back to back in host memory as in read_ranges/write_ranges.
+struct BufferRangesRead {
+    BufferId id{};
+    std::span<const ElementRange> ranges;
+    void* dst = nullptr;
+};
+struct BufferRangesWrite {
+    BufferId id{};
+    std::span<const ElementRange> ranges;
+    const void* src = nullptr;
+};
+/// The moves of one buffer in move_buffers.
+struct BufferMoves {
+    BufferId id{};
+    std::span<const ElementMove> moves;
+};
+
+/// Host bytes of one element of buffer `id` read or written as `as`.
+inline uint64_t range_scalar_bytes(BufferId id, Scalar as) {
+    return uint64_t(shape_scalars(buffer_info(id).shape)) * (as == Scalar::f64 ? 8 : 4);
+}
+
 class Backend {
 public:
     virtual ~Backend() = default;
@@ -132,9 +161,54 @@ public:
     virtual Status write(BufferId id, uint64_t first, uint64_t count, const void* src,
                          Scalar as) = 0;
 
+    /// read() of every range of `ranges`, in order, their elements back to back in `dst`. Ranges
+    /// may overlap. A device backend copies them all with one round trip (a few where they
+    /// exceed its staging memory); this default reads them one by one.
+    virtual Status read_ranges(BufferId id, std::span<const ElementRange> ranges, void* dst, Scalar as) const {
+        auto* out = static_cast<std::byte*>(dst);
+        const uint64_t bytes = range_scalar_bytes(id, as);
+        for (const ElementRange& r : ranges) {
+            HMSM_TRY(read(id, r.first, r.count, out, as));
+            out += r.count * bytes;
+        }
+        return {};
+    }
+    /// write() of every range of `ranges`, in order, their elements back to back in `src`; where
+    /// ranges overlap the later one's values stay. A device backend copies them all at once; this
+    /// default writes them one by one.
+    virtual Status write_ranges(BufferId id, std::span<const ElementRange> ranges, const void* src, Scalar as) {
+        const auto* in = static_cast<const std::byte*>(src);
+        const uint64_t bytes = range_scalar_bytes(id, as);
+        for (const ElementRange& r : ranges) {
+            HMSM_TRY(write(id, r.first, r.count, in, as));
+            in += r.count * bytes;
+        }
+        return {};
+    }
+
+    /// read_ranges of several buffers, with one round trip in all where the backend can (their
+    /// bytes within its staging memory); this default reads buffer by buffer.
+    virtual Status read_buffers(std::span<const BufferRangesRead> reads, Scalar as) const {
+        for (const BufferRangesRead& r : reads) HMSM_TRY(read_ranges(r.id, r.ranges, r.dst, as));
+        return {};
+    }
+    /// write_ranges of several buffers, in order; this default writes buffer by buffer.
+    virtual Status write_buffers(std::span<const BufferRangesWrite> writes, Scalar as) {
+        for (const BufferRangesWrite& w : writes) HMSM_TRY(write_ranges(w.id, w.ranges, w.src, as));
+        return {};
+    }
+    /// move_elements of several buffers (each buffer's moves in order; buffers are apart), with
+    /// one submission or wait in all where the backend can; this default moves buffer by buffer.
+    virtual Status move_buffers(std::span<const BufferMoves> moves) {
+        for (const BufferMoves& m : moves) HMSM_TRY(move_elements(m.id, m.moves));
+        return {};
+    }
+
     /// Moves element ranges of buffer `id` on the device, in order, each as if through a
     /// temporary (source and destination may overlap): the state of instances that change place
-    /// (live_reshape.cpp, lod_switch.cpp). Nothing goes through the host.
+    /// (live_reshape.cpp, lod_switch.cpp). Nothing goes through the host. A device backend
+    /// copies a call's moves with a few copies or kernels whatever their number
+    /// (element_moves.h plan_move_batches).
     virtual Status move_elements(BufferId id, std::span<const ElementMove> moves) = 0;
     /// Bracket a change of the instance list (live_reshape.cpp). A backend may hold back the
     /// writes, moves and runs made in between and carry them, in order, with the next work it

@@ -1,19 +1,46 @@
 // How a device backend carries out Backend::move_elements (src/backend.h) with bounded scratch:
-// moves whose destinations lie apart from every source are copied directly, a move that
-// overlaps itself goes through scratch in chunks of at most kMoveScratchBytes.
+// moves whose destinations lie apart from every source are copied directly; otherwise the
+// moves go through scratch in batches (plan_move_batches): all sources of a batch are gathered
+// into scratch, then scattered to their destinations, with at most kMoveScratchBytes in flight.
 #pragma once
 
 #include "backend.h"
 
 #include <algorithm>
 #include <cstdint>
+#include <cstdlib>
+#include <iterator>
+#include <map>
 #include <span>
+#include <string_view>
+#include <vector>
 
 namespace hmsm::detail {
 
 /// The most bytes a device backend stages at a time for a move whose source and destination
 /// overlap: a longer move goes through its scratch in chunks of this size.
 constexpr uint64_t kMoveScratchBytes = uint64_t(32) << 20;
+
+/// Whether a device backend batches its range transfers (read_ranges, write_ranges,
+/// move_elements through plan_move_batches): yes unless the environment sets
+/// HMSM_BATCH_TRANSFERS=0, which makes them one copy per range or move (for A/B measurements).
+inline bool batch_transfers_enabled() {
+    const char* value = std::getenv("HMSM_BATCH_TRANSFERS");
+    return !(value && std::string_view(value) == "0");
+}
+
+/// Whether two of `ranges` share an element (a batched write of them could then leave either
+/// value). O(n log n).
+inline bool ranges_overlap(std::span<const ElementRange> ranges) {
+    std::vector<ElementRange> sorted;
+    sorted.reserve(ranges.size());
+    for (const ElementRange& r : ranges)
+        if (r.count > 0) sorted.push_back(r);
+    std::sort(sorted.begin(), sorted.end(), [](const ElementRange& a, const ElementRange& b) { return a.first < b.first; });
+    for (size_t k = 1; k < sorted.size(); ++k)
+        if (sorted[k - 1].first + sorted[k - 1].count > sorted[k].first) return true;
+    return false;
+}
 
 /// Whether `m` changes something and its source and destination overlap (it must then go
 /// through scratch).
@@ -45,6 +72,67 @@ Status for_each_chunk(const ElementMove& m, uint64_t most, Chunk&& chunk) {
         HMSM_TRY(chunk(m.src + first, m.dst + first, count));
     }
     return {};
+}
+
+/// Disjoint intervals [first, end) of elements or bytes, for O(log n) overlap queries.
+class DisjointIntervals {
+public:
+    bool overlaps(uint64_t first, uint64_t end) const {
+        auto after = intervals_.upper_bound(first);
+        if (after != intervals_.end() && after->first < end) return true;
+        return after != intervals_.begin() && std::prev(after)->second > first;
+    }
+    /// Adds [first, end), which overlaps none held.
+    void add(uint64_t first, uint64_t end) { intervals_.emplace(first, end); }
+    void clear() { intervals_.clear(); }
+
+private:
+    std::map<uint64_t, uint64_t> intervals_;  // first -> end
+};
+
+/// The moves of one move_elements call as batches that each go through scratch at once: every
+/// source of a batch is copied into scratch, back to back, then every destination from there.
+/// That equals applying the batch's moves one after another exactly when no move reads an
+/// element an earlier move of the batch writes and no two of them write the same element; a
+/// batch therefore ends before a move that would break either, or overflow the scratch. The
+/// moves of shift_moves (instance_moves.h) break neither and make one batch per scratch-full.
+struct MoveBatches {
+    /// The moves that change something, in order; one longer than the scratch is cut into
+    /// pieces in for_each_chunk's order.
+    std::vector<ElementMove> pieces;
+    /// Batch k is pieces [ends[k - 1], ends[k]) (ends[-1] = 0).
+    std::vector<size_t> ends;
+    /// Elements of the largest batch: the scratch it needs.
+    uint64_t largest = 0;
+};
+
+/// Cuts `moves` into batches of at most `scratch_elements` elements (>= 1). O(n log n).
+inline MoveBatches plan_move_batches(std::span<const ElementMove> moves, uint64_t scratch_elements) {
+    MoveBatches plan;
+    DisjointIntervals written;  // destinations of the open batch
+    uint64_t in_batch = 0;
+    auto close_batch = [&] {
+        if (in_batch == 0) return;
+        plan.ends.push_back(plan.pieces.size());
+        plan.largest = std::max(plan.largest, in_batch);
+        in_batch = 0;
+        written.clear();
+    };
+    auto add = [&](uint64_t src, uint64_t dst, uint64_t count) -> Status {
+        if (in_batch + count > scratch_elements || written.overlaps(src, src + count) ||
+            written.overlaps(dst, dst + count))
+            close_batch();
+        plan.pieces.push_back({src, dst, count});
+        written.add(dst, dst + count);
+        in_batch += count;
+        return {};
+    };
+    for (const ElementMove& m : moves) {
+        if (m.src == m.dst || m.count == 0) continue;
+        (void)for_each_chunk(m, scratch_elements, add);
+    }
+    close_batch();
+    return plan;
 }
 
 }  // namespace hmsm::detail

@@ -236,16 +236,19 @@ Status Simulation::Impl::reset(std::span<const uint32_t> indices) {
         return {ErrorCode::internal, "reset: " + std::to_string(indices.size() - covered) + " instances are in no group"};
     // S = V = 0 and g = 0, as for an added instance; the run from pass 2 computes T, R, O, the
     // joint matrices, nodes and vertices from them.
+    std::vector<detail::ElementRange> ranges, both_halves;  // every slice at once
+    uint64_t chains = 0;
     for (const detail::InstanceGroup& g : slices) {
-        const uint64_t chains = uint64_t(g.instance_count) * data_->models[g.model].chain_count;
-        const std::vector<double> zeros(chains * 4, 0.0);
-        HMSM_TRY(backend_->write(BufferId::chain_state, g.chain_begin, chains, zeros.data(), detail::Scalar::f64));
-        HMSM_TRY(backend_->write(BufferId::chain_force, g.chain_begin, chains, zeros.data(), detail::Scalar::f64));
-        if (data_->coupled())  // both halves of the loads
-            for (uint64_t half : {uint64_t(0), data_->chain_capacity})
-                HMSM_TRY(backend_->write(BufferId::chain_load, half + g.chain_begin, chains, zeros.data(),
-                                         detail::Scalar::f64));
+        ranges.push_back({g.chain_begin, uint64_t(g.instance_count) * data_->models[g.model].chain_count});
+        chains += ranges.back().count;
     }
+    for (uint64_t half : {uint64_t(0), data_->chain_capacity})
+        for (const detail::ElementRange& r : ranges) both_halves.push_back({half + r.first, r.count});
+    const std::vector<double> zeros(2 * chains * 4, 0.0);
+    HMSM_TRY(backend_->write_ranges(BufferId::chain_state, ranges, zeros.data(), detail::Scalar::f64));
+    HMSM_TRY(backend_->write_ranges(BufferId::chain_force, ranges, zeros.data(), detail::Scalar::f64));
+    if (data_->coupled())  // both halves of the loads
+        HMSM_TRY(backend_->write_ranges(BufferId::chain_load, both_halves, zeros.data(), detail::Scalar::f64));
     ahead_schedule_.live_change();  // the reset angles replace any integrated ahead
     const detail::RunStep at_rest[1] = {};
     return backend_->run(program_for(slices, Pass::integrate), at_rest);
@@ -297,20 +300,24 @@ Status Simulation::Impl::reshape_in_place(std::unique_ptr<detail::SceneData> nex
                 HMSM_TRY(backend_->write(BufferId::chain_load, half + at, added_chains, zeros.data(),
                                          detail::Scalar::f64));
     }
-    // Origins and yaws of the instances that changed place or came, run by run.
+    // Origins and yaws of the instances that changed place or came, every run in one write.
     const uint32_t count = next->instance_count();
+    std::vector<detail::ElementRange> runs;
     for (uint32_t first = first_moved; first < count;) {
         uint32_t end = first + 1;
         while (end < count && (end >= survivors.size() || survivors[end] != end)) ++end;
-        std::vector<double> values(uint64_t(end - first) * 4);
-        for (BufferId id : {BufferId::instance_origin, BufferId::instance_yaw}) {
-            const auto& source = id == BufferId::instance_origin ? next->instance_origin : next->instance_yaw;
-            for (uint32_t i = first; i < end; ++i)
-                for (int c = 0; c < 4; ++c) values[4 * (i - first) + c] = source[i][c];
-            HMSM_TRY(backend_->write(id, first, end - first, values.data(), detail::Scalar::f64));
-        }
+        runs.push_back({first, end - first});
         first = end;
         while (first < count && first < survivors.size() && survivors[first] == first) ++first;
+    }
+    std::vector<double> values;
+    for (BufferId id : {BufferId::instance_origin, BufferId::instance_yaw}) {
+        const auto& source = id == BufferId::instance_origin ? next->instance_origin : next->instance_yaw;
+        values.clear();
+        for (const detail::ElementRange& r : runs)
+            for (uint64_t i = r.first; i < r.first + r.count; ++i)
+                for (int c = 0; c < 4; ++c) values.push_back(source[i][c]);
+        HMSM_TRY(backend_->write_ranges(id, runs, values.data(), detail::Scalar::f64));
     }
     data_->take_instance_layout(std::move(*next));
     return {};

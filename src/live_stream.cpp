@@ -54,14 +54,17 @@ Status apply_moves(detail::Backend& backend, BufferId id, const std::vector<Elem
     return backend.move_elements(id, both);
 }
 
-/// Writes origins and yaws of instances [first, end) from d's instance arrays.
-Status write_placement(detail::Backend& backend, const detail::SceneData& d, uint32_t first, uint32_t end) {
-    std::vector<double> values(uint64_t(end - first) * 4);
+/// Writes origins and yaws of the instances in `runs` (ranges of indices) from d's instance
+/// arrays, every run in one write_ranges per buffer.
+Status write_placement(detail::Backend& backend, const detail::SceneData& d, std::span<const detail::ElementRange> runs) {
+    std::vector<double> values;
     for (BufferId id : {BufferId::instance_origin, BufferId::instance_yaw}) {
         const auto& source = id == BufferId::instance_origin ? d.instance_origin : d.instance_yaw;
-        for (uint32_t i = first; i < end; ++i)
-            for (int c = 0; c < 4; ++c) values[4 * (i - first) + c] = source[i][c];
-        HMSM_TRY(backend.write(id, first, end - first, values.data(), detail::Scalar::f64));
+        values.clear();
+        for (const detail::ElementRange& r : runs)
+            for (uint64_t i = r.first; i < r.first + r.count; ++i)
+                for (int c = 0; c < 4; ++c) values.push_back(source[i][c]);
+        HMSM_TRY(backend.write_ranges(id, runs, values.data(), detail::Scalar::f64));
     }
     return {};
 }
@@ -138,7 +141,8 @@ Result<bool> Simulation::Impl::append_in_place(std::span<const Instance> added) 
     }
     d.instance_wind.resize(size_t(HMSM_INSTANCE_WIND_VEC4S) * 4 * instances_.size(), 0.0);
     detail::relay_groups(d, instances_, appended);
-    HMSM_TRY(write_placement(*backend_, d, first, uint32_t(instances_.size())));
+    const detail::ElementRange appended_run{first, instances_.size() - first};
+    HMSM_TRY(write_placement(*backend_, d, {&appended_run, 1}));
     instances_changed();
     header_dirty_ = program_dirty_ = true;
 
@@ -225,9 +229,10 @@ Result<bool> Simulation::Impl::swap_remove_in_place(const std::vector<uint32_t>&
     detail::InstanceChangeBracket change(*backend_);
     ahead_schedule_.live_change();  // the state moves, the angles integrated ahead with it
     auto move_scope = [&](BufferId id, const ScopeMoves& moves) -> Status {
+        std::vector<ElementMove> in_order;  // the three parts in one call, applied in order
         for (const std::vector<ElementMove>* part : {&moves.stage, &moves.shift, &moves.unstage})
-            HMSM_TRY(apply_moves(*backend_, id, *part, d.chain_capacity));
-        return {};
+            in_order.insert(in_order.end(), part->begin(), part->end());
+        return apply_moves(*backend_, id, in_order, d.chain_capacity);
     };
     for (BufferId id : detail::carried_buffers(d.coupled())) HMSM_TRY(move_scope(id, scopes[0]));
     // The survivors' outputs (nodes, vertices) move with them, bitwise what they were.
@@ -270,12 +275,14 @@ Result<bool> Simulation::Impl::swap_remove_in_place(const std::vector<uint32_t>&
 
     // Origins, yaws and winds of the holes, run by run.
     std::erase_if(dirty_instances_, [&](uint32_t i) { return i >= kept; });
+    std::vector<detail::ElementRange> hole_runs;
     for (size_t j = 0; j < holes.size();) {
         size_t end = j + 1;
         while (end < holes.size() && holes[end] == holes[end - 1] + 1) ++end;
-        HMSM_TRY(write_placement(*backend_, d, holes[j], holes[end - 1] + 1));
+        hole_runs.push_back({holes[j], end - j});
         j = end;
     }
+    HMSM_TRY(write_placement(*backend_, d, hole_runs));
     dirty_instances_.insert(dirty_instances_.end(), holes.begin(), holes.end());
     HMSM_TRY(apply_pending());
     return true;

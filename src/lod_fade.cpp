@@ -163,19 +163,28 @@ Result<std::vector<uint8_t>> Simulation::Impl::fades_at_rest(const std::vector<u
     auto end_of = [&](uint32_t i) { return chain_of(i) + data_->models[instances_[i].model].chain_count; };
     auto run = [&](auto zero) -> Status {
         using V = decltype(zero);
-        std::vector<V> state;
-        size_t k = 0;  // indices ascend, and so do their runs
-        for (const IndexRun& r : index_runs(indices)) {
-            const uint64_t first = chain_of(r.first), count = end_of(r.end - 1) - first;
-            state.resize(size_t(count * 4));
-            HMSM_TRY(backend_->read(BufferId::chain_state, first, count, state.data(), scalar));
+        // Every run's chains in one read, back to back.
+        const std::vector<IndexRun> runs = index_runs(indices);
+        std::vector<detail::ElementRange> ranges;
+        uint64_t total = 0;
+        for (const IndexRun& r : runs) {
+            ranges.push_back({chain_of(r.first), end_of(r.end - 1) - chain_of(r.first)});
+            total += ranges.back().count;
+        }
+        std::vector<V> state(size_t(total * 4));
+        HMSM_TRY(backend_->read_ranges(BufferId::chain_state, ranges, state.data(), scalar));
+        size_t k = 0;         // indices ascend, and so do their runs
+        uint64_t packed = 0;  // the run's first chain in state
+        for (size_t j = 0; j < runs.size(); packed += ranges[j].count, ++j) {
+            const IndexRun& r = runs[j];
+            const uint64_t first = ranges[j].first;
             for (uint32_t i = r.first; i < r.end; ++i, ++k) {
                 const LodFade& fade = fades_.at(uint64_t(instance_ids_[i]));
                 const uint32_t model = instances_[i].model;
                 const std::vector<uint8_t> folded =
                     folded_chains(lod_models_[model].source_chain, lod_models_[fade.target_model].source_chain);
-                const double d = deflection_bound(state.data() + 4 * (chain_of(i) - first), hierarchies_[model], folded,
-                                                  subtree_extent(model));
+                const double d = deflection_bound(state.data() + 4 * (packed + chain_of(i) - first), hierarchies_[model],
+                                                  folded, subtree_extent(model));
                 at_rest[k] = d <= lod_bands_.fade_bound_m;
             }
         }

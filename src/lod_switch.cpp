@@ -114,46 +114,76 @@ std::vector<V> carry_layout(const std::vector<V>& old, uint32_t per, uint32_t ha
     return out;
 }
 
+/// The ranges of the switched instances in buffer `id`, run by run and half by half: their old
+/// ranges (`first` = old_chain) or their new ones (new_chain).
+std::vector<detail::ElementRange> switched_ranges(BufferId id, uint64_t capacity, const std::vector<detail::IndexRun>& runs,
+                                                  const detail::ByInstance<uint64_t>& first) {
+    std::vector<detail::ElementRange> ranges;
+    ranges.reserve(runs.size() * halves_of(id));
+    for (const detail::IndexRun& run : runs)
+        for (uint32_t h = 0; h < halves_of(id); ++h)
+            ranges.push_back({h * capacity + first[run.first], first[run.end] - first[run.first]});
+    return ranges;
+}
+
 /// The switched instances' values of buffer `id` in their new layout, run by run and half by
-/// half back to back: only their old ranges are read.
+/// half back to back, from `old`: their old ranges (switched_ranges of old_chain) back to back.
 template <class V>
-Status read_switched(const detail::Backend& backend, BufferId id, uint64_t capacity, detail::Scalar scalar,
-                     const std::vector<detail::IndexRun>& runs, const detail::ByInstance<uint64_t>& old_chain,
-                     const detail::ByInstance<uint64_t>& new_chain, const detail::ByInstance<const ChainMap*>& maps,
-                     std::vector<V>& carried) {
+void carry_runs(BufferId id, const std::vector<detail::IndexRun>& runs, const detail::ByInstance<uint64_t>& old_chain,
+                const detail::ByInstance<uint64_t>& new_chain, const detail::ByInstance<const ChainMap*>& maps,
+                const std::vector<V>& old, std::vector<V>& carried) {
     const uint32_t per = detail::shape_scalars(detail::buffer_info(id).shape);
-    std::vector<V> old;
+    uint64_t new_elements = 0;
+    for (const detail::IndexRun& run : runs) new_elements += halves_of(id) * (new_chain[run.end] - new_chain[run.first]);
+    carried.assign(size_t(new_elements * per), V(0));
+    size_t from = 0, into = 0;
     for (const detail::IndexRun& run : runs) {
         const uint64_t old_first = old_chain[run.first], new_first = new_chain[run.first];
-        const uint64_t chains = old_chain[run.end] - old_first;
-        old.resize(chains * per);
         for (uint32_t h = 0; h < halves_of(id); ++h) {
-            HMSM_TRY(backend.read(id, h * capacity + old_first, chains, old.data(), scalar));
-            const size_t at = carried.size();
-            carried.resize(at + (new_chain[run.end] - new_first) * per, V(0));
             for (uint32_t i = run.first; i < run.end; ++i)
-                carry_switched(old.data() + (old_chain[i] - old_first) * per,
-                               carried.data() + at + (new_chain[i] - new_first) * per, *maps[i], per, id);
+                carry_switched(old.data() + from + (old_chain[i] - old_first) * per,
+                               carried.data() + into + (new_chain[i] - new_first) * per, *maps[i], per, id);
+            from += (old_chain[run.end] - old_first) * per;
+            into += (new_chain[run.end] - new_first) * per;
         }
     }
+}
+
+/// Reads the switched instances' old ranges of every carried buffer with one read_buffers and
+/// carries them into their new layout (carry_runs), buffer by buffer into `values`.
+template <class V>
+Status read_switched(const detail::Backend& backend, const std::vector<BufferId>& carried, uint64_t capacity,
+                     detail::Scalar scalar, const std::vector<detail::IndexRun>& runs,
+                     const detail::ByInstance<uint64_t>& old_chain, const detail::ByInstance<uint64_t>& new_chain,
+                     const detail::ByInstance<const ChainMap*>& maps, std::vector<std::vector<V>>& values) {
+    std::vector<std::vector<detail::ElementRange>> ranges(carried.size());
+    std::vector<std::vector<V>> old(carried.size());
+    std::vector<detail::BufferRangesRead> reads;
+    for (size_t b = 0; b < carried.size(); ++b) {
+        ranges[b] = switched_ranges(carried[b], capacity, runs, old_chain);
+        uint64_t elements = 0;
+        for (const detail::ElementRange& r : ranges[b]) elements += r.count;
+        old[b].resize(size_t(elements * detail::shape_scalars(detail::buffer_info(carried[b]).shape)));
+        reads.push_back({carried[b], ranges[b], old[b].data()});
+    }
+    HMSM_TRY(backend.read_buffers(reads, scalar));
+    for (size_t b = 0; b < carried.size(); ++b) carry_runs(carried[b], runs, old_chain, new_chain, maps, old[b], values[b]);
     return {};
 }
 
-/// Writes what read_switched carried into the switched instances' new ranges.
+/// Writes what read_switched carried into the switched instances' new ranges, every buffer in
+/// one write_buffers.
 template <class V>
-Status write_switched(detail::Backend& backend, BufferId id, uint64_t capacity, detail::Scalar scalar,
-                      const std::vector<detail::IndexRun>& runs, const detail::ByInstance<uint64_t>& new_chain,
-                      const std::vector<V>& carried) {
-    const uint32_t per = detail::shape_scalars(detail::buffer_info(id).shape);
-    size_t at = 0;
-    for (const detail::IndexRun& run : runs) {
-        const uint64_t chains = new_chain[run.end] - new_chain[run.first];
-        for (uint32_t h = 0; h < halves_of(id); ++h) {
-            HMSM_TRY(backend.write(id, h * capacity + new_chain[run.first], chains, carried.data() + at, scalar));
-            at += chains * per;
-        }
+Status write_switched(detail::Backend& backend, const std::vector<BufferId>& carried, uint64_t capacity,
+                      detail::Scalar scalar, const std::vector<detail::IndexRun>& runs,
+                      const detail::ByInstance<uint64_t>& new_chain, const std::vector<std::vector<V>>& values) {
+    std::vector<std::vector<detail::ElementRange>> ranges(carried.size());
+    std::vector<detail::BufferRangesWrite> writes;
+    for (size_t b = 0; b < carried.size(); ++b) {
+        ranges[b] = switched_ranges(carried[b], capacity, runs, new_chain);
+        writes.push_back({carried[b], ranges[b], values[b].data()});
     }
-    return {};
+    return backend.write_buffers(writes, scalar);
 }
 
 /// Elements per instance of `instances` as running sums (`per` picks chains, nodes or
@@ -229,34 +259,35 @@ Status Simulation::Impl::switch_models(const std::vector<std::pair<uint32_t, uin
         // behind them shift on the device, their nodes and vertices with them.
         const std::vector<detail::IndexRun> runs = detail::index_runs(switched);
         const uint64_t capacity = data_->chain_capacity;
-        for (size_t b = 0; b < carried.size(); ++b)
-            HMSM_TRY(scalar == detail::Scalar::f64
-                         ? read_switched(*backend_, carried[b], capacity, scalar, runs, old_chain, new_chain, maps,
-                                         values64[b])
-                         : read_switched(*backend_, carried[b], capacity, scalar, runs, old_chain, new_chain, maps,
-                                         values32[b]));
+        HMSM_TRY(scalar == detail::Scalar::f64
+                     ? read_switched(*backend_, carried, capacity, scalar, runs, old_chain, new_chain, maps, values64)
+                     : read_switched(*backend_, carried, capacity, scalar, runs, old_chain, new_chain, maps, values32));
+        // Every buffer's shifts in one move_buffers.
         const std::vector<ElementMove> chain_moves = detail::shift_moves(old_chain, new_chain, count, switched);
+        std::vector<std::vector<ElementMove>> in_buffers;
+        in_buffers.reserve(carried.size());
+        std::vector<detail::BufferMoves> moves;
         for (BufferId id : carried) {
-            std::vector<ElementMove> in_buffer;
+            std::vector<ElementMove>& in_buffer = in_buffers.emplace_back();
             for (uint64_t h = 0; h < halves_of(id); ++h)
                 for (ElementMove m : chain_moves) {
                     m.src += h * capacity;
                     m.dst += h * capacity;
                     in_buffer.push_back(m);
                 }
-            if (!in_buffer.empty()) HMSM_TRY(backend_->move_elements(id, in_buffer));
+            if (!in_buffer.empty()) moves.push_back({id, in_buffer});
         }
         const std::vector<ElementMove> node_moves = detail::shift_moves(old_node, new_node, count, switched);
         const std::vector<ElementMove> vertex_moves = detail::shift_moves(old_vertex, new_vertex, count, switched);
         for (BufferId id : detail::kMovedOutputs) {
             const bool node_scope = detail::buffer_info(id).scope == detail::Scope::node;
-            const std::vector<ElementMove>& moves = node_scope ? node_moves : vertex_moves;
-            if (data_->element_count(id) > 0 && !moves.empty()) HMSM_TRY(backend_->move_elements(id, moves));
+            const std::vector<ElementMove>& in_buffer = node_scope ? node_moves : vertex_moves;
+            if (data_->element_count(id) > 0 && !in_buffer.empty()) moves.push_back({id, in_buffer});
         }
-        for (size_t b = 0; b < carried.size(); ++b)
-            HMSM_TRY(scalar == detail::Scalar::f64
-                         ? write_switched(*backend_, carried[b], capacity, scalar, runs, new_chain, values64[b])
-                         : write_switched(*backend_, carried[b], capacity, scalar, runs, new_chain, values32[b]));
+        HMSM_TRY(backend_->move_buffers(moves));
+        HMSM_TRY(scalar == detail::Scalar::f64
+                     ? write_switched(*backend_, carried, capacity, scalar, runs, new_chain, values64)
+                     : write_switched(*backend_, carried, capacity, scalar, runs, new_chain, values32));
         for (auto [i, model] : models) {
             offsets.add(i, detail::counts_of(data_->models[model]) - detail::counts_of(data_->models[instances_[i].model]));
             instances_[i].model = model;

@@ -85,6 +85,26 @@ Result<const float*> CudaBackend::take_read(uint32_t slot) const {
     return buffers_.take_read(slot);
 }
 
+Status CudaBackend::read_ranges(BufferId id, std::span<const ElementRange> ranges, void* dst, Scalar as) const {
+    HMSM_TRY(make_current());
+    return buffers_.read_ranges(id, ranges, dst, as, stream_);
+}
+
+Status CudaBackend::write_ranges(BufferId id, std::span<const ElementRange> ranges, const void* src, Scalar as) {
+    HMSM_TRY(make_current());
+    return buffers_.write_ranges(id, ranges, src, as, stream_);
+}
+
+Status CudaBackend::read_buffers(std::span<const BufferRangesRead> reads, Scalar as) const {
+    HMSM_TRY(make_current());
+    return buffers_.read_buffers(reads, as, stream_);
+}
+
+Status CudaBackend::move_buffers(std::span<const BufferMoves> moves) {
+    HMSM_TRY(make_current());
+    return buffers_.move_buffers(moves, stream_);
+}
+
 Status CudaBackend::move_elements(BufferId id, std::span<const ElementMove> moves) {
     HMSM_TRY(make_current());
     return buffers_.move(id, moves, stream_);

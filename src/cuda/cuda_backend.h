@@ -34,7 +34,11 @@ public:
     Status run(std::span<const Dispatch> program, std::span<const RunStep> steps, uint64_t program_id = 0) override;
     Status read(BufferId id, uint64_t first, uint64_t count, void* dst, Scalar as) const override;
     Status write(BufferId id, uint64_t first, uint64_t count, const void* src, Scalar as) override;
+    Status read_ranges(BufferId id, std::span<const ElementRange> ranges, void* dst, Scalar as) const override;
+    Status write_ranges(BufferId id, std::span<const ElementRange> ranges, const void* src, Scalar as) override;
     Status move_elements(BufferId id, std::span<const ElementMove> moves) override;
+    Status read_buffers(std::span<const BufferRangesRead> reads, Scalar as) const override;
+    Status move_buffers(std::span<const BufferMoves> moves) override;
     Status request_read(uint32_t slot, BufferId id, uint64_t first, uint64_t count) const override;
     Result<const float*> take_read(uint32_t slot) const override;
     void set_profiling(bool enabled) override { profiling_ = enabled; }

@@ -45,6 +45,9 @@ void DeviceBuffers::release() {
     if (move_scratch_) (void)cudaFree(move_scratch_);
     move_scratch_ = nullptr;
     move_scratch_bytes_ = 0;
+    if (range_table_) (void)cudaFree(range_table_);
+    range_table_ = nullptr;
+    range_table_bytes_ = 0;
     counts_ = {};
     pointers_ = {};
 }
@@ -117,7 +120,7 @@ Status DeviceBuffers::upload(const SceneData& scene, cudaStream_t stream) {
     return {};
 }
 
-Status DeviceBuffers::move(BufferId id, std::span<const ElementMove> moves, cudaStream_t stream) {
+Status DeviceBuffers::move_one_by_one(BufferId id, std::span<const ElementMove> moves, cudaStream_t stream) {
     const uint64_t element_bytes = device_element_bytes(id);
     auto checked = largest_move_bytes(moves, element_bytes,
                                       [&](uint64_t first, uint64_t count) { return check_range(id, first, count); });
@@ -128,13 +131,7 @@ Status DeviceBuffers::move(BufferId id, std::span<const ElementMove> moves, cuda
     uint64_t staged = 0;
     for (const ElementMove& m : moves)
         if (overlaps_itself(m)) staged = std::max(staged, std::min(m.count * element_bytes, kMoveScratchBytes));
-    if (move_scratch_bytes_ < staged) {
-        if (move_scratch_) CUDA_TRY(cudaFree(move_scratch_));
-        move_scratch_ = nullptr;
-        move_scratch_bytes_ = 0;
-        CUDA_TRY(cudaMalloc(&move_scratch_, staged));
-        move_scratch_bytes_ = staged;
-    }
+    HMSM_TRY(ensure_scratch(staged, stream));
     auto* base = static_cast<std::byte*>(bases_[uint32_t(id)]);
     const uint64_t chunk_elements = std::max<uint64_t>(1, kMoveScratchBytes / element_bytes);
     for (const ElementMove& m : moves) {
@@ -257,8 +254,7 @@ Status DeviceBuffers::write(BufferId id, uint64_t first, uint64_t count, const v
     if (count * element_bytes <= kUploadSlotBytes) {
         // The next slot of the ring: its previous copy has long run unless four writes were
         // enqueued since (acquire waits for it then).
-        HostSlot& slot = upload_slots_[next_upload_];
-        next_upload_ = (next_upload_ + 1) % kUploadSlots;
+        HostSlot& slot = next_upload_slot();
         auto staging = slot.acquire(count * element_bytes);
         if (!staging) return staging.status();
         scalars_to_words(shape, src, count * scalars, *staging, as);

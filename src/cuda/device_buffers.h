@@ -6,6 +6,8 @@
 #pragma once
 
 #include "../backend.h"
+#include "../element_moves.h"
+#include "../../kernels/cuda/copy_ranges.h"
 #include "../../kernels/cuda/launchers.h"
 #include "host_slot.h"
 
@@ -41,9 +43,23 @@ public:
     Status request_read(uint32_t slot, BufferId id, uint64_t first, uint64_t count, cudaStream_t stream) const;
     Result<const float*> take_read(uint32_t slot) const;
 
-    /// Backend::move_elements: each move device-to-device through a scratch buffer (the ranges
-    /// may overlap), in stream order; complete on return.
+    /// Backend::move_elements, in stream order and complete on return: batched (the default,
+    /// element_moves.h batch_transfers_enabled), one gather and one scatter launch through the
+    /// scratch buffer per batch of plan_move_batches; otherwise each move one or two copies.
     Status move(BufferId id, std::span<const ElementMove> moves, cudaStream_t stream);
+    /// Backend::read_ranges: per scratch-full of ranges one gather launch, one device-to-host
+    /// copy and one wait (range_transfers.cpp).
+    Status read_ranges(BufferId id, std::span<const ElementRange> ranges, void* dst, Scalar as,
+                       cudaStream_t stream) const;
+    /// Backend::read_buffers: each buffer's ranges gathered with one launch into one scratch,
+    /// one device-to-host copy and one wait in all (within 16 MiB; else buffer by buffer).
+    Status read_buffers(std::span<const BufferRangesRead> reads, Scalar as, cudaStream_t stream) const;
+    /// Backend::move_buffers: every buffer's batches as in move(), one wait in all.
+    Status move_buffers(std::span<const BufferMoves> moves, cudaStream_t stream);
+    /// Backend::write_ranges: per scratch-full one host-to-device copy and one scatter launch,
+    /// in stream order without waiting (`src` may be reused at once).
+    Status write_ranges(BufferId id, std::span<const ElementRange> ranges, const void* src, Scalar as,
+                        cudaStream_t stream);
 
     /// Makes the angles the walk ahead wrote (BufferPointers::chain_state_next) chain_state, and
     /// chain_state's old allocation the next twin: a swap of two pointers, nothing copied.
@@ -64,12 +80,25 @@ private:
 
     std::array<void*, kBufferCount> bases_{};
     void* next_state_ = nullptr;  // chain_state's twin (BufferPointers::chain_state_next)
-    void* move_scratch_ = nullptr;  // move(), grown on demand
-    uint64_t move_scratch_bytes_ = 0;
+    /// Moves each as one or two copies (HMSM_BATCH_TRANSFERS=0).
+    Status move_one_by_one(BufferId id, std::span<const ElementMove> moves, cudaStream_t stream);
+    /// Grows the scratch of moves and range transfers to `bytes` (after the stream's work).
+    Status ensure_scratch(uint64_t bytes, cudaStream_t stream) const;
+    /// Copies `ranges` into the device range table (in stream order, without waiting).
+    Status upload_range_table(const std::vector<WordRange>& ranges, cudaStream_t stream) const;
+    /// The next slot of the upload ring.
+    HostSlot& next_upload_slot() const;
+
+    bool batch_transfers_ = batch_transfers_enabled();
+    mutable void* move_scratch_ = nullptr;  // moves and range transfers, grown on demand
+    mutable uint64_t move_scratch_bytes_ = 0;
+    mutable void* range_table_ = nullptr;  // WordRange entries of the last range launch
+    mutable uint64_t range_table_bytes_ = 0;
+    mutable HostSlot range_read_slot_;  // read_ranges' device-to-host copy
     mutable std::array<HostSlot, kReadSlots> read_slots_;
     static constexpr uint32_t kUploadSlots = 4;
-    std::array<HostSlot, kUploadSlots> upload_slots_;
-    uint32_t next_upload_ = 0;
+    mutable std::array<HostSlot, kUploadSlots> upload_slots_;
+    mutable uint32_t next_upload_ = 0;
     mutable std::byte* pinned_ = nullptr;
     mutable bool pinned_refused_ = false;
     std::array<uint64_t, kBufferCount> counts_{};

@@ -100,6 +100,37 @@ void VulkanBackend::record_moves(VkCommandBuffer cmd, BufferId id, std::span<con
         after_copies();
         return;
     }
+    if (!batch_transfers_) return record_moves_one_by_one(cmd, id, moves);
+    // Per batch: one copy gathers every source into scratch, back to back, one scatters them.
+    const MoveBatches plan = plan_move_batches(moves, std::max<uint64_t>(1, move_scratch_.size() / element_bytes));
+    std::vector<VkBufferCopy> gather, scatter;
+    size_t begin = 0;
+    for (size_t end : plan.ends) {
+        gather.clear();
+        scatter.clear();
+        uint64_t packed = 0;
+        for (size_t k = begin; k < end; ++k) {
+            const ElementMove& m = plan.pieces[k];
+            gather.push_back({m.src * element_bytes, packed, m.count * element_bytes});
+            scatter.push_back({packed, m.dst * element_bytes, m.count * element_bytes});
+            packed += m.count * element_bytes;
+        }
+        vk.vkCmdCopyBuffer(cmd, buffer, move_scratch_.handle(), uint32_t(gather.size()), gather.data());
+        after_copies();
+        vk.vkCmdCopyBuffer(cmd, move_scratch_.handle(), buffer, uint32_t(scatter.size()), scatter.data());
+        after_copies();
+        begin = end;
+    }
+}
+
+void VulkanBackend::record_moves_one_by_one(VkCommandBuffer cmd, BufferId id, std::span<const ElementMove> moves) const {
+    const VolkDeviceTable& vk = device_->vk();
+    const uint64_t element_bytes = device_element_bytes(id);
+    const VkBuffer buffer = buffers_[uint32_t(id)].handle();
+    auto after_copies = [&] {
+        barrier_after_all_writes(*device_, cmd, VK_PIPELINE_STAGE_TRANSFER_BIT,
+                                 VK_ACCESS_TRANSFER_READ_BIT | VK_ACCESS_TRANSFER_WRITE_BIT);
+    };
     // In order: a move apart from its own source is one copy; one that overlaps itself goes
     // through the scratch buffer in pieces, in the order for_each_chunk gives (every piece of
     // the source read before a destination piece overwrites it).

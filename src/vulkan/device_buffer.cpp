@@ -3,6 +3,7 @@
 #include "vk_error.h"
 
 #include <algorithm>
+#include <vector>
 
 namespace hmsm::detail::vk {
 namespace {
@@ -212,6 +213,140 @@ Status Transfer::download(const Buffer& src, VkDeviceSize offset, VkDeviceSize b
         done += chunk;
     }
     return {};
+}
+
+namespace {
+
+/// The copies of one staging-full of packed regions: bytes [first, first + bytes) of the
+/// regions back to back, as copies between the device buffer (srcOffset: its offset) and the
+/// staging buffer (dstOffset: the offset in staging).
+struct StagedChunk {
+    VkDeviceSize first = 0, bytes = 0;
+    std::vector<VkBufferCopy> copies;
+};
+
+/// `regions` (size: the bytes, srcOffset: the device offset) cut into staging-fulls of at most
+/// `staging` bytes; a region crossing a chunk's end goes on in the next.
+std::vector<StagedChunk> staged_chunks(std::span<const VkBufferCopy> regions, VkDeviceSize staging) {
+    std::vector<StagedChunk> chunks;
+    VkDeviceSize packed = 0;
+    for (const VkBufferCopy& r : regions) {
+        for (VkDeviceSize done = 0; done < r.size;) {
+            if (chunks.empty() || chunks.back().bytes == staging) chunks.push_back({packed, 0, {}});
+            StagedChunk& chunk = chunks.back();
+            const VkDeviceSize n = std::min(r.size - done, staging - chunk.bytes);
+            chunk.copies.push_back({r.srcOffset + done, chunk.bytes, n});
+            chunk.bytes += n;
+            done += n;
+            packed += n;
+        }
+    }
+    return chunks;
+}
+
+VkDeviceSize total_bytes(std::span<const VkBufferCopy> regions) {
+    VkDeviceSize total = 0;
+    for (const VkBufferCopy& r : regions) total += r.size;
+    return total;
+}
+
+}  // namespace
+
+Status Transfer::download_ranges(const Buffer& src, std::span<const VkBufferCopy> regions,
+                                 const std::function<void(const void*, VkDeviceSize, VkDeviceSize)>& consume) {
+    const VkDeviceSize total = total_bytes(regions);
+    if (total == 0) return {};
+    HMSM_TRY(ensure_staging(total));
+    for (const StagedChunk& chunk : staged_chunks(regions, staging_.size())) {
+        HMSM_TRY(submit([&](VkCommandBuffer cmd) {
+            device_.vk().vkCmdCopyBuffer(cmd, src.handle(), staging_.handle(), uint32_t(chunk.copies.size()),
+                                         chunk.copies.data());
+        }));
+        consume(staging_.mapped(), chunk.first, chunk.bytes);
+    }
+    return {};
+}
+
+Status Transfer::upload_ranges(const Buffer& dst, std::span<const VkBufferCopy> regions,
+                               const std::function<void(void*, VkDeviceSize, VkDeviceSize)>& fill) {
+    const VkDeviceSize total = total_bytes(regions);
+    if (total == 0) return {};
+    HMSM_TRY(ensure_staging(total));
+    for (const StagedChunk& chunk : staged_chunks(regions, staging_.size())) {
+        fill(staging_.mapped(), chunk.first, chunk.bytes);
+        std::vector<VkBufferCopy> back(chunk.copies.size());
+        for (size_t k = 0; k < back.size(); ++k)
+            back[k] = {chunk.copies[k].dstOffset, chunk.copies[k].srcOffset, chunk.copies[k].size};
+        HMSM_TRY(submit([&](VkCommandBuffer cmd) {
+            device_.vk().vkCmdCopyBuffer(cmd, staging_.handle(), dst.handle(), uint32_t(back.size()), back.data());
+        }));
+    }
+    return {};
+}
+
+VkDeviceSize Transfer::most_staged_bytes() { return kMaxStagingBytes; }
+
+namespace {
+
+/// The staging copies of `parts`, back to back: per part the copies (srcOffset in the buffer,
+/// dstOffset in staging), and where each part starts in staging.
+struct PackedParts {
+    std::vector<std::vector<VkBufferCopy>> copies;
+    std::vector<VkDeviceSize> first;
+    VkDeviceSize bytes = 0;
+};
+
+PackedParts pack_parts(std::span<const Transfer::BufferRegions> parts) {
+    PackedParts packed;
+    for (const Transfer::BufferRegions& part : parts) {
+        packed.first.push_back(packed.bytes);
+        std::vector<VkBufferCopy>& copies = packed.copies.emplace_back();
+        for (const VkBufferCopy& r : part.regions) {
+            if (r.size == 0) continue;
+            copies.push_back({r.srcOffset, packed.bytes, r.size});
+            packed.bytes += r.size;
+        }
+    }
+    return packed;
+}
+
+}  // namespace
+
+Status Transfer::download_parts(std::span<const BufferRegions> parts,
+                                const std::function<void(size_t, const void*)>& consume) {
+    const PackedParts packed = pack_parts(parts);
+    if (packed.bytes > kMaxStagingBytes)
+        return {ErrorCode::internal, "vulkan: download_parts of more than the staging buffer"};
+    if (packed.bytes == 0) return {};
+    HMSM_TRY(ensure_staging(packed.bytes));
+    HMSM_TRY(submit([&](VkCommandBuffer cmd) {
+        for (size_t k = 0; k < parts.size(); ++k)
+            if (!packed.copies[k].empty())
+                device_.vk().vkCmdCopyBuffer(cmd, parts[k].buffer->handle(), staging_.handle(),
+                                             uint32_t(packed.copies[k].size()), packed.copies[k].data());
+    }));
+    for (size_t k = 0; k < parts.size(); ++k)
+        consume(k, static_cast<const std::byte*>(staging_.mapped()) + packed.first[k]);
+    return {};
+}
+
+Status Transfer::upload_parts(std::span<const BufferRegions> parts, const std::function<void(size_t, void*)>& fill) {
+    const PackedParts packed = pack_parts(parts);
+    if (packed.bytes > kMaxStagingBytes)
+        return {ErrorCode::internal, "vulkan: upload_parts of more than the staging buffer"};
+    if (packed.bytes == 0) return {};
+    HMSM_TRY(ensure_staging(packed.bytes));
+    for (size_t k = 0; k < parts.size(); ++k) fill(k, static_cast<std::byte*>(staging_.mapped()) + packed.first[k]);
+    return submit([&](VkCommandBuffer cmd) {
+        for (size_t k = 0; k < parts.size(); ++k) {
+            std::vector<VkBufferCopy> back;
+            back.reserve(packed.copies[k].size());
+            for (const VkBufferCopy& c : packed.copies[k]) back.push_back({c.dstOffset, c.srcOffset, c.size});
+            if (!back.empty())
+                device_.vk().vkCmdCopyBuffer(cmd, staging_.handle(), parts[k].buffer->handle(), uint32_t(back.size()),
+                                             back.data());
+        }
+    });
 }
 
 }  // namespace hmsm::detail::vk

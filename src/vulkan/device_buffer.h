@@ -8,6 +8,7 @@
 
 #include <functional>
 #include <memory>
+#include <span>
 
 namespace hmsm::detail::vk {
 
@@ -53,6 +54,27 @@ public:
     /// The inverse: `consume(staging, first_byte, chunk_bytes)` receives each chunk.
     Status download(const Buffer& src, VkDeviceSize offset, VkDeviceSize bytes,
                     const std::function<void(const void*, VkDeviceSize, VkDeviceSize)>& consume);
+    /// download() of many regions of `src` ([offset, offset + bytes) each, which may overlap):
+    /// `consume` receives their bytes back to back, packed, one submission per staging-full.
+    Status download_ranges(const Buffer& src, std::span<const VkBufferCopy> regions,
+                           const std::function<void(const void*, VkDeviceSize, VkDeviceSize)>& consume);
+    /// upload() into many regions of `dst` (disjoint): `fill` writes their bytes back to back.
+    Status upload_ranges(const Buffer& dst, std::span<const VkBufferCopy> regions,
+                         const std::function<void(void*, VkDeviceSize, VkDeviceSize)>& fill);
+    /// Regions of one buffer for download_parts/upload_parts (srcOffset: the offset in the
+    /// buffer, size: the bytes; dstOffset unused).
+    struct BufferRegions {
+        const Buffer* buffer = nullptr;
+        std::span<const VkBufferCopy> regions;
+    };
+    /// The most bytes download_parts/upload_parts carry in one call.
+    static VkDeviceSize most_staged_bytes();
+    /// download_ranges of several buffers in one submission (one copy command each):
+    /// `consume(part, bytes)` receives part k's regions back to back.
+    Status download_parts(std::span<const BufferRegions> parts,
+                          const std::function<void(size_t, const void*)>& consume);
+    /// The inverse: `fill(part, bytes)` writes part k's regions back to back (disjoint regions).
+    Status upload_parts(std::span<const BufferRegions> parts, const std::function<void(size_t, void*)>& fill);
     /// Records `commands` into a one-shot command buffer, submits it and waits.
     Status submit(const std::function<void(VkCommandBuffer)>& commands);
     /// Submissions made so far (a test hook).

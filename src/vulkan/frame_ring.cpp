@@ -1,8 +1,11 @@
 #include "frame_ring.h"
 
+#include "../element_moves.h"
+
 #include <algorithm>
 #include <atomic>
 #include <cstddef>
+#include <vector>
 
 namespace hmsm::detail {
 namespace {
@@ -57,7 +60,23 @@ void FrameRing::record_copies(VkCommandBuffer cmd) {
     // have written them (write-after-write). The host wrote the sources before the engine's
     // submission, which makes host-coherent writes visible to the device.
     barrier_after_all_writes(device_, cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT);
-    for (const Copy& copy : copies_) device_.vk().vkCmdCopyBuffer(cmd, copy.src, copy.dst, 1, &copy.region);
+    // Neighbouring copies between the same buffers go as one command while their destinations
+    // stay apart (a later copy over an earlier one's bytes starts a command of its own, which
+    // keeps the order).
+    std::vector<VkBufferCopy> regions;
+    DisjointIntervals written;
+    for (size_t k = 0; k < copies_.size();) {
+        const Copy& first = copies_[k];
+        regions.clear();
+        written.clear();
+        for (; k < copies_.size() && copies_[k].src == first.src && copies_[k].dst == first.dst; ++k) {
+            const VkBufferCopy& r = copies_[k].region;
+            if (written.overlaps(r.dstOffset, r.dstOffset + r.size)) break;
+            written.add(r.dstOffset, r.dstOffset + r.size);
+            regions.push_back(r);
+        }
+        device_.vk().vkCmdCopyBuffer(cmd, first.src, first.dst, uint32_t(regions.size()), regions.data());
+    }
     copies_.clear();
 }
 

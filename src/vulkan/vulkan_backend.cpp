@@ -171,20 +171,33 @@ Status VulkanBackend::upload(const SceneData& scene) {
     return device_->take_validation_messages();
 }
 
-Status VulkanBackend::move_elements(BufferId id, std::span<const ElementMove> moves) {
-    HMSM_TRY(check_device_lost());
-    if (!capabilities().reshapes_in_place)
-        return {ErrorCode::unsupported, "vulkan: a scene split into windows cannot move state in place"};
+Result<uint64_t> VulkanBackend::move_scratch_bytes(BufferId id, std::span<const ElementMove> moves) const {
     const uint64_t element_bytes = device_element_bytes(id);
     auto checked = largest_move_bytes(moves, element_bytes,
                                       [&](uint64_t first, uint64_t count) { return check_range(id, first, count); });
     if (!checked) return checked.status();
-    if (*checked == 0) return {};
-    // Scratch only for moves that overlap themselves, at most kMoveScratchBytes at a time.
+    // Scratch for the largest batch of plan_move_batches (one by one: for the largest move that
+    // overlaps itself), at most kMoveScratchBytes; none where the moves can be copied directly.
     uint64_t staged = 0;
+    if (*checked == 0 || destinations_apart_from_sources(moves)) return staged;
+    if (batch_transfers_)
+        return plan_move_batches(moves, std::max<uint64_t>(1, kMoveScratchBytes / element_bytes)).largest * element_bytes;
     for (const ElementMove& m : moves)
         if (overlaps_itself(m)) staged = std::max(staged, std::min(m.count * element_bytes, kMoveScratchBytes));
-    HMSM_TRY(ensure_move_scratch(staged));
+    return staged;
+}
+
+Status VulkanBackend::move_elements(BufferId id, std::span<const ElementMove> moves) {
+    HMSM_TRY(check_device_lost());
+    if (!capabilities().reshapes_in_place)
+        return {ErrorCode::unsupported, "vulkan: a scene split into windows cannot move state in place"};
+    auto largest = largest_move_bytes(moves, device_element_bytes(id),
+                                      [&](uint64_t first, uint64_t count) { return check_range(id, first, count); });
+    if (!largest) return largest.status();
+    if (*largest == 0) return {};
+    auto staged = move_scratch_bytes(id, moves);
+    if (!staged) return staged.status();
+    HMSM_TRY(ensure_move_scratch(*staged));
     if (holding_back()) {
         HeldBack change{HeldBack::Kind::move, id};
         change.moves.assign(moves.begin(), moves.end());

@@ -21,6 +21,7 @@
 #include "windows.h"
 
 #include "../backend.h"
+#include "../element_moves.h"
 
 #include <array>
 #include <memory>
@@ -41,9 +42,20 @@ public:
     Status run(std::span<const Dispatch> program, std::span<const RunStep> steps, uint64_t program_id = 0) override;
     Status read(BufferId id, uint64_t first, uint64_t count, void* dst, Scalar as) const override;
     Status write(BufferId id, uint64_t first, uint64_t count, const void* src, Scalar as) override;
-    /// Each move copies through a device-local scratch buffer (vkCmdCopyBuffer forbids
-    /// overlapping regions), all in one submission.
+    /// The moves copy through a device-local scratch buffer (vkCmdCopyBuffer forbids
+    /// overlapping regions), all in one submission: per batch of plan_move_batches one copy
+    /// command gathers every source into scratch and one scatters them (element_moves.h).
     Status move_elements(BufferId id, std::span<const ElementMove> moves) override;
+    /// One submission per staging-full of ranges, each one copy command with a region per range
+    /// (a split scene's ping-pong buffers: range by range).
+    Status read_ranges(BufferId id, std::span<const ElementRange> ranges, void* dst, Scalar as) const override;
+    /// As read_ranges; held back or staged into a recording range by range, as write() is.
+    Status write_ranges(BufferId id, std::span<const ElementRange> ranges, const void* src, Scalar as) override;
+    /// Every buffer's ranges in one submission, within the staging buffer's size.
+    Status read_buffers(std::span<const BufferRangesRead> reads, Scalar as) const override;
+    Status write_buffers(std::span<const BufferRangesWrite> writes, Scalar as) override;
+    /// Every buffer's moves in one submission (held back: buffer by buffer, as move_elements).
+    Status move_buffers(std::span<const BufferMoves> moves) override;
     void set_profiling(bool enabled) override { profiling_ = enabled; }
     /// Once the simulation has recorded steps into an engine's command buffer, an instance
     /// change within the capacity holds its writes, moves and at-rest runs back for the next
@@ -138,9 +150,17 @@ private:
     /// Records the held-back changes into the recording's command buffer, in order.
     Status record_held_back();
     Status hold_back_write(BufferId id, uint64_t first, uint64_t count, const void* src, Scalar as);
-    /// The moves into `cmd`, each through the scratch buffer (vkCmdCopyBuffer forbids
-    /// overlapping regions), after a barrier against all earlier work, also an engine's reads.
+    /// The moves into `cmd` through the scratch buffer (vkCmdCopyBuffer forbids overlapping
+    /// regions), after a barrier against all earlier work, also an engine's reads.
     void record_moves(VkCommandBuffer cmd, BufferId id, std::span<const ElementMove> moves) const;
+    /// record_moves one by one, each move one copy or pieces through scratch
+    /// (HMSM_BATCH_TRANSFERS=0).
+    void record_moves_one_by_one(VkCommandBuffer cmd, BufferId id, std::span<const ElementMove> moves) const;
+    /// Checks `moves` of buffer `id` and returns the scratch bytes record_moves needs for them.
+    Result<uint64_t> move_scratch_bytes(BufferId id, std::span<const ElementMove> moves) const;
+    /// Whether read_ranges/write_ranges may copy `ranges` at once: batching on, an unsplit
+    /// scene (a split one maps a range to pieces) and, for writes, ranges apart.
+    bool copies_ranges_at_once(std::span<const ElementRange> ranges, bool writes) const;
     Status ensure_move_scratch(uint64_t bytes);
     /// write() inside a recording: the data goes to the ring, the copy into the command buffer.
     Status stage_write(BufferId id, uint64_t first, uint64_t count, const void* src, Scalar as);
@@ -151,6 +171,7 @@ private:
     std::array<Buffer, kBufferCount> buffers_;
     std::array<uint64_t, kBufferCount> element_counts_{};  // logical (read/write) counts
     Buffer move_scratch_;  // move_elements(), grown on demand
+    bool batch_transfers_ = batch_transfers_enabled();  // element_moves.h
     uint64_t window_bytes_ = 0;  // vulkan_set_window_bytes() when the backend was made; 0: none
     uint64_t window_alignment_ = 0;
     std::unique_ptr<WindowPlan> plan_;

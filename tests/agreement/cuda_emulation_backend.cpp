@@ -3,7 +3,9 @@
 #include "cuda/launch_dispatch.h"
 #include "cuda/launch_plan.h"
 #include "device_words.h"
+#include "element_moves.h"
 #include "step_program.h"
+#include "../../kernels/cuda/copy_ranges.h"
 
 #include <algorithm>
 #include <cstring>
@@ -98,14 +100,53 @@ public:
         return {};
     }
 
+    /// As the CUDA backend batches them (src/cuda/range_transfers.cpp): per batch of
+    /// plan_move_batches the range copy's gather into scratch, then its scatter.
     Status move_elements(BufferId id, std::span<const detail::ElementMove> moves) override {
         const uint64_t element_bytes = detail::device_element_bytes(id);
         for (const detail::ElementMove& m : moves) {
             HMSM_TRY(check_range(id, m.src, m.count));
             HMSM_TRY(check_range(id, m.dst, m.count));
-            std::byte* base = bytes_[uint32_t(id)].data();
-            std::memmove(base + m.dst * element_bytes, base + m.src * element_bytes, m.count * element_bytes);
         }
+        const detail::MoveBatches plan =
+            detail::plan_move_batches(moves, std::max<uint64_t>(1, detail::kMoveScratchBytes / element_bytes));
+        size_t begin = 0;
+        for (size_t end : plan.ends) {
+            std::vector<detail::cuda::WordRange> table;
+            const uint64_t words = detail::cuda::append_word_ranges(
+                table, std::span(plan.pieces).subspan(begin, end - begin), element_bytes / 4);
+            move_batch(id, table, words);
+            begin = end;
+        }
+        return {};
+    }
+
+    /// The range copy's gather into scratch, then the words converted as read() does.
+    Status read_ranges(BufferId id, std::span<const detail::ElementRange> ranges, void* dst,
+                       detail::Scalar as) const override {
+        std::vector<detail::cuda::WordRange> table;
+        const Result<uint64_t> words = word_table(id, ranges, true, table);
+        if (!words) return words.status();
+        std::vector<uint32_t> scratch(*words);
+        gather(id, table, scratch);
+        const detail::Shape shape = detail::buffer_info(id).shape;
+        detail::words_to_scalars(shape, scratch.data(), scratch.size(), dst, as);
+        return {};
+    }
+
+    /// The words converted as write() does, then the range copy's scatter (ranges that overlap:
+    /// one by one, as the CUDA backend).
+    Status write_ranges(BufferId id, std::span<const detail::ElementRange> ranges, const void* src,
+                        detail::Scalar as) override {
+        if (detail::ranges_overlap(ranges)) return Backend::write_ranges(id, ranges, src, as);
+        std::vector<detail::cuda::WordRange> table;
+        const Result<uint64_t> words = word_table(id, ranges, false, table);
+        if (!words) return words.status();
+        std::vector<uint32_t> scratch(*words);
+        detail::scalars_to_words(detail::buffer_info(id).shape, src, scratch.size(), scratch.data(), as);
+        detail::cuda::emulate_copy_ranges(reinterpret_cast<uint32_t*>(bytes_[uint32_t(id)].data()), scratch.data(),
+                                          table.data(), uint32_t(table.size()), scratch.size(),
+                                          detail::cuda::RangeCopy::scatter);
         return {};
     }
 
@@ -113,6 +154,33 @@ public:
     PassTimes pass_times() const override { return {}; }
 
 private:
+    /// The word ranges of `ranges` (read from: `reads`), packed back to back; their total words.
+    Result<uint64_t> word_table(BufferId id, std::span<const detail::ElementRange> ranges, bool reads,
+                                std::vector<detail::cuda::WordRange>& table) const {
+        std::vector<detail::ElementMove> pieces;
+        for (const detail::ElementRange& r : ranges) {
+            HMSM_TRY(check_range(id, r.first, r.count));
+            pieces.push_back({reads ? r.first : 0, reads ? 0 : r.first, r.count});
+        }
+        return detail::cuda::append_word_ranges(table, pieces, detail::device_element_bytes(id) / 4);
+    }
+    void gather(BufferId id, const std::vector<detail::cuda::WordRange>& table, std::vector<uint32_t>& scratch) const {
+        // Gathering only reads the buffer.
+        auto* buffer = const_cast<uint32_t*>(reinterpret_cast<const uint32_t*>(bytes_[uint32_t(id)].data()));
+        detail::cuda::emulate_copy_ranges(buffer, scratch.data(),
+                                          table.data(), uint32_t(table.size()), scratch.size(),
+                                          detail::cuda::RangeCopy::gather);
+    }
+    /// One batch of moves: gather every source, then scatter every destination.
+    void move_batch(BufferId id, const std::vector<detail::cuda::WordRange>& table, uint64_t words) {
+        std::vector<uint32_t> scratch(words);
+        auto* buffer = reinterpret_cast<uint32_t*>(bytes_[uint32_t(id)].data());
+        detail::cuda::emulate_copy_ranges(buffer, scratch.data(), table.data(), uint32_t(table.size()), words,
+                                          detail::cuda::RangeCopy::gather);
+        detail::cuda::emulate_copy_ranges(buffer, scratch.data(), table.data(), uint32_t(table.size()), words,
+                                          detail::cuda::RangeCopy::scatter);
+    }
+
     Status check_range(BufferId id, uint64_t first, uint64_t count) const {
         if (first + count <= counts_[uint32_t(id)] && first + count >= first) return {};
         return {ErrorCode::invalid_argument, "cuda emulation: elements [" + std::to_string(first) + ", " +

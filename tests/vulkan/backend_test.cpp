@@ -231,3 +231,50 @@ TEST_F(VulkanTest, DispatchBeyondTheWorkgroupCountLimitMatchesCpu64) {
 
 }  // namespace
 }  // namespace hmsm::test
+
+namespace hmsm::test {
+namespace {
+
+// Reads and writes of scattered ranges take one submission each, whatever their number (that
+// they agree with one-range calls: range_transfers_test.cpp).
+TEST_F(VulkanTest, ScatteredRangesTakeOneSubmission) {
+    if (!detail::batch_transfers_enabled()) GTEST_SKIP() << "HMSM_BATCH_TRANSFERS=0";
+    std::string skip;
+    auto sim = create_simulation_or_skip(*grid_scene(small_tree(), 40, 5.0, 1), windy_config(), BackendKind::vulkan, skip);
+    if (!skip.empty()) GTEST_SKIP() << skip;
+    ASSERT_TRUE(sim);
+    ASSERT_TRUE(sim->step(3).ok());
+    const auto& backend = dynamic_cast<const detail::vk::VulkanBackend&>(hmsm::detail::backend_of(*sim));
+    auto& mutable_backend = hmsm::detail::backend_of(*sim);
+    const uint64_t chains = hmsm::detail::scene_data_of(*sim).element_count(BufferId::chain_state);
+    ASSERT_GT(chains, 200u);
+    std::vector<detail::ElementRange> ranges;
+    uint64_t total = 0;
+    for (uint64_t first = 1; first + 3 < chains; first += 7) {
+        ranges.push_back({first, 3});
+        total += 3;
+    }
+    ASSERT_GT(ranges.size(), 20u);
+    std::vector<float> values(total * 4);
+    uint64_t before = backend.submissions();
+    ASSERT_TRUE(mutable_backend.read_ranges(BufferId::chain_state, ranges, values.data(), detail::Scalar::f32).ok());
+    EXPECT_EQ(backend.submissions() - before, 1u);
+    before = backend.submissions();
+    ASSERT_TRUE(mutable_backend.write_ranges(BufferId::chain_state, ranges, values.data(), detail::Scalar::f32).ok());
+    EXPECT_EQ(backend.submissions() - before, 1u);
+    // Two buffers at once: still one submission each way.
+    std::vector<float> forces(total * 2);
+    const detail::BufferRangesRead reads[] = {{BufferId::chain_state, ranges, values.data()},
+                                              {BufferId::chain_force, ranges, forces.data()}};
+    before = backend.submissions();
+    ASSERT_TRUE(mutable_backend.read_buffers(reads, detail::Scalar::f32).ok());
+    EXPECT_EQ(backend.submissions() - before, 1u);
+    const detail::BufferRangesWrite writes[] = {{BufferId::chain_state, ranges, values.data()},
+                                                {BufferId::chain_force, ranges, forces.data()}};
+    before = backend.submissions();
+    ASSERT_TRUE(mutable_backend.write_buffers(writes, detail::Scalar::f32).ok());
+    EXPECT_EQ(backend.submissions() - before, 1u);
+}
+
+}  // namespace
+}  // namespace hmsm::test

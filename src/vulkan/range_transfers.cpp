@@ -1,0 +1,148 @@
+// Backend::read_ranges and write_ranges of the Vulkan backend: every range of a call in one
+// copy command (a region per range) to or from the transfer staging buffer, one submission
+// and wait per staging-full. Inside an engine's recording or a held-back instance change the
+// ranges go range by range the way write() goes (the ring, deferred_changes.cpp).
+#include "vulkan_backend.h"
+
+#include "../device_words.h"
+
+#include <algorithm>
+#include <vector>
+
+namespace hmsm::detail::vk {
+
+bool VulkanBackend::copies_ranges_at_once(std::span<const ElementRange> ranges, bool writes) const {
+    if (!batch_transfers_ || !plan_ || plan_->split()) return false;
+    if (writes && (record_target_ || holding_back() || ranges_overlap(ranges))) return false;
+    return true;
+}
+
+Status VulkanBackend::read_ranges(BufferId id, std::span<const ElementRange> ranges, void* dst, Scalar as) const {
+    if (!copies_ranges_at_once(ranges, false)) return Backend::read_ranges(id, ranges, dst, as);
+    HMSM_TRY(check_device_lost());
+    for (const ElementRange& r : ranges) HMSM_TRY(check_range(id, r.first, r.count));
+    // A read sees every change made before it (read()).
+    HMSM_TRY(const_cast<VulkanBackend*>(this)->submit_held_back());
+    const Shape shape = buffer_info(id).shape;
+    const uint64_t element_bytes = device_element_bytes(id), scalar_bytes = as == Scalar::f64 ? 8 : 4;
+    std::vector<VkBufferCopy> regions;
+    regions.reserve(ranges.size());
+    for (const ElementRange& r : ranges)
+        if (r.count > 0) regions.push_back({r.first * element_bytes, 0, r.count * element_bytes});
+    auto* out = static_cast<std::byte*>(dst);
+    HMSM_TRY(transfer_->download_ranges(buffers_[uint32_t(id)], regions,
+                                        [&](const void* staging, VkDeviceSize first_byte, VkDeviceSize bytes) {
+                                            words_to_scalars(shape, staging, bytes / 4,
+                                                             out + first_byte / 4 * scalar_bytes, as);
+                                        }));
+    return device_->take_validation_messages();
+}
+
+Status VulkanBackend::write_ranges(BufferId id, std::span<const ElementRange> ranges, const void* src, Scalar as) {
+    if (!copies_ranges_at_once(ranges, true)) return Backend::write_ranges(id, ranges, src, as);
+    HMSM_TRY(check_device_lost());
+    for (const ElementRange& r : ranges) HMSM_TRY(check_range(id, r.first, r.count));
+    HMSM_TRY(submit_held_back());
+    const Shape shape = buffer_info(id).shape;
+    const uint64_t element_bytes = device_element_bytes(id), scalar_bytes = as == Scalar::f64 ? 8 : 4;
+    std::vector<VkBufferCopy> regions;
+    regions.reserve(ranges.size());
+    for (const ElementRange& r : ranges)
+        if (r.count > 0) regions.push_back({r.first * element_bytes, 0, r.count * element_bytes});
+    const auto* in = static_cast<const std::byte*>(src);
+    HMSM_TRY(transfer_->upload_ranges(buffers_[uint32_t(id)], regions,
+                                      [&](void* staging, VkDeviceSize first_byte, VkDeviceSize bytes) {
+                                          scalars_to_words(shape, in + first_byte / 4 * scalar_bytes, bytes / 4,
+                                                           staging, as);
+                                      }));
+    return device_->take_validation_messages();
+}
+
+namespace {
+
+/// The regions of `ranges` in a buffer of `element_bytes` elements (srcOffset, size).
+std::vector<VkBufferCopy> byte_regions(std::span<const ElementRange> ranges, uint64_t element_bytes) {
+    std::vector<VkBufferCopy> regions;
+    regions.reserve(ranges.size());
+    for (const ElementRange& r : ranges)
+        if (r.count > 0) regions.push_back({r.first * element_bytes, 0, r.count * element_bytes});
+    return regions;
+}
+
+/// The device bytes of every range of `parts` (BufferRangesRead or BufferRangesWrite).
+template <class Part>
+uint64_t device_bytes(std::span<const Part> parts) {
+    uint64_t bytes = 0;
+    for (const Part& p : parts)
+        for (const ElementRange& r : p.ranges) bytes += r.count * device_element_bytes(p.id);
+    return bytes;
+}
+
+}  // namespace
+
+Status VulkanBackend::read_buffers(std::span<const BufferRangesRead> reads, Scalar as) const {
+    bool at_once = device_bytes(reads) <= Transfer::most_staged_bytes();
+    for (const BufferRangesRead& r : reads) at_once = at_once && copies_ranges_at_once(r.ranges, false);
+    if (!at_once) return Backend::read_buffers(reads, as);
+    HMSM_TRY(check_device_lost());
+    for (const BufferRangesRead& r : reads)
+        for (const ElementRange& range : r.ranges) HMSM_TRY(check_range(r.id, range.first, range.count));
+    HMSM_TRY(const_cast<VulkanBackend*>(this)->submit_held_back());  // a read sees every change before it
+    std::vector<std::vector<VkBufferCopy>> regions;
+    std::vector<Transfer::BufferRegions> parts;
+    regions.reserve(reads.size());
+    for (const BufferRangesRead& r : reads)
+        parts.push_back({&buffers_[uint32_t(r.id)], regions.emplace_back(byte_regions(r.ranges, device_element_bytes(r.id)))});
+    HMSM_TRY(transfer_->download_parts(parts, [&](size_t k, const void* packed) {
+        uint64_t elements = 0;
+        for (const ElementRange& range : reads[k].ranges) elements += range.count;
+        const Shape shape = buffer_info(reads[k].id).shape;
+        words_to_scalars(shape, packed, elements * shape_scalars(shape), reads[k].dst, as);
+    }));
+    return device_->take_validation_messages();
+}
+
+Status VulkanBackend::write_buffers(std::span<const BufferRangesWrite> writes, Scalar as) {
+    bool at_once = device_bytes(writes) <= Transfer::most_staged_bytes();
+    for (const BufferRangesWrite& w : writes) at_once = at_once && copies_ranges_at_once(w.ranges, true);
+    if (!at_once) return Backend::write_buffers(writes, as);
+    HMSM_TRY(check_device_lost());
+    for (const BufferRangesWrite& w : writes)
+        for (const ElementRange& range : w.ranges) HMSM_TRY(check_range(w.id, range.first, range.count));
+    HMSM_TRY(submit_held_back());
+    std::vector<std::vector<VkBufferCopy>> regions;
+    std::vector<Transfer::BufferRegions> parts;
+    regions.reserve(writes.size());
+    for (const BufferRangesWrite& w : writes)
+        parts.push_back({&buffers_[uint32_t(w.id)], regions.emplace_back(byte_regions(w.ranges, device_element_bytes(w.id)))});
+    HMSM_TRY(transfer_->upload_parts(parts, [&](size_t k, void* packed) {
+        uint64_t elements = 0;
+        for (const ElementRange& range : writes[k].ranges) elements += range.count;
+        const Shape shape = buffer_info(writes[k].id).shape;
+        scalars_to_words(shape, writes[k].src, elements * shape_scalars(shape), packed, as);
+    }));
+    return device_->take_validation_messages();
+}
+
+Status VulkanBackend::move_buffers(std::span<const BufferMoves> moves) {
+    if (!batch_transfers_ || holding_back() || record_target_) return Backend::move_buffers(moves);
+    HMSM_TRY(check_device_lost());
+    if (!capabilities().reshapes_in_place)
+        return {ErrorCode::unsupported, "vulkan: a scene split into windows cannot move state in place"};
+    uint64_t staged = 0;
+    for (const BufferMoves& m : moves) {
+        auto bytes = move_scratch_bytes(m.id, m.moves);
+        if (!bytes) return bytes.status();
+        staged = std::max(staged, *bytes);
+    }
+    HMSM_TRY(ensure_move_scratch(staged));
+    HMSM_TRY(submit_held_back());
+    // One buffer's scatter and the next one's gather share the scratch: record_moves ends each
+    // copy with a barrier against all earlier transfer writes and reads.
+    HMSM_TRY(transfer_->submit([&](VkCommandBuffer cmd) {
+        for (const BufferMoves& m : moves) record_moves(cmd, m.id, m.moves);
+    }));
+    return device_->take_validation_messages();
+}
+
+}  // namespace hmsm::detail::vk
