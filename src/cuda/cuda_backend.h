@@ -25,6 +25,9 @@ public:
     BackendKind kind() const override { return BackendKind::cuda; }
     std::string device_name() const override { return device_name_; }
     Status upload(const SceneData& scene) override;
+    /// DeviceBuffers::grow on the backend's stream; the captured graphs, which hold the old
+    /// buffers' addresses, are captured again on their next run (they match by pointers).
+    Status grow(const SceneData& scene) override;
     /// Without profiling, each step is one replay of a captured step graph (captured on the
     /// first run() of a program); with profiling, the launches (launch_plan.h: a run of
     /// dispatches over different groups is one batched launch) are enqueued one by one
@@ -44,6 +47,7 @@ public:
         can.walks_ahead = walk_ahead_;
         can.prefers_path_walk = true;
         can.reads_async = true;
+        can.grows_on_device = true;
         return can;
     }
     /// Steps run without their wind_force dispatches, taking the angles the step before
