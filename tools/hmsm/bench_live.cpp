@@ -1,8 +1,8 @@
 // Live-control costs (src/live_control.cpp): removing instances moves the survivors' state on
 // the device (all those after the first hole in order, or only the fillers of a swap removal),
 // adding them back within the capacity writes only the added ones, adding past the
-// capacity re-uploads the scene once with room to grow; switching instances between levels of
-// detail; a wind change between two steps; and pausing and resuming a tenth of the forest.
+// capacity grows it once by half (on the device, or by re-uploading the scene where the backend
+// cannot or HMSM_DEVICE_GROWTH=0); switching instances between levels of detail; a wind change between two steps; and pausing and resuming a tenth of the forest.
 #include "bench_live.h"
 
 #include "bench_frames.h"
