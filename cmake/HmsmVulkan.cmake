@@ -109,6 +109,7 @@ set(_hmsm_vulkan_sources
   src/vulkan/vulkan_backend.cpp
   src/vulkan/deferred_changes.cpp
   src/vulkan/range_transfers.cpp
+  src/vulkan/growth.cpp
   src/vulkan/copy_bandwidth.cpp
   src/vulkan/interop.cpp)
 target_sources(hmsm PRIVATE ${_hmsm_vulkan_sources} $<TARGET_OBJECTS:hmsm_volk>)

@@ -97,6 +97,10 @@ struct BackendCapabilities {
     /// The backend copies outputs to host memory of its own asynchronously (request_read and
     /// take_read below); otherwise the simulation reads them at the request.
     bool reads_async = false;
+    /// grow() below reallocates the capacity-sized buffers keeping their contents on the
+    /// device; otherwise growth past the capacity uploads the scene anew (its state read back
+    /// and written again).
+    bool grows_on_device = false;
 };
 
 /// Read slots of request_read/take_read: one per Output, and one for Simulation::read().
@@ -136,11 +140,25 @@ public:
 
     /// Allocates every buffer of kBufferTable sized by scene.element_count(), uploads the static
     /// buffers and zero-fills the others. Called once before anything below, and again when
-    /// added instances outgrow the scene's capacities or the backend cannot reshape in place
-    /// (earlier buffers and their contents are released; the simulation writes the carried-over
-    /// state back). Fails (never aborts) with out_of_memory or unsupported when the scene does
-    /// not fit.
+    /// added instances outgrow the scene's capacities on a backend that cannot grow() or the
+    /// backend cannot reshape in place (earlier buffers and their contents are released; the
+    /// simulation writes the carried-over state back). Fails (never aborts) with out_of_memory
+    /// or unsupported when the scene does not fit.
     virtual Status upload(const SceneData& scene) = 0;
+
+    /// Only where capabilities().grows_on_device: reallocates the buffers sized by the
+    /// capacities (capacity_growth.h sized_by_capacity: chain, node, vertex and instance scope)
+    /// for `scene`'s capacities, each at least what upload() or the last grow() allocated, and
+    /// copies their live elements (scene's live counts; both halves of a ping-pong buffer, the
+    /// second of which moves to the new chain_capacity) from the old allocation on the device:
+    /// nothing goes through the host. Elements past the live ones are zero; model-scope buffers
+    /// and the wind table keep their allocation and contents. Fails with unsupported where the
+    /// backend cannot grow this scene so (a Vulkan scene that would be split into windows) and
+    /// with out_of_memory, in both cases with every buffer as it was.
+    virtual Status grow(const SceneData& scene) {
+        (void)scene;
+        return {ErrorCode::unsupported, "this backend cannot grow its buffers on the device"};
+    }
 
     /// Runs `program` steps.size() times, in order, one step each; step k runs every dispatch
     /// that reads the wind slot (reads_wind_slot) with constants.wind_slot = steps[k].wind_slot,

@@ -1,7 +1,9 @@
 // Adding and removing instances (docs/model.md 3.9, docs/driving.md): the instance list is
 // replaced by the survivors (in order, or with holes filled from the end for a swap removal)
 // followed by the added instances, every survivor keeps its state bit for bit, and the device
-// scene is kept where the capacity allows (in place) or uploaded anew with room to grow.
+// scene is kept where the capacity allows or grows on the device (in place), or is uploaded
+// anew with room to grow.
+#include "capacity_growth.h"
 #include "instance_moves.h"
 #include "simulation_impl.h"
 
@@ -15,10 +17,9 @@ namespace {
 using detail::BufferId;
 using detail::carried_buffers;
 using detail::halves_of;
+using detail::grown_capacity;
+using detail::kMaxStateElements;
 using detail::kMovedOutputs;
-
-/// Most elements of one state buffer the capacity grows to (a chain buffer holds two halves).
-constexpr uint64_t kMaxStateElements = std::numeric_limits<uint32_t>::max() / 2;
 
 /// Moves that bring each survivor's elements [old[i], old[i + 1]) behind the survivor before
 /// it in the new list, neighbours coalesced; `end` receives the elements the survivors hold.
@@ -62,13 +63,6 @@ std::vector<uint64_t> running_offsets(const std::vector<Instance>& instances, Pe
     std::vector<uint64_t> old(instances.size() + 1, 0);
     for (size_t i = 0; i < instances.size(); ++i) old[i + 1] = old[i] + per(instances[i].model);
     return old;
-}
-
-/// Capacity after growing to hold `needed`: 1.5 times the current one, so that adding
-/// instances one at a time re-uploads O(log n) times; never past `limit`.
-uint64_t grown(uint64_t current, uint64_t needed, uint64_t limit) {
-    if (needed <= current) return current;
-    return std::max(needed, std::min(limit, current + current / 2));
 }
 
 /// The groups covering instances [first, end) of `d`.
@@ -116,6 +110,10 @@ Status Simulation::reserve_instances(uint64_t count) {
     const Impl::Reserved before = s.reserved_;
     s.reserved_ = room;
     if (fits || !s.backend_->capabilities().reshapes_in_place) return {};
+    const detail::ElementCounts live{d.total_chains, d.total_nodes, d.total_vertices};
+    Result<bool> on_device = s.grow_on_device(live, d.instance_count());
+    if (!on_device) s.reserved_ = before;
+    if (!on_device || *on_device) return on_device.status();
     std::vector<uint32_t> everyone(s.instances_.size());
     for (uint32_t i = 0; i < everyone.size(); ++i) everyone[i] = i;
     Status grown_now = s.reshape(everyone, {}, /*reupload=*/true);
@@ -157,7 +155,7 @@ Status Simulation::Impl::reshape(const std::vector<uint32_t>& survivors, std::sp
     if (!added.empty()) last_moved = uint32_t(next.size() - 1);
 
     ahead_schedule_.live_change();  // the state moves, the angles integrated ahead with it
-    bool in_place = !reupload && backend_->capabilities().reshapes_in_place && data_->holds(*data);
+    bool in_place = !reupload && backend_->capabilities().reshapes_in_place;
     if (in_place && !ascending) {
         // A swap removal moves instances from the end into the holes: in place when each one
         // fills a hole of its own size (one model) or the instances between shift down; where
@@ -168,6 +166,14 @@ Status Simulation::Impl::reshape(const std::vector<uint32_t>& survivors, std::sp
         in_place = sequential_safe(survivor_moves(survivors, old_chain, end)) &&
                    sequential_safe(survivor_moves(survivors, running_offsets(instances_, per_node), end)) &&
                    sequential_safe(survivor_moves(survivors, running_offsets(instances_, per_vertex), end));
+    }
+    if (in_place && !data_->holds(*data)) {
+        // Past the capacity: the buffers grow on the device where the backend can, and the
+        // change goes on in place.
+        Result<bool> grown = grow_on_device({data->total_chains, data->total_nodes, data->total_vertices},
+                                            data->instance_count());
+        if (!grown) return grown.status();
+        in_place = *grown;
     }
     if (in_place) {
         HMSM_TRY(reshape_in_place(std::move(data), survivors, old_chain, first_moved));
@@ -336,14 +342,16 @@ Status Simulation::Impl::reshape_anew(std::unique_ptr<detail::SceneData> next,
     }
     const uint64_t limit = kMaxStateElements;
     // growth_: the room a swap removal's staging asked for, grown as the live counts are.
-    next->chain_capacity = std::max({grown(data_->chain_capacity, next->total_chains, limit), reserved_.chains,
-                                     grown(data_->chain_capacity, std::min(growth_.chains, limit), limit)});
-    next->node_capacity = std::max({grown(data_->node_capacity, next->total_nodes, limit), reserved_.nodes,
-                                    grown(data_->node_capacity, std::min(growth_.nodes, limit), limit)});
-    next->vertex_capacity = std::max({grown(data_->vertex_capacity, next->total_vertices, limit), reserved_.vertices,
-                                      grown(data_->vertex_capacity, std::min(growth_.vertices, limit), limit)});
+    auto room = [&](uint64_t current, uint64_t live, uint64_t reserved, uint64_t staging) {
+        return std::max({grown_capacity(current, live, limit), reserved,
+                         grown_capacity(current, std::min(staging, limit), limit)});
+    };
+    next->chain_capacity = room(data_->chain_capacity, next->total_chains, reserved_.chains, growth_.chains);
+    next->node_capacity = room(data_->node_capacity, next->total_nodes, reserved_.nodes, growth_.nodes);
+    next->vertex_capacity = room(data_->vertex_capacity, next->total_vertices, reserved_.vertices, growth_.vertices);
     next->instance_capacity = uint32_t(std::max<uint64_t>(
-        grown(data_->instance_capacity, next->instance_count(), uint64_t(1) << 24), reserved_.instances));
+        grown_capacity(data_->instance_capacity, next->instance_count(), detail::kMaxGrownInstances),
+        reserved_.instances));
     growth_ = {};
     const detail::Scalar scalar = backend_->kind() == BackendKind::cpu64 ? detail::Scalar::f64 : detail::Scalar::f32;
     struct Saved {

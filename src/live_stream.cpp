@@ -104,10 +104,13 @@ Result<bool> Simulation::Impl::append_in_place(std::span<const Instance> added) 
     ElementCounts grown = live;
     for (const Instance& inst : added) grown += detail::counts_of(d.models[inst.model]);
     HMSM_TRY(check_size(uint64_t(first) + added.size(), grown));
-    if (!backend_->capabilities().reshapes_in_place || grown.chains > d.chain_capacity ||
-        grown.nodes > d.node_capacity || grown.vertices > d.vertex_capacity ||
-        uint64_t(first) + added.size() > d.instance_capacity)
-        return false;
+    if (!backend_->capabilities().reshapes_in_place) return false;
+    if (grown.chains > d.chain_capacity || grown.nodes > d.node_capacity || grown.vertices > d.vertex_capacity ||
+        uint64_t(first) + added.size() > d.instance_capacity) {
+        // Past the capacity: the buffers grow on the device where the backend can.
+        Result<bool> room = grow_on_device(grown, uint64_t(first) + added.size());
+        if (!room || !*room) return room;
+    }
     detail::InstanceChangeBracket change(*backend_);
     ahead_schedule_.live_change();
     detail::InstanceOffsets& offsets = this->offsets();
@@ -185,8 +188,14 @@ Result<bool> Simulation::Impl::swap_remove_in_place(const std::vector<uint32_t>&
     const ElementCounts room = live + staged;
     if (!same_sizes &&
         (room.chains > d.chain_capacity || room.nodes > d.node_capacity || room.vertices > d.vertex_capacity)) {
-        growth_ = {room.chains, room.nodes, room.vertices, 0};
-        return false;
+        // The staging room grows on the device where the backend can; else the next upload
+        // takes it.
+        Result<bool> grown = grow_on_device(room, n);
+        if (!grown) return grown;
+        if (!*grown) {
+            growth_ = {room.chains, room.nodes, room.vertices, 0};
+            return false;
+        }
     }
 
     // The moves of each scope; delta: what the holes before gained over the removed instances.

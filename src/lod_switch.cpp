@@ -231,8 +231,15 @@ Status Simulation::Impl::switch_models(const std::vector<std::pair<uint32_t, uin
     std::vector<std::vector<double>> values64(carried.size());
     std::vector<std::vector<float>> values32(carried.size());
     ahead_schedule_.live_change();  // the state moves, the angles integrated ahead with it
-    const bool in_place = streaming_paths_ && backend_->capabilities().reshapes_in_place && totals.chains <= data_->chain_capacity &&
-                          totals.nodes <= data_->node_capacity && totals.vertices <= data_->vertex_capacity;
+    bool in_place = streaming_paths_ && backend_->capabilities().reshapes_in_place;
+    if (in_place && (totals.chains > data_->chain_capacity || totals.nodes > data_->node_capacity ||
+                     totals.vertices > data_->vertex_capacity)) {
+        // Past the capacity: the buffers grow on the device where the backend can, and the
+        // switch goes on in place.
+        Result<bool> grown = grow_on_device(totals, instances_.size());
+        if (!grown) return grown.status();
+        in_place = *grown;
+    }
     if (in_place) {
         // The first elements, old and new, of the switched instances and those after them.
         detail::InstanceOffsets& offsets = this->offsets();
@@ -295,8 +302,9 @@ Status Simulation::Impl::switch_models(const std::vector<std::pair<uint32_t, uin
         }
         detail::relay_groups(*data_, instances_, switched);
     } else {
-        // Past the capacity (or where the backend cannot move state): every instance's state
-        // is read, laid out anew and uploaded with room to grow.
+        // Past the capacity where the backend cannot grow its buffers on the device (or where
+        // it cannot move state): every instance's state is read, laid out anew and uploaded
+        // with room to grow.
         std::vector<Instance> next = instances_;
         std::vector<const ChainMap*> all_maps(instances_.size(), nullptr);
         for (size_t k = 0; k < models.size(); ++k) {

@@ -13,7 +13,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <limits>
+#include <string_view>
 #include <type_traits>
 
 namespace hmsm {
@@ -220,6 +222,8 @@ Result<std::unique_ptr<Simulation>> Simulation::Impl::create(const Scene& scene,
             detail::automatic_composition(sim->backend_->capabilities().prefers_path_walk, deepest);
     }
     sim->backend_->set_profiling(config.profile_passes);
+    const char* device_growth = std::getenv("HMSM_DEVICE_GROWTH");
+    sim->device_growth_ = !(device_growth && std::string_view(device_growth) == "0");
     HMSM_TRY(sim->backend_->upload(*sim->data_));
 
     // Pose at rest (every instance, active or not): with g = 0, integrate keeps S = V = 0 and

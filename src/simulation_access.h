@@ -40,5 +40,8 @@ inline const std::vector<Dispatch>& step_program_of(const Simulation& sim) {
 inline const SceneData& scene_data_of(const Simulation& sim) { return SimulationAccess::scene_data(sim); }
 /// How often adding or removing instances re-uploaded the whole scene (live_control.cpp).
 inline uint64_t full_uploads_of(Simulation& sim) { return SimulationAccess::impl(sim).full_uploads_; }
+/// How often growth past the capacity reallocated the buffers on the device instead
+/// (capacity_growth.cpp).
+inline uint64_t device_growths_of(Simulation& sim) { return SimulationAccess::impl(sim).device_growths_; }
 
 }  // namespace hmsm::detail

@@ -63,6 +63,15 @@ struct __attribute__((visibility("hidden"))) Simulation::Impl {
     /// staging of the instances that fill the holes does not fit the capacity (growth_ then
     /// says how much room the next upload takes).
     Result<bool> swap_remove_in_place(const std::vector<uint32_t>& removed);
+    /// Grows the capacities to hold `needed` elements and `instances` instances (1.5 times at a
+    /// time, at least the reserve) on the device (Backend::grow, capacity_growth.cpp): true when
+    /// they hold them now, false where the backend cannot grow so (the caller then takes the
+    /// path that uploads the scene anew); an error (nothing changed) where the device has no
+    /// memory for it.
+    Result<bool> grow_on_device(const detail::ElementCounts& needed, uint64_t instances);
+    /// Whether growth may take grow_on_device (HMSM_DEVICE_GROWTH=0 at create turns it off, for
+    /// A/B measurements; tests compare both).
+    bool device_growth_ = true;
     /// The first elements of the instances, rebuilt when a change laid the list out anew.
     detail::InstanceOffsets& offsets();
     /// Marks what the general paths (reshape, a switch past the capacity) leave stale: the
@@ -254,6 +263,8 @@ struct __attribute__((visibility("hidden"))) Simulation::Impl {
     /// Times add/remove re-uploaded the whole scene (capacity outgrown, or a backend that
     /// cannot reshape in place); tests check that in-place changes leave it alone.
     uint64_t full_uploads_ = 0;
+    /// Times growth past the capacity took grow_on_device instead.
+    uint64_t device_growths_ = 0;
 };
 
 }  // namespace hmsm

@@ -193,16 +193,17 @@ TEST_F(BenchCli, QuickCpuWritesSchemaAndTables) {
     EXPECT_NE(r.out.find("| cpu | 20 | remove 1 |"), std::string::npos) << r.out;
     EXPECT_NE(r.out.find("| cpu | 20 | pause 2 |"), std::string::npos) << r.out;
     // Live control: removal and adding back within the capacity happen in place (no upload),
-    // adding past the capacity uploads the scene once; pausing is timed.
+    // adding past the capacity grows it once, on the device; pausing is timed.
     bool removal = false, growth = false, pause = false, lod = false;
     for (const json& e : d["live_control"]) {
         if (e.contains("remove_seconds")) {
             removal = true;
             EXPECT_EQ(e.value("scene_uploads", 99), 0) << e.dump();
         }
-        if (e.contains("add_past_capacity_seconds")) {
+        if (e.contains("add_past_capacity_seconds")) {  // the CPU backends grow on the device
             growth = true;
-            EXPECT_EQ(e.value("scene_uploads", 99), 1) << e.dump();
+            EXPECT_EQ(e.value("scene_uploads", 99), 0) << e.dump();
+            EXPECT_EQ(e.value("device_growths", 99), 1) << e.dump();
         }
         if (e.contains("lod_coarser_seconds")) {  // switches within the capacity: no upload
             lod = true;

@@ -86,13 +86,13 @@ public:
     Status set_instance_active(uint64_t instance, bool active);
     /// Appends instances of the scene's models; they start at rest (S = V = 0, posed at rest).
     /// Within the capacity the device buffers have (spare after removals or an earlier growth)
-    /// this costs what the added instances cost; past it, the scene is uploaded anew once with
-    /// 1.5 times the capacity (docs/driving.md).
+    /// this costs what the added instances cost; past it, the capacity first grows once to 1.5
+    /// times, the live state copied into larger buffers on the device (docs/driving.md).
     Status add_instances(std::span<const Instance> instances);
     /// Makes room on the device for `count` instances in all, each as large as the scene's
     /// largest model, so that adding up to that many costs only what the added instances cost:
-    /// one upload of the scene now if the room is smaller, nothing otherwise. The room is kept
-    /// when a later addition outgrows it. At most kMaxInstances (docs/driving.md).
+    /// one growth of the capacity now if the room is smaller, nothing otherwise. The room is
+    /// kept when a later addition outgrows it. At most kMaxInstances (docs/driving.md).
     Status reserve_instances(uint64_t count);
     /// As add_instances(instances), and `ids` (as many as `instances`) receives the added
     /// instances' handles, in order.

@@ -5,6 +5,7 @@
 // are host wall clock.
 #include "cpu_state.h"
 #include "step_plan.h"
+#include "../capacity_growth.h"
 #include "thread_pool.h"
 
 #include <algorithm>
@@ -87,6 +88,12 @@ public:
     CpuBackend(uint32_t threads, uint32_t min_chunk_elements)
         : pool_(std::make_unique<ThreadPool>(threads)), min_chunk_elements_(min_chunk_elements) {}
 
+    BackendCapabilities capabilities() const override {
+        BackendCapabilities can;
+        can.grows_on_device = true;
+        return can;
+    }
+
     BackendKind kind() const override {
         if (pool_) return BackendKind::cpu_parallel;
         return sizeof(T) == 8 ? BackendKind::cpu64 : BackendKind::cpu;
@@ -102,6 +109,27 @@ public:
         } catch (const std::bad_alloc&) {
             return {ErrorCode::out_of_memory, "cpu: not enough host memory for the scene"};
         }
+        return {};
+    }
+
+    /// Each capacity-sized vector is built anew at its new size and takes its live elements;
+    /// the vectors are swapped in only once all are built (bad_alloc leaves every one as it was).
+    Status grow(const SceneData& scene) override {
+        State<T> next;
+        std::array<bool, kBufferCount> grown{};
+        try {
+#define HMSM_CPU_GROW(name, binding, shape, scope) \
+    HMSM_TRY(grown_copy(s_.name, next.name, BufferId::name, scene, grown));
+            HMSM_BUFFERS(HMSM_CPU_GROW)
+#undef HMSM_CPU_GROW
+        } catch (const std::bad_alloc&) {
+            return {ErrorCode::out_of_memory, "cpu: not enough host memory to grow the scene's buffers"};
+        }
+#define HMSM_CPU_TAKE(name, binding, shape, scope) \
+    if (grown[binding]) s_.name.swap(next.name);
+        HMSM_BUFFERS(HMSM_CPU_TAKE)
+#undef HMSM_CPU_TAKE
+        s_.total_chains = scene.chain_capacity;  // the stride between ping-pong halves
         return {};
     }
 
@@ -288,6 +316,24 @@ public:
     }
 
 private:
+    /// `out`: buffer `id` of `old` grown to its element count under `scene` (capacity_growth.h),
+    /// where growth reallocates it (`grown[id]` then set).
+    template <class E>
+    static Status grown_copy(const std::vector<E>& old, std::vector<E>& out, BufferId id, const SceneData& scene,
+                             std::array<bool, kBufferCount>& grown) {
+        const uint64_t count = scene.element_count(id);
+        if (!sized_by_capacity(id) || count == old.size()) return {};
+        if (count < old.size())
+            return {ErrorCode::internal, "cpu: grow() would shrink buffer " + std::string(buffer_info(id).name)};
+        E zero;
+        std::memset(static_cast<void*>(&zero), 0, sizeof zero);
+        out.assign(count, zero);
+        for (const GrowthCopy& c : growth_plan(id, old.size(), count, live_elements(scene, id)).copies)
+            std::copy_n(old.begin() + std::ptrdiff_t(c.src), c.count, out.begin() + std::ptrdiff_t(c.dst));
+        grown[uint32_t(id)] = true;
+        return {};
+    }
+
     /// Calls f(buffer) for the host vector behind `id` after a range check.
     template <class F>
     static Status visit(State<T>& s, BufferId id, uint64_t first, uint64_t count, F&& f) {

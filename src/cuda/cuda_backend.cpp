@@ -65,6 +65,11 @@ Status CudaBackend::upload(const SceneData& scene) {
     return buffers_.upload(scene, stream_);
 }
 
+Status CudaBackend::grow(const SceneData& scene) {
+    HMSM_TRY(make_current());
+    return buffers_.grow(scene, stream_);
+}
+
 Status CudaBackend::read(BufferId id, uint64_t first, uint64_t count, void* dst, Scalar as) const {
     HMSM_TRY(make_current());
     return buffers_.read(id, first, count, dst, as, stream_);

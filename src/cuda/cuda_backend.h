@@ -25,6 +25,9 @@ public:
     BackendKind kind() const override { return BackendKind::cuda; }
     std::string device_name() const override { return device_name_; }
     Status upload(const SceneData& scene) override;
+    /// DeviceBuffers::grow on the backend's stream; the captured graphs, which hold the old
+    /// buffers' addresses, are captured again on their next run (they match by pointers).
+    Status grow(const SceneData& scene) override;
     /// Without profiling, each step of a named program (program_id) is one replay of a
     /// captured step graph (captured on the first run() of the program), an unnamed one is
     /// launched directly; with profiling, the launches (launch_plan.h: a run of
@@ -49,6 +52,7 @@ public:
         can.walks_ahead = walk_ahead_;
         can.prefers_path_walk = true;
         can.reads_async = true;
+        can.grows_on_device = true;
         return can;
     }
     /// Steps run without their wind_force dispatches, taking the angles the step before

@@ -1,6 +1,7 @@
 #include "device_buffers.h"
 
 #include "cuda_error.h"
+#include "../capacity_growth.h"
 #include "../device_words.h"
 #include "../element_moves.h"
 
@@ -9,6 +10,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <cstring>
+#include <utility>
 #include <vector>
 
 namespace hmsm::detail::cuda {
@@ -117,6 +119,88 @@ Status DeviceBuffers::upload(const SceneData& scene, cudaStream_t stream) {
         }
     }
     CUDA_TRY(cudaStreamSynchronize(stream));
+    return {};
+}
+
+Status DeviceBuffers::grow(const SceneData& scene, cudaStream_t stream) {
+    std::array<void*, kBufferCount> fresh{};
+    std::array<GrowthPlan, kBufferCount> plans;
+    void* fresh_twin = nullptr;
+    auto release_fresh = [&] {
+        for (void*& base : fresh) {
+            if (base) (void)cudaFree(base);
+            base = nullptr;
+        }
+        if (fresh_twin) (void)cudaFree(fresh_twin);
+        fresh_twin = nullptr;
+    };
+    auto allocate = [&](void*& base, uint64_t bytes, const std::string& what) -> Status {
+        if (const cudaError_t error = cudaMalloc(&base, bytes); error != cudaSuccess) {
+            base = nullptr;
+            const Status status = cuda_status(error, "cudaMalloc", __FILE__, __LINE__);
+            release_fresh();
+            return {status.code(), "cuda: cannot grow " + what + " to " + human_bytes(bytes) + ": " + status.message()};
+        }
+        return {};
+    };
+    for (const BufferInfo& info : kBufferTable) {
+        const uint32_t b = uint32_t(info.id);
+        const uint64_t count = scene.element_count(info.id);
+        plans[b] = growth_plan(info.id, counts_[b], count, live_elements(scene, info.id));
+        if (!plans[b].reallocates) continue;
+        if (count < counts_[b]) {
+            release_fresh();
+            return {ErrorCode::internal, "cuda: grow() would shrink buffer " + std::string(info.name)};
+        }
+        HMSM_TRY(allocate(fresh[b], std::max<uint64_t>(count * device_element_bytes(info.id), 16),
+                          "buffer " + std::string(info.name)));
+    }
+    const uint32_t state = uint32_t(BufferId::chain_state);
+    if (plans[state].reallocates)  // the twin is written by the walk ahead before it is read
+        HMSM_TRY(allocate(fresh_twin, std::max<uint64_t>(scene.element_count(BufferId::chain_state) *
+                                                              device_element_bytes(BufferId::chain_state),
+                                                          16),
+                          "the next-step angles"));
+    // The live elements device to device, the rest zeroed, in stream order after all earlier work.
+    auto enqueue = [&]() -> cudaError_t {
+        for (const BufferInfo& info : kBufferTable) {
+            const uint32_t b = uint32_t(info.id);
+            const uint64_t element_bytes = device_element_bytes(info.id);
+            auto* to = static_cast<std::byte*>(fresh[b]);
+            const auto* from = static_cast<const std::byte*>(bases_[b]);
+            for (const GrowthCopy& c : plans[b].copies)
+                if (cudaError_t e = cudaMemcpyAsync(to + c.dst * element_bytes, from + c.src * element_bytes,
+                                                    c.count * element_bytes, cudaMemcpyDeviceToDevice, stream);
+                    e != cudaSuccess)
+                    return e;
+            for (const GrowthZero& z : plans[b].zeros)
+                if (cudaError_t e = cudaMemsetAsync(to + z.first * element_bytes, 0, z.count * element_bytes, stream);
+                    e != cudaSuccess)
+                    return e;
+        }
+        return cudaStreamSynchronize(stream);
+    };
+    if (const cudaError_t error = enqueue(); error != cudaSuccess) {
+        (void)cudaStreamSynchronize(stream);
+        release_fresh();
+        return cuda_status(error, "cudaMemcpyAsync (growing the buffers)", __FILE__, __LINE__);
+    }
+    for (const BufferInfo& info : kBufferTable) {
+        const uint32_t b = uint32_t(info.id);
+        if (!plans[b].reallocates) continue;
+        (void)cudaFree(bases_[b]);
+        bases_[b] = std::exchange(fresh[b], nullptr);
+        counts_[b] = scene.element_count(info.id);
+    }
+    if (fresh_twin) {
+        (void)cudaFree(next_state_);
+        next_state_ = std::exchange(fresh_twin, nullptr);
+    }
+#define HMSM_CUDA_BIND(name, binding, shape, scope) \
+    pointers_.name = static_cast<DeviceType_##shape*>(bases_[binding]);
+    HMSM_BUFFERS(HMSM_CUDA_BIND)
+#undef HMSM_CUDA_BIND
+    pointers_.chain_state_next = static_cast<float4*>(next_state_);
     return {};
 }
 

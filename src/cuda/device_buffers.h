@@ -28,6 +28,11 @@ public:
     Status allocate(const SceneData& scene);
     /// Copies the static buffers and zero-fills the state buffers; complete on return.
     Status upload(const SceneData& scene, cudaStream_t stream);
+    /// Backend::grow: allocates the capacity-sized buffers (and chain_state's twin) anew for
+    /// `scene`, copies their live elements device to device and zeroes the rest on `stream`,
+    /// then frees the old ones; complete on return. When an allocation fails, frees what it
+    /// took and returns out_of_memory with every buffer as it was.
+    Status grow(const SceneData& scene, cudaStream_t stream);
 
     /// Backend::read / Backend::write over elements [first, first + count) of `id`.
     Status read(BufferId id, uint64_t first, uint64_t count, void* dst, Scalar as,

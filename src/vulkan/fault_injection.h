@@ -11,6 +11,7 @@ enum class VulkanFault {
     none,
     out_of_device_memory_at_upload,  ///< upload() fails as vkAllocateMemory would
     device_lost_at_submit,           ///< the (after+1)-th submission fails; the device stays lost
+    out_of_device_memory_at_growth,  ///< grow() fails as vkAllocateMemory would
 };
 
 /// Applies to backends created after the call; `after` successful submissions come first.

@@ -143,11 +143,8 @@ Status VulkanBackend::upload(const SceneData& scene) {
     for (const BufferInfo& info : kBufferTable) {
         const uint32_t b = uint32_t(info.id);
         element_counts_[b] = scene.element_count(info.id);
-        VkBufferUsageFlags usage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT |
-                                   VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT;
-        if (is_shared_output(info.id)) usage |= VK_BUFFER_USAGE_VERTEX_BUFFER_BIT;
         auto buffer = Buffer::create(*device_, plan_->physical_elements(info.id, scene) * device_element_bytes(info.id),
-                                     usage, MemoryUse::device_local, std::string(info.name));
+                                     usage_of(info.id), MemoryUse::device_local, std::string(info.name));
         if (!buffer) return buffer.status();
         buffers_[b] = std::move(buffer).value();
     }
@@ -169,6 +166,13 @@ Status VulkanBackend::upload(const SceneData& scene) {
     if (!sets) return sets.status();
     sets_ = std::move(sets).value();
     return device_->take_validation_messages();
+}
+
+VkBufferUsageFlags VulkanBackend::usage_of(BufferId id) {
+    VkBufferUsageFlags usage =
+        VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT;
+    if (is_shared_output(id)) usage |= VK_BUFFER_USAGE_VERTEX_BUFFER_BIT;
+    return usage;
 }
 
 Result<uint64_t> VulkanBackend::move_scratch_bytes(BufferId id, std::span<const ElementMove> moves) const {

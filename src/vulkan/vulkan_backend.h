@@ -39,6 +39,11 @@ public:
     BackendKind kind() const override { return BackendKind::vulkan; }
     std::string device_name() const override { return device_->name(); }
     Status upload(const SceneData& scene) override;
+    /// New buffers for the capacity-sized ids and one submission of vkCmdCopyBuffer (the live
+    /// elements) and vkCmdFillBuffer (the rest), which waits; the descriptor sets are made
+    /// anew. Held-back changes are submitted first. Only for a scene in one window that stays
+    /// in one (growth.cpp); else unsupported, and the simulation uploads the scene anew.
+    Status grow(const SceneData& scene) override;
     Status run(std::span<const Dispatch> program, std::span<const RunStep> steps, uint64_t program_id = 0) override;
     Status read(BufferId id, uint64_t first, uint64_t count, void* dst, Scalar as) const override;
     Status write(BufferId id, uint64_t first, uint64_t count, const void* src, Scalar as) override;
@@ -104,6 +109,7 @@ public:
         can.reshapes_in_place = plan_ && !plan_->split();
         can.dispatches_are_expensive = true;
         can.prefers_path_walk = !device_->is_cpu();
+        can.grows_on_device = can.reshapes_in_place;
         return can;
     }
 
@@ -126,6 +132,8 @@ private:
     /// Static model buffers within maxStorageBufferRange; the segments of the state buffers.
     Status plan_windows(const SceneData& scene);
     Status upload_static(BufferId id, const SceneData& scene);
+    /// How buffer `id` is used: storage and transfer, and vertex input for the shared outputs.
+    static VkBufferUsageFlags usage_of(BufferId id);
     Status submit_chunk(Slot& slot, std::span<const RunStep> steps);
     /// Waits for `slot` and adds its timestamps to times_ (of recording_'s timed parts).
     Status finish_slot(Slot& slot);

@@ -1,6 +1,7 @@
 #include "cuda_emulation_backend.h"
 
 #include "cuda/launch_dispatch.h"
+#include "capacity_growth.h"
 #include "cuda/launch_plan.h"
 #include "device_words.h"
 #include "element_moves.h"
@@ -29,6 +30,7 @@ public:
         detail::BackendCapabilities can;
         can.walks_ahead = ahead_ != nullptr;
         can.prefers_path_walk = true;  // as the CUDA backend
+        can.grows_on_device = true;
         return can;
     }
 
@@ -42,12 +44,30 @@ public:
             else bytes.assign(scene.element_count(info.id) * detail::device_element_bytes(info.id), std::byte{0});
             bytes.resize(std::max<size_t>(bytes.size(), 16));
         }
-#define HMSM_EMULATION_BIND(name, binding, shape, scope) \
-    pointers_.name = reinterpret_cast<detail::cuda::DeviceType_##shape*>(bytes_[binding].data());
-        HMSM_BUFFERS(HMSM_EMULATION_BIND)
-#undef HMSM_EMULATION_BIND
         next_state_.assign(bytes_[uint32_t(BufferId::chain_state)].size(), std::byte{0});
-        pointers_.chain_state_next = reinterpret_cast<float4*>(next_state_.data());
+        bind();
+        return {};
+    }
+
+    /// The CUDA backend's growth (src/cuda/device_buffers.cpp) over the host images: each
+    /// capacity-sized buffer anew, its live elements copied as capacity_growth.h plans them.
+    Status grow(const detail::SceneData& scene) override {
+        for (const detail::BufferInfo& info : detail::kBufferTable) {
+            const uint32_t b = uint32_t(info.id);
+            const uint64_t count = scene.element_count(info.id);
+            const detail::GrowthPlan plan = detail::growth_plan(info.id, counts_[b], count,
+                                                                detail::live_elements(scene, info.id));
+            if (!plan.reallocates) continue;
+            const uint64_t element_bytes = detail::device_element_bytes(info.id);
+            std::vector<std::byte> grown(std::max<size_t>(count * element_bytes, 16), std::byte{0});
+            for (const detail::GrowthCopy& c : plan.copies)
+                std::memcpy(grown.data() + c.dst * element_bytes, bytes_[b].data() + c.src * element_bytes,
+                            c.count * element_bytes);
+            bytes_[b] = std::move(grown);
+            counts_[b] = count;
+            if (info.id == BufferId::chain_state) next_state_.assign(bytes_[b].size(), std::byte{0});
+        }
+        bind();
         return {};
     }
 
@@ -179,6 +199,13 @@ private:
                                           detail::cuda::RangeCopy::gather);
         detail::cuda::emulate_copy_ranges(buffer, scratch.data(), table.data(), uint32_t(table.size()), words,
                                           detail::cuda::RangeCopy::scatter);
+    }
+    void bind() {
+#define HMSM_EMULATION_BIND(name, binding, shape, scope) \
+    pointers_.name = reinterpret_cast<detail::cuda::DeviceType_##shape*>(bytes_[binding].data());
+        HMSM_BUFFERS(HMSM_EMULATION_BIND)
+#undef HMSM_EMULATION_BIND
+        pointers_.chain_state_next = reinterpret_cast<float4*>(next_state_.data());
     }
 
     Status check_range(BufferId id, uint64_t first, uint64_t count) const {

@@ -1,8 +1,8 @@
 // Live-control costs (src/live_control.cpp): removing instances moves the survivors' state on
 // the device (all those after the first hole in order, or only the fillers of a swap removal),
 // adding them back within the capacity writes only the added ones, adding past the
-// capacity re-uploads the scene once with room to grow; switching instances between levels of
-// detail; a wind change between two steps; and pausing and resuming a tenth of the forest.
+// capacity grows it once by half (on the device, or by re-uploading the scene where the backend
+// cannot or HMSM_DEVICE_GROWTH=0); switching instances between levels of detail; a wind change between two steps; and pausing and resuming a tenth of the forest.
 #include "bench_live.h"
 
 #include "bench_frames.h"
@@ -168,10 +168,11 @@ nlohmann::json measure_live_control(const TreeModel& model, const std::vector<Ba
                                    {"paused_steps_seconds", paused_steps},
                                    {"resume_seconds", resume}});
         }
-        // Adding past the capacity (one re-upload, the capacity grows by half), then as many
-        // again, which now fit.
+        // Adding past the capacity (one growth by half: on the device, or by a re-upload where
+        // the backend cannot or HMSM_DEVICE_GROWTH=0), then as many again, which now fit.
         const std::vector<Instance> more(std::max(1u, forest / 10), s.instances()[0]);
         const uint64_t uploads = detail::full_uploads_of(s);
+        const uint64_t growths = detail::device_growths_of(s);
         start = Clock::now();
         status = s.add_instances(more);
         const double grow = seconds_since(start);
@@ -181,7 +182,8 @@ nlohmann::json measure_live_control(const TreeModel& model, const std::vector<Ba
         if (status)
             results.push_back({{"backend", to_string(kind)}, {"instances", forest}, {"added", more.size()},
                                {"add_past_capacity_seconds", grow}, {"add_within_capacity_seconds", fit},
-                               {"scene_uploads", detail::full_uploads_of(s) - uploads}});
+                               {"scene_uploads", detail::full_uploads_of(s) - uploads},
+                               {"device_growths", detail::device_growths_of(s) - growths}});
         // One instance past the capacity, once the room is filled: the single call that pays
         // for the growth.
         {
@@ -191,6 +193,7 @@ nlohmann::json measure_live_control(const TreeModel& model, const std::vector<Ba
                                                      (d.chain_capacity - d.total_chains) / per);
             if (status && room > 0) status = s.add_instances(std::vector<Instance>(room, s.instances()[0]));
             const uint64_t before = detail::full_uploads_of(s);
+            const uint64_t grown_before = detail::device_growths_of(s);
             start = Clock::now();
             const Instance one = s.instances()[0];
             if (status) status = s.add_instances({&one, 1});
@@ -198,7 +201,8 @@ nlohmann::json measure_live_control(const TreeModel& model, const std::vector<Ba
             if (status)
                 results.push_back({{"backend", to_string(kind)}, {"instances", s.instances().size() - 1},
                                    {"add_one_past_capacity_seconds", one_past},
-                                   {"scene_uploads", detail::full_uploads_of(s) - before}});
+                                   {"scene_uploads", detail::full_uploads_of(s) - before},
+                                   {"device_growths", detail::device_growths_of(s) - grown_before}});
         }
     }
     return results;
@@ -218,7 +222,9 @@ std::string render_live_control(const nlohmann::json& rows) {
     for (const nlohmann::json& r : rows) {
         const std::string head = "| " + r.value("backend", std::string()) + " | " +
                                  std::to_string(r.value("instances", 0ull)) + " | ";
-        const std::string uploads = r.contains("scene_uploads") ? std::to_string(r["scene_uploads"].get<uint64_t>()) : "";
+        std::string uploads = r.contains("scene_uploads") ? std::to_string(r["scene_uploads"].get<uint64_t>()) : "";
+        if (r.value("device_growths", 0ull) > 0)
+            uploads += " (" + std::to_string(r["device_growths"].get<uint64_t>()) + " grown on the device)";
         auto line = [&](const std::string& change, const std::string& cell, const std::string& up) {
             out += head + change + " | " + cell + " | " + up + " |\n";
         };

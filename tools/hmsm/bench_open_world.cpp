@@ -385,7 +385,7 @@ json run_backend(const TreeModel& model, const std::string& model_name, BackendK
         if (Status status = world.frame(move, nullptr, nullptr, nullptr); !status) return stop(status);
     Calls moving, still;
     std::vector<double> changes, switched;
-    const uint64_t uploads = detail::full_uploads_of(sim);
+    const uint64_t uploads = detail::full_uploads_of(sim), growths = detail::device_growths_of(sim);
     for (uint32_t k = 0; k < s.frames; ++k) {
         uint64_t changed = 0, lod = 0;
         if (Status status = world.frame(move, &moving, &changed, &lod); !status) return stop(status);
@@ -393,6 +393,7 @@ json run_backend(const TreeModel& model, const std::string& model_name, BackendK
         switched.push_back(double(lod));
     }
     row["scene_uploads"] = detail::full_uploads_of(sim) - uploads;
+    row["device_growths"] = detail::device_growths_of(sim) - growths;
     for (uint32_t k = 0; k < std::min<uint32_t>(s.frames, 100); ++k)
         if (Status status = world.frame({0.0, 0.0}, &still, nullptr, nullptr); !status) return stop(status);
 
