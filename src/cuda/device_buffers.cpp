@@ -90,11 +90,7 @@ Status DeviceBuffers::allocate(const SceneData& scene) {
         return {status.code(), "cuda: cannot allocate the next-step angles of " + human_bytes(state_bytes) + ": " +
                                    status.message()};
     }
-#define HMSM_CUDA_BIND(name, binding, shape, scope) \
-    pointers_.name = static_cast<DeviceType_##shape*>(bases_[binding]);
-    HMSM_BUFFERS(HMSM_CUDA_BIND)
-#undef HMSM_CUDA_BIND
-    pointers_.chain_state_next = static_cast<float4*>(next_state_);
+    bind_pointers();
     return {};
 }
 
@@ -196,12 +192,16 @@ Status DeviceBuffers::grow(const SceneData& scene, cudaStream_t stream) {
         (void)cudaFree(next_state_);
         next_state_ = std::exchange(fresh_twin, nullptr);
     }
+    bind_pointers();
+    return {};
+}
+
+void DeviceBuffers::bind_pointers() {
 #define HMSM_CUDA_BIND(name, binding, shape, scope) \
     pointers_.name = static_cast<DeviceType_##shape*>(bases_[binding]);
     HMSM_BUFFERS(HMSM_CUDA_BIND)
 #undef HMSM_CUDA_BIND
     pointers_.chain_state_next = static_cast<float4*>(next_state_);
-    return {};
 }
 
 Status DeviceBuffers::move_one_by_one(BufferId id, std::span<const ElementMove> moves, cudaStream_t stream) {

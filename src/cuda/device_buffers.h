@@ -77,6 +77,8 @@ public:
 
 private:
     void release();
+    /// pointers_ from bases_ and next_state_ (after they are allocated or regrown).
+    void bind_pointers();
     Status check_range(BufferId id, uint64_t first, uint64_t count) const;
     /// The pinned (page-locked) host staging buffer of read/write, two halves of
     /// kStagingBytes / 2, allocated on first use; nullptr where pinned memory is refused (the

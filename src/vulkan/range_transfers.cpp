@@ -11,6 +11,20 @@
 
 namespace hmsm::detail::vk {
 
+namespace {
+
+/// A copy region per non-empty range, in the buffer's bytes (the transfer fills the staging
+/// side, back to back).
+std::vector<VkBufferCopy> buffer_regions(std::span<const ElementRange> ranges, uint64_t element_bytes) {
+    std::vector<VkBufferCopy> regions;
+    regions.reserve(ranges.size());
+    for (const ElementRange& r : ranges)
+        if (r.count > 0) regions.push_back({r.first * element_bytes, 0, r.count * element_bytes});
+    return regions;
+}
+
+}  // namespace
+
 bool VulkanBackend::copies_ranges_at_once(std::span<const ElementRange> ranges, bool writes) const {
     if (!batch_transfers_ || !plan_ || plan_->split()) return false;
     if (writes && (record_target_ || holding_back() || ranges_overlap(ranges))) return false;
@@ -25,10 +39,7 @@ Status VulkanBackend::read_ranges(BufferId id, std::span<const ElementRange> ran
     HMSM_TRY(const_cast<VulkanBackend*>(this)->submit_held_back());
     const Shape shape = buffer_info(id).shape;
     const uint64_t element_bytes = device_element_bytes(id), scalar_bytes = as == Scalar::f64 ? 8 : 4;
-    std::vector<VkBufferCopy> regions;
-    regions.reserve(ranges.size());
-    for (const ElementRange& r : ranges)
-        if (r.count > 0) regions.push_back({r.first * element_bytes, 0, r.count * element_bytes});
+    const std::vector<VkBufferCopy> regions = buffer_regions(ranges, element_bytes);
     auto* out = static_cast<std::byte*>(dst);
     HMSM_TRY(transfer_->download_ranges(buffers_[uint32_t(id)], regions,
                                         [&](const void* staging, VkDeviceSize first_byte, VkDeviceSize bytes) {
@@ -45,10 +56,7 @@ Status VulkanBackend::write_ranges(BufferId id, std::span<const ElementRange> ra
     HMSM_TRY(submit_held_back());
     const Shape shape = buffer_info(id).shape;
     const uint64_t element_bytes = device_element_bytes(id), scalar_bytes = as == Scalar::f64 ? 8 : 4;
-    std::vector<VkBufferCopy> regions;
-    regions.reserve(ranges.size());
-    for (const ElementRange& r : ranges)
-        if (r.count > 0) regions.push_back({r.first * element_bytes, 0, r.count * element_bytes});
+    const std::vector<VkBufferCopy> regions = buffer_regions(ranges, element_bytes);
     const auto* in = static_cast<const std::byte*>(src);
     HMSM_TRY(transfer_->upload_ranges(buffers_[uint32_t(id)], regions,
                                       [&](void* staging, VkDeviceSize first_byte, VkDeviceSize bytes) {
@@ -62,10 +70,7 @@ namespace {
 
 /// The regions of `ranges` in a buffer of `element_bytes` elements (srcOffset, size).
 std::vector<VkBufferCopy> byte_regions(std::span<const ElementRange> ranges, uint64_t element_bytes) {
-    std::vector<VkBufferCopy> regions;
-    regions.reserve(ranges.size());
-    for (const ElementRange& r : ranges)
-        if (r.count > 0) regions.push_back({r.first * element_bytes, 0, r.count * element_bytes});
+    const std::vector<VkBufferCopy> regions = buffer_regions(ranges, element_bytes);
     return regions;
 }
 
