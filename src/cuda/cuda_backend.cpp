@@ -33,6 +33,8 @@ Result<std::unique_ptr<Backend>> CudaBackend::create() {
     const char* ahead = std::getenv("HMSM_CUDA_WALK_AHEAD");
     backend->walk_ahead_ = !(ahead && std::string_view(ahead) == "0");
     backend->batch_runs_ = batch_runs_enabled();
+    const char* at_once = std::getenv("HMSM_CUDA_CAPTURE_AT_ONCE");
+    backend->capture_at_once_ = at_once && std::string_view(at_once) == "1";
     return std::unique_ptr<Backend>(std::move(backend));
 }
 
@@ -151,18 +153,32 @@ Result<double> CudaBackend::measure_copy_bandwidth(uint64_t bytes) {
     return 2.0 * double(bytes) / median_seconds;
 }
 
-Result<StepGraph*> CudaBackend::graph_for(std::span<const Dispatch> program, uint64_t program_id) {
-    size_t oldest = 0;
+StepGraph* CudaBackend::find_graph(std::span<const Dispatch> program, uint64_t program_id) {
     for (size_t i = 0; i < graphs_.size(); ++i) {
         if (graphs_[i].matches(program, buffers_.pointers(), program_id)) {
             graph_used_[i] = ++graph_clock_;
             return &graphs_[i];
         }
-        if (graph_used_[i] < graph_used_[oldest]) oldest = i;
     }
+    return nullptr;
+}
+
+Result<StepGraph*> CudaBackend::capture_graph(std::span<const Dispatch> program, uint64_t program_id) {
+    size_t oldest = 0;
+    for (size_t i = 1; i < graphs_.size(); ++i)
+        if (graph_used_[i] < graph_used_[oldest]) oldest = i;
     HMSM_TRY(graphs_[oldest].capture(program, buffers_.pointers(), batch_runs_, stream_, program_id));
     graph_used_[oldest] = ++graph_clock_;
+    ++graphs_captured_;
     return &graphs_[oldest];
+}
+
+bool CudaBackend::first_run(uint64_t step_id) {
+    if (capture_at_once_) return false;
+    if (std::find(run_once_.begin(), run_once_.end(), step_id) != run_once_.end()) return false;
+    run_once_[run_once_next_] = step_id;
+    run_once_next_ = (run_once_next_ + 1) % run_once_.size();
+    return true;
 }
 
 // A program of the walk ahead leaves in chain_state_next the angles of the step after its own,
@@ -192,25 +208,34 @@ Status CudaBackend::run(std::span<const Dispatch> program, std::span<const RunSt
         const std::span<const Dispatch> step = how == AheadStep::take    ? std::span<const Dispatch>(ahead_.without_wind)
                                                : how == AheadStep::plain ? std::span<const Dispatch>(ahead_.plain)
                                                                          : program;
-        if (profiling_ || program_id == 0) {
-            // Timed launch by launch, or a program run once (a pose at rest after a live
-            // change): capturing a graph would cost more than it saves and evict a step's.
-            HMSM_TRY(run_launches(step, slot, profiling_));
-        } else {
-            // Each variant of a named program is a program of its own, with an id of its own.
-            const uint64_t variant = how == AheadStep::take ? 1 : how == AheadStep::plain ? 2 : 0;
-            auto graph = graph_for(step, program_id != 0 ? 3 * program_id + variant : 0);
-            if (!graph) return graph.status();
-            HMSM_TRY((*graph)->replay(slot, stream_));
+        // Each variant of a named program is a program of its own, with an id of its own.
+        const uint64_t variant = how == AheadStep::take ? 1 : how == AheadStep::plain ? 2 : 0;
+        const uint64_t step_id = program_id != 0 ? 3 * program_id + variant : 0;
+        StepGraph* graph = profiling_ || step_id == 0 ? nullptr : find_graph(step, step_id);
+        // Timed launch by launch, or a program run once (a pose at rest after a live change,
+        // the first step after a level switch): capturing a graph would cost more than it
+        // saves and evict a step's. A named program is captured on its second step.
+        if (!graph && (profiling_ || step_id == 0 || first_run(step_id))) {
+            HMSM_TRY(run_launches(step, slot, profiling_, step_id));
+            continue;
         }
+        if (!graph) {
+            auto captured = capture_graph(step, step_id);
+            if (!captured) return captured.status();
+            graph = *captured;
+        }
+        HMSM_TRY(graph->replay(slot, stream_));
     }
     if (waits_for_steps_ || profiling_) CUDA_TRY(cudaStreamSynchronize(stream_));
     times_.steps = profiling_ ? steps.size() : 0;
     return {};
 }
 
-Status CudaBackend::run_launches(std::span<const Dispatch> program, uint32_t slot, bool timed) {
-    if (!same_dispatches(program, launched_program_) || launched_plan_.launches.empty()) {
+Status CudaBackend::run_launches(std::span<const Dispatch> program, uint32_t slot, bool timed, uint64_t step_id) {
+    ++steps_launched_;
+    const bool same = (step_id != 0 && step_id == launched_id_) || same_dispatches(program, launched_program_);
+    launched_id_ = step_id;
+    if (!same || launched_plan_.launches.empty()) {
         launched_program_.assign(program.begin(), program.end());
         launched_plan_ = plan_launches(launched_program_, batch_runs_, max_launch_blocks());
         HMSM_TRY(launched_table_.upload(launched_plan_, stream_));

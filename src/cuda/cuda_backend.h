@@ -29,8 +29,10 @@ public:
     /// buffers' addresses, are captured again on their next run (they match by pointers).
     Status grow(const SceneData& scene) override;
     /// Without profiling, each step of a named program (program_id) is one replay of a
-    /// captured step graph (captured on the first run() of the program), an unnamed one is
-    /// launched directly; with profiling, the launches (launch_plan.h: a run of
+    /// captured step graph, captured on the program's second step (its first is launched
+    /// directly, as the one step of a program that changes every frame would cost more to
+    /// capture than to launch; HMSM_CUDA_CAPTURE_AT_ONCE=1, read when the backend is created,
+    /// captures on the first); an unnamed one is launched directly; with profiling, the launches (launch_plan.h: a run of
     /// dispatches over different groups is one batched launch) are enqueued one by one
     /// between events and every step is timed. A program of the walk that integrates ahead
     /// runs each step as `ahead` says (cuda_backend.cpp).
@@ -60,6 +62,9 @@ public:
     uint64_t steps_taken_ahead() const { return steps_taken_ahead_; }
     /// Steps of a walk-ahead program run as the plain walk (AheadStep::plain; for tests).
     uint64_t steps_walked_plain() const { return steps_walked_plain_; }
+    /// Step graphs captured, and steps launched directly rather than replayed (for tests).
+    uint64_t graphs_captured() const { return graphs_captured_; }
+    uint64_t steps_launched() const { return steps_launched_; }
     PassTimes pass_times() const override { return times_; }
 
     /// For `hmsm bench`'s roofline: the median of a few device-to-device copies of `bytes`
@@ -78,13 +83,16 @@ public:
 private:
     CudaBackend(int device, std::string name, cudaStream_t own_stream)
         : device_(device), device_name_(std::move(name)), own_stream_(own_stream), stream_(own_stream) {}
-    /// The captured graph of `program` over the current buffers, captured now if none of the
-    /// last few is.
-    /// The graph of `program` (named `program_id` where non-zero), captured if none holds it.
-    Result<StepGraph*> graph_for(std::span<const Dispatch> program, uint64_t program_id);
-    /// One step of `program` launch by launch (launch_plan.h); `timed`: between events, its
-    /// device times added to times_ (synchronizes).
-    Status run_launches(std::span<const Dispatch> program, uint32_t slot, bool timed);
+    /// The captured graph of `program` (named `program_id` where non-zero) over the current
+    /// buffers, if one of the last few is.
+    StepGraph* find_graph(std::span<const Dispatch> program, uint64_t program_id);
+    /// Captures `program` in place of the least recently used graph.
+    Result<StepGraph*> capture_graph(std::span<const Dispatch> program, uint64_t program_id);
+    /// Whether the named step `step_id` runs for the first time of late (then remembered).
+    bool first_run(uint64_t step_id);
+    /// One step of `program` (named `step_id` where non-zero) launch by launch (launch_plan.h);
+    /// `timed`: between events, its device times added to times_ (synchronizes).
+    Status run_launches(std::span<const Dispatch> program, uint32_t slot, bool timed, uint64_t step_id = 0);
     Status make_current() const;
 
     int device_;
@@ -105,6 +113,7 @@ private:
     /// The program last run launch by launch (profiled, or run once), its launches and their
     /// table.
     std::vector<Dispatch> launched_program_;
+    uint64_t launched_id_ = 0;  // its step id (0: none)
     LaunchPlan launched_plan_;
     LaunchTable launched_table_;
     /// The last program of the walk ahead that ran, and what its steps run instead where they
@@ -114,6 +123,12 @@ private:
     bool walks_ahead_ = false;  // whether that program walks ahead (then ahead_ is its variants)
     uint64_t steps_taken_ahead_ = 0;   // steps that took the angles integrated ahead
     uint64_t steps_walked_plain_ = 0;  // steps_walked_plain()
+    uint64_t graphs_captured_ = 0;     // graphs_captured()
+    uint64_t steps_launched_ = 0;      // steps_launched()
+    /// The named steps run once of late (launched directly; captured if they run again).
+    std::array<uint64_t, 8> run_once_{};
+    size_t run_once_next_ = 0;
+    bool capture_at_once_ = false;  // HMSM_CUDA_CAPTURE_AT_ONCE=1
     std::vector<cudaEvent_t> events_;  // profiling: one before and one after each dispatch
     bool profiling_ = false;
     bool waits_for_steps_ = true;

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cstdlib>
+#include <cstring>
 #include <string_view>
 
 namespace hmsm::detail::cuda {
@@ -138,32 +139,50 @@ void emulate_launch(const LaunchPlan& plan, const PlannedLaunch& launch, std::sp
                   plan.batch(launch, plan.constants.data(), plan.block_begin.data(), wind_slot), launch.shape);
 }
 
-LaunchTable::~LaunchTable() { release(); }
+LaunchTable::~LaunchTable() {
+    for (Slot& slot : slots_) release(slot);
+}
 
-void LaunchTable::release() {
-    if (constants_) (void)cudaFree(constants_);
-    if (block_begin_) (void)cudaFree(block_begin_);
-    constants_ = nullptr;
-    block_begin_ = nullptr;
-    constants_capacity_ = block_begin_capacity_ = 0;
+void LaunchTable::release(Slot& slot) {
+    if (slot.constants) (void)cudaFree(slot.constants);
+    if (slot.block_begin) (void)cudaFree(slot.block_begin);
+    if (slot.staging) (void)cudaFreeHost(slot.staging);
+    if (slot.used) (void)cudaEventDestroy(slot.used);
+    slot = {};
 }
 
 Status LaunchTable::upload(const LaunchPlan& plan, cudaStream_t stream) {
     if (plan.constants.empty()) return {};
-    // Launches enqueued earlier may still read the table this one replaces.
-    CUDA_TRY(cudaStreamSynchronize(stream));
-    if (plan.constants.size() > constants_capacity_ || plan.block_begin.size() > block_begin_capacity_) {
-        release();
-        CUDA_TRY(cudaMalloc(reinterpret_cast<void**>(&constants_), plan.constants.size() * sizeof(gpu::PassConstants)));
-        constants_capacity_ = plan.constants.size();
-        CUDA_TRY(cudaMalloc(reinterpret_cast<void**>(&block_begin_), plan.block_begin.size() * sizeof(uint32_t)));
-        block_begin_capacity_ = plan.block_begin.size();
+    Slot& current = slots_[current_];
+    if (current.used) {
+        // Every launch that reads the current slot is enqueued before this point.
+        CUDA_TRY(cudaEventRecord(current.used, stream));
+        current.marked = true;
     }
-    CUDA_TRY(cudaMemcpyAsync(constants_, plan.constants.data(), plan.constants.size() * sizeof(gpu::PassConstants),
-                             cudaMemcpyHostToDevice, stream));
-    CUDA_TRY(cudaMemcpyAsync(block_begin_, plan.block_begin.data(), plan.block_begin.size() * sizeof(uint32_t),
-                             cudaMemcpyHostToDevice, stream));
-    CUDA_TRY(cudaStreamSynchronize(stream));
+    const size_t next = current.constants ? 1 - current_ : current_;
+    Slot& slot = slots_[next];
+    // The launches that read this slot before the previous upload, and its copies.
+    if (slot.marked) CUDA_TRY(cudaEventSynchronize(slot.used));
+    slot.marked = false;
+    if (plan.constants.size() > slot.constants_capacity || plan.block_begin.size() > slot.block_begin_capacity) {
+        release(slot);
+        CUDA_TRY(cudaMalloc(reinterpret_cast<void**>(&slot.constants), plan.constants.size() * sizeof(gpu::PassConstants)));
+        slot.constants_capacity = plan.constants.size();
+        CUDA_TRY(cudaMalloc(reinterpret_cast<void**>(&slot.block_begin), plan.block_begin.size() * sizeof(uint32_t)));
+        slot.block_begin_capacity = plan.block_begin.size();
+        CUDA_TRY(cudaMallocHost(&slot.staging, slot.constants_capacity * sizeof(gpu::PassConstants) +
+                                                   slot.block_begin_capacity * sizeof(uint32_t)));
+        CUDA_TRY(cudaEventCreateWithFlags(&slot.used, cudaEventDisableTiming));
+    }
+    auto* staged_constants = static_cast<unsigned char*>(slot.staging);
+    unsigned char* staged_block_begin = staged_constants + slot.constants_capacity * sizeof(gpu::PassConstants);
+    const size_t constants_bytes = plan.constants.size() * sizeof(gpu::PassConstants);
+    const size_t block_begin_bytes = plan.block_begin.size() * sizeof(uint32_t);
+    std::memcpy(staged_constants, plan.constants.data(), constants_bytes);
+    std::memcpy(staged_block_begin, plan.block_begin.data(), block_begin_bytes);
+    CUDA_TRY(cudaMemcpyAsync(slot.constants, staged_constants, constants_bytes, cudaMemcpyHostToDevice, stream));
+    CUDA_TRY(cudaMemcpyAsync(slot.block_begin, staged_block_begin, block_begin_bytes, cudaMemcpyHostToDevice, stream));
+    current_ = next;
     return {};
 }
 

@@ -12,6 +12,7 @@
 #include "../backend.h"
 #include "../../kernels/cuda/launchers.h"
 
+#include <array>
 #include <span>
 #include <vector>
 
@@ -65,8 +66,12 @@ cudaError_t enqueue_launch(const LaunchPlan& plan, const PlannedLaunch& launch, 
 void emulate_launch(const LaunchPlan& plan, const PlannedLaunch& launch, std::span<const Dispatch> program,
                     const BufferPointers& host_buffers, uint32_t wind_slot);
 
-/// Device copy of a plan's table; freed with the object (its owner makes sure no enqueued
-/// launch still reads it).
+/// Device copy of a plan's table, in two slots: an upload fills the slot the previous upload
+/// did not, from pinned host memory, so it waits neither for the launches still reading the
+/// current table nor for the copy itself (a copy from pageable memory would wait for the whole
+/// stream). It waits only where the slot it fills is still read by launches enqueued before the
+/// previous upload (an event recorded then marks them). Freed with the object (its owner makes
+/// sure no enqueued launch still reads it).
 class LaunchTable {
 public:
     LaunchTable() = default;
@@ -74,17 +79,24 @@ public:
     LaunchTable(const LaunchTable&) = delete;
     LaunchTable& operator=(const LaunchTable&) = delete;
 
-    /// Copies the table of `plan` to the device (growing the allocation where needed); complete
-    /// on return.
+    /// Copies the table of `plan` to the device on `stream` (growing the allocation where
+    /// needed); launches enqueued on `stream` afterwards read it.
     Status upload(const LaunchPlan& plan, cudaStream_t stream);
-    const gpu::PassConstants* constants() const { return constants_; }
-    const uint32_t* block_begin() const { return block_begin_; }
+    const gpu::PassConstants* constants() const { return slots_[current_].constants; }
+    const uint32_t* block_begin() const { return slots_[current_].block_begin; }
 
 private:
-    void release();
-    gpu::PassConstants* constants_ = nullptr;
-    uint32_t* block_begin_ = nullptr;
-    size_t constants_capacity_ = 0, block_begin_capacity_ = 0;
+    struct Slot {
+        gpu::PassConstants* constants = nullptr;  // device
+        uint32_t* block_begin = nullptr;          // device
+        void* staging = nullptr;                  // pinned host: constants, then block_begin
+        size_t constants_capacity = 0, block_begin_capacity = 0;
+        cudaEvent_t used = nullptr;  // recorded after the last launch that reads this slot
+        bool marked = false;         // `used` was recorded
+    };
+    static void release(Slot& slot);
+    std::array<Slot, 2> slots_;
+    size_t current_ = 0;
 };
 
 }  // namespace hmsm::detail::cuda

@@ -38,7 +38,7 @@ public:
     bool matches(std::span<const Dispatch> program, const BufferPointers& buffers, uint64_t program_id = 0) const;
     /// Captures `program` from `stream` and instantiates it (replacing any earlier graph), its
     /// runs batched unless `batch_runs` is false (launch_plan.h; the batches' table is uploaded
-    /// first, after the launches of the graph it replaces have completed).
+    /// first, into the slot of the table the graph before the last one read).
     Status capture(std::span<const Dispatch> program, const BufferPointers& buffers, bool batch_runs,
                    cudaStream_t stream, uint64_t program_id = 0);
     /// Enqueues one step reading wind-table slot `wind_slot` on `stream`.
