@@ -6,6 +6,7 @@
 #include "test_trees.h"
 
 #include "backend.h"
+#include "forwarding_backend.h"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -412,44 +413,29 @@ TEST(Resources, CliSceneTooLargeExitsOneWithoutOutput) {
 // backends need the same through a fault-injection hook of their own.
 namespace {
 
-class FailingBackend : public detail::Backend {
+class FailingBackend final : public test::ForwardingBackend {
 public:
     enum class Fault { upload_oom, lost_at_run };
-    FailingBackend(Fault fault, int fail_at_run) : fault_(fault), fail_at_run_(fail_at_run) {
-        inner_ = std::move(detail::create_cpu_backend(false)).value();
-    }
-    BackendKind kind() const override { return BackendKind::cpu; }
+    FailingBackend(Fault fault, int fail_at_run)
+        : ForwardingBackend(std::move(detail::create_cpu_backend(false)).value()), fault_(fault),
+          fail_at_run_(fail_at_run) {}
     std::string device_name() const override { return "failing test device"; }
     Status upload(const detail::SceneData& scene) override {
         if (fault_ == Fault::upload_oom)
             return {ErrorCode::out_of_memory, "failing test device: out of device memory (injected)"};
-        return inner_->upload(scene);
+        return ForwardingBackend::upload(scene);
     }
     Status run(std::span<const detail::Dispatch> program, std::span<const detail::RunStep> steps,
                uint64_t program_id = 0) override {
-        if (lost_ || ++runs_ == fail_at_run_) {
-            lost_ = true;
-            return {ErrorCode::device_error, "failing test device: device lost (injected)"};
-        }
-        return inner_->run(program, steps, program_id);
+        if (!lost_ && ++runs_ == fail_at_run_) lost_ = true;
+        return ForwardingBackend::run(program, steps, program_id);
     }
-    Status read(detail::BufferId id, uint64_t first, uint64_t count, void* dst, detail::Scalar as) const override {
-        if (lost_) return {ErrorCode::device_error, "failing test device: device lost (injected)"};
-        return inner_->read(id, first, count, dst, as);
-    }
-    Status write(detail::BufferId id, uint64_t first, uint64_t count, const void* src, detail::Scalar as) override {
-        if (lost_) return {ErrorCode::device_error, "failing test device: device lost (injected)"};
-        return inner_->write(id, first, count, src, as);
-    }
-    Status move_elements(detail::BufferId id, std::span<const detail::ElementMove> moves) override {
-        if (lost_) return {ErrorCode::device_error, "failing test device: device lost (injected)"};
-        return inner_->move_elements(id, moves);
-    }
-    void set_profiling(bool enabled) override { inner_->set_profiling(enabled); }
-    PassTimes pass_times() const override { return inner_->pass_times(); }
 
 private:
-    std::unique_ptr<detail::Backend> inner_;
+    Status gate() const override {
+        if (lost_) return {ErrorCode::device_error, "failing test device: device lost (injected)"};
+        return {};
+    }
     Fault fault_;
     int fail_at_run_;
     int runs_ = 0;

@@ -4,6 +4,7 @@
 #include "test_trees.h"
 
 #include "backend.h"
+#include "forwarding_backend.h"
 #include "simulation_access.h"
 
 #include <gtest/gtest.h>
@@ -26,39 +27,20 @@ Scene two_model_forest() {
 }
 
 /// A backend that cannot reshape in place: every add and remove takes the upload path.
-class UploadsAnew final : public detail::Backend {
+class UploadsAnew final : public test::ForwardingBackend {
 public:
-    explicit UploadsAnew(std::unique_ptr<detail::Backend> inner) : inner_(std::move(inner)) {}
-    BackendKind kind() const override { return inner_->kind(); }
-    std::string device_name() const override { return inner_->device_name(); }
-    Status upload(const detail::SceneData& scene) override { return inner_->upload(scene); }
-    Status run(std::span<const detail::Dispatch> program, std::span<const detail::RunStep> steps,
-               uint64_t program_id = 0) override {
-        return inner_->run(program, steps, program_id);
-    }
-    Status read(detail::BufferId id, uint64_t first, uint64_t count, void* dst, detail::Scalar as) const override {
-        return inner_->read(id, first, count, dst, as);
-    }
-    Status write(detail::BufferId id, uint64_t first, uint64_t count, const void* src, detail::Scalar as) override {
-        return inner_->write(id, first, count, src, as);
-    }
-    Status request_read(uint32_t slot, detail::BufferId id, uint64_t first, uint64_t count) const override {
-        return inner_->request_read(slot, id, first, count);
-    }
-    Result<const float*> take_read(uint32_t slot) const override { return inner_->take_read(slot); }
+    using ForwardingBackend::ForwardingBackend;
     Status move_elements(detail::BufferId, std::span<const detail::ElementMove>) override {
         return {ErrorCode::internal, "UploadsAnew moves nothing"};
     }
-    void set_profiling(bool enabled) override { inner_->set_profiling(enabled); }
-    PassTimes pass_times() const override { return inner_->pass_times(); }
+    Status move_buffers(std::span<const detail::BufferMoves>) override {
+        return {ErrorCode::internal, "UploadsAnew moves nothing"};
+    }
     detail::BackendCapabilities capabilities() const override {
-        detail::BackendCapabilities can = inner_->capabilities();
+        detail::BackendCapabilities can = ForwardingBackend::capabilities();
         can.reshapes_in_place = false;
         return can;
     }
-
-private:
-    std::unique_ptr<detail::Backend> inner_;
 };
 
 class LiveReshape : public ::testing::TestWithParam<BackendKind> {

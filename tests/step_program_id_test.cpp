@@ -3,6 +3,7 @@
 // recorded without comparing every dispatch. A backend that trusted an id given to two
 // different programs would step the second with the first's plan.
 #include "simulation_access.h"
+#include "forwarding_backend.h"
 #include "test_trees.h"
 
 #include <gtest/gtest.h>
@@ -23,12 +24,9 @@ bool same_program(const std::vector<detail::Dispatch>& a, const std::vector<deta
 }
 
 /// A backend that keeps every named program it is asked to run, by id.
-class Named final : public detail::Backend {
+class Named final : public test::ForwardingBackend {
 public:
-    explicit Named(std::unique_ptr<detail::Backend> inner) : inner_(std::move(inner)) {}
-    BackendKind kind() const override { return inner_->kind(); }
-    std::string device_name() const override { return inner_->device_name(); }
-    Status upload(const detail::SceneData& scene) override { return inner_->upload(scene); }
+    using ForwardingBackend::ForwardingBackend;
     Status run(std::span<const detail::Dispatch> program, std::span<const detail::RunStep> steps,
                uint64_t program_id = 0) override {
         if (program_id != 0) {
@@ -37,28 +35,11 @@ public:
             if (!added && !same_program(seen->second, dispatches)) ++reused_for_another;
             ++named_runs;
         }
-        return inner_->run(program, steps, program_id);
+        return ForwardingBackend::run(program, steps, program_id);
     }
-    Status read(detail::BufferId id, uint64_t first, uint64_t count, void* dst, detail::Scalar as) const override {
-        return inner_->read(id, first, count, dst, as);
-    }
-    Status write(detail::BufferId id, uint64_t first, uint64_t count, const void* src, detail::Scalar as) override {
-        return inner_->write(id, first, count, src, as);
-    }
-    Status move_elements(detail::BufferId id, std::span<const detail::ElementMove> moves) override {
-        return inner_->move_elements(id, moves);
-    }
-    void begin_instance_change() override { inner_->begin_instance_change(); }
-    void end_instance_change() override { inner_->end_instance_change(); }
-    void set_profiling(bool enabled) override { inner_->set_profiling(enabled); }
-    PassTimes pass_times() const override { return inner_->pass_times(); }
-    detail::BackendCapabilities capabilities() const override { return inner_->capabilities(); }
 
     std::map<uint64_t, std::vector<detail::Dispatch>> programs;
     uint64_t reused_for_another = 0, named_runs = 0;
-
-private:
-    std::unique_ptr<detail::Backend> inner_;
 };
 
 // Every kind of live change that rebuilds the step program (pausing, adding, removing, switching
