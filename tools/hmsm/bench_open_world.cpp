@@ -81,13 +81,6 @@ struct Calls {
     std::vector<double> update_lod, remove, add, step, frame;
 };
 
-double percentile(std::vector<double> values, double p) {
-    if (values.empty()) return 0.0;
-    std::sort(values.begin(), values.end());
-    const size_t rank = size_t(std::ceil(p * double(values.size())));
-    return values[std::min(values.size(), std::max<size_t>(rank, 1)) - 1];
-}
-
 json distribution(const std::vector<double>& v) {
     json d = {{"calls", v.size()}};
     if (v.empty()) return d;
@@ -266,44 +259,6 @@ private:
     std::vector<Cell> leaving_, entering_;
 };
 
-/// Largest vertex jump at a switch and the motion of that tree in one frame; medians of both;
-/// the motion of fading trees over one frame.
-json pop_json(const json& jumps, const std::vector<double>& fading) {
-    json pop = {{"switches_measured", jumps.size()}, {"fading_trees_measured", fading.size()}};
-    if (!fading.empty()) {
-        pop["largest_fading_motion_m"] = *std::max_element(fading.begin(), fading.end());
-        pop["median_fading_motion_m"] = percentile(fading, 0.5);
-    }
-    if (jumps.empty()) return pop;
-    std::vector<double> jump, motion;
-    size_t largest = 0;
-    for (size_t k = 0; k < jumps.size(); ++k) {
-        jump.push_back(jumps[k]["jump_m"].get<double>());
-        motion.push_back(jumps[k]["motion_m"].get<double>());
-        if (jump.back() > jump[largest]) largest = k;
-    }
-    pop["largest_jump_m"] = jump[largest];
-    pop["motion_of_largest_m"] = motion[largest];
-    pop["largest_jump_levels"] = {jumps[largest]["from"], jumps[largest]["to"]};
-    pop["median_jump_m"] = percentile(jump, 0.5);
-    pop["median_motion_m"] = percentile(motion, 0.5);
-    // Per kind of switch ("3-4": from 16 joints to the trunk alone): the largest jump, the
-    // motion of that tree, and how many were measured.
-    json by_switch = json::object();
-    for (size_t k = 0; k < jumps.size(); ++k) {
-        const std::string kind = std::to_string(jumps[k]["from"].get<int>()) + "-" + std::to_string(jumps[k]["to"].get<int>());
-        if (!by_switch.contains(kind)) by_switch[kind] = json::object();
-        json& entry = by_switch[kind];
-        entry["measured"] = entry.value("measured", 0) + 1;
-        if (jump[k] >= entry.value("largest_jump_m", -1.0)) {
-            entry["largest_jump_m"] = jump[k];
-            entry["motion_m"] = motion[k];
-        }
-    }
-    pop["by_switch"] = by_switch;
-    return pop;
-}
-
 json run_backend(const TreeModel& model, const std::string& model_name, BackendKind kind,
                  const OpenWorldSettings& s) {
     json row = {{"backend", to_string(kind)}, {"model", model_name}, {"trees_asked", s.trees}};
@@ -397,39 +352,7 @@ json run_backend(const TreeModel& model, const std::string& model_name, BackendK
     for (uint32_t k = 0; k < std::min<uint32_t>(s.frames, 100); ++k)
         if (Status status = world.frame({0.0, 0.0}, &still, nullptr, nullptr); !status) return stop(status);
 
-    // Where a standing step's device time goes: ten profiled steps (timers serialize the
-    // passes, so their sum exceeds the unprofiled step).
-    {
-        detail::Backend& backend = detail::backend_of(sim);
-        backend.set_profiling(true);
-        const Status status = sim.step(10);
-        backend.set_profiling(false);
-        if (!status) return stop(status);
-        const PassTimes t = sim.pass_times();
-        json per_pass = json::object();
-        for (Pass p : kAllPasses)
-            if (t.steps > 0 && t.seconds[uint32_t(p)] > 0.0)
-                per_pass[std::string(pass_name(p))] = t.seconds[uint32_t(p)] / double(t.steps);
-        row["still_pass_seconds"] = per_pass;
-        // Groups are the runs of neighbouring instances of one model (level); every pass
-        // dispatches once per group.
-        row["groups"] = detail::scene_data_of(sim).groups.size();
-        row["dispatches_per_step"] = detail::step_program_of(sim).size();
-    }
-    // The same standing step as an engine issues it (CUDA: enqueued on its stream; Vulkan:
-    // recorded into its command buffer): the host time of the call, and the whole frame until
-    // the outputs are ready.
-    {
-        json engine = json::array();
-        for (const std::unique_ptr<FrameDriver>& driver : engine_drivers(sim)) {
-            FrameTimes times;
-            if (Status status = time_frames(sim, *driver, 20, {}, times); !status) return stop(status);
-            engine.push_back({{"path", driver->path()},
-                              {"call_median_seconds", percentile(times.call, 0.5)},
-                              {"frame_median_seconds", percentile(times.whole, 0.5)}});
-        }
-        row["still_engine"] = engine;
-    }
+    if (Status status = profile_standing_step(sim, row); !status) return stop(status);
 
     row["frames"] = s.frames;
     row["warmup_frames"] = warmup;

@@ -1,6 +1,6 @@
 // hmsm bench --open-world: what the open-world case measures besides time (bench_open_world.h):
-// the memory a scene takes, and the vertex jump of a level switch, skinned on the host from
-// the joint matrices as an engine skins them (hmsm/skin.h).
+// the memory a scene takes, the vertex jump of a level switch, skinned on the host from the
+// joint matrices as an engine skins them (hmsm/skin.h), and where a standing step's time goes.
 #pragma once
 
 #include <hmsm/hmsm.h>
@@ -45,6 +45,19 @@ private:
     std::vector<SkinTemplate> skins_;
     std::vector<int32_t> level_of_model_;
 };
+
+/// The value at rank ceil(p n) of `values` (p in (0, 1]; 0.5: the median), 0 when empty.
+double percentile(std::vector<double> values, double p);
+
+/// Summary of a run's level switches: `jumps` holds one object per measured switch (from, to,
+/// jump_m, motion_m); `fading` the motion over one frame of trees that were fading.
+nlohmann::json pop_json(const nlohmann::json& jumps, const std::vector<double>& fading);
+
+/// Where a standing step's time goes, into `row`: ten profiled steps' device seconds per pass
+/// (still_pass_seconds), the scene's groups and dispatches per step, and the step as an engine
+/// issues it (still_engine: CUDA enqueued on its stream, Vulkan recorded into its command
+/// buffer; the host time of the call and the whole frame, medians of 20).
+Status profile_standing_step(Simulation& sim, nlohmann::json& row);
 
 /// Per instance of `sim`, the first of its chains (instance-major), and the total at the end.
 std::vector<uint64_t> chain_offsets(const Simulation& sim);
