@@ -177,6 +177,7 @@ std::vector<Dispatch> build_path_walk_program(const SceneData& d, const std::vec
     for (const auto& g : groups) all_active = all_active && !g.covers_paused;
     const bool ahead = walk_ahead && walk_poses && wind_pair_runs && !from_records && all_active;
     std::vector<Dispatch> program;
+    program.reserve(4 * groups.size());  // a dispatch per group and pass pair (and top poses)
     uint32_t done = 0;
     for (Pass pass : kAllPasses) {
         if (!(wanted & bit(pass)) || (done & bit(pass))) continue;
@@ -257,7 +258,16 @@ Composition automatic_composition(bool backend_prefers_path_walk, int32_t deepes
 
 AheadVariants ahead_variants(std::span<const Dispatch> program) {
     AheadVariants v;
+    ahead_variants(program, v);
+    return v;
+}
+
+void ahead_variants(std::span<const Dispatch> program, AheadVariants& v) {
     v.whole.assign(program.begin(), program.end());
+    v.without_wind.clear();
+    v.plain.clear();
+    v.without_wind.reserve(program.size());
+    v.plain.reserve(program.size());
     for (Dispatch d : program) {
         if (d.pass != Pass::wind_force) v.without_wind.push_back(d);
         if (is_top_poses_walk(d)) continue;
@@ -267,7 +277,6 @@ AheadVariants ahead_variants(std::span<const Dispatch> program) {
         }
         v.plain.push_back(d);
     }
-    return v;
 }
 
 void AheadSchedule::plan(std::span<RunStep> steps) {

@@ -81,6 +81,9 @@ struct AheadVariants {
     std::vector<Dispatch> whole, without_wind, plain;
 };
 AheadVariants ahead_variants(std::span<const Dispatch> program);
+/// The same into `into`, reusing its vectors' memory (a forest's program changes every frame
+/// while trees stream and switch levels, and has tens of thousands of dispatches).
+void ahead_variants(std::span<const Dispatch> program, AheadVariants& into);
 
 /// The step layer's side of the walk that integrates ahead: from the simulation's change flags
 /// it decides how each step of a run of a walk-ahead program runs (AheadStep). The angles a run's

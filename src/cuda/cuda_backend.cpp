@@ -193,7 +193,7 @@ Status CudaBackend::run(std::span<const Dispatch> program, std::span<const RunSt
     // dispatches (a forest's step program has thousands).
     if (program_id == 0 || program_id != ahead_id_) {
         walks_ahead_ = std::any_of(program.begin(), program.end(), [](const Dispatch& d) { return is_walk_ahead(d); });
-        if (walks_ahead_ && !same_dispatches(program, ahead_.whole)) ahead_ = ahead_variants(program);
+        if (walks_ahead_ && !same_program(program, program_id, ahead_.whole, ahead_id_)) ahead_variants(program, ahead_);
         ahead_id_ = program_id;
     }
     const bool walks_ahead = walks_ahead_;
@@ -233,11 +233,11 @@ Status CudaBackend::run(std::span<const Dispatch> program, std::span<const RunSt
 
 Status CudaBackend::run_launches(std::span<const Dispatch> program, uint32_t slot, bool timed, uint64_t step_id) {
     ++steps_launched_;
-    const bool same = (step_id != 0 && step_id == launched_id_) || same_dispatches(program, launched_program_);
+    const bool same = same_program(program, step_id, launched_program_, launched_id_);
     launched_id_ = step_id;
     if (!same || launched_plan_.launches.empty()) {
         launched_program_.assign(program.begin(), program.end());
-        launched_plan_ = plan_launches(launched_program_, batch_runs_, max_launch_blocks());
+        plan_launches(launched_program_, batch_runs_, max_launch_blocks(), launched_plan_);
         HMSM_TRY(launched_table_.upload(launched_plan_, stream_));
     }
     const std::vector<PlannedLaunch>& launches = launched_plan_.launches;

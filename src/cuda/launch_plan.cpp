@@ -95,8 +95,22 @@ private:
 
 LaunchPlan plan_launches(std::span<const Dispatch> program, bool batch_runs, uint32_t max_blocks) {
     LaunchPlan plan;
-    for (const std::span<const Dispatch> run : dispatch_batches(program)) {
-        std::vector<const Dispatch*> entries;
+    plan_launches(program, batch_runs, max_blocks, plan);
+    return plan;
+}
+
+void plan_launches(std::span<const Dispatch> program, bool batch_runs, uint32_t max_blocks, LaunchPlan& plan) {
+    plan.launches.clear();
+    plan.constants.clear();
+    plan.block_begin.clear();
+    const std::vector<std::span<const Dispatch>> runs = dispatch_batches(program);
+    if (batch_runs) {  // at most every dispatch an entry, and a prefix more per launch
+        plan.constants.reserve(program.size());
+        plan.block_begin.reserve(program.size() + 2 * runs.size());
+    }
+    std::vector<const Dispatch*> entries;
+    for (const std::span<const Dispatch> run : runs) {
+        entries.clear();
         for (const Dispatch& d : run)
             if (d.constants.element_count > 0) entries.push_back(&d);
         if (!batch_runs || entries.size() < 2) {
@@ -106,8 +120,11 @@ LaunchPlan plan_launches(std::span<const Dispatch> program, bool batch_runs, uin
         // One launch per block size (in-dispatch rounds of models of different sizes), each
         // keeping the run's order; a size of one entry takes that dispatch's own launch.
         auto threads_of = [](const Dispatch* d) { return dispatch_threads(d->constants); };
-        std::stable_sort(entries.begin(), entries.end(),
-                         [&](const Dispatch* a, const Dispatch* b) { return threads_of(a) < threads_of(b); });
+        const bool one_size = std::all_of(entries.begin(), entries.end(),
+                                          [&](const Dispatch* d) { return threads_of(d) == threads_of(entries[0]); });
+        if (!one_size)
+            std::stable_sort(entries.begin(), entries.end(),
+                             [&](const Dispatch* a, const Dispatch* b) { return threads_of(a) < threads_of(b); });
         for (size_t first = 0; first < entries.size();) {
             size_t end = first + 1;
             while (end < entries.size() && threads_of(entries[end]) == threads_of(entries[first])) ++end;
@@ -121,7 +138,6 @@ LaunchPlan plan_launches(std::span<const Dispatch> program, bool batch_runs, uin
             first = end;
         }
     }
-    return plan;
 }
 
 cudaError_t enqueue_launch(const LaunchPlan& plan, const PlannedLaunch& launch, std::span<const Dispatch> program,

@@ -53,6 +53,8 @@ uint32_t dispatch_threads(const gpu::PassConstants& pc);
 /// per rounds_workgroup_size among its entries, so every block has its entry's own size. Empty
 /// dispatches take no entry; a batch whose grid would pass 2^31 - 1 blocks is split.
 LaunchPlan plan_launches(std::span<const Dispatch> program, bool batch_runs, uint32_t max_blocks);
+/// The same into `into`, reusing its vectors' memory.
+void plan_launches(std::span<const Dispatch> program, bool batch_runs, uint32_t max_blocks, LaunchPlan& into);
 
 /// Enqueues `launch` of `plan` (of `program`) on `stream`: a single dispatch through
 /// launch_dispatch, a batch through its pass's launch_batch_NAME over `table`'s device copy.

@@ -64,6 +64,11 @@ bool same_dispatches(std::span<const Dispatch> a, std::span<const Dispatch> b) {
     return std::equal(a.begin(), a.end(), b.begin(), b.end(), same_dispatch);
 }
 
+bool same_program(std::span<const Dispatch> a, uint64_t a_id, std::span<const Dispatch> b, uint64_t b_id) {
+    if (a_id != 0 && b_id != 0) return a_id == b_id;
+    return same_dispatches(a, b);
+}
+
 StepGraph::~StepGraph() { release(); }
 
 void StepGraph::release() {
@@ -74,12 +79,14 @@ void StepGraph::release() {
     wind_nodes_.clear();
     program_.clear();
     program_id_ = 0;
-    plan_ = {};
+    plan_.launches.clear();  // the vectors keep their memory for the next capture
+    plan_.constants.clear();
+    plan_.block_begin.clear();
 }
 
 bool StepGraph::matches(std::span<const Dispatch> program, const BufferPointers& buffers, uint64_t program_id) const {
     if (!exec_ || !same_bytes(&buffers, &buffers_, sizeof buffers)) return false;
-    return (program_id != 0 && program_id == program_id_) || same_dispatches(program, program_);
+    return same_program(program, program_id, program_, program_id_);
 }
 
 Status StepGraph::capture(std::span<const Dispatch> program, const BufferPointers& buffers, bool batch_runs,
@@ -87,7 +94,7 @@ Status StepGraph::capture(std::span<const Dispatch> program, const BufferPointer
     release();
     program_.assign(program.begin(), program.end());
     program_id_ = program_id;
-    plan_ = plan_launches(program_, batch_runs, max_launch_blocks());
+    plan_launches(program_, batch_runs, max_launch_blocks(), plan_);
     HMSM_TRY(table_.upload(plan_, stream));  // before the capture: the graph's launches read it
     const std::vector<PlannedLaunch>& launches = plan_.launches;
     // A launch that does not depend on the one before it (the path walk's node pair and contour,

@@ -25,6 +25,10 @@ namespace hmsm::detail::cuda {
 bool same_dispatch(const Dispatch& a, const Dispatch& b);
 /// Whether two programs are the same launches in the same order.
 bool same_dispatches(std::span<const Dispatch> a, std::span<const Dispatch> b);
+/// Whether programs `a` and `b`, named `a_id` and `b_id` (Backend::run's program_id; 0: none),
+/// are the same: by their ids where both have one (an id names one program, and a program given
+/// a new id is taken as new: a forest's has tens of thousands of dispatches), else by comparing.
+bool same_program(std::span<const Dispatch> a, uint64_t a_id, std::span<const Dispatch> b, uint64_t b_id);
 
 class StepGraph {
 public:
@@ -34,7 +38,7 @@ public:
     StepGraph& operator=(const StepGraph&) = delete;
 
     /// True when the captured graph runs exactly `program` over `buffers`: the program it was
-    /// captured from has the same non-zero `program_id` (Backend::run), or the same dispatches.
+    /// captured from is `program` by same_program.
     bool matches(std::span<const Dispatch> program, const BufferPointers& buffers, uint64_t program_id = 0) const;
     /// Captures `program` from `stream` and instantiates it (replacing any earlier graph), its
     /// runs batched unless `batch_runs` is false (launch_plan.h; the batches' table is uploaded

@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cstring>
 #include <map>
 #include <vector>
 
@@ -163,6 +164,31 @@ TEST(LaunchPlan, InDispatchRoundsLaunchOncePerBlockSize) {
         EXPECT_EQ(plan.block_begin[small.prefix_begin + e + 1] - plan.block_begin[small.prefix_begin + e], 2 + small_groups[e]);
     }
     EXPECT_EQ(small.shape.blocks, 2u + 4u + 7u);
+}
+
+// Planning into a plan that held another program (the backend reuses its plans' memory as the
+// program changes) gives the plan made afresh.
+TEST(LaunchPlan, APlanMadeOverAnotherEqualsOneMadeAfresh) {
+    std::vector<Dispatch> large, small;
+    for (uint32_t g = 0; g < 40; ++g) large.push_back(dispatch_of(Pass::wind_force, HMSM_DISPATCH_PER_ELEMENT, g, 1 + g % 3, 77));
+    for (uint32_t g = 0; g < 6; ++g)
+        small.push_back(dispatch_of(Pass::compose, HMSM_DISPATCH_JUMP_ROUNDS_IN_DISPATCH, g, 2 + g, g % 2 ? 100 : 50));
+    LaunchPlan reused;
+    for (const std::vector<Dispatch>* program : {&large, &small, &large}) {
+        detail::cuda::plan_launches(*program, true, 5, reused);
+        const LaunchPlan fresh = detail::cuda::plan_launches(*program, true, 5);
+        ASSERT_EQ(reused.launches.size(), fresh.launches.size());
+        for (size_t i = 0; i < fresh.launches.size(); ++i) {
+            EXPECT_EQ(reused.launches[i].entries, fresh.launches[i].entries);
+            EXPECT_EQ(reused.launches[i].entry_begin, fresh.launches[i].entry_begin);
+            EXPECT_EQ(reused.launches[i].shape.blocks, fresh.launches[i].shape.blocks);
+        }
+        EXPECT_EQ(reused.block_begin, fresh.block_begin);
+        ASSERT_EQ(reused.constants.size(), fresh.constants.size());
+        EXPECT_EQ(std::memcmp(reused.constants.data(), fresh.constants.data(),
+                              fresh.constants.size() * sizeof(gpu::PassConstants)),
+                  0);
+    }
 }
 
 }  // namespace
