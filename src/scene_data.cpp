@@ -27,10 +27,14 @@ void append_coupled_record(std::vector<double>& out, const ChainDynamics& k, con
         out.insert(out.end(), phi.begin(), phi.end());
     }
     const glm::dvec3 moment = kReferencePressure * k.wind_moment;
+    // The motion drag per unit rate over the wind's aerodynamic damping per sqrt(|w|), one
+    // ratio for both axes (their drag-weighted mean).
+    const double aero_sum = k.aero_damping[0] + k.aero_damping[1];
+    const double motion_ratio = aero_sum > 0.0 ? (k.motion_drag[0] + k.motion_drag[1]) / aero_sum : 0.0;
     const double rest[16] = {k.inertia[0] / dt, k.inertia[1] / dt, 1.0 / k.stiffness[0], 1.0 / k.stiffness[1],
                              k.aero_damping[0] * dt / k.inertia[0], k.aero_damping[1] * dt / k.inertia[1],
                              double(k.first_child), double(k.child_count),
-                             moment.x, moment.y, moment.z, 0.0,
+                             moment.x, moment.y, moment.z, motion_ratio,
                              q[0][0], q[2][0], q[0][2], q[2][2]};  // glm: q[column][row]
     out.insert(out.end(), std::begin(rest), std::end(rest));
 }

@@ -54,7 +54,8 @@ TEST(CoupledRecord, SharedMathOnTheRecordEqualsTheModelsForms) {
             double damped[2] = {0.0, 0.0};
             detail::coupled_subtract_aero_damping(record, wind_dot, rate, damped);
             for (int a = 0; a < 2; ++a) {
-                const double damping = k.aero_damping[a] * std::sqrt(std::sqrt(wind_dot));
+                const double eta = (k.motion_drag[0] + k.motion_drag[1]) / (k.aero_damping[0] + k.aero_damping[1]);
+                const double damping = k.aero_damping[a] * (std::sqrt(std::sqrt(wind_dot)) + eta * std::abs(rate[a]));
                 const double x = damping * dt / k.inertia[a];
                 const double share = x > 1e-4 ? (1.0 - std::exp(-x)) / x : 1.0 - 0.5 * x;
                 const double expected = -damping * share * rate[a];

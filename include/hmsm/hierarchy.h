@@ -33,8 +33,12 @@ struct ChainDynamics {
     /// K = (2 pi f0)^2 I, or a link's joint stiffness from E J along the chain (N m/rad)
     double stiffness[2] = {};
     double damping[2] = {};          ///< structural D = 2 zeta_s sqrt(K I) (N m s/rad)
-    /// Aerodynamic damping per square root of wind strength: D_aero = aero_damping sqrt(|w|).
+    /// Aerodynamic damping per square root of wind strength: D_aero = aero_damping sqrt(|w|)
+    /// + motion_drag |V| (N m s/rad).
     double aero_damping[2] = {};
+    /// Drag of the chain's own motion in still air per unit rate: (1/2) rho_air times the third
+    /// moment of drag area about the axis (N m s^2/rad^2; docs/model.md 3.13).
+    double motion_drag[2] = {};
     int32_t first_child = 0;         ///< children: chains [first_child, first_child + child_count)
     int32_t child_count = 0;
     /// A chain longer than its tree's link length is split into links (3.13): this chain is link

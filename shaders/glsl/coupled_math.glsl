@@ -33,13 +33,15 @@ vec2 coupled_force(uint k, uint c, vec3 w_local) {
         g.x += passing.x * load_j.x + passing.y * load_j.y;
         g.y += passing.z * load_j.x + passing.w * load_j.y;
     }
-    // Aerodynamic damping D_a = aero sqrt(|w|), held as the torque that takes from the rate what
-    // exp(-x), x = D_a dt / I, would over one step: (I / dt) (1 - exp(-x)) per unit rate.
+    // Aerodynamic damping D_a = aero (sqrt(|w|) + eta |V_a|), the wind's and the motion's,
+    // held as the torque that takes from the rate what exp(-x), x = D_a dt / I, would over one
+    // step: (I / dt) (1 - exp(-x)) per unit rate.
     float speed = sqrt(sqrt(dot(w_local, w_local)));
+    float motion_ratio = coupled_record(model_chain, 4u).w;
     vec4 s = chain_state[state_chain(k, c)];
     vec4 inertia_stiffness = coupled_record(model_chain, 2u);  // (I_x / dt, I_z / dt, 1 / K_x, 1 / K_z)
     for (int a = 0; a < 2; ++a) {
-        float x = damping_children[a] * speed;
+        float x = damping_children[a] * (speed + motion_ratio * abs(s[2 + a]));
         float taken = x > 1e-4 ? 1.0 - exp(-x) : x * (1.0 - 0.5 * x);
         g[a] -= inertia_stiffness[a] * taken * s[2 + a];
     }

@@ -45,19 +45,22 @@ HMSM_HOST_DEVICE void coupled_add_child_load(const T passing[4], T load_x, T loa
     g[1] += passing[2] * load_x + passing[3] * load_z;
 }
 
-/// Subtracts the aerodynamic damping D_a = aero_a sqrt(|w|), held as the torque that takes from
-/// the rate what exp(-x) with x = D_a dt / I_a would over one step: (I_a / dt) (1 - exp(-x)) per
-/// unit rate, never more than the rate itself; x (1 - x / 2) for x so small that 1 - exp(-x)
-/// cancels. `wind_dot` is |w_local|^2.
+/// Subtracts the aerodynamic damping D_a = aero_a (sqrt(|w|) + eta |V_a|), the wind's and
+/// that of the chain's own motion in the air, held as the torque that takes from the rate what
+/// exp(-x) with x = D_a dt / I_a would over one step: (I_a / dt) (1 - exp(-x)) per unit rate,
+/// never more than the rate itself; x (1 - x / 2) for x so small that 1 - exp(-x) cancels.
+/// `wind_dot` is |w_local|^2.
 template <class T>
 HMSM_HOST_DEVICE void coupled_subtract_aero_damping(const T* record, T wind_dot, const T rate[2], T g[2]) {
 #ifndef __CUDA_ARCH__
+    using std::abs;
     using std::exp;  // the float overloads on the host; CUDA's device overloads are global
     using std::sqrt;
 #endif
     const T speed = sqrt(sqrt(wind_dot));
+    const T motion_ratio = coupled_field(record, 4, 3);
     for (int a = 0; a < 2; ++a) {
-        const T x = coupled_field(record, 3, a) * speed;
+        const T x = coupled_field(record, 3, a) * (speed + motion_ratio * abs(rate[a]));
         const T taken = x > T(1e-4) ? T(1) - exp(-x) : x * (T(1) - T(0.5) * x);
         g[a] -= coupled_field(record, 2, a) * taken * rate[a];
     }

@@ -68,7 +68,9 @@
 ///   j = 2: (I_x / dt, I_z / dt, 1 / K_x, 1 / K_z)
 ///   j = 3: (aero_x dt / I_x, aero_z dt / I_z, first child, child count): the aerodynamic damping
 ///          per sqrt(|w|) over one step; the children as floats (model-local chain ids, < 2^24)
-///   j = 4: (q_ref M_c, 0): the wind moment, torque = (q_ref M_c) x w_local
+///   j = 4: (q_ref M_c, eta): the wind moment, torque = (q_ref M_c) x w_local, and the motion
+///          drag per unit rate over the aerodynamic damping per sqrt(|w|): the damping is
+///          aero (sqrt(|w|) + eta |V|)
 ///   j = 5: (Q_00, Q_02, Q_20, Q_22): rows x and z of columns x and z of the rest rotation Q_c,
 ///          which pass the chain's load (x, z) on into its parent's frame; the parent reads it
 ///          beside the load, so a gather over the children reads one vec4 of each record

@@ -34,6 +34,13 @@ double axis_distance2(const glm::dvec3& x, int axis) {
     return axis == 0 ? x.y * x.y + x.z * x.z : x.x * x.x + x.y * x.y;
 }
 
+/// Cubed distance from the axis: a drag area at it, moving with the chain's rate V, meets the
+/// air at V times the distance and turns it with V^2 times the cube.
+double axis_distance3(const glm::dvec3& x, int axis) {
+    const double d2 = axis_distance2(x, axis);
+    return d2 * std::sqrt(d2);
+}
+
 /// What a chain's cantilever carries at one path node: point masses, their first mass moment
 /// along the path's tangent there (a rigid load whose centroid lies beyond or before the node:
 /// the lateral load's couple, and the displacement w + theta * lever of its centroid), and their
@@ -205,6 +212,7 @@ void split_chain_constants(Hierarchy& h, size_t first, const std::vector<ChainPa
             d.inertia[a] = d.stiffness[a] / (omega[a] * omega[a]);
             d.damping[a] = 2.0 * zeta * std::sqrt(d.stiffness[a] * d.inertia[a]);
             d.aero_damping[a] *= d.inertia[a] / d.rigid_inertia[a];
+            d.motion_drag[a] *= d.inertia[a] / d.rigid_inertia[a];
         }
     }
 }
@@ -315,10 +323,11 @@ Status fill_coupled_constants(const TreeModel& tree, const Parameters& parameter
         Chain& chain = h.chains[c];
         ChainDynamics& d = chain.dynamics;
         const ChainPath& path = paths[c];
-        double inertia[2] = {0.0, 0.0}, drag_moment2[2] = {0.0, 0.0};
+        double inertia[2] = {0.0, 0.0}, drag_moment2[2] = {0.0, 0.0}, drag_moment3[2] = {0.0, 0.0};
         glm::dvec3 moment(0.0), mass_moment(0.0);
         // Own wood: each segment a frustum, 3-point Gauss-Legendre along it (exact for the
-        // quartic integrands of mass and drag-area moments).
+        // quartic integrands of mass and drag-area moments; the drag's third moment, not a
+        // polynomial, to the rule's accuracy).
         const double gauss_t[3] = {0.5 - std::sqrt(0.15), 0.5, 0.5 + std::sqrt(0.15)};
         const double gauss_w[3] = {5.0 / 18.0, 8.0 / 18.0, 5.0 / 18.0};
         for (size_t j = 1; j < path.p.size(); ++j) {
@@ -335,6 +344,7 @@ Status fill_coupled_constants(const TreeModel& tree, const Parameters& parameter
                 for (int a = 0; a < 2; ++a) {
                     inertia[a] += dm * axis_distance2(x, a);
                     drag_moment2[a] += da * axis_distance2(x, a);
+                    drag_moment3[a] += da * axis_distance3(x, a);
                 }
             }
         }
@@ -348,6 +358,7 @@ Status fill_coupled_constants(const TreeModel& tree, const Parameters& parameter
             for (int a = 0; a < 2; ++a) {
                 inertia[a] += leaf.mass * axis_distance2(leaf.x, a);
                 drag_moment2[a] += leaf.drag_area * axis_distance2(leaf.x, a);
+                drag_moment3[a] += leaf.drag_area * axis_distance3(leaf.x, a);
             }
             NodeLoad& at = node_load[size_t(leaf.path_index)];
             const glm::dvec3 offset = leaf.x - path.p[size_t(leaf.path_index)];
@@ -379,6 +390,7 @@ Status fill_coupled_constants(const TreeModel& tree, const Parameters& parameter
                 inertia[ax] += child.dynamics.subtree_mass * axis_distance2(a, ax) +
                                axis_cross2(a, child_moment, ax) + rotary;
                 drag_moment2[ax] += child.dynamics.subtree_drag_area * axis_distance2(a, ax);
+                drag_moment3[ax] += child.dynamics.subtree_drag_area * axis_distance3(a, ax);
                 if (!next_link) node_load[at].rotary[ax] += rotary;
             }
         }
@@ -387,6 +399,7 @@ Status fill_coupled_constants(const TreeModel& tree, const Parameters& parameter
         for (int a = 0; a < 2; ++a) {
             d.inertia[a] = d.rigid_inertia[a] = inertia[a];
             d.aero_damping[a] = kAirDensity * kReferenceWindSpeed * drag_moment2[a];
+            d.motion_drag[a] = 0.5 * kAirDensity * drag_moment3[a];
         }
         if (d.link_count > 1) continue;  // split_chain_constants, below
         double omega[2];
@@ -416,6 +429,7 @@ Status fill_coupled_constants(const TreeModel& tree, const Parameters& parameter
             if (!float_safe(d.damping[a], true)) return out_of_range(c, chain, "damping", d.damping[a]);
             if (!float_safe(d.aero_damping[a], true))
                 return out_of_range(c, chain, "aerodynamic damping", d.aero_damping[a]);
+            if (!float_safe(d.motion_drag[a], true)) return out_of_range(c, chain, "motion drag", d.motion_drag[a]);
         }
         if (!float_safe(chain.wind_area, true)) return out_of_range(c, chain, "wind moment", chain.wind_area);
     }
