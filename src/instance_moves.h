@@ -43,6 +43,17 @@ struct InstanceChangeBracket {
 /// Halves of a chain-scope buffer: 2 for the ping-pong buffers, chain_capacity elements apart.
 inline uint32_t halves_of(BufferId id) { return buffer_info(id).scope == Scope::chain_halves ? 2u : 1u; }
 
+/// Whether half `h` of chain-scope buffer `id` holds values a later step reads, so that it moves
+/// with a shifted instance. R and O hold the pose only in the pose half (HMSM_FINAL_HALF of the
+/// scene's rounds): every later reader reads that half, and the rounds of passes 3 and 5 write
+/// the other before they read it (docs/model.md 3.7, ping-pong halves); a paused instance's
+/// rounds skip it and read neither. Every other buffer's halves (the loads: the half the last
+/// step wrote) all move.
+inline bool half_moves(BufferId id, uint32_t h, uint32_t pose_half) {
+    if (id == BufferId::chain_rotation || id == BufferId::chain_origin) return h == pose_half;
+    return h < halves_of(id);
+}
+
 /// Neighbouring instances [first, end): read, carried and written as one range.
 struct IndexRun {
     uint32_t first = 0, end = 0;

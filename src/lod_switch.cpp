@@ -305,19 +305,21 @@ Status Simulation::Impl::switch_models(const std::vector<std::pair<uint32_t, uin
         HMSM_TRY(scalar == detail::Scalar::f64
                      ? read_switched(*backend_, carried, capacity, scalar, runs, old_chain, new_chain, maps, values64)
                      : read_switched(*backend_, carried, capacity, scalar, runs, old_chain, new_chain, maps, values32));
-        // Every buffer's shifts in one move_buffers.
+        // Every buffer's shifts in one move_buffers; of R and O only the pose half.
         const std::vector<ElementMove> chain_moves = detail::shift_moves(old_chain, new_chain, count, switched);
+        const uint32_t pose_half = HMSM_FINAL_HALF(data_->jump_rounds);
         std::vector<std::vector<ElementMove>> in_buffers;
         in_buffers.reserve(carried.size());
         std::vector<detail::BufferMoves> moves;
         for (BufferId id : carried) {
             std::vector<ElementMove>& in_buffer = in_buffers.emplace_back();
-            for (uint64_t h = 0; h < halves_of(id); ++h)
-                for (ElementMove m : chain_moves) {
-                    m.src += h * capacity;
-                    m.dst += h * capacity;
-                    in_buffer.push_back(m);
-                }
+            for (uint32_t h = 0; h < halves_of(id); ++h)
+                if (detail::half_moves(id, h, pose_half))
+                    for (ElementMove m : chain_moves) {
+                        m.src += h * capacity;
+                        m.dst += h * capacity;
+                        in_buffer.push_back(m);
+                    }
             if (!in_buffer.empty()) moves.push_back({id, in_buffer});
         }
         const std::vector<ElementMove> node_moves = detail::shift_moves(old_node, new_node, count, switched);
