@@ -26,10 +26,12 @@ inline std::vector<BufferId> carried_buffers(bool coupled) {
     return ids;
 }
 
-/// The outputs that passes 4, 6 and 7 compute from R and O, element for element: they move
-/// with the state of an instance that changes place, bitwise what they were.
-inline constexpr BufferId kMovedOutputs[] = {BufferId::node_relative, BufferId::node_world,
-                                             BufferId::vertex_position, BufferId::vertex_normal};
+/// The outputs that passes 6 and 7 compute from R and O, element for element: they move with
+/// the state of an instance that changes place, bitwise what they were. node_relative (u,
+/// pass 4) does not: it is scratch within a step, which pass 4 writes before passes 5 and 6 read
+/// it, and no reader outside the step sees it.
+inline constexpr BufferId kMovedOutputs[] = {BufferId::node_world, BufferId::vertex_position,
+                                             BufferId::vertex_normal};
 
 /// Brackets a change of the instance list (Backend::begin_instance_change).
 struct InstanceChangeBracket {
