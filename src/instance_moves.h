@@ -26,10 +26,12 @@ inline std::vector<BufferId> carried_buffers(bool coupled) {
     return ids;
 }
 
-/// The outputs that passes 4, 6 and 7 compute from R and O, element for element: they move
-/// with the state of an instance that changes place, bitwise what they were.
-inline constexpr BufferId kMovedOutputs[] = {BufferId::node_relative, BufferId::node_world,
-                                             BufferId::vertex_position, BufferId::vertex_normal};
+/// The outputs that passes 6 and 7 compute from R and O, element for element: they move with
+/// the state of an instance that changes place, bitwise what they were. node_relative (u,
+/// pass 4) does not: it is scratch within a step, which pass 4 writes before passes 5 and 6 read
+/// it, and no reader outside the step sees it.
+inline constexpr BufferId kMovedOutputs[] = {BufferId::node_world, BufferId::vertex_position,
+                                             BufferId::vertex_normal};
 
 /// Brackets a change of the instance list (Backend::begin_instance_change).
 struct InstanceChangeBracket {
@@ -42,6 +44,17 @@ struct InstanceChangeBracket {
 
 /// Halves of a chain-scope buffer: 2 for the ping-pong buffers, chain_capacity elements apart.
 inline uint32_t halves_of(BufferId id) { return buffer_info(id).scope == Scope::chain_halves ? 2u : 1u; }
+
+/// Whether half `h` of chain-scope buffer `id` holds values a later step reads, so that it moves
+/// with a shifted instance. R and O hold the pose only in the pose half (HMSM_FINAL_HALF of the
+/// scene's rounds): every later reader reads that half, and the rounds of passes 3 and 5 write
+/// the other before they read it (docs/model.md 3.7, ping-pong halves); a paused instance's
+/// rounds skip it and read neither. Every other buffer's halves (the loads: the half the last
+/// step wrote) all move.
+inline bool half_moves(BufferId id, uint32_t h, uint32_t pose_half) {
+    if (id == BufferId::chain_rotation || id == BufferId::chain_origin) return h == pose_half;
+    return h < halves_of(id);
+}
 
 /// Neighbouring instances [first, end): read, carried and written as one range.
 struct IndexRun {

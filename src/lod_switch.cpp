@@ -2,9 +2,9 @@
 // model of the device scene from create() on, and a switch runs an instance on another of them.
 // The instance keeps its index: the chains both levels keep carry their state element for
 // element (a level keeps the full model's chains with their constants, docs/model.md 3.12), and
-// chains the finer level unfolds start rigid with their parent. Within the capacity a switch
-// costs in proportion to the switched instances: only their state goes through the host, the
-// instances between and behind them shift on the device (instance_moves.h).
+// chains the finer level unfolds start rigid with their parent. Within the capacity only the
+// switched instances' state goes through the host, and of it only the chains both levels keep;
+// the instances between and behind them shift on the device (instance_moves.h).
 #include "instance_moves.h"
 #include "simulation_impl.h"
 
@@ -15,6 +15,7 @@
 #include <algorithm>
 #include <cmath>
 #include <string>
+#include <utility>
 
 namespace hmsm {
 
@@ -75,18 +76,33 @@ namespace {
 struct ChainMap {
     std::vector<int32_t> old_chain;
     std::vector<glm::dmat3> rest_rotation;  // Q_c per new chain, read where old_chain is -1
+    /// The old chains some new chain takes, as runs of neighbours relative to the instance's
+    /// first old chain: all a switch reads of the instance. Both levels list their chains in
+    /// the full model's order, so the runs ascend in old and in new chains alike.
+    std::vector<detail::ElementRange> kept;
 };
 
+/// The runs of ChainMap::kept from its old_chain.
+std::vector<detail::ElementRange> kept_runs(const std::vector<int32_t>& old_chain) {
+    std::vector<detail::ElementRange> runs;
+    for (int32_t c : old_chain) {
+        if (c < 0) continue;
+        if (!runs.empty() && runs.back().first + runs.back().count == uint64_t(c)) ++runs.back().count;
+        else runs.push_back({uint64_t(c), 1});
+    }
+    return runs;
+}
+
 /// Carries one switched instance's values of chain-scope buffer `id` (`per` scalars a chain)
-/// from `from` (its old chains) into `into` (its new chains, zero on entry): each chain takes
-/// the values of the old chain the map names, or those of a chain at rest relative to its
-/// parent (state, force and load 0, T = Q; the pose is recomputed).
-template <class V>
-void carry_switched(const V* from, V* into, const ChainMap& map, uint32_t per, BufferId id) {
+/// into `into` (its new chains, zero on entry): each chain takes the values of the old chain the
+/// map names, at old(c) for old chain c (asked in ascending order of c), or those of a chain at
+/// rest relative to its parent (state, force and load 0, T = Q; the pose is recomputed).
+template <class V, class Old>
+void carry_switched(V* into, const ChainMap& map, uint32_t per, BufferId id, Old&& old) {
     for (size_t j = 0; j < map.old_chain.size(); ++j) {
         V* chain = into + j * per;
         if (map.old_chain[j] >= 0) {
-            std::copy_n(from + uint64_t(map.old_chain[j]) * per, per, chain);
+            std::copy_n(old(map.old_chain[j]), per, chain);
         } else if (id == BufferId::chain_local) {  // T = Q Rz(0) Rx(0): rigid with the parent
             for (int col = 0; col < 3; ++col)
                 for (int row = 0; row < 3; ++row) chain[4 * col + row] = V(map.rest_rotation[j][col][row]);
@@ -107,15 +123,17 @@ std::vector<V> carry_layout(const std::vector<V>& old, uint32_t per, uint32_t ha
         const V* src = old.data() + h * old_live * per;
         V* dst = out.data() + h * new_live * per;
         for (size_t i = 0; i + 1 < old_chain.size(); ++i) {
-            if (maps[i]) carry_switched(src + old_chain[i] * per, dst + new_chain[i] * per, *maps[i], per, id);
+            if (maps[i])
+                carry_switched(dst + new_chain[i] * per, *maps[i], per, id,
+                               [&](int32_t c) { return src + (old_chain[i] + uint64_t(c)) * per; });
             else std::copy_n(src + old_chain[i] * per, (old_chain[i + 1] - old_chain[i]) * per, dst + new_chain[i] * per);
         }
     }
     return out;
 }
 
-/// The ranges of the switched instances in buffer `id`, run by run and half by half: their old
-/// ranges (`first` = old_chain) or their new ones (new_chain).
+/// The new ranges of the switched instances in buffer `id` (`first` = new_chain), run by run
+/// and half by half.
 std::vector<detail::ElementRange> switched_ranges(BufferId id, uint64_t capacity, const std::vector<detail::IndexRun>& runs,
                                                   const detail::ByInstance<uint64_t>& first) {
     std::vector<detail::ElementRange> ranges;
@@ -126,48 +144,65 @@ std::vector<detail::ElementRange> switched_ranges(BufferId id, uint64_t capacity
     return ranges;
 }
 
+/// The old chains of the switched instances that their new levels keep (ChainMap::kept), in
+/// buffer `id`, run by run, half by half and instance by instance; neighbouring ranges merged.
+/// A coarser level reads only the chains it keeps, a finer one its old chains whole.
+std::vector<detail::ElementRange> kept_ranges(BufferId id, uint64_t capacity, const std::vector<detail::IndexRun>& runs,
+                                              const detail::ByInstance<uint64_t>& old_chain,
+                                              const detail::ByInstance<const ChainMap*>& maps) {
+    std::vector<detail::ElementRange> ranges;
+    for (const detail::IndexRun& run : runs)
+        for (uint32_t h = 0; h < halves_of(id); ++h)
+            for (uint32_t i = run.first; i < run.end; ++i)
+                for (const detail::ElementRange& r : maps[i]->kept) {
+                    const uint64_t first = h * capacity + old_chain[i] + r.first;
+                    if (!ranges.empty() && ranges.back().first + ranges.back().count == first) ranges.back().count += r.count;
+                    else ranges.push_back({first, r.count});
+                }
+    return ranges;
+}
+
 /// The switched instances' values of buffer `id` in their new layout, run by run and half by
-/// half back to back, from `old`: their old ranges (switched_ranges of old_chain) back to back.
+/// half back to back, from `kept`: what kept_ranges names, back to back.
 template <class V>
-void carry_runs(BufferId id, const std::vector<detail::IndexRun>& runs, const detail::ByInstance<uint64_t>& old_chain,
-                const detail::ByInstance<uint64_t>& new_chain, const detail::ByInstance<const ChainMap*>& maps,
-                const std::vector<V>& old, std::vector<V>& carried) {
+void carry_runs(BufferId id, const std::vector<detail::IndexRun>& runs, const detail::ByInstance<uint64_t>& new_chain,
+                const detail::ByInstance<const ChainMap*>& maps, const std::vector<V>& kept, std::vector<V>& carried) {
     const uint32_t per = detail::shape_scalars(detail::buffer_info(id).shape);
     uint64_t new_elements = 0;
     for (const detail::IndexRun& run : runs) new_elements += halves_of(id) * (new_chain[run.end] - new_chain[run.first]);
     carried.assign(size_t(new_elements * per), V(0));
     size_t from = 0, into = 0;
     for (const detail::IndexRun& run : runs) {
-        const uint64_t old_first = old_chain[run.first], new_first = new_chain[run.first];
+        const uint64_t new_first = new_chain[run.first];
         for (uint32_t h = 0; h < halves_of(id); ++h) {
             for (uint32_t i = run.first; i < run.end; ++i)
-                carry_switched(old.data() + from + (old_chain[i] - old_first) * per,
-                               carried.data() + into + (new_chain[i] - new_first) * per, *maps[i], per, id);
-            from += (old_chain[run.end] - old_first) * per;
+                carry_switched(carried.data() + into + (new_chain[i] - new_first) * per, *maps[i], per, id,
+                               [&](int32_t) { return kept.data() + std::exchange(from, from + per); });
             into += (new_chain[run.end] - new_first) * per;
         }
     }
 }
 
-/// Reads the switched instances' old ranges of every carried buffer with one read_buffers and
-/// carries them into their new layout (carry_runs), buffer by buffer into `values`.
+/// Reads the old chains the switched instances keep, of every carried buffer, with one
+/// read_buffers and carries them into their new layout (carry_runs), buffer by buffer into
+/// `values`.
 template <class V>
 Status read_switched(const detail::Backend& backend, const std::vector<BufferId>& carried, uint64_t capacity,
                      detail::Scalar scalar, const std::vector<detail::IndexRun>& runs,
                      const detail::ByInstance<uint64_t>& old_chain, const detail::ByInstance<uint64_t>& new_chain,
                      const detail::ByInstance<const ChainMap*>& maps, std::vector<std::vector<V>>& values) {
     std::vector<std::vector<detail::ElementRange>> ranges(carried.size());
-    std::vector<std::vector<V>> old(carried.size());
+    std::vector<std::vector<V>> kept(carried.size());
     std::vector<detail::BufferRangesRead> reads;
     for (size_t b = 0; b < carried.size(); ++b) {
-        ranges[b] = switched_ranges(carried[b], capacity, runs, old_chain);
+        ranges[b] = kept_ranges(carried[b], capacity, runs, old_chain, maps);
         uint64_t elements = 0;
         for (const detail::ElementRange& r : ranges[b]) elements += r.count;
-        old[b].resize(size_t(elements * detail::shape_scalars(detail::buffer_info(carried[b]).shape)));
-        reads.push_back({carried[b], ranges[b], old[b].data()});
+        kept[b].resize(size_t(elements * detail::shape_scalars(detail::buffer_info(carried[b]).shape)));
+        reads.push_back({carried[b], ranges[b], kept[b].data()});
     }
     HMSM_TRY(backend.read_buffers(reads, scalar));
-    for (size_t b = 0; b < carried.size(); ++b) carry_runs(carried[b], runs, old_chain, new_chain, maps, old[b], values[b]);
+    for (size_t b = 0; b < carried.size(); ++b) carry_runs(carried[b], runs, new_chain, maps, kept[b], values[b]);
     return {};
 }
 
@@ -221,6 +256,7 @@ Status Simulation::Impl::switch_models(const std::vector<std::pair<uint32_t, uin
             map.old_chain.push_back(full < kept_at.size() ? kept_at[full] : -1);
             map.rest_rotation.emplace_back(hierarchies_[model].chains[j].rest_rotation);
         }
+        map.kept = kept_runs(map.old_chain);
         maps.add(i, &map);
     }
     // Every instance keeps its place, origin and yaw: only the groups and totals change.
@@ -269,19 +305,21 @@ Status Simulation::Impl::switch_models(const std::vector<std::pair<uint32_t, uin
         HMSM_TRY(scalar == detail::Scalar::f64
                      ? read_switched(*backend_, carried, capacity, scalar, runs, old_chain, new_chain, maps, values64)
                      : read_switched(*backend_, carried, capacity, scalar, runs, old_chain, new_chain, maps, values32));
-        // Every buffer's shifts in one move_buffers.
+        // Every buffer's shifts in one move_buffers; of R and O only the pose half.
         const std::vector<ElementMove> chain_moves = detail::shift_moves(old_chain, new_chain, count, switched);
+        const uint32_t pose_half = HMSM_FINAL_HALF(data_->jump_rounds);
         std::vector<std::vector<ElementMove>> in_buffers;
         in_buffers.reserve(carried.size());
         std::vector<detail::BufferMoves> moves;
         for (BufferId id : carried) {
             std::vector<ElementMove>& in_buffer = in_buffers.emplace_back();
-            for (uint64_t h = 0; h < halves_of(id); ++h)
-                for (ElementMove m : chain_moves) {
-                    m.src += h * capacity;
-                    m.dst += h * capacity;
-                    in_buffer.push_back(m);
-                }
+            for (uint32_t h = 0; h < halves_of(id); ++h)
+                if (detail::half_moves(id, h, pose_half))
+                    for (ElementMove m : chain_moves) {
+                        m.src += h * capacity;
+                        m.dst += h * capacity;
+                        in_buffer.push_back(m);
+                    }
             if (!in_buffer.empty()) moves.push_back({id, in_buffer});
         }
         const std::vector<ElementMove> node_moves = detail::shift_moves(old_node, new_node, count, switched);
