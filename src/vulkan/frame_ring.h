@@ -30,6 +30,8 @@ public:
     FrameRing(const Device& device, uint32_t frames);
 
     uint32_t frames() const { return uint32_t(slots_.size()); }
+    /// The slot of the frame being recorded, in [0, frames()).
+    uint32_t current() const { return current_; }
     /// Moves to the next frame's slot; what the slot held before is free to overwrite.
     void next_frame();
     /// Host memory for `bytes` bytes in the current slot, which record_copies() copies to
