@@ -11,6 +11,8 @@
 #include "device.h"
 #include "device_buffer.h"
 
+#include "../element_moves.h"
+
 #include <vector>
 
 namespace hmsm::detail {
@@ -62,6 +64,9 @@ private:
     std::vector<Slot> slots_;
     uint32_t current_ = 0;
     std::vector<Copy> copies_;
+    // record_copies' scratch, kept so that a frame's recording allocates nothing.
+    std::vector<VkBufferCopy> regions_;
+    DisjointIntervals written_;
 };
 
 }  // namespace hmsm::detail::vk
