@@ -103,6 +103,7 @@ set(_hmsm_vulkan_sources
   src/vulkan/device_buffer.cpp
   src/vulkan/pipelines.cpp
   src/vulkan/recorder.cpp
+  src/vulkan/step_replay.cpp
   src/vulkan/run_table.cpp
   src/vulkan/frame_ring.cpp
   src/vulkan/windows.cpp

@@ -115,10 +115,18 @@ HMSM_API Result<SharedBuffers> shared_buffers(const Simulation& simulation);
 
 HMSM_API Result<DeviceHandles> device_handles(const Simulation& simulation);
 
-/// Records `count` (at most 256) steps into `command_buffer` (recording state, outside a render
-/// pass, from a pool of a compute-capable queue family of the simulation's device) instead of
-/// submitting them, and advances the simulation's clock as Simulation::step() would. hmsm
-/// neither submits nor waits here. Live changes made since the last step (wind, force fields,
+/// Records `count` (at most 256) steps into `command_buffer` (a primary command buffer in the
+/// recording state, outside a render pass, from a pool of the simulation's queue family:
+/// ExternalContext::queue_family_index, or DeviceHandles::queue_family_index on hmsm's own
+/// device) instead of submitting them, and advances the simulation's clock as
+/// Simulation::step() would. hmsm neither submits nor waits here. The steps' commands are
+/// recorded once into secondary command buffers of hmsm's own and executed with
+/// vkCmdExecuteCommands, recorded again only when the step program changes (instances added or
+/// removed, levels switched, fades ended); vkCmdExecuteCommands is why the pool's queue family
+/// must be the simulation's and the command buffer must be outside a render pass (the
+/// secondaries inherit none). HMSM_VULKAN_REPLAY_STEPS=0, set before the simulation is
+/// created, records the commands into `command_buffer` itself instead (any compute-capable
+/// queue family of the device then). Live changes made since the last step (wind, force fields,
 /// instance settings) take effect in the recorded steps: record_steps writes them, with the
 /// steps' wind clock, into a host-visible ring slot of this frame and records copies from it
 /// into the simulation's device buffers ahead of the steps.

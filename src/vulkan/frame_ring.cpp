@@ -62,20 +62,29 @@ void FrameRing::record_copies(VkCommandBuffer cmd) {
     barrier_after_all_writes(device_, cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT);
     // Neighbouring copies between the same buffers go as one command while their destinations
     // stay apart (a later copy over an earlier one's bytes starts a command of its own, which
-    // keeps the order).
-    std::vector<VkBufferCopy> regions;
-    DisjointIntervals written;
+    // keeps the order). Destinations in ascending order are apart without a look-up; the
+    // interval index is built only for a copy that starts below the end of the ones before.
     for (size_t k = 0; k < copies_.size();) {
         const Copy& first = copies_[k];
-        regions.clear();
-        written.clear();
+        regions_.clear();
+        written_.clear();
+        bool ascending = true;
+        VkDeviceSize end = 0;
         for (; k < copies_.size() && copies_[k].src == first.src && copies_[k].dst == first.dst; ++k) {
             const VkBufferCopy& r = copies_[k].region;
-            if (written.overlaps(r.dstOffset, r.dstOffset + r.size)) break;
-            written.add(r.dstOffset, r.dstOffset + r.size);
-            regions.push_back(r);
+            if (ascending && r.dstOffset < end) {
+                ascending = false;
+                for (const VkBufferCopy& earlier : regions_)
+                    written_.add(earlier.dstOffset, earlier.dstOffset + earlier.size);
+            }
+            if (!ascending) {
+                if (written_.overlaps(r.dstOffset, r.dstOffset + r.size)) break;
+                written_.add(r.dstOffset, r.dstOffset + r.size);
+            }
+            end = std::max(end, r.dstOffset + r.size);
+            regions_.push_back(r);
         }
-        device_.vk().vkCmdCopyBuffer(cmd, first.src, first.dst, uint32_t(regions.size()), regions.data());
+        device_.vk().vkCmdCopyBuffer(cmd, first.src, first.dst, uint32_t(regions_.size()), regions_.data());
     }
     copies_.clear();
 }

@@ -11,6 +11,8 @@
 #include "device.h"
 #include "device_buffer.h"
 
+#include "../element_moves.h"
+
 #include <vector>
 
 namespace hmsm::detail {
@@ -30,6 +32,8 @@ public:
     FrameRing(const Device& device, uint32_t frames);
 
     uint32_t frames() const { return uint32_t(slots_.size()); }
+    /// The slot of the frame being recorded, in [0, frames()).
+    uint32_t current() const { return current_; }
     /// Moves to the next frame's slot; what the slot held before is free to overwrite.
     void next_frame();
     /// Host memory for `bytes` bytes in the current slot, which record_copies() copies to
@@ -60,6 +64,9 @@ private:
     std::vector<Slot> slots_;
     uint32_t current_ = 0;
     std::vector<Copy> copies_;
+    // record_copies' scratch, kept so that a frame's recording allocates nothing.
+    std::vector<VkBufferCopy> regions_;
+    DisjointIntervals written_;
 };
 
 }  // namespace hmsm::detail::vk

@@ -60,6 +60,7 @@ Result<bool> RecordingPlan::prepare(const Device& device, Pipelines& pipelines, 
     }
     program_.assign(program.begin(), program.end());
     program_id_ = program_id;
+    ++generation_;
     return true;
 }
 

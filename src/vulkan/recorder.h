@@ -71,6 +71,9 @@ public:
         program_id_ = 0;
     }
     std::span<const Part> parts() const { return parts_; }
+    /// Names what prepare() last built: a different number after each build (0: nothing built),
+    /// so commands recorded from one plan know when they are stale (step_replay.h).
+    uint64_t generation() const { return program_.empty() ? 0 : generation_; }
     /// The pass of each timestamp after the first, in the order a step writes them.
     std::span<const Pass> timestamp_passes() const { return timestamp_passes_; }
     /// vkCmdDispatch calls per step.
@@ -89,6 +92,7 @@ private:
 
     std::vector<Dispatch> program_;
     uint64_t program_id_ = 0;  // the id program_ was built or last held with (0: none)
+    uint64_t generation_ = 0;  // builds so far
     Batching batching_;
     std::vector<Part> parts_;
     std::vector<Pass> timestamp_passes_;

@@ -43,6 +43,11 @@ Result<std::unique_ptr<VulkanBackend>> VulkanBackend::create(std::shared_ptr<Dev
     auto table = RunTable::create(dev, b->pipelines_->table_set_layout());
     if (!table) return table.status();
     b->run_table_ = std::move(table).value();
+    if (step_replay_requested()) {
+        auto replay = StepReplay::create(dev, frames_in_flight);
+        if (!replay) return replay.status();
+        b->replay_ = std::move(replay).value();
+    }
     auto transfer = Transfer::create(dev);
     if (!transfer) return transfer.status();
     b->transfer_ = std::move(transfer).value();
@@ -76,6 +81,7 @@ VulkanBackend::~VulkanBackend() {
     if (pool_) vk.vkDestroyCommandPool(dev, pool_, nullptr);
     // Buffers, pipelines and the transfer go before the device (member order would not ensure it
     // for the shared device).
+    replay_.reset();
     sets_.reset();
     run_table_.reset();
     ring_.reset();
@@ -301,8 +307,14 @@ Status VulkanBackend::run(std::span<const Dispatch> program, std::span<const Run
     HMSM_TRY(prepare_recording(program, program_id));
     if (record_target_) {
         ring_->record_copies(record_target_);
-        record_steps(*device_, pipelines_->layout(), recording_, record_target_, steps, VK_NULL_HANDLE,
-                     run_table_->set());
+        // The step program replays from a secondary; a one-off (program_id 0: an added
+        // instance's rest pose) is recorded directly.
+        if (replay_ && program_id != 0)
+            HMSM_TRY(replay_->record(record_target_, ring_->current(), recordings_, pipelines_->layout(), recording_,
+                                     steps, run_table_->set()));
+        else
+            record_steps(*device_, pipelines_->layout(), recording_, record_target_, steps, VK_NULL_HANDLE,
+                         run_table_->set());
         return device_->take_validation_messages();
     }
     const size_t steps_per_chunk = std::max<size_t>(1, kDispatchesPerChunk / program.size());
@@ -364,6 +376,7 @@ Status VulkanBackend::read(BufferId id, uint64_t first, uint64_t count, void* ds
 
 Status VulkanBackend::begin_recording(VkCommandBuffer command_buffer) {
     record_target_ = command_buffer;
+    ++recordings_;
     ring_->next_frame();
     run_table_->next_recording(ring_->frames());
     return record_held_back();

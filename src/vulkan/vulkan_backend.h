@@ -5,7 +5,8 @@
 // maxStorageBufferRange are bound in windows, one descriptor set per segment of instances, and
 // each dispatch is recorded as one part per segment (windows.h). Steps recorded into an engine's
 // command buffer take their live changes from a ring of frame slots (frame_ring.h) and replay
-// the program's commands built once (recorder.h RecordingPlan): no submission, no wait. Each
+// the program's commands built once (recorder.h RecordingPlan), recorded once into secondary
+// command buffers and replayed (step_replay.h): no submission, no wait. Each
 // run of dispatches of one pass over many instance groups is one launch whose workgroups find
 // their constants in the run table (run_table.h), on a GPU (HMSM_VULKAN_BATCH_RUNS=0 or 1
 // decides).
@@ -18,6 +19,7 @@
 #include "pipelines.h"
 #include "recorder.h"
 #include "run_table.h"
+#include "step_replay.h"
 #include "windows.h"
 
 #include "../backend.h"
@@ -93,6 +95,11 @@ public:
     /// Queue submissions hmsm made itself on this backend (step, read, write outside a
     /// recording, ...); a test hook: record_steps makes none.
     uint64_t submissions() const { return submissions_ + transfer_->submissions(); }
+    /// Secondary command buffers recorded for recorded steps, and their vkCmdExecuteCommands
+    /// (test hooks; step_replay.h): a frame loop whose program stays records none after the
+    /// first frames in flight. Both 0 with replay off.
+    uint64_t step_secondaries_recorded() const { return replay_ ? replay_->secondaries_recorded() : 0; }
+    uint64_t step_replays() const { return replay_ ? replay_->replays() : 0; }
     /// vkCmdDispatch calls per step of the program last run (a test hook).
     size_t launches_per_step() const { return recording_.launches(); }
     /// Whether runs of dispatches are batched (vulkan_set_batch_runs, HMSM_VULKAN_BATCH_RUNS).
@@ -196,6 +203,8 @@ private:
     RecordingPlan recording_;  // the commands of a step of the last program run
     RecordingPlan::Batching batching_;
     std::unique_ptr<RunTable> run_table_;
+    std::unique_ptr<StepReplay> replay_;  // null: recorded steps go into the engine's buffer
+    uint64_t recordings_ = 0;             // begin_recording calls
     uint64_t submissions_ = 0;
     bool in_instance_change_ = false;
     bool engine_recorded_ = false;  // record_steps has recorded into an engine's command buffer

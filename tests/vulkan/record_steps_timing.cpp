@@ -6,7 +6,7 @@
 // Not a test: it asserts nothing and runs without validation (which would dominate the cost).
 //
 //   hmsm_vulkan_record_timing [--preset paper-1] [--trees 1] [--frames 600] [--steps 2]
-//                             [--joints] [--idle] [--spin] [--sleep-us N]
+//                             [--joints] [--idle] [--spin] [--sleep-us N] [--composition C]
 //
 // --joints simulates only the joint matrices (SimulationConfig::outputs = joints, so large
 // forests fit a CPU driver); --idle waits for the queue to drain before each record_steps, so
@@ -14,7 +14,11 @@
 // fence by polling it rather than blocking, so the thread never sleeps; --sleep-us N sleeps N
 // microseconds before each record_steps, as a thread that blocked on a fence does: together they
 // tell hmsm's own cost from the cost of running after the thread slept (cold caches, clocks).
+// HMSM_VULKAN_REPLAY_STEPS=0 records every step's commands into the command buffer rather than
+// replaying them from secondary command buffers (src/vulkan/step_replay.h), for comparisons.
+#include "simulation_access.h"
 #include "vulkan/device.h"
+#include "vulkan/vulkan_backend.h"
 
 #include <hmsm/hmsm.h>
 #include <hmsm/vulkan.h>
@@ -25,6 +29,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <optional>
 #include <string>
 #include <thread>
 #include <vector>
@@ -33,6 +38,7 @@ namespace {
 
 struct Options {
     std::string preset = "paper-1";
+    std::string composition = "automatic";  // path_walk: the step program of a GPU
     uint32_t trees = 1, frames = 600, steps = 2;
     bool joints = false, idle = false, spin = false;
     uint32_t sleep_us = 0;
@@ -46,6 +52,7 @@ bool parse(int argc, char** argv, Options& o) {
         else if (arg == "--trees" && has_value) o.trees = uint32_t(std::strtoul(argv[++i], nullptr, 10));
         else if (arg == "--frames" && has_value) o.frames = uint32_t(std::strtoul(argv[++i], nullptr, 10));
         else if (arg == "--steps" && has_value) o.steps = uint32_t(std::strtoul(argv[++i], nullptr, 10));
+        else if (arg == "--composition" && has_value) o.composition = argv[++i];
         else if (arg == "--joints") o.joints = true;
         else if (arg == "--idle") o.idle = true;
         else if (arg == "--spin") o.spin = true;
@@ -87,6 +94,9 @@ int main(int argc, char** argv) {
     SimulationConfig config;
     config.wind.strength = 8.0;
     if (o.joints) config.outputs = Outputs::joints;
+    const std::optional<Composition> composition = parse_composition(o.composition);
+    if (!composition) return fail("unknown composition " + o.composition);
+    config.composition = *composition;
     auto created = vulkan::create_simulation(*scene, config, context);
     if (!created) return fail(created.status().message());
     Simulation& sim = **created;
@@ -115,6 +125,7 @@ int main(int argc, char** argv) {
                 device.name().c_str(), o.preset.c_str(), o.trees, o.joints ? " (joints only)" : "", o.steps,
                 o.frames, kFrames, o.idle ? ", queue idle before each call" : "",
                 o.spin ? ", fences polled" : "", o.sleep_us);
+    const auto& backend = dynamic_cast<const detail::vk::VulkanBackend&>(detail::backend_of(sim));
     uint64_t frame = 0;
     for (const bool live : {false, true}) {
         std::vector<double> micros, change_micros;
@@ -166,6 +177,9 @@ int main(int argc, char** argv) {
         if (live) std::printf("   (set_wind + set_force_fields median %.1f us)", quantile(change_micros, 0.5));
         std::printf("\n");
     }
+    // Replayed (step_replay.h): one secondary per frame in flight, recorded in the first frames.
+    std::printf("secondaries recorded %llu, replayed %llu times (HMSM_VULKAN_REPLAY_STEPS=0: none)\n",
+                (unsigned long long)backend.step_secondaries_recorded(), (unsigned long long)backend.step_replays());
     vk.vkQueueWaitIdle(device.queue());
     std::vector<float> joints;
     if (Status s = sim.read(Output::joint_matrices, joints); !s) return fail(s.message());
