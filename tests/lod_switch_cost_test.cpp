@@ -2,6 +2,7 @@
 // only the switched instances' state goes through the host, the others shift on the device in
 // an order that overwrites no source before it is read, and the result is bit for bit that of
 // laying out every instance anew.
+#include "forwarding_backend.h"
 #include "instance_moves.h"
 #include "simulation_access.h"
 #include "test_trees.h"
@@ -62,46 +63,43 @@ TEST(ShiftMoves, SequentialMovesCarryEveryInstanceThatKeepsItsSize) {
     EXPECT_GT(down, 0u);
 }
 
-/// A backend that logs the reads and moves made while `recording`, and optionally refuses to
-/// reshape in place (every switch then lays out and uploads the scene anew).
-class Watched final : public detail::Backend {
+/// A backend that logs the reads and moves made while `recording` (single and batched), and
+/// optionally refuses to reshape in place (every switch then lays out and uploads the scene anew).
+class Watched final : public test::ForwardingBackend {
 public:
     struct Range {
         BufferId id;
         uint64_t first, count;
     };
-    Watched(std::unique_ptr<detail::Backend> inner, bool in_place) : inner_(std::move(inner)), in_place_(in_place) {}
-    BackendKind kind() const override { return inner_->kind(); }
-    std::string device_name() const override { return inner_->device_name(); }
-    Status upload(const detail::SceneData& scene) override { return inner_->upload(scene); }
-    Status run(std::span<const detail::Dispatch> program, std::span<const detail::RunStep> steps,
-               uint64_t program_id = 0) override {
-        return inner_->run(program, steps, program_id);
-    }
+    Watched(std::unique_ptr<detail::Backend> inner, bool in_place)
+        : ForwardingBackend(std::move(inner)), in_place_(in_place) {}
     Status read(BufferId id, uint64_t first, uint64_t count, void* dst, detail::Scalar as) const override {
         if (recording) reads.push_back({id, first, count});
-        return inner_->read(id, first, count, dst, as);
+        return ForwardingBackend::read(id, first, count, dst, as);
     }
-    Status write(BufferId id, uint64_t first, uint64_t count, const void* src, detail::Scalar as) override {
-        return inner_->write(id, first, count, src, as);
+    Status read_ranges(BufferId id, std::span<const detail::ElementRange> ranges, void* dst,
+                       detail::Scalar as) const override {
+        log_reads(id, ranges);
+        return ForwardingBackend::read_ranges(id, ranges, dst, as);
     }
-    Status request_read(uint32_t slot, BufferId id, uint64_t first, uint64_t count) const override {
-        return inner_->request_read(slot, id, first, count);
+    Status read_buffers(std::span<const detail::BufferRangesRead> buffers, detail::Scalar as) const override {
+        for (const detail::BufferRangesRead& r : buffers) log_reads(r.id, r.ranges);
+        return ForwardingBackend::read_buffers(buffers, as);
     }
-    Result<const float*> take_read(uint32_t slot) const override { return inner_->take_read(slot); }
     Status move_elements(BufferId id, std::span<const ElementMove> moves) override {
         if (!in_place_) return {ErrorCode::internal, "this backend moves nothing"};
-        if (recording)
-            for (const ElementMove& m : moves) moved.push_back({id, m});
-        return inner_->move_elements(id, moves);
+        log_moves(id, moves);
+        return ForwardingBackend::move_elements(id, moves);
     }
-    void begin_instance_change() override { inner_->begin_instance_change(); }
-    void end_instance_change() override { inner_->end_instance_change(); }
-    void set_profiling(bool enabled) override { inner_->set_profiling(enabled); }
-    PassTimes pass_times() const override { return inner_->pass_times(); }
+    Status move_buffers(std::span<const detail::BufferMoves> buffers) override {
+        if (!in_place_) return {ErrorCode::internal, "this backend moves nothing"};
+        for (const detail::BufferMoves& m : buffers) log_moves(m.id, m.moves);
+        return ForwardingBackend::move_buffers(buffers);
+    }
     detail::BackendCapabilities capabilities() const override {
-        detail::BackendCapabilities can = inner_->capabilities();
+        detail::BackendCapabilities can = ForwardingBackend::capabilities();
         can.reshapes_in_place = can.reshapes_in_place && in_place_;
+        can.grows_on_device = can.grows_on_device && in_place_;
         return can;
     }
 
@@ -110,7 +108,14 @@ public:
     std::vector<std::pair<BufferId, ElementMove>> moved;
 
 private:
-    std::unique_ptr<detail::Backend> inner_;
+    void log_reads(BufferId id, std::span<const detail::ElementRange> ranges) const {
+        if (recording)
+            for (const detail::ElementRange& r : ranges) reads.push_back({id, r.first, r.count});
+    }
+    void log_moves(BufferId id, std::span<const ElementMove> moves) {
+        if (recording)
+            for (const ElementMove& m : moves) moved.push_back({id, m});
+    }
     bool in_place_;
 };
 
