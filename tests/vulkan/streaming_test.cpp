@@ -163,87 +163,97 @@ TEST_F(Streaming, GrowthPastTheCapacityWhileRecordingSubmitsAndStillMatches) {
     EXPECT_EQ(a, b);
 }
 
+/// A scene of small trees on a grid with two coarser levels, simulated twice under the same
+/// wind: `recorded` through record_steps into the engine's frames, `reference` stepped on a plain
+/// Vulkan simulation. Members go in reverse order: the simulations before the engine's device.
+struct RecordedAndReference {
+    std::unique_ptr<EngineDevice> engine;
+    std::unique_ptr<Simulation> recorded, reference;
+
+    /// Empty `skip` and both simulations made, or `skip` says what is missing.
+    static RecordedAndReference create(uint32_t trees, std::string& skip) {
+        RecordedAndReference r;
+        r.engine = EngineDevice::create(skip);
+        if (!skip.empty() || !r.engine) return r;
+        SimulationConfig config;
+        config.wind.strength = 6.0;
+        Scene scene = *grid_scene(small_tree(), trees, 5.0, 4);
+        scene.lod_budgets = {{3, 1}};
+        auto recorded = vulkan::create_simulation(scene, config, r.engine->context());
+        EXPECT_TRUE(recorded.ok()) << recorded.status().message();
+        if (recorded.ok()) r.recorded = std::move(recorded).value();
+        r.reference = create_simulation_or_skip(scene, config, BackendKind::vulkan, skip);
+        return r;
+    }
+    /// The two run the same models and give the same `outputs`, bit for bit.
+    void expect_same(std::initializer_list<Output> outputs) const {
+        for (size_t i = 0; i < recorded->instance_count(); ++i)
+            EXPECT_EQ(recorded->instances()[i].model, reference->instances()[i].model) << "instance " << i;
+        for (Output output : outputs) {
+            std::vector<float> a, b;
+            ASSERT_TRUE(recorded->read(output, a).ok());
+            ASSERT_TRUE(reference->read(output, b).ok());
+            EXPECT_EQ(a, b) << "output " << int(output);
+        }
+    }
+};
+
 // Level switches while the engine records: each switch reads the switched instances' state,
 // and its moves, writes and pose travel in the next recorded command buffer; the result equals
 // the same switches stepped with step() on the Vulkan backend.
 TEST_F(VulkanTest, LevelSwitchesTravelWithTheRecordedFrames) {
-    std::string no_device;
-    auto engine = EngineDevice::create(no_device);
-    if (!no_device.empty()) GTEST_SKIP() << no_device;
-    ASSERT_TRUE(engine);
-    SimulationConfig config;
-    config.wind.strength = 6.0;
-    Scene scene = *grid_scene(small_tree(), 6, 5.0, 4);
-    scene.lod_budgets = {{3, 1}};
-    auto recorded = vulkan::create_simulation(scene, config, engine->context());
-    ASSERT_TRUE(recorded.ok()) << recorded.status().message();
-    Simulation& sim = *recorded.value();
     std::string skip;
-    auto reference = create_simulation_or_skip(scene, config, BackendKind::vulkan, skip);
-    ASSERT_TRUE(reference);
+    RecordedAndReference pair = RecordedAndReference::create(6, skip);
+    if (!skip.empty()) GTEST_SKIP() << skip;
+    ASSERT_TRUE(pair.recorded && pair.reference);
+    Simulation &sim = *pair.recorded, &reference = *pair.reference;
     const auto& backend = dynamic_cast<const detail::vk::VulkanBackend&>(detail::backend_of(sim));
     {
-        EngineFrames frames(*engine, 3);
+        EngineFrames frames(*pair.engine, 3);
         if (HasFailure()) return;
         VkCommandBuffer first = frames.begin(0);
         ASSERT_TRUE(vulkan::record_steps(sim, first, 2).ok());
         frames.submit(0);
-        ASSERT_TRUE(reference->step(2).ok());
+        ASSERT_TRUE(reference.step(2).ok());
         for (uint32_t f = 1; f < 9; ++f) {
             const InstanceId ids[] = {InstanceId(0), InstanceId(2), InstanceId(3), InstanceId(5)};
             const uint32_t levels[] = {f % 3, (f + 1) % 3, (2 * f) % 3, (f + 2) % 3};
-            for (Simulation* s : {&sim, reference.get()}) ASSERT_TRUE(s->set_instance_lods(ids, levels).ok());
+            for (Simulation* s : {&sim, &reference}) ASSERT_TRUE(s->set_instance_lods(ids, levels).ok());
             EXPECT_GT(backend.held_back_changes(), 0u) << "frame " << f;
             VkCommandBuffer cmd = frames.begin(f);
             const Status status = vulkan::record_steps(sim, cmd, 2);
             frames.submit(f);
             ASSERT_TRUE(status.ok()) << "frame " << f << ": " << status.message();
             EXPECT_EQ(backend.held_back_changes(), 0u);
-            ASSERT_TRUE(reference->step(2).ok());
+            ASSERT_TRUE(reference.step(2).ok());
         }
         frames.wait_all();
     }
-    for (size_t i = 0; i < sim.instance_count(); ++i) EXPECT_EQ(sim.instances()[i].model, reference->instances()[i].model);
-    for (Output output : {Output::node_positions, Output::vertex_positions, Output::joint_matrices}) {
-        std::vector<float> a, b;
-        ASSERT_TRUE(sim.read(output, a).ok());
-        ASSERT_TRUE(reference->read(output, b).ok());
-        EXPECT_EQ(a, b) << "output " << int(output);
-    }
-    recorded.value().reset();  // before the engine's device
+    pair.expect_same({Output::node_positions, Output::vertex_positions, Output::joint_matrices});
 }
 
 // A coarsening request fades in pass 2 on the device, with no host round trip per step: the
 // fades run inside recorded steps, and record_steps switches the fades that are over before its
 // recording, exactly as step() does with the same requests on a plain simulation.
 TEST_F(VulkanTest, RecordedStepsFadeAsStepDoes) {
-    std::string no_device;
-    auto engine = EngineDevice::create(no_device);
-    if (!no_device.empty()) GTEST_SKIP() << no_device;
-    ASSERT_TRUE(engine);
-    SimulationConfig config;
-    config.wind.strength = 6.0;
-    Scene scene = *grid_scene(small_tree(), 5, 5.0, 4);
-    scene.lod_budgets = {{3, 1}};
-    auto recorded = vulkan::create_simulation(scene, config, engine->context());
-    ASSERT_TRUE(recorded.ok()) << recorded.status().message();
-    Simulation& sim = *recorded.value();
     std::string skip;
-    auto reference = create_simulation_or_skip(scene, config, BackendKind::vulkan, skip);
-    ASSERT_TRUE(reference);
+    RecordedAndReference pair = RecordedAndReference::create(5, skip);
+    if (!skip.empty()) GTEST_SKIP() << skip;
+    ASSERT_TRUE(pair.recorded && pair.reference);
+    Simulation &sim = *pair.recorded, &reference = *pair.reference;
     LodBands bands;
     bands.edges = {100.0};
     bands.fade_steps = 4;  // two frames of two steps
     ASSERT_TRUE(sim.set_lod_bands(bands).ok());
-    ASSERT_TRUE(reference->set_lod_bands(bands).ok());
+    ASSERT_TRUE(reference.set_lod_bands(bands).ok());
     {
-        EngineFrames frames(*engine, 3);
+        EngineFrames frames(*pair.engine, 3);
         if (HasFailure()) return;
         for (uint32_t f = 0; f < 6; ++f) {
             if (f == 2) {
                 const InstanceId ids[] = {InstanceId(1), InstanceId(4)};
                 const uint32_t levels[] = {2, 1};
-                for (Simulation* s : {&sim, reference.get()}) {
+                for (Simulation* s : {&sim, &reference}) {
                     auto requested = s->request_instance_lods(ids, levels);
                     ASSERT_TRUE(requested.ok()) << requested.status().message();
                     ASSERT_EQ(s->fading_instance_count(), 2u) << "the trees sway: their switches fade";
@@ -254,20 +264,13 @@ TEST_F(VulkanTest, RecordedStepsFadeAsStepDoes) {
             frames.submit(f);
             ASSERT_TRUE(status.ok()) << "frame " << f << ": " << status.message();
             EXPECT_EQ(sim.fading_instance_count(), f == 2 || f == 3 ? 2u : 0u) << "frame " << f;
-            ASSERT_TRUE(reference->step(2).ok());
+            ASSERT_TRUE(reference.step(2).ok());
         }
         frames.wait_all();
     }
     EXPECT_EQ(*sim.instance_lod(InstanceId(1)), 2u);
     EXPECT_EQ(*sim.instance_lod(InstanceId(4)), 1u);
-    for (size_t i = 0; i < sim.instance_count(); ++i) EXPECT_EQ(sim.instances()[i].model, reference->instances()[i].model);
-    for (Output output : {Output::node_positions, Output::joint_matrices}) {
-        std::vector<float> a, b;
-        ASSERT_TRUE(sim.read(output, a).ok());
-        ASSERT_TRUE(reference->read(output, b).ok());
-        EXPECT_EQ(a, b) << "output " << int(output);
-    }
-    recorded.value().reset();  // before the engine's device
+    pair.expect_same({Output::node_positions, Output::joint_matrices});
 }
 
 }  // namespace
