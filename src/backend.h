@@ -101,6 +101,10 @@ struct BackendCapabilities {
     /// device; otherwise growth past the capacity uploads the scene anew (its state read back
     /// and written again).
     bool grows_on_device = false;
+    /// The backend runs listed dispatches (gpu_layout.h PassConstants.instance_list: instances
+    /// of one model wherever they lie, through the instance table); the simulation then lists a
+    /// fragmented scene's instances per model (listed_groups.h).
+    bool runs_listed_groups = false;
 };
 
 /// Read slots of request_read/take_read: one per Output, and one for Simulation::read().

@@ -11,13 +11,14 @@
 namespace hmsm::detail {
 
 /// Element shape: scalars per element as stored (a mat3x4 is 12).
-enum class Shape : uint32_t { i32 = 1, i32x2 = 2, f32x2 = 102, f32x4 = 104, mat3x4 = 112,
+enum class Shape : uint32_t { i32 = 1, i32x2 = 2, i32x4 = 4, f32x2 = 102, f32x4 = 104, mat3x4 = 112,
                               f32x24 = 124, f32x36 = 136 };
 
 constexpr uint32_t shape_scalars(Shape s) {
     switch (s) {
         case Shape::i32: return 1;
         case Shape::i32x2: return 2;
+        case Shape::i32x4: return 4;
         case Shape::f32x2: return 2;
         case Shape::f32x4: return 4;
         case Shape::mat3x4: return 12;
@@ -26,7 +27,7 @@ constexpr uint32_t shape_scalars(Shape s) {
     }
     return 0;
 }
-constexpr bool shape_is_integer(Shape s) { return s == Shape::i32 || s == Shape::i32x2; }
+constexpr bool shape_is_integer(Shape s) { return s == Shape::i32 || s == Shape::i32x2 || s == Shape::i32x4; }
 
 /// What an element count is counted in.
 enum class Scope : uint32_t {
@@ -73,7 +74,8 @@ enum class Scope : uint32_t {
     X(joint_matrix, HMSM_BINDING_JOINT_MATRIX, mat3x4, chain)                       \
     X(chain_walk, HMSM_BINDING_CHAIN_WALK, i32, model_chain_walk)                   \
     X(chain_dynamics, HMSM_BINDING_CHAIN_DYNAMICS, f32x24, model_chain)             \
-    X(chain_load, HMSM_BINDING_CHAIN_LOAD, f32x4, chain_halves)
+    X(chain_load, HMSM_BINDING_CHAIN_LOAD, f32x4, chain_halves)                     \
+    X(instance_table, HMSM_BINDING_INSTANCE_TABLE, i32x4, instance)
 
 enum class BufferId : uint32_t {
 #define HMSM_BUFFER_ENUM(name, binding, shape, scope) name = binding,

@@ -73,6 +73,8 @@ std::vector<std::byte> device_image(const SceneData& d, BufferId id) {
             std::vector<float> words(d.instance_wind.begin(), d.instance_wind.end());
             return padded(raw_bytes(words), d, id);
         }
+        // The listed dispatches' table: written with a program that lists instances.
+        case BufferId::instance_table: return padded({}, d, id);
         default: return {};  // state buffers start zeroed on the device
     }
 }

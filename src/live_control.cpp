@@ -131,12 +131,32 @@ Status Simulation::Impl::apply_pending() {
 
 const std::vector<detail::Dispatch>& Simulation::Impl::current_program() {
     if (program_dirty_) {
-        step_program_ = program_for(active_groups(*data_, instances_, paused_count_), Pass::wind_force);
+        std::vector<detail::InstanceGroup> groups = active_groups(*data_, instances_, paused_count_);
+        // A fragmented scene runs listed groups, a few per model, where the backend can
+        // (listed_groups.h); their instance table is written before the program runs
+        // (write_instance_table).
+        instance_table_dirty_ = false;
+        if (backend_->capabilities().runs_listed_groups && groups.size() > 1 && detail::scene_can_be_listed(*data_)) {
+            detail::list_groups(*data_, groups, instances_, listed_);
+            if (detail::listing_pays(groups.size(), listed_.groups.size())) {
+                groups = listed_.groups;
+                instance_table_dirty_ = listed_.entries() > 0;
+            }
+        }
+        step_program_ = program_for(groups, Pass::wind_force);
         ++step_program_id_;
         step_program_walks_ahead_ = std::any_of(step_program_.begin(), step_program_.end(), detail::is_walk_ahead);
         program_dirty_ = false;
     }
     return step_program_;
+}
+
+Status Simulation::Impl::write_instance_table() {
+    if (!instance_table_dirty_) return {};
+    HMSM_TRY(backend_->write(detail::BufferId::instance_table, 0, listed_.entries(), listed_.table.data(),
+                             detail::Scalar::f64));
+    instance_table_dirty_ = false;
+    return {};
 }
 
 Status Simulation::set_wind(const Wind& wind) {

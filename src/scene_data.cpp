@@ -62,6 +62,7 @@ gpu::PassConstants group_constants(const SceneData& d, const InstanceGroup& g, u
     pc.dst_half = final_half;
     pc.dynamics = d.coupled() ? HMSM_PASS_DYNAMICS_COUPLED : HMSM_PASS_DYNAMICS_PAPER;
     pc.params = {float(d.dt), float(d.max_angle), float(d.fix_weight), g.covers_paused ? 1.0f : 0.0f};
+    pc.instance_list = g.listed ? 1u : 0u;
     return pc;
 }
 

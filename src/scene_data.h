@@ -40,6 +40,9 @@ struct InstanceGroup {
     uint32_t chain_begin = 0, node_begin = 0, vertex_begin = 0;  // state offsets
     /// Some of its instances are paused: its dispatches skip them (gpu_layout.h PassConstants.params).
     bool covers_paused = false;
+    /// A listed group (listed_groups): its instances are entries [instance_begin, instance_begin
+    /// + instance_count) of the instance table, wherever they lie; the state offsets are unused.
+    bool listed = false;
 };
 
 struct SceneData {

@@ -239,6 +239,7 @@ Simulation::~Simulation() = default;
 Status Simulation::Impl::step(uint32_t count) {
     HMSM_TRY(apply_pending());
     const std::vector<detail::Dispatch>& program = current_program();
+    HMSM_TRY(write_instance_table());
     const Wind& wind = config_.wind;
     const double dt = config_.parameters.dt;
     uint32_t done = 0;

@@ -7,6 +7,7 @@
 #include "backend.h"
 #include "cpu/thread_pool.h"
 #include "instance_offsets.h"
+#include "listed_groups.h"
 #include "lod_tracker.h"
 #include "live_wind.h"
 #include "scene_data.h"
@@ -34,6 +35,8 @@ struct __attribute__((visibility("hidden"))) Simulation::Impl {
     /// The step program, rebuilt first if a change left it stale (live changes leave the
     /// rebuild to the next step, so a frame's changes rebuild it once).
     const std::vector<detail::Dispatch>& current_program();
+    /// Writes the instance table of a listed step program (current_program) once it changed.
+    Status write_instance_table();
     /// The step program over `groups` from pass `first` on (only the passes in `passes`, a bit
     /// per Pass).
     std::vector<detail::Dispatch> program_for(const std::vector<detail::InstanceGroup>& groups,
@@ -211,6 +214,10 @@ struct __attribute__((visibility("hidden"))) Simulation::Impl {
     /// Numbers step_program_'s contents: a rebuild takes the next id (Backend::run program_id).
     uint64_t step_program_id_ = 0;
     bool step_program_walks_ahead_ = false;  // whether step_program_ has the walk ahead
+    /// The listed groups of step_program_ where it lists (listed_groups.h), and whether their
+    /// instance table still has to be written to the backend before the program runs.
+    detail::ListedGroups listed_;
+    bool instance_table_dirty_ = false;
     std::vector<ForceField> force_fields_;
     std::vector<Instance> instances_;  // the current instance list (live control)
     /// The handle of each current instance: survivors keep their order and added instances

@@ -20,6 +20,13 @@ constexpr uint32_t kMaxChainsForRoundsInDispatch = 16 * HMSM_MAX_ROUNDS_WORKGROU
 /// analysis, change 3).
 constexpr uint32_t kWalkRecordsMaxInstances = 1;
 
+/// A dispatch of `per_instance` threads for each instance of group g (a listed group's threads
+/// per instance in listed_threads: gpu_layout.h PassConstants.instance_list).
+void size_for(gpu::PassConstants& pc, const InstanceGroup& g, uint32_t per_instance) {
+    pc.element_count = g.instance_count * per_instance;
+    pc.listed_threads = g.listed ? per_instance : 0u;
+}
+
 }  // namespace
 
 uint32_t walk_top_depth(std::span<const uint32_t> level_begin) {
@@ -56,7 +63,7 @@ void append_pass(std::vector<Dispatch>& program, const SceneData& d,
             const auto& m = d.models[g.model];
             const uint32_t per_domain[] = {m.chain_count, m.node_count, m.vertex_count};
             const uint32_t per_instance = per_domain[uint32_t(pass_domain(pass))];
-            dispatch.constants.element_count = g.instance_count * per_instance;
+            size_for(dispatch.constants, g, per_instance);
             if (pass_domain(pass) == PassDomain::vertex)
                 dispatch.constants.kind = d.packed_vertices() ? HMSM_DISPATCH_CONTOUR_PACKED
                                                               : HMSM_DISPATCH_CONTOUR_SEPARATE;
@@ -80,7 +87,7 @@ void append_pass(std::vector<Dispatch>& program, const SceneData& d,
         for (const auto& g : groups) {
             if (!in_dispatch(g)) continue;
             Dispatch dispatch{pass, group_constants(d, g, final_half)};
-            dispatch.constants.element_count = g.instance_count * d.models[g.model].chain_count;
+            size_for(dispatch.constants, g, d.models[g.model].chain_count);
             dispatch.constants.kind = HMSM_DISPATCH_JUMP_ROUNDS_IN_DISPATCH;
             dispatch.constants.round = d.jump_rounds;
             if (dispatch.constants.element_count > 0) program.push_back(dispatch);
@@ -89,7 +96,7 @@ void append_pass(std::vector<Dispatch>& program, const SceneData& d,
             for (const auto& g : groups) {
                 if (in_dispatch(g)) continue;
                 Dispatch dispatch{pass, group_constants(d, g, final_half)};
-                dispatch.constants.element_count = g.instance_count * d.models[g.model].chain_count;
+                size_for(dispatch.constants, g, d.models[g.model].chain_count);
                 dispatch.constants.kind = HMSM_DISPATCH_JUMP_ROUND;
                 dispatch.constants.round = r;
                 dispatch.constants.src_half = HMSM_HALF_READ(r);  // unused in round 0
@@ -111,7 +118,7 @@ void append_pass(std::vector<Dispatch>& program, const SceneData& d,
             dispatch.constants.kind = HMSM_DISPATCH_LEVEL;
             dispatch.constants.level_begin = m.level_begin[level];
             dispatch.constants.level_count = count;
-            dispatch.constants.element_count = g.instance_count * count;
+            size_for(dispatch.constants, g, count);
             program.push_back(dispatch);
         }
     }
@@ -142,7 +149,7 @@ void append_walk_ahead(std::vector<Dispatch>& program, const SceneData& d, const
             dispatch.constants.kind = kind;
             dispatch.constants.level_count = m.level_begin[top_depth_of(m) + 1];
             const uint32_t per_instance = kind == HMSM_DISPATCH_WALK_AHEAD ? m.chain_count : dispatch.constants.level_count;
-            dispatch.constants.element_count = g.instance_count * per_instance;
+            size_for(dispatch.constants, g, per_instance);
             if (dispatch.constants.element_count > 0) program.push_back(dispatch);
         }
     }
@@ -204,7 +211,7 @@ std::vector<Dispatch> build_path_walk_program(const SceneData& d, const std::vec
                                                             : HMSM_DISPATCH_POSE_WALK;
         for (const auto& g : groups) {
             Dispatch dispatch{pass, group_constants(d, g, HMSM_FINAL_HALF(d.jump_rounds))};
-            dispatch.constants.element_count = g.instance_count * per_domain(g);
+            size_for(dispatch.constants, g, per_domain(g));
             dispatch.constants.kind = kind;
             if (dispatch.constants.element_count > 0) program.push_back(dispatch);
         }
@@ -239,7 +246,8 @@ std::vector<std::span<const Dispatch>> dispatch_batches(std::span<const Dispatch
     auto joins = [](const Dispatch& run_last, const Dispatch& next) {
         const gpu::PassConstants &a = run_last.constants, &b = next.constants;
         return next.pass == run_last.pass && b.kind == a.kind && b.round == a.round &&
-               b.src_half == a.src_half && b.dst_half == a.dst_half && b.instance_begin > a.instance_begin;
+               b.src_half == a.src_half && b.dst_half == a.dst_half && b.instance_begin > a.instance_begin &&
+               a.instance_list == 0 && b.instance_list == 0;  // a listed dispatch launches alone
     };
     std::vector<std::span<const Dispatch>> runs;
     size_t begin = 0;

@@ -42,7 +42,8 @@ std::vector<Dispatch> build_program(const SceneData& d, const std::vector<Instan
                                     JumpingForm jumping_form = JumpingForm::by_size);
 
 /// The runs of consecutive dispatches of `program` that one launch may run together: the same
-/// pass, kind, round and halves over different groups (ascending instance_begin). Groups share
+/// pass, kind, round and halves over different groups (ascending instance_begin), none listed
+/// (a listed dispatch, already one per model, is a run of its own). Groups share
 /// no state, so no dispatch of a run reads what another writes, and a backend may run a run as
 /// one launch whose workgroups each find their dispatch's constants. The runs cover `program`
 /// in order; build_program orders a pass's dispatches round by round (level by level) over all

@@ -97,8 +97,26 @@ __global__ void __launch_bounds__(HMSM_WORKGROUP_SIZE)
 
 HMSM_CUDA_ROUNDS_PASS_TYPE(compose)
 
+namespace {
+/// The work of one thread of a listed compose dispatch, every kind (the walk kinds as their
+/// kernels' loop bodies; the constants are rebased to one active instance, so no pause check).
+struct ListedComposeItems {
+    using Index = uint32_t;
+    static HMSM_HOST_DEVICE void item(const BufferPointers& b, const gpu::PassConstants& pc, Index i) {
+        switch (pc.kind) {
+            case HMSM_DISPATCH_WALK_TOP_POSES: return walk_top_pose(b, pc, 0, int32_t(i));
+            case HMSM_DISPATCH_WALK_AHEAD: return walk_ahead(b, pc, 0, int32_t(i));
+            case HMSM_DISPATCH_POSE_WALK_FROM_RECORDS: return path_walk<true>(b, pc, 0, int32_t(i));
+            case HMSM_DISPATCH_POSE_WALK: return path_walk<false>(b, pc, 0, int32_t(i));
+            default: return compose_element(b, pc, i);  // LEVEL, JUMP_ROUND
+        }
+    }
+};
+}  // namespace
+
 cudaError_t launch_compose(const BufferPointers& b, const gpu::PassConstants& pc, cudaStream_t stream) {
     if (pc.element_count == 0) return cudaSuccess;
+    if (pc.instance_list != 0) return launch_listed<ListedComposeItems, compose_pass>(b, pc, stream);
     const unsigned blocks = launch_blocks(pc.element_count);
     switch (pc.kind) {
         case HMSM_DISPATCH_POSE_WALK_FROM_RECORDS:

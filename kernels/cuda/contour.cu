@@ -148,6 +148,8 @@ constexpr unsigned kSeparateThreads = 256;
 
 cudaError_t launch_contour(const BufferPointers& b, const gpu::PassConstants& pc, cudaStream_t stream) {
     if (pc.element_count == 0) return cudaSuccess;
+    // Listed: one thread per vertex of each listed instance, in either layout (contour_element).
+    if (pc.instance_list != 0) return launch_listed<ElementItems<contour_pass>, contour_pass>(b, pc, stream);
     const bool may_pause = pc.params.w != 0.0f;  // the kernel variant with the check
     if (pc.kind != HMSM_DISPATCH_CONTOUR_PACKED) {
         // Blocks of 256: a quarter of the blocks to schedule and drain (measured faster for one tree
@@ -166,7 +168,7 @@ cudaError_t launch_contour(const BufferPointers& b, const gpu::PassConstants& pc
 /// items, so the tests that emulate it check the mapping the GPU runs).
 void emulate_contour(const BufferPointers& b, const gpu::PassConstants& pc) {
     if (pc.element_count == 0) return;
-    if (pc.kind != HMSM_DISPATCH_CONTOUR_PACKED) return emulate<contour_pass>(b, pc);
+    if (pc.kind != HMSM_DISPATCH_CONTOUR_PACKED || pc.instance_list != 0) return emulate<contour_pass>(b, pc);
     for (uint64_t w = 0; w < gpu::packed_contour_threads(pc); ++w) contour_packed_item(b, pc, w);
 }
 

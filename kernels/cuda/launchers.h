@@ -26,6 +26,7 @@ namespace hmsm::detail::cuda {
 /// Device element type of each buffer shape (a mat3x4 element is 3 consecutive float4 columns).
 using DeviceType_i32 = int;
 using DeviceType_i32x2 = int2;
+using DeviceType_i32x4 = int4;  // instance_table (uvec4 entries stored as int32 words)
 using DeviceType_f32x2 = float2;
 using DeviceType_f32x4 = float4;
 using DeviceType_mat3x4 = float4;

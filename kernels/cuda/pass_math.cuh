@@ -265,12 +265,64 @@ static __global__ void __launch_bounds__(HMSM_MAX_ROUNDS_WORKGROUP_SIZE)
                         });
 }
 
+/// The items of a per-element dispatch: element i runs P::element.
+template <class P>
+struct ElementItems {
+    using Index = uint32_t;
+    static HMSM_HOST_DEVICE Index count(const gpu::PassConstants& pc) { return pc.element_count; }
+    static HMSM_HOST_DEVICE void item(const BufferPointers& b, const gpu::PassConstants& pc, Index i) {
+        P::element(b, pc, i);
+    }
+};
+
+/// A listed dispatch (gpu_layout.h PassConstants.instance_list): thread t runs item
+/// t % listed_threads of listed instance t / listed_threads with the constants rebased to that
+/// instance (element_index.h listed_instance_constants), as a dispatch over it alone would.
+/// `Items` as for the batched launches below (ElementItems: P::element).
+template <class Items>
+static __global__ void __launch_bounds__(HMSM_WORKGROUP_SIZE)
+    listed_kernel(const BufferPointers b, const gpu::PassConstants pc) {
+    begin_pass();
+    for (uint32_t t = blockIdx.x * blockDim.x + threadIdx.x; t < pc.element_count; t += gridDim.x * blockDim.x) {
+        const uint32_t k = t / pc.listed_threads;
+        const gpu::PassConstants one = listed_instance_constants(pc, load(b.instance_table + pc.instance_begin + k));
+        Items::item(b, one, t - k * pc.listed_threads);
+    }
+}
+
+/// JUMP_ROUNDS_IN_DISPATCH of a listed dispatch: block k runs every round for listed instance k
+/// (and k + gridDim.x, ...), as rounds_kernel for a dispatch over that instance alone.
+template <class P>
+static __global__ void __launch_bounds__(HMSM_MAX_ROUNDS_WORKGROUP_SIZE)
+    listed_rounds_kernel(const BufferPointers b, const gpu::PassConstants pc) {
+    begin_pass();
+    for (uint32_t k = blockIdx.x; k < dispatch_instances(pc); k += gridDim.x) {
+        const gpu::PassConstants one = listed_instance_constants(pc, load(b.instance_table + pc.instance_begin + k));
+        run_rounds_in_block(b, one, 0, 1, [&](uint32_t instance, uint32_t c, uint32_t round, uint32_t src, uint32_t dst) {
+            P::template jump<true>(b, one, instance, c, round, src, dst);
+        });
+    }
+}
+
+/// Launches a listed dispatch of pass P (in-dispatch rounds: one block per listed instance),
+/// `Items` the work of one thread of an instance.
+template <class Items, class P>
+cudaError_t launch_listed(const BufferPointers& b, const gpu::PassConstants& pc, cudaStream_t stream) {
+    if constexpr (P::kRounds) {
+        if (pc.kind == HMSM_DISPATCH_JUMP_ROUNDS_IN_DISPATCH)
+            return launch_pass(listed_rounds_kernel<P>, launch_blocks_per_instance(pc),
+                               gpu::rounds_workgroup_size(pc.model_chain_count), stream, b, pc);
+    }
+    return launch_pass(listed_kernel<Items>, launch_blocks(pc.element_count), HMSM_WORKGROUP_SIZE, stream, b, pc);
+}
+
 /// launch_NAME: an empty dispatch launches nothing; in-dispatch rounds take one block per
 /// instance of rounds_workgroup_size threads, everything else blocks of HMSM_WORKGROUP_SIZE
 /// up to the grid cap (launch_blocks).
 template <class P>
 cudaError_t launch(const BufferPointers& b, const gpu::PassConstants& pc, cudaStream_t stream) {
     if (pc.element_count == 0) return cudaSuccess;
+    if (pc.instance_list != 0) return launch_listed<ElementItems<P>, P>(b, pc, stream);
     const bool may_pause = pc.params.w != 0.0f;
     if constexpr (P::kRounds) {
         if (pc.kind == HMSM_DISPATCH_JUMP_ROUNDS_IN_DISPATCH)
@@ -286,6 +338,11 @@ cudaError_t launch(const BufferPointers& b, const gpu::PassConstants& pc, cudaSt
 /// emulate_NAME: the same element (or round) code, serially on the host.
 template <class P>
 void emulate(const BufferPointers& b, const gpu::PassConstants& pc) {
+    if (pc.instance_list != 0) {  // instance after instance, each as a dispatch over it alone
+        for (uint32_t k = 0; k < pc.element_count / pc.listed_threads; ++k)
+            emulate<P>(b, listed_instance_constants(pc, b.instance_table[pc.instance_begin + k]));
+        return;
+    }
     if constexpr (P::kRounds) {
         if (pc.kind == HMSM_DISPATCH_JUMP_ROUNDS_IN_DISPATCH) {
             emulate_rounds(b, pc, [&](uint32_t k, uint32_t c, uint32_t round, uint32_t src, uint32_t dst) {
@@ -305,15 +362,6 @@ void emulate(const BufferPointers& b, const gpu::PassConstants& pc) {
 // The work of a dispatch is a count of items and the code of item i (Items::count, Items::item;
 // Items::Index the loop's index type, as in the kernel of the dispatch's own launch).
 
-/// The items of a per-element dispatch: element i runs P::element.
-template <class P>
-struct ElementItems {
-    using Index = uint32_t;
-    static HMSM_HOST_DEVICE Index count(const gpu::PassConstants& pc) { return pc.element_count; }
-    static HMSM_HOST_DEVICE void item(const BufferPointers& b, const gpu::PassConstants& pc, Index i) {
-        P::element(b, pc, i);
-    }
-};
 
 /// kMayPause: some entry covers paused instances; each entry keeps its own params.w, so an
 /// entry without paused instances skips none, as in its own launch.

@@ -105,6 +105,22 @@ layout(set = 0, binding = HMSM_BINDING_CHAIN_LOAD, std430) buffer ChainLoad { ve
 // wind table (turbulent amplitudes, wind vector, force fields, per-step slots).
 layout(set = 0, binding = HMSM_BINDING_INSTANCE_WIND, std430) readonly buffer InstanceWind { vec4 instance_wind[]; };
 layout(set = 0, binding = HMSM_BINDING_WIND_TABLE, std430) readonly buffer WindTable { vec4 wind_table[]; };
+// Listed dispatches (PassConstants.instance_list): per entry (chain_begin, node_begin,
+// vertex_begin, instance) of one listed instance.
+layout(set = 0, binding = HMSM_BINDING_INSTANCE_TABLE, std430) readonly buffer InstanceTable { uvec4 instance_table[]; };
+
+/// A listed dispatch's constants for its group instance k (src/common/element_index.h
+/// listed_instance_constants): the dispatch over that instance alone.
+void rebase_to_listed_instance(uint k) {
+    uvec4 entry = instance_table[pc.instance_begin + k];
+    pc.chain_begin = entry.x;
+    pc.node_begin = entry.y;
+    pc.vertex_begin = entry.z;
+    pc.instance_begin = entry.w;
+    pc.element_count = pc.listed_threads;
+    pc.instance_list = 0u;
+    pc.params.w = 0.0;
+}
 
 /// Whether group instance k is paused (inactive, frozen): a dispatch may cover paused instances
 /// between active ones (it says so in params.w) and skips their elements (the z of the
@@ -115,7 +131,28 @@ bool instance_paused(uint k) {
 
 /// The workgroup's index within its dispatch, and the global thread index of the dispatch.
 uint workgroup_index() { return launch_workgroup_index() - dispatch_first_workgroup; }
-uint thread_index() { return workgroup_index() * gl_WorkGroupSize.x + gl_LocalInvocationID.x; }
+/// In a listed dispatch, thread t is thread t % listed_threads of its listed instance: pc is
+/// rebased to that instance (rebase_to_listed_instance) and the index within it returned; a
+/// thread past the dispatch gets an index past the rebased element_count.
+uint thread_index() {
+    uint t = workgroup_index() * gl_WorkGroupSize.x + gl_LocalInvocationID.x;
+    if (pc.instance_list == 0u) return t;
+    if (t >= pc.element_count) return 0xFFFFFFFFu;
+    uint k = t / pc.listed_threads;
+    rebase_to_listed_instance(k);
+    return t - k * pc.element_count;
+}
+/// The group instance of an in-dispatch rounds workgroup (one workgroup per instance): its
+/// workgroup index, or in a listed dispatch 0 after rebasing pc to that instance (a workgroup
+/// past the dispatch gets an index past the rebased dispatch's one instance). Uniform per
+/// workgroup.
+uint rounds_instance() {
+    uint k = workgroup_index();
+    if (pc.instance_list == 0u) return k;
+    if (k >= pc.element_count / pc.model_chain_count) return 0xFFFFFFFFu;
+    rebase_to_listed_instance(k);
+    return 0u;
+}
 
 /// State index of model chain `c` of group instance `k` (cpu_state.h state_chain).
 uint state_chain(uint k, uint c) { return pc.chain_begin + k * pc.model_chain_count + c; }

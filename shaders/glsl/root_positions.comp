@@ -17,7 +17,7 @@
 void main() {
     load_constants();
     if (pc.kind == HMSM_DISPATCH_JUMP_ROUNDS_IN_DISPATCH) {
-        uint k = workgroup_index();
+        uint k = rounds_instance();
         if (k >= pc.element_count / pc.model_chain_count || instance_paused(k)) return;  // uniform per workgroup
         for (uint round = 0u; round < pc.round; ++round) {
             for (uint c = gl_LocalInvocationID.x; c < pc.model_chain_count; c += gl_WorkGroupSize.x)

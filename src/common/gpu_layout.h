@@ -52,7 +52,9 @@
 // The coupled dynamics (docs/model.md 3.13; no elements under the paper's):
 #define HMSM_BINDING_CHAIN_DYNAMICS 27       // HMSM_CHAIN_DYNAMICS_VEC4S vec4 per model chain: below
 #define HMSM_BINDING_CHAIN_LOAD 28           // vec4 per chain, 2 halves: (g_x, g_z, 0, 0), the load g of a step
-#define HMSM_BINDING_COUNT 29
+// Listed dispatches (PassConstants.instance_list below), written by the host with the program:
+#define HMSM_BINDING_INSTANCE_TABLE 29       // uvec4 per list entry: (chain_begin, node_begin, vertex_begin, instance)
+#define HMSM_BINDING_COUNT 30
 
 /// What PassConstants.dynamics says the passes integrate (hmsm::Dynamics values).
 #define HMSM_PASS_DYNAMICS_PAPER 0u
@@ -240,6 +242,13 @@ struct alignas(16) vec4 {
 /// element (i % per_instance) of instance (i / per_instance) of the group, where per_instance is
 /// model_chain_count, model_node_count, model_vertex_count, or level_count for a LEVEL or
 /// WALK_TOP_POSES dispatch. `kind` (HMSM_DISPATCH_*) says what the dispatch runs.
+///
+/// A listed dispatch (instance_list = 1) covers instances of one model wherever they lie: its
+/// group instance k is entry instance_begin + k of the instance table (binding
+/// HMSM_BINDING_INSTANCE_TABLE), which gives that instance's first state chain, node and vertex
+/// and its index; chain_begin, node_begin and vertex_begin are unused, and listed_threads is
+/// per_instance. Kernels rebase such a dispatch to one instance per thread
+/// (listed_instance_constants) and then run as for a group of one.
 struct PassConstants {
     uint element_count;       // threads: group instances x per_instance
     uint instance_begin;      // first global instance of the group
@@ -263,8 +272,8 @@ struct PassConstants {
     uint dst_half;            // ping-pong: half written
     uint wind_slot;           // the step's wind-table slot (Backend::run sets it where reads_wind_slot)
     uint dynamics;            // HMSM_DYNAMICS_*: the equations wind_force and integrate run
-    uint reserved0;           // padding up to params (std430 aligns a vec4 to 16 bytes)
-    uint reserved1;
+    uint instance_list;       // 1: a listed dispatch (above), whose instances the instance table gives
+    uint listed_threads;      // listed dispatch: threads per instance (per_instance); else 0
     vec4 params;              // (dt, max_angle, fix_weight, covers paused: 1 if the group has paused instances)
 };
 
@@ -278,9 +287,10 @@ static_assert(offsetof(PassConstants, round) == 52 && offsetof(PassConstants, ki
 static_assert(sizeof(PassConstants) <= 128, "push constants must fit the guaranteed 128 bytes");
 
 /// Threads of a packed contour dispatch (HMSM_PACKED_CONTOUR_INSTANCES): one per model vertex
-/// and group of instances. Host and device: the launchers size their grids by it and the CUDA
-/// kernel bounds its loop by it.
+/// and group of instances (a listed dispatch: one per vertex of each instance). Host and
+/// device: the launchers size their grids by it and the CUDA kernel bounds its loop by it.
 HMSM_HOST_DEVICE constexpr uint64_t packed_contour_threads(const PassConstants& pc) {
+    if (pc.instance_list != 0) return pc.element_count;  // listed: one thread per vertex of each instance
     const uint32_t instances = pc.element_count / pc.model_vertex_count;
     return uint64_t((instances + HMSM_PACKED_CONTOUR_INSTANCES - 1) / HMSM_PACKED_CONTOUR_INSTANCES) *
            pc.model_vertex_count;

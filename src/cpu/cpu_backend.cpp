@@ -35,6 +35,9 @@ struct ScalarView {
     static void get(const std::vector<glm::ivec2>& b, uint64_t i, double* out) {
         out[0] = b[i].x; out[1] = b[i].y;
     }
+    static void get(const std::vector<glm::ivec4>& b, uint64_t i, double* out) {
+        for (int k = 0; k < 4; ++k) out[k] = b[i][k];
+    }
     static void get(const std::vector<glm::vec<2, T>>& b, uint64_t i, double* out) {
         out[0] = double(b[i].x); out[1] = double(b[i].y);
     }
@@ -66,6 +69,9 @@ struct ScalarView {
     static void set(std::vector<int32_t>& b, uint64_t i, const double* in) { b[i] = int32_t(in[0]); }
     static void set(std::vector<glm::ivec2>& b, uint64_t i, const double* in) {
         b[i] = glm::ivec2(int32_t(in[0]), int32_t(in[1]));
+    }
+    static void set(std::vector<glm::ivec4>& b, uint64_t i, const double* in) {
+        for (int k = 0; k < 4; ++k) b[i][k] = int32_t(in[k]);
     }
     static void set(std::vector<glm::vec<2, T>>& b, uint64_t i, const double* in) {
         b[i] = glm::vec<2, T>(T(in[0]), T(in[1]));
@@ -256,6 +262,7 @@ private:
         for (size_t i = 0; i < d.instance_count(); ++i)
             for (size_t k = 0; k < 36; ++k) s_.instance_wind[i][k] = T(d.instance_wind[36 * i + k]);
         s_.wind_table.assign(HMSM_WIND_TABLE_ELEMENTS, vec4(0));
+        s_.instance_table.assign(d.element_count(BufferId::instance_table), glm::ivec4(0));
         s_.chain_state.assign(d.element_count(BufferId::chain_state), vec4(0));
         s_.chain_force.assign(d.element_count(BufferId::chain_force), typename State<T>::vec2(0));
         s_.chain_load.assign(d.element_count(BufferId::chain_load), vec4(0));

@@ -41,6 +41,9 @@ struct State {
     // Live control: the wind per instance and the wind table (gpu_layout.h).
     std::vector<std::array<T, 4 * HMSM_INSTANCE_WIND_VEC4S>> instance_wind;
     std::vector<vec4> wind_table;
+    /// The listed dispatches' table (gpu_layout.h HMSM_BINDING_INSTANCE_TABLE): allocated as on
+    /// the devices, read by no CPU pass (the CPU backends run no listed dispatch).
+    std::vector<glm::ivec4> instance_table;
     // Per-instance state.
     std::vector<vec4> chain_state;
     std::vector<vec2> chain_force;

@@ -55,6 +55,7 @@ public:
         can.prefers_path_walk = true;
         can.reads_async = true;
         can.grows_on_device = true;
+        can.runs_listed_groups = true;
         return can;
     }
     /// Steps run without their wind_force dispatches, taking the angles the step before

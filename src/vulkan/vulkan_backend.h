@@ -117,6 +117,8 @@ public:
         can.dispatches_are_expensive = true;
         can.prefers_path_walk = !device_->is_cpu();
         can.grows_on_device = can.reshapes_in_place;
+        // A listed dispatch reads state anywhere, so only within one window (windows.h).
+        can.runs_listed_groups = can.reshapes_in_place;
         return can;
     }
 

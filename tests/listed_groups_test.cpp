@@ -1,0 +1,168 @@
+// Listed groups (src/listed_groups.h): a fragmented scene's step program runs one group per
+// model over the instance table. The table lists each model's active instances in index order
+// with their state offsets; the rule lists only where the contiguous groups are many; and on
+// the backends that run listed dispatches, a listed program gives bit for bit what the
+// contiguous program gives, through adds, swap removals, pauses and level switches, and agrees
+// with cpu64.
+#include "test_trees.h"
+
+#include "listed_groups.h"
+#include "simulation_access.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <random>
+
+namespace hmsm {
+namespace {
+
+using detail::InstanceGroup;
+
+TEST(ListedGroups, ListEachModelsActiveInstancesInIndexOrderWithTheirOffsets) {
+    detail::SceneData d;
+    d.models.resize(2);
+    d.models[0].chain_count = 3;
+    d.models[0].node_count = 5;
+    d.models[0].vertex_count = 7;
+    d.models[1].chain_count = 2;
+    d.models[1].node_count = 4;
+    d.models[1].vertex_count = 1;
+    // Instances 0 1 | 2 | 3 4 5 of models 0 | 1 | 0; instance 4 is paused, inside a group that
+    // covers it.
+    InstanceGroup a{0, 0, 2, 0, 0, 0};
+    InstanceGroup b{1, 2, 1, 6, 10, 14};
+    InstanceGroup c{0, 3, 3, 8, 14, 15};
+    c.covers_paused = true;
+    std::vector<Instance> instances(6);
+    for (size_t i = 0; i < instances.size(); ++i) instances[i].model = i == 2 ? 1u : 0u;
+    instances[4].active = false;
+    const std::vector<InstanceGroup> groups = {a, b, c};
+
+    detail::ListedGroups listed;
+    detail::list_groups(d, groups, instances, listed);
+    const std::vector<double> expected = {
+        0, 0, 0, 0,     // model 0: instance 0
+        3, 5, 7, 1,     //          instance 1
+        8, 14, 15, 3,   //          instance 3
+        14, 24, 29, 5,  //          instance 5 (4 is paused)
+        6, 10, 14, 2,   // model 1: instance 2
+    };
+    EXPECT_EQ(listed.table, expected);
+    ASSERT_EQ(listed.groups.size(), 2u);
+    EXPECT_TRUE(listed.groups[0].listed && listed.groups[1].listed);
+    EXPECT_EQ(listed.groups[0].model, 0u);
+    EXPECT_EQ(listed.groups[0].instance_begin, 0u);
+    EXPECT_EQ(listed.groups[0].instance_count, 4u);
+    EXPECT_EQ(listed.groups[1].model, 1u);
+    EXPECT_EQ(listed.groups[1].instance_begin, 4u);
+    EXPECT_EQ(listed.groups[1].instance_count, 1u);
+
+    // A listed group's dispatches carry the flag and the threads per instance.
+    const std::vector<detail::Dispatch> program =
+        detail::build_program(d, listed.groups, Composition::level_by_level, false, Pass::integrate,
+                              1u << uint32_t(Pass::integrate));
+    ASSERT_EQ(program.size(), 2u);
+    EXPECT_EQ(program[0].constants.instance_list, 1u);
+    EXPECT_EQ(program[0].constants.listed_threads, 3u);
+    EXPECT_EQ(program[0].constants.element_count, 12u);
+    EXPECT_EQ(program[1].constants.listed_threads, 2u);
+    // Listed dispatches are never joined into one launch.
+    EXPECT_EQ(detail::dispatch_batches(program).size(), 2u);
+}
+
+TEST(ListedGroups, ListOnlyWhereTheContiguousGroupsAreMany) {
+    detail::set_listing_for_tests(-1);
+    EXPECT_FALSE(detail::listing_pays(detail::kListedGroupsFrom - 1, 1));
+    EXPECT_TRUE(detail::listing_pays(detail::kListedGroupsFrom, detail::kListedGroupsFrom / 4));
+    EXPECT_FALSE(detail::listing_pays(detail::kListedGroupsFrom, detail::kListedGroupsFrom / 4 + 1));
+    detail::set_listing_for_tests(1);
+    EXPECT_TRUE(detail::listing_pays(2, 2));
+    detail::set_listing_for_tests(0);
+    EXPECT_FALSE(detail::listing_pays(100000, 1));
+    detail::set_listing_for_tests(-1);
+}
+
+constexpr int32_t kBudgets[] = {6, 3, 1};
+
+/// Two models on alternating places, each with three coarser levels.
+Scene fragmented_scene() {
+    Scene scene;
+    scene.models = {test::small_tree(), test::deep_tree(4)};
+    scene.model_names = {"small", "deep"};
+    for (uint32_t i = 0; i < 13; ++i)
+        scene.instances.push_back({i % 2, {3.0 * i, 0.0, 1.5 * (i % 3)}, 0.4 * i, 0.6 + 0.05 * i, 0.1 * i});
+    scene.lod_budgets = {{std::begin(kBudgets), std::end(kBudgets)}, {std::begin(kBudgets), std::end(kBudgets)}};
+    return scene;
+}
+
+bool lists(const Simulation& sim) {
+    const auto& program = detail::step_program_of(sim);
+    return std::any_of(program.begin(), program.end(),
+                       [](const detail::Dispatch& d) { return d.constants.instance_list != 0; });
+}
+
+/// Steps `sim` with listing forced on or off (the rule is taken when the program is rebuilt).
+void step_listing(Simulation& sim, bool listing) {
+    detail::set_listing_for_tests(listing ? 1 : 0);
+    const Status stepped = sim.step(1);
+    EXPECT_TRUE(stepped.ok()) << stepped.message();
+    detail::set_listing_for_tests(-1);
+}
+
+class ListedSteps : public ::testing::TestWithParam<BackendKind> {};
+
+TEST_P(ListedSteps, MatchTheContiguousProgramThroughStreamingAndAgreeWithCpu64) {
+    for (Composition composition : {Composition::automatic, Composition::pointer_jumping, Composition::level_by_level}) {
+        SCOPED_TRACE(to_string(composition));
+        SimulationConfig config = test::windy_config();
+        config.composition = composition;
+        std::string skip;
+        auto listed = test::create_simulation_or_skip(fragmented_scene(), config, GetParam(), skip);
+        if (!skip.empty()) GTEST_SKIP() << skip;
+        auto contiguous = test::create_simulation_or_skip(fragmented_scene(), config, GetParam(), skip);
+        auto oracle = test::create_simulation_or_skip(fragmented_scene(), config, BackendKind::cpu64, skip);
+        ASSERT_TRUE(listed && contiguous && oracle);
+        ASSERT_TRUE(detail::backend_of(*listed).capabilities().runs_listed_groups);
+        std::mt19937 rng(27);
+        for (int frame = 0; frame < 24; ++frame) {
+            std::vector<Simulation*> all = {listed.get(), contiguous.get(), oracle.get()};
+            // A swap removal, an arrival, a pause or resume and a switch every few frames.
+            if (frame % 3 == 1 && listed->instance_count() > 4) {
+                const InstanceId leaving = listed->instance_ids()[rng() % listed->instance_count()];
+                for (Simulation* sim : all) ASSERT_TRUE(sim->swap_remove_instances({&leaving, 1}).ok());
+            }
+            if (frame % 3 == 2) {
+                const Instance coming{uint32_t(rng() % 2), {double(rng() % 40), 0.0, 2.0}, 1.0, 0.8, 0.2};
+                for (Simulation* sim : all) ASSERT_TRUE(sim->add_instances({&coming, 1}).ok());
+            }
+            if (frame % 4 == 0) {
+                const uint64_t i = rng() % listed->instance_count();
+                const bool active = rng() % 2 == 0;
+                for (Simulation* sim : all) ASSERT_TRUE(sim->set_instance_active(i, active).ok());
+            }
+            const InstanceId id = listed->instance_ids()[rng() % listed->instance_count()];
+            const uint32_t level = rng() % 4;
+            for (Simulation* sim : all) ASSERT_TRUE(sim->set_instance_lod(id, level).ok());
+            step_listing(*listed, true);
+            step_listing(*contiguous, false);
+            ASSERT_TRUE(oracle->step(1).ok());
+            ASSERT_TRUE(lists(*listed)) << "frame " << frame;
+            ASSERT_FALSE(lists(*contiguous)) << "frame " << frame;
+            ASSERT_TRUE(test::same_bits(test::every_output(*listed), test::every_output(*contiguous)))
+                << "frame " << frame;
+        }
+        // Agreement with the oracle at the end; the scene moved.
+        for (Output o : {Output::node_positions, Output::vertex_positions, Output::chain_origins}) {
+            const auto a = test::read_output(*listed, o), b = test::read_output(*oracle, o);
+            ASSERT_EQ(a.size(), b.size());
+            EXPECT_LE(test::max_abs_difference(a, b), 1e-3) << "output " << int(o);
+        }
+    }
+}
+
+INSTANTIATE_TEST_SUITE_P(Backends, ListedSteps, ::testing::Values(BackendKind::vulkan, BackendKind::cuda),
+                         [](const auto& info) { return test::backend_test_name(info.param); });
+
+}  // namespace
+}  // namespace hmsm
