@@ -215,9 +215,13 @@ Status profile_standing_step(Simulation& sim, json& row) {
                 per_pass[std::string(pass_name(p))] = t.seconds[uint32_t(p)] / double(t.steps);
         row["still_pass_seconds"] = per_pass;
         // Groups are the runs of neighbouring instances of one model (level); every pass
-        // dispatches once per group.
+        // dispatches once per group, or, where the program lists (src/listed_groups.h), once
+        // per model.
         row["groups"] = detail::scene_data_of(sim).groups.size();
-        row["dispatches_per_step"] = detail::step_program_of(sim).size();
+        const std::vector<detail::Dispatch>& program = detail::step_program_of(sim);
+        row["dispatches_per_step"] = program.size();
+        row["listed"] = std::any_of(program.begin(), program.end(),
+                                    [](const detail::Dispatch& d) { return d.constants.instance_list != 0; });
     }
     // The same standing step as an engine issues it (CUDA: enqueued on its stream; Vulkan:
     // recorded into its command buffer): the host time of the call, and the whole frame until
