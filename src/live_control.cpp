@@ -135,12 +135,12 @@ const std::vector<detail::Dispatch>& Simulation::Impl::current_program() {
         // A fragmented scene runs listed groups, a few per model, where the backend can
         // (listed_groups.h); their instance table is written before the program runs
         // (write_instance_table).
-        instance_table_dirty_ = false;
+        instance_table_dirty_ = step_program_lists_ = false;
         if (backend_->capabilities().runs_listed_groups && groups.size() > 1 && detail::scene_can_be_listed(*data_)) {
             detail::list_groups(*data_, groups, instances_, listed_);
-            if (detail::listing_pays(groups.size(), listed_.groups.size())) {
+            if (detail::listing_pays(groups.size(), listed_.groups.size()) && listed_.entries() > 0) {
                 groups = listed_.groups;
-                instance_table_dirty_ = listed_.entries() > 0;
+                instance_table_dirty_ = step_program_lists_ = true;
             }
         }
         step_program_ = program_for(groups, Pass::wind_force);

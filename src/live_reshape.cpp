@@ -211,7 +211,6 @@ Status Simulation::Impl::reshape(const std::vector<uint32_t>& survivors, std::sp
     // with their state; after an upload every output buffer is new: node positions and vertices
     // are a pure function of the carried R and O (passes 4, 6, 7 map elements one to one), so
     // recomputing them restores them exactly.
-    const detail::RunStep at_rest[1] = {};
     const uint32_t first_added = uint32_t(survivors.size());
     if (!in_place && first_added > 0) {
         std::vector<detail::InstanceGroup> survived;
@@ -222,10 +221,10 @@ Status Simulation::Impl::reshape(const std::vector<uint32_t>& survivors, std::sp
         }
         const uint32_t outputs = (1u << uint32_t(Pass::node_relative)) | (1u << uint32_t(Pass::node_world)) |
                                  (1u << uint32_t(Pass::contour));
-        HMSM_TRY(backend_->run(program_for(survived, Pass::node_relative, outputs), at_rest));
+        HMSM_TRY(run_at_rest(survived, Pass::node_relative, outputs));
     }
     if (!added.empty())
-        HMSM_TRY(backend_->run(program_for(groups_from(*data_, first_added), Pass::integrate), at_rest));
+        HMSM_TRY(run_at_rest(groups_from(*data_, first_added), Pass::integrate));
     return apply_pending();
 }
 
@@ -256,8 +255,7 @@ Status Simulation::Impl::reset(std::span<const uint32_t> indices) {
     if (data_->coupled())  // both halves of the loads
         HMSM_TRY(backend_->write_ranges(BufferId::chain_load, both_halves, zeros.data(), detail::Scalar::f64));
     ahead_schedule_.live_change();  // the reset angles replace any integrated ahead
-    const detail::RunStep at_rest[1] = {};
-    return backend_->run(program_for(slices, Pass::integrate), at_rest);
+    return run_at_rest(slices, Pass::integrate);
 }
 
 Status Simulation::Impl::reshape_in_place(std::unique_ptr<detail::SceneData> next,

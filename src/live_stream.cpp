@@ -156,8 +156,7 @@ Result<bool> Simulation::Impl::append_in_place(std::span<const Instance> added) 
     for (auto g = at - 1; g != d.groups.end(); ++g)
         posed.push_back(detail::group_slice(d, *g, std::max(first, g->instance_begin),
                                             g->instance_begin + g->instance_count - std::max(first, g->instance_begin)));
-    const detail::RunStep at_rest[1] = {};
-    HMSM_TRY(backend_->run(program_for(posed, Pass::integrate), at_rest));
+    HMSM_TRY(run_at_rest(posed, Pass::integrate));
     HMSM_TRY(apply_pending());
     return true;
 }

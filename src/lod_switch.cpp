@@ -394,7 +394,6 @@ Status Simulation::Impl::switch_models(const std::vector<std::pair<uint32_t, uin
     instances_changed();
     header_dirty_ = program_dirty_ = true;
 
-    const detail::RunStep at_rest[1] = {};
     if (!in_place) {
         // Every output buffer is new: passes 4, 6 and 7 from the carried pose, element for
         // element what they were.
@@ -403,10 +402,10 @@ Status Simulation::Impl::switch_models(const std::vector<std::pair<uint32_t, uin
             all.push_back(detail::group_slice(*data_, g, g.instance_begin, g.instance_count));
         const uint32_t outputs = (1u << uint32_t(Pass::node_relative)) | (1u << uint32_t(Pass::node_world)) |
                                  (1u << uint32_t(Pass::contour));
-        HMSM_TRY(backend_->run(program_for(all, Pass::node_relative, outputs), at_rest));
+        HMSM_TRY(run_at_rest(all, Pass::node_relative, outputs));
     }
     // The switched instances are posed from their angles.
-    HMSM_TRY(backend_->run(program_for(detail::slices_covering(*data_, switched), Pass::compose), at_rest));
+    HMSM_TRY(run_at_rest(detail::slices_covering(*data_, switched), Pass::compose));
     return apply_pending();
 }
 

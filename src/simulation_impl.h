@@ -41,6 +41,12 @@ struct __attribute__((visibility("hidden"))) Simulation::Impl {
     /// per Pass).
     std::vector<detail::Dispatch> program_for(const std::vector<detail::InstanceGroup>& groups,
                                               Pass first, uint32_t passes = ~0u) const;
+    /// Runs program_for(groups, first, passes) once at rest (a one-off program: posing added,
+    /// reset or switched instances, outputs recomputed), listed where the groups are many and
+    /// the backend can (listed_groups.h): the switched trees of a fragmented world are many
+    /// scattered slices. Its table takes the instance table's place, so a listed step program
+    /// writes its own again before it runs.
+    Status run_at_rest(const std::vector<detail::InstanceGroup>& groups, Pass first, uint32_t passes = ~0u);
     /// Replaces the instance list: survivors (old indices, in their new order) then `added`;
     /// carries the survivors' state over and poses the added instances at rest
     /// (live_reshape.cpp).
@@ -218,6 +224,8 @@ struct __attribute__((visibility("hidden"))) Simulation::Impl {
     /// instance table still has to be written to the backend before the program runs.
     detail::ListedGroups listed_;
     bool instance_table_dirty_ = false;
+    bool step_program_lists_ = false;     // step_program_ runs listed_'s groups
+    detail::ListedGroups one_off_listed_;  // run_at_rest's scratch
     std::vector<ForceField> force_fields_;
     std::vector<Instance> instances_;  // the current instance list (live control)
     /// The handle of each current instance: survivors keep their order and added instances

@@ -102,12 +102,11 @@ bool lists(const Simulation& sim) {
                        [](const detail::Dispatch& d) { return d.constants.instance_list != 0; });
 }
 
-/// Steps `sim` with listing forced on or off (the rule is taken when the program is rebuilt).
-void step_listing(Simulation& sim, bool listing) {
-    detail::set_listing_for_tests(listing ? 1 : 0);
-    const Status stepped = sim.step(1);
-    EXPECT_TRUE(stepped.ok()) << stepped.message();
-    detail::set_listing_for_tests(-1);
+/// Listing forced on for `listed`, off for every other simulation (the rule is taken where a
+/// program is built: at a step, and for the one-off programs that pose added, reset or
+/// switched instances).
+void force_listing_for(const Simulation* sim, const Simulation* listed) {
+    detail::set_listing_for_tests(sim == listed ? 1 : 0);
 }
 
 class ListedSteps : public ::testing::TestWithParam<BackendKind> {};
@@ -126,27 +125,33 @@ TEST_P(ListedSteps, MatchTheContiguousProgramThroughStreamingAndAgreeWithCpu64) 
         ASSERT_TRUE(detail::backend_of(*listed).capabilities().runs_listed_groups);
         std::mt19937 rng(27);
         for (int frame = 0; frame < 24; ++frame) {
-            std::vector<Simulation*> all = {listed.get(), contiguous.get(), oracle.get()};
-            // A swap removal, an arrival, a pause or resume and a switch every few frames.
-            if (frame % 3 == 1 && listed->instance_count() > 4) {
-                const InstanceId leaving = listed->instance_ids()[rng() % listed->instance_count()];
-                for (Simulation* sim : all) ASSERT_TRUE(sim->swap_remove_instances({&leaving, 1}).ok());
-            }
-            if (frame % 3 == 2) {
-                const Instance coming{uint32_t(rng() % 2), {double(rng() % 40), 0.0, 2.0}, 1.0, 0.8, 0.2};
-                for (Simulation* sim : all) ASSERT_TRUE(sim->add_instances({&coming, 1}).ok());
-            }
-            if (frame % 4 == 0) {
-                const uint64_t i = rng() % listed->instance_count();
-                const bool active = rng() % 2 == 0;
-                for (Simulation* sim : all) ASSERT_TRUE(sim->set_instance_active(i, active).ok());
-            }
-            const InstanceId id = listed->instance_ids()[rng() % listed->instance_count()];
+            // A swap removal, an arrival, a pause or resume and a switch every few frames, then
+            // a step, each simulation with its own listing rule.
+            const bool removes = frame % 3 == 1 && listed->instance_count() > 4;
+            const InstanceId leaving = listed->instance_ids()[rng() % listed->instance_count()];
+            const Instance coming{uint32_t(rng() % 2), {double(rng() % 40), 0.0, 2.0}, 1.0, 0.8, 0.2};
+            const uint64_t paused = rng() % listed->instance_count();
+            const bool active = rng() % 2 == 0;
             const uint32_t level = rng() % 4;
-            for (Simulation* sim : all) ASSERT_TRUE(sim->set_instance_lod(id, level).ok());
-            step_listing(*listed, true);
-            step_listing(*contiguous, false);
-            ASSERT_TRUE(oracle->step(1).ok());
+            const size_t switched = rng();
+            for (Simulation* sim : {listed.get(), contiguous.get(), oracle.get()}) {
+                force_listing_for(sim, listed.get());
+                if (removes) ASSERT_TRUE(sim->swap_remove_instances({&leaving, 1}).ok());
+                if (frame % 3 == 2) ASSERT_TRUE(sim->add_instances({&coming, 1}).ok());
+                if (frame % 4 == 0) ASSERT_TRUE(sim->set_instance_active(paused % sim->instance_count(), active).ok());
+                // Two instances apart, so that the one-off programs that reset or pose them
+                // cover two slices, which the listed simulation lists.
+                const uint32_t n = uint32_t(sim->instance_count()), first = uint32_t(switched % (n - 2));
+                if (frame % 5 == 3) {
+                    const uint32_t reset[] = {uint32_t(paused % (n - 2)), uint32_t(paused % (n - 2)) + 2};
+                    ASSERT_TRUE(sim->reset_instances(reset).ok());
+                }
+                const InstanceId ids[] = {sim->instance_ids()[first], sim->instance_ids()[first + 2]};
+                const uint32_t levels[] = {level, (level + 1) % 4};
+                ASSERT_TRUE(sim->set_instance_lods(ids, levels).ok());
+                ASSERT_TRUE(sim->step(1).ok());
+            }
+            detail::set_listing_for_tests(-1);
             ASSERT_TRUE(lists(*listed)) << "frame " << frame;
             ASSERT_FALSE(lists(*contiguous)) << "frame " << frame;
             ASSERT_TRUE(test::same_bits(test::every_output(*listed), test::every_output(*contiguous)))
