@@ -2,6 +2,8 @@
 
 #include "cuda_error.h"
 
+#include <algorithm>
+
 namespace hmsm::detail::cuda {
 namespace {
 
@@ -27,7 +29,11 @@ Result<std::byte*> HostSlot::acquire(uint64_t bytes) {
     HMSM_TRY(wait());
     if (pinned_ && capacity_ >= bytes) return pinned_;
     if (!pinned_ && !pageable_.empty() && pageable_.size() >= bytes) return pageable_.data();
-    const uint64_t grown = (bytes / kGrain + 1) * kGrain;
+    // Geometric growth: a slot asked for a little more each call (a streaming world's writes
+    // grow with its instances) is reallocated, which pins memory anew, a logarithmic number of
+    // times.
+    const uint64_t held = pinned_ ? capacity_ : uint64_t(pageable_.size());
+    const uint64_t grown = std::max((bytes / kGrain + 1) * kGrain, (held + held / 2) / kGrain * kGrain);
     if (pinned_) CUDA_TRY(cudaFreeHost(pinned_));
     pinned_ = nullptr;
     capacity_ = 0;
