@@ -1,6 +1,7 @@
 #include "device_words.h"
 
 #include <cstring>
+#include <type_traits>
 
 namespace hmsm::detail {
 namespace {
@@ -95,14 +96,21 @@ void words_to_scalars(Shape shape, const void* words, uint64_t n, void* dst, Sca
 }
 
 void scalars_to_words(Shape shape, const void* src, uint64_t n, void* words, Scalar as) {
+    // One loop per case, each a plain conversion the compiler vectorizes (the instance table and
+    // a switch's state are millions of scalars at 500,000 trees).
+    auto convert = [n](const auto* from, auto* to) {
+        using To = std::remove_pointer_t<decltype(to)>;
+        for (uint64_t i = 0; i < n; ++i) to[i] = To(from[i]);
+    };
     const bool integer = shape_is_integer(shape);
-    auto* ints = static_cast<int32_t*>(words);
-    auto* floats = static_cast<float*>(words);
-    for (uint64_t i = 0; i < n; ++i) {
-        double value = as == Scalar::f64 ? static_cast<const double*>(src)[i]
-                                         : double(static_cast<const float*>(src)[i]);
-        if (integer) ints[i] = int32_t(value);
-        else floats[i] = float(value);
+    if (as == Scalar::f64) {
+        const auto* from = static_cast<const double*>(src);
+        if (integer) convert(from, static_cast<int32_t*>(words));
+        else convert(from, static_cast<float*>(words));
+    } else {
+        const auto* from = static_cast<const float*>(src);
+        if (integer) convert(from, static_cast<int32_t*>(words));
+        else if (n > 0) std::memcpy(words, from, n * 4);  // the same words, bit for bit
     }
 }
 
