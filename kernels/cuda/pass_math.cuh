@@ -298,9 +298,10 @@ static __global__ void __launch_bounds__(HMSM_MAX_ROUNDS_WORKGROUP_SIZE)
     begin_pass();
     for (uint32_t k = blockIdx.x; k < dispatch_instances(pc); k += gridDim.x) {
         const gpu::PassConstants one = listed_instance_constants(pc, load(b.instance_table + pc.instance_begin + k));
-        run_rounds_in_block(b, one, 0, 1, [&](uint32_t instance, uint32_t c, uint32_t round, uint32_t src, uint32_t dst) {
-            P::template jump<true>(b, one, instance, c, round, src, dst);
-        });
+        run_rounds_in_block(b, one, 0, 1,
+                            [&](uint32_t instance, uint32_t c, uint32_t round, uint32_t src, uint32_t dst) {
+                                P::template jump<true>(b, one, instance, c, round, src, dst);
+                            });
     }
 }
 
