@@ -55,7 +55,7 @@ void list_groups(const SceneData& d, std::span<const InstanceGroup> groups, std:
     }
     for (size_t m = 1; m < next.size(); ++m) next[m] += next[m - 1];
     const std::vector<uint32_t> first(next.begin(), next.end() - 1);
-    into.table.assign(size_t(4) * next.back(), 0.0);
+    into.table.resize(size_t(4) * next.back());  // every entry is written below
     for (const InstanceGroup& g : groups) {
         const ModelRange& m = d.models[g.model];
         for (uint32_t k = 0; k < g.instance_count; ++k) {
