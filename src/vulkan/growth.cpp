@@ -91,6 +91,7 @@ Status VulkanBackend::grow(const SceneData& scene) {
         auto sets = WindowSets::create(*device_, pipelines_->set_layout(), *plan_, buffers_);
         if (sets) {
             recording_.clear();  // its descriptor sets go
+            one_off_recording_.clear();
             sets_ = std::move(sets).value();
             return device_->take_validation_messages();
         }

@@ -168,6 +168,7 @@ Status VulkanBackend::upload(const SceneData& scene) {
                                               VK_WHOLE_SIZE, 0);
     }));
     recording_.clear();  // its descriptor sets go
+    one_off_recording_.clear();
     auto sets = WindowSets::create(*device_, pipelines_->set_layout(), *plan_, buffers_);
     if (!sets) return sets.status();
     sets_ = std::move(sets).value();
@@ -240,16 +241,16 @@ Status VulkanBackend::ensure_timestamp_capacity(Slot& slot, uint32_t queries) {
     return {};
 }
 
-Status VulkanBackend::submit_chunk(Slot& slot, std::span<const RunStep> steps) {
+Status VulkanBackend::submit_chunk(Slot& slot, const RecordingPlan& plan, std::span<const RunStep> steps) {
     const VolkDeviceTable& vk = device_->vk();
     const bool timed = profiling_ && device_->limits().timestamp_period_ns > 0.0;
-    const size_t per_step = recording_.timestamp_passes().size();
+    const size_t per_step = plan.timestamp_passes().size();
     if (timed) HMSM_TRY(ensure_timestamp_capacity(slot, uint32_t(steps.size() * per_step + 1)));
     HMSM_VK_TRY(vk.vkResetCommandBuffer(slot.command_buffer, 0));
     VkCommandBufferBeginInfo begin{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
     begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
     HMSM_VK_TRY(vk.vkBeginCommandBuffer(slot.command_buffer, &begin));
-    record_steps(*device_, pipelines_->layout(), recording_, slot.command_buffer, steps,
+    record_steps(*device_, pipelines_->layout(), plan, slot.command_buffer, steps,
                  timed ? slot.timestamps : VK_NULL_HANDLE, run_table_->set());
     HMSM_VK_TRY(vk.vkEndCommandBuffer(slot.command_buffer));
     VkSubmitInfo submit{VK_STRUCTURE_TYPE_SUBMIT_INFO};
@@ -263,6 +264,7 @@ Status VulkanBackend::submit_chunk(Slot& slot, std::span<const RunStep> steps) {
     ++submissions_;
     slot.in_flight = true;
     slot.steps = timed ? steps.size() : 0;
+    slot.plan = &plan;
     return {};
 }
 
@@ -271,8 +273,8 @@ Status VulkanBackend::finish_slot(Slot& slot) {
     const VolkDeviceTable& vk = device_->vk();
     slot.in_flight = false;
     HMSM_VK_TRY(vk.vkWaitForFences(device_->handle(), 1, &slot.fence, VK_TRUE, UINT64_MAX));
-    if (slot.steps == 0) return {};
-    const std::span<const Pass> passes = recording_.timestamp_passes();
+    if (slot.steps == 0 || !slot.plan) return {};
+    const std::span<const Pass> passes = slot.plan->timestamp_passes();
     const uint32_t queries = uint32_t(slot.steps * passes.size() + 1);
     std::vector<uint64_t> ticks(queries);
     HMSM_VK_TRY(vk.vkGetQueryPoolResults(device_->handle(), slot.timestamps, 0, queries,
@@ -304,16 +306,18 @@ Status VulkanBackend::run(std::span<const Dispatch> program, std::span<const Run
         return {};
     }
     if (!record_target_) HMSM_TRY(submit_held_back());
-    HMSM_TRY(prepare_recording(program, program_id));
+    const bool one_off = program_id == 0;
+    HMSM_TRY(one_off ? prepare_one_off(program) : prepare_recording(program, program_id));
+    const RecordingPlan& plan = one_off ? one_off_recording_ : recording_;
     if (record_target_) {
         ring_->record_copies(record_target_);
         // The step program replays from a secondary; a one-off (program_id 0: an added
         // instance's rest pose) is recorded directly.
-        if (replay_ && program_id != 0)
+        if (replay_ && !one_off)
             HMSM_TRY(replay_->record(record_target_, ring_->current(), recordings_, pipelines_->layout(), recording_,
                                      steps, run_table_->set()));
         else
-            record_steps(*device_, pipelines_->layout(), recording_, record_target_, steps, VK_NULL_HANDLE,
+            record_steps(*device_, pipelines_->layout(), plan, record_target_, steps, VK_NULL_HANDLE,
                          run_table_->set());
         return device_->take_validation_messages();
     }
@@ -324,7 +328,7 @@ Status VulkanBackend::run(std::span<const Dispatch> program, std::span<const Run
         Slot& slot = slots_[chunk % slots_.size()];
         status = finish_slot(slot);
         if (status.ok())
-            status = submit_chunk(slot, steps.subspan(first, std::min(steps_per_chunk, steps.size() - first)));
+            status = submit_chunk(slot, plan, steps.subspan(first, std::min(steps_per_chunk, steps.size() - first)));
     }
     // Oldest first; after a failure still wait for whatever was submitted.
     for (size_t k = 0; k < slots_.size(); ++k) {
@@ -351,6 +355,12 @@ Status VulkanBackend::prepare_recording(std::span<const Dispatch> program, uint6
                                                         recording_.table_first_workgroups());
     if (!status) recording_.clear();  // built again, with its table, by the next run
     return status;
+}
+
+Status VulkanBackend::prepare_one_off(std::span<const Dispatch> program) {
+    RecordingPlan::Batching alone = batching_;
+    alone.batch_runs = false;  // no run table: the step program's stays
+    return one_off_recording_.prepare(*device_, *pipelines_, Windows{*plan_, *sets_}, program, alone).status();
 }
 
 Status VulkanBackend::read(BufferId id, uint64_t first, uint64_t count, void* dst, Scalar as) const {

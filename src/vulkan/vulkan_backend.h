@@ -131,6 +131,7 @@ private:
         uint32_t timestamp_capacity = 0;
         bool in_flight = false;
         size_t steps = 0;  // steps recorded into the command buffer
+        const RecordingPlan* plan = nullptr;  // the plan they were recorded from
     };
 
     explicit VulkanBackend(std::shared_ptr<Device> device);
@@ -143,11 +144,15 @@ private:
     Status upload_static(BufferId id, const SceneData& scene);
     /// How buffer `id` is used: storage and transfer, and vertex input for the shared outputs.
     static VkBufferUsageFlags usage_of(BufferId id);
-    Status submit_chunk(Slot& slot, std::span<const RunStep> steps);
-    /// Waits for `slot` and adds its timestamps to times_ (of recording_'s timed parts).
+    Status submit_chunk(Slot& slot, const RecordingPlan& plan, std::span<const RunStep> steps);
+    /// Waits for `slot` and adds its timestamps to times_ (of its plan's timed parts).
     Status finish_slot(Slot& slot);
     /// The recording plan of `program`, and the run table's contents where the plan is new.
     Status prepare_recording(std::span<const Dispatch> program, uint64_t program_id);
+    /// The plan of a one-off program (program_id 0: the pose of added, reset or switched
+    /// instances), recorded without batching: it leaves the step program's plan, run table and
+    /// replayed secondaries as they are, so a streaming frame records none of them again.
+    Status prepare_one_off(std::span<const Dispatch> program);
     Status ensure_timestamp_capacity(Slot& slot, uint32_t queries);
     /// A write, move or run of an instance change held back for the next recording.
     struct HeldBack {
@@ -202,7 +207,8 @@ private:
     PassTimes times_;
     VkCommandBuffer record_target_ = VK_NULL_HANDLE;
     std::unique_ptr<FrameRing> ring_;
-    RecordingPlan recording_;  // the commands of a step of the last program run
+    RecordingPlan recording_;  // the commands of a step of the last step program run
+    RecordingPlan one_off_recording_;  // those of the last one-off program (prepare_one_off)
     RecordingPlan::Batching batching_;
     std::unique_ptr<RunTable> run_table_;
     std::unique_ptr<StepReplay> replay_;  // null: recorded steps go into the engine's buffer

@@ -1,8 +1,9 @@
 // Recorded steps replayed from secondary command buffers (src/vulkan/step_replay.h): each
 // record_steps executes a secondary that holds the step program's commands, recorded again only
 // when the program changes. Frames whose live data changes (gusts, a turned wind, a moving force
-// field, step counts that shift the load halves of the coupled dynamics) replay the same
-// secondaries; adding a tree, switching levels, starting and ending fades record new ones. The
+// field, step counts that shift the load halves of the coupled dynamics) and frames that reset
+// a tree (a one-off program) replay the same secondaries; adding a tree, switching levels,
+// starting and ending fades record new ones. The
 // results must equal the same frames stepped with step(), under synchronization validation.
 #include "engine_device.h"
 #include "simulation_access.h"
@@ -87,6 +88,10 @@ TEST_P(StepReplay, FollowsPlanChangesBetweenFrames) {
         for (uint32_t f = 0; f < 18; ++f) {
             for (Simulation* s : {&sim, reference.get()}) {
                 gust(*s, f);
+                if (f == 4) {  // a reset: a one-off pose, the step program stays
+                    const uint32_t reset[] = {2};
+                    ASSERT_TRUE(s->reset_instances(reset).ok());
+                }
                 if (f == 6) {  // a tree streams in: a new program
                     const Instance added[] = {{0, {12.0, 0.0, 3.0}, 0.4}};
                     ASSERT_TRUE(s->add_instances(added).ok());
@@ -117,7 +122,7 @@ TEST_P(StepReplay, FollowsPlanChangesBetweenFrames) {
             EXPECT_GE(backend.step_replays(), replays + 1) << "frame " << f << " replays its steps";
             if (f == 6 || f == 9)
                 EXPECT_GT(backend.step_secondaries_recorded(), secondaries) << "frame " << f << " has a new program";
-            if (f == 4 || f == 5)
+            if (f == 4 || f == 5)  // a reset's one-off program has a plan of its own
                 EXPECT_EQ(backend.step_secondaries_recorded(), secondaries) << "frame " << f << ": live data only";
         }
         frames.wait_all();
