@@ -19,6 +19,12 @@ namespace {
 
 using detail::InstanceGroup;
 
+/// Gives the rule back to the environment however the test ends (a failed assertion returns
+/// early), so that no later test in the process runs with listing forced.
+struct ListingRuleRestored {
+    ~ListingRuleRestored() { detail::set_listing_for_tests(-1); }
+};
+
 TEST(ListedGroups, ListEachModelsActiveInstancesInIndexOrderWithTheirOffsets) {
     detail::SceneData d;
     d.models.resize(2);
@@ -72,6 +78,7 @@ TEST(ListedGroups, ListEachModelsActiveInstancesInIndexOrderWithTheirOffsets) {
 }
 
 TEST(ListedGroups, ListOnlyWhereTheContiguousGroupsAreMany) {
+    const ListingRuleRestored restored;
     detail::set_listing_for_tests(-1);
     EXPECT_FALSE(detail::listing_pays(detail::kListedGroupsFrom - 1, 1));
     EXPECT_TRUE(detail::listing_pays(detail::kListedGroupsFrom, detail::kListedGroupsFrom / 4));
@@ -112,6 +119,7 @@ void force_listing_for(const Simulation* sim, const Simulation* listed) {
 class ListedSteps : public ::testing::TestWithParam<BackendKind> {};
 
 TEST_P(ListedSteps, MatchTheContiguousProgramThroughStreamingAndAgreeWithCpu64) {
+    const ListingRuleRestored restored;
     for (Composition composition : {Composition::automatic, Composition::pointer_jumping, Composition::level_by_level}) {
         SCOPED_TRACE(to_string(composition));
         SimulationConfig config = test::windy_config();
