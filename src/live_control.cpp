@@ -139,12 +139,8 @@ const std::vector<detail::Dispatch>& Simulation::Impl::current_program() {
         // A fragmented scene runs listed groups, a few per model, where the backend can
         // (listed_groups.h); their instance table is written before the program runs
         // (write_instance_table).
-        instance_table_dirty_ = step_program_lists_ = false;
-        if (backend_->capabilities().runs_listed_groups && groups.size() > 1 && detail::scene_can_be_listed(*data_)) {
-            detail::list_groups(*data_, groups, instances_, listed_);
-            step_program_lists_ = detail::listing_pays(groups.size(), listed_.groups.size()) && listed_.entries() > 0;
-            instance_table_dirty_ = step_program_lists_;
-        }
+        step_program_lists_ = lists(groups, listed_);
+        instance_table_dirty_ = step_program_lists_;
         step_program_ = program_for(step_program_lists_ ? listed_.groups : groups, Pass::wind_force);
         ++step_program_id_;
         step_program_walks_ahead_ = std::any_of(step_program_.begin(), step_program_.end(), detail::is_walk_ahead);

@@ -49,16 +49,20 @@ std::vector<Dispatch> Simulation::Impl::program_for(const std::vector<detail::In
 
 Status Simulation::Impl::run_at_rest(const std::vector<detail::InstanceGroup>& groups, Pass first, uint32_t passes) {
     const detail::RunStep at_rest[1] = {};
-    if (backend_->capabilities().runs_listed_groups && groups.size() > 1 && detail::scene_can_be_listed(*data_)) {
-        detail::list_groups(*data_, groups, instances_, one_off_listed_);
-        if (detail::listing_pays(groups.size(), one_off_listed_.groups.size()) && one_off_listed_.entries() > 0) {
-            HMSM_TRY(backend_->write(detail::BufferId::instance_table, 0, one_off_listed_.entries(),
-                                     one_off_listed_.table.data(), detail::Scalar::f64));
-            instance_table_dirty_ = instance_table_dirty_ || step_program_lists_;
-            return backend_->run(program_for(one_off_listed_.groups, first, passes), at_rest);
-        }
+    if (lists(groups, one_off_listed_)) {
+        HMSM_TRY(backend_->write(detail::BufferId::instance_table, 0, one_off_listed_.entries(),
+                                 one_off_listed_.table.data(), detail::Scalar::f64));
+        instance_table_dirty_ = instance_table_dirty_ || step_program_lists_;
+        return backend_->run(program_for(one_off_listed_.groups, first, passes), at_rest);
     }
     return backend_->run(program_for(groups, first, passes), at_rest);
+}
+
+bool Simulation::Impl::lists(const std::vector<detail::InstanceGroup>& groups, detail::ListedGroups& into) const {
+    if (!backend_->capabilities().runs_listed_groups || groups.size() <= 1 || !detail::scene_can_be_listed(*data_))
+        return false;
+    detail::list_groups(*data_, groups, instances_, into);
+    return detail::listing_pays(groups.size(), into.groups.size()) && into.entries() > 0;
 }
 
 Status Simulation::Impl::check_size(std::span<const Instance> instances) const {

@@ -47,6 +47,10 @@ struct __attribute__((visibility("hidden"))) Simulation::Impl {
     /// scattered slices. Its table takes the instance table's place, so a listed step program
     /// writes its own again before it runs.
     Status run_at_rest(const std::vector<detail::InstanceGroup>& groups, Pass first, uint32_t passes = ~0u);
+    /// Whether a program over `groups` should run listed groups (listed_groups.h): the backend
+    /// runs them, the scene fits the table's words and listing pays. Fills `into` when it says
+    /// so (and may fill it when it does not).
+    bool lists(const std::vector<detail::InstanceGroup>& groups, detail::ListedGroups& into) const;
     /// Replaces the instance list: survivors (old indices, in their new order) then `added`;
     /// carries the survivors' state over and poses the added instances at rest
     /// (live_reshape.cpp).
