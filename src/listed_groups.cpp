@@ -30,7 +30,7 @@ void set_listing_for_tests(int mode) { g_listing_mode = mode; }
 bool listing_pays(size_t contiguous, size_t listed) {
     const int hook = g_listing_mode.load();
     const int mode = hook >= 0 ? hook : environment_mode();
-    if (mode >= 0) return mode == 1;
+    if (mode == 0 || mode == 1) return mode == 1;
     return contiguous >= kListedGroupsFrom && contiguous >= 4 * listed;
 }
 

@@ -44,7 +44,8 @@ void list_groups(const SceneData& d, std::span<const InstanceGroup> groups, std:
 bool listing_pays(size_t contiguous, size_t listed);
 inline constexpr size_t kListedGroupsFrom = 64;
 
-/// Test hook: -1 (default) as the environment says, 0 never, 1 always.
+/// Test hook: -1 (default) as the environment says, 0 never, 1 always, 2 by size whatever the
+/// environment says.
 void set_listing_for_tests(int mode);
 
 }  // namespace hmsm::detail
