@@ -247,6 +247,8 @@ Status Simulation::add_instances(std::span<const Instance> instances) {
         return {ErrorCode::unsupported, "scene too large: " + std::to_string(s.instances_.size()) + " + " +
                                             std::to_string(instances.size()) + " instances, at most " +
                                             std::to_string(kMaxInstances) + " are supported"};
+    // Each added instance names the model it runs: its scene model's run model for its level.
+    std::vector<Instance> run(instances.begin(), instances.end());
     for (size_t i = 0; i < instances.size(); ++i) {
         const Instance& inst = instances[i];
         const std::string where = "added instance " + std::to_string(i) + ": ";
@@ -254,24 +256,31 @@ Status Simulation::add_instances(std::span<const Instance> instances) {
             return {ErrorCode::invalid_argument, where + "model index " + std::to_string(inst.model) +
                                                      " does not exist (the scene has " +
                                                      std::to_string(s.scene_.models.size()) + " models)"};
+        const std::vector<uint32_t>& levels = s.levels_of_[inst.model];
+        if (inst.level >= levels.size())
+            return {ErrorCode::invalid_argument,
+                    where + "level " + std::to_string(inst.level) + " does not exist (model '" +
+                        detail::quote_input(s.scene_.model_names[inst.model]) + "' has levels 0 to " +
+                        std::to_string(levels.size() - 1) + ", Scene::lod_budgets)"};
+        run[i].model = levels[inst.level];
         HMSM_TRY(detail::check_coordinate(where + "origin", inst.origin));
         if (!std::isfinite(inst.yaw)) return {ErrorCode::invalid_argument, where + "yaw is not finite"};
         HMSM_TRY(detail::check_wind_scale(where + "wind scale", inst.wind_scale));
         HMSM_TRY(detail::check_wind_force(where + "model '" + detail::quote_input(s.scene_.model_names[inst.model]) + "'",
                                           s.config_.wind.strength, inst.wind_scale,
-                                          s.largest_wind_area_[inst.model]));
+                                          s.largest_wind_area_[run[i].model]));
         if (!std::isfinite(inst.wind_phase) ||
             !std::isfinite(detail::instance_wind_phase(s.config_.wind, inst)))
             return {ErrorCode::invalid_argument, where + "wind phase is not finite"};
     }
     if (s.streaming_paths_) {
-        Result<bool> appended = s.append_in_place(instances);
+        Result<bool> appended = s.append_in_place(run);
         if (!appended) return appended.status();
         if (*appended) return {};
     }
     std::vector<uint32_t> survivors(s.instances_.size());
     for (uint32_t i = 0; i < survivors.size(); ++i) survivors[i] = i;
-    return s.reshape(survivors, instances);
+    return s.reshape(survivors, run);
 }
 
 Status Simulation::remove_instances(std::span<const uint64_t> indices) {

@@ -336,6 +336,7 @@ Status Simulation::Impl::switch_models(const std::vector<std::pair<uint32_t, uin
         for (auto [i, model] : models) {
             offsets.add(i, detail::counts_of(data_->models[model]) - detail::counts_of(data_->models[instances_[i].model]));
             instances_[i].model = model;
+            instances_[i].level = lod_models_[model].level;
             lod_tracker_.examine_next(i, uint64_t(instance_ids_[i]));
         }
         detail::relay_groups(*data_, instances_, switched);
@@ -347,6 +348,7 @@ Status Simulation::Impl::switch_models(const std::vector<std::pair<uint32_t, uin
         std::vector<const ChainMap*> all_maps(instances_.size(), nullptr);
         for (size_t k = 0; k < models.size(); ++k) {
             next[models[k].first].model = models[k].second;
+            next[models[k].first].level = lod_models_[models[k].second].level;
             all_maps[models[k].first] = &chain_maps[k];
         }
         const auto chains_of = [&](uint32_t model) { return data_->models[model].chain_count; };

@@ -231,7 +231,7 @@ std::vector<int32_t> stepped_nodes(const Hierarchy& h, Outputs outputs) {
     return nodes;
 }
 
-SceneData flatten_scene(const Scene& scene, const std::vector<Hierarchy>& hierarchies,
+SceneData flatten_scene(std::span<const Instance> instances, const std::vector<Hierarchy>& hierarchies,
                         const std::vector<MeshTemplate>& meshes, const Parameters& parameters,
                         const ModelOptions& options, const Wind& wind, Outputs outputs,
                         uint64_t max_group_elements) {
@@ -299,7 +299,7 @@ SceneData flatten_scene(const Scene& scene, const std::vector<Hierarchy>& hierar
 
     fill_walk_records(d);
 
-    lay_out_instances(d, scene.instances, max_group_elements);
+    lay_out_instances(d, instances, max_group_elements);
     d.fit_capacity();
 
     d.dt = parameters.dt;

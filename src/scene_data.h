@@ -144,10 +144,11 @@ namespace hmsm::detail {
 std::vector<int32_t> stepped_nodes(const Hierarchy& h, Outputs outputs);
 
 /// Flattens models and instances (docs/model.md 2: ordered chain-by-depth, instance-major state),
-/// each model with its stepped_nodes for `outputs` (and d.outputs = `outputs`). Groups are runs
-/// of consecutive instances of one model, split so that no dispatch exceeds
-/// `max_group_elements` threads.
-SceneData flatten_scene(const Scene& scene, const std::vector<Hierarchy>& hierarchies,
+/// each model with its stepped_nodes for `outputs` (and d.outputs = `outputs`). `instances`
+/// name the models they run (hierarchies' indices: a level's run model where they start on
+/// one). Groups are runs of consecutive instances of one model, split so that no dispatch
+/// exceeds `max_group_elements` threads.
+SceneData flatten_scene(std::span<const Instance> instances, const std::vector<Hierarchy>& hierarchies,
                         const std::vector<MeshTemplate>& meshes, const Parameters& parameters,
                         const ModelOptions& options, const Wind& wind, Outputs outputs,
                         uint64_t max_group_elements = (1ull << 31));

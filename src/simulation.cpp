@@ -205,18 +205,19 @@ Result<std::unique_ptr<Simulation>> Simulation::Impl::create(const Scene& scene,
 
     HMSM_TRY(sim->append_lod_levels());
     sim->instances_ = scene.instances;
+    for (Instance& inst : sim->instances_) inst.model = sim->levels_of_[inst.model][inst.level];
     for (uint64_t i = 0; i < scene.instances.size(); ++i) sim->instance_ids_.push_back(InstanceId(i));
     sim->next_instance_id_ = scene.instances.size();
     sim->instance_list_laid_out();
     HMSM_TRY(sim->check_wind(config.wind));
-    HMSM_TRY(sim->check_size(scene.instances));
+    HMSM_TRY(sim->check_size(sim->instances_));
     sim->modes_ = detail::wind_modes(config.wind);
 
     // Without vertex outputs no mesh is flattened: the layout then holds no vertex at all, so
     // forests of joints-only trees are not bounded by vertices they never produce.
     const std::vector<MeshTemplate> no_meshes(config.outputs == Outputs::all ? 0 : sim->meshes_.size());
     sim->data_ = std::make_unique<SceneData>(
-        detail::flatten_scene(scene, sim->hierarchies_, config.outputs == Outputs::all ? sim->meshes_ : no_meshes,
+        detail::flatten_scene(sim->instances_, sim->hierarchies_, config.outputs == Outputs::all ? sim->meshes_ : no_meshes,
                               config.parameters, config.model, config.wind, config.outputs));
     sim->data_->vertex_layout = config.vertex_layout;
     auto keep = sim->chain_keep_ranks();

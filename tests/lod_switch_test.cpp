@@ -220,6 +220,54 @@ TEST_P(LodSwitch, VertexJumpAgainstFrameMotion) {
     }
 }
 
+// An instance that starts on a level (Instance::level, at create and in add_instances) runs
+// bit for bit as one created or added whole and switched there at once, and never runs its
+// finer levels; instances() reports the level it runs on.
+TEST_P(LodSwitch, StartingOnALevelIsSwitchingThereAtRest) {
+    const std::pair<uint32_t, uint32_t> start[] = {{0, 2}, {2, 3}, {5, 1}};  // (instance, level)
+    Scene leveled = lod_forest();
+    for (auto [i, level] : start) leveled.instances[i].level = level;
+    std::string skip;
+    auto started = test::create_simulation_or_skip(leveled, test::windy_config(), GetParam(), skip);
+    if (!skip.empty()) GTEST_SKIP() << skip;
+    auto switched = test::create_simulation_or_skip(lod_forest(), test::windy_config(), GetParam(), skip);
+    ASSERT_TRUE(started && switched);
+    auto switch_to = [&](std::span<const std::pair<uint32_t, uint32_t>> levels) {
+        std::vector<InstanceId> ids;
+        std::vector<uint32_t> to;
+        for (auto [i, level] : levels) {
+            ids.push_back(switched->instance_ids()[i]);
+            to.push_back(level);
+        }
+        ASSERT_TRUE(switched->set_instance_lods(ids, to).ok());
+    };
+    switch_to(start);
+    EXPECT_EQ(started->chain_count(), switched->chain_count());
+    EXPECT_TRUE(test::same_bits(test::every_output(*started), test::every_output(*switched)));
+    ASSERT_TRUE(started->step(7).ok() && switched->step(7).ok());
+    // Arrivals: a deep tree on level 2 and a small one on level 3, against arrivals at level 0
+    // switched there.
+    Instance deep{1, {4.0, 0.0, 7.0}, 0.3}, small{0, {-5.0, 0.0, 2.0}, 1.1};
+    deep.level = 2;
+    small.level = 3;
+    const Instance arrivals[] = {deep, small};
+    ASSERT_TRUE(started->add_instances(arrivals).ok());
+    Instance whole[] = {deep, small};
+    for (Instance& inst : whole) inst.level = 0;
+    ASSERT_TRUE(switched->add_instances(whole).ok());
+    const uint32_t n = uint32_t(switched->instance_count());
+    const std::pair<uint32_t, uint32_t> arrived[] = {{n - 2, 2}, {n - 1, 3}};
+    switch_to(arrived);
+    ASSERT_EQ(started->chain_count(), switched->chain_count());
+    for (uint32_t i = 0; i < n; ++i) {
+        EXPECT_EQ(started->instances()[i].model, switched->instances()[i].model) << "instance " << i;
+        EXPECT_EQ(started->instances()[i].level, *switched->instance_lod(switched->instance_ids()[i])) << "instance " << i;
+    }
+    EXPECT_EQ(started->instances()[n - 1].level, 3u);
+    ASSERT_TRUE(started->step(9).ok() && switched->step(9).ok());
+    EXPECT_TRUE(test::same_bits(test::every_output(*started), test::every_output(*switched)));
+}
+
 std::string backend_name(const ::testing::TestParamInfo<BackendKind>& info) {
     std::string name = to_string(info.param);
     std::replace(name.begin(), name.end(), '-', '_');
@@ -269,6 +317,21 @@ TEST(LodSwitchInput, BadHandlesAndLevelsChangeNothing) {
     expect_refused(sim->set_lod_bands({{5.0, 5.0}, 0.1}), "edge 1");
     expect_refused(sim->set_lod_bands({{5.0}, 1.0}), "hysteresis");
     EXPECT_TRUE(sim->lod_bands().edges.empty());
+    // An added instance on a level its model lacks.
+    Instance arrival{1, {3.0, 0.0, 3.0}};
+    arrival.level = 4;
+    const uint64_t count = sim->instance_count();
+    expect_refused(sim->add_instances({&arrival, 1}), "added instance 0: level 4 does not exist (model 'deep' has levels 0 to 3");
+    EXPECT_EQ(sim->instance_count(), count);
+    // A scene instance on one.
+    Scene scene = lod_forest();
+    scene.instances[3].level = 7;
+    SimulationConfig config;
+    config.backend = BackendKind::cpu64;
+    auto refused = Simulation::create(scene, config);
+    ASSERT_FALSE(refused.ok());
+    EXPECT_NE(refused.status().message().find("instance 3: level 7 does not exist"), std::string::npos)
+        << refused.status().message();
 }
 
 TEST(LodSwitchInput, BudgetBelowTrunkOnlyLevelIsRefused) {
@@ -377,6 +440,20 @@ TEST(LodSwitchC, SwitchesAndRefusals) {
     ASSERT_EQ(hmsm_simulation_instance_lod(sim, 0, &level), HMSM_OK);
     EXPECT_EQ(level, 0u);
     ASSERT_EQ(hmsm_simulation_step(sim, 10), HMSM_OK);
+    // An arrival on the coarsest level, and one on a level the model lacks.
+    instance.level = 2;
+    hmsm_instance_id arrived = 0;
+    ASSERT_EQ(hmsm_simulation_add_instances_with_ids(sim, &instance, 1, &arrived), HMSM_OK) << hmsm_status_message();
+    ASSERT_EQ(hmsm_simulation_instance_lod(sim, arrived, &level), HMSM_OK);
+    EXPECT_EQ(level, 2u);
+    hmsm_instance listed[2];
+    ASSERT_EQ(HMSM_INIT(hmsm_instance_init, &listed[0]), HMSM_OK);
+    size_t listed_count = 0;
+    ASSERT_EQ(hmsm_simulation_instances(sim, listed, 2, &listed_count), HMSM_OK);
+    EXPECT_EQ(listed[1].level, 2u);
+    instance.level = 3;
+    EXPECT_EQ(hmsm_simulation_add_instances(sim, &instance, 1), HMSM_INVALID_ARGUMENT);
+    EXPECT_NE(std::string(hmsm_status_message()).find("level 3 does not exist"), std::string::npos);
     hmsm_simulation_destroy(sim);
     hmsm_scene_destroy(scene);
     hmsm_tree_destroy(tree);

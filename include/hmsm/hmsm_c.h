@@ -185,6 +185,9 @@ typedef struct hmsm_instance {
     double wind_scale;
     double wind_phase;
     int32_t active;
+    /* Appended: the level of detail (hmsm::Instance::level) it starts on (add, create) or runs
+     * on (hmsm_simulation_instances); 0 (the default) is the model as created. */
+    uint64_t level;
 } hmsm_instance;
 
 /* hmsm::ForceField (docs/model.md 3.9) */

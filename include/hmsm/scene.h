@@ -22,6 +22,10 @@ struct Instance {
     double wind_scale = 1.0;   ///< lambda >= 0: shelter (< 1), exposed forest edge (> 1)
     double wind_phase = 0.0;   ///< p, added to the profile's argument (profile units)
     bool active = true;        ///< an inactive instance is frozen (docs/model.md 3.9)
+    /// Level of detail (Scene::lod_budgets; 0: the model as created): the level it starts on
+    /// in Scene::instances and Simulation::add_instances, so that a tree streamed in far away
+    /// never runs its finer levels; in Simulation::instances(), the level it runs on.
+    uint32_t level = 0;
 };
 
 /// A further name of a scene model: forest keys that name one file or preset share its model.

@@ -85,7 +85,9 @@ Status to_cpp(const hmsm_instance& in, Instance& out, const char* what) {
     if (!std::isfinite(in.wind_phase))
         return bad(std::string(what) + ": wind_phase must be finite");
     if (in.active != 0 && in.active != 1) return bad(std::string(what) + ": active must be 0 or 1");
+    if (in.level > UINT32_MAX) return bad(std::string(what) + ": level " + std::to_string(in.level) + " is out of range");
     out.model = in.model;
+    out.level = uint32_t(in.level);
     out.origin = Vec3(in.origin[0], in.origin[1], in.origin[2]);
     out.yaw = in.yaw;
     out.wind_scale = in.wind_scale;
@@ -101,6 +103,7 @@ void to_c(const Instance& in, hmsm_instance& out) {
     out.wind_scale = in.wind_scale;
     out.wind_phase = in.wind_phase;
     out.active = in.active ? 1 : 0;
+    out.level = in.level;
 }
 
 Status to_cpp(const hmsm_force_field& in, ForceField& out, const char* what) {

@@ -85,7 +85,7 @@ struct CStruct<hmsm_instance> {
         HMSM_C_FIELD(hmsm_instance, struct_size), HMSM_C_FIELD(hmsm_instance, model),
         HMSM_C_FIELD(hmsm_instance, origin), HMSM_C_FIELD(hmsm_instance, yaw),
         HMSM_C_FIELD(hmsm_instance, wind_scale), HMSM_C_FIELD(hmsm_instance, wind_phase),
-        HMSM_C_FIELD(hmsm_instance, active)});
+        HMSM_C_FIELD(hmsm_instance, active), HMSM_C_FIELD(hmsm_instance, level)});
 };
 template <>
 struct CStruct<hmsm_force_field> {

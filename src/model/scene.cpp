@@ -76,6 +76,12 @@ Status validate_scene(const Scene& scene) {
         HMSM_TRY(detail::check_wind_scale(where + "wind_scale", inst.wind_scale));
         if (!std::isfinite(inst.wind_phase))
             return {ErrorCode::invalid_argument, where + "wind_phase is not finite"};
+        const size_t levels = 1 + (inst.model < scene.lod_budgets.size() ? scene.lod_budgets[inst.model].size() : 0);
+        if (inst.level >= levels)
+            return {ErrorCode::invalid_argument, where + "level " + std::to_string(inst.level) +
+                                                     " does not exist (model " + std::to_string(inst.model) +
+                                                     " has levels 0 to " + std::to_string(levels - 1) +
+                                                     ", Scene::lod_budgets)"};
     }
     if (scene.joint_budgets.size() > scene.models.size())
         return {ErrorCode::invalid_argument, "scene: " + std::to_string(scene.joint_budgets.size()) +
