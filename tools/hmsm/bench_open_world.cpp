@@ -106,8 +106,7 @@ public:
         live_[Grid::key(0, 0)] = sim.instance_ids()[0];
     }
 
-    /// Streams the trees around `viewer` in, nearest first, in batches that each land on their
-    /// levels before the next (so that at most one batch runs whole at a time).
+    /// Streams the trees around `viewer` in, nearest first, in batches, each tree on its level.
     Status populate(glm::dvec2 viewer, uint64_t batch_chains) {
         std::vector<Cell> cells;
         const auto [j0, j1] = grid_.rows(viewer.y, viewer.y);
@@ -131,12 +130,21 @@ public:
         return {};
     }
 
-    /// Adds the trees of `cells` (at level 0) and records their handles.
+    /// Adds the trees of `cells`, each on the level its distance to the viewer falls in (the
+    /// bands without hysteresis, as an engine streaming trees in would ask), and records their
+    /// handles.
     Status add(const std::vector<Cell>& cells) {
         if (cells.empty()) return {};
         std::vector<Instance> trees;
         trees.reserve(cells.size());
-        for (const Cell& c : cells) trees.push_back(grid_.tree(c.i, c.j));
+        const std::vector<double>& edges = sim_.lod_bands().edges;
+        for (const Cell& c : cells) {
+            Instance tree = grid_.tree(c.i, c.j);
+            const double distance = glm::length(glm::dvec3(tree.origin) - glm::dvec3(eye()));
+            const auto band = uint32_t(std::upper_bound(edges.begin(), edges.end(), distance) - edges.begin());
+            tree.level = std::min(band, sim_.lod_level_count(tree.model) - 1);
+            trees.push_back(tree);
+        }
         std::vector<InstanceId> ids(cells.size());
         HMSM_TRY(sim_.add_instances(trees, ids));
         for (size_t k = 0; k < cells.size(); ++k) live_[Grid::key(cells[k].i, cells[k].j)] = ids[k];
@@ -282,9 +290,9 @@ json run_backend(const TreeModel& model, const std::string& model_name, BackendK
         bands.edges.push_back(grid.radius * std::sqrt(cumulative));
     }
     // Speed: trees cross a circle of radius r moving by v at 4 r v / spacing^2 per frame (in and
-    // out); streaming adds and removes at the radius and switches the arrivals once, and every
+    // out); streaming adds and removes at the radius (arrivals come on their level), and every
     // band edge switches its crossers.
-    double crossing = 6.0 * grid.radius;
+    double crossing = 4.0 * grid.radius;
     for (double edge : bands.edges) crossing += 4.0 * edge;
     const double speed = double(s.changes) * grid.spacing * grid.spacing / crossing;
     const glm::dvec2 direction = glm::normalize(glm::dvec2(1.0, 0.31));
@@ -325,8 +333,7 @@ json run_backend(const TreeModel& model, const std::string& model_name, BackendK
     if (Status status = sim.set_lod_bands(bands); !status) return stop(status);
     OpenWorld world(sim, grid);
     const auto setup = Clock::now();
-    // Trees come in on level 0 and the capacity never shrinks: batches of half the chains the
-    // case will run keep the room the whole trees need to a third of the scene.
+    // Trees come in on their levels, in batches of half the chains the case will run.
     double expected_chains = 0.0;
     for (size_t k = 0; k < levels.size(); ++k) expected_chains += double(s.trees) * kOpenWorldShares[k] * double(levels[k].chains);
     if (Status status = world.populate({0.0, 0.0}, uint64_t(expected_chains / 2.0)); !status) return stop(status);
