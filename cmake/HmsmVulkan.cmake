@@ -77,8 +77,9 @@ set(_hmsm_glsl_dir "${CMAKE_CURRENT_SOURCE_DIR}/shaders/glsl")
 set(_hmsm_spirv_dir "${CMAKE_CURRENT_BINARY_DIR}/hmsm_spirv")
 file(MAKE_DIRECTORY "${_hmsm_spirv_dir}")
 set(_hmsm_spirv_headers "")
-# copy_bandwidth is no pass: the device copy `hmsm bench` measures its roofline with.
-foreach(pass IN LISTS HMSM_PASSES ITEMS copy_bandwidth)
+# copy_bandwidth and copy_ranges are no passes: the device copy `hmsm bench` measures its
+# roofline with, and the range copies of the transfers (src/vulkan/range_copy.h).
+foreach(pass IN LISTS HMSM_PASSES ITEMS copy_bandwidth copy_ranges)
   set(_out "${_hmsm_spirv_dir}/${pass}.h")
   add_custom_command(
     OUTPUT "${_out}"
@@ -112,6 +113,7 @@ set(_hmsm_vulkan_sources
   src/vulkan/range_transfers.cpp
   src/vulkan/growth.cpp
   src/vulkan/copy_bandwidth.cpp
+  src/vulkan/range_copy.cpp
   src/vulkan/interop.cpp)
 target_sources(hmsm PRIVATE ${_hmsm_vulkan_sources} $<TARGET_OBJECTS:hmsm_volk>)
 # `VkFooCreateInfo info{VK_STRUCTURE_TYPE_FOO}` (zero the rest) is the Vulkan idiom; -Wextra

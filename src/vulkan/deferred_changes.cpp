@@ -68,7 +68,9 @@ Status VulkanBackend::ensure_move_scratch(uint64_t bytes) {
     for (const HeldBack& c : held_back_)
         if (c.kind == HeldBack::Kind::move && move_scratch_.size() > 0) return {};
     move_scratch_ = Buffer{};
-    auto scratch = Buffer::create(*device_, bytes, VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+    auto scratch = Buffer::create(*device_, bytes,
+                                  VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT |
+                                      VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
                                   MemoryUse::device_local, "state move scratch");
     if (!scratch) return scratch.status();
     move_scratch_ = std::move(scratch).value();

@@ -8,9 +8,11 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cstdlib>
 #include <cstring>
 #include <new>
 #include <numeric>
+#include <string_view>
 #include <vector>
 
 namespace hmsm::detail {
@@ -51,6 +53,12 @@ Result<std::unique_ptr<VulkanBackend>> VulkanBackend::create(std::shared_ptr<Dev
     auto transfer = Transfer::create(dev);
     if (!transfer) return transfer.status();
     b->transfer_ = std::move(transfer).value();
+    const char* range_copies = std::getenv("HMSM_VULKAN_RANGE_COPIES");
+    if (!(range_copies && std::string_view(range_copies) == "0")) {
+        auto copier = RangeCopier::create(dev);
+        if (!copier) return copier.status();
+        b->range_copier_ = std::move(copier).value();
+    }
 
     const VolkDeviceTable& vk = dev.vk();
     VkCommandPoolCreateInfo pool{VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO};
@@ -216,6 +224,10 @@ Status VulkanBackend::move_elements(BufferId id, std::span<const ElementMove> mo
         return {};
     }
     HMSM_TRY(submit_held_back());
+    if (copies_by_shader({&id, 1})) {
+        const BufferMoves one{id, moves};
+        return shader_moves({&one, 1});
+    }
     HMSM_TRY(transfer_->submit([&](VkCommandBuffer cmd) { record_moves(cmd, id, moves); }));
     return device_->take_validation_messages();
 }

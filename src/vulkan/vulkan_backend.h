@@ -17,6 +17,7 @@
 #include "device_buffer.h"
 #include "frame_ring.h"
 #include "pipelines.h"
+#include "range_copy.h"
 #include "recorder.h"
 #include "run_table.h"
 #include "step_replay.h"
@@ -95,6 +96,8 @@ public:
     /// Queue submissions hmsm made itself on this backend (step, read, write outside a
     /// recording, ...); a test hook: record_steps makes none.
     uint64_t submissions() const { return submissions_ + transfer_->submissions(); }
+    /// Dispatches of the range copy (range_copy.h) so far (a test hook).
+    uint64_t range_copy_dispatches() const { return range_copier_ ? range_copier_->dispatches() : 0; }
     /// Secondary command buffers recorded for recorded steps, and their vkCmdExecuteCommands
     /// (test hooks; step_replay.h): a frame loop whose program stays records none after the
     /// first frames in flight. Both 0 with replay off.
@@ -184,12 +187,26 @@ private:
     /// scene (a split one maps a range to pieces) and, for writes, ranges apart.
     bool copies_ranges_at_once(std::span<const ElementRange> ranges, bool writes) const;
     Status ensure_move_scratch(uint64_t bytes);
+    /// Whether the batched transfers of buffers `ids` go through the range copies (range_copy.h):
+    /// batching on, and every buffer's words countable in 32 bits.
+    bool copies_by_shader(std::span<const BufferId> ids) const;
+    /// read_buffers / write_buffers through the range copies: one submission gathering every
+    /// range into the scratch and one copy to staging (or the reverse), `bytes` in all.
+    Status shader_read(std::span<const BufferRangesRead> reads, Scalar as, uint64_t bytes);
+    Status shader_write(std::span<const BufferRangesWrite> writes, Scalar as, uint64_t bytes);
+    /// move_buffers through the range copies: per buffer and batch of its moves
+    /// (plan_move_batches), a gather into the scratch and a scatter from it, all in one submission.
+    Status shader_moves(std::span<const BufferMoves> moves);
     /// write() inside a recording: the data goes to the ring, the copy into the command buffer.
     Status stage_write(BufferId id, uint64_t first, uint64_t count, const void* src, Scalar as);
 
     std::shared_ptr<Device> device_;
     std::unique_ptr<Pipelines> pipelines_;
     std::unique_ptr<Transfer> transfer_;
+    /// The range copies of the batched transfers; null with HMSM_VULKAN_RANGE_COPIES=0 in the
+    /// environment when the backend was made (copy commands of a region per range instead, for
+    /// side-by-side measurements).
+    std::unique_ptr<RangeCopier> range_copier_;
     std::array<Buffer, kBufferCount> buffers_;
     std::array<uint64_t, kBufferCount> element_counts_{};  // logical (read/write) counts
     Buffer move_scratch_;  // move_elements(), grown on demand

@@ -1,0 +1,159 @@
+#include "range_copy.h"
+
+#include "vk_error.h"
+
+#include "hmsm_spirv/copy_ranges.h"
+
+#include <algorithm>
+#include <cstring>
+
+namespace hmsm::detail::vk {
+namespace {
+
+constexpr uint32_t kCopyWorkgroupSize = 256;  // local_size_x of copy_ranges.comp
+constexpr uint32_t kBindings = 3;             // data, packed, ranges
+
+struct CopyConstants {
+    uint32_t first_range, range_count, packed_begin, words, gather;
+};
+
+}  // namespace
+
+RangeCopier::~RangeCopier() {
+    const VolkDeviceTable& vk = device_.vk();
+    VkDevice dev = device_.handle();
+    if (pipeline_) vk.vkDestroyPipeline(dev, pipeline_, nullptr);
+    if (layout_) vk.vkDestroyPipelineLayout(dev, layout_, nullptr);
+    if (pool_) vk.vkDestroyDescriptorPool(dev, pool_, nullptr);
+    if (set_layout_) vk.vkDestroyDescriptorSetLayout(dev, set_layout_, nullptr);
+}
+
+Result<std::unique_ptr<RangeCopier>> RangeCopier::create(const Device& device) {
+    std::unique_ptr<RangeCopier> c(new RangeCopier(device));
+    const VolkDeviceTable& vk = device.vk();
+    VkDevice dev = device.handle();
+    VkDescriptorSetLayoutBinding bindings[kBindings] = {};
+    for (uint32_t b = 0; b < kBindings; ++b) {
+        bindings[b].binding = b;
+        bindings[b].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+        bindings[b].descriptorCount = 1;
+        bindings[b].stageFlags = VK_SHADER_STAGE_COMPUTE_BIT;
+    }
+    VkDescriptorSetLayoutCreateInfo set_info{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
+    set_info.bindingCount = kBindings;
+    set_info.pBindings = bindings;
+    HMSM_VK_TRY(vk.vkCreateDescriptorSetLayout(dev, &set_info, nullptr, &c->set_layout_));
+    VkPushConstantRange push{VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(CopyConstants)};
+    VkPipelineLayoutCreateInfo layout_info{VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO};
+    layout_info.setLayoutCount = 1;
+    layout_info.pSetLayouts = &c->set_layout_;
+    layout_info.pushConstantRangeCount = 1;
+    layout_info.pPushConstantRanges = &push;
+    HMSM_VK_TRY(vk.vkCreatePipelineLayout(dev, &layout_info, nullptr, &c->layout_));
+    VkShaderModuleCreateInfo module_info{VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};
+    module_info.codeSize = sizeof(hmsm_spirv_copy_ranges);
+    module_info.pCode = hmsm_spirv_copy_ranges;
+    VkShaderModule module = VK_NULL_HANDLE;
+    HMSM_VK_TRY(vk.vkCreateShaderModule(dev, &module_info, nullptr, &module));
+    VkComputePipelineCreateInfo info{VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO};
+    info.stage.sType = VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO;
+    info.stage.stage = VK_SHADER_STAGE_COMPUTE_BIT;
+    info.stage.module = module;
+    info.stage.pName = "main";
+    info.layout = c->layout_;
+    const VkResult created = vk.vkCreateComputePipelines(dev, VK_NULL_HANDLE, 1, &info, nullptr, &c->pipeline_);
+    vk.vkDestroyShaderModule(dev, module, nullptr);
+    HMSM_VK_TRY(created);
+    return c;
+}
+
+Status RangeCopier::prepare(uint64_t ranges, uint32_t dispatches) {
+    const VolkDeviceTable& vk = device_.vk();
+    VkDevice dev = device_.handle();
+    dispatches = std::max<uint32_t>(dispatches, 1);
+    if (dispatches > pool_sets_) {
+        const uint32_t sets = std::max(dispatches, 2 * pool_sets_);
+        if (pool_) vk.vkDestroyDescriptorPool(dev, pool_, nullptr);
+        pool_ = VK_NULL_HANDLE;
+        pool_sets_ = 0;
+        VkDescriptorPoolSize size{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, kBindings * sets};
+        VkDescriptorPoolCreateInfo pool_info{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
+        pool_info.maxSets = sets;
+        pool_info.poolSizeCount = 1;
+        pool_info.pPoolSizes = &size;
+        HMSM_VK_TRY(vk.vkCreateDescriptorPool(dev, &pool_info, nullptr, &pool_));
+        pool_sets_ = sets;
+    } else {
+        HMSM_VK_TRY(vk.vkResetDescriptorPool(dev, pool_, 0));
+    }
+    const VkDeviceSize bytes = std::max<uint64_t>(ranges, 1) * sizeof(WordSpan);
+    if (table_host_.size() < bytes) {
+        const VkDeviceSize grown = std::max(bytes, 2 * table_host_.size());
+        table_host_ = Buffer{};
+        table_device_ = Buffer{};
+        auto host = Buffer::create(device_, grown, VK_BUFFER_USAGE_TRANSFER_SRC_BIT, MemoryUse::staging,
+                                   "range copy table (host)");
+        if (!host) return host.status();
+        auto on_device = Buffer::create(device_, grown,
+                                        VK_BUFFER_USAGE_TRANSFER_DST_BIT | VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
+                                        MemoryUse::device_local, "range copy table");
+        if (!on_device) return on_device.status();
+        table_host_ = std::move(host).value();
+        table_device_ = std::move(on_device).value();
+    }
+    table_used_ = 0;
+    table_prepared_ = bytes;
+    return {};
+}
+
+Status RangeCopier::record(VkCommandBuffer cmd, const Buffer& data, const Buffer& packed,
+                           std::span<const WordSpan> ranges, bool gather) {
+    if (ranges.empty()) return {};
+    const VolkDeviceTable& vk = device_.vk();
+    const VkDeviceSize first = table_used_ * sizeof(WordSpan), bytes = ranges.size_bytes();
+    if (first + bytes > table_prepared_)
+        return {ErrorCode::internal, "vulkan: range copy table smaller than prepared"};
+    std::memcpy(static_cast<std::byte*>(table_host_.mapped()) + first, ranges.data(), bytes);
+    if (table_used_ == 0) {
+        // The whole prepared table in one copy ahead of the first dispatch: the host has written
+        // every entry by the time the submission runs.
+        const VkBufferCopy region{0, 0, table_prepared_};
+        vk.vkCmdCopyBuffer(cmd, table_host_.handle(), table_device_.handle(), 1, &region);
+        VkMemoryBarrier table_ready{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
+        table_ready.srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
+        table_ready.dstAccessMask = VK_ACCESS_SHADER_READ_BIT;
+        vk.vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, 0, 1,
+                                &table_ready, 0, nullptr, 0, nullptr);
+    }
+
+    VkDescriptorSet set = VK_NULL_HANDLE;
+    VkDescriptorSetAllocateInfo allocate{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO};
+    allocate.descriptorPool = pool_;
+    allocate.descriptorSetCount = 1;
+    allocate.pSetLayouts = &set_layout_;
+    HMSM_VK_TRY(vk.vkAllocateDescriptorSets(device_.handle(), &allocate, &set));
+    const VkDescriptorBufferInfo buffers[kBindings] = {
+        {data.handle(), 0, VK_WHOLE_SIZE}, {packed.handle(), 0, VK_WHOLE_SIZE}, {table_device_.handle(), 0, VK_WHOLE_SIZE}};
+    VkWriteDescriptorSet write{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
+    write.dstSet = set;
+    write.descriptorCount = kBindings;
+    write.descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+    write.pBufferInfo = buffers;
+    vk.vkUpdateDescriptorSets(device_.handle(), 1, &write, 0, nullptr);
+
+    const uint64_t words = uint64_t(ranges.back().packed) + ranges.back().words - ranges.front().packed;
+    const CopyConstants constants{uint32_t(table_used_), uint32_t(ranges.size()), ranges.front().packed,
+                                  uint32_t(words), gather ? 1u : 0u};
+    vk.vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline_);
+    vk.vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, layout_, 0, 1, &set, 0, nullptr);
+    vk.vkCmdPushConstants(cmd, layout_, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof constants, &constants);
+    const uint64_t needed = (words + kCopyWorkgroupSize - 1) / kCopyWorkgroupSize;
+    const uint32_t groups = uint32_t(
+        std::clamp<uint64_t>(needed, 1, std::min<uint64_t>(65535, device_.limits().max_workgroup_count[0])));
+    vk.vkCmdDispatch(cmd, groups, 1, 1);
+    table_used_ += ranges.size();
+    ++dispatches_;
+    return {};
+}
+
+}  // namespace hmsm::detail::vk
