@@ -1,5 +1,5 @@
 #version 450
-// Not a pass: the range copies of the Vulkan backend's transfers (src/vulkan/range_copy.h), as
+// Not a pass: the range copies of the Vulkan backend's moves (src/vulkan/range_copy.h), as
 // kernels/cuda/copy_ranges.cu does them on CUDA. One invocation per 32-bit word of the packed
 // side, a grid-stride loop beyond the grid: gather copies words of many ranges of `data` into
 // `packed` back to back, scatter the reverse. A copy command of many regions costs microseconds

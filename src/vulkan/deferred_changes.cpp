@@ -67,6 +67,9 @@ Status VulkanBackend::ensure_move_scratch(uint64_t bytes) {
     // it in pieces.
     for (const HeldBack& c : held_back_)
         if (c.kind == HeldBack::Kind::move && move_scratch_.size() > 0) return {};
+    // Geometric growth: the reads, writes and moves of a streaming world ask for ever other
+    // sizes, and each new allocation of device memory is a chance to fragment it.
+    bytes = std::max<uint64_t>({bytes, 2 * move_scratch_.size(), uint64_t(1) << 20});
     move_scratch_ = Buffer{};
     auto scratch = Buffer::create(*device_, bytes,
                                   VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT |

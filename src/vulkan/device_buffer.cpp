@@ -159,12 +159,6 @@ Status Transfer::ensure_staging(VkDeviceSize bytes) {
     return {};
 }
 
-Result<const Buffer*> Transfer::staging_for(VkDeviceSize bytes) {
-    if (bytes > kMaxStagingBytes) return Status{ErrorCode::internal, "vulkan: more than the staging buffer asked for"};
-    HMSM_TRY(ensure_staging(bytes));
-    return &staging_;
-}
-
 Status Transfer::submit(const std::function<void(VkCommandBuffer)>& commands) {
     const VolkDeviceTable& vk = device_.vk();
     HMSM_VK_TRY(vk.vkResetCommandBuffer(command_buffer_, 0));

@@ -77,9 +77,6 @@ public:
     Status upload_parts(std::span<const BufferRegions> parts, const std::function<void(size_t, void*)>& fill);
     /// Records `commands` into a one-shot command buffer, submits it and waits.
     Status submit(const std::function<void(VkCommandBuffer)>& commands);
-    /// The staging buffer, at least `bytes` (<= most_staged_bytes()) large, for a caller that
-    /// records its own copies to or from it in submit().
-    Result<const Buffer*> staging_for(VkDeviceSize bytes);
     /// Submissions made so far (a test hook).
     uint64_t submissions() const { return submissions_; }
 

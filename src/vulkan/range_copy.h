@@ -1,14 +1,17 @@
-// The range copies of the Vulkan backend's batched transfers (read_ranges, write_ranges,
-// read_buffers, write_buffers, move_buffers, move_elements outside an engine's recording): a
-// compute dispatch of shaders/glsl/copy_ranges.comp gathers many ranges of a buffer into a packed
-// device scratch or scatters them back, as the CUDA backend's copy_ranges kernel does. One copy
-// command with a region per range costs about 2-5 microseconds per region on an H100 (measured:
-// 26,000 ranges read back in 60 ms against 0.9 ms on CUDA); the dispatch costs the words.
+// The range copies of the Vulkan backend's batched moves (move_buffers, move_elements outside an
+// engine's recording: level-of-detail switches, fades, swap removals): a compute dispatch of
+// shaders/glsl/copy_ranges.comp gathers many ranges of a buffer into a packed device scratch or
+// scatters them back, as the CUDA backend's copy_ranges kernel does. A copy command with a region
+// per range costs about 2-5 microseconds per region on an H100 (measured: docs/vulkan.md).
+// Reads and writes of many ranges keep copy commands: with the range copy for them as well, the
+// standing step of the open-world bench measured 1.3-2x slower on the H100, for a reason not yet
+// found (with moves alone it did not change).
 //
 // Use within one submission that is waited for before the next: prepare() sizes the range table
 // and the descriptor sets for the dispatches to come and forgets those of the submission before;
-// record() then appends one dispatch. Not for an engine's command buffer, which may still be
-// pending when the next call prepares (those keep copy commands, deferred_changes.cpp).
+// record() then appends one dispatch (the first also copies the whole table to the device). Not
+// for an engine's command buffer, which may still be pending when the next call prepares (those
+// keep copy commands, deferred_changes.cpp).
 #pragma once
 
 #include "device_buffer.h"

@@ -52,11 +52,6 @@ bool VulkanBackend::copies_ranges_at_once(std::span<const ElementRange> ranges, 
 
 Status VulkanBackend::read_ranges(BufferId id, std::span<const ElementRange> ranges, void* dst, Scalar as) const {
     if (!copies_ranges_at_once(ranges, false)) return Backend::read_ranges(id, ranges, dst, as);
-    const BufferRangesRead one{id, ranges, dst};
-    if (ranges.size() > 1 && copies_by_shader({&id, 1}) &&  // many regions: the range copies
-        device_bytes(std::span(&one, 1)) <= Transfer::most_staged_bytes()) {
-        return read_buffers({&one, 1}, as);
-    }
     HMSM_TRY(check_device_lost());
     for (const ElementRange& r : ranges) HMSM_TRY(check_range(id, r.first, r.count));
     // A read sees every change made before it (read()).
@@ -75,10 +70,6 @@ Status VulkanBackend::read_ranges(BufferId id, std::span<const ElementRange> ran
 
 Status VulkanBackend::write_ranges(BufferId id, std::span<const ElementRange> ranges, const void* src, Scalar as) {
     if (!copies_ranges_at_once(ranges, true)) return Backend::write_ranges(id, ranges, src, as);
-    const BufferRangesWrite one{id, ranges, src};
-    if (ranges.size() > 1 && copies_by_shader({&id, 1}) && device_bytes(std::span(&one, 1)) <= Transfer::most_staged_bytes()) {
-        return write_buffers({&one, 1}, as);
-    }
     HMSM_TRY(check_device_lost());
     for (const ElementRange& r : ranges) HMSM_TRY(check_range(id, r.first, r.count));
     HMSM_TRY(submit_held_back());
@@ -103,9 +94,6 @@ Status VulkanBackend::read_buffers(std::span<const BufferRangesRead> reads, Scal
     for (const BufferRangesRead& r : reads)
         for (const ElementRange& range : r.ranges) HMSM_TRY(check_range(r.id, range.first, range.count));
     HMSM_TRY(const_cast<VulkanBackend*>(this)->submit_held_back());  // a read sees every change before it
-    std::vector<BufferId> ids;
-    for (const BufferRangesRead& r : reads) ids.push_back(r.id);
-    if (copies_by_shader(ids)) return const_cast<VulkanBackend*>(this)->shader_read(reads, as, device_bytes(reads));
     std::vector<std::vector<VkBufferCopy>> regions;
     std::vector<Transfer::BufferRegions> parts;
     regions.reserve(reads.size());
@@ -128,9 +116,6 @@ Status VulkanBackend::write_buffers(std::span<const BufferRangesWrite> writes, S
     for (const BufferRangesWrite& w : writes)
         for (const ElementRange& range : w.ranges) HMSM_TRY(check_range(w.id, range.first, range.count));
     HMSM_TRY(submit_held_back());
-    std::vector<BufferId> ids;
-    for (const BufferRangesWrite& w : writes) ids.push_back(w.id);
-    if (copies_by_shader(ids)) return shader_write(writes, as, device_bytes(writes));
     std::vector<std::vector<VkBufferCopy>> regions;
     std::vector<Transfer::BufferRegions> parts;
     regions.reserve(writes.size());
@@ -174,92 +159,6 @@ bool VulkanBackend::copies_by_shader(std::span<const BufferId> ids) const {
     for (BufferId id : ids)
         if (buffers_[uint32_t(id)].size() / 4 > UINT32_MAX) return false;
     return true;
-}
-
-namespace {
-
-/// The word spans of `ranges` (elements of `words` words), packed from word `packed` on (which
-/// it advances); `to_data` says whether the data side is the target (a scatter) or the source.
-std::vector<WordSpan> word_spans(std::span<const ElementRange> ranges, uint64_t words, uint64_t& packed,
-                                 bool to_data) {
-    std::vector<WordSpan> spans;
-    spans.reserve(ranges.size());
-    for (const ElementRange& r : ranges) {
-        if (r.count == 0) continue;
-        const uint32_t at = uint32_t(r.first * words);
-        spans.push_back({uint32_t(packed), uint32_t(r.count * words), to_data ? 0 : at, to_data ? at : 0});
-        packed += r.count * words;
-    }
-    return spans;
-}
-
-uint64_t range_count(std::span<const ElementRange> ranges) { return ranges.size(); }
-
-}  // namespace
-
-Status VulkanBackend::shader_read(std::span<const BufferRangesRead> reads, Scalar as, uint64_t bytes) {
-    if (bytes == 0) return {};
-    HMSM_TRY(ensure_move_scratch(bytes));
-    auto staging = transfer_->staging_for(bytes);
-    if (!staging) return staging.status();
-    uint64_t ranges = 0;
-    for (const BufferRangesRead& r : reads) ranges += range_count(r.ranges);
-    HMSM_TRY(range_copier_->prepare(ranges, uint32_t(reads.size())));
-    const VolkDeviceTable& vk = device_->vk();
-    std::vector<uint64_t> first_word;  // per read: its first packed word
-    Status recorded;
-    HMSM_TRY(transfer_->submit([&](VkCommandBuffer cmd) {
-        barrier_after_all_writes(*device_, cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
-                                 VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT);
-        uint64_t packed = 0;
-        for (const BufferRangesRead& r : reads) {
-            first_word.push_back(packed);
-            const std::vector<WordSpan> spans = word_spans(r.ranges, device_element_bytes(r.id) / 4, packed, false);
-            if (recorded.ok()) recorded = range_copier_->record(cmd, buffers_[uint32_t(r.id)], move_scratch_, spans, true);
-        }
-        barrier_after_all_writes(*device_, cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_READ_BIT);
-        const VkBufferCopy all{0, 0, packed * 4};
-        vk.vkCmdCopyBuffer(cmd, move_scratch_.handle(), (*staging)->handle(), 1, &all);
-    }));
-    HMSM_TRY(recorded);
-    for (size_t k = 0; k < reads.size(); ++k) {
-        uint64_t elements = 0;
-        for (const ElementRange& range : reads[k].ranges) elements += range.count;
-        const Shape shape = buffer_info(reads[k].id).shape;
-        words_to_scalars(shape, static_cast<const std::byte*>((*staging)->mapped()) + first_word[k] * 4,
-                         elements * shape_scalars(shape), reads[k].dst, as);
-    }
-    return device_->take_validation_messages();
-}
-
-Status VulkanBackend::shader_write(std::span<const BufferRangesWrite> writes, Scalar as, uint64_t bytes) {
-    if (bytes == 0) return {};
-    HMSM_TRY(ensure_move_scratch(bytes));
-    auto staging = transfer_->staging_for(bytes);
-    if (!staging) return staging.status();
-    uint64_t ranges = 0, packed = 0;
-    std::vector<std::vector<WordSpan>> spans;
-    for (const BufferRangesWrite& w : writes) {
-        ranges += range_count(w.ranges);
-        const uint64_t first = packed;
-        spans.push_back(word_spans(w.ranges, device_element_bytes(w.id) / 4, packed, true));
-        const Shape shape = buffer_info(w.id).shape;
-        scalars_to_words(shape, w.src, packed - first, static_cast<std::byte*>((*staging)->mapped()) + first * 4, as);
-    }
-    HMSM_TRY(range_copier_->prepare(ranges, uint32_t(writes.size())));
-    const VolkDeviceTable& vk = device_->vk();
-    Status recorded;
-    HMSM_TRY(transfer_->submit([&](VkCommandBuffer cmd) {
-        const VkBufferCopy all{0, 0, packed * 4};
-        vk.vkCmdCopyBuffer(cmd, (*staging)->handle(), move_scratch_.handle(), 1, &all);
-        barrier_after_all_writes(*device_, cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
-                                 VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT);
-        for (size_t k = 0; k < writes.size(); ++k)
-            if (recorded.ok())
-                recorded = range_copier_->record(cmd, buffers_[uint32_t(writes[k].id)], move_scratch_, spans[k], false);
-    }));
-    HMSM_TRY(recorded);
-    return device_->take_validation_messages();
 }
 
 Status VulkanBackend::shader_moves(std::span<const BufferMoves> moves) {

@@ -187,13 +187,9 @@ private:
     /// scene (a split one maps a range to pieces) and, for writes, ranges apart.
     bool copies_ranges_at_once(std::span<const ElementRange> ranges, bool writes) const;
     Status ensure_move_scratch(uint64_t bytes);
-    /// Whether the batched transfers of buffers `ids` go through the range copies (range_copy.h):
-    /// batching on, and every buffer's words countable in 32 bits.
+    /// Whether the moves of buffers `ids` go through the range copies (range_copy.h): batching
+    /// on, and every buffer's words countable in 32 bits.
     bool copies_by_shader(std::span<const BufferId> ids) const;
-    /// read_buffers / write_buffers through the range copies: one submission gathering every
-    /// range into the scratch and one copy to staging (or the reverse), `bytes` in all.
-    Status shader_read(std::span<const BufferRangesRead> reads, Scalar as, uint64_t bytes);
-    Status shader_write(std::span<const BufferRangesWrite> writes, Scalar as, uint64_t bytes);
     /// move_buffers through the range copies: per buffer and batch of its moves
     /// (plan_move_batches), a gather into the scratch and a scatter from it, all in one submission.
     Status shader_moves(std::span<const BufferMoves> moves);
