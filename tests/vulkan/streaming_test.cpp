@@ -5,6 +5,7 @@
 // installed) checks the recorded moves against the frames still running; the results must
 // equal the same changes stepped with step() on the Vulkan backend, and agree with cpu64.
 #include "engine_device.h"
+#include "recorded_pair.h"
 #include "simulation_access.h"
 #include "test_trees.h"
 #include "vulkan_test_support.h"
@@ -163,41 +164,6 @@ TEST_F(Streaming, GrowthPastTheCapacityWhileRecordingSubmitsAndStillMatches) {
     EXPECT_EQ(a, b);
 }
 
-/// A scene of small trees on a grid with two coarser levels, simulated twice under the same
-/// wind: `recorded` through record_steps into the engine's frames, `reference` stepped on a plain
-/// Vulkan simulation. Members go in reverse order: the simulations before the engine's device.
-struct RecordedAndReference {
-    std::unique_ptr<EngineDevice> engine;
-    std::unique_ptr<Simulation> recorded, reference;
-
-    /// Empty `skip` and both simulations made, or `skip` says what is missing.
-    static RecordedAndReference create(uint32_t trees, std::string& skip) {
-        RecordedAndReference r;
-        r.engine = EngineDevice::create(skip);
-        if (!skip.empty() || !r.engine) return r;
-        SimulationConfig config;
-        config.wind.strength = 6.0;
-        Scene scene = *grid_scene(small_tree(), trees, 5.0, 4);
-        scene.lod_budgets = {{3, 1}};
-        auto recorded = vulkan::create_simulation(scene, config, r.engine->context());
-        EXPECT_TRUE(recorded.ok()) << recorded.status().message();
-        if (recorded.ok()) r.recorded = std::move(recorded).value();
-        r.reference = create_simulation_or_skip(scene, config, BackendKind::vulkan, skip);
-        return r;
-    }
-    /// The two run the same models and give the same `outputs`, bit for bit.
-    void expect_same(std::initializer_list<Output> outputs) const {
-        for (size_t i = 0; i < recorded->instance_count(); ++i)
-            EXPECT_EQ(recorded->instances()[i].model, reference->instances()[i].model) << "instance " << i;
-        for (Output output : outputs) {
-            std::vector<float> a, b;
-            ASSERT_TRUE(recorded->read(output, a).ok());
-            ASSERT_TRUE(reference->read(output, b).ok());
-            EXPECT_EQ(a, b) << "output " << int(output);
-        }
-    }
-};
-
 // Level switches while the engine records: each switch reads the switched instances' state,
 // and its moves, writes and pose travel in the next recorded command buffer; the result equals
 // the same switches stepped with step() on the Vulkan backend.
@@ -211,21 +177,15 @@ TEST_F(VulkanTest, LevelSwitchesTravelWithTheRecordedFrames) {
     {
         EngineFrames frames(*pair.engine, 3);
         if (HasFailure()) return;
-        VkCommandBuffer first = frames.begin(0);
-        ASSERT_TRUE(vulkan::record_steps(sim, first, 2).ok());
-        frames.submit(0);
-        ASSERT_TRUE(reference.step(2).ok());
+        ASSERT_TRUE(pair.step_both(frames, 0, 2).ok());
         for (uint32_t f = 1; f < 9; ++f) {
             const InstanceId ids[] = {InstanceId(0), InstanceId(2), InstanceId(3), InstanceId(5)};
             const uint32_t levels[] = {f % 3, (f + 1) % 3, (2 * f) % 3, (f + 2) % 3};
             for (Simulation* s : {&sim, &reference}) ASSERT_TRUE(s->set_instance_lods(ids, levels).ok());
             EXPECT_GT(backend.held_back_changes(), 0u) << "frame " << f;
-            VkCommandBuffer cmd = frames.begin(f);
-            const Status status = vulkan::record_steps(sim, cmd, 2);
-            frames.submit(f);
+            const Status status = pair.step_both(frames, f, 2);
             ASSERT_TRUE(status.ok()) << "frame " << f << ": " << status.message();
             EXPECT_EQ(backend.held_back_changes(), 0u);
-            ASSERT_TRUE(reference.step(2).ok());
         }
         frames.wait_all();
     }
@@ -259,12 +219,9 @@ TEST_F(VulkanTest, RecordedStepsFadeAsStepDoes) {
                     ASSERT_EQ(s->fading_instance_count(), 2u) << "the trees sway: their switches fade";
                 }
             }
-            VkCommandBuffer cmd = frames.begin(f);
-            const Status status = vulkan::record_steps(sim, cmd, 2);
-            frames.submit(f);
+            const Status status = pair.step_both(frames, f, 2);
             ASSERT_TRUE(status.ok()) << "frame " << f << ": " << status.message();
             EXPECT_EQ(sim.fading_instance_count(), f == 2 || f == 3 ? 2u : 0u) << "frame " << f;
-            ASSERT_TRUE(reference.step(2).ok());
         }
         frames.wait_all();
     }
