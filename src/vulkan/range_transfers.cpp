@@ -1,7 +1,8 @@
 // Backend::read_ranges and write_ranges of the Vulkan backend: every range of a call in one
 // copy command (a region per range) to or from the transfer staging buffer, one submission
 // and wait per staging-full. Inside an engine's recording or a held-back instance change the
-// ranges go range by range the way write() goes (the ring, deferred_changes.cpp).
+// ranges go range by range the way write() goes (the ring, deferred_changes.cpp). Moves of
+// many ranges go through the range copy (range_copy.h) in one submission per call.
 #include "vulkan_backend.h"
 
 #include "../device_words.h"
@@ -22,10 +23,6 @@ std::vector<VkBufferCopy> buffer_regions(std::span<const ElementRange> ranges, u
         if (r.count > 0) regions.push_back({r.first * element_bytes, 0, r.count * element_bytes});
     return regions;
 }
-
-}  // namespace
-
-namespace {
 
 /// The regions of `ranges` in a buffer of `element_bytes` elements (srcOffset, size).
 std::vector<VkBufferCopy> byte_regions(std::span<const ElementRange> ranges, uint64_t element_bytes) {
@@ -84,7 +81,6 @@ Status VulkanBackend::write_ranges(BufferId id, std::span<const ElementRange> ra
                                       }));
     return device_->take_validation_messages();
 }
-
 
 Status VulkanBackend::read_buffers(std::span<const BufferRangesRead> reads, Scalar as) const {
     bool at_once = device_bytes(reads) <= Transfer::most_staged_bytes();
