@@ -9,6 +9,7 @@
 // compute shader (shaders/glsl/copy_bandwidth.comp) streaming 16-byte words like the passes.
 #include "vulkan_backend.h"
 
+#include "pipelines.h"
 #include "vk_error.h"
 
 #include "hmsm_spirv/copy_bandwidth.h"
@@ -38,17 +39,7 @@ public:
     Status create(const Buffer& source, const Buffer& target, VkDeviceSize bytes) {
         const VolkDeviceTable& vk = device_.vk();
         VkDevice dev = device_.handle();
-        VkDescriptorSetLayoutBinding bindings[2] = {};
-        for (uint32_t b = 0; b < 2; ++b) {
-            bindings[b].binding = b;
-            bindings[b].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
-            bindings[b].descriptorCount = 1;
-            bindings[b].stageFlags = VK_SHADER_STAGE_COMPUTE_BIT;
-        }
-        VkDescriptorSetLayoutCreateInfo set_info{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
-        set_info.bindingCount = 2;
-        set_info.pBindings = bindings;
-        HMSM_VK_TRY(vk.vkCreateDescriptorSetLayout(dev, &set_info, nullptr, &set_layout_));
+        HMSM_TRY(storage_buffer_set_layout(device_, 2, set_layout_));
 
         VkPushConstantRange push{VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(uint32_t)};
         VkPipelineLayoutCreateInfo layout_info{VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO};
@@ -58,20 +49,9 @@ public:
         layout_info.pPushConstantRanges = &push;
         HMSM_VK_TRY(vk.vkCreatePipelineLayout(dev, &layout_info, nullptr, &layout_));
 
-        VkShaderModuleCreateInfo module_info{VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};
-        module_info.codeSize = sizeof(hmsm_spirv_copy_bandwidth);
-        module_info.pCode = hmsm_spirv_copy_bandwidth;
-        VkShaderModule module = VK_NULL_HANDLE;
-        HMSM_VK_TRY(vk.vkCreateShaderModule(dev, &module_info, nullptr, &module));
-        VkComputePipelineCreateInfo info{VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO};
-        info.stage.sType = VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO;
-        info.stage.stage = VK_SHADER_STAGE_COMPUTE_BIT;
-        info.stage.module = module;
-        info.stage.pName = "main";
-        info.layout = layout_;
-        VkResult created = vk.vkCreateComputePipelines(dev, VK_NULL_HANDLE, 1, &info, nullptr, &pipeline_);
-        vk.vkDestroyShaderModule(dev, module, nullptr);
-        HMSM_VK_TRY(created);
+        auto pipeline = compute_pipeline(device_, layout_, hmsm_spirv_copy_bandwidth);
+        if (!pipeline) return pipeline.status();
+        pipeline_ = *pipeline;
 
         VkDescriptorPoolSize size{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 2};
         VkDescriptorPoolCreateInfo pool_info{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};

@@ -28,9 +28,6 @@ std::span<const uint32_t> pass_spirv(Pass pass) {
     return {};
 }
 
-namespace {
-
-/// A descriptor set layout of `count` storage buffers, bindings 0 .. count - 1, for compute.
 Status storage_buffer_set_layout(const Device& device, uint32_t count, VkDescriptorSetLayout& layout) {
     std::vector<VkDescriptorSetLayoutBinding> bindings(count);
     for (uint32_t b = 0; b < count; ++b) {
@@ -46,7 +43,30 @@ Status storage_buffer_set_layout(const Device& device, uint32_t count, VkDescrip
     return {};
 }
 
-}  // namespace
+Result<VkPipeline> compute_pipeline(const Device& device, VkPipelineLayout layout, std::span<const uint32_t> code,
+                                    const uint32_t* workgroup_size) {
+    const VolkDeviceTable& vk = device.vk();
+    VkDevice dev = device.handle();
+    VkShaderModuleCreateInfo module_info{VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};
+    module_info.codeSize = code.size_bytes();
+    module_info.pCode = code.data();
+    VkShaderModule module;
+    HMSM_VK_TRY(vk.vkCreateShaderModule(dev, &module_info, nullptr, &module));
+    const VkSpecializationMapEntry entry{0, 0, sizeof(uint32_t)};
+    VkSpecializationInfo specialization{1, &entry, sizeof(uint32_t), workgroup_size};
+    VkComputePipelineCreateInfo info{VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO};
+    info.stage.sType = VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO;
+    info.stage.stage = VK_SHADER_STAGE_COMPUTE_BIT;
+    info.stage.module = module;
+    info.stage.pName = "main";
+    if (workgroup_size) info.stage.pSpecializationInfo = &specialization;
+    info.layout = layout;
+    VkPipeline pipeline = VK_NULL_HANDLE;
+    VkResult result = vk.vkCreateComputePipelines(dev, VK_NULL_HANDLE, 1, &info, nullptr, &pipeline);
+    vk.vkDestroyShaderModule(dev, module, nullptr);
+    HMSM_VK_TRY(result);
+    return pipeline;
+}
 
 Result<std::unique_ptr<Pipelines>> Pipelines::create(const Device& device) {
     const DeviceLimits& limits = device.limits();
@@ -116,27 +136,7 @@ Result<VkPipeline> Pipelines::create_pipeline(Pass pass, uint32_t workgroup_size
 
 Result<VkPipeline> Pipelines::create_pipeline(std::span<const uint32_t> code, bool specialized,
                                               uint32_t workgroup_size) const {
-    const VolkDeviceTable& vk = device_.vk();
-    VkDevice dev = device_.handle();
-    VkShaderModuleCreateInfo module_info{VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};
-    module_info.codeSize = code.size_bytes();
-    module_info.pCode = code.data();
-    VkShaderModule module;
-    HMSM_VK_TRY(vk.vkCreateShaderModule(dev, &module_info, nullptr, &module));
-    const VkSpecializationMapEntry entry{0, 0, sizeof(uint32_t)};
-    VkSpecializationInfo specialization{1, &entry, sizeof(uint32_t), &workgroup_size};
-    VkComputePipelineCreateInfo info{VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO};
-    info.stage.sType = VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO;
-    info.stage.stage = VK_SHADER_STAGE_COMPUTE_BIT;
-    info.stage.module = module;
-    info.stage.pName = "main";
-    if (specialized) info.stage.pSpecializationInfo = &specialization;
-    info.layout = layout_;
-    VkPipeline pipeline = VK_NULL_HANDLE;
-    VkResult result = vk.vkCreateComputePipelines(dev, VK_NULL_HANDLE, 1, &info, nullptr, &pipeline);
-    vk.vkDestroyShaderModule(dev, module, nullptr);
-    HMSM_VK_TRY(result);
-    return pipeline;
+    return compute_pipeline(device_, layout_, code, specialized ? &workgroup_size : nullptr);
 }
 
 uint32_t Pipelines::rounds_size(const Dispatch& dispatch) const {

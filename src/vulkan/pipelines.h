@@ -23,6 +23,13 @@ namespace hmsm::detail::vk {
 /// SPIR-V words of `pass`, compiled from shaders/glsl/NAME.comp.
 std::span<const uint32_t> pass_spirv(Pass pass);
 
+/// A descriptor set layout of `count` storage buffers, bindings 0 .. count - 1, for compute.
+Status storage_buffer_set_layout(const Device& device, uint32_t count, VkDescriptorSetLayout& layout);
+/// The compute pipeline of SPIR-V `code` (entry point main) with `layout`; where
+/// `workgroup_size` is given, it sets specialization constant 0.
+Result<VkPipeline> compute_pipeline(const Device& device, VkPipelineLayout layout, std::span<const uint32_t> code,
+                                    const uint32_t* workgroup_size = nullptr);
+
 class Pipelines {
 public:
     static Result<std::unique_ptr<Pipelines>> create(const Device& device);

@@ -1,5 +1,6 @@
 #include "range_copy.h"
 
+#include "pipelines.h"
 #include "vk_error.h"
 
 #include "hmsm_spirv/copy_ranges.h"
@@ -32,17 +33,7 @@ Result<std::unique_ptr<RangeCopier>> RangeCopier::create(const Device& device) {
     std::unique_ptr<RangeCopier> c(new RangeCopier(device));
     const VolkDeviceTable& vk = device.vk();
     VkDevice dev = device.handle();
-    VkDescriptorSetLayoutBinding bindings[kBindings] = {};
-    for (uint32_t b = 0; b < kBindings; ++b) {
-        bindings[b].binding = b;
-        bindings[b].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
-        bindings[b].descriptorCount = 1;
-        bindings[b].stageFlags = VK_SHADER_STAGE_COMPUTE_BIT;
-    }
-    VkDescriptorSetLayoutCreateInfo set_info{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
-    set_info.bindingCount = kBindings;
-    set_info.pBindings = bindings;
-    HMSM_VK_TRY(vk.vkCreateDescriptorSetLayout(dev, &set_info, nullptr, &c->set_layout_));
+    HMSM_TRY(storage_buffer_set_layout(device, kBindings, c->set_layout_));
     VkPushConstantRange push{VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(CopyConstants)};
     VkPipelineLayoutCreateInfo layout_info{VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO};
     layout_info.setLayoutCount = 1;
@@ -50,20 +41,9 @@ Result<std::unique_ptr<RangeCopier>> RangeCopier::create(const Device& device) {
     layout_info.pushConstantRangeCount = 1;
     layout_info.pPushConstantRanges = &push;
     HMSM_VK_TRY(vk.vkCreatePipelineLayout(dev, &layout_info, nullptr, &c->layout_));
-    VkShaderModuleCreateInfo module_info{VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};
-    module_info.codeSize = sizeof(hmsm_spirv_copy_ranges);
-    module_info.pCode = hmsm_spirv_copy_ranges;
-    VkShaderModule module = VK_NULL_HANDLE;
-    HMSM_VK_TRY(vk.vkCreateShaderModule(dev, &module_info, nullptr, &module));
-    VkComputePipelineCreateInfo info{VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO};
-    info.stage.sType = VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO;
-    info.stage.stage = VK_SHADER_STAGE_COMPUTE_BIT;
-    info.stage.module = module;
-    info.stage.pName = "main";
-    info.layout = c->layout_;
-    const VkResult created = vk.vkCreateComputePipelines(dev, VK_NULL_HANDLE, 1, &info, nullptr, &c->pipeline_);
-    vk.vkDestroyShaderModule(dev, module, nullptr);
-    HMSM_VK_TRY(created);
+    auto pipeline = compute_pipeline(device, c->layout_, hmsm_spirv_copy_ranges);
+    if (!pipeline) return pipeline.status();
+    c->pipeline_ = *pipeline;
     return c;
 }
 
