@@ -74,20 +74,81 @@ Status for_each_chunk(const ElementMove& m, uint64_t most, Chunk&& chunk) {
     return {};
 }
 
-/// Disjoint intervals [first, end) of elements or bytes, for O(log n) overlap queries.
+/// Disjoint intervals [first, end) of elements or bytes, for overlap queries. The moves of a
+/// level switch or a swap removal add tens of thousands of intervals a call, nearly all in a
+/// few ascending or descending sequences (staging, shifts, unstaging): each such sequence is a
+/// sorted run, searched in O(log n); an interval that continues no run starts one, and past
+/// kMostRuns runs the rest go to a map. A query outside the bounds of everything held is O(1).
 class DisjointIntervals {
 public:
+    /// Whether [first, end) (first < end) shares an element with an interval held.
     bool overlaps(uint64_t first, uint64_t end) const {
-        auto after = intervals_.upper_bound(first);
-        if (after != intervals_.end() && after->first < end) return true;
-        return after != intervals_.begin() && std::prev(after)->second > first;
+        if (end <= lowest_ || first >= highest_) return false;
+        for (const Run& run : runs_)
+            if (run.overlaps(first, end)) return true;
+        return map_overlaps(first, end);
     }
-    /// Adds [first, end), which overlaps none held.
-    void add(uint64_t first, uint64_t end) { intervals_.emplace(first, end); }
-    void clear() { intervals_.clear(); }
+    /// Adds [first, end) (first < end), which overlaps none held.
+    void add(uint64_t first, uint64_t end) {
+        lowest_ = std::min(lowest_, first);
+        highest_ = std::max(highest_, end);
+        for (Run& run : runs_)
+            if (run.continues(first, end)) {
+                run.intervals.push_back({first, end});
+                return;
+            }
+        if (runs_.size() < kMostRuns) {
+            runs_.push_back({{{first, end}}, false});
+            return;
+        }
+        map_.emplace(first, end);
+    }
+    void clear() {
+        runs_.clear();
+        map_.clear();
+        lowest_ = ~uint64_t(0);
+        highest_ = 0;
+    }
 
 private:
-    std::map<uint64_t, uint64_t> intervals_;  // first -> end
+    static constexpr size_t kMostRuns = 8;
+    struct Run {
+        std::vector<std::pair<uint64_t, uint64_t>> intervals;  // ascending, or descending
+        bool descending = false;
+        /// Whether [first, end) extends the run in its direction (a run of one takes either).
+        bool continues(uint64_t first, uint64_t end) {
+            const auto& [back_first, back_end] = intervals.back();
+            if (intervals.size() == 1) {
+                if (back_end <= first) return !(descending = false);
+                if (end <= back_first) return descending = true;
+                return false;
+            }
+            return descending ? end <= back_first : back_end <= first;
+        }
+        bool overlaps(uint64_t first, uint64_t end) const {
+            // Past either end of the run (a sequence's next interval): O(1).
+            const auto& [low, high] = descending ? std::pair(intervals.back().first, intervals.front().second)
+                                                 : std::pair(intervals.front().first, intervals.back().second);
+            if (end <= low || first >= high) return false;
+            // The interval with the largest start below `end` is the only one that can overlap.
+            if (!descending) {
+                auto after = std::lower_bound(intervals.begin(), intervals.end(), end,
+                                              [](const auto& i, uint64_t at) { return i.first < at; });
+                return after != intervals.begin() && std::prev(after)->second > first;
+            }
+            auto below = std::lower_bound(intervals.begin(), intervals.end(), end,
+                                          [](const auto& i, uint64_t at) { return i.first >= at; });
+            return below != intervals.end() && below->second > first;
+        }
+    };
+    bool map_overlaps(uint64_t first, uint64_t end) const {
+        auto after = map_.upper_bound(first);
+        if (after != map_.end() && after->first < end) return true;
+        return after != map_.begin() && std::prev(after)->second > first;
+    }
+    std::vector<Run> runs_;
+    std::map<uint64_t, uint64_t> map_;  // first -> end, past kMostRuns runs
+    uint64_t lowest_ = ~uint64_t(0), highest_ = 0;
 };
 
 /// The moves of one move_elements call as batches that each go through scratch at once: every

@@ -15,6 +15,7 @@
 
 #include <algorithm>
 #include <cstring>
+#include <numeric>
 #include <random>
 
 namespace hmsm {
@@ -104,6 +105,42 @@ TEST(PlanMoveBatches, ShiftMovesMakeOneBatch) {
         const std::vector<ElementMove> moves = detail::shift_moves(old, now, resized);
         const detail::MoveBatches plan = detail::plan_move_batches(moves, 1u << 20);
         EXPECT_LE(plan.ends.size(), 1u) << "trial " << trial;
+    }
+}
+
+// The intervals a batch has written, held as sorted runs with a map past them, answer every
+// overlap query as a search of all of them would: intervals added ascending, descending, in
+// interleaved sequences (more than the runs held) and at random.
+TEST(DisjointIntervals, AnswersAsASearchOfEveryInterval) {
+    std::mt19937 random(3);
+    for (int trial = 0; trial < 300; ++trial) {
+        const int pattern = trial % 4;
+        // Disjoint slots of 8 elements, each holding at most one interval, visited in the
+        // pattern's order: ascending, descending, 12 interleaved ascending sequences, random.
+        const uint64_t slots = 4 + random() % 120;
+        std::vector<uint64_t> order(slots);
+        std::iota(order.begin(), order.end(), 0);
+        if (pattern == 1) std::reverse(order.begin(), order.end());
+        if (pattern == 2)
+            std::stable_sort(order.begin(), order.end(), [](uint64_t a, uint64_t b) { return a % 12 < b % 12; });
+        if (pattern == 3) std::shuffle(order.begin(), order.end(), random);
+        detail::DisjointIntervals intervals;
+        std::vector<std::pair<uint64_t, uint64_t>> held;
+        for (uint64_t slot : order) {
+            const uint64_t first = 8 * slot + random() % 4, end = first + 1 + random() % 4;
+            intervals.add(first, end);
+            held.push_back({first, end});
+            for (int query = 0; query < 4; ++query) {
+                const uint64_t a = random() % (8 * slots + 8), b = a + 1 + random() % 20;
+                const bool expected = std::any_of(held.begin(), held.end(), [&](const auto& i) {
+                    return i.first < b && a < i.second;
+                });
+                ASSERT_EQ(intervals.overlaps(a, b), expected)
+                    << "trial " << trial << " pattern " << pattern << " [" << a << ", " << b << ")";
+            }
+        }
+        intervals.clear();
+        EXPECT_FALSE(intervals.overlaps(held.front().first, held.front().second));
     }
 }
 
