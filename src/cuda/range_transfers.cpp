@@ -121,7 +121,8 @@ Status DeviceBuffers::move_buffers(std::span<const BufferMoves> moves, cudaStrea
             HMSM_TRY(move_one_by_one(m.id, m.moves, stream));
             continue;
         }
-        planned.push_back({m.id, plan_move_batches(m.moves, std::max<uint64_t>(1, kMoveScratchBytes / element_bytes))});
+        const uint64_t scratch_elements = std::max<uint64_t>(1, kMoveScratchBytes / element_bytes);
+        planned.push_back({m.id, plan_move_batches(m.moves, scratch_elements), 0, {}});
         scratch_bytes = std::max(scratch_bytes, planned.back().plan.largest * element_bytes);
     }
     if (planned.empty()) return {};
