@@ -2,10 +2,11 @@
 // model of the device scene from create() on, and a switch runs an instance on another of them.
 // The instance keeps its index: the chains both levels keep carry their state element for
 // element (a level keeps the full model's chains with their constants, docs/model.md 3.12), and
-// chains the finer level unfolds start rigid with their parent. Within the capacity only the
-// switched instances' state goes through the host, and of it only the chains both levels keep;
-// the instances between and behind them shift on the device (instance_moves.h).
+// chains the finer level unfolds start rigid with their parent (level_carry.h). Within the
+// capacity nothing is read back: the switched instances are built in staging on the device and
+// the instances between and behind them shift there (instance_moves.h).
 #include "instance_moves.h"
+#include "level_carry.h"
 #include "simulation_impl.h"
 
 #include <hmsm/levels.h>
@@ -26,6 +27,7 @@ using detail::carried_buffers;
 using detail::ElementMove;
 using detail::halves_of;
 using detail::InstanceGroup;
+using detail::LevelCarry;
 using detail::SceneData;
 
 std::string id_name(InstanceId id) { return "instance id " + std::to_string(uint64_t(id)); }
@@ -70,155 +72,26 @@ Status Simulation::Impl::append_lod_levels() {
 
 namespace {
 
-/// How a switched instance's chains take their state: per chain of its new model, the chain of
-/// its old model that keeps the same full-model chain, or -1 (unfolded: rest relative to its
-/// parent, T = Q_c).
-struct ChainMap {
-    std::vector<int32_t> old_chain;
-    std::vector<glm::dmat3> rest_rotation;  // Q_c per new chain, read where old_chain is -1
-    /// The old chains some new chain takes, as runs of neighbours relative to the instance's
-    /// first old chain: all a switch reads of the instance. Both levels list their chains in
-    /// the full model's order, so the runs ascend in old and in new chains alike.
-    std::vector<detail::ElementRange> kept;
-};
-
-/// The runs of ChainMap::kept from its old_chain.
-std::vector<detail::ElementRange> kept_runs(const std::vector<int32_t>& old_chain) {
-    std::vector<detail::ElementRange> runs;
-    for (int32_t c : old_chain) {
-        if (c < 0) continue;
-        if (!runs.empty() && runs.back().first + runs.back().count == uint64_t(c)) ++runs.back().count;
-        else runs.push_back({uint64_t(c), 1});
-    }
-    return runs;
-}
-
-/// Carries one switched instance's values of chain-scope buffer `id` (`per` scalars a chain)
-/// into `into` (its new chains, zero on entry): each chain takes the values of the old chain the
-/// map names, at old(c) for old chain c (asked in ascending order of c), or those of a chain at
-/// rest relative to its parent (state, force and load 0, T = Q; the pose is recomputed).
-template <class V, class Old>
-void carry_switched(V* into, const ChainMap& map, uint32_t per, BufferId id, Old&& old) {
-    for (size_t j = 0; j < map.old_chain.size(); ++j) {
-        V* chain = into + j * per;
-        if (map.old_chain[j] >= 0) {
-            std::copy_n(old(map.old_chain[j]), per, chain);
-        } else if (id == BufferId::chain_local) {  // T = Q Rz(0) Rx(0): rigid with the parent
-            for (int col = 0; col < 3; ++col)
-                for (int row = 0; row < 3; ++row) chain[4 * col + row] = V(map.rest_rotation[j][col][row]);
-        }
-    }
-}
-
 /// Carries the chain-scope state of `old` (live chains, halves back to back) into the layout of
 /// the new instance list: instance i moves whole from old_chain[i] to new_chain[i] unless it has
-/// a map (maps[i] non-null), then carry_switched.
+/// a carry (carries[i] non-null), then carry_switched.
 template <class V>
 std::vector<V> carry_layout(const std::vector<V>& old, uint32_t per, uint32_t halves, BufferId id,
                             const std::vector<uint64_t>& old_chain, const std::vector<uint64_t>& new_chain,
-                            const std::vector<const ChainMap*>& maps) {
+                            const std::vector<const LevelCarry*>& carries) {
     const uint64_t old_live = old_chain.back(), new_live = new_chain.back();
     std::vector<V> out(size_t(halves * new_live * per), V(0));
     for (uint32_t h = 0; h < halves; ++h) {
         const V* src = old.data() + h * old_live * per;
         V* dst = out.data() + h * new_live * per;
         for (size_t i = 0; i + 1 < old_chain.size(); ++i) {
-            if (maps[i])
-                carry_switched(dst + new_chain[i] * per, *maps[i], per, id,
+            if (carries[i])
+                carry_switched(dst + new_chain[i] * per, *carries[i], per, id,
                                [&](int32_t c) { return src + (old_chain[i] + uint64_t(c)) * per; });
             else std::copy_n(src + old_chain[i] * per, (old_chain[i + 1] - old_chain[i]) * per, dst + new_chain[i] * per);
         }
     }
     return out;
-}
-
-/// The new ranges of the switched instances in buffer `id` (`first` = new_chain), run by run
-/// and half by half.
-std::vector<detail::ElementRange> switched_ranges(BufferId id, uint64_t capacity, const std::vector<detail::IndexRun>& runs,
-                                                  const detail::ByInstance<uint64_t>& first) {
-    std::vector<detail::ElementRange> ranges;
-    ranges.reserve(runs.size() * halves_of(id));
-    for (const detail::IndexRun& run : runs)
-        for (uint32_t h = 0; h < halves_of(id); ++h)
-            ranges.push_back({h * capacity + first[run.first], first[run.end] - first[run.first]});
-    return ranges;
-}
-
-/// The old chains of the switched instances that their new levels keep (ChainMap::kept), in
-/// buffer `id`, run by run, half by half and instance by instance; neighbouring ranges merged.
-/// A coarser level reads only the chains it keeps, a finer one its old chains whole.
-std::vector<detail::ElementRange> kept_ranges(BufferId id, uint64_t capacity, const std::vector<detail::IndexRun>& runs,
-                                              const detail::ByInstance<uint64_t>& old_chain,
-                                              const detail::ByInstance<const ChainMap*>& maps) {
-    std::vector<detail::ElementRange> ranges;
-    for (const detail::IndexRun& run : runs)
-        for (uint32_t h = 0; h < halves_of(id); ++h)
-            for (uint32_t i = run.first; i < run.end; ++i)
-                for (const detail::ElementRange& r : maps[i]->kept) {
-                    const uint64_t first = h * capacity + old_chain[i] + r.first;
-                    if (!ranges.empty() && ranges.back().first + ranges.back().count == first) ranges.back().count += r.count;
-                    else ranges.push_back({first, r.count});
-                }
-    return ranges;
-}
-
-/// The switched instances' values of buffer `id` in their new layout, run by run and half by
-/// half back to back, from `kept`: what kept_ranges names, back to back.
-template <class V>
-void carry_runs(BufferId id, const std::vector<detail::IndexRun>& runs, const detail::ByInstance<uint64_t>& new_chain,
-                const detail::ByInstance<const ChainMap*>& maps, const std::vector<V>& kept, std::vector<V>& carried) {
-    const uint32_t per = detail::shape_scalars(detail::buffer_info(id).shape);
-    uint64_t new_elements = 0;
-    for (const detail::IndexRun& run : runs) new_elements += halves_of(id) * (new_chain[run.end] - new_chain[run.first]);
-    carried.assign(size_t(new_elements * per), V(0));
-    size_t from = 0, into = 0;
-    for (const detail::IndexRun& run : runs) {
-        const uint64_t new_first = new_chain[run.first];
-        for (uint32_t h = 0; h < halves_of(id); ++h) {
-            for (uint32_t i = run.first; i < run.end; ++i)
-                carry_switched(carried.data() + into + (new_chain[i] - new_first) * per, *maps[i], per, id,
-                               [&](int32_t) { return kept.data() + std::exchange(from, from + per); });
-            into += (new_chain[run.end] - new_first) * per;
-        }
-    }
-}
-
-/// Reads the old chains the switched instances keep, of every carried buffer, with one
-/// read_buffers and carries them into their new layout (carry_runs), buffer by buffer into
-/// `values`.
-template <class V>
-Status read_switched(const detail::Backend& backend, const std::vector<BufferId>& carried, uint64_t capacity,
-                     detail::Scalar scalar, const std::vector<detail::IndexRun>& runs,
-                     const detail::ByInstance<uint64_t>& old_chain, const detail::ByInstance<uint64_t>& new_chain,
-                     const detail::ByInstance<const ChainMap*>& maps, std::vector<std::vector<V>>& values) {
-    std::vector<std::vector<detail::ElementRange>> ranges(carried.size());
-    std::vector<std::vector<V>> kept(carried.size());
-    std::vector<detail::BufferRangesRead> reads;
-    for (size_t b = 0; b < carried.size(); ++b) {
-        ranges[b] = kept_ranges(carried[b], capacity, runs, old_chain, maps);
-        uint64_t elements = 0;
-        for (const detail::ElementRange& r : ranges[b]) elements += r.count;
-        kept[b].resize(size_t(elements * detail::shape_scalars(detail::buffer_info(carried[b]).shape)));
-        reads.push_back({carried[b], ranges[b], kept[b].data()});
-    }
-    HMSM_TRY(backend.read_buffers(reads, scalar));
-    for (size_t b = 0; b < carried.size(); ++b) carry_runs(carried[b], runs, new_chain, maps, kept[b], values[b]);
-    return {};
-}
-
-/// Writes what read_switched carried into the switched instances' new ranges, every buffer in
-/// one write_buffers.
-template <class V>
-Status write_switched(detail::Backend& backend, const std::vector<BufferId>& carried, uint64_t capacity,
-                      detail::Scalar scalar, const std::vector<detail::IndexRun>& runs,
-                      const detail::ByInstance<uint64_t>& new_chain, const std::vector<std::vector<V>>& values) {
-    std::vector<std::vector<detail::ElementRange>> ranges(carried.size());
-    std::vector<detail::BufferRangesWrite> writes;
-    for (size_t b = 0; b < carried.size(); ++b) {
-        ranges[b] = switched_ranges(carried[b], capacity, runs, new_chain);
-        writes.push_back({carried[b], ranges[b], values[b].data()});
-    }
-    return backend.write_buffers(writes, scalar);
 }
 
 /// Elements per instance of `instances` as running sums (`per` picks chains, nodes or
@@ -230,7 +103,52 @@ std::vector<uint64_t> running_offsets(const std::vector<Instance>& instances, Pe
     return offsets;
 }
 
+/// Where a switch within the capacity builds the switched instances' new chains on the device:
+/// above every live chain, old and new, each switched instance in its new layout, back to back,
+/// then a template of each new model that unfolds chains (every chain at rest, rest_chains),
+/// which the unfolded chains are copied from.
+struct Staging {
+    std::vector<uint64_t> instance_at;                        // per switch, its first staged chain
+    std::vector<std::pair<uint32_t, uint64_t>> template_at;   // (run model, its template's first chain)
+    uint64_t end = 0;                                         // the chains the staging needs below it
+};
+
+/// Writes the templates of `staging` in every carried buffer (both halves where a buffer has
+/// two), every buffer in one write_buffers, in the backend's scalar.
+template <class V>
+Status write_templates(detail::Backend& backend, const std::vector<BufferId>& carried, uint64_t capacity,
+                       detail::Scalar scalar, const Staging& staging,
+                       const std::vector<const LevelCarry*>& template_carries) {
+    std::vector<std::vector<detail::ElementRange>> ranges(carried.size());
+    std::vector<std::vector<V>> values(carried.size());
+    std::vector<detail::BufferRangesWrite> writes;
+    for (size_t b = 0; b < carried.size(); ++b) {
+        const uint32_t per = detail::shape_scalars(detail::buffer_info(carried[b]).shape);
+        for (uint32_t h = 0; h < halves_of(carried[b]); ++h)
+            for (size_t t = 0; t < staging.template_at.size(); ++t) {
+                const std::vector<V> rest = detail::rest_chains<V>(*template_carries[t], per, carried[b]);
+                ranges[b].push_back({h * capacity + staging.template_at[t].second, rest.size() / per});
+                values[b].insert(values[b].end(), rest.begin(), rest.end());
+            }
+        writes.push_back({carried[b], ranges[b], values[b].data()});
+    }
+    return backend.write_buffers(writes, scalar);
+}
+
 }  // namespace
+
+const LevelCarry& Simulation::Impl::level_carry(uint32_t from, uint32_t into) {
+    const uint64_t key = (uint64_t(from) << 32) | into;
+    auto found = level_carries_.find(key);
+    if (found != level_carries_.end()) return found->second;
+    std::vector<glm::dmat3> rest;
+    rest.reserve(hierarchies_[into].chains.size());
+    for (const Chain& chain : hierarchies_[into].chains) rest.push_back(chain.rest_rotation);
+    return level_carries_
+        .emplace(key, detail::make_level_carry(lod_models_[from].source_chain, lod_models_[into].source_chain,
+                                               std::move(rest)))
+        .first->second;
+}
 
 Status Simulation::Impl::switch_models(const std::vector<std::pair<uint32_t, uint32_t>>& models) {
     if (models.empty()) return {};
@@ -242,39 +160,42 @@ Status Simulation::Impl::switch_models(const std::vector<std::pair<uint32_t, uin
         totals += detail::counts_of(data_->models[model]) - detail::counts_of(data_->models[instances_[i].model]);
     }
     HMSM_TRY(check_size(instances_.size(), totals));
-    std::vector<ChainMap> chain_maps(models.size());
-    detail::ByInstance<const ChainMap*> maps;
-    for (size_t k = 0; k < models.size(); ++k) {
-        const auto [i, model] = models[k];
-        const LodModel& from = lod_models_[instances_[i].model];
-        const LodModel& into = lod_models_[model];
-        std::vector<int32_t> kept_at(size_t(from.source_chain.back()) + 1, -1);  // sources ascend
-        for (size_t c = 0; c < from.source_chain.size(); ++c) kept_at[size_t(from.source_chain[c])] = int32_t(c);
-        ChainMap& map = chain_maps[k];
-        for (size_t j = 0; j < into.source_chain.size(); ++j) {
-            const size_t full = size_t(into.source_chain[j]);
-            map.old_chain.push_back(full < kept_at.size() ? kept_at[full] : -1);
-            map.rest_rotation.emplace_back(hierarchies_[model].chains[j].rest_rotation);
-        }
-        map.kept = kept_runs(map.old_chain);
-        maps.add(i, &map);
-    }
+    std::vector<const LevelCarry*> carries(models.size());
+    for (size_t k = 0; k < models.size(); ++k) carries[k] = &level_carry(instances_[models[k].first].model, models[k].second);
     // Every instance keeps its place, origin and yaw: only the groups and totals change.
 
     // The state as the backend stores it, so that everything carried is bit for bit.
     const detail::Scalar scalar = backend_->kind() == BackendKind::cpu64 ? detail::Scalar::f64 : detail::Scalar::f32;
     const std::vector<BufferId> carried = carried_buffers(data_->coupled());
-    std::vector<std::vector<double>> values64(carried.size());
-    std::vector<std::vector<float>> values32(carried.size());
     ahead_schedule_.live_change();  // the state moves, the angles integrated ahead with it
+    Staging staging;
+    std::vector<const LevelCarry*> template_carries;  // per template, a carry into its model
+    {
+        uint64_t at = std::max(data_->total_chains, totals.chains);
+        for (size_t k = 0; k < models.size(); ++k) {
+            staging.instance_at.push_back(at);
+            at += data_->models[models[k].second].chain_count;
+        }
+        for (size_t k = 0; k < models.size(); ++k) {
+            const uint32_t model = models[k].second;
+            if (carries[k]->unfolded.empty() ||
+                std::any_of(staging.template_at.begin(), staging.template_at.end(),
+                            [&](const auto& t) { return t.first == model; }))
+                continue;
+            staging.template_at.emplace_back(model, at);
+            template_carries.push_back(carries[k]);
+            at += data_->models[model].chain_count;
+        }
+        staging.end = at;
+    }
     bool in_place = streaming_paths_ && backend_->capabilities().reshapes_in_place;
-    if (in_place && (totals.chains > data_->chain_capacity || totals.nodes > data_->node_capacity ||
+    if (in_place && (staging.end > data_->chain_capacity || totals.nodes > data_->node_capacity ||
                      totals.vertices > data_->vertex_capacity)) {
         // Past the capacity: the buffers grow on the device where the backend can, and the
         // switch goes on in place.
-        Result<bool> grown = grow_on_device(totals, instances_.size());
+        Result<bool> grown = grow_on_device({staging.end, totals.nodes, totals.vertices}, instances_.size());
         if (!grown) return grown.status();
-        in_place = *grown;
+        in_place = *grown && staging.end <= data_->chain_capacity;  // not where the growth met its limit
     }
     if (in_place) {
         // The first elements, old and new, of the switched instances and those after them.
@@ -298,29 +219,41 @@ Status Simulation::Impl::switch_models(const std::vector<std::pair<uint32_t, uin
             add_offsets(i + 1);
         }
         add_offsets(count);
-        // Only the switched instances' state goes through the host; the instances between and
-        // behind them shift on the device, their nodes and vertices with them.
+        // Nothing goes through the host but the templates. In each carried buffer, in order: the
+        // switched instances' new chains are built in the staging (kept chains from their old
+        // places, unfolded ones from the template), the instances between and behind them shift
+        // (of R and O only the pose half), and the staged instances go to their new places.
+        std::vector<ElementMove> stage, unstage;
+        for (size_t k = 0; k < models.size(); ++k) {
+            const uint64_t from = old_chain[models[k].first], into = staging.instance_at[k];
+            for (const ElementMove& m : carries[k]->kept) stage.push_back({from + m.src, into + m.dst, m.count});
+            if (carries[k]->unfolded.empty()) continue;
+            const uint64_t rest = std::find_if(staging.template_at.begin(), staging.template_at.end(),
+                                               [&](const auto& t) { return t.first == models[k].second; })->second;
+            for (const detail::ElementRange& r : carries[k]->unfolded) stage.push_back({rest + r.first, into + r.first, r.count});
+        }
         const std::vector<detail::IndexRun> runs = detail::index_runs(switched);
-        const uint64_t capacity = data_->chain_capacity;
-        HMSM_TRY(scalar == detail::Scalar::f64
-                     ? read_switched(*backend_, carried, capacity, scalar, runs, old_chain, new_chain, maps, values64)
-                     : read_switched(*backend_, carried, capacity, scalar, runs, old_chain, new_chain, maps, values32));
-        // Every buffer's shifts in one move_buffers; of R and O only the pose half.
-        const std::vector<ElementMove> chain_moves = detail::shift_moves(old_chain, new_chain, count, switched);
+        for (size_t k = 0; const detail::IndexRun& run : runs) {
+            unstage.push_back({staging.instance_at[k], new_chain[run.first], new_chain[run.end] - new_chain[run.first]});
+            k += run.end - run.first;
+        }
+        const std::vector<ElementMove> shift = detail::shift_moves(old_chain, new_chain, count, switched);
         const uint32_t pose_half = HMSM_FINAL_HALF(data_->jump_rounds);
+        const uint64_t capacity = data_->chain_capacity;
         std::vector<std::vector<ElementMove>> in_buffers;
         in_buffers.reserve(carried.size());
         std::vector<detail::BufferMoves> moves;
         for (BufferId id : carried) {
             std::vector<ElementMove>& in_buffer = in_buffers.emplace_back();
-            for (uint32_t h = 0; h < halves_of(id); ++h)
-                if (detail::half_moves(id, h, pose_half))
-                    for (ElementMove m : chain_moves) {
-                        m.src += h * capacity;
-                        m.dst += h * capacity;
-                        in_buffer.push_back(m);
-                    }
-            if (!in_buffer.empty()) moves.push_back({id, in_buffer});
+            for (const std::vector<ElementMove>* part : {&std::as_const(stage), &shift, &std::as_const(unstage)})
+                for (uint32_t h = 0; h < halves_of(id); ++h)
+                    if (part != &shift || detail::half_moves(id, h, pose_half))
+                        for (ElementMove m : *part) {
+                            m.src += h * capacity;
+                            m.dst += h * capacity;
+                            in_buffer.push_back(m);
+                        }
+            moves.push_back({id, in_buffer});
         }
         const std::vector<ElementMove> node_moves = detail::shift_moves(old_node, new_node, count, switched);
         const std::vector<ElementMove> vertex_moves = detail::shift_moves(old_vertex, new_vertex, count, switched);
@@ -329,10 +262,11 @@ Status Simulation::Impl::switch_models(const std::vector<std::pair<uint32_t, uin
             const std::vector<ElementMove>& in_buffer = node_scope ? node_moves : vertex_moves;
             if (data_->element_count(id) > 0 && !in_buffer.empty()) moves.push_back({id, in_buffer});
         }
+        if (!staging.template_at.empty())
+            HMSM_TRY(scalar == detail::Scalar::f64
+                         ? write_templates<double>(*backend_, carried, capacity, scalar, staging, template_carries)
+                         : write_templates<float>(*backend_, carried, capacity, scalar, staging, template_carries));
         HMSM_TRY(backend_->move_buffers(moves));
-        HMSM_TRY(scalar == detail::Scalar::f64
-                     ? write_switched(*backend_, carried, capacity, scalar, runs, new_chain, values64)
-                     : write_switched(*backend_, carried, capacity, scalar, runs, new_chain, values32));
         for (auto [i, model] : models) {
             offsets.add(i, detail::counts_of(data_->models[model]) - detail::counts_of(data_->models[instances_[i].model]));
             instances_[i].model = model;
@@ -345,11 +279,13 @@ Status Simulation::Impl::switch_models(const std::vector<std::pair<uint32_t, uin
         // it cannot move state): every instance's state is read, laid out anew and uploaded
         // with room to grow.
         std::vector<Instance> next = instances_;
-        std::vector<const ChainMap*> all_maps(instances_.size(), nullptr);
+        std::vector<const LevelCarry*> all_carries(instances_.size(), nullptr);
+        std::vector<std::vector<double>> values64(carried.size());
+        std::vector<std::vector<float>> values32(carried.size());
         for (size_t k = 0; k < models.size(); ++k) {
             next[models[k].first].model = models[k].second;
             next[models[k].first].level = lod_models_[models[k].second].level;
-            all_maps[models[k].first] = &chain_maps[k];
+            all_carries[models[k].first] = carries[k];
         }
         const auto chains_of = [&](uint32_t model) { return data_->models[model].chain_count; };
         const std::vector<uint64_t> old_chain = running_offsets(instances_, chains_of);
@@ -366,14 +302,17 @@ Status Simulation::Impl::switch_models(const std::vector<std::pair<uint32_t, uin
                 for (uint32_t h = 0; h < halves; ++h)
                     HMSM_TRY(backend_->read(carried[b], h * data_->chain_capacity, old_live,
                                             values.data() + h * old_live * per, scalar));
-                values = carry_layout(values, per, halves, carried[b], old_chain, new_chain, all_maps);
+                values = carry_layout(values, per, halves, carried[b], old_chain, new_chain, all_carries);
                 return {};
             };
             HMSM_TRY(scalar == detail::Scalar::f64 ? read_all(values64[b]) : read_all(values32[b]));
         }
         detail::SceneData whole = *data_;
         whole.take_instance_layout(std::move(*laid));
-        whole.chain_capacity = std::max(grown(data_->chain_capacity, whole.total_chains), reserved_.chains);
+        // With room for the next switch's staging (a switch in place builds the switched
+        // instances above the live chains).
+        whole.chain_capacity = std::max(grown(data_->chain_capacity, std::max(whole.total_chains, staging.end)),
+                                        reserved_.chains);
         whole.node_capacity = std::max(grown(data_->node_capacity, whole.total_nodes), reserved_.nodes);
         whole.vertex_capacity = std::max(grown(data_->vertex_capacity, whole.total_vertices), reserved_.vertices);
         HMSM_TRY(backend_->upload(whole));

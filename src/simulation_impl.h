@@ -7,6 +7,7 @@
 #include "backend.h"
 #include "cpu/thread_pool.h"
 #include "instance_offsets.h"
+#include "level_carry.h"
 #include "listed_groups.h"
 #include "lod_tracker.h"
 #include "live_wind.h"
@@ -148,6 +149,9 @@ struct __attribute__((visibility("hidden"))) Simulation::Impl {
     /// Runs every instance of `models` (current index -> new model) on its new model, keeping
     /// its index and carrying the state of the chains both models keep (lod_switch.cpp).
     Status switch_models(const std::vector<std::pair<uint32_t, uint32_t>>& models);
+    /// How a switch from run model `from` to `into` carries the chains (made on first use).
+    const detail::LevelCarry& level_carry(uint32_t from, uint32_t into);
+    std::unordered_map<uint64_t, detail::LevelCarry> level_carries_;  // by from << 32 | into
 
     /// A model the simulation runs: a scene model (level 0, as Scene::joint_budgets runs it) or
     /// one of its levels of detail. source_chain maps its chains to the full model's.

@@ -1,7 +1,8 @@
 // What a level-of-detail switch costs (docs/driving.md, levels of detail): within the capacity
-// only the switched instances' state goes through the host, the others shift on the device in
-// an order that overwrites no source before it is read, and the result is bit for bit that of
-// laying out every instance anew.
+// nothing is read back and only a template of each level that unfolds chains is written; the
+// switched instances are built in staging on the device, the others shift in an order that
+// overwrites no source before it is read, and the result is bit for bit that of laying out
+// every instance anew.
 #include "forwarding_backend.h"
 #include "instance_moves.h"
 #include "simulation_access.h"
@@ -63,7 +64,7 @@ TEST(ShiftMoves, SequentialMovesCarryEveryInstanceThatKeepsItsSize) {
     EXPECT_GT(down, 0u);
 }
 
-/// A backend that logs the reads and moves made while `recording` (single and batched), and
+/// A backend that logs the reads, writes and moves made while `recording` (single and batched), and
 /// optionally refuses to reshape in place (every switch then lays out and uploads the scene anew).
 class Watched final : public test::ForwardingBackend {
 public:
@@ -86,6 +87,19 @@ public:
         for (const detail::BufferRangesRead& r : buffers) log_reads(r.id, r.ranges);
         return ForwardingBackend::read_buffers(buffers, as);
     }
+    Status write(BufferId id, uint64_t first, uint64_t count, const void* src, detail::Scalar as) override {
+        if (recording) writes.push_back({id, first, count});
+        return ForwardingBackend::write(id, first, count, src, as);
+    }
+    Status write_ranges(BufferId id, std::span<const detail::ElementRange> ranges, const void* src,
+                        detail::Scalar as) override {
+        log_writes(id, ranges);
+        return ForwardingBackend::write_ranges(id, ranges, src, as);
+    }
+    Status write_buffers(std::span<const detail::BufferRangesWrite> buffers, detail::Scalar as) override {
+        for (const detail::BufferRangesWrite& w : buffers) log_writes(w.id, w.ranges);
+        return ForwardingBackend::write_buffers(buffers, as);
+    }
     Status move_elements(BufferId id, std::span<const ElementMove> moves) override {
         if (!in_place_) return {ErrorCode::internal, "this backend moves nothing"};
         log_moves(id, moves);
@@ -105,12 +119,17 @@ public:
 
     bool recording = false;
     mutable std::vector<Range> reads;
+    std::vector<Range> writes;
     std::vector<std::pair<BufferId, ElementMove>> moved;
 
 private:
     void log_reads(BufferId id, std::span<const detail::ElementRange> ranges) const {
         if (recording)
             for (const detail::ElementRange& r : ranges) reads.push_back({id, r.first, r.count});
+    }
+    void log_writes(BufferId id, std::span<const detail::ElementRange> ranges) {
+        if (recording)
+            for (const detail::ElementRange& r : ranges) writes.push_back({id, r.first, r.count});
     }
     void log_moves(BufferId id, std::span<const ElementMove> moves) {
         if (recording)
@@ -243,48 +262,75 @@ TEST_P(LodSwitchCost, CoupledSwitchesInOneCallMatchOneAtATimeAndLayingOutAnew) {
     expect_many_switches_match(GetParam(), Dynamics::coupled);
 }
 
-// A switch reads back the switched instances' own chains, not the scene: every read lies in
-// the old range of a switched instance (in either half of the ping-pong buffers), and only the
-// chains both levels share are read (a coarser level's, levels being nested).
-TEST_P(LodSwitchCost, ReadsOnlyTheSwitchedInstances) {
+// A switch reads nothing back. The switched instances' kept chains move on the device from
+// their old ranges (only the chains both levels share, once per half of each carried buffer);
+// the chains a finer level unfolds are copied from a template of that level at rest, the only
+// state written: once per level and half, above every live chain. A switch to coarser levels
+// writes no state.
+TEST_P(LodSwitchCost, ReadsNothingAndWritesOnlyTheTemplatesOfUnfoldingLevels) {
     std::unique_ptr<Simulation> sim;
     std::string skip;
     Watched* watched = create_watched(GetParam(), true, sim, skip);
     if (!skip.empty()) GTEST_SKIP() << skip;
     ASSERT_TRUE(watched);
     ASSERT_TRUE(sim->step(20).ok());
-    std::vector<uint64_t> first_chain{0};
-    for (const Instance& inst : sim->instances())
-        first_chain.push_back(first_chain.back() + sim->hierarchy(inst.model).chains.size());
-    const uint64_t capacity = detail::scene_data_of(*sim).chain_capacity;
-    watched->recording = true;
-    const InstanceId ids[] = {InstanceId(1), InstanceId(2), InstanceId(9)};
-    const uint32_t levels[] = {2, 3, 1};
-    ASSERT_TRUE(sim->set_instance_lods(ids, levels).ok());
-    watched->recording = false;
-    EXPECT_EQ(detail::full_uploads_of(*sim), 0u);
-    ASSERT_FALSE(watched->reads.empty());
-    uint64_t read_chains = 0;
-    for (const Watched::Range& r : watched->reads) {
-        const detail::Scope scope = detail::buffer_info(r.id).scope;
-        EXPECT_TRUE(scope == detail::Scope::chain || scope == detail::Scope::chain_halves)
-            << detail::buffer_info(r.id).name;
-        const uint64_t first = r.first >= capacity ? r.first - capacity : r.first;
-        const bool inside = (first >= first_chain[1] && first + r.count <= first_chain[3]) ||
-                            (first >= first_chain[9] && first + r.count <= first_chain[10]);
-        EXPECT_TRUE(inside) << detail::buffer_info(r.id).name << " [" << first << ", " << first + r.count << ")";
-        read_chains += r.count;
-    }
     uint32_t halves = 0;  // of every carried buffer
     for (BufferId id : detail::carried_buffers(false)) halves += detail::halves_of(id);
-    uint64_t shared_chains = 0, switched_chains = 0;
-    for (uint32_t i : {1u, 2u, 9u}) {
-        const uint64_t now = sim->hierarchy(sim->instances()[i].model).chains.size();
-        shared_chains += std::min(now, first_chain[i + 1] - first_chain[i]);
-        switched_chains += first_chain[i + 1] - first_chain[i];
-    }
-    EXPECT_LT(shared_chains, switched_chains) << "the test switches some instance to a coarser level";
-    EXPECT_EQ(read_chains, shared_chains * halves) << "each half of each carried buffer once";
+    auto switch_and_check = [&](std::span<const InstanceId> ids, std::span<const uint32_t> levels, const char* what) {
+        std::vector<uint64_t> first_chain{0};
+        for (const Instance& inst : sim->instances())
+            first_chain.push_back(first_chain.back() + sim->hierarchy(inst.model).chains.size());
+        std::vector<uint64_t> old_chains;
+        for (InstanceId id : ids) old_chains.push_back(sim->hierarchy(sim->instances()[uint64_t(id)].model).chains.size());
+        watched->reads.clear();
+        watched->writes.clear();
+        watched->moved.clear();
+        watched->recording = true;
+        ASSERT_TRUE(sim->set_instance_lods(ids, levels).ok()) << what;
+        watched->recording = false;
+        EXPECT_EQ(detail::full_uploads_of(*sim), 0u) << what;
+        EXPECT_TRUE(watched->reads.empty()) << what;
+        const uint64_t capacity = detail::scene_data_of(*sim).chain_capacity;  // grown for the staging
+        // The templates: one per level that unfolds chains (new levels finer than the old).
+        std::set<uint32_t> unfolding;
+        uint64_t shared_chains = 0;
+        for (size_t k = 0; k < ids.size(); ++k) {
+            const uint32_t model = sim->instances()[uint64_t(ids[k])].model;
+            const uint64_t now = sim->hierarchy(model).chains.size();
+            if (now > old_chains[k]) unfolding.insert(model);
+            shared_chains += std::min(now, old_chains[k]);
+        }
+        uint64_t template_chains = 0;
+        for (uint32_t model : unfolding) template_chains += sim->hierarchy(model).chains.size();
+        const uint64_t live = std::max<uint64_t>(first_chain.back(), detail::scene_data_of(*sim).total_chains);
+        uint64_t written = 0;  // chain state (the wind header and instance table are rewritten too)
+        for (const Watched::Range& r : watched->writes) {
+            const detail::Scope scope = detail::buffer_info(r.id).scope;
+            EXPECT_TRUE(scope != detail::Scope::node && scope != detail::Scope::vertex)
+                << what << ": " << detail::buffer_info(r.id).name;
+            if (scope != detail::Scope::chain && scope != detail::Scope::chain_halves) continue;
+            EXPECT_GE(r.first % capacity, live) << what << ": " << detail::buffer_info(r.id).name;
+            written += r.count;
+        }
+        EXPECT_EQ(written, template_chains * halves) << what;
+        // The kept chains: moves out of the switched instances' old ranges.
+        uint64_t kept = 0;
+        for (const auto& [id, m] : watched->moved) {
+            if (detail::buffer_info(id).scope == detail::Scope::node) continue;
+            const uint64_t src = m.src % capacity;
+            for (InstanceId i : ids)
+                if (src >= first_chain[uint64_t(i)] && src < first_chain[uint64_t(i) + 1]) {
+                    EXPECT_LE(src + m.count, first_chain[uint64_t(i) + 1]) << what;
+                    kept += m.count;
+                }
+        }
+        EXPECT_EQ(kept, shared_chains * halves) << what << ": each half of each carried buffer once";
+    };
+    const InstanceId ids[] = {InstanceId(1), InstanceId(2), InstanceId(9)};
+    const uint32_t coarser[] = {2, 3, 1};
+    switch_and_check(ids, coarser, "to coarser levels");
+    const uint32_t finer[] = {0, 1, 0};
+    switch_and_check(ids, finer, "to finer levels");
     EXPECT_FALSE(watched->moved.empty()) << "the instances behind the switched ones shift on the device";
 }
 
@@ -300,18 +346,22 @@ TEST_P(LodSwitchCost, ShiftsMoveOnlyThePoseHalfOfRotationsAndOrigins) {
     ASSERT_TRUE(sim->step(20).ok());
     const detail::SceneData& d = detail::scene_data_of(*sim);
     ASSERT_GE(d.jump_rounds, 2u) << "the scene's rounds use both halves";
-    const uint64_t capacity = d.chain_capacity;
-    const uint64_t pose_first = uint64_t(HMSM_FINAL_HALF(d.jump_rounds)) * capacity;
+    const uint64_t live_before = d.total_chains;
     watched->recording = true;
     const InstanceId ids[] = {InstanceId(1), InstanceId(6)};
     const uint32_t levels[] = {2, 1};
     ASSERT_TRUE(sim->set_instance_lods(ids, levels).ok());
     watched->recording = false;
+    const uint64_t capacity = d.chain_capacity;  // grown for the staging
+    const uint64_t pose_first = uint64_t(HMSM_FINAL_HALF(d.jump_rounds)) * capacity;
     EXPECT_EQ(detail::full_uploads_of(*sim), 0u);
-    std::map<BufferId, std::set<uint64_t>> halves;  // per buffer, the halves its moves touch
+    // The shifts: moves within the live chains (staging lies above them, and the switched
+    // instances go there and back in both halves).
+    const uint64_t live = std::max(live_before, d.total_chains);
+    std::map<BufferId, std::set<uint64_t>> halves;  // per buffer, the halves its shifts touch
     for (const auto& [id, m] : watched->moved) {
         if (detail::halves_of(id) != 2) continue;
-        halves[id].insert(m.src / capacity);
+        if (m.src % capacity < live && m.dst % capacity < live) halves[id].insert(m.src / capacity);
         EXPECT_EQ(m.src / capacity, m.dst / capacity) << detail::buffer_info(id).name;
     }
     for (BufferId id : {BufferId::chain_rotation, BufferId::chain_origin}) {
