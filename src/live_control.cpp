@@ -107,23 +107,27 @@ Status Simulation::Impl::apply_pending() {
         dirty_instances_.clear();
     }
     if (!dirty_instances_.empty()) {
-        // One write per run of changed instances, the unchanged ones of a short gap between two
-        // rewritten as they are: a write is a transfer of its own, and a tenth of a forest
-        // paused for culling would take one each; a long gap is not rewritten, so a change
-        // costs in proportion to the instances it touched.
+        // One range per run of changed instances, the unchanged ones of a short gap between two
+        // rewritten as they are, all in one write_ranges (a device backend's one transfer); a
+        // long gap is not rewritten, so a change costs in proportion to the instances it
+        // touched.
         std::sort(dirty_instances_.begin(), dirty_instances_.end());
+        std::vector<detail::ElementRange> runs;
         for (size_t k = 0; k < dirty_instances_.size();) {
             const uint32_t begin = dirty_instances_[k];
             uint32_t last = begin;
             while (++k < dirty_instances_.size() && dirty_instances_[k] - last <= kWindGapRewritten)
                 last = dirty_instances_[k];
-            const uint32_t count = last - begin + 1;
-            wind_scratch_.resize(size_t(count) * detail::kInstanceWindScalars);
-            for (uint32_t i = 0; i < count; ++i)
-                detail::fill_instance_wind(config_.wind, modes_, instances_[begin + i], fade_word(begin + i),
-                                           &wind_scratch_[size_t(i) * detail::kInstanceWindScalars]);
-            HMSM_TRY(backend_->write(BufferId::instance_wind, begin, count, wind_scratch_.data(), detail::Scalar::f64));
+            runs.push_back({begin, uint64_t(last - begin) + 1});
         }
+        wind_scratch_.clear();
+        for (const detail::ElementRange& run : runs)
+            for (uint64_t i = run.first; i < run.first + run.count; ++i) {
+                wind_scratch_.resize(wind_scratch_.size() + detail::kInstanceWindScalars);
+                detail::fill_instance_wind(config_.wind, modes_, instances_[i], fade_word(uint32_t(i)),
+                                           &wind_scratch_[wind_scratch_.size() - detail::kInstanceWindScalars]);
+            }
+        HMSM_TRY(backend_->write_ranges(BufferId::instance_wind, runs, wind_scratch_.data(), detail::Scalar::f64));
         dirty_instances_.clear();
     }
     return {};
