@@ -103,11 +103,16 @@ std::vector<uint64_t> running_offsets(const std::vector<Instance>& instances, Pe
     return offsets;
 }
 
-/// Where a switch within the capacity builds the switched instances' new chains on the device:
-/// above every live chain, old and new, each switched instance in its new layout, back to back,
+/// Where a switch within the capacity builds the switched instances' new chains on the device,
+/// above every live chain, old and new: first a copy of the switched instances' old chains, a
+/// run of neighbours as one range, then each switched instance in its new layout, back to back,
 /// then a template of each new model that unfolds chains (every chain at rest, rest_chains),
-/// which the unfolded chains are copied from.
+/// which the unfolded chains are copied from. The fine-grained copies (a chain or a few each)
+/// stay within the staging; the live chains are read and written only in whole instances and
+/// runs of them (on an H100's Vulkan driver, shader copies of single chains out of and into the
+/// live chains left the standing step slower afterwards: docs/benchmarks/nvidia-h100.md).
 struct Staging {
+    std::vector<uint64_t> old_at;                             // per switch, its old chains' copy
     std::vector<uint64_t> instance_at;                        // per switch, its first staged chain
     std::vector<std::pair<uint32_t, uint64_t>> template_at;   // (run model, its template's first chain)
     uint64_t end = 0;                                         // the chains the staging needs below it
@@ -173,6 +178,10 @@ Status Simulation::Impl::switch_models(const std::vector<std::pair<uint32_t, uin
     {
         uint64_t at = std::max(data_->total_chains, totals.chains);
         for (size_t k = 0; k < models.size(); ++k) {
+            staging.old_at.push_back(at);
+            at += data_->models[instances_[models[k].first].model].chain_count;
+        }
+        for (size_t k = 0; k < models.size(); ++k) {
             staging.instance_at.push_back(at);
             at += data_->models[models[k].second].chain_count;
         }
@@ -220,19 +229,24 @@ Status Simulation::Impl::switch_models(const std::vector<std::pair<uint32_t, uin
         }
         add_offsets(count);
         // Nothing goes through the host but the templates. In each carried buffer, in order: the
-        // switched instances' new chains are built in the staging (kept chains from their old
-        // places, unfolded ones from the template), the instances between and behind them shift
-        // (of R and O only the pose half), and the staged instances go to their new places.
+        // switched instances' old chains are copied into the staging, their new chains built
+        // there (kept chains from that copy, unfolded ones from the template), the instances
+        // between and behind them shift (of R and O only the pose half), and the staged
+        // instances go to their new places.
         std::vector<ElementMove> stage, unstage;
+        const std::vector<detail::IndexRun> runs = detail::index_runs(switched);
+        for (size_t k = 0; const detail::IndexRun& run : runs) {
+            stage.push_back({old_chain[run.first], staging.old_at[k], old_chain[run.end] - old_chain[run.first]});
+            k += run.end - run.first;
+        }
         for (size_t k = 0; k < models.size(); ++k) {
-            const uint64_t from = old_chain[models[k].first], into = staging.instance_at[k];
+            const uint64_t from = staging.old_at[k], into = staging.instance_at[k];
             for (const ElementMove& m : carries[k]->kept) stage.push_back({from + m.src, into + m.dst, m.count});
             if (carries[k]->unfolded.empty()) continue;
             const uint64_t rest = std::find_if(staging.template_at.begin(), staging.template_at.end(),
                                                [&](const auto& t) { return t.first == models[k].second; })->second;
             for (const detail::ElementRange& r : carries[k]->unfolded) stage.push_back({rest + r.first, into + r.first, r.count});
         }
-        const std::vector<detail::IndexRun> runs = detail::index_runs(switched);
         for (size_t k = 0; const detail::IndexRun& run : runs) {
             unstage.push_back({staging.instance_at[k], new_chain[run.first], new_chain[run.end] - new_chain[run.first]});
             k += run.end - run.first;
