@@ -131,6 +131,18 @@ Status VulkanBackend::move_buffers(std::span<const BufferMoves> moves) {
     HMSM_TRY(check_device_lost());
     if (!capabilities().reshapes_in_place)
         return {ErrorCode::unsupported, "vulkan: a scene split into windows cannot move state in place"};
+    std::vector<BufferId> ids;
+    for (const BufferMoves& m : moves) ids.push_back(m.id);
+    if (copies_by_shader(ids)) {
+        // Every move checked first (nothing moves if one is out of range); shader_moves plans
+        // the batches and sizes the scratch once.
+        for (const BufferMoves& m : moves)
+            HMSM_TRY(largest_move_bytes(m.moves, device_element_bytes(m.id), [&](uint64_t first, uint64_t count) {
+                         return check_range(m.id, first, count);
+                     }).status());
+        HMSM_TRY(submit_held_back());
+        return shader_moves(moves);
+    }
     uint64_t staged = 0;
     for (const BufferMoves& m : moves) {
         auto bytes = move_scratch_bytes(m.id, m.moves);
@@ -139,9 +151,6 @@ Status VulkanBackend::move_buffers(std::span<const BufferMoves> moves) {
     }
     HMSM_TRY(ensure_move_scratch(staged));
     HMSM_TRY(submit_held_back());
-    std::vector<BufferId> ids;
-    for (const BufferMoves& m : moves) ids.push_back(m.id);
-    if (copies_by_shader(ids)) return shader_moves(moves);
     // One buffer's scatter and the next one's gather share the scratch: record_moves ends each
     // copy with a barrier against all earlier transfer writes and reads.
     HMSM_TRY(transfer_->submit([&](VkCommandBuffer cmd) {
