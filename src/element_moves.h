@@ -119,9 +119,9 @@ private:
         bool continues(uint64_t first, uint64_t end) {
             const auto& [back_first, back_end] = intervals.back();
             if (intervals.size() == 1) {
-                if (back_end <= first) return !(descending = false);
-                if (end <= back_first) return descending = true;
-                return false;
+                if (back_end > first && end > back_first) return false;
+                descending = end <= back_first;
+                return true;
             }
             return descending ? end <= back_first : back_end <= first;
         }
