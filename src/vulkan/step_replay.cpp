@@ -37,17 +37,16 @@ StepReplay::~StepReplay() {
     if (pool_) device_.vk().vkDestroyCommandPool(device_.handle(), pool_, nullptr);
 }
 
-bool StepReplay::holds(const Secondary& s, const RecordingPlan& plan, std::span<const RunStep> steps,
-                       VkDescriptorSet table_set) {
-    if (s.plan_generation != plan.generation() || s.table_set != table_set || s.wind_slots.size() != steps.size())
+bool StepReplay::holds(const Secondary& s, const Contents& c) {
+    if (s.plan_generation != c.plan.generation() || s.table_set != c.table_set ||
+        s.wind_slots.size() != c.steps.size() || s.wind.src != c.wind.src || s.wind.bytes != c.wind.bytes)
         return false;
-    for (size_t k = 0; k < steps.size(); ++k)
-        if (s.wind_slots[k] != steps[k].wind_slot) return false;
+    for (size_t k = 0; k < c.steps.size(); ++k)
+        if (s.wind_slots[k] != c.steps[k].wind_slot) return false;
     return true;
 }
 
-Status StepReplay::record_secondary(Secondary& s, VkPipelineLayout layout, const RecordingPlan& plan,
-                                    std::span<const RunStep> steps, VkDescriptorSet table_set) {
+Status StepReplay::record_secondary(Secondary& s, VkPipelineLayout layout, const Contents& c) {
     const VolkDeviceTable& vk = device_.vk();
     s.plan_generation = 0;  // holds nothing until it is recorded whole
     if (!s.command_buffer) {
@@ -62,22 +61,26 @@ Status StepReplay::record_secondary(Secondary& s, VkPipelineLayout layout, const
     VkCommandBufferBeginInfo begin{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
     begin.pInheritanceInfo = &inheritance;
     HMSM_VK_TRY(vk.vkBeginCommandBuffer(s.command_buffer, &begin));
-    record_steps(device_, layout, plan, s.command_buffer, steps, VK_NULL_HANDLE, table_set);
+    if (c.wind.bytes) FrameRing::record_wind_copy(device_, s.command_buffer, c.wind, c.wind_table);
+    record_steps(device_, layout, c.plan, s.command_buffer, c.steps, VK_NULL_HANDLE, c.table_set);
     HMSM_VK_TRY(vk.vkEndCommandBuffer(s.command_buffer));
-    s.plan_generation = plan.generation();
-    s.table_set = table_set;
-    s.wind_slots.resize(steps.size());
-    for (size_t k = 0; k < steps.size(); ++k) s.wind_slots[k] = steps[k].wind_slot;
+    s.plan_generation = c.plan.generation();
+    s.table_set = c.table_set;
+    s.wind = c.wind;
+    s.wind_slots.resize(c.steps.size());
+    for (size_t k = 0; k < c.steps.size(); ++k) s.wind_slots[k] = c.steps[k].wind_slot;
     ++secondaries_recorded_;
     return {};
 }
 
 Status StepReplay::record(VkCommandBuffer primary, uint32_t frame, uint64_t recording, VkPipelineLayout layout,
-                          const RecordingPlan& plan, std::span<const RunStep> steps, VkDescriptorSet table_set) {
+                          const RecordingPlan& plan, std::span<const RunStep> steps, VkDescriptorSet table_set,
+                          const FrameRing::WindCopy* wind, VkBuffer wind_table) {
+    const Contents contents{plan, steps, table_set, wind ? *wind : FrameRing::WindCopy{}, wind_table};
     std::vector<Secondary>& slot = frames_[frame];
     Secondary* chosen = nullptr;
     for (Secondary& s : slot)
-        if (s.used_in != recording && holds(s, plan, steps, table_set)) {
+        if (s.used_in != recording && holds(s, contents)) {
             chosen = &s;
             break;
         }
@@ -97,10 +100,11 @@ Status StepReplay::record(VkCommandBuffer primary, uint32_t frame, uint64_t reco
                     break;
                 }
         if (!chosen) {
+            if (wind) FrameRing::record_wind_copy(device_, primary, *wind, wind_table);
             record_steps(device_, layout, plan, primary, steps, VK_NULL_HANDLE, table_set);
             return {};
         }
-        HMSM_TRY(record_secondary(*chosen, layout, plan, steps, table_set));
+        HMSM_TRY(record_secondary(*chosen, layout, contents));
     }
     chosen->used_in = recording;
     device_.vk().vkCmdExecuteCommands(primary, 1, &chosen->command_buffer);

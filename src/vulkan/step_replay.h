@@ -3,9 +3,12 @@
 // set, every part's barrier, pipeline, descriptor set, push constants and dispatch) depend only
 // on the recording plan, the run table's set and the steps' wind-table slots, so they are
 // recorded once into a secondary command buffer and each later frame executes it with one
-// vkCmdExecuteCommands. What changes from frame to frame (the wind table's step slots with the
-// load half and the fades' clock, force fields, instance settings) reaches the device through
-// the ring's copies, which the engine's primary records ahead of the replay.
+// vkCmdExecuteCommands. What changes from frame to frame reaches the device through the ring
+// (frame_ring.h): the wind table (the step slots with the load half and the fades' clock, the
+// header with the force fields) by a copy from the slot's copy of the table that the secondary
+// itself begins with, so a steady frame records one command into the engine's primary;
+// instance settings and other writes by the ring's copies, which the primary records ahead of
+// the replay.
 //
 // Each frame of the ring (frame_ring.h) has secondaries of its own: under the ring rule the
 // primary that executed a frame slot's secondaries has completed when the ring comes round to
@@ -20,6 +23,7 @@
 #pragma once
 
 #include "device.h"
+#include "frame_ring.h"
 #include "recorder.h"
 
 #include "../backend.h"
@@ -49,12 +53,14 @@ public:
     ~StepReplay();
 
     /// Records `steps` of `plan` into `primary` as one vkCmdExecuteCommands of a secondary of
-    /// ring slot `frame`, recording that secondary first where it does not hold these steps.
+    /// ring slot `frame`, recording that secondary first where it does not hold these steps;
+    /// with `wind`, the secondary copies the slot's wind table to `wind_table` first.
     /// `recording` names the engine recording (record_steps call) the primary belongs to: a
     /// secondary executes at most once per recording. Past kSecondariesPerFrame runs in one
     /// recording the steps are recorded into `primary` directly.
     Status record(VkCommandBuffer primary, uint32_t frame, uint64_t recording, VkPipelineLayout layout,
-                  const RecordingPlan& plan, std::span<const RunStep> steps, VkDescriptorSet table_set);
+                  const RecordingPlan& plan, std::span<const RunStep> steps, VkDescriptorSet table_set,
+                  const FrameRing::WindCopy* wind, VkBuffer wind_table);
     /// Secondaries recorded so far (a test hook: a steady frame loop records none).
     uint64_t secondaries_recorded() const { return secondaries_recorded_; }
     /// vkCmdExecuteCommands recorded so far (a test hook).
@@ -70,14 +76,21 @@ private:
         uint64_t plan_generation = 0;  // 0: holds nothing
         VkDescriptorSet table_set = VK_NULL_HANDLE;
         std::vector<uint32_t> wind_slots;  // the steps it records, by their wind-table slot
+        FrameRing::WindCopy wind;          // the wind table copy it begins with (bytes 0: none)
         uint64_t used_in = 0;              // the last recording that executed it (0: none)
     };
 
     explicit StepReplay(const Device& device) : device_(device) {}
-    static bool holds(const Secondary& s, const RecordingPlan& plan, std::span<const RunStep> steps,
-                      VkDescriptorSet table_set);
-    Status record_secondary(Secondary& s, VkPipelineLayout layout, const RecordingPlan& plan,
-                            std::span<const RunStep> steps, VkDescriptorSet table_set);
+    /// What a secondary records: the plan's steps, the run table's set and the wind copy.
+    struct Contents {
+        const RecordingPlan& plan;
+        std::span<const RunStep> steps;
+        VkDescriptorSet table_set;
+        FrameRing::WindCopy wind;
+        VkBuffer wind_table;
+    };
+    static bool holds(const Secondary& s, const Contents& c);
+    Status record_secondary(Secondary& s, VkPipelineLayout layout, const Contents& c);
 
     const Device& device_;
     VkCommandPool pool_ = VK_NULL_HANDLE;

@@ -7,6 +7,7 @@
 #include "../element_moves.h"
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cstdlib>
 #include <cstring>
@@ -323,14 +324,22 @@ Status VulkanBackend::run(std::span<const Dispatch> program, std::span<const Run
     const RecordingPlan& plan = one_off ? one_off_recording_ : recording_;
     if (record_target_) {
         ring_->record_copies(record_target_);
-        // The step program replays from a secondary; a one-off (program_id 0: an added
-        // instance's rest pose) is recorded directly.
-        if (replay_ && !one_off)
+        // The step program replays from a secondary, which also carries the frame's wind table
+        // (frame_ring.h); a one-off (program_id 0: an added instance's rest pose) is recorded
+        // directly.
+        const std::optional<FrameRing::WindCopy> wind = ring_->take_wind_copy();
+        const VkBuffer wind_table = buffers_[uint32_t(BufferId::wind_table)].handle();
+        if (replay_ && !one_off) {
             HMSM_TRY(replay_->record(record_target_, ring_->current(), recordings_, pipelines_->layout(), recording_,
-                                     steps, run_table_->set()));
-        else
+                                     steps, run_table_->set(), wind ? &*wind : nullptr, wind_table));
+        } else {
+            if (wind) {
+                FrameRing::record_wind_copy(*device_, record_target_, *wind, wind_table);
+                ++wind_copies_in_engine_buffers_;
+            }
             record_steps(*device_, pipelines_->layout(), plan, record_target_, steps, VK_NULL_HANDLE,
                          run_table_->set());
+        }
         return device_->take_validation_messages();
     }
     const size_t steps_per_chunk = std::max<size_t>(1, kDispatchesPerChunk / program.size());
@@ -401,11 +410,18 @@ Status VulkanBackend::begin_recording(VkCommandBuffer command_buffer) {
     ++recordings_;
     ring_->next_frame();
     run_table_->next_recording(ring_->frames());
-    return record_held_back();
+    HMSM_TRY(record_held_back());
+    ring_->open_wind_table();
+    return {};
 }
 
 Status VulkanBackend::end_recording() {
     ring_->record_copies(record_target_);
+    if (const std::optional<FrameRing::WindCopy> wind = ring_->take_wind_copy()) {
+        FrameRing::record_wind_copy(*device_, record_target_, *wind,
+                                    buffers_[uint32_t(BufferId::wind_table)].handle());
+        ++wind_copies_in_engine_buffers_;
+    }
     record_target_ = VK_NULL_HANDLE;
     engine_recorded_ = true;
     return device_->take_validation_messages();
@@ -414,6 +430,19 @@ Status VulkanBackend::end_recording() {
 Status VulkanBackend::stage_write(BufferId id, uint64_t first, uint64_t count, const void* src, Scalar as) {
     const Shape shape = buffer_info(id).shape;
     const uint64_t scalar_bytes = as == Scalar::f64 ? 8 : 4;
+    if (id == BufferId::wind_table) {
+        // Into the slot's copy of the table where it is open (frame_ring.h), else as any write.
+        const bool whole_header = first == 0 && count >= HMSM_WIND_STEPS;
+        if (first < HMSM_WIND_STEPS && !whole_header) ring_->forget_wind_header();
+        auto region = ring_->stage_wind(first * 16, count * 16);
+        if (!region) return region.status();
+        if (*region) {
+            scalars_to_words(shape, src, count * 4, *region, as);
+            if (whole_header) ring_->keep_wind_header(*region, true);
+            return {};
+        }
+        keep_wind_header(first, count, src, as);  // the copy staged below carries it
+    }
     auto stage = [&](const WindowPlan::Piece& piece) -> Status {
         const auto* in =
             static_cast<const std::byte*>(src) + (piece.logical - first) * shape_scalars(shape) * scalar_bytes;
@@ -429,6 +458,14 @@ Status VulkanBackend::stage_write(BufferId id, uint64_t first, uint64_t count, c
     return {};
 }
 
+void VulkanBackend::keep_wind_header(uint64_t first, uint64_t count, const void* src, Scalar as) {
+    if (first >= HMSM_WIND_STEPS) return;
+    if (first > 0 || count < HMSM_WIND_STEPS) return ring_->forget_wind_header();
+    std::array<uint32_t, HMSM_WIND_STEPS * 4> words;
+    scalars_to_words(buffer_info(BufferId::wind_table).shape, src, words.size(), words.data(), as);
+    ring_->keep_wind_header(words.data(), false);
+}
+
 Status VulkanBackend::write(BufferId id, uint64_t first, uint64_t count, const void* src, Scalar as) {
     HMSM_TRY(check_device_lost());
     HMSM_TRY(check_range(id, first, count));
@@ -436,6 +473,7 @@ Status VulkanBackend::write(BufferId id, uint64_t first, uint64_t count, const v
     if (record_target_) return stage_write(id, first, count, src, as);
     if (holding_back()) return hold_back_write(id, first, count, src, as);
     HMSM_TRY(submit_held_back());
+    if (id == BufferId::wind_table) keep_wind_header(first, count, src, as);
     const Shape shape = buffer_info(id).shape;
     const uint64_t scalar_bytes = as == Scalar::f64 ? 8 : 4;
     for (const WindowPlan::Piece& piece : plan_->pieces(id, first, count)) {

@@ -103,6 +103,9 @@ public:
     /// first frames in flight. Both 0 with replay off.
     uint64_t step_secondaries_recorded() const { return replay_ ? replay_->secondaries_recorded() : 0; }
     uint64_t step_replays() const { return replay_ ? replay_->replays() : 0; }
+    /// Copy commands recorded into engines' command buffers (a test hook): a replayed frame's
+    /// wind table travels in its secondary, so a steady frame loop records none.
+    uint64_t engine_copy_commands() const { return ring_->copy_commands() + wind_copies_in_engine_buffers_; }
     /// vkCmdDispatch calls per step of the program last run (a test hook).
     size_t launches_per_step() const { return recording_.launches(); }
     /// Whether runs of dispatches are batched (vulkan_set_batch_runs, HMSM_VULKAN_BATCH_RUNS).
@@ -195,6 +198,10 @@ private:
     Status shader_moves(std::span<const BufferMoves> moves);
     /// write() inside a recording: the data goes to the ring, the copy into the command buffer.
     Status stage_write(BufferId id, uint64_t first, uint64_t count, const void* src, Scalar as);
+    /// For a write of wind table elements [first, first + count) from `src` that reaches the
+    /// device other than through the ring's copy of the table: the ring keeps the header it
+    /// holds whole, or forgets the header it knew where it holds a part (frame_ring.h).
+    void keep_wind_header(uint64_t first, uint64_t count, const void* src, Scalar as);
 
     std::shared_ptr<Device> device_;
     std::unique_ptr<Pipelines> pipelines_;
@@ -226,6 +233,7 @@ private:
     std::unique_ptr<RunTable> run_table_;
     std::unique_ptr<StepReplay> replay_;  // null: recorded steps go into the engine's buffer
     uint64_t recordings_ = 0;             // begin_recording calls
+    uint64_t wind_copies_in_engine_buffers_ = 0;  // engine_copy_commands()
     uint64_t submissions_ = 0;
     bool in_instance_change_ = false;
     bool engine_recorded_ = false;  // record_steps has recorded into an engine's command buffer

@@ -137,15 +137,47 @@ TEST_F(StepReplay, SteadyFramesRecordNoSecondaryAgain) {
         for (uint32_t f = 0; f < kFrames; ++f) {
             for (Simulation* s : {&sim, reference}) gust(*s, f);
             if (HasFatalFailure()) return;
+            const uint64_t copies = backend.engine_copy_commands();
             const Status status = pair.step_both(frames, f, 2);
             ASSERT_TRUE(status.ok()) << "frame " << f << ": " << status.message();
             if (f == 2) after_first_round = backend.step_secondaries_recorded();
+            // The gust's wind table (header and step slots) travels in the secondary: past the
+            // first frame (its run table) the engine's buffer gets the vkCmdExecuteCommands
+            // alone, but in frame 4, whose turned wind rewrites every instance's wind data.
+            if (f > 0 && f != 4)
+                EXPECT_EQ(backend.engine_copy_commands(), copies) << "copies into the engine's buffer, frame " << f;
         }
         frames.wait_all();
     }
     EXPECT_EQ(after_first_round, 3u) << "one secondary per frame in flight";
     EXPECT_EQ(backend.step_secondaries_recorded(), after_first_round) << "recorded again in a steady loop";
     EXPECT_EQ(backend.step_replays(), kFrames);
+    pair.expect_same(kCompared);
+}
+
+// The wind header is written only in the frames that change the wind (here 1 and 7); every
+// ring slot's copy of the wind table carries it into the frames after, whichever slot wrote it.
+TEST_F(StepReplay, WindChangedInOneFrameReachesTheFramesAfterIt) {
+    std::string skip;
+    RecordedAndReference::Options options;
+    options.trees = 3;
+    options.lod_budgets.clear();
+    RecordedAndReference pair = RecordedAndReference::create(options, skip);
+    if (!skip.empty()) GTEST_SKIP() << skip;
+    ASSERT_TRUE(pair.recorded && pair.reference);
+    {
+        EngineFrames frames(*pair.engine, 3);
+        if (HasFailure()) return;
+        for (uint32_t f = 0; f < 11; ++f) {
+            if (f == 1 || f == 7)
+                for (Simulation* s : {pair.recorded.get(), pair.reference.get()}) gust(*s, f);
+            if (HasFatalFailure()) return;
+            const Status status = pair.step_both(frames, f, 2);
+            ASSERT_TRUE(status.ok()) << "frame " << f << ": " << status.message();
+        }
+        frames.wait_all();
+    }
+    EXPECT_GE(vulkan_of(*pair.recorded).step_replays(), 11u);
     pair.expect_same(kCompared);
 }
 
