@@ -6,7 +6,8 @@
 // Not a test: it asserts nothing and runs without validation (which would dominate the cost).
 //
 //   hmsm_vulkan_record_timing [--preset paper-1] [--trees 1] [--frames 600] [--steps 2]
-//                             [--joints] [--idle] [--spin] [--sleep-us N] [--composition C]
+//                             [--joints] [--idle] [--spin] [--sleep-us N] [--warm-us N]
+//                             [--evict-kib N] [--probe] [--composition C]
 //
 // --joints simulates only the joint matrices (SimulationConfig::outputs = joints, so large
 // forests fit a CPU driver); --idle waits for the queue to drain before each record_steps, so
@@ -14,6 +15,13 @@
 // fence by polling it rather than blocking, so the thread never sleeps; --sleep-us N sleeps N
 // microseconds before each record_steps, as a thread that blocked on a fence does: together they
 // tell hmsm's own cost from the cost of running after the thread slept (cold caches, clocks).
+// --warm-us N keeps the thread busy N microseconds (touching nothing of hmsm's) before each
+// record_steps, as an engine's own frame work between its fence wait and the recording does;
+// --evict-kib N then writes N KiB of other memory, which evicts hmsm's code and data from the
+// core's caches while its clock stays up: together they tell a cold clock from cold caches.
+// --probe times, every other frame and in record_steps' place, the Vulkan calls a replayed
+// frame makes (a barrier, a buffer copy, one vkCmdExecuteCommands of an empty secondary) on
+// buffers of the engine's: the driver's share of a cold call.
 // HMSM_VULKAN_REPLAY_STEPS=0 records every step's commands into the command buffer rather than
 // replaying them from secondary command buffers (src/vulkan/step_replay.h), for comparisons.
 #include "simulation_access.h"
@@ -40,8 +48,8 @@ struct Options {
     std::string preset = "paper-1";
     std::string composition = "automatic";  // path_walk: the step program of a GPU
     uint32_t trees = 1, frames = 600, steps = 2;
-    bool joints = false, idle = false, spin = false;
-    uint32_t sleep_us = 0;
+    bool joints = false, idle = false, spin = false, probe = false;
+    uint32_t sleep_us = 0, warm_us = 0, evict_kib = 0;
 };
 
 bool parse(int argc, char** argv, Options& o) {
@@ -56,7 +64,10 @@ bool parse(int argc, char** argv, Options& o) {
         else if (arg == "--joints") o.joints = true;
         else if (arg == "--idle") o.idle = true;
         else if (arg == "--spin") o.spin = true;
+        else if (arg == "--probe") o.probe = true;
         else if (arg == "--sleep-us" && has_value) o.sleep_us = uint32_t(std::strtoul(argv[++i], nullptr, 10));
+        else if (arg == "--warm-us" && has_value) o.warm_us = uint32_t(std::strtoul(argv[++i], nullptr, 10));
+        else if (arg == "--evict-kib" && has_value) o.evict_kib = uint32_t(std::strtoul(argv[++i], nullptr, 10));
         else {
             std::fprintf(stderr, "unknown or incomplete argument %s\n", arg.c_str());
             return false;
@@ -121,10 +132,43 @@ int main(int argc, char** argv) {
     for (VkFence& f : fences)
         if (vk.vkCreateFence(device.handle(), &fence_info, nullptr, &f) != VK_SUCCESS) return fail("vkCreateFence");
 
-    std::printf("device %s, %s x %u%s, record_steps(sim, cmd, %u), %u frames, %u in flight%s%s, sleep %u us\n",
+    std::printf("device %s, %s x %u%s, record_steps(sim, cmd, %u), %u frames, %u in flight%s%s, sleep %u us, "
+                "busy %u us, %u KiB evicted\n",
                 device.name().c_str(), o.preset.c_str(), o.trees, o.joints ? " (joints only)" : "", o.steps,
                 o.frames, kFrames, o.idle ? ", queue idle before each call" : "",
-                o.spin ? ", fences polled" : "", o.sleep_us);
+                o.spin ? ", fences polled" : "", o.sleep_us, o.warm_us, o.evict_kib);
+    std::vector<uint64_t> other(size_t(o.evict_kib) * 1024 / sizeof(uint64_t));
+    // The probe's buffers and empty secondary (--probe).
+    auto probe_src = detail::vk::Buffer::create(device, 256, VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
+                                                detail::vk::MemoryUse::staging, "probe source");
+    auto probe_dst = detail::vk::Buffer::create(device, 256, VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                                                detail::vk::MemoryUse::device_local, "probe destination");
+    if (!probe_src || !probe_dst) return fail("probe buffers");
+    VkCommandBuffer empty_secondary = VK_NULL_HANDLE;
+    {
+        VkCommandBufferAllocateInfo info{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
+        info.commandPool = pool;
+        info.level = VK_COMMAND_BUFFER_LEVEL_SECONDARY;
+        info.commandBufferCount = 1;
+        if (vk.vkAllocateCommandBuffers(device.handle(), &info, &empty_secondary) != VK_SUCCESS)
+            return fail("vkAllocateCommandBuffers (secondary)");
+        VkCommandBufferInheritanceInfo inheritance{VK_STRUCTURE_TYPE_COMMAND_BUFFER_INHERITANCE_INFO};
+        VkCommandBufferBeginInfo begin{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
+        begin.pInheritanceInfo = &inheritance;
+        vk.vkBeginCommandBuffer(empty_secondary, &begin);
+        vk.vkEndCommandBuffer(empty_secondary);
+    }
+    auto record_probe = [&](VkCommandBuffer cmd) {
+        VkMemoryBarrier barrier{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
+        barrier.srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT | VK_ACCESS_TRANSFER_WRITE_BIT;
+        barrier.dstAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
+        vk.vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_TRANSFER_BIT,
+                                VK_PIPELINE_STAGE_TRANSFER_BIT, 0, 1, &barrier, 0, nullptr, 0, nullptr);
+        const VkBufferCopy region{0, 0, 256};
+        vk.vkCmdCopyBuffer(cmd, probe_src->handle(), probe_dst->handle(), 1, &region);
+        vk.vkCmdExecuteCommands(cmd, 1, &empty_secondary);
+    };
+    std::vector<double> probe_micros;
     const auto& backend = dynamic_cast<const detail::vk::VulkanBackend&>(detail::backend_of(sim));
     uint64_t frame = 0;
     for (const bool live : {false, true}) {
@@ -139,6 +183,12 @@ int main(int argc, char** argv) {
             vk.vkResetFences(device.handle(), 1, &fences[k]);
             if (o.idle) vk.vkQueueWaitIdle(device.queue());
             if (o.sleep_us) std::this_thread::sleep_for(std::chrono::microseconds(o.sleep_us));
+            if (o.warm_us) {
+                const auto until = std::chrono::steady_clock::now() + std::chrono::microseconds(o.warm_us);
+                while (std::chrono::steady_clock::now() < until) {
+                }
+            }
+            for (size_t w = 0; w < other.size(); w += 8) other[w] += frame;  // a line each
             vk.vkResetCommandBuffer(commands[k], 0);
             VkCommandBufferBeginInfo begin{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
             begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
@@ -157,9 +207,17 @@ int main(int argc, char** argv) {
                 change_micros.push_back(
                     std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - start).count());
             }
+            const bool probing = o.probe && frame % 2 == 1;
             const auto start = std::chrono::steady_clock::now();
+            if (probing) {
+                record_probe(commands[k]);
+                probe_micros.push_back(
+                    std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - start).count());
+            }
             const Status recorded = vulkan::record_steps(sim, commands[k], o.steps);
-            micros.push_back(std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - start).count());
+            if (!probing)
+                micros.push_back(
+                    std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - start).count());
             if (!recorded) return fail(recorded.message());
             vk.vkEndCommandBuffer(commands[k]);
             VkSubmitInfo submit{VK_STRUCTURE_TYPE_SUBMIT_INFO};
@@ -176,6 +234,11 @@ int main(int argc, char** argv) {
                     quantile(micros, 0.5), quantile(micros, 0.99));
         if (live) std::printf("   (set_wind + set_force_fields median %.1f us)", quantile(change_micros, 0.5));
         std::printf("\n");
+    }
+    if (o.probe) {
+        std::sort(probe_micros.begin(), probe_micros.end());
+        std::printf("probe (barrier, copy, execute of an empty secondary) median %8.1f us\n",
+                    probe_micros[probe_micros.size() / 2]);
     }
     // Replayed (step_replay.h): one secondary per frame in flight, recorded in the first frames.
     std::printf("secondaries recorded %llu, replayed %llu times (HMSM_VULKAN_REPLAY_STEPS=0: none)\n",
