@@ -110,6 +110,7 @@ set(_hmsm_vulkan_sources
   src/vulkan/windows.cpp
   src/vulkan/vulkan_backend.cpp
   src/vulkan/deferred_changes.cpp
+  src/vulkan/engine_recording.cpp
   src/vulkan/range_transfers.cpp
   src/vulkan/growth.cpp
   src/vulkan/copy_bandwidth.cpp
