@@ -381,8 +381,39 @@ TEST_F(BenchCli, FramesTableHasARowPerBackendSizeAndChange) {
         EXPECT_LE(row["call_median_seconds"].get<double>(), row["frame_median_seconds"].get<double>());
         if (i % 6 == 3) EXPECT_EQ(row["streamed"], (i / 6) % 2 == 0 ? 1 : 4);  // all of a forest under 10
         if (i % 6 >= 4) EXPECT_GT(row.value("bytes", 0), 0);
+        EXPECT_EQ(row.value("steps", 0), 1);
+        EXPECT_FALSE(row.contains("device_median_seconds")) << "a blocking step has no engine marks";
     }
     EXPECT_NE(r.out.find("### Frames: one step per frame"), std::string::npos) << r.out;
     EXPECT_NE(r.out.find("| cpu-parallel | step | 4 | stream_10 |"), std::string::npos) << r.out;
     expect_bad_input("bench --quick --backends cpu --frames -1", "--frames");
+    expect_bad_input("bench --quick --backends cpu --frames 10 --frame-steps 0", "--frame-steps");
+}
+
+// An engine's Vulkan frame of two steps: recorded into its command buffer between two
+// timestamps of its own, whose difference each row gives as device time (at most the frame).
+TEST_F(BenchCli, FramesTableTimesTheEngineFrameOnTheDevice) {
+    const auto kinds = hmsm::compiled_backends();
+    if (std::find(kinds.begin(), kinds.end(), hmsm::BackendKind::vulkan) == kinds.end())
+        GTEST_SKIP() << "the Vulkan backend is not compiled into this build";
+    const std::string file = path("frames.json");
+    const CliRun r = run("bench --no-progress --backends vulkan --presets none --instances none --joint-instances none "
+                         "--frames 10 --frame-instances 1 --frame-steps 2 --case-budget 20 --json " + file);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const json d = json::parse(read_text(file), nullptr, false);
+    ASSERT_TRUE(d.contains("frames"));
+    size_t recorded = 0;
+    for (const json& row : d["frames"]) {
+        SCOPED_TRACE(row.dump());
+        if (row.contains("skipped")) GTEST_SKIP() << "no Vulkan device: " << row["skipped"];
+        EXPECT_EQ(row.value("steps", 0), 2);
+        if (row.value("path", "") != "record") continue;
+        ++recorded;
+        ASSERT_TRUE(row.contains("device_median_seconds"));
+        expect_figures_positive(row["device_median_seconds"], "device_median_seconds");
+        EXPECT_LE(row["device_median_seconds"].get<double>(), row["device_p99_seconds"].get<double>());
+        EXPECT_LE(row["device_median_seconds"].get<double>(), row["frame_median_seconds"].get<double>());
+    }
+    EXPECT_EQ(recorded, 4u) << "one record row per change";
+    EXPECT_NE(r.out.find("### Frames: 2 steps per frame"), std::string::npos) << r.out;
 }

@@ -16,9 +16,13 @@ double seconds(Clock::time_point a, Clock::time_point b) { return std::chrono::d
 
 class BlockingStep final : public FrameDriver {
 public:
+    explicit BlockingStep(uint32_t steps) : steps_(steps) {}
     const char* path() const override { return "step"; }
-    Status call(Simulation& simulation) override { return simulation.step(1); }
+    Status call(Simulation& simulation) override { return simulation.step(steps_); }
     Status finish(Simulation&) override { return {}; }
+
+private:
+    uint32_t steps_;
 };
 
 /// What changes before each frame's step.
@@ -79,6 +83,10 @@ void put_times(nlohmann::json& row, const FrameTimes& times) {
     row["call_p99_seconds"] = percentile(times.call, 0.99);
     row["frame_median_seconds"] = percentile(times.whole, 0.5);
     row["frame_p99_seconds"] = percentile(times.whole, 0.99);
+    if (!times.device.empty()) {
+        row["device_median_seconds"] = percentile(times.device, 0.5);
+        row["device_p99_seconds"] = percentile(times.device, 0.99);
+    }
 }
 
 /// The joint matrices read back after a step, `frames` times each way: read() (call = frame),
@@ -87,7 +95,7 @@ void measure_readback(Simulation& s, const nlohmann::json& head, uint32_t frames
     std::vector<float> joints;
     for (const char* how : {"read", "request_take"}) {
         const bool requested = std::string(how) == "request_take";
-        FrameTimes times{std::vector<double>(frames), std::vector<double>(frames)};
+        FrameTimes times{std::vector<double>(frames), std::vector<double>(frames), {}};
         Status status;
         for (uint32_t k = 0; status && k < frames + 2; ++k) {  // two warm-up reads grow the slots
             status = s.step(1);
@@ -161,10 +169,11 @@ void measure_driver(Simulation& s, FrameDriver& driver, const nlohmann::json& he
 
 }  // namespace
 
-std::unique_ptr<FrameDriver> blocking_step() { return std::make_unique<BlockingStep>(); }
+std::unique_ptr<FrameDriver> blocking_step(uint32_t steps) { return std::make_unique<BlockingStep>(steps); }
 
 Status time_frames(Simulation& s, FrameDriver& driver, uint32_t frames, const FrameChange& change, FrameTimes& times) {
     for (uint32_t k = 0; k < frames; ++k) {
+        HMSM_TRY(driver.begin(s));
         const auto start = Clock::now();
         if (change) HMSM_TRY(change(s, k));
         HMSM_TRY(driver.call(s));
@@ -172,6 +181,7 @@ Status time_frames(Simulation& s, FrameDriver& driver, uint32_t frames, const Fr
         HMSM_TRY(driver.finish(s));
         times.call.push_back(seconds(start, called));
         times.whole.push_back(seconds(start, Clock::now()));
+        if (const std::optional<double> device = driver.device_seconds()) times.device.push_back(*device);
     }
     return {};
 }
@@ -181,7 +191,7 @@ nlohmann::json measure_frames(const TreeModel& model, const std::vector<BackendK
     nlohmann::json rows = nlohmann::json::array();
     for (BackendKind kind : backends) {
         for (uint32_t count : settings.counts) {
-            nlohmann::json head = {{"backend", to_string(kind)}, {"instances", count}, {"path", "step"}};
+            nlohmann::json head = {{"backend", to_string(kind)}, {"instances", count}, {"path", "step"}, {"steps", settings.steps}};
             auto scene = grid_scene(model, count, settings.spacing, 1);
             if (!scene) {
                 head["skipped"] = scene.status().message();
@@ -199,8 +209,8 @@ nlohmann::json measure_frames(const TreeModel& model, const std::vector<BackendK
                 continue;
             }
             head["device"] = (*sim)->device_name();
-            measure_driver(**sim, *blocking_step(), head, settings, rows);
-            for (auto& driver : engine_drivers(**sim)) {
+            measure_driver(**sim, *blocking_step(settings.steps), head, settings, rows);
+            for (auto& driver : engine_drivers(**sim, settings.steps)) {
                 head["path"] = driver->path();
                 measure_driver(**sim, *driver, head, settings, rows);
             }
@@ -209,15 +219,26 @@ nlohmann::json measure_frames(const TreeModel& model, const std::vector<BackendK
     return rows;
 }
 
+namespace {
+/// "one step" or "N steps", as the rows say.
+std::string steps_per_frame(const nlohmann::json& rows) {
+    const uint32_t steps = rows.empty() ? 1u : rows.front().value("steps", 1u);
+    return steps == 1 ? "one step" : std::to_string(steps) + " steps";
+}
+}  // namespace
+
 std::string render_frames(const nlohmann::json& rows) {
     if (!rows.is_array() || rows.empty()) return "";
     std::string out =
-        "\n### Frames: one step per frame, joints only (µs: the frame's hmsm calls, and until its outputs are "
-        "ready; median / p99)\n\n"
-        "| backend | path | instances | change | frames | call median | call p99 | frame median | frame p99 |\n"
-        "|---|---|--:|---|--:|--:|--:|--:|--:|\n";
+        "\n### Frames: " + steps_per_frame(rows) +
+        " per frame, joints only (µs: the frame's hmsm calls, until its outputs are ready, and on the device "
+        "between the engine's marks around hmsm's work; median / p99)\n\n"
+        "| backend | path | instances | change | frames | call median | call p99 | frame median | frame p99 | "
+        "device median | device p99 |\n"
+        "|---|---|--:|---|--:|--:|--:|--:|--:|--:|--:|\n";
     auto us = [](const nlohmann::json& r, const char* key) {
         char cell[32];
+        if (!r.contains(key)) return std::string("–");
         std::snprintf(cell, sizeof cell, "%.1f", r.value(key, 0.0) * 1e6);
         return std::string(cell);
     };
@@ -226,7 +247,7 @@ std::string render_frames(const nlohmann::json& rows) {
                std::to_string(r.value("instances", 0ull)) + " | ";
         if (r.contains("skipped") || r.contains("failed")) {
             out += r.value("change", std::string("–")) + " | " + r.value("skipped", r.value("failed", std::string())) +
-                   " | | | | |\n";
+                   " | | | | | | |\n";
             continue;
         }
         std::string change = r.value("change", std::string());
@@ -238,7 +259,8 @@ std::string render_frames(const nlohmann::json& rows) {
         }
         out += change + " | " + std::to_string(r.value("frames", 0u)) + " | " +
                us(r, "call_median_seconds") + " | " + us(r, "call_p99_seconds") + " | " + us(r, "frame_median_seconds") +
-               " | " + us(r, "frame_p99_seconds") + " |\n";
+               " | " + us(r, "frame_p99_seconds") + " | " + us(r, "device_median_seconds") + " | " +
+               us(r, "device_p99_seconds") + " |\n";
     }
     return out;
 }

@@ -1,10 +1,11 @@
-// hmsm bench --frames: what an engine sees once per frame. One step per frame on a joints-only
-// forest, with nothing changed, a wind change, a moving force field or ten instances streamed
-// in and out before it; per frame the wall time of the engine's hmsm calls (the change and the
-// step call) and of the whole frame until the outputs are ready, median and p99. Each backend
-// runs its blocking step(); CUDA also enqueues on an engine stream (hmsm/cuda.h
-// enqueue_steps) and Vulkan records into an engine command buffer (hmsm/vulkan.h
-// record_steps), where this build can.
+// hmsm bench --frames: what an engine sees once per frame. One step (--frame-steps) per frame
+// on a joints-only forest, with nothing changed, a wind change, a moving force field or ten
+// instances streamed in and out before it; per frame the wall time of the engine's hmsm calls
+// (the change and the step call) and of the whole frame until the outputs are ready, median and
+// p99. Each backend runs its blocking step(); CUDA also enqueues on an engine stream
+// (hmsm/cuda.h enqueue_steps) and Vulkan records into an engine command buffer (hmsm/vulkan.h
+// record_steps), where this build can; on those paths the engine also times its frame on the
+// device (CUDA events, Vulkan timestamps around hmsm's work).
 #pragma once
 
 #include <hmsm/hmsm.h>
@@ -13,6 +14,7 @@
 
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -24,18 +26,24 @@ public:
     virtual ~FrameDriver() = default;
     /// "step" (Simulation::step, blocking), "enqueue" (CUDA), "record" (Vulkan).
     virtual const char* path() const = 0;
+    /// The engine's own work before the frame's hmsm calls (untimed): beginning its command
+    /// buffer, marking the start of its device time.
+    virtual Status begin(Simulation&) { return {}; }
     /// The frame's step call: what the engine's thread spends in hmsm for it.
     virtual Status call(Simulation& simulation) = 0;
     /// Waits until the outputs of the call are ready (nothing for a blocking step).
     virtual Status finish(Simulation& simulation) = 0;
+    /// Device seconds of the frame finish() waited for, from the engine's marks around hmsm's
+    /// work; none where the path has no device of the engine's.
+    virtual std::optional<double> device_seconds() const { return std::nullopt; }
 };
 
 /// The engine paths of a simulation of `kind` this build can drive (CUDA: an engine stream;
-/// Vulkan: an engine command buffer); empty where there is none.
-std::vector<std::unique_ptr<FrameDriver>> engine_drivers(Simulation& simulation);
+/// Vulkan: an engine command buffer), `steps` steps per call; empty where there is none.
+std::vector<std::unique_ptr<FrameDriver>> engine_drivers(Simulation& simulation, uint32_t steps = 1);
 
-/// Simulation::step(1) as the frame's step call ("step"): returns when the step is complete.
-std::unique_ptr<FrameDriver> blocking_step();
+/// Simulation::step(steps) as the frame's step call ("step"): returns when the steps are complete.
+std::unique_ptr<FrameDriver> blocking_step(uint32_t steps = 1);
 
 /// The frame's live change before its step call (frame counts from 0); none when empty.
 using FrameChange = std::function<Status(Simulation& simulation, uint32_t frame)>;
@@ -44,6 +52,7 @@ using FrameChange = std::function<Status(Simulation& simulation, uint32_t frame)
 /// whole frame until its outputs are ready.
 struct FrameTimes {
     std::vector<double> call, whole;
+    std::vector<double> device;  // FrameDriver::device_seconds, where the driver has them
 };
 
 /// Runs `frames` frames of `change` then `driver`'s step on `simulation`, timing each; stops at
@@ -56,6 +65,7 @@ struct FrameSettings {
     uint32_t frames = 200;         // frames per change, fewer where the case budget says so
     double case_budget = 20.0;     // seconds per (backend, path, size) over all changes
     double spacing = 25.0;
+    uint32_t steps = 1;            // steps per frame
 };
 
 /// The frame table: one JSON row per backend, path, forest size and change (or one skipped

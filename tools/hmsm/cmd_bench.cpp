@@ -39,7 +39,7 @@ struct BenchFlags {
     std::string instances = "1,10,100,1000,10000";
     std::string joint_instances = "1,10,100,1000,10000";  // joints-only forest (bench_joints.h)
     std::string composition_depths = "none";
-    int64_t frames = 0;  // frame table (bench_frames.h): frames per change; 0: no table
+    int64_t frames = 0, frame_steps = 1;  // frame table (bench_frames.h): frames per change (0: no table), steps per frame
     std::string frame_instances = "1,100,1000,10000";  // path walk against pointer jumping (bench_depth.h)
     double spacing = 25.0;
     double case_budget = 20.0;
@@ -168,6 +168,7 @@ void register_bench_flags(CLI::App& app) {
                        "per change, fewer where --case-budget says (default 0: no table)");
     app.add_option("--frame-instances", flags.frame_instances,
                    "joints-only paper-1 forest sizes of the frame table (default 1,100,1000,10000)");
+    add_integer_option(app, "--frame-steps", flags.frame_steps, "steps per frame of the frame table (default 1)");
     app.add_option("--spacing", flags.spacing, "forest grid spacing in metres (default 25)");
     app.add_option("--forest-composition", flags.forest_composition,
                    "composition of the forest rows: " +
@@ -233,6 +234,8 @@ int run_bench(CLI::App& app) {
         return fail_input("--repeats " + std::to_string(flags.repeats) + ": must be in [1, 1000]");
     if (flags.frames < 0 || flags.frames > 100000)
         return fail_input("--frames " + std::to_string(flags.frames) + ": must be in [0, 100000]");
+    if (flags.frame_steps < 1 || flags.frame_steps > 64)
+        return fail_input("--frame-steps " + std::to_string(flags.frame_steps) + ": must be in [1, 64]");
     flags.open_world |= app.count("--open-world-trees") + app.count("--open-world-frames") +
                             app.count("--open-world-changes") + app.count("--open-world-fade-steps") > 0;
     auto world_settings = bench::open_world_settings(flags.open_world_trees, flags.open_world_frames,
@@ -380,7 +383,7 @@ int run_bench(CLI::App& app) {
         auto tree = flags.tree.empty() ? generate_preset("paper-1") : load_tree(flags.tree);
         if (!tree) return fail(tree.status());
         bench::FrameSettings frame_settings{*parsed_frame_counts, uint32_t(flags.frames), settings.case_budget,
-                                            flags.spacing};
+                                            flags.spacing, uint32_t(flags.frame_steps)};
         frames = bench::measure_frames(*tree, live_backends, frame_settings);
     }
     json dynamics = json::array();
