@@ -111,6 +111,7 @@ set(_hmsm_vulkan_sources
   src/vulkan/vulkan_backend.cpp
   src/vulkan/deferred_changes.cpp
   src/vulkan/engine_recording.cpp
+  src/vulkan/read_slots.cpp
   src/vulkan/range_transfers.cpp
   src/vulkan/growth.cpp
   src/vulkan/copy_bandwidth.cpp

@@ -50,6 +50,9 @@ Result<std::unique_ptr<VulkanBackend>> VulkanBackend::create(std::shared_ptr<Dev
         if (!replay) return replay.status();
         b->replay_ = std::move(replay).value();
     }
+    auto read_slots = ReadSlots::create(dev);
+    if (!read_slots) return read_slots.status();
+    b->read_slots_ = std::move(read_slots).value();
     auto transfer = Transfer::create(dev);
     if (!transfer) return transfer.status();
     b->transfer_ = std::move(transfer).value();
@@ -90,6 +93,7 @@ VulkanBackend::~VulkanBackend() {
     // Buffers, pipelines and the transfer go before the device (member order would not ensure it
     // for the shared device).
     replay_.reset();
+    read_slots_.reset();
     sets_.reset();
     run_table_.reset();
     ring_.reset();

@@ -20,6 +20,7 @@
 #include "range_copy.h"
 #include "recorder.h"
 #include "run_table.h"
+#include "read_slots.h"
 #include "step_replay.h"
 #include "windows.h"
 
@@ -95,7 +96,7 @@ public:
     uint32_t frames_in_flight() const { return ring_->frames(); }
     /// Queue submissions hmsm made itself on this backend (step, read, write outside a
     /// recording, ...); a test hook: record_steps makes none.
-    uint64_t submissions() const { return submissions_ + transfer_->submissions(); }
+    uint64_t submissions() const { return submissions_ + transfer_->submissions() + read_slots_->submissions(); }
     /// Dispatches of the range copy (range_copy.h) so far (a test hook).
     uint64_t range_copy_dispatches() const { return range_copier_ ? range_copier_->dispatches() : 0; }
     /// Secondary command buffers recorded for recorded steps, and their vkCmdExecuteCommands
@@ -111,6 +112,10 @@ public:
     /// Whether runs of dispatches are batched (vulkan_set_batch_runs, HMSM_VULKAN_BATCH_RUNS).
     bool batches_runs() const { return batching_.batch_runs; }
 
+    /// One copy command per output into a host-visible buffer of the slot's (read_slots.h);
+    /// an output past one allocation goes through the staging chunks.
+    Status request_read(uint32_t slot, BufferId id, uint64_t first, uint64_t count) const override;
+    Result<const float*> take_read(uint32_t slot) const override;
     /// For `hmsm bench`'s roofline (copy_bandwidth.cpp): the faster of vkCmdCopyBuffer and a
     /// compute-shader copy between two scratch device-local buffers, each the median of
     /// timestamped runs, as (bytes read + bytes written) / seconds.
@@ -125,6 +130,7 @@ public:
         can.grows_on_device = can.reshapes_in_place;
         // A listed dispatch reads state anywhere, so only within one window (windows.h).
         can.runs_listed_groups = can.reshapes_in_place;
+        can.reads_async = true;
         return can;
     }
 
@@ -232,6 +238,10 @@ private:
     RecordingPlan::Batching batching_;
     std::unique_ptr<RunTable> run_table_;
     std::unique_ptr<StepReplay> replay_;  // null: recorded steps go into the engine's buffer
+    std::unique_ptr<ReadSlots> read_slots_;
+    // request_read of an output past one allocation: read at the request into host memory.
+    mutable std::array<std::vector<float>, kReadSlots> read_fallback_;
+    mutable std::array<bool, kReadSlots> read_from_host_{};
     uint64_t recordings_ = 0;             // begin_recording calls
     uint64_t wind_copies_in_engine_buffers_ = 0;  // engine_copy_commands()
     uint64_t submissions_ = 0;
