@@ -23,11 +23,7 @@ Status VulkanBackend::begin_recording(VkCommandBuffer command_buffer) {
 
 Status VulkanBackend::end_recording() {
     ring_->record_copies(record_target_);
-    if (const std::optional<FrameRing::WindCopy> wind = ring_->take_wind_copy()) {
-        FrameRing::record_wind_copy(*device_, record_target_, *wind,
-                                    buffers_[uint32_t(BufferId::wind_table)].handle());
-        ++wind_copies_in_engine_buffers_;
-    }
+    if (const std::optional<FrameRing::WindCopy> wind = ring_->take_wind_copy()) record_wind_copy(*wind);
     record_target_ = VK_NULL_HANDLE;
     engine_recorded_ = true;
     return device_->take_validation_messages();
@@ -39,7 +35,11 @@ Status VulkanBackend::stage_write(BufferId id, uint64_t first, uint64_t count, c
     if (id == BufferId::wind_table) {
         // Into the slot's copy of the table where it is open (frame_ring.h), else as any write.
         const bool whole_header = first == 0 && count >= HMSM_WIND_STEPS;
-        if (first < HMSM_WIND_STEPS && !whole_header) ring_->forget_wind_header();
+        if (first < HMSM_WIND_STEPS && !whole_header) {
+            // A part of the header: what the slot's table holds so far goes first, this after.
+            ring_->forget_wind_header();
+            if (const std::optional<FrameRing::WindCopy> wind = ring_->take_wind_copy()) record_wind_copy(*wind);
+        }
         auto region = ring_->stage_wind(first * 16, count * 16);
         if (!region) return region.status();
         if (*region) {
@@ -62,6 +62,11 @@ Status VulkanBackend::stage_write(BufferId id, uint64_t first, uint64_t count, c
     if (!plan_->split() || buffer_info(id).scope != Scope::chain_halves) return stage({first, first, count});
     for (const WindowPlan::Piece& piece : plan_->pieces(id, first, count)) HMSM_TRY(stage(piece));
     return {};
+}
+
+void VulkanBackend::record_wind_copy(const FrameRing::WindCopy& copy) {
+    FrameRing::record_wind_copy(*device_, record_target_, copy, buffers_[uint32_t(BufferId::wind_table)].handle());
+    ++wind_copies_in_engine_buffers_;
 }
 
 void VulkanBackend::keep_wind_header(uint64_t first, uint64_t count, const void* src, Scalar as) {

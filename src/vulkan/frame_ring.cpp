@@ -72,12 +72,13 @@ Result<void*> FrameRing::stage(VkBuffer dst, VkDeviceSize dst_offset, VkDeviceSi
 void FrameRing::keep_wind_header(const void* words, bool in_slot) {
     std::memcpy(header_.data(), words, kWindHeaderBytes);
     ++header_version_;
+    header_known_ = true;
     if (in_slot) slots_[current_].header_version = header_version_;
 }
 
 Result<void*> FrameRing::stage_wind(VkDeviceSize offset, VkDeviceSize bytes) {
     const bool whole_header = offset == 0 && bytes >= kWindHeaderBytes;
-    if (!wind_open_ || offset + bytes > kWindTableBytes || (header_version_ == 0 && !whole_header))
+    if (!wind_open_ || offset + bytes > kWindTableBytes || (!header_known_ && !whole_header))
         return static_cast<void*>(nullptr);
     Slot& slot = slots_[current_];
     if (!slot.buffer.handle()) HMSM_TRY(grow(slot, kWindTableBytes));

@@ -72,7 +72,7 @@ public:
     /// `in_slot`: the current slot's wind table holds them already.
     void keep_wind_header(const void* words, bool in_slot);
     /// The header was written in part: none is known until it is written whole again.
-    void forget_wind_header() { header_version_ = 0; }
+    void forget_wind_header() { header_known_ = false; }
     /// Lets the current frame's wind table writes go to its slot's copy of the table (after the
     /// changes held back were recorded), until take_wind_copy().
     void open_wind_table() { wind_open_ = true; }
@@ -108,7 +108,8 @@ private:
     std::vector<Copy> copies_;
     uint64_t copy_commands_ = 0;
     std::vector<std::byte> header_ = std::vector<std::byte>(kWindHeaderBytes);  // keep_wind_header's
-    uint64_t header_version_ = 0;  // numbers the kept header; 0: none known
+    uint64_t header_version_ = 0;  // numbers the kept headers (a slot's 0: none)
+    bool header_known_ = false;    // header_ is the header last written
     bool wind_open_ = false;
     VkDeviceSize wind_end_ = 0;  // end of the open table's writes this frame
     // record_copies' scratch, kept so that a frame's recording allocates nothing.

@@ -336,10 +336,7 @@ Status VulkanBackend::run(std::span<const Dispatch> program, std::span<const Run
             HMSM_TRY(replay_->record(record_target_, ring_->current(), recordings_, pipelines_->layout(), recording_,
                                      steps, run_table_->set(), wind ? &*wind : nullptr, wind_table));
         } else {
-            if (wind) {
-                FrameRing::record_wind_copy(*device_, record_target_, *wind, wind_table);
-                ++wind_copies_in_engine_buffers_;
-            }
+            if (wind) record_wind_copy(*wind);
             record_steps(*device_, pipelines_->layout(), plan, record_target_, steps, VK_NULL_HANDLE,
                          run_table_->set());
         }

@@ -208,6 +208,8 @@ private:
     /// device other than through the ring's copy of the table: the ring keeps the header it
     /// holds whole, or forgets the header it knew where it holds a part (frame_ring.h).
     void keep_wind_header(uint64_t first, uint64_t count, const void* src, Scalar as);
+    /// Records `copy` of the ring slot's wind table into the engine's command buffer.
+    void record_wind_copy(const FrameRing::WindCopy& copy);
 
     std::shared_ptr<Device> device_;
     std::unique_ptr<Pipelines> pipelines_;
