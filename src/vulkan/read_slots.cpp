@@ -120,11 +120,12 @@ Status VulkanBackend::request_read(uint32_t slot, BufferId id, uint64_t first, u
     HMSM_TRY(const_cast<VulkanBackend*>(this)->submit_held_back());
     const uint64_t element_bytes = device_element_bytes(id);
     std::vector<float>& host = read_fallback_[slot];
-    if (!read_slots_->fits(count * element_bytes)) {
-        // Past one allocation of the device: through the staging chunks into host memory.
+    if (count == 0 || !read_slots_->fits(count * element_bytes)) {
+        // Past one allocation of the device: through the staging chunks into host memory
+        // (nothing to copy for no elements).
         host.resize(count * element_bytes / 4);
         read_from_host_[slot] = true;
-        return read(id, first, count, host.data(), Scalar::f32);
+        return count == 0 ? Status{} : read(id, first, count, host.data(), Scalar::f32);
     }
     read_from_host_[slot] = false;
     host = {};
