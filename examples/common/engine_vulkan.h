@@ -205,10 +205,13 @@ private:
 /// of frame n - F, and is submitted with its fence without waiting.
 class Frames {
 public:
-    Frames(const Device& device, uint32_t frames) : device_(device.handle()), queue_(device.queue()), commands_(frames), fences_(frames) {
+    Frames(const Device& device, uint32_t frames) : Frames(device.handle(), device.queue(), device.queue_family(), frames) {}
+    /// On a device and queue the engine has from elsewhere (e.g. hmsm::vulkan::device_handles).
+    Frames(VkDevice device, VkQueue queue, uint32_t queue_family, uint32_t frames)
+        : device_(device), queue_(queue), commands_(frames), fences_(frames) {
         VkCommandPoolCreateInfo pool{VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO};
         pool.flags = VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT;
-        pool.queueFamilyIndex = device.queue_family();
+        pool.queueFamilyIndex = queue_family;
         check(vkCreateCommandPool(device_, &pool, nullptr, &pool_), "vkCreateCommandPool");
         VkCommandBufferAllocateInfo allocate{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
         allocate.commandPool = pool_;
@@ -247,6 +250,11 @@ public:
         submit.commandBufferCount = 1;
         submit.pCommandBuffers = &commands_[k];
         check(vkQueueSubmit(queue_, 1, &submit, fences_[k]), "vkQueueSubmit");
+    }
+    /// Waits for frame `frame` (its slot's fence).
+    void wait(uint64_t frame) {
+        const size_t k = frame % commands_.size();
+        check(vkWaitForFences(device_, 1, &fences_[k], VK_TRUE, UINT64_MAX), "vkWaitForFences");
     }
     void wait_all() {
         check(vkWaitForFences(device_, uint32_t(fences_.size()), fences_.data(), VK_TRUE, UINT64_MAX), "vkWaitForFences");
