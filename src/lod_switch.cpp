@@ -112,29 +112,35 @@ std::vector<uint64_t> running_offsets(const std::vector<Instance>& instances, Pe
 /// runs of them (on an H100's Vulkan driver, shader copies of single chains out of and into the
 /// live chains left the standing step slower afterwards: docs/benchmarks/nvidia-h100.md).
 struct Staging {
-    std::vector<uint64_t> old_at;                             // per switch, its old chains' copy
-    std::vector<uint64_t> instance_at;                        // per switch, its first staged chain
-    std::vector<std::pair<uint32_t, uint64_t>> template_at;   // (run model, its template's first chain)
-    uint64_t end = 0;                                         // the chains the staging needs below it
+    /// A template: a model's chains at rest, from a carry into that model.
+    struct Template {
+        uint32_t model = 0;
+        uint64_t at = 0;  // its first chain
+        const LevelCarry* carry = nullptr;
+    };
+    std::vector<uint64_t> old_at;       // per switch, its old chains' copy
+    std::vector<uint64_t> instance_at;  // per switch, its first staged chain
+    std::vector<Template> templates;    // one per model that unfolds chains
+    uint64_t end = 0;                   // the chains the staging needs below it
 };
 
 /// Writes the templates of `staging` in every carried buffer (both halves where a buffer has
 /// two), every buffer in one write_buffers, in the backend's scalar.
 template <class V>
 Status write_templates(detail::Backend& backend, const std::vector<BufferId>& carried, uint64_t capacity,
-                       detail::Scalar scalar, const Staging& staging,
-                       const std::vector<const LevelCarry*>& template_carries) {
+                       detail::Scalar scalar, const Staging& staging) {
     std::vector<std::vector<detail::ElementRange>> ranges(carried.size());
     std::vector<std::vector<V>> values(carried.size());
     std::vector<detail::BufferRangesWrite> writes;
     for (size_t b = 0; b < carried.size(); ++b) {
         const uint32_t per = detail::shape_scalars(detail::buffer_info(carried[b]).shape);
-        for (uint32_t h = 0; h < halves_of(carried[b]); ++h)
-            for (size_t t = 0; t < staging.template_at.size(); ++t) {
-                const std::vector<V> rest = detail::rest_chains<V>(*template_carries[t], per, carried[b]);
-                ranges[b].push_back({h * capacity + staging.template_at[t].second, rest.size() / per});
+        for (const Staging::Template& t : staging.templates) {
+            const std::vector<V> rest = detail::rest_chains<V>(*t.carry, per, carried[b]);
+            for (uint32_t h = 0; h < halves_of(carried[b]); ++h) {
+                ranges[b].push_back({h * capacity + t.at, rest.size() / per});
                 values[b].insert(values[b].end(), rest.begin(), rest.end());
             }
+        }
         writes.push_back({carried[b], ranges[b], values[b].data()});
     }
     return backend.write_buffers(writes, scalar);
@@ -174,7 +180,6 @@ Status Simulation::Impl::switch_models(const std::vector<std::pair<uint32_t, uin
     const std::vector<BufferId> carried = carried_buffers(data_->coupled());
     ahead_schedule_.live_change();  // the state moves, the angles integrated ahead with it
     Staging staging;
-    std::vector<const LevelCarry*> template_carries;  // per template, a carry into its model
     {
         uint64_t at = std::max(data_->total_chains, totals.chains);
         for (size_t k = 0; k < models.size(); ++k) {
@@ -188,11 +193,10 @@ Status Simulation::Impl::switch_models(const std::vector<std::pair<uint32_t, uin
         for (size_t k = 0; k < models.size(); ++k) {
             const uint32_t model = models[k].second;
             if (carries[k]->unfolded.empty() ||
-                std::any_of(staging.template_at.begin(), staging.template_at.end(),
-                            [&](const auto& t) { return t.first == model; }))
+                std::any_of(staging.templates.begin(), staging.templates.end(),
+                            [&](const Staging::Template& t) { return t.model == model; }))
                 continue;
-            staging.template_at.emplace_back(model, at);
-            template_carries.push_back(carries[k]);
+            staging.templates.push_back({model, at, carries[k]});
             at += data_->models[model].chain_count;
         }
         staging.end = at;
@@ -243,8 +247,9 @@ Status Simulation::Impl::switch_models(const std::vector<std::pair<uint32_t, uin
             const uint64_t from = staging.old_at[k], into = staging.instance_at[k];
             for (const ElementMove& m : carries[k]->kept) stage.push_back({from + m.src, into + m.dst, m.count});
             if (carries[k]->unfolded.empty()) continue;
-            const uint64_t rest = std::find_if(staging.template_at.begin(), staging.template_at.end(),
-                                               [&](const auto& t) { return t.first == models[k].second; })->second;
+            const uint64_t rest = std::find_if(staging.templates.begin(), staging.templates.end(),
+                                               [&](const Staging::Template& t) { return t.model == models[k].second; })
+                                      ->at;
             for (const detail::ElementRange& r : carries[k]->unfolded) stage.push_back({rest + r.first, into + r.first, r.count});
         }
         for (size_t k = 0; const detail::IndexRun& run : runs) {
@@ -276,10 +281,9 @@ Status Simulation::Impl::switch_models(const std::vector<std::pair<uint32_t, uin
             const std::vector<ElementMove>& in_buffer = node_scope ? node_moves : vertex_moves;
             if (data_->element_count(id) > 0 && !in_buffer.empty()) moves.push_back({id, in_buffer});
         }
-        if (!staging.template_at.empty())
-            HMSM_TRY(scalar == detail::Scalar::f64
-                         ? write_templates<double>(*backend_, carried, capacity, scalar, staging, template_carries)
-                         : write_templates<float>(*backend_, carried, capacity, scalar, staging, template_carries));
+        if (!staging.templates.empty())
+            HMSM_TRY(scalar == detail::Scalar::f64 ? write_templates<double>(*backend_, carried, capacity, scalar, staging)
+                                                   : write_templates<float>(*backend_, carried, capacity, scalar, staging));
         HMSM_TRY(backend_->move_buffers(moves));
         for (auto [i, model] : models) {
             offsets.add(i, detail::counts_of(data_->models[model]) - detail::counts_of(data_->models[instances_[i].model]));
