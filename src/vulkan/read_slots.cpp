@@ -105,10 +105,7 @@ Result<const void*> ReadSlots::take(uint32_t slot_index) {
     return static_cast<const void*>(slot.buffer.mapped());
 }
 
-}  // namespace hmsm::detail::vk
-
 // The backend's side (Backend::request_read / take_read).
-namespace hmsm::detail::vk {
 
 Status VulkanBackend::request_read(uint32_t slot, BufferId id, uint64_t first, uint64_t count) const {
     HMSM_TRY(check_device_lost());
