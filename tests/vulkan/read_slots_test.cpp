@@ -31,16 +31,9 @@ std::vector<std::vector<float>> read_both_ways(Simulation& sim) {
     return values;
 }
 
-SimulationConfig windy() {
-    SimulationConfig config;
-    config.wind.strength = 9.0;
-    config.wind.direction = {1, 0, 0.4};
-    return config;
-}
-
 TEST_F(VulkanTest, OutputsReadInOneCopyEqualTheStagingChunks) {
     std::string skip;
-    auto sim = create_simulation_or_skip(*grid_scene(small_tree(), 5, 4.0, 1), windy(), BackendKind::vulkan, skip);
+    auto sim = create_simulation_or_skip(*grid_scene(small_tree(), 5, 4.0, 1), windy_config(), BackendKind::vulkan, skip);
     if (!skip.empty()) GTEST_SKIP() << skip;
     ASSERT_TRUE(sim);
     ASSERT_TRUE(sim->step(7).ok());
