@@ -74,7 +74,7 @@ enum class Scope : uint32_t {
     X(joint_matrix, HMSM_BINDING_JOINT_MATRIX, mat3x4, chain)                       \
     X(chain_walk, HMSM_BINDING_CHAIN_WALK, i32, model_chain_walk)                   \
     X(chain_dynamics, HMSM_BINDING_CHAIN_DYNAMICS, f32x24, model_chain)             \
-    X(chain_load, HMSM_BINDING_CHAIN_LOAD, f32x4, chain_halves)                     \
+    X(chain_load, HMSM_BINDING_CHAIN_LOAD, f32x2, chain_halves)                     \
     X(instance_table, HMSM_BINDING_INSTANCE_TABLE, i32x4, instance)
 
 enum class BufferId : uint32_t {

@@ -59,10 +59,10 @@ HMSM_HOST_DEVICE float2 coupled_force(const BufferPointers& b, const gpu::PassCo
     // Each child's load of the last step, passed on by its joint.
     int32_t first = 0, count = 0;
     coupled_children(record.s, first, count);
-    const float4* loads = b.chain_load + half_begin(pc, 1u - written);
+    const float2* loads = b.chain_load + half_begin(pc, 1u - written);
     const float4* passings = coupled_vec4(b, pc, pc.model_chain_begin, HMSM_CHAIN_DYNAMICS_PASSING);
     for (int32_t j = first; j < first + count; ++j) {
-        const float4 load_j = load(loads + state_chain(pc, k, j));
+        const float2 load_j = load(loads + state_chain(pc, k, j));
         const float4 p = load(passings + j);
         const float passing[4] = {p.x, p.y, p.z, p.w};
         coupled_add_child_load(passing, load_j.x, load_j.y, g);
@@ -70,7 +70,7 @@ HMSM_HOST_DEVICE float2 coupled_force(const BufferPointers& b, const gpu::PassCo
     const float4 state = load(b.chain_state + chain);
     const float rate[2] = {state.z, state.w};
     coupled_subtract_aero_damping(record.s, dot(w_local, w_local), rate, g);
-    b.chain_load[half_begin(pc, written) + chain] = make_float4(g[0], g[1], 0.0f, 0.0f);
+    b.chain_load[half_begin(pc, written) + chain] = make_float2(g[0], g[1]);
     return make_float2(g[0], g[1]);
 }
 

@@ -99,7 +99,7 @@ layout(set = 0, binding = HMSM_BINDING_JOINT_MATRIX, std430) buffer JointMatrix 
 // The coupled dynamics (docs/model.md 3.13; no elements under the paper's): HMSM_CHAIN_DYNAMICS_VEC4S
 // vec4 per model chain (its record), and per chain the load g of its last step.
 layout(set = 0, binding = HMSM_BINDING_CHAIN_DYNAMICS, std430) readonly buffer ChainDynamics { vec4 chain_dynamics[]; };
-layout(set = 0, binding = HMSM_BINDING_CHAIN_LOAD, std430) buffer ChainLoad { vec4 chain_load[]; };
+layout(set = 0, binding = HMSM_BINDING_CHAIN_LOAD, std430) buffer ChainLoad { vec2 chain_load[]; };
 
 // Live control, written by the host between steps (gpu_layout.h): 9 vec4 per instance, and the
 // wind table (turbulent amplitudes, wind vector, force fields, per-step slots).

@@ -28,7 +28,7 @@ vec2 coupled_force(uint k, uint c, vec3 w_local) {
     vec4 damping_children = coupled_record(model_chain, 3u);
     int first = int(damping_children.z), count = int(damping_children.w);
     for (int j = first; j < first + count; ++j) {
-        vec4 load_j = chain_load[half_offset(1u - written) + state_chain(k, uint(j))];
+        vec2 load_j = chain_load[half_offset(1u - written) + state_chain(k, uint(j))];
         vec4 passing = coupled_record(pc.model_chain_begin + uint(j), HMSM_CHAIN_DYNAMICS_PASSING);
         g.x += passing.x * load_j.x + passing.y * load_j.y;
         g.y += passing.z * load_j.x + passing.w * load_j.y;
@@ -45,7 +45,7 @@ vec2 coupled_force(uint k, uint c, vec3 w_local) {
         float taken = x > 1e-4 ? 1.0 - exp(-x) : x * (1.0 - 0.5 * x);
         g[a] -= inertia_stiffness[a] * taken * s[2 + a];
     }
-    chain_load[half_offset(written) + state_chain(k, c)] = vec4(g, 0.0, 0.0);
+    chain_load[half_offset(written) + state_chain(k, c)] = g;
     return g;
 }
 

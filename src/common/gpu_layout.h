@@ -51,7 +51,7 @@
 #define HMSM_BINDING_CHAIN_WALK 26           // HMSM_WALK_RECORD_INTS int per model chain: its walk record (below)
 // The coupled dynamics (docs/model.md 3.13; no elements under the paper's):
 #define HMSM_BINDING_CHAIN_DYNAMICS 27       // HMSM_CHAIN_DYNAMICS_VEC4S vec4 per model chain: below
-#define HMSM_BINDING_CHAIN_LOAD 28           // vec4 per chain, 2 halves: (g_x, g_z, 0, 0), the load g of a step
+#define HMSM_BINDING_CHAIN_LOAD 28           // vec2 per chain, 2 halves: (g_x, g_z), the load g of a step
 // Listed dispatches (PassConstants.instance_list below), written by the host with the program:
 #define HMSM_BINDING_INSTANCE_TABLE 29       // uvec4 per list entry: (chain_begin, node_begin, vertex_begin, instance)
 #define HMSM_BINDING_COUNT 30

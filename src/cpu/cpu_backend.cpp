@@ -265,7 +265,7 @@ private:
         s_.instance_table.assign(d.element_count(BufferId::instance_table), glm::ivec4(0));
         s_.chain_state.assign(d.element_count(BufferId::chain_state), vec4(0));
         s_.chain_force.assign(d.element_count(BufferId::chain_force), typename State<T>::vec2(0));
-        s_.chain_load.assign(d.element_count(BufferId::chain_load), vec4(0));
+        s_.chain_load.assign(d.element_count(BufferId::chain_load), typename State<T>::vec2(0));
         s_.chain_local.assign(d.element_count(BufferId::chain_local), typename State<T>::mat3(0));
         s_.chain_rotation.assign(d.element_count(BufferId::chain_rotation), typename State<T>::mat3(0));
         s_.node_relative.assign(d.element_count(BufferId::node_relative), vec4(0));

@@ -47,7 +47,7 @@ struct State {
     // Per-instance state.
     std::vector<vec4> chain_state;
     std::vector<vec2> chain_force;
-    std::vector<vec4> chain_load;      // coupled: (tau_x, tau_z, 0, 0), the load of the last step
+    std::vector<vec2> chain_load;      // coupled: (g_x, g_z), the load of the last step
     std::vector<mat3> chain_local;
     std::vector<mat3> chain_rotation;  // two halves of total_chains (the allocated chains)
     std::vector<vec4> node_relative;

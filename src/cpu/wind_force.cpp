@@ -73,7 +73,7 @@ void wind_forces(State<T>& s, const gpu::PassConstants& pc, uint32_t wind_slot, 
         auto w_local = glm::transpose(from_joint ? joint_rotation(s, c) : s.chain_rotation[pose]) * w;
         if (pc.dynamics == HMSM_PASS_DYNAMICS_COUPLED) {
             const auto g = coupled_force(s, pc, e.instance, c, pc.model_chain_begin + e.index, w_local, 1 - load_written);
-            s.chain_load[load_written * s.total_chains + c] = {g.x, g.y, T(0), T(0)};  // the parent's next load
+            s.chain_load[load_written * s.total_chains + c] = {g.x, g.y};  // the parent's next load
             use(c, e.instance, pc.model_chain_begin + e.index, g);
             continue;
         }
