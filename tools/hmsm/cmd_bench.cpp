@@ -5,10 +5,11 @@
 #include "bench_dynamics.h"
 #include "bench_frames.h"
 #include "bench_joints.h"
-#include "bench_report.h"
-#include "bench_run.h"
 #include "bench_live.h"
 #include "bench_open_world.h"
+#include "bench_page.h"
+#include "bench_report.h"
+#include "bench_run.h"
 #include "cli_common.h"
 
 #include <nlohmann/json.hpp>
@@ -17,7 +18,6 @@
 #include <cmath>
 #include <ctime>
 #include <filesystem>
-#include <fstream>
 #include <map>
 #include <optional>
 #include <sstream>
@@ -87,60 +87,6 @@ std::string utc_now() {
     char text[32];
     std::strftime(text, sizeof text, "%Y-%m-%dT%H:%M:%SZ", &tm);
     return text;
-}
-
-/// Every table of a result document, as a run prints them on stdout.
-std::string render_tables(const json& document) {
-    return render_markdown(document) + bench::render_joint_forest(document.value("forest_joints", json::array())) +
-           bench::render_live_control(document.value("live_control", json::array())) +
-           bench::render_composition_depths(document.value("composition_depths", json::array())) +
-           bench::render_frames(document.value("frames", json::array())) +
-           bench::render_dynamics(document.value("dynamics", json::array())) +
-           bench::render_open_world(document.value("open_world", json::array()));
-}
-
-/// The device page `--out STEM` writes as STEM.md: a header naming the device (the stem's file
-/// name), the commit and date, and the raw result beside it, then the tables.
-std::string render_page(const json& document, const std::string& stem) {
-    const std::string device = std::filesystem::path(stem).filename().string();
-    std::string page = "# hmsm bench: " + device + "\n\n";
-    page += "The newest result on this device: commit " + document.value("commit", std::string("unknown")) +
-            ", " + document.value("date", std::string("unknown")) + ". Raw result: [" + device + ".json](" +
-            device + ".json). Written by `hmsm bench --out`; a re-run replaces both files. The method, the "
-            "byte model and the JSON schema: docs/benchmarks/README.md.\n\n";
-    return page + render_tables(document);
-}
-
-/// Stages STEM.json and STEM.md (`--out`): both are written whole at commit, or neither.
-Status write_page(StagedOutputs& outputs, const std::string& stem, const std::string& json_text,
-                  const json& document) {
-    auto json_file = outputs.stage(stem + ".json", "--out");
-    if (!json_file) return json_file.status();
-    auto page_file = outputs.stage(stem + ".md", "--out");
-    if (!page_file) return page_file.status();
-    const std::string page = render_page(document, stem);
-    Status written = outputs.write(*json_file, json_text.data(), json_text.size());
-    if (written) written = outputs.write(*page_file, page.data(), page.size());
-    return written;
-}
-
-int render(const std::string& path) {
-    std::ifstream in(path);
-    if (!in) return fail_input("--render '" + detail::quote_input(path) + "': cannot read the file");
-    std::stringstream text;
-    text << in.rdbuf();
-    json document = json::parse(text.str(), nullptr, false);
-    if (document.is_discarded() || !document.is_object() || document.value("format", "") != "hmsm-bench")
-        return fail_input("--render '" + detail::quote_input(path) + "': not an hmsm-bench JSON document");
-    StagedOutputs outputs;
-    if (!flags.out_stem.empty()) {
-        Status staged = write_page(outputs, flags.out_stem, text.str(), document);
-        if (!staged) return fail(staged);
-    }
-    std::fputs(render_tables(document).c_str(), stdout);
-    Status committed = outputs.commit();
-    if (!committed) return fail(committed);
-    return kExitOk;
 }
 
 }  // namespace
@@ -216,7 +162,7 @@ int run_bench(CLI::App& app) {
         if (!folder.empty() && !std::filesystem::is_directory(folder, ec))
             return fail_input("--out " + flags.out_stem + ": the folder " + folder.string() + " does not exist");
     }
-    if (!flags.render.empty()) return render(flags.render);
+    if (!flags.render.empty()) return render_file(flags.render, flags.out_stem);
     if (flags.quick) {
         if (!app.count("--presets") && flags.tree.empty()) flags.presets = "paper-5";
         if (!app.count("--steps")) flags.steps = 5;
