@@ -112,14 +112,18 @@ HMSM_API TurbulentModes turbulent_modes(double turbulence, uint64_t seed);
 inline constexpr uint32_t kAtmosphericModesU = 16, kAtmosphericModesV = 8, kAtmosphericModesW = 8;
 
 /// The constants of the atmospheric profile for one wind setting, in double: mode k contributes
-/// a_k cos(2 pi (kx_k (xi - x.e_x) - ky_k x.e_y - kz_k x.e_z + u_k)) to its component, with xi the
-/// distance the mean wind has travelled and x the point (docs/model.md 3.5).
+/// a_k cos(2 pi (kx_k (xi - x.e_x) - ky_k x.e_y - kz_k x.e_z + u_k + q_k(xi))) to its component,
+/// with xi the distance the mean wind has travelled, x the point and q_k the mode's wander, which
+/// spreads its line over its band (docs/model.md 3.5).
 struct AtmosphericModes {
     double wavenumber[kTurbulentModes];  ///< kx_k (cycles per metre) along the mean wind
     double lateral[kTurbulentModes];     ///< ky_k: Davenport-like lateral coherence
     double vertical[kTurbulentModes];    ///< kz_k: the same vertically
     double amplitude[kTurbulentModes];   ///< a_k, the Kaimal variance of the mode's band
     double phase[kTurbulentModes];       ///< u_k in [0, 1)
+    /// Delta_k (m): the wander's knots lie Delta_k apart in xi, the inverse of the band's width.
+    double wander_spacing[kTurbulentModes];
+    uint64_t wander_key[kTurbulentModes];  ///< splitmix64(seed + 128 + k): the knots' values
 };
 HMSM_API AtmosphericModes atmospheric_modes(double turbulence, uint64_t seed);
 

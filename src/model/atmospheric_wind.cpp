@@ -1,7 +1,8 @@
 // The atmospheric wind profile (docs/model.md 3.5): a Kaimal spectrum per component (IEC
 // 61400-1 Ed. 3, Annex B), realised with one mode per log-spaced wavenumber band at a seeded
-// wavenumber within the band, Taylor-advected with the mean wind, with seeded lateral and
-// vertical wavenumbers that give Davenport-like coherence.
+// wavenumber within the band, Taylor-advected with the mean wind, its phase wandering so that
+// its line spreads over the band, with seeded lateral and vertical wavenumbers that give
+// Davenport-like coherence.
 #include "atmospheric_wind.h"
 
 #include <glm/geometric.hpp>
@@ -20,10 +21,12 @@ constexpr double kLengthScale[3] = {8.1 * kScaleParameter, 2.7 * kScaleParameter
 // sigma_u (IEC 61400-1 Ed. 3, B.2), and the quasi-steady force |V| V ~ U^2 (e_x (1 + 2 u/U) +
 // e_y v/U + e_z w/U): u' = 2 u/U carries sigma, v' = v/U and w' = w/U half the intensity ratio.
 constexpr double kRelativeDeviation[3] = {1.0, 0.8 / 2.0, 0.5 / 2.0};
-// Wavenumber bands (cycles per metre): from 0.02 / L (the spectrum's low end) to 1 (a 6 Hz
+// Wavenumber bands (cycles per metre): from 0.02 / L (the spectrum's low end) to 4 (a 24 Hz
 // gust at 6 m/s); the variance outside is left out and the rest scaled to the full variance.
 constexpr double kLowestBand = 0.02;
-constexpr double kHighestWavenumber = 1.0;
+constexpr double kHighestWavenumber = 4.0;
+// The wander's knot values are uniform in [-kWanderAmplitude, kWanderAmplitude] cycles.
+constexpr double kWanderAmplitude = 0.5;
 // Davenport-like decay of the coherence exp(-c f r / U) across the wind (IEC 61400-1 Ed. 3,
 // B.2 uses c = 12 for the exponential coherence model).
 constexpr double kCoherenceDecay = 12.0;
@@ -61,6 +64,8 @@ AtmosphericModes atmospheric_modes(double turbulence, uint64_t seed) {
             modes.lateral[k] = scale * std::tan(std::numbers::pi * (uniform_open(seed, 2, k) - 0.5));
             modes.vertical[k] = scale * std::tan(std::numbers::pi * (uniform_open(seed, 3, k) - 0.5));
             modes.phase[k] = double(splitmix64(seed + k) >> 11) * 0x1.0p-53;
+            modes.wander_spacing[k] = 1.0 / (edge * (ratio - 1.0));
+            modes.wander_key[k] = splitmix64(seed + 4u * 32u + k);
         }
         const double deviation = turbulence * kRelativeDeviation[c];
         for (uint32_t j = 0; j < count; ++j)
@@ -88,8 +93,18 @@ namespace detail {
 
 double fraction(double x) { return x - std::floor(x); }
 
+double atmospheric_wander(const AtmosphericModes& modes, uint32_t k, double clock) {
+    const double at = clock / modes.wander_spacing[k], knot = std::floor(at);
+    auto value = [&](double m) {
+        const uint64_t bits = splitmix64(modes.wander_key[k] + uint64_t(int64_t(m)));
+        return kWanderAmplitude * (2.0 * (double(bits >> 11) * 0x1.0p-53) - 1.0);
+    };
+    const double before = value(knot), after = value(knot + 1.0);
+    return before + (at - knot) * (after - before);
+}
+
 double atmospheric_step_phase(const AtmosphericModes& modes, uint32_t k, double clock) {
-    return fraction(modes.wavenumber[k] * clock + modes.phase[k]);
+    return fraction(fraction(modes.wavenumber[k] * clock + modes.phase[k]) + atmospheric_wander(modes, k, clock));
 }
 
 double atmospheric_instance_phase(const AtmosphericModes& modes, uint32_t k, double p, const Vec3& x,
@@ -100,12 +115,12 @@ double atmospheric_instance_phase(const AtmosphericModes& modes, uint32_t k, dou
     return fraction(along + lateral + vertical);
 }
 
-double atmospheric_component(const AtmosphericModes& modes, uint32_t begin, uint32_t end, double clock,
+double atmospheric_component(const AtmosphericModes& modes, uint32_t begin, uint32_t end, double clock, double p,
                              const Vec3& x, const WindFrame& frame) {
     double sum = 0.0;
     for (uint32_t k = begin; k < end; ++k) {
         const double phase =
-            fraction(atmospheric_step_phase(modes, k, clock) + atmospheric_instance_phase(modes, k, 0.0, x, frame));
+            fraction(atmospheric_step_phase(modes, k, clock) + atmospheric_instance_phase(modes, k, p, x, frame));
         sum += modes.amplitude[k] * std::cos(2.0 * std::numbers::pi * phase);
     }
     return sum;

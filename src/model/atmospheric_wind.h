@@ -11,7 +11,12 @@ namespace hmsm::detail {
 /// frac(x) = x - floor(x), in [0, 1).
 double fraction(double x);
 
-/// The per-step part of mode k's phase: frac(kx_k clock + u_k), the clock in metres.
+/// Mode k's wander q_k at `clock` (cycles): linear between seeded knot values in [-1/2, 1/2]
+/// placed wander_spacing[k] apart in the clock.
+double atmospheric_wander(const AtmosphericModes& modes, uint32_t k, double clock);
+
+/// The per-step part of mode k's phase: frac(frac(kx_k clock + u_k) + q_k(clock)), the clock in
+/// metres.
 double atmospheric_step_phase(const AtmosphericModes& modes, uint32_t k, double clock);
 
 /// The per-instance part of mode k's phase at point x with the instance's wind phase p (metres):
@@ -20,9 +25,9 @@ double atmospheric_step_phase(const AtmosphericModes& modes, uint32_t k, double 
 double atmospheric_instance_phase(const AtmosphericModes& modes, uint32_t k, double p, const Vec3& x,
                                   const WindFrame& frame);
 
-/// sum_{begin <= k < end} a_k cos(2 pi frac(step_k + instance_k)) at `clock` (the instance's
-/// phase p included) and point x: one component's fluctuation, exactly as the devices sum it.
-double atmospheric_component(const AtmosphericModes& modes, uint32_t begin, uint32_t end, double clock,
+/// sum_{begin <= k < end} a_k cos(2 pi frac(step_k + instance_k)) at `clock`, the instance's
+/// phase p and point x: one component's fluctuation, exactly as the devices sum it.
+double atmospheric_component(const AtmosphericModes& modes, uint32_t begin, uint32_t end, double clock, double p,
                              const Vec3& x, const WindFrame& frame);
 
 }  // namespace hmsm::detail

@@ -58,7 +58,7 @@ TurbulentModes turbulent_modes(double turbulence, uint64_t seed) {
 double wind_value(const Wind& wind, double x) {
     if (wind.profile == WindProfile::atmospheric) {  // 1 + u' at the origin
         const AtmosphericModes modes = atmospheric_modes(wind.turbulence, wind.seed);
-        return 1.0 + detail::atmospheric_component(modes, 0, kAtmosphericModesU, x, glm::dvec3(0.0),
+        return 1.0 + detail::atmospheric_component(modes, 0, kAtmosphericModesU, x, 0.0, glm::dvec3(0.0),
                                                    wind_frame(wind.direction));
     }
     if (wind.profile != WindProfile::turbulent) {
@@ -86,12 +86,12 @@ glm::dvec3 wind_at(const Wind& wind, const glm::dvec3& origin, double t, double 
     if (wind.profile == WindProfile::atmospheric) {
         const AtmosphericModes modes = atmospheric_modes(wind.turbulence, wind.seed);
         const WindFrame frame = wind_frame(wind.direction);
-        const double clock = wind_clock_rate(wind) * t + instance_phase;
+        const double clock = wind_clock_rate(wind) * t, p = instance_phase;
         const glm::dvec3 x = wind.strength < 0.0 ? -origin : origin;  // gusts travel with the mean wind
         const uint32_t v = kAtmosphericModesU, w = v + kAtmosphericModesV;
-        const double u_rel = detail::atmospheric_component(modes, 0, v, clock, x, frame);
-        const double v_rel = detail::atmospheric_component(modes, v, w, clock, x, frame);
-        const double w_rel = detail::atmospheric_component(modes, w, kTurbulentModes, clock, x, frame);
+        const double u_rel = detail::atmospheric_component(modes, 0, v, clock, p, x, frame);
+        const double v_rel = detail::atmospheric_component(modes, v, w, clock, p, x, frame);
+        const double w_rel = detail::atmospheric_component(modes, w, kTurbulentModes, clock, p, x, frame);
         return instance_scale * wind.strength *
                ((1.0 + u_rel) * frame.along + v_rel * frame.lateral + w_rel * frame.vertical);
     }
