@@ -194,19 +194,24 @@ Result<std::vector<uint8_t>> Simulation::Impl::fades_at_rest(const std::vector<u
     return at_rest;
 }
 
-Status Simulation::Impl::fold_ready_fades() {
-    std::vector<std::pair<uint32_t, uint32_t>> folds;
+std::vector<std::pair<uint32_t, uint32_t>> Simulation::Impl::ended_fades() {
+    std::vector<std::pair<uint32_t, uint32_t>> ended;
     for (auto it = fades_.begin(); it != fades_.end();) {
         const int64_t index = live_index(it->first);
         const bool gone = index < 0 || instances_[size_t(index)].model != it->second.from_model;
         const bool over = !gone && (instances_[size_t(index)].active ? it->second.end_step <= steps_done_
                                                                       : it->second.paused_left == 0);
-        if (over) folds.emplace_back(uint32_t(index), it->second.target_model);
-        if (index >= 0 && (gone || over)) dirty_instances_.push_back(uint32_t(index));  // its fade word
-        it = gone || over ? fades_.erase(it) : std::next(it);
+        if (over) ended.emplace_back(uint32_t(index), it->second.target_model);
+        if (index >= 0 && gone) dirty_instances_.push_back(uint32_t(index));  // its fade word
+        it = gone ? fades_.erase(it) : std::next(it);
     }
-    std::sort(folds.begin(), folds.end());
-    return switch_models(folds);
+    std::sort(ended.begin(), ended.end());
+    return ended;
+}
+
+Status Simulation::Impl::fold_ready_fades() {
+    Result<uint64_t> folded = request_lods({}, ended_fades());
+    return folded ? Status{} : folded.status();
 }
 
 Status Simulation::Impl::step_fading(uint32_t count) {
@@ -221,9 +226,24 @@ Status Simulation::Impl::step_fading(uint32_t count) {
     return {};
 }
 
-Result<uint64_t> Simulation::Impl::request_lods(std::vector<std::pair<uint32_t, uint32_t>> requests) {
+Result<uint64_t> Simulation::Impl::request_lods(std::vector<std::pair<uint32_t, uint32_t>> requests,
+                                                std::vector<std::pair<uint32_t, uint32_t>> ended) {
     std::sort(requests.begin(), requests.end());
-    std::vector<std::pair<uint32_t, uint32_t>> switches;  // (index, run model), ascending
+    for (auto [i, model] : ended) {  // the ended fades fold: their fade words are rewritten
+        fades_.erase(uint64_t(instance_ids_[i]));
+        dirty_instances_.push_back(i);
+    }
+    // An instance both folding and asked for a level folds first, as if asked after the fold;
+    // otherwise the folds join this call's switches (one reshape of the state instead of two).
+    std::vector<std::pair<uint32_t, uint32_t>> switches = std::move(ended);  // (index, run model)
+    for (size_t a = 0, b = 0; a < switches.size() && b < requests.size();) {
+        if (switches[a].first == requests[b].first) {
+            HMSM_TRY(switch_models(switches));
+            switches.clear();
+            break;
+        }
+        switches[a].first < requests[b].first ? ++a : ++b;
+    }
     std::vector<uint32_t> started;                         // fades to measure, ascending
     uint64_t changed = 0;
     for (const auto& [i, level] : requests) {
@@ -293,8 +313,7 @@ Result<uint64_t> Simulation::request_instance_lods(std::span<const InstanceId> i
             return Status{ErrorCode::invalid_argument, "request_instance_lods: instance id " +
                                                            std::to_string(uint64_t(s.instance_ids_[sorted[k].first])) +
                                                            " is listed twice"};
-    HMSM_TRY(impl_->fold_ready_fades());
-    return impl_->request_lods(std::move(requests));
+    return impl_->request_lods(std::move(requests), impl_->ended_fades());
 }
 
 Result<uint32_t> Simulation::instance_lod_target(InstanceId id) const {

@@ -34,7 +34,9 @@ Result<uint64_t> Simulation::update_lod(Vec3 viewer) {
     Impl& s = *impl_;
     if (!std::isfinite(viewer.x) || !std::isfinite(viewer.y) || !std::isfinite(viewer.z))
         return Status{ErrorCode::invalid_argument, "update_lod: the viewer position is not finite"};
-    HMSM_TRY(s.fold_ready_fades());
+    // The fades that ended switch with this call's changes; until then they head for their
+    // targets, so they are examined at the level they fold to.
+    std::vector<std::pair<uint32_t, uint32_t>> ended = s.ended_fades();
     const std::vector<double>& edges = s.lod_bands_.edges;
     const double h = s.lod_bands_.hysteresis;
     detail::LodTracker& tracker = s.lod_tracker_;
@@ -75,7 +77,7 @@ Result<uint64_t> Simulation::update_lod(Vec3 viewer) {
             keys[i] = e.slack;
         }
         tracker.invalidate();
-        Result<uint64_t> changed = s.request_lods(changes);
+        Result<uint64_t> changed = s.request_lods(changes, std::move(ended));
         if (!changed) return changed.status();
         tracker.key = std::move(keys);
         tracker.heap.reserve(n);
@@ -88,6 +90,7 @@ Result<uint64_t> Simulation::update_lod(Vec3 viewer) {
         return *changed;
     }
 
+    for (const auto& [i, model] : ended) tracker.examine_next(i, uint64_t(s.instance_ids_[i]));  // as a fold would
     tracker.travelled += glm::length(glm::dvec3(viewer) - glm::dvec3(tracker.viewer));
     tracker.viewer = viewer;
     ++tracker.calls;
@@ -104,7 +107,7 @@ Result<uint64_t> Simulation::update_lod(Vec3 viewer) {
         change_of(i, e.level);
         examined.emplace_back(i, e.slack);
     }
-    Result<uint64_t> changed = s.request_lods(changes);
+    Result<uint64_t> changed = s.request_lods(changes, std::move(ended));
     if (!changed) {
         tracker.invalidate();
         return changed.status();

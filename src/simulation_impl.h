@@ -201,10 +201,16 @@ struct __attribute__((visibility("hidden"))) Simulation::Impl {
     /// to a node or mesh vertex of its subtree (filled on first use).
     mutable std::vector<std::vector<double>> subtree_extent_;
     /// Levels asked for (current index, level), in any order: finer or equal levels switch at
-    /// once, coarser ones fade by lod_bands_. Returns how many instances changed level or target.
-    Result<uint64_t> request_lods(std::vector<std::pair<uint32_t, uint32_t>> requests);
-    /// Switches the fades that are over (all their steps run) and drops those whose instance is
-    /// gone or switched; their fade words are rewritten.
+    /// once, coarser ones fade by lod_bands_. `ended` (ended_fades) switch to their targets in
+    /// the same switch where no request names them, else first. Returns how many instances
+    /// changed level or target.
+    Result<uint64_t> request_lods(std::vector<std::pair<uint32_t, uint32_t>> requests,
+                                  std::vector<std::pair<uint32_t, uint32_t>> ended = {});
+    /// The fades that are over (all their steps run) as (index, target model), ascending; they
+    /// stay in fades_ (an instance heads for its target) until request_lods switches them. Drops
+    /// the fades whose instance is gone or switched (their fade words are rewritten).
+    std::vector<std::pair<uint32_t, uint32_t>> ended_fades();
+    /// Switches the ended fades (ended_fades) at once.
     Status fold_ready_fades();
     /// step() while fades run: folds the fades that are over, then runs the steps in one go
     /// (chunks of at most kStepsBetweenFolds, lod_fade.cpp).
