@@ -67,6 +67,31 @@ struct RecordedAndReference {
         return reference->step(steps);
     }
 
+    /// `count` frames of an engine with three in flight: change(f) makes the frame's live changes
+    /// (to both simulations), step_both runs steps(f) steps, then check(f). Stops at the first
+    /// fatal failure; waits for every frame otherwise.
+    template <class Change, class Steps, class Check>
+    void run_frames(uint32_t count, Change change, Steps steps, Check check) {
+        EngineFrames frames(*engine, 3);
+        if (::testing::Test::HasFailure()) return;
+        for (uint32_t f = 0; f < count; ++f) {
+            change(f);
+            if (::testing::Test::HasFatalFailure()) return;
+            const Status status = step_both(frames, f, steps(f));
+            ASSERT_TRUE(status.ok()) << "frame " << f << ": " << status.message();
+            check(f);
+            if (::testing::Test::HasFatalFailure()) return;
+        }
+        frames.wait_all();
+    }
+    /// run_frames with the same live change for both simulations, `steps` steps a frame, and
+    /// no check.
+    template <class Change>
+    void run_frames(uint32_t count, Change change, uint32_t steps) {
+        run_frames(
+            count, [&](uint32_t f) { for (Simulation* s : {recorded.get(), reference.get()}) change(*s, f); },
+            [&](uint32_t) { return steps; }, [](uint32_t) {});
+    }
     /// The two run the same models and give the same `outputs`, bit for bit.
     void expect_same(std::initializer_list<Output> outputs) const {
         ASSERT_EQ(recorded->instance_count(), reference->instance_count());

@@ -67,47 +67,45 @@ TEST_P(StepReplay, FollowsPlanChangesBetweenFrames) {
         ASSERT_TRUE(s->reserve_instances(16).ok());
         ASSERT_TRUE(s->set_lod_bands(bands).ok());
     }
-    {
-        EngineFrames frames(*pair.engine, 3);
-        if (HasFailure()) return;
-        for (uint32_t f = 0; f < 18; ++f) {
-            for (Simulation* s : {&sim, reference}) {
-                gust(*s, f);
-                if (f == 4) {  // a reset: a one-off pose, the step program stays
-                    const uint32_t reset[] = {2};
-                    ASSERT_TRUE(s->reset_instances(reset).ok());
-                }
-                if (f == 6) {  // a tree streams in: a new program
-                    const Instance added[] = {{0, {12.0, 0.0, 3.0}, 0.4}};
-                    ASSERT_TRUE(s->add_instances(added).ok());
-                }
-                if (f == 9) {  // switches made at once: a new program
-                    const InstanceId ids[] = {InstanceId(0), InstanceId(3)};
-                    const uint32_t levels[] = {1, 2};
-                    ASSERT_TRUE(s->set_instance_lods(ids, levels).ok());
-                }
-                if (f == 12) {  // fades that end a few frames later: new programs then
-                    const InstanceId ids[] = {InstanceId(1), InstanceId(4)};
-                    const uint32_t levels[] = {2, 1};
-                    auto requested = s->request_instance_lods(ids, levels);
-                    ASSERT_TRUE(requested.ok()) << requested.status().message();
-                }
-                if (HasFatalFailure()) return;
+    uint64_t secondaries = 0, replays = 0;  // before the frame
+    auto change = [&](uint32_t f) {
+        for (Simulation* s : {&sim, reference}) {
+            gust(*s, f);
+            if (f == 4) {  // a reset: a one-off pose, the step program stays
+                const uint32_t reset[] = {2};
+                ASSERT_TRUE(s->reset_instances(reset).ok());
             }
-            const uint64_t secondaries = backend.step_secondaries_recorded();
-            const uint64_t replays = backend.step_replays();
-            // 1, 2 and 3 steps in turn: the coupled dynamics' load halves and the fades' clock
-            // come from the wind table, whatever step count the replayed secondary records.
-            const Status status = pair.step_both(frames, f, 1 + f % 3);
-            ASSERT_TRUE(status.ok()) << "frame " << f << ": " << status.message();
-            EXPECT_GE(backend.step_replays(), replays + 1) << "frame " << f << " replays its steps";
-            if (f == 6 || f == 9)
-                EXPECT_GT(backend.step_secondaries_recorded(), secondaries) << "frame " << f << " has a new program";
-            if (f == 4 || f == 5)  // a reset's one-off program has a plan of its own
-                EXPECT_EQ(backend.step_secondaries_recorded(), secondaries) << "frame " << f << ": live data only";
+            if (f == 6) {  // a tree streams in: a new program
+                const Instance added[] = {{0, {12.0, 0.0, 3.0}, 0.4}};
+                ASSERT_TRUE(s->add_instances(added).ok());
+            }
+            if (f == 9) {  // switches made at once: a new program
+                const InstanceId ids[] = {InstanceId(0), InstanceId(3)};
+                const uint32_t levels[] = {1, 2};
+                ASSERT_TRUE(s->set_instance_lods(ids, levels).ok());
+            }
+            if (f == 12) {  // fades that end a few frames later: new programs then
+                const InstanceId ids[] = {InstanceId(1), InstanceId(4)};
+                const uint32_t levels[] = {2, 1};
+                auto requested = s->request_instance_lods(ids, levels);
+                ASSERT_TRUE(requested.ok()) << requested.status().message();
+            }
         }
-        frames.wait_all();
-    }
+        secondaries = backend.step_secondaries_recorded();
+        replays = backend.step_replays();
+    };
+    // 1, 2 and 3 steps in turn: the coupled dynamics' load halves and the fades' clock come
+    // from the wind table, whatever step count the replayed secondary records.
+    auto steps = [](uint32_t f) { return 1 + f % 3; };
+    auto check = [&](uint32_t f) {
+        EXPECT_GE(backend.step_replays(), replays + 1) << "frame " << f << " replays its steps";
+        if (f == 6 || f == 9)
+            EXPECT_GT(backend.step_secondaries_recorded(), secondaries) << "frame " << f << " has a new program";
+        if (f == 4 || f == 5)  // a reset's one-off program has a plan of its own
+            EXPECT_EQ(backend.step_secondaries_recorded(), secondaries) << "frame " << f << ": live data only";
+    };
+    pair.run_frames(18, change, steps, check);
+    if (HasFatalFailure()) return;
     EXPECT_EQ(sim.fading_instance_count(), 0u);
     EXPECT_EQ(*sim.instance_lod(InstanceId(1)), 2u);
     pair.expect_same(kCompared);
@@ -130,25 +128,23 @@ TEST_F(StepReplay, SteadyFramesRecordNoSecondaryAgain) {
     Simulation &sim = *pair.recorded, *reference = pair.reference.get();
     const auto& backend = vulkan_of(sim);
     constexpr uint32_t kFrames = 12;
-    uint64_t after_first_round = 0;
-    {
-        EngineFrames frames(*pair.engine, 3);
-        if (HasFailure()) return;
-        for (uint32_t f = 0; f < kFrames; ++f) {
+    uint64_t after_first_round = 0, copies = 0;
+    pair.run_frames(
+        kFrames,
+        [&](uint32_t f) {
             for (Simulation* s : {&sim, reference}) gust(*s, f);
-            if (HasFatalFailure()) return;
-            const uint64_t copies = backend.engine_copy_commands();
-            const Status status = pair.step_both(frames, f, 2);
-            ASSERT_TRUE(status.ok()) << "frame " << f << ": " << status.message();
+            copies = backend.engine_copy_commands();
+        },
+        [](uint32_t) { return 2u; },
+        [&](uint32_t f) {
             if (f == 2) after_first_round = backend.step_secondaries_recorded();
             // The gust's wind table (header and step slots) travels in the secondary: past the
             // first frame (its run table) the engine's buffer gets the vkCmdExecuteCommands
             // alone, but in frame 4, whose turned wind rewrites every instance's wind data.
             if (f > 0 && f != 4)
                 EXPECT_EQ(backend.engine_copy_commands(), copies) << "copies into the engine's buffer, frame " << f;
-        }
-        frames.wait_all();
-    }
+        });
+    if (HasFatalFailure()) return;
     EXPECT_EQ(after_first_round, 3u) << "one secondary per frame in flight";
     EXPECT_EQ(backend.step_secondaries_recorded(), after_first_round) << "recorded again in a steady loop";
     EXPECT_EQ(backend.step_replays(), kFrames);
@@ -165,18 +161,13 @@ TEST_F(StepReplay, WindChangedInOneFrameReachesTheFramesAfterIt) {
     RecordedAndReference pair = RecordedAndReference::create(options, skip);
     if (!skip.empty()) GTEST_SKIP() << skip;
     ASSERT_TRUE(pair.recorded && pair.reference);
-    {
-        EngineFrames frames(*pair.engine, 3);
-        if (HasFailure()) return;
-        for (uint32_t f = 0; f < 11; ++f) {
-            if (f == 1 || f == 7)
-                for (Simulation* s : {pair.recorded.get(), pair.reference.get()}) gust(*s, f);
-            if (HasFatalFailure()) return;
-            const Status status = pair.step_both(frames, f, 2);
-            ASSERT_TRUE(status.ok()) << "frame " << f << ": " << status.message();
-        }
-        frames.wait_all();
-    }
+    pair.run_frames(
+        11,
+        [](Simulation& s, uint32_t f) {
+            if (f == 1 || f == 7) gust(s, f);
+        },
+        2);
+    if (HasFatalFailure()) return;
     EXPECT_GE(vulkan_of(*pair.recorded).step_replays(), 11u);
     pair.expect_same(kCompared);
 }
@@ -192,17 +183,8 @@ TEST_F(VulkanTest, RecordedStepsWithoutReplayMatchStep) {
     RecordedAndReference pair = RecordedAndReference::create(options, skip);
     if (!skip.empty()) GTEST_SKIP() << skip;
     ASSERT_TRUE(pair.recorded && pair.reference);
-    {
-        EngineFrames frames(*pair.engine, 3);
-        if (HasFailure()) return;
-        for (uint32_t f = 0; f < 6; ++f) {
-            for (Simulation* s : {pair.recorded.get(), pair.reference.get()}) gust(*s, f);
-            if (HasFatalFailure()) return;
-            const Status status = pair.step_both(frames, f, 2);
-            ASSERT_TRUE(status.ok()) << "frame " << f << ": " << status.message();
-        }
-        frames.wait_all();
-    }
+    pair.run_frames(6, gust, 2);
+    if (HasFatalFailure()) return;
     EXPECT_EQ(vulkan_of(*pair.recorded).step_replays(), 0u);
     pair.expect_same(kCompared);
 }
