@@ -162,7 +162,9 @@ public:
     /// Chooses each instance's level from its distance to `viewer` (world metres) by the
     /// bands, with hysteresis (from the level a fading instance heads for), and asks for the
     /// changes in one request_instance_lods call: finer levels at once, coarser ones by a
-    /// fade. Fades that ended since are switched first. Once per frame, before step().
+    /// fade. Fades that ended since switch in the same reshape of the state as the call's
+    /// changes (an instance both ending its fade and changing level switches to its fade's
+    /// target first). Once per frame, before step().
     /// Returns how many instances changed level or target.
     Result<uint64_t> update_lod(Vec3 viewer);
 
