@@ -38,13 +38,14 @@ constexpr bool sized_by_capacity(BufferId id) {
 }
 
 /// The live elements of buffer `id` under `scene`'s live counts, per half of a ping-pong buffer:
-/// the chains, nodes, vertices or instances the scene holds now.
+/// the chains, nodes, vertices (up to the last slot held, in the placed layout) or instances
+/// the scene holds now.
 inline uint64_t live_elements(const SceneData& scene, BufferId id) {
     switch (buffer_info(id).scope) {
         case Scope::chain:
-        case Scope::chain_halves: return scene.total_chains;
-        case Scope::node: return scene.total_nodes;
-        case Scope::vertex: return scene.total_vertices;
+        case Scope::chain_halves: return scene.chains_held();
+        case Scope::node: return scene.nodes_held();
+        case Scope::vertex: return scene.vertices_held();
         case Scope::instance: return scene.instance_count();
         default: return 0;
     }

@@ -20,6 +20,11 @@ std::optional<VertexLayout> parse_vertex_layout(std::string_view name) {
     return value_named(kVertexLayoutNames, name);
 }
 
+const char* to_string(InstanceLayout layout) { return name_in(kInstanceLayoutNames, layout); }
+std::optional<InstanceLayout> parse_instance_layout(std::string_view name) {
+    return value_named(kInstanceLayoutNames, name);
+}
+
 const char* to_string(Outputs outputs) { return name_in(kOutputsNames, outputs); }
 std::optional<Outputs> parse_outputs(std::string_view name) {
     return value_named(kOutputsNames, name);

@@ -59,6 +59,26 @@ Result<uint64_t> Simulation::index_of(InstanceId id) const {
                                                    std::to_string(impl_->next_instance_id_) + ")"};
 }
 
+Result<InstancePlacement> Simulation::instance_placement(InstanceId id) const {
+    Result<uint64_t> index = index_of(id);
+    if (!index) return Status{index.status().code(), "instance_placement: " + index.status().message()};
+    const Impl& s = *impl_;
+    const uint32_t i = uint32_t(*index);
+    if (s.placed_) {
+        const detail::ElementCounts& at = s.placements_[i];
+        return InstancePlacement{at.chains, at.nodes, at.vertices};
+    }
+    // Packed: from the group holding the instance, whose instances lie back to back.
+    const std::vector<detail::InstanceGroup>& groups = s.data_->groups;
+    auto g = std::upper_bound(groups.begin(), groups.end(), i,
+                              [](uint32_t at, const detail::InstanceGroup& group) { return at < group.instance_begin; });
+    --g;
+    const detail::ModelRange& m = s.data_->models[g->model];
+    const uint64_t k = i - g->instance_begin;
+    return InstancePlacement{g->chain_begin + k * m.chain_count, g->node_begin + k * m.node_count,
+                             g->vertex_begin + k * m.vertex_count};
+}
+
 Result<InstanceId> Simulation::id_of(uint64_t index) const {
     if (index >= impl_->instance_ids_.size())
         return Status{ErrorCode::invalid_argument, "instance " + std::to_string(index) +

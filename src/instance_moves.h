@@ -7,6 +7,7 @@
 #pragma once
 
 #include "backend.h"
+#include "scene_data.h"
 
 #include <algorithm>
 #include <cstdint>
@@ -54,6 +55,21 @@ inline uint32_t halves_of(BufferId id) { return buffer_info(id).scope == Scope::
 inline bool half_moves(BufferId id, uint32_t h, uint32_t pose_half) {
     if (id == BufferId::chain_rotation || id == BufferId::chain_origin) return h == pose_half;
     return h < halves_of(id);
+}
+
+/// Writes origins and yaws of the instances in `runs` (ranges of indices) from d's instance
+/// arrays, every run in one write_ranges per buffer.
+inline Status write_origins_and_yaws(Backend& backend, const SceneData& d, std::span<const ElementRange> runs) {
+    std::vector<double> values;
+    for (BufferId id : {BufferId::instance_origin, BufferId::instance_yaw}) {
+        const auto& source = id == BufferId::instance_origin ? d.instance_origin : d.instance_yaw;
+        values.clear();
+        for (const ElementRange& r : runs)
+            for (uint64_t i = r.first; i < r.first + r.count; ++i)
+                for (int c = 0; c < 4; ++c) values.push_back(source[i][c]);
+        HMSM_TRY(backend.write_ranges(id, runs, values.data(), Scalar::f64));
+    }
+    return {};
 }
 
 /// Neighbouring instances [first, end): read, carried and written as one range.

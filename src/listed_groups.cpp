@@ -40,7 +40,7 @@ bool scene_can_be_listed(const SceneData& d) {
 }
 
 void list_groups(const SceneData& d, std::span<const InstanceGroup> groups, std::span<const Instance> instances,
-                 ListedGroups& into) {
+                 ListedGroups& into, const InstancePlacements* placed) {
     auto active = [&](const InstanceGroup& g, uint32_t k) {
         return !g.covers_paused || instances[g.instance_begin + k].active;
     };
@@ -61,9 +61,16 @@ void list_groups(const SceneData& d, std::span<const InstanceGroup> groups, std:
         for (uint32_t k = 0; k < g.instance_count; ++k) {
             if (!active(g, k)) continue;
             double* entry = &into.table[size_t(4) * next[g.model]++];
-            entry[0] = double(g.chain_begin + uint64_t(k) * m.chain_count);
-            entry[1] = double(g.node_begin + uint64_t(k) * m.node_count);
-            entry[2] = double(g.vertex_begin + uint64_t(k) * m.vertex_count);
+            if (placed) {
+                const ElementCounts& at = (*placed)[g.instance_begin + k];
+                entry[0] = double(at.chains);
+                entry[1] = double(at.nodes);
+                entry[2] = double(at.vertices);
+            } else {
+                entry[0] = double(g.chain_begin + uint64_t(k) * m.chain_count);
+                entry[1] = double(g.node_begin + uint64_t(k) * m.node_count);
+                entry[2] = double(g.vertex_begin + uint64_t(k) * m.vertex_count);
+            }
             entry[3] = double(g.instance_begin + k);
         }
     }

@@ -7,6 +7,7 @@
 // PassConstants.instance_list), so the program has a few dispatches per pass whatever the order.
 #pragma once
 
+#include "instance_placements.h"
 #include "scene_data.h"
 
 #include <hmsm/scene.h>
@@ -33,9 +34,11 @@ bool scene_can_be_listed(const SceneData& d);
 /// The listed groups of the active instances that `groups` (contiguous groups of d, as the step
 /// program takes them; a group may cover paused instances, which are left out) cover: per
 /// model, its instances in ascending index, split so that no dispatch exceeds
-/// kMaxGroupElements threads; models in ascending order. O(instances covered + models).
+/// kMaxGroupElements threads; models in ascending order. O(instances covered + models). The
+/// entries' state offsets are the groups' (the packed layout) or, given `placed`, each
+/// instance's slot (the placed layout, instance_placements.h; the groups' offsets unused).
 void list_groups(const SceneData& d, std::span<const InstanceGroup> groups, std::span<const Instance> instances,
-                 ListedGroups& into);
+                 ListedGroups& into, const InstancePlacements* placed = nullptr);
 
 /// Whether the step program should run `listed` groups rather than the `contiguous` ones:
 /// there are many contiguous groups (at least kListedGroupsFrom) and at least four times as

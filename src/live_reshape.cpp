@@ -128,6 +128,7 @@ Status Simulation::Impl::reshape(const std::vector<uint32_t>& survivors, std::sp
         explicit InstanceChange(detail::Backend& b) : backend(b) { backend.begin_instance_change(); }
         ~InstanceChange() { backend.end_instance_change(); }
     } change(*backend_);
+    HMSM_TRY(pack_layout());  // the moves below take the layout as packed
     std::vector<Instance> next;
     next.reserve(survivors.size() + added.size());
     for (uint32_t i : survivors) next.push_back(instances_[i]);
@@ -243,9 +244,18 @@ Status Simulation::Impl::reset(std::span<const uint32_t> indices) {
     // joint matrices, nodes and vertices from them.
     std::vector<detail::ElementRange> ranges, both_halves;  // every slice at once
     uint64_t chains = 0;
-    for (const detail::InstanceGroup& g : slices) {
-        ranges.push_back({g.chain_begin, uint64_t(g.instance_count) * data_->models[g.model].chain_count});
-        chains += ranges.back().count;
+    if (placed_) {
+        for (uint32_t i : indices) {
+            const uint64_t first = placements_[i].chains, n = data_->models[instances_[i].model].chain_count;
+            if (!ranges.empty() && ranges.back().first + ranges.back().count == first) ranges.back().count += n;
+            else ranges.push_back({first, n});
+            chains += n;
+        }
+    } else {
+        for (const detail::InstanceGroup& g : slices) {
+            ranges.push_back({g.chain_begin, uint64_t(g.instance_count) * data_->models[g.model].chain_count});
+            chains += ranges.back().count;
+        }
     }
     for (uint64_t half : {uint64_t(0), data_->chain_capacity})
         for (const detail::ElementRange& r : ranges) both_halves.push_back({half + r.first, r.count});

@@ -54,21 +54,6 @@ Status apply_moves(detail::Backend& backend, BufferId id, const std::vector<Elem
     return backend.move_elements(id, both);
 }
 
-/// Writes origins and yaws of the instances in `runs` (ranges of indices) from d's instance
-/// arrays, every run in one write_ranges per buffer.
-Status write_placement(detail::Backend& backend, const detail::SceneData& d, std::span<const detail::ElementRange> runs) {
-    std::vector<double> values;
-    for (BufferId id : {BufferId::instance_origin, BufferId::instance_yaw}) {
-        const auto& source = id == BufferId::instance_origin ? d.instance_origin : d.instance_yaw;
-        values.clear();
-        for (const detail::ElementRange& r : runs)
-            for (uint64_t i = r.first; i < r.first + r.count; ++i)
-                for (int c = 0; c < 4; ++c) values.push_back(source[i][c]);
-        HMSM_TRY(backend.write_ranges(id, runs, values.data(), detail::Scalar::f64));
-    }
-    return {};
-}
-
 }  // namespace
 
 detail::InstanceOffsets& Simulation::Impl::offsets() {
@@ -81,6 +66,10 @@ detail::InstanceOffsets& Simulation::Impl::offsets() {
 
 void Simulation::Impl::instance_list_laid_out() {
     offsets_valid_ = false;
+    if (placed_) {  // laid out packed
+        placements_.assign_packed(instances_, data_->models);
+        placed_end_changed();
+    }
     lod_tracker_.invalidate();
     paused_count_ = uint64_t(std::count_if(instances_.begin(), instances_.end(), [](const Instance& i) { return !i.active; }));
 }
@@ -98,6 +87,7 @@ Status Simulation::Impl::check_size(uint64_t count, const detail::ElementCounts&
 }
 
 Result<bool> Simulation::Impl::append_in_place(std::span<const Instance> added) {
+    if (placed_) return append_placed(added);
     detail::SceneData& d = *data_;
     const uint32_t first = uint32_t(instances_.size());
     const ElementCounts live{d.total_chains, d.total_nodes, d.total_vertices};
@@ -145,7 +135,7 @@ Result<bool> Simulation::Impl::append_in_place(std::span<const Instance> added) 
     d.instance_wind.resize(size_t(HMSM_INSTANCE_WIND_VEC4S) * 4 * instances_.size(), 0.0);
     detail::relay_groups(d, instances_, appended);
     const detail::ElementRange appended_run{first, instances_.size() - first};
-    HMSM_TRY(write_placement(*backend_, d, {&appended_run, 1}));
+    HMSM_TRY(detail::write_origins_and_yaws(*backend_, d, {&appended_run, 1}));
     instances_changed();
     header_dirty_ = program_dirty_ = true;
 
@@ -162,6 +152,10 @@ Result<bool> Simulation::Impl::append_in_place(std::span<const Instance> added) 
 }
 
 Result<bool> Simulation::Impl::swap_remove_in_place(const std::vector<uint32_t>& removed) {
+    if (placed_) {
+        HMSM_TRY(swap_remove_placed(removed));
+        return true;
+    }
     detail::SceneData& d = *data_;
     const uint32_t n = uint32_t(instances_.size());
     const uint32_t kept = n - uint32_t(removed.size());
@@ -290,7 +284,7 @@ Result<bool> Simulation::Impl::swap_remove_in_place(const std::vector<uint32_t>&
         hole_runs.push_back({holes[j], end - j});
         j = end;
     }
-    HMSM_TRY(write_placement(*backend_, d, hole_runs));
+    HMSM_TRY(detail::write_origins_and_yaws(*backend_, d, hole_runs));
     dirty_instances_.insert(dirty_instances_.end(), holes.begin(), holes.end());
     HMSM_TRY(apply_pending());
     return true;

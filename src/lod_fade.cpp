@@ -155,6 +155,7 @@ Result<std::vector<uint8_t>> Simulation::Impl::fades_at_rest(const std::vector<u
     // The first state chain of instance i, and one past its last, from the group holding it.
     const std::vector<detail::InstanceGroup>& groups = data_->groups;
     auto chain_of = [&](uint32_t i) -> uint64_t {
+        if (placed_) return placements_[i].chains;
         auto g = std::upper_bound(groups.begin(), groups.end(), i,
                                   [](uint32_t at, const detail::InstanceGroup& group) { return at < group.instance_begin; });
         --g;
@@ -163,8 +164,13 @@ Result<std::vector<uint8_t>> Simulation::Impl::fades_at_rest(const std::vector<u
     auto end_of = [&](uint32_t i) { return chain_of(i) + data_->models[instances_[i].model].chain_count; };
     auto run = [&](auto zero) -> Status {
         using V = decltype(zero);
-        // Every run's chains in one read, back to back.
-        const std::vector<IndexRun> runs = index_runs(indices);
+        // Every run's chains in one read, back to back (in the placed layout, each instance's
+        // slot is a run of its own).
+        std::vector<IndexRun> runs;
+        if (placed_)
+            for (uint32_t i : indices) runs.push_back({i, i + 1});
+        else
+            runs = index_runs(indices);
         std::vector<detail::ElementRange> ranges;
         uint64_t total = 0;
         for (const IndexRun& r : runs) {

@@ -7,6 +7,7 @@
 // the instances between and behind them shift there (instance_moves.h).
 #include "instance_moves.h"
 #include "level_carry.h"
+#include "level_staging.h"
 #include "simulation_impl.h"
 
 #include <hmsm/levels.h>
@@ -103,48 +104,6 @@ std::vector<uint64_t> running_offsets(const std::vector<Instance>& instances, Pe
     return offsets;
 }
 
-/// Where a switch within the capacity builds the switched instances' new chains on the device,
-/// above every live chain, old and new: first a copy of the switched instances' old chains, a
-/// run of neighbours as one range, then each switched instance in its new layout, back to back,
-/// then a template of each new model that unfolds chains (every chain at rest, rest_chains),
-/// which the unfolded chains are copied from. The fine-grained copies (a chain or a few each)
-/// stay within the staging; the live chains are read and written only in whole instances and
-/// runs of them (on an H100's Vulkan driver, shader copies of single chains out of and into the
-/// live chains left the standing step slower afterwards: docs/benchmarks/nvidia-h100.md).
-struct Staging {
-    /// A template: a model's chains at rest, from a carry into that model.
-    struct Template {
-        uint32_t model = 0;
-        uint64_t at = 0;  // its first chain
-        const LevelCarry* carry = nullptr;
-    };
-    std::vector<uint64_t> old_at;       // per switch, its old chains' copy
-    std::vector<uint64_t> instance_at;  // per switch, its first staged chain
-    std::vector<Template> templates;    // one per model that unfolds chains
-    uint64_t end = 0;                   // the chains the staging needs below it
-};
-
-/// Writes the templates of `staging` in every carried buffer (both halves where a buffer has
-/// two), every buffer in one write_buffers, in the backend's scalar.
-template <class V>
-Status write_templates(detail::Backend& backend, const std::vector<BufferId>& carried, uint64_t capacity,
-                       detail::Scalar scalar, const Staging& staging) {
-    std::vector<std::vector<detail::ElementRange>> ranges(carried.size());
-    std::vector<std::vector<V>> values(carried.size());
-    std::vector<detail::BufferRangesWrite> writes;
-    for (size_t b = 0; b < carried.size(); ++b) {
-        const uint32_t per = detail::shape_scalars(detail::buffer_info(carried[b]).shape);
-        for (const Staging::Template& t : staging.templates) {
-            const std::vector<V> rest = detail::rest_chains<V>(*t.carry, per, carried[b]);
-            for (uint32_t h = 0; h < halves_of(carried[b]); ++h) {
-                ranges[b].push_back({h * capacity + t.at, rest.size() / per});
-                values[b].insert(values[b].end(), rest.begin(), rest.end());
-            }
-        }
-        writes.push_back({carried[b], ranges[b], values[b].data()});
-    }
-    return backend.write_buffers(writes, scalar);
-}
 
 }  // namespace
 
@@ -179,38 +138,24 @@ Status Simulation::Impl::switch_models(const std::vector<std::pair<uint32_t, uin
     const detail::Scalar scalar = backend_->kind() == BackendKind::cpu64 ? detail::Scalar::f64 : detail::Scalar::f32;
     const std::vector<BufferId> carried = carried_buffers(data_->coupled());
     ahead_schedule_.live_change();  // the state moves, the angles integrated ahead with it
-    Staging staging;
-    {
-        uint64_t at = std::max(data_->total_chains, totals.chains);
-        for (size_t k = 0; k < models.size(); ++k) {
-            staging.old_at.push_back(at);
-            at += data_->models[instances_[models[k].first].model].chain_count;
-        }
-        for (size_t k = 0; k < models.size(); ++k) {
-            staging.instance_at.push_back(at);
-            at += data_->models[models[k].second].chain_count;
-        }
-        for (size_t k = 0; k < models.size(); ++k) {
-            const uint32_t model = models[k].second;
-            if (carries[k]->unfolded.empty() ||
-                std::any_of(staging.templates.begin(), staging.templates.end(),
-                            [&](const Staging::Template& t) { return t.model == model; }))
-                continue;
-            staging.templates.push_back({model, at, carries[k]});
-            at += data_->models[model].chain_count;
-        }
-        staging.end = at;
-    }
+    const uint64_t staging_base = std::max(data_->chains_held(), totals.chains);
+    const detail::LevelStaging staging = detail::lay_out_staging(
+        staging_base, models, [&](uint32_t i) { return instances_[i].model; }, data_->models, carries);
     bool in_place = streaming_paths_ && backend_->capabilities().reshapes_in_place;
-    if (in_place && (staging.end > data_->chain_capacity || totals.nodes > data_->node_capacity ||
-                     totals.vertices > data_->vertex_capacity)) {
+    if (in_place && placed_) {
+        // New slots, nothing shifts (placed_layout.cpp).
+        Result<bool> placed = switch_placed(models, carries);
+        if (!placed) return placed.status();
+        in_place = *placed;
+    } else if (in_place && (staging.end > data_->chain_capacity || totals.nodes > data_->node_capacity ||
+                            totals.vertices > data_->vertex_capacity)) {
         // Past the capacity: the buffers grow on the device where the backend can, and the
         // switch goes on in place.
         Result<bool> grown = grow_on_device({staging.end, totals.nodes, totals.vertices}, instances_.size());
         if (!grown) return grown.status();
         in_place = *grown && staging.end <= data_->chain_capacity;  // not where the growth met its limit
     }
-    if (in_place) {
+    if (in_place && !placed_) {
         // The first elements, old and new, of the switched instances and those after them.
         detail::InstanceOffsets& offsets = this->offsets();
         const uint32_t count = uint32_t(instances_.size());
@@ -243,15 +188,7 @@ Status Simulation::Impl::switch_models(const std::vector<std::pair<uint32_t, uin
             stage.push_back({old_chain[run.first], staging.old_at[k], old_chain[run.end] - old_chain[run.first]});
             k += run.end - run.first;
         }
-        for (size_t k = 0; k < models.size(); ++k) {
-            const uint64_t from = staging.old_at[k], into = staging.instance_at[k];
-            for (const ElementMove& m : carries[k]->kept) stage.push_back({from + m.src, into + m.dst, m.count});
-            if (carries[k]->unfolded.empty()) continue;
-            const uint64_t rest = std::find_if(staging.templates.begin(), staging.templates.end(),
-                                               [&](const Staging::Template& t) { return t.model == models[k].second; })
-                                      ->at;
-            for (const detail::ElementRange& r : carries[k]->unfolded) stage.push_back({rest + r.first, into + r.first, r.count});
-        }
+        detail::append_build_moves(stage, staging, carries);
         for (size_t k = 0; const detail::IndexRun& run : runs) {
             unstage.push_back({staging.instance_at[k], new_chain[run.first], new_chain[run.end] - new_chain[run.first]});
             k += run.end - run.first;
@@ -281,9 +218,7 @@ Status Simulation::Impl::switch_models(const std::vector<std::pair<uint32_t, uin
             const std::vector<ElementMove>& in_buffer = node_scope ? node_moves : vertex_moves;
             if (data_->element_count(id) > 0 && !in_buffer.empty()) moves.push_back({id, in_buffer});
         }
-        if (!staging.templates.empty())
-            HMSM_TRY(scalar == detail::Scalar::f64 ? write_templates<double>(*backend_, carried, capacity, scalar, staging)
-                                                   : write_templates<float>(*backend_, carried, capacity, scalar, staging));
+        HMSM_TRY(detail::write_staging_templates(*backend_, carried, capacity, scalar, staging));
         HMSM_TRY(backend_->move_buffers(moves));
         for (auto [i, model] : models) {
             offsets.add(i, detail::counts_of(data_->models[model]) - detail::counts_of(data_->models[instances_[i].model]));
@@ -292,10 +227,11 @@ Status Simulation::Impl::switch_models(const std::vector<std::pair<uint32_t, uin
             lod_tracker_.examine_next(i, uint64_t(instance_ids_[i]));
         }
         detail::relay_groups(*data_, instances_, switched);
-    } else {
+    } else if (!in_place) {
         // Past the capacity where the backend cannot grow its buffers on the device (or where
         // it cannot move state): every instance's state is read, laid out anew and uploaded
         // with room to grow.
+        HMSM_TRY(pack_layout());
         std::vector<Instance> next = instances_;
         std::vector<const LevelCarry*> all_carries(instances_.size(), nullptr);
         std::vector<std::vector<double>> values64(carried.size());

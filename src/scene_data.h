@@ -85,6 +85,14 @@ struct SceneData {
     /// halves of chain_rotation and chain_origin lie chain_capacity elements apart.
     uint64_t chain_capacity = 0, node_capacity = 0, vertex_capacity = 0;
     uint32_t instance_capacity = 0;
+    /// The placed layout (SimulationConfig::instance_layout, instance_placements.h): one past
+    /// the highest element an instance's slot holds, per scope, free slots included; 0 in the
+    /// packed layout, where the live totals end the elements held.
+    uint64_t placed_chain_end = 0, placed_node_end = 0, placed_vertex_end = 0;
+    /// The elements below which every instance lies (what a growth keeps, what read() reads).
+    uint64_t chains_held() const { return placed_chain_end > total_chains ? placed_chain_end : total_chains; }
+    uint64_t nodes_held() const { return placed_node_end > total_nodes ? placed_node_end : total_nodes; }
+    uint64_t vertices_held() const { return placed_vertex_end > total_vertices ? placed_vertex_end : total_vertices; }
     /// Takes `laid`'s instance layout (lay_out_instances: instance origins, yaws and winds,
     /// groups and the live totals), keeping these models and capacities.
     void take_instance_layout(SceneData&& laid) {
@@ -95,6 +103,7 @@ struct SceneData {
         total_chains = laid.total_chains;
         total_nodes = laid.total_nodes;
         total_vertices = laid.total_vertices;
+        placed_chain_end = placed_node_end = placed_vertex_end = 0;  // packed anew
     }
     /// Capacities equal to the live counts (flatten_scene; tests that build a SceneData).
     void fit_capacity() {

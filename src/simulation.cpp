@@ -50,6 +50,7 @@ std::vector<Dispatch> Simulation::Impl::program_for(const std::vector<detail::In
 Status Simulation::Impl::run_at_rest(const std::vector<detail::InstanceGroup>& groups, Pass first, uint32_t passes) {
     const detail::RunStep at_rest[1] = {};
     if (lists(groups, one_off_listed_)) {
+        if (one_off_listed_.entries() == 0) return {};  // the placed layout lists even none
         HMSM_TRY(backend_->write(detail::BufferId::instance_table, 0, one_off_listed_.entries(),
                                  one_off_listed_.table.data(), detail::Scalar::f64));
         instance_table_dirty_ = instance_table_dirty_ || step_program_lists_;
@@ -59,6 +60,10 @@ Status Simulation::Impl::run_at_rest(const std::vector<detail::InstanceGroup>& g
 }
 
 bool Simulation::Impl::lists(const std::vector<detail::InstanceGroup>& groups, detail::ListedGroups& into) const {
+    if (placed_) {  // every program lists, the slots say where each instance lies
+        detail::list_groups(*data_, groups, instances_, into, &placements_);
+        return true;
+    }
     if (!backend_->capabilities().runs_listed_groups || groups.size() <= 1 || !detail::scene_can_be_listed(*data_))
         return false;
     detail::list_groups(*data_, groups, instances_, into);
@@ -158,6 +163,9 @@ Result<std::unique_ptr<Simulation>> Simulation::Impl::create(const Scene& scene,
     HMSM_TRY(validate(config.model));
     HMSM_TRY(validate(config.parameters));
     HMSM_TRY(validate(config.wind));
+    if (config.instance_layout != InstanceLayout::packed && config.instance_layout != InstanceLayout::placed)
+        return Status{ErrorCode::invalid_argument, "create: unknown instance_layout " +
+                                                       std::to_string(static_cast<int>(config.instance_layout))};
     HMSM_TRY(validate_scene(scene));
 
     // Sized from the models' counts before anything is built (docs/model.md 3.11).
@@ -244,6 +252,11 @@ Result<std::unique_ptr<Simulation>> Simulation::Impl::create(const Scene& scene,
     const char* device_growth = std::getenv("HMSM_DEVICE_GROWTH");
     sim->device_growth_ = !(device_growth && std::string_view(device_growth) == "0");
     HMSM_TRY(sim->backend_->upload(*sim->data_));
+    // The placed layout starts packed.
+    const detail::BackendCapabilities can = sim->backend_->capabilities();
+    sim->placed_ = config.instance_layout == InstanceLayout::placed && can.runs_listed_groups &&
+                   can.reshapes_in_place && detail::scene_can_be_listed(*sim->data_);
+    sim->instance_list_laid_out();
 
     // Pose at rest (every instance, active or not): with g = 0, integrate keeps S = V = 0 and
     // writes the rest transforms; the remaining passes then fill R, O, node positions and the mesh.

@@ -7,6 +7,7 @@
 #include "backend.h"
 #include "cpu/thread_pool.h"
 #include "instance_offsets.h"
+#include "instance_placements.h"
 #include "level_carry.h"
 #include "listed_groups.h"
 #include "lod_tracker.h"
@@ -93,6 +94,31 @@ struct __attribute__((visibility("hidden"))) Simulation::Impl {
     void instance_list_laid_out();
     detail::InstanceOffsets offsets_;
     bool offsets_valid_ = false;
+
+    // The placed layout (SimulationConfig::instance_layout, instance_placements.h;
+    // placed_layout.cpp): in force while placed_, set at create where the backend runs listed
+    // groups and reshapes in place. Every step program and one-off run then lists its
+    // instances with their slots; the general paths (reshape, a switch past the capacity) pack
+    // the layout first (pack_layout) and lay it out anew, packed.
+    bool placed_ = false;
+    detail::InstancePlacements placements_;
+    /// Instance i's first chain, node and vertex in the layout in force.
+    detail::ElementCounts first_elements(uint32_t i);
+    /// Copies the placed layout's end into the scene (SceneData::placed_*_end), which growth
+    /// and reads cover.
+    void placed_end_changed();
+    /// Moves every instance to its packed place (the state through the host, the outputs
+    /// recomputed), so that a general path may take the layout as packed; nothing where it is.
+    Status pack_layout();
+    /// append_in_place, swap_remove_in_place and the part of switch_models within the capacity
+    /// in the placed layout: each changed instance takes a slot, nothing else moves.
+    Result<bool> append_placed(std::span<const Instance> added);
+    Status swap_remove_placed(const std::vector<uint32_t>& removed);
+    /// Builds the switched instances (`models`: index, new run model; their carries) in new
+    /// slots, through the staging above every slot held, and frees their old slots. False where
+    /// the slots and the staging do not fit the capacity even after growing it.
+    Result<bool> switch_placed(const std::vector<std::pair<uint32_t, uint32_t>>& models,
+                               const std::vector<const detail::LevelCarry*>& carries);
     /// Paused instances (Instance::active false): none lets the step program take the groups
     /// as they are.
     uint64_t paused_count_ = 0;
@@ -120,10 +146,18 @@ struct __attribute__((visibility("hidden"))) Simulation::Impl {
     struct ReadSource {
         Output output = Output::node_positions;
         detail::BufferId id = detail::BufferId::node_world;
-        uint64_t count = 0;          // elements
+        uint64_t count = 0;          // elements of the output
+        uint64_t held = 0;           // elements read: the output's, or every slot's (placed)
         uint32_t stored = 4;         // scalars per stored element
         bool packed_normals = false;  // normals decoded from the positions' w words
+        /// The placed layout: where each instance's elements lie among those read (src) and
+        /// go in the output (dst), neighbours joined; empty where they are the output's order.
+        std::vector<detail::ElementMove> gather;
     };
+    /// `raw` (source.held stored elements) in the output's order: `raw` itself, or gathered
+    /// into `into` by source.gather.
+    template <class Stored>
+    const Stored* gathered(const ReadSource& source, const Stored* raw, std::vector<Stored>& into) const;
     /// The source of `output`, or invalid_argument (message starting with `fn`) when the
     /// simulation does not produce it.
     Result<ReadSource> read_source(Output output, const char* fn) const;
@@ -268,8 +302,8 @@ struct __attribute__((visibility("hidden"))) Simulation::Impl {
     std::vector<double> wind_scratch_;
     // Scratch for read(): elements as the backend stores them, kept between calls so a
     // per-frame readback neither allocates nor zero-fills.
-    mutable std::vector<float> stored_f32_;
-    mutable std::vector<double> stored_f64_;
+    mutable std::vector<float> stored_f32_, gathered_f32_;
+    mutable std::vector<double> stored_f64_, gathered_f64_;
     // Serializes read(): the scratch above and the backends' readback paths (a staging buffer
     // and a queue submission on Vulkan, pinned memory on CUDA) are shared, and const calls may
     // run concurrently (the threading contract in include/hmsm/simulation.h).

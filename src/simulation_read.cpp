@@ -66,7 +66,39 @@ Result<Simulation::Impl::ReadSource> Simulation::Impl::read_source(Output output
                           std::string(fn) + ": unknown output " + std::to_string(static_cast<int>(output))};
     }
     source.stored = detail::shape_scalars(detail::buffer_info(source.id).shape);
+    source.held = source.count;
+    if (placed_) {
+        // Every slot is read; each instance's elements go to their place in index order.
+        const detail::Scope scope = detail::buffer_info(source.id).scope;
+        const bool nodes = scope == detail::Scope::node, vertices = scope == detail::Scope::vertex;
+        source.held = nodes ? data_->nodes_held() : vertices ? data_->vertices_held() : data_->chains_held();
+        uint64_t at = 0;
+        for (uint32_t i = 0; i < instances_.size(); ++i) {
+            const detail::ModelRange& m = data_->models[instances_[i].model];
+            const uint64_t from = nodes ? placements_[i].nodes : vertices ? placements_[i].vertices : placements_[i].chains;
+            const uint64_t n = nodes ? m.node_count : vertices ? m.vertex_count : m.chain_count;
+            if (n == 0) continue;
+            std::vector<detail::ElementMove>& gather = source.gather;
+            if (!gather.empty() && gather.back().src + gather.back().count == from && gather.back().dst + gather.back().count == at)
+                gather.back().count += n;
+            else
+                gather.push_back({from, at, n});
+            at += n;
+        }
+        if (source.gather.size() == 1 && source.gather[0].src == 0) source.gather.clear();  // the output's order
+        if (source.gather.empty()) source.held = source.count;
+    }
     return source;
+}
+
+template <class Stored>
+const Stored* Simulation::Impl::gathered(const ReadSource& source, const Stored* raw, std::vector<Stored>& into) const {
+    if (source.gather.empty()) return raw;
+    const uint64_t stored = source.stored;
+    into.resize(source.count * stored);
+    for (const detail::ElementMove& m : source.gather)
+        std::memcpy(into.data() + m.dst * stored, raw + m.src * stored, m.count * stored * sizeof(Stored));
+    return into.data();
 }
 
 template <class F>
@@ -90,6 +122,8 @@ void Simulation::Impl::for_element_ranges(uint64_t count, uint64_t bytes_per_ele
 
 template <class Stored, class Out>
 void Simulation::Impl::unpack(const ReadSource& source, const Stored* raw, std::vector<Out>& out) const {
+    if constexpr (std::is_same_v<Stored, double>) raw = gathered(source, raw, gathered_f64_);
+    else raw = gathered(source, raw, gathered_f32_);
     const uint64_t count = source.count;
     if (source.packed_normals) {
         // The double CPU oracle holds the word as an integer value, every other backend as
@@ -146,7 +180,7 @@ Status Simulation::Impl::read_into(Output output, std::vector<Out>& out) const {
     auto source = read_source(output, "read");
     if (!source) return source.status();
     if (backend_->capabilities().reads_async) {  // one copy into the backend's pinned slot
-        HMSM_TRY(backend_->request_read(detail::kSyncReadSlot, source->id, 0, source->count));
+        HMSM_TRY(backend_->request_read(detail::kSyncReadSlot, source->id, 0, source->held));
         auto raw = backend_->take_read(detail::kSyncReadSlot);
         if (!raw) return raw.status();
         unpack(*source, *raw, out);
@@ -158,7 +192,7 @@ Status Simulation::Impl::read_into(Output output, std::vector<Out>& out) const {
     constexpr detail::Scalar out_scalar = std::is_same_v<Out, double> ? detail::Scalar::f64 : detail::Scalar::f32;
     const bool stores_out = backend_->kind() == BackendKind::cpu64 ? out_scalar == detail::Scalar::f64
                                                                    : out_scalar == detail::Scalar::f32;
-    if (stores_out && !source->packed_normals && source->stored == output_components(output)) {
+    if (stores_out && !source->packed_normals && source->gather.empty() && source->stored == output_components(output)) {
         out.resize(source->count * source->stored);
         Status status = backend_->read(source->id, 0, source->count, out.data(), out_scalar);
         if (!status) out.clear();  // no partial output
@@ -166,14 +200,14 @@ Status Simulation::Impl::read_into(Output output, std::vector<Out>& out) const {
     }
     // Elements as the backend stores them (cpu64: double), converted in unpack: the same
     // values as the backend's own conversion.
-    const uint64_t scalars = source->count * source->stored;
+    const uint64_t scalars = source->held * source->stored;
     if (backend_->kind() == BackendKind::cpu64) {
         stored_f64_.resize(scalars);
-        HMSM_TRY(backend_->read(source->id, 0, source->count, stored_f64_.data(), detail::Scalar::f64));
+        HMSM_TRY(backend_->read(source->id, 0, source->held, stored_f64_.data(), detail::Scalar::f64));
         unpack(*source, stored_f64_.data(), out);
     } else {
         stored_f32_.resize(scalars);
-        HMSM_TRY(backend_->read(source->id, 0, source->count, stored_f32_.data(), detail::Scalar::f32));
+        HMSM_TRY(backend_->read(source->id, 0, source->held, stored_f32_.data(), detail::Scalar::f32));
         unpack(*source, stored_f32_.data(), out);
     }
     return {};
@@ -184,21 +218,21 @@ Status Simulation::Impl::request_read(Output output) {
     if (!source) return source.status();
     const uint32_t slot = uint32_t(output);
     if (backend_->capabilities().reads_async) {
-        HMSM_TRY(backend_->request_read(slot, source->id, 0, source->count));
+        HMSM_TRY(backend_->request_read(slot, source->id, 0, source->held));
     } else {
         // Read now: the values are those of the request whatever runs before take_read.
         PendingRead& snapshot = pending_reads_[slot];
         snapshot.requested = false;
-        const uint64_t scalars = source->count * source->stored;
+        const uint64_t scalars = source->held * source->stored;
         if (backend_->kind() == BackendKind::cpu64) {
             snapshot.f64.resize(scalars);
-            HMSM_TRY(backend_->read(source->id, 0, source->count, snapshot.f64.data(), detail::Scalar::f64));
+            HMSM_TRY(backend_->read(source->id, 0, source->held, snapshot.f64.data(), detail::Scalar::f64));
         } else {
             snapshot.f32.resize(scalars);
-            HMSM_TRY(backend_->read(source->id, 0, source->count, snapshot.f32.data(), detail::Scalar::f32));
+            HMSM_TRY(backend_->read(source->id, 0, source->held, snapshot.f32.data(), detail::Scalar::f32));
         }
     }
-    pending_reads_[slot].source = *source;
+    pending_reads_[slot].source = std::move(*source);  // the slots as they were at the request
     pending_reads_[slot].requested = true;
     return {};
 }

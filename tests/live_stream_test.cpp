@@ -75,13 +75,16 @@ void expect_same_lists(const Simulation& fast, const Simulation& slow, int frame
 struct StreamCase {
     BackendKind backend;
     bool reserved;  // room reserved up front (in place throughout) or grown on the way
+    InstanceLayout layout = InstanceLayout::packed;  // of the streaming side
 };
 
 class Streaming : public ::testing::TestWithParam<StreamCase> {};
 
 TEST_P(Streaming, RandomSequenceMatchesGeneralPaths) {
     std::string skip;
-    auto fast = test::create_simulation_or_skip(stream_scene(), test::windy_config(), GetParam().backend, skip);
+    SimulationConfig streaming = test::windy_config();
+    streaming.instance_layout = GetParam().layout;
+    auto fast = test::create_simulation_or_skip(stream_scene(), streaming, GetParam().backend, skip);
     if (!skip.empty()) GTEST_SKIP() << skip;
     auto slow = test::create_simulation_or_skip(stream_scene(), test::windy_config(), GetParam().backend, skip);
     ASSERT_TRUE(fast && slow);
@@ -159,7 +162,8 @@ TEST_P(Streaming, RandomSequenceMatchesGeneralPaths) {
 }
 
 std::string case_name(const ::testing::TestParamInfo<StreamCase>& info) {
-    std::string name = std::string(to_string(info.param.backend)) + (info.param.reserved ? "_reserved" : "_growing");
+    std::string name = std::string(to_string(info.param.backend)) + (info.param.reserved ? "_reserved" : "_growing") +
+                       (info.param.layout == InstanceLayout::placed ? "_placed" : "");
     std::replace(name.begin(), name.end(), '-', '_');
     return name;
 }
@@ -170,7 +174,12 @@ INSTANTIATE_TEST_SUITE_P(Backends, Streaming,
                                            StreamCase{BackendKind::cpu_parallel, true},
                                            StreamCase{BackendKind::vulkan, true},
                                            StreamCase{BackendKind::vulkan, false},
-                                           StreamCase{BackendKind::cuda, true}),
+                                           StreamCase{BackendKind::cuda, true},
+                                           StreamCase{BackendKind::cpu64, true, InstanceLayout::placed},
+                                           StreamCase{BackendKind::vulkan, true, InstanceLayout::placed},
+                                           StreamCase{BackendKind::vulkan, false, InstanceLayout::placed},
+                                           StreamCase{BackendKind::cuda, true, InstanceLayout::placed},
+                                           StreamCase{BackendKind::cuda, false, InstanceLayout::placed}),
                          case_name);
 
 }  // namespace

@@ -99,6 +99,25 @@ inline constexpr NamedValue<Outputs> kOutputsNames[] = {
 HMSM_API const char* to_string(Outputs outputs);
 HMSM_API std::optional<Outputs> parse_outputs(std::string_view name);
 
+/// Where the instances' chains, nodes and vertices lie in the state and output buffers
+/// (docs/driving.md, streaming budgets). Simulation::read() returns the same outputs in both.
+/// - `packed`: instance-major in index order, instance i's elements right behind those of
+///   instance i - 1, as read() returns them and as the shared GPU buffers
+///   (hmsm::vulkan::SharedBuffers, hmsm::cuda::DeviceOutputs) hold them. An add, a removal or a
+///   level switch shifts the elements of every instance behind the first one it changes.
+/// - `placed`: each instance keeps a slot of its own (Simulation::instance_placement) from the
+///   add or level switch that gave it until it is removed or switches again; freed slots are
+///   reused by later instances of the same model and level. Adds, swap removals and level
+///   switches then move only the instances they touch; the shared buffers hold every slot
+///   (free ones too: their counts are the elements held) and an engine finds an instance's
+///   joints at its placement. Taken where the backend runs listed dispatches (cuda, vulkan);
+///   elsewhere the layout stays packed and instance_placement reports the packed places.
+enum class InstanceLayout { packed, placed };
+inline constexpr NamedValue<InstanceLayout> kInstanceLayoutNames[] = {
+    {InstanceLayout::packed, "packed"}, {InstanceLayout::placed, "placed"}};
+HMSM_API const char* to_string(InstanceLayout layout);
+HMSM_API std::optional<InstanceLayout> parse_instance_layout(std::string_view name);
+
 struct SimulationConfig {
     BackendKind backend = BackendKind::automatic;
     ModelOptions model;
@@ -115,6 +134,8 @@ struct SimulationConfig {
     bool profile_passes = false;
     /// What each step produces; skipped passes cost nothing.
     Outputs outputs = Outputs::all;
+    /// Where the instances' elements lie; `placed` for a streaming open world.
+    InstanceLayout instance_layout = InstanceLayout::packed;
 };
 
 /// What a caller can read back. Components per element: positions and normals 3 (x, y, z),

@@ -19,7 +19,10 @@ namespace hmsm::cuda {
 /// instances are added or removed (which moves state and may reallocate), and current after each step()
 /// returns (after enqueue_steps: in stream order); nullptr (count 0) for outputs the simulation does not produce
 /// (SimulationConfig::outputs). Every element is 4 floats (a CUDA float4, 16-byte
-/// aligned), instance-major, in the order of Simulation::read.
+/// aligned), instance-major, in the order of Simulation::read in the packed layout
+/// (SimulationConfig::instance_layout); in the placed layout each instance's elements begin at
+/// Simulation::instance_placement and the counts cover every slot held (free ones too), so
+/// skin an instance from its placement's first_chain.
 struct DeviceOutputs {
     int device = 0;                           ///< CUDA device ordinal that holds the buffers
     const float* node_positions = nullptr;    ///< node_count x (x, y, z, 1), nodes in input order

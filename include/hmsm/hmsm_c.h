@@ -19,7 +19,8 @@
  *   functions taking a const handle may run concurrently with each other; distinct handles
  *   concurrently. The last-status message is per thread.
  * - Sized structs: every struct that crosses this boundary (hmsm_config, hmsm_wind,
- *   hmsm_instance, hmsm_force_field, hmsm_counts, hmsm_level_options) begins with `uint32_t struct_size`, the size
+ *   hmsm_instance, hmsm_force_field, hmsm_counts, hmsm_level_options,
+ *   hmsm_instance_placement) begins with `uint32_t struct_size`, the size
  *   of the caller's definition of it. Fill a struct with its hmsm_*_init function and the
  *   caller's size, HMSM_INIT(hmsm_config_init, &config), which sets struct_size and hmsm's
  *   defaults; then change what you need. Every call that reads or fills a struct checks
@@ -82,6 +83,8 @@ enum { /* hmsm_config.composition */
     HMSM_COMPOSITION_AUTOMATIC = 6  /* the default: path walk on a GPU, else pointer jumping */
 };
 enum { HMSM_VERTEX_LAYOUT_SEPARATE = 0, HMSM_VERTEX_LAYOUT_PACKED = 1 };
+/* hmsm_config.instance_layout (hmsm::InstanceLayout) */
+enum { HMSM_INSTANCE_LAYOUT_PACKED = 0, HMSM_INSTANCE_LAYOUT_PLACED = 1 };
 enum { HMSM_GROUPING_DIRECTION = 0, HMSM_GROUPING_WIDTH = 1 };
 /* hmsm_config.dynamics (hmsm::Dynamics, docs/model.md 3.7 and 3.13) */
 enum { HMSM_DYNAMICS_PAPER = 0, HMSM_DYNAMICS_COUPLED = 1 };
@@ -174,6 +177,9 @@ typedef struct hmsm_config {
     hmsm_wind wind;
     int32_t dynamics;                /* HMSM_DYNAMICS_*: the equations of motion */
     hmsm_coupled_parameters coupled; /* used by HMSM_DYNAMICS_COUPLED, validated always */
+    /* Appended: HMSM_INSTANCE_LAYOUT_*, where the instances' elements lie in the device
+     * buffers (hmsm::InstanceLayout; hmsm_simulation_instance_placement). */
+    int32_t instance_layout;
 } hmsm_config;
 
 /* hmsm::Instance: a placed copy of model `model` (docs/model.md 3.6, 3.9) */
@@ -367,6 +373,20 @@ HMSM_API hmsm_status hmsm_simulation_index_of(const hmsm_simulation* simulation,
                                               uint64_t* index);
 HMSM_API hmsm_status hmsm_simulation_id_of(const hmsm_simulation* simulation, uint64_t index,
                                            hmsm_instance_id* id);
+/* Where instance `id`'s elements begin in the state and output buffers
+ * (hmsm::Simulation::instance_placement): in HMSM_INSTANCE_LAYOUT_PLACED its slot, else its
+ * packed place. An engine skinning from a shared GPU buffer reads the instance's joint
+ * matrices from first_chain on. placement->struct_size must be set
+ * (hmsm_instance_placement_init). */
+typedef struct hmsm_instance_placement {
+    uint32_t struct_size;
+    uint64_t first_chain;
+    uint64_t first_node;
+    uint64_t first_vertex;
+} hmsm_instance_placement;
+HMSM_API hmsm_status hmsm_instance_placement_init(hmsm_instance_placement* placement, size_t struct_size); /* zeros */
+HMSM_API hmsm_status hmsm_simulation_instance_placement(const hmsm_simulation* simulation, hmsm_instance_id id,
+                                                        hmsm_instance_placement* placement);
 /* Levels of detail at run time (hmsm::Simulation::set_instance_lods and friends,
  * docs/driving.md): runs instance ids[k] on levels[k], all in one reshape, keeping each
  * instance's id, index and settings and carrying the state of the chains both levels keep. An

@@ -24,6 +24,12 @@ namespace hmsm {
 /// simulation's life (docs/driving.md, instance handles).
 enum class InstanceId : uint64_t {};
 
+/// Where an instance's elements begin in the state and output buffers (element indices:
+/// chains, nodes as the simulation keeps them, mesh vertices), Simulation::instance_placement.
+struct InstancePlacement {
+    uint64_t first_chain = 0, first_node = 0, first_vertex = 0;
+};
+
 /// Distance bands for Simulation::update_lod (docs/driving.md, levels of detail): an instance
 /// at distance d (metres, from its origin to the viewer) belongs on level k where
 /// edges[k - 1] <= d < edges[k] (level 0 nearer than edges[0]; levels past a model's last are
@@ -114,6 +120,13 @@ public:
     Result<uint64_t> index_of(InstanceId id) const;
     /// The handle of the instance at current index `index` (an error if out of range).
     Result<InstanceId> id_of(uint64_t index) const;
+    /// Where instance `id`'s elements lie in the state and output buffers (its first chain,
+    /// node and vertex; SimulationConfig::instance_layout): in the placed layout its slot, which
+    /// changes only when it switches level, else its running sums in the packed layout. An
+    /// engine skinning from a shared GPU buffer (hmsm::vulkan::SharedBuffers,
+    /// hmsm::cuda::DeviceOutputs) reads the instance's joint matrices from first_chain on.
+    /// An error naming the id if it was removed or never given.
+    Result<InstancePlacement> instance_placement(InstanceId id) const;
     /// The handles of the current instance list, index for index (ascending until a
     /// swap_remove_instances() moves an instance down).
     std::span<const InstanceId> instance_ids() const;

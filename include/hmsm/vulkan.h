@@ -43,7 +43,9 @@ struct ExternalContext {
 
 /// One output as a range of a device buffer: `count` elements of `stride` bytes starting at
 /// `offset`. Positions are vec4 (x, y, z, 1) and normals vec4 (x, y, z, 0), float32,
-/// instance-major, in the same order as Simulation::read(); in VertexLayout::packed a
+/// instance-major, in the same order as Simulation::read() in the packed layout
+/// (SimulationConfig::instance_layout; in the placed layout an instance's elements begin at
+/// Simulation::instance_placement, and the range holds free slots too); in VertexLayout::packed a
 /// position's w holds the normal word instead (decode it with
 /// oct_decode(unpackSnorm2x16(floatBitsToUint(p.w))), docs/vulkan.md). The buffers carry the
 /// usage flags STORAGE_BUFFER, VERTEX_BUFFER, TRANSFER_SRC and TRANSFER_DST. Each output is one
@@ -70,7 +72,7 @@ struct SharedBuffers {
     BufferRange node_positions;    ///< skeleton nodes in input order
     VertexLayout vertex_layout = VertexLayout::separate;  ///< the simulation's config().vertex_layout
     /// Joint matrices M_c = [R_c | O_c], one per chain (chain_count() in all, instance-major,
-    /// chains in chain order), stride 48: three vec4 rows (R row i, O_i), i.e. a GLSL
+    /// chains in chain order; in the placed layout from each instance's placement on), stride 48: three vec4 rows (R row i, O_i), i.e. a GLSL
     /// `mat3x4` whose columns are the rows (p' = vec4(p, 1) * M) or an HLSL row-major float3x4
     /// (p' = mul(M, float4(p, 1))). Written by root_positions, so present for every
     /// SimulationConfig::outputs; bind it as a storage buffer (bone palette, docs/skinning.md).

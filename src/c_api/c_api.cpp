@@ -139,11 +139,14 @@ Status to_cpp(const hmsm_config& in, SimulationConfig& out) {
         return bad("config.dynamics: unknown value " + std::to_string(in.dynamics));
     if (in.coupled.leaves_on != 0 && in.coupled.leaves_on != 1)
         return bad("config.coupled.leaves_on must be 0 or 1");
+    if (in.instance_layout != HMSM_INSTANCE_LAYOUT_PACKED && in.instance_layout != HMSM_INSTANCE_LAYOUT_PLACED)
+        return bad("config.instance_layout: unknown value " + std::to_string(in.instance_layout));
     config.backend = static_cast<BackendKind>(in.backend);
     config.composition = *kCompositions[size_t(in.composition)];
     config.vertex_layout = static_cast<VertexLayout>(in.vertex_layout);
     config.profile_passes = in.profile_passes == 1;
     config.outputs = static_cast<Outputs>(in.outputs);
+    config.instance_layout = static_cast<InstanceLayout>(in.instance_layout);
     config.model.grouping = static_cast<Grouping>(in.model.grouping);
     config.model.max_chain_segments = in.model.max_chain_segments;
     config.model.ring_sides = in.model.ring_sides;
@@ -179,6 +182,7 @@ void set_defaults(hmsm_config& out) {
     out.vertex_layout = static_cast<int32_t>(defaults.vertex_layout);
     out.profile_passes = defaults.profile_passes ? 1 : 0;
     out.outputs = static_cast<int32_t>(defaults.outputs);
+    out.instance_layout = static_cast<int32_t>(defaults.instance_layout);
     out.model.grouping = static_cast<int32_t>(defaults.model.grouping);
     out.model.max_chain_segments = defaults.model.max_chain_segments;
     out.model.ring_sides = defaults.model.ring_sides;
@@ -213,6 +217,11 @@ void set_defaults(hmsm_force_field& out) {
 }
 
 void set_defaults(hmsm_counts& out) {
+    std::memset(&out, 0, sizeof out);
+    out.struct_size = sizeof out;
+}
+
+void set_defaults(hmsm_instance_placement& out) {
     std::memset(&out, 0, sizeof out);
     out.struct_size = sizeof out;
 }
@@ -290,6 +299,10 @@ hmsm_status hmsm_force_field_init(hmsm_force_field* field, size_t struct_size) {
 
 hmsm_status hmsm_counts_init(hmsm_counts* counts, size_t struct_size) {
     return init_struct("hmsm_counts_init", counts, struct_size);
+}
+
+hmsm_status hmsm_instance_placement_init(hmsm_instance_placement* placement, size_t struct_size) {
+    return init_struct("hmsm_instance_placement_init", placement, struct_size);
 }
 
 hmsm_status hmsm_level_options_init(hmsm_level_options* options, size_t struct_size) {

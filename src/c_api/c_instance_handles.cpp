@@ -1,5 +1,6 @@
 // The C ABI's stable instance handles (Simulation::index_of and friends, docs/driving.md).
 #include "c_api_internal.h"
+#include "c_struct.h"
 
 #include <algorithm>
 #include <vector>
@@ -68,6 +69,26 @@ hmsm_status hmsm_simulation_id_of(const hmsm_simulation* simulation, uint64_t in
         Result<InstanceId> found = simulation->simulation->id_of(index);
         if (!found) return {found.status().code(), std::string(fn) + ": " + found.status().message()};
         *id = uint64_t(*found);
+        return {};
+    });
+}
+
+hmsm_status hmsm_simulation_instance_placement(const hmsm_simulation* simulation, hmsm_instance_id id,
+                                               hmsm_instance_placement* placement) {
+    return guarded([&]() -> Status {
+        const char* fn = "hmsm_simulation_instance_placement";
+        if (!simulation) return bad(std::string(fn) + ": simulation is NULL");
+        if (!placement) return bad(std::string(fn) + ": placement is NULL");
+        size_t bytes = 0;
+        HMSM_TRY(field_bytes<hmsm_instance_placement>(std::string(fn) + ": placement", placement->struct_size, bytes));
+        const Simulation& sim = *simulation->simulation;
+        Result<uint64_t> live = sim.index_of(InstanceId(id));  // its message, under this function's name
+        if (!live) return {live.status().code(), std::string(fn) + ": " + live.status().message()};
+        Result<InstancePlacement> found = sim.instance_placement(InstanceId(id));
+        if (!found) return found.status();
+        const hmsm_instance_placement full = {static_cast<uint32_t>(sizeof(hmsm_instance_placement)), found->first_chain,
+                                              found->first_node, found->first_vertex};
+        write_struct(full, placement, placement->struct_size, bytes);
         return {};
     });
 }

@@ -76,7 +76,7 @@ struct CStruct<hmsm_config> {
         HMSM_C_FIELD(hmsm_config, profile_passes), HMSM_C_FIELD(hmsm_config, outputs),
         HMSM_C_FIELD(hmsm_config, model), HMSM_C_FIELD(hmsm_config, parameters),
         HMSM_C_FIELD(hmsm_config, wind), HMSM_C_FIELD(hmsm_config, dynamics),
-        HMSM_C_FIELD(hmsm_config, coupled)});
+        HMSM_C_FIELD(hmsm_config, coupled), HMSM_C_FIELD(hmsm_config, instance_layout)});
 };
 template <>
 struct CStruct<hmsm_instance> {
@@ -112,6 +112,14 @@ struct CStruct<hmsm_level_options> {
         HMSM_C_FIELD(hmsm_level_options, struct_size), HMSM_C_FIELD(hmsm_level_options, max_joints)});
 };
 
+template <>
+struct CStruct<hmsm_instance_placement> {
+    static constexpr const char* name = "hmsm_instance_placement";
+    static constexpr auto layouts = prefix_layouts(std::array{
+        HMSM_C_FIELD(hmsm_instance_placement, struct_size), HMSM_C_FIELD(hmsm_instance_placement, first_chain),
+        HMSM_C_FIELD(hmsm_instance_placement, first_node), HMSM_C_FIELD(hmsm_instance_placement, first_vertex)});
+};
+
 #undef HMSM_C_FIELD
 
 static_assert(layouts_are_distinct<hmsm_wind>(CStruct<hmsm_wind>::layouts));
@@ -120,6 +128,7 @@ static_assert(layouts_are_distinct<hmsm_instance>(CStruct<hmsm_instance>::layout
 static_assert(layouts_are_distinct<hmsm_force_field>(CStruct<hmsm_force_field>::layouts));
 static_assert(layouts_are_distinct<hmsm_counts>(CStruct<hmsm_counts>::layouts));
 static_assert(layouts_are_distinct<hmsm_level_options>(CStruct<hmsm_level_options>::layouts));
+static_assert(layouts_are_distinct<hmsm_instance_placement>(CStruct<hmsm_instance_placement>::layouts));
 
 /// hmsm's defaults in every field, struct_size = sizeof(T), padding zero.
 void set_defaults(hmsm_config& out);
@@ -128,6 +137,7 @@ void set_defaults(hmsm_instance& out);
 void set_defaults(hmsm_force_field& out);
 void set_defaults(hmsm_counts& out);
 void set_defaults(hmsm_level_options& out);
+void set_defaults(hmsm_instance_placement& out);
 
 /// The field bytes of a caller's T of `struct_size` bytes; `what` names it in the message
 /// ("hmsm_simulation_create: config").

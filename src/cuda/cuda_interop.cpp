@@ -27,12 +27,14 @@ Result<DeviceOutputs> device_outputs(const Simulation& simulation) {
     outputs.node_positions = reinterpret_cast<const float*>(p.node_world);
     outputs.vertex_positions = reinterpret_cast<const float*>(p.vertex_position);
     outputs.vertex_normals = reinterpret_cast<const float*>(p.vertex_normal);
-    outputs.node_count = simulation.node_count();
-    outputs.vertex_count = simulation.vertex_count();
+    // Every element held: in the placed layout the slots, free ones included.
+    const detail::SceneData& held = detail::scene_data_of(simulation);
+    outputs.node_count = held.nodes_held();
+    outputs.vertex_count = held.vertices_held();
     outputs.vertex_layout = simulation.config().vertex_layout;
     if (outputs.vertex_layout == VertexLayout::packed) outputs.vertex_normals = nullptr;
     outputs.joint_matrices = reinterpret_cast<const float*>(p.joint_matrix);
-    outputs.chain_count = simulation.chain_count();
+    outputs.chain_count = held.chains_held();
     if (simulation.config().outputs != Outputs::all) {
         outputs.vertex_positions = outputs.vertex_normals = nullptr;
         outputs.vertex_count = 0;

@@ -99,6 +99,28 @@ int main(void) {
     CHECK_STATUS(HMSM_INVALID_ARGUMENT, hmsm_simulation_swap_remove_instances(NULL, swap_first, 1));
     CHECK(instance_count(simulation) == 3);
     CHECK_STATUS(HMSM_OK, hmsm_simulation_step(simulation, 2));
+
+    /* Placements: on the CPU the layout is packed, so instance 1 (id 2) begins where instance 0
+       (id 5) ends, one tree's chains on. */
+    {
+        hmsm_instance_placement at_0, at_1, unset;
+        hmsm_counts counts;
+        CHECK(HMSM_INIT(hmsm_instance_placement_init, &at_0) == HMSM_OK);
+        CHECK(HMSM_INIT(hmsm_instance_placement_init, &at_1) == HMSM_OK);
+        CHECK(HMSM_INIT(hmsm_counts_init, &counts) == HMSM_OK);
+        CHECK_STATUS(HMSM_OK, hmsm_simulation_counts(simulation, &counts));
+        CHECK_STATUS(HMSM_OK, hmsm_simulation_instance_placement(simulation, 5, &at_0));
+        CHECK_STATUS(HMSM_OK, hmsm_simulation_instance_placement(simulation, 2, &at_1));
+        CHECK(at_0.first_chain == 0 && at_0.first_node == 0 && at_0.first_vertex == 0);
+        CHECK(at_1.first_chain == counts.chains / 3 && at_1.first_vertex == counts.vertices / 3);
+        CHECK_STATUS(HMSM_INVALID_ARGUMENT, hmsm_simulation_instance_placement(simulation, 1, &at_0));
+        CHECK(strstr(hmsm_status_message(), "hmsm_simulation_instance_placement: instance id 1 was removed") != NULL);
+        CHECK_STATUS(HMSM_INVALID_ARGUMENT, hmsm_simulation_instance_placement(simulation, 2, NULL));
+        CHECK_STATUS(HMSM_INVALID_ARGUMENT, hmsm_simulation_instance_placement(NULL, 2, &at_0));
+        memset(&unset, 0, sizeof unset);
+        CHECK_STATUS(HMSM_INVALID_ARGUMENT, hmsm_simulation_instance_placement(simulation, 2, &unset));
+        CHECK(strstr(hmsm_status_message(), "hmsm_instance_placement") != NULL);
+    }
     hmsm_simulation_destroy(simulation);
     if (failures) fprintf(stderr, "%d check(s) failed\n", failures);
     return failures ? 1 : 0;

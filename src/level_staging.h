@@ -1,0 +1,114 @@
+// Where a level switch within the capacity builds the switched instances' new chains on the
+// device (lod_switch.cpp in the packed layout, placed_layout.cpp in the placed one): in a
+// staging area above every chain the layout holds, first a copy of the switched instances' old
+// chains, then each switched instance in its new layout, back to back, then a template of each
+// new model that unfolds chains (every chain at rest, rest_chains), which the unfolded chains
+// are copied from. The fine-grained copies (a chain or a few each) stay within the staging; the
+// live chains are read and written only in whole instances and runs of them (on an H100's
+// Vulkan driver, shader copies of single chains out of and into the live chains left the
+// standing step slower afterwards: docs/benchmarks/nvidia-h100.md).
+#pragma once
+
+#include "backend.h"
+#include "level_carry.h"
+#include "scene_data.h"
+
+#include <cstdint>
+#include <utility>
+#include <vector>
+
+namespace hmsm::detail {
+
+struct LevelStaging {
+    /// A template: a model's chains at rest, from a carry into that model.
+    struct Template {
+        uint32_t model = 0;
+        uint64_t at = 0;  // its first chain
+        const LevelCarry* carry = nullptr;
+    };
+    std::vector<uint64_t> old_at;       // per switch, its old chains' copy
+    std::vector<uint64_t> instance_at;  // per switch, its first staged chain
+    std::vector<int32_t> template_of;   // per switch, its template in `templates`, or -1
+    std::vector<Template> templates;    // one per model that unfolds chains
+    uint64_t end = 0;                   // the chains the staging needs below it
+};
+
+/// The staging from chain `base` on for the switches `models` (instance index, new run model;
+/// `from_model` gives an index's run model before the switch) carried by `carries`.
+template <class FromModel>
+LevelStaging lay_out_staging(uint64_t base, const std::vector<std::pair<uint32_t, uint32_t>>& models,
+                             FromModel&& from_model, const std::vector<ModelRange>& ranges,
+                             const std::vector<const LevelCarry*>& carries) {
+    LevelStaging staging;
+    uint64_t at = base;
+    for (auto [i, model] : models) {
+        staging.old_at.push_back(at);
+        at += ranges[from_model(i)].chain_count;
+    }
+    for (auto [i, model] : models) {
+        staging.instance_at.push_back(at);
+        at += ranges[model].chain_count;
+    }
+    for (size_t k = 0; k < models.size(); ++k) {
+        const uint32_t model = models[k].second;
+        int32_t found = -1;
+        if (!carries[k]->unfolded.empty()) {
+            for (size_t t = 0; t < staging.templates.size() && found < 0; ++t)
+                if (staging.templates[t].model == model) found = int32_t(t);
+            if (found < 0) {
+                found = int32_t(staging.templates.size());
+                staging.templates.push_back({model, at, carries[k]});
+                at += ranges[model].chain_count;
+            }
+        }
+        staging.template_of.push_back(found);
+    }
+    staging.end = at;
+    return staging;
+}
+
+/// The moves within the staging that build each switched instance's new chains: the kept
+/// chains from its old chains' copy, the unfolded ones from its model's template.
+inline void append_build_moves(std::vector<ElementMove>& moves, const LevelStaging& staging,
+                               const std::vector<const LevelCarry*>& carries) {
+    for (size_t k = 0; k < carries.size(); ++k) {
+        const uint64_t from = staging.old_at[k], into = staging.instance_at[k];
+        for (const ElementMove& m : carries[k]->kept) moves.push_back({from + m.src, into + m.dst, m.count});
+        if (staging.template_of[k] < 0) continue;
+        const uint64_t rest = staging.templates[size_t(staging.template_of[k])].at;
+        for (const ElementRange& r : carries[k]->unfolded) moves.push_back({rest + r.first, into + r.first, r.count});
+    }
+}
+
+/// Writes the templates of `staging` in every carried buffer (both halves where a buffer has
+/// two), every buffer in one write_buffers, in the backend's scalar.
+template <class V>
+Status write_templates(Backend& backend, const std::vector<BufferId>& carried, uint64_t capacity, Scalar scalar,
+                       const LevelStaging& staging) {
+    std::vector<std::vector<ElementRange>> ranges(carried.size());
+    std::vector<std::vector<V>> values(carried.size());
+    std::vector<BufferRangesWrite> writes;
+    for (size_t b = 0; b < carried.size(); ++b) {
+        const uint32_t per = shape_scalars(buffer_info(carried[b]).shape);
+        const uint32_t halves = buffer_info(carried[b]).scope == Scope::chain_halves ? 2u : 1u;
+        for (const LevelStaging::Template& t : staging.templates) {
+            const std::vector<V> rest = rest_chains<V>(*t.carry, per, carried[b]);
+            for (uint32_t h = 0; h < halves; ++h) {
+                ranges[b].push_back({h * capacity + t.at, rest.size() / per});
+                values[b].insert(values[b].end(), rest.begin(), rest.end());
+            }
+        }
+        writes.push_back({carried[b], ranges[b], values[b].data()});
+    }
+    return backend.write_buffers(writes, scalar);
+}
+
+/// write_templates in the backend's own scalar (double on cpu64), where there are any.
+inline Status write_staging_templates(Backend& backend, const std::vector<BufferId>& carried, uint64_t capacity,
+                                      Scalar scalar, const LevelStaging& staging) {
+    if (staging.templates.empty()) return {};
+    return scalar == Scalar::f64 ? write_templates<double>(backend, carried, capacity, scalar, staging)
+                                 : write_templates<float>(backend, carried, capacity, scalar, staging);
+}
+
+}  // namespace hmsm::detail

@@ -1,0 +1,288 @@
+// The placed layout (SimulationConfig::instance_layout, instance_placements.h): appends, swap
+// removals and level switches within the capacity give the instances they touch slots of their
+// own and move nothing else, so a call costs in proportion to those instances whatever their
+// indices. The step program lists every instance with its slot (listed_groups.h). Results are
+// bit for bit those of the packed layout (tests/placed_layout_test.cpp).
+#include "instance_moves.h"
+#include "level_staging.h"
+#include "simulation_impl.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace hmsm {
+
+namespace {
+
+using detail::BufferId;
+using detail::ElementCounts;
+using detail::ElementMove;
+using detail::ElementRange;
+
+/// Appends a move of `count` elements, joined to the move before where it continues it.
+void add_move(std::vector<ElementMove>& moves, uint64_t src, uint64_t dst, uint64_t count) {
+    if (count == 0) return;
+    if (!moves.empty() && moves.back().src + moves.back().count == src && moves.back().dst + moves.back().count == dst)
+        moves.back().count += count;
+    else
+        moves.push_back({src, dst, count});
+}
+
+/// Appends range [first, first + count), joined to the range before where it continues it.
+void add_range(std::vector<ElementRange>& ranges, uint64_t first, uint64_t count) {
+    if (count == 0) return;
+    if (!ranges.empty() && ranges.back().first + ranges.back().count == first) ranges.back().count += count;
+    else ranges.push_back({first, count});
+}
+
+std::vector<ElementRange> runs_of(std::span<const uint32_t> ascending) {
+    std::vector<ElementRange> runs;
+    for (const detail::IndexRun& r : detail::index_runs(ascending)) runs.push_back({r.first, r.end - r.first});
+    return runs;
+}
+
+}  // namespace
+
+detail::ElementCounts Simulation::Impl::first_elements(uint32_t i) {
+    return placed_ ? placements_[i] : offsets().before(i);
+}
+
+void Simulation::Impl::placed_end_changed() {
+    const ElementCounts& end = placements_.end();
+    data_->placed_chain_end = end.chains;
+    data_->placed_node_end = end.nodes;
+    data_->placed_vertex_end = end.vertices;
+}
+
+Status Simulation::Impl::pack_layout() {
+    if (!placed_) return {};
+    detail::SceneData& d = *data_;
+    auto size = [&](uint32_t i) { return detail::counts_of(d.models[instances_[i].model]); };
+    bool packed = true;
+    ElementCounts at;
+    for (uint32_t i = 0; packed && i < instances_.size(); ++i) {
+        packed = placements_[i] == at;
+        at += size(i);
+    }
+    if (packed) {  // only free slots past the instances: dropped
+        placements_.assign_packed(instances_, d.models);
+        placed_end_changed();
+        return {};
+    }
+    // Every carried buffer's held chains through the host (halves back to back), each instance
+    // from its slot to its packed place; the outputs are then recomputed from R and O (passes 4,
+    // 6, 7 map elements one to one), element for element what they were.
+    detail::InstanceChangeBracket change(*backend_);
+    ahead_schedule_.live_change();
+    const detail::Scalar scalar = backend_->kind() == BackendKind::cpu64 ? detail::Scalar::f64 : detail::Scalar::f32;
+    const uint64_t held = d.chains_held(), live = d.total_chains;
+    for (BufferId id : detail::carried_buffers(d.coupled())) {
+        const uint32_t per = detail::shape_scalars(detail::buffer_info(id).shape);
+        auto pack = [&](auto zero) -> Status {
+            using V = decltype(zero);
+            std::vector<V> values(held * per), packed_values(live * per);
+            for (uint32_t h = 0; h < detail::halves_of(id); ++h) {
+                HMSM_TRY(backend_->read(id, h * d.chain_capacity, held, values.data(), scalar));
+                uint64_t at = 0;
+                for (uint32_t i = 0; i < instances_.size(); ++i) {
+                    const uint64_t n = size(i).chains;
+                    std::copy_n(values.begin() + placements_[i].chains * per, n * per, packed_values.begin() + at * per);
+                    at += n;
+                }
+                HMSM_TRY(backend_->write(id, h * d.chain_capacity, live, packed_values.data(), scalar));
+            }
+            return {};
+        };
+        HMSM_TRY(scalar == detail::Scalar::f64 ? pack(0.0) : pack(0.0f));
+    }
+    placements_.assign_packed(instances_, d.models);
+    placed_end_changed();
+    program_dirty_ = true;
+    std::vector<detail::InstanceGroup> all;
+    for (const detail::InstanceGroup& g : d.groups)
+        all.push_back(detail::group_slice(d, g, g.instance_begin, g.instance_count));
+    const uint32_t outputs = (1u << uint32_t(Pass::node_relative)) | (1u << uint32_t(Pass::node_world)) |
+                             (1u << uint32_t(Pass::contour));
+    return run_at_rest(all, Pass::node_relative, outputs);
+}
+
+Result<bool> Simulation::Impl::append_placed(std::span<const Instance> added) {
+    detail::SceneData& d = *data_;
+    const uint32_t first = uint32_t(instances_.size());
+    ElementCounts grown{d.total_chains, d.total_nodes, d.total_vertices};
+    std::vector<uint32_t> models;
+    for (const Instance& inst : added) {
+        grown += detail::counts_of(d.models[inst.model]);
+        models.push_back(inst.model);
+    }
+    HMSM_TRY(check_size(uint64_t(first) + added.size(), grown));
+    const ElementCounts end = placements_.end_after(models, d.models);
+    if (end.chains > d.chain_capacity || end.nodes > d.node_capacity || end.vertices > d.vertex_capacity ||
+        uint64_t(first) + added.size() > d.instance_capacity) {
+        Result<bool> room = grow_on_device(end, uint64_t(first) + added.size());
+        if (!room || !*room) return room;
+    }
+    detail::InstanceChangeBracket change(*backend_);
+    ahead_schedule_.live_change();
+
+    // Added instances start at rest in their slots: S = V = 0 and g = 0 (T, R, O are computed
+    // from them), every slot in one write per buffer.
+    std::vector<ElementRange> slots, both_halves;
+    uint64_t chains = 0;
+    for (const Instance& inst : added) {
+        const ElementCounts size = detail::counts_of(d.models[inst.model]);
+        const ElementCounts at = placements_.allocate(inst.model, size);
+        placements_.push_back(at);
+        add_range(slots, at.chains, size.chains);
+        chains += size.chains;
+    }
+    placed_end_changed();
+    for (uint64_t half : {uint64_t(0), d.chain_capacity})
+        for (const ElementRange& r : slots) both_halves.push_back({half + r.first, r.count});
+    const std::vector<double> zeros(2 * chains * 4, 0.0);
+    HMSM_TRY(backend_->write_ranges(BufferId::chain_state, slots, zeros.data(), detail::Scalar::f64));
+    HMSM_TRY(backend_->write_ranges(BufferId::chain_force, slots, zeros.data(), detail::Scalar::f64));
+    if (d.coupled()) HMSM_TRY(backend_->write_ranges(BufferId::chain_load, both_halves, zeros.data(), detail::Scalar::f64));
+
+    std::vector<uint32_t> appended;
+    appended.reserve(added.size());
+    for (const Instance& inst : added) {
+        const uint32_t i = uint32_t(instances_.size());
+        appended.push_back(i);
+        instances_.push_back(inst);
+        const InstanceId id = InstanceId(next_instance_id_++);
+        instance_ids_.push_back(id);  // ascending ids stay ascending
+        if (!ids_ascending_) id_index_.emplace(uint64_t(id), i);
+        d.instance_origin.push_back({inst.origin, 0.0});
+        d.instance_yaw.push_back({std::cos(inst.yaw), std::sin(inst.yaw), 0.0, 0.0});
+        lod_tracker_.append(uint64_t(id));
+        if (!inst.active) ++paused_count_;
+        dirty_instances_.push_back(i);
+    }
+    offsets_valid_ = false;  // the packed offsets are not kept in this layout
+    d.instance_wind.resize(size_t(HMSM_INSTANCE_WIND_VEC4S) * 4 * instances_.size(), 0.0);
+    detail::relay_groups(d, instances_, appended);
+    const ElementRange appended_run{first, instances_.size() - first};
+    HMSM_TRY(detail::write_origins_and_yaws(*backend_, d, {&appended_run, 1}));
+    instances_changed();
+    header_dirty_ = program_dirty_ = true;
+    HMSM_TRY(run_at_rest(detail::slices_covering(d, appended), Pass::integrate));
+    HMSM_TRY(apply_pending());
+    return true;
+}
+
+Status Simulation::Impl::swap_remove_placed(const std::vector<uint32_t>& removed) {
+    detail::SceneData& d = *data_;
+    const uint32_t n = uint32_t(instances_.size());
+    const uint32_t kept = n - uint32_t(removed.size());
+    // The holes below the new count take, in ascending order, the survivors at or past it; each
+    // takes its filler's slot along, so nothing moves on the device.
+    std::vector<uint32_t> holes, fillers;
+    size_t past = 0;
+    for (; past < removed.size() && removed[past] < kept; ++past) holes.push_back(removed[past]);
+    for (uint32_t i = kept, r = uint32_t(past); i < n; ++i) {
+        if (r < removed.size() && removed[r] == i) ++r;
+        else fillers.push_back(i);
+    }
+    detail::InstanceChangeBracket change(*backend_);
+    ahead_schedule_.live_change();
+    if (ids_ascending_ && !holes.empty()) {
+        id_index_.clear();
+        id_index_.reserve(instance_ids_.size());
+        for (uint32_t i = 0; i < n; ++i) id_index_.emplace(uint64_t(instance_ids_[i]), i);
+        ids_ascending_ = false;
+    }
+    for (uint32_t r : removed) {
+        if (!instances_[r].active) --paused_count_;
+        if (!ids_ascending_) id_index_.erase(uint64_t(instance_ids_[r]));
+        placements_.release(instances_[r].model, placements_[r]);
+    }
+    for (size_t j = 0; j < holes.size(); ++j) {
+        const uint32_t h = holes[j], f = fillers[j];
+        placements_.set(h, placements_[f]);
+        instances_[h] = instances_[f];
+        instance_ids_[h] = instance_ids_[f];
+        id_index_[uint64_t(instance_ids_[h])] = h;
+        d.instance_origin[h] = d.instance_origin[f];
+        d.instance_yaw[h] = d.instance_yaw[f];
+        if (lod_tracker_.valid) lod_tracker_.key[h] = lod_tracker_.key[f];
+    }
+    placements_.resize(kept);
+    offsets_valid_ = false;
+    instances_.resize(kept);
+    instance_ids_.resize(kept);
+    d.instance_origin.resize(kept);
+    d.instance_yaw.resize(kept);
+    d.instance_wind.resize(size_t(HMSM_INSTANCE_WIND_VEC4S) * 4 * kept);
+    if (lod_tracker_.valid) lod_tracker_.key.resize(kept);
+    detail::relay_groups(d, instances_, holes);
+    instances_changed();
+    header_dirty_ = program_dirty_ = true;
+
+    // Origins, yaws and winds of the holes, run by run.
+    std::erase_if(dirty_instances_, [&](uint32_t i) { return i >= kept; });
+    HMSM_TRY(detail::write_origins_and_yaws(*backend_, d, runs_of(holes)));
+    dirty_instances_.insert(dirty_instances_.end(), holes.begin(), holes.end());
+    return apply_pending();
+}
+
+Result<bool> Simulation::Impl::switch_placed(const std::vector<std::pair<uint32_t, uint32_t>>& models,
+                                             const std::vector<const detail::LevelCarry*>& carries) {
+    detail::SceneData& d = *data_;
+    std::vector<uint32_t> new_models, switched;
+    for (auto [i, model] : models) {
+        new_models.push_back(model);
+        switched.push_back(i);
+    }
+    // The staging lies above every slot held once the new slots are taken.
+    const ElementCounts end = placements_.end_after(new_models, d.models);
+    const detail::LevelStaging staging = detail::lay_out_staging(
+        end.chains, models, [&](uint32_t i) { return instances_[i].model; }, d.models, carries);
+    if (staging.end > d.chain_capacity || end.nodes > d.node_capacity || end.vertices > d.vertex_capacity) {
+        Result<bool> grown = grow_on_device({staging.end, end.nodes, end.vertices}, instances_.size());
+        if (!grown) return grown;
+        if (!*grown || staging.end > d.chain_capacity) return false;  // not where the growth met its limit
+    }
+    // New slots first: the old ones are read by the moves below and freed after them.
+    std::vector<ElementCounts> slots;
+    for (uint32_t model : new_models) slots.push_back(placements_.allocate(model, detail::counts_of(d.models[model])));
+    placed_end_changed();
+    // In each carried buffer, in order: the switched instances' old chains are copied into the
+    // staging, their new chains built there, and each goes to its new slot (all halves).
+    std::vector<ElementMove> stage, unstage;
+    for (size_t k = 0; k < models.size(); ++k)
+        add_move(stage, placements_[models[k].first].chains, staging.old_at[k],
+                 d.models[instances_[models[k].first].model].chain_count);
+    detail::append_build_moves(stage, staging, carries);
+    for (size_t k = 0; k < models.size(); ++k)
+        add_move(unstage, staging.instance_at[k], slots[k].chains, d.models[models[k].second].chain_count);
+    const std::vector<BufferId> carried = detail::carried_buffers(d.coupled());
+    std::vector<std::vector<ElementMove>> in_buffers(carried.size());
+    std::vector<detail::BufferMoves> moves;
+    for (size_t b = 0; b < carried.size(); ++b) {
+        for (const std::vector<ElementMove>* part : {&stage, &unstage})
+            for (uint32_t h = 0; h < detail::halves_of(carried[b]); ++h)
+                for (ElementMove m : *part) {
+                    m.src += h * d.chain_capacity;
+                    m.dst += h * d.chain_capacity;
+                    in_buffers[b].push_back(m);
+                }
+        moves.push_back({carried[b], in_buffers[b]});
+    }
+    const detail::Scalar scalar = backend_->kind() == BackendKind::cpu64 ? detail::Scalar::f64 : detail::Scalar::f32;
+    HMSM_TRY(detail::write_staging_templates(*backend_, carried, d.chain_capacity, scalar, staging));
+    HMSM_TRY(backend_->move_buffers(moves));
+    for (size_t k = 0; k < models.size(); ++k) {
+        const auto [i, model] = models[k];
+        placements_.release(instances_[i].model, placements_[i]);
+        placements_.set(i, slots[k]);
+        instances_[i].model = model;
+        instances_[i].level = lod_models_[model].level;
+        lod_tracker_.examine_next(i, uint64_t(instance_ids_[i]));
+    }
+    offsets_valid_ = false;
+    detail::relay_groups(d, instances_, switched);
+    return true;
+}
+
+}  // namespace hmsm

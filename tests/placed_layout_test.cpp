@@ -1,0 +1,284 @@
+// The placed layout (SimulationConfig::instance_layout): a level switch, an add and a swap removal
+// move only the instances they touch, and every other instance keeps its slot; outputs are bit
+// for bit those of the packed layout (live_stream_test.cpp runs the long random sequence in
+// both); instance_placement says where an instance's elements lie, in both layouts; a backend
+// that cannot list its instances keeps the packed layout.
+#include "forwarding_backend.h"
+#include "instance_placements.h"
+#include "simulation_access.h"
+#include "test_trees.h"
+
+#include <hmsm/hmsm.h>
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace hmsm {
+namespace {
+
+using detail::ElementCounts;
+
+TEST(InstancePlacements, FreedSlotsServeTheirModelAndTheEndGrowsOtherwise) {
+    std::vector<detail::ModelRange> models(2);
+    models[0].chain_count = 3, models[0].node_count = 4, models[0].vertex_count = 5;
+    models[1].chain_count = 2, models[1].node_count = 2, models[1].vertex_count = 0;
+    std::vector<Instance> instances(3);
+    instances[1].model = 1;
+    detail::InstancePlacements p;
+    p.assign_packed(instances, models);
+    EXPECT_EQ(p[1], (ElementCounts{3, 4, 5}));
+    EXPECT_EQ(p[2], (ElementCounts{5, 6, 5}));
+    const ElementCounts end{8, 10, 10};
+    EXPECT_EQ(p.end(), end);
+    const uint32_t both[] = {0, 1};
+    EXPECT_EQ(p.end_after(both, models), end + detail::counts_of(models[0]) + detail::counts_of(models[1]));
+    p.release(0, p[0]);
+    const uint32_t two_of_model_0[] = {0, 0};
+    EXPECT_EQ(p.end_after(two_of_model_0, models), end + detail::counts_of(models[0])) << "one free slot serves one";
+    EXPECT_EQ(p.free_slots(), 1u);
+    EXPECT_EQ(p.allocate(0, detail::counts_of(models[0])), (ElementCounts{0, 0, 0})) << "the freed slot";
+    EXPECT_EQ(p.allocate(0, detail::counts_of(models[0])), end) << "then past the end";
+    EXPECT_EQ(p.end(), end + detail::counts_of(models[0]));
+    EXPECT_EQ(p.free_slots(), 0u);
+}
+
+/// Sums the elements the backend moves.
+class MovedElements final : public test::ForwardingBackend {
+public:
+    using ForwardingBackend::ForwardingBackend;
+    Status move_elements(detail::BufferId id, std::span<const detail::ElementMove> moves) override {
+        for (const detail::ElementMove& m : moves) moved += m.count;
+        return ForwardingBackend::move_elements(id, moves);
+    }
+    Status move_buffers(std::span<const detail::BufferMoves> buffers) override {
+        for (const detail::BufferMoves& b : buffers)
+            for (const detail::ElementMove& m : b.moves) moved += m.count;
+        return ForwardingBackend::move_buffers(buffers);
+    }
+    uint64_t moved = 0;
+};
+
+struct Forest {
+    std::unique_ptr<Simulation> sim;
+    MovedElements* backend = nullptr;
+};
+
+/// Twelve deep trees in a row, with three levels below the whole tree, swaying, on `kind` in
+/// `layout`; null (with `skip` set) where the backend is absent.
+Forest forest(BackendKind kind, InstanceLayout layout, std::string& skip) {
+    Scene scene = single_tree_scene(test::deep_tree(4));
+    scene.instances.clear();
+    for (int k = 0; k < 12; ++k) scene.instances.push_back({0, {4.0 * k, 0.0, 0.0}, 0.3 * k, 1.0, 0.1 * k});
+    scene.lod_budgets = {{6, 3, 1}};
+    SimulationConfig config = test::windy_config();
+    config.instance_layout = layout;
+    auto inner = detail::create_backend(kind);
+    if (!inner) {
+        skip = std::string(to_string(kind)) + ": " + inner.status().message();
+        return {};
+    }
+    auto counting = std::make_unique<MovedElements>(std::move(inner).value());
+    Forest f;
+    f.backend = counting.get();
+    auto sim = detail::SimulationAccess::create(scene, config, std::move(counting));
+    EXPECT_TRUE(sim.ok()) << sim.status().message();
+    if (!sim) return {};
+    f.sim = std::move(sim).value();
+    EXPECT_TRUE(f.sim->step(30).ok());
+    return f;
+}
+
+std::vector<InstancePlacement> placements_of(const Simulation& sim) {
+    std::vector<InstancePlacement> all;
+    for (InstanceId id : sim.instance_ids()) all.push_back(*sim.instance_placement(id));
+    return all;
+}
+
+bool same_place(const InstancePlacement& a, const InstancePlacement& b) {
+    return a.first_chain == b.first_chain && a.first_node == b.first_node && a.first_vertex == b.first_vertex;
+}
+
+/// Packed running sums of the instances' chains, nodes and vertices.
+std::vector<InstancePlacement> packed_places(const Simulation& sim) {
+    const detail::SceneData& d = detail::scene_data_of(sim);
+    std::vector<InstancePlacement> all;
+    InstancePlacement at;
+    for (const Instance& inst : sim.instances()) {
+        all.push_back(at);
+        at.first_chain += d.models[inst.model].chain_count;
+        at.first_node += d.models[inst.model].node_count;
+        at.first_vertex += d.models[inst.model].vertex_count;
+    }
+    return all;
+}
+
+void expect_same_outputs(const Simulation& a, const Simulation& b) {
+    for (Output output : test::kEveryOutput) {
+        std::vector<double> x, y;
+        ASSERT_TRUE(a.read(output, x).ok());
+        ASSERT_TRUE(b.read(output, y).ok());
+        EXPECT_TRUE(test::same_bits(x, y)) << "output " << uint32_t(output);
+    }
+}
+
+class PlacedLayout : public ::testing::TestWithParam<BackendKind> {};
+
+TEST_P(PlacedLayout, SwitchMovesOnlyTheSwitchedInstance) {
+    std::string skip;
+    Forest placed = forest(GetParam(), InstanceLayout::placed, skip);
+    if (!skip.empty()) GTEST_SKIP() << skip;
+    Forest packed = forest(GetParam(), InstanceLayout::packed, skip);
+    ASSERT_TRUE(placed.sim && packed.sim);
+    const std::vector<InstancePlacement> before = placements_of(*placed.sim);
+    for (size_t i = 0; i < before.size(); ++i) EXPECT_TRUE(same_place(before[i], packed_places(*placed.sim)[i]));
+    const InstanceId first = placed.sim->instance_ids()[0];
+    placed.backend->moved = packed.backend->moved = 0;
+    const uint32_t level[] = {2};
+    ASSERT_TRUE(placed.sim->set_instance_lods({&first, 1}, level).ok());
+    ASSERT_TRUE(packed.sim->set_instance_lods({&first, 1}, level).ok());
+    const std::vector<InstancePlacement> after = placements_of(*placed.sim);
+    EXPECT_GE(after[0].first_chain, before.back().first_chain + 1) << "a new slot past every other";
+    for (size_t i = 1; i < after.size(); ++i) EXPECT_TRUE(same_place(after[i], before[i])) << "instance " << i;
+    // The packed switch shifts the eleven trees behind; the placed one moves the switched tree's
+    // chains through the staging only.
+    EXPECT_GT(packed.backend->moved, 0u);
+    EXPECT_LT(placed.backend->moved * 4, packed.backend->moved)
+        << "placed " << placed.backend->moved << ", packed " << packed.backend->moved;
+    expect_same_outputs(*placed.sim, *packed.sim);
+    ASSERT_TRUE(placed.sim->step(20).ok());
+    ASSERT_TRUE(packed.sim->step(20).ok());
+    expect_same_outputs(*placed.sim, *packed.sim);
+}
+
+TEST_P(PlacedLayout, SwapRemovalMovesNothingAndAddsReuseFreedSlots) {
+    std::string skip;
+    Forest placed = forest(GetParam(), InstanceLayout::placed, skip);
+    if (!skip.empty()) GTEST_SKIP() << skip;
+    Forest packed = forest(GetParam(), InstanceLayout::packed, skip);
+    ASSERT_TRUE(placed.sim && packed.sim);
+    // Instance 3 on a coarser level, so that the last tree fills a hole of another size.
+    const InstanceId third = placed.sim->instance_ids()[3], last = placed.sim->instance_ids()[11];
+    ASSERT_TRUE(placed.sim->set_instance_lod(third, 1).ok());
+    ASSERT_TRUE(packed.sim->set_instance_lod(third, 1).ok());
+    const InstancePlacement last_place = *placed.sim->instance_placement(last);
+    const InstancePlacement freed = *placed.sim->instance_placement(third);
+    placed.backend->moved = packed.backend->moved = 0;
+    ASSERT_TRUE(placed.sim->swap_remove_instances({&third, 1}).ok());
+    ASSERT_TRUE(packed.sim->swap_remove_instances({&third, 1}).ok());
+    EXPECT_EQ(placed.backend->moved, 0u) << "the last tree takes its slot along";
+    EXPECT_GT(packed.backend->moved, 0u);
+    EXPECT_EQ(*placed.sim->index_of(last), 3u);
+    EXPECT_TRUE(same_place(*placed.sim->instance_placement(last), last_place));
+    expect_same_outputs(*placed.sim, *packed.sim);
+    // A tree of the freed slot's model and level takes that slot.
+    Instance coming{0, {100.0, 0.0, 0.0}, 0.2, 1.0, 0.4};
+    coming.level = 1;
+    InstanceId id{};
+    ASSERT_TRUE(placed.sim->add_instances({&coming, 1}, {&id, 1}).ok());
+    ASSERT_TRUE(packed.sim->add_instances({&coming, 1}).ok());
+    EXPECT_TRUE(same_place(*placed.sim->instance_placement(id), freed));
+    ASSERT_TRUE(placed.sim->step(15).ok());
+    ASSERT_TRUE(packed.sim->step(15).ok());
+    expect_same_outputs(*placed.sim, *packed.sim);
+}
+
+TEST_P(PlacedLayout, OrderKeepingRemovalPacksTheLayout) {
+    std::string skip;
+    Forest placed = forest(GetParam(), InstanceLayout::placed, skip);
+    if (!skip.empty()) GTEST_SKIP() << skip;
+    Forest packed = forest(GetParam(), InstanceLayout::packed, skip);
+    ASSERT_TRUE(placed.sim && packed.sim);
+    for (Simulation* sim : {placed.sim.get(), packed.sim.get()}) {
+        const InstanceId ids[] = {sim->instance_ids()[2], sim->instance_ids()[7]};
+        const uint32_t levels[] = {3, 1};
+        ASSERT_TRUE(sim->set_instance_lods(ids, levels).ok());
+        ASSERT_TRUE(sim->step(5).ok());
+    }
+    const uint64_t removed[] = {4};
+    ASSERT_TRUE(placed.sim->remove_instances(removed).ok());
+    ASSERT_TRUE(packed.sim->remove_instances(removed).ok());
+    const std::vector<InstancePlacement> now = placements_of(*placed.sim), packed_now = packed_places(*placed.sim);
+    for (size_t i = 0; i < now.size(); ++i) EXPECT_TRUE(same_place(now[i], packed_now[i])) << "instance " << i;
+    expect_same_outputs(*placed.sim, *packed.sim);
+    ASSERT_TRUE(placed.sim->step(10).ok());
+    ASSERT_TRUE(packed.sim->step(10).ok());
+    expect_same_outputs(*placed.sim, *packed.sim);
+}
+
+TEST_P(PlacedLayout, TheBufferHoldsEachInstanceAtItsPlacement) {
+    std::string skip;
+    Forest placed = forest(GetParam(), InstanceLayout::placed, skip);
+    if (!skip.empty()) GTEST_SKIP() << skip;
+    ASSERT_TRUE(placed.sim);
+    Simulation& sim = *placed.sim;
+    const InstanceId ids[] = {sim.instance_ids()[0], sim.instance_ids()[5]};
+    const uint32_t levels[] = {1, 3};
+    ASSERT_TRUE(sim.set_instance_lods(ids, levels).ok());
+    ASSERT_TRUE(sim.step(3).ok());
+    std::vector<float> joints;
+    ASSERT_TRUE(sim.read(Output::joint_matrices, joints).ok());
+    const detail::SceneData& d = detail::scene_data_of(sim);
+    uint64_t at = 0;  // the instance's first chain in read()'s order
+    for (uint64_t i = 0; i < sim.instance_count(); ++i) {
+        const uint64_t chains = d.models[sim.instances()[i].model].chain_count;
+        const InstancePlacement place = *sim.instance_placement(sim.instance_ids()[i]);
+        std::vector<float> raw(chains * 12);
+        ASSERT_TRUE(detail::backend_of(sim).read(detail::BufferId::joint_matrix, place.first_chain, chains, raw.data(),
+                                                 detail::Scalar::f32).ok());
+        EXPECT_TRUE(std::equal(raw.begin(), raw.end(), joints.begin() + std::ptrdiff_t(at * 12))) << "instance " << i;
+        at += chains;
+    }
+}
+
+std::string backend_name(const ::testing::TestParamInfo<BackendKind>& info) {
+    std::string name = to_string(info.param);
+    std::replace(name.begin(), name.end(), '-', '_');
+    return name;
+}
+
+INSTANTIATE_TEST_SUITE_P(Backends, PlacedLayout, ::testing::Values(BackendKind::vulkan, BackendKind::cuda),
+                         backend_name);
+
+TEST(PlacedLayout, BackendsThatDoNotListKeepThePackedLayout) {
+    std::string skip;
+    Forest f = forest(BackendKind::cpu, InstanceLayout::placed, skip);
+    ASSERT_TRUE(f.sim);
+    const InstanceId first = f.sim->instance_ids()[0];
+    ASSERT_TRUE(f.sim->set_instance_lod(first, 2).ok());
+    const std::vector<InstancePlacement> now = placements_of(*f.sim), packed = packed_places(*f.sim);
+    for (size_t i = 0; i < now.size(); ++i) EXPECT_TRUE(same_place(now[i], packed[i])) << "instance " << i;
+}
+
+TEST(PlacedLayout, PlacementOfAnUnknownIdIsRefused) {
+    std::string skip;
+    Forest f = forest(BackendKind::cpu, InstanceLayout::placed, skip);
+    ASSERT_TRUE(f.sim);
+    const InstanceId gone = f.sim->instance_ids()[1];
+    ASSERT_TRUE(f.sim->swap_remove_instances({&gone, 1}).ok());
+    Result<InstancePlacement> removed = f.sim->instance_placement(gone);
+    ASSERT_FALSE(removed.ok());
+    EXPECT_EQ(removed.status().code(), ErrorCode::invalid_argument);
+    EXPECT_NE(removed.status().message().find("instance_placement: instance id 1 was removed"), std::string::npos)
+        << removed.status().message();
+    Result<InstancePlacement> never = f.sim->instance_placement(InstanceId(999));
+    ASSERT_FALSE(never.ok());
+    EXPECT_NE(never.status().message().find("999 was never given"), std::string::npos) << never.status().message();
+}
+
+TEST(PlacedLayout, UnknownLayoutIsRefused) {
+    SimulationConfig config;
+    config.backend = BackendKind::cpu;
+    config.instance_layout = static_cast<InstanceLayout>(7);
+    auto sim = Simulation::create(single_tree_scene(test::small_tree()), config);
+    ASSERT_FALSE(sim.ok());
+    EXPECT_NE(sim.status().message().find("instance_layout 7"), std::string::npos) << sim.status().message();
+    EXPECT_EQ(parse_instance_layout("placed"), InstanceLayout::placed);
+    EXPECT_EQ(std::string(to_string(InstanceLayout::packed)), "packed");
+}
+
+}  // namespace
+}  // namespace hmsm
