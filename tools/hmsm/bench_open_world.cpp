@@ -314,6 +314,8 @@ json run_backend(const TreeModel& model, const std::string& model_name, BackendK
     SimulationConfig config;
     config.backend = kind;
     config.outputs = Outputs::joints;
+    config.instance_layout = s.layout;
+    row["instance_layout"] = to_string(s.layout);
     auto created = Simulation::create(scene, config);
     if (!created) return stop(created.status());
     Simulation& sim = **created;

@@ -32,6 +32,7 @@ struct OpenWorldSettings {
     uint32_t pop_frames = 3;   ///< frames whose switches are measured for the pop (untimed)
     /// LodBands::fade_steps of coarsening switches; 0: instantaneous switches
     uint32_t fade_steps = LodBands{}.fade_steps;
+    InstanceLayout layout = InstanceLayout::placed;  ///< SimulationConfig::instance_layout
     uint64_t device_copy_bytes = 1 << 30, host_copy_bytes = 256 << 20;  ///< roofline block sizes
 };
 

@@ -49,6 +49,7 @@ struct BenchFlags {
     int64_t open_world_trees = 500000, open_world_frames = 300, open_world_changes = 0;
     int64_t open_world_fade_steps = LodBands{}.fade_steps;
     std::string dynamics = "paper";  // coupled: also the dynamics table (bench_dynamics.h)
+    std::string open_world_layout = "placed";  // SimulationConfig::instance_layout of the open world
     bool quick = false, no_progress = false;
     std::string json_path, out_stem, commit = "unknown", render;
 } flags;
@@ -138,6 +139,9 @@ void register_bench_flags(CLI::App& app) {
     add_integer_option(app, "--open-world-fade-steps", flags.open_world_fade_steps,
                        "steps a coarsening LOD switch fades over (LodBands::fade_steps, default " +
                            std::to_string(LodBands{}.fade_steps) + "; 0: instantaneous switches; implies --open-world)");
+    app.add_option("--open-world-layout", flags.open_world_layout,
+                   "where the open world's instances lie (SimulationConfig::instance_layout): placed (default) "
+                   "or packed, for comparison; implies --open-world");
     app.add_option("--case-budget", flags.case_budget,
                    "seconds one case may take: slower cases run fewer steps, forest sizes "
                    "extrapolated past it are skipped (default 20)");
@@ -183,11 +187,16 @@ int run_bench(CLI::App& app) {
     if (flags.frame_steps < 1 || flags.frame_steps > 64)
         return fail_input("--frame-steps " + std::to_string(flags.frame_steps) + ": must be in [1, 64]");
     flags.open_world |= app.count("--open-world-trees") + app.count("--open-world-frames") +
-                            app.count("--open-world-changes") + app.count("--open-world-fade-steps") > 0;
+                            app.count("--open-world-changes") + app.count("--open-world-fade-steps") +
+                            app.count("--open-world-layout") > 0;
     auto world_settings = bench::open_world_settings(flags.open_world_trees, flags.open_world_frames,
                                                      flags.open_world_changes, app.count("--open-world-changes") > 0,
                                                      flags.open_world_fade_steps);
     if (!world_settings) return fail(world_settings.status());
+    const auto world_layout =
+        parse_choice(kInstanceLayoutNames, flags.open_world_layout, "--open-world-layout", Spelling::as_is);
+    if (!world_layout) return fail(world_layout.status());
+    world_settings->layout = *world_layout;
     if (!(flags.case_budget > 0.0) || !std::isfinite(flags.case_budget))
         return fail_input("--case-budget: must be a positive number of seconds");
     const auto forest_composition =
