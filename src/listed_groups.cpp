@@ -92,4 +92,36 @@ void list_groups(const SceneData& d, std::span<const InstanceGroup> groups, std:
     }
 }
 
+void list_instances(const SceneData& d, std::span<const uint32_t> indices, std::span<const Instance> instances,
+                    const InstancePlacements& placed, ListedGroups& into) {
+    std::vector<uint32_t> next(d.models.size() + 1, 0);  // entries per model, then each model's next
+    for (uint32_t i : indices) ++next[instances[i].model + 1];
+    for (size_t m = 1; m < next.size(); ++m) next[m] += next[m - 1];
+    const std::vector<uint32_t> first(next.begin(), next.end() - 1);
+    into.table.resize(size_t(4) * indices.size());
+    for (uint32_t i : indices) {
+        double* entry = &into.table[size_t(4) * next[instances[i].model]++];
+        entry[0] = double(placed[i].chains);
+        entry[1] = double(placed[i].nodes);
+        entry[2] = double(placed[i].vertices);
+        entry[3] = double(i);
+    }
+    into.groups.clear();
+    for (uint32_t model = 0; model < d.models.size(); ++model) {
+        const ModelRange& m = d.models[model];
+        const uint64_t per_instance = std::max({uint64_t(1), uint64_t(m.chain_count), uint64_t(m.node_count),
+                                                uint64_t(m.vertex_count)});
+        const uint32_t most = uint32_t(std::max<uint64_t>(1, kMaxGroupElements / per_instance));
+        for (uint32_t at = first[model]; at < next[model];) {
+            InstanceGroup g;
+            g.model = model;
+            g.instance_begin = at;
+            g.instance_count = std::min(most, next[model] - at);
+            g.listed = true;
+            into.groups.push_back(g);
+            at += g.instance_count;
+        }
+    }
+}
+
 }  // namespace hmsm::detail

@@ -40,6 +40,12 @@ bool scene_can_be_listed(const SceneData& d);
 void list_groups(const SceneData& d, std::span<const InstanceGroup> groups, std::span<const Instance> instances,
                  ListedGroups& into, const InstancePlacements* placed = nullptr);
 
+/// The listed groups of the instances `indices` (each once, active or paused) at their slots
+/// `placed`: per model in ascending order, its instances in the order given, split so that no
+/// dispatch exceeds kMaxGroupElements threads. O(indices + models).
+void list_instances(const SceneData& d, std::span<const uint32_t> indices, std::span<const Instance> instances,
+                    const InstancePlacements& placed, ListedGroups& into);
+
 /// Whether the step program should run `listed` groups rather than the `contiguous` ones:
 /// there are many contiguous groups (at least kListedGroupsFrom) and at least four times as
 /// many as listed ones. HMSM_LIST_INSTANCES=0 in the environment (read once) never lists, =1

@@ -137,6 +137,17 @@ const std::vector<detail::Dispatch>& Simulation::Impl::current_program() {
     if (program_dirty_) {
         // Without paused instances the runs are the groups themselves (not copied: a
         // fragmented world has hundreds of thousands).
+        if (placed_) {
+            // The placed layout's table is kept under changes (placed_list.h): a segment per model.
+            placed_list_.groups(*data_, listed_.groups);
+            step_program_lists_ = true;
+            instance_table_dirty_ = true;
+            step_program_ = program_for(listed_.groups, Pass::wind_force);
+            ++step_program_id_;
+            step_program_walks_ahead_ = std::any_of(step_program_.begin(), step_program_.end(), detail::is_walk_ahead);
+            program_dirty_ = false;
+            return step_program_;
+        }
         std::vector<detail::InstanceGroup> runs;
         if (paused_count_ > 0) runs = active_groups(*data_, instances_, paused_count_);
         const std::vector<detail::InstanceGroup>& groups = paused_count_ > 0 ? runs : data_->groups;
@@ -154,6 +165,14 @@ const std::vector<detail::Dispatch>& Simulation::Impl::current_program() {
 }
 
 Status Simulation::Impl::write_instance_table() {
+    if (placed_) {  // the entries written since the last step, run by run
+        instance_table_dirty_ = false;
+        if (!placed_list_.pending()) return {};
+        std::vector<detail::ElementRange> ranges;
+        std::vector<double> values;
+        placed_list_.take_writes(ranges, values);
+        return backend_->write_ranges(detail::BufferId::instance_table, ranges, values.data(), detail::Scalar::f64);
+    }
     if (!instance_table_dirty_) return {};
     HMSM_TRY(backend_->write(detail::BufferId::instance_table, 0, listed_.entries(), listed_.table.data(),
                              detail::Scalar::f64));
@@ -237,6 +256,11 @@ Status Simulation::set_instance_active(uint64_t instance, bool active) {
     if (impl_->instances_[instance].active != active) {
         impl_->instances_[instance].active = active;
         impl_->paused_count_ += active ? uint64_t(-1) : 1;
+        if (impl_->placed_) {  // a paused instance has no entry in the step program's table
+            const uint32_t i = uint32_t(instance);
+            if (active) impl_->placed_list_.insert(i, impl_->instances_[i].model, impl_->placements_[i]);
+            else impl_->placed_list_.erase(i);
+        }
         impl_->pause_fade(uint32_t(instance), active);
         impl_->dirty_instances_.push_back(uint32_t(instance));  // its paused flag and fade word
         impl_->program_dirty_ = true;

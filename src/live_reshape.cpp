@@ -235,6 +235,18 @@ Status Simulation::Impl::reset(std::span<const uint32_t> indices) {
     HMSM_TRY(apply_pending());
     // Runs of neighbours in one group become one group slice. Slices cover no paused instance
     // (their flag is not read), so a paused instance is reset too and stays paused.
+    if (placed_) {
+        // S = V = 0 and g = 0 in each instance's slot, then the run from pass 2 (as below).
+        std::vector<detail::ElementRange> ranges;
+        for (uint32_t i : indices) {
+            const uint64_t first = placements_[i].chains, n = data_->models[instances_[i].model].chain_count;
+            if (!ranges.empty() && ranges.back().first + ranges.back().count == first) ranges.back().count += n;
+            else ranges.push_back({first, n});
+        }
+        HMSM_TRY(zero_chain_state(ranges));
+        ahead_schedule_.live_change();
+        return run_at_rest_placed(indices, Pass::integrate);
+    }
     const std::vector<detail::InstanceGroup> slices = detail::slices_covering(*data_, indices);
     uint64_t covered = 0;
     for (const detail::InstanceGroup& g : slices) covered += g.instance_count;
@@ -242,21 +254,18 @@ Status Simulation::Impl::reset(std::span<const uint32_t> indices) {
         return {ErrorCode::internal, "reset: " + std::to_string(indices.size() - covered) + " instances are in no group"};
     // S = V = 0 and g = 0, as for an added instance; the run from pass 2 computes T, R, O, the
     // joint matrices, nodes and vertices from them.
-    std::vector<detail::ElementRange> ranges, both_halves;  // every slice at once
+    std::vector<detail::ElementRange> ranges;  // every slice at once
+    for (const detail::InstanceGroup& g : slices)
+        ranges.push_back({g.chain_begin, uint64_t(g.instance_count) * data_->models[g.model].chain_count});
+    HMSM_TRY(zero_chain_state(ranges));
+    ahead_schedule_.live_change();  // the reset angles replace any integrated ahead
+    return run_at_rest(slices, Pass::integrate);
+}
+
+Status Simulation::Impl::zero_chain_state(std::span<const detail::ElementRange> ranges) {
+    std::vector<detail::ElementRange> both_halves;
     uint64_t chains = 0;
-    if (placed_) {
-        for (uint32_t i : indices) {
-            const uint64_t first = placements_[i].chains, n = data_->models[instances_[i].model].chain_count;
-            if (!ranges.empty() && ranges.back().first + ranges.back().count == first) ranges.back().count += n;
-            else ranges.push_back({first, n});
-            chains += n;
-        }
-    } else {
-        for (const detail::InstanceGroup& g : slices) {
-            ranges.push_back({g.chain_begin, uint64_t(g.instance_count) * data_->models[g.model].chain_count});
-            chains += ranges.back().count;
-        }
-    }
+    for (const detail::ElementRange& r : ranges) chains += r.count;
     for (uint64_t half : {uint64_t(0), data_->chain_capacity})
         for (const detail::ElementRange& r : ranges) both_halves.push_back({half + r.first, r.count});
     const std::vector<double> zeros(2 * chains * 4, 0.0);
@@ -264,8 +273,7 @@ Status Simulation::Impl::reset(std::span<const uint32_t> indices) {
     HMSM_TRY(backend_->write_ranges(BufferId::chain_force, ranges, zeros.data(), detail::Scalar::f64));
     if (data_->coupled())  // both halves of the loads
         HMSM_TRY(backend_->write_ranges(BufferId::chain_load, both_halves, zeros.data(), detail::Scalar::f64));
-    ahead_schedule_.live_change();  // the reset angles replace any integrated ahead
-    return run_at_rest(slices, Pass::integrate);
+    return {};
 }
 
 Status Simulation::Impl::reshape_in_place(std::unique_ptr<detail::SceneData> next,

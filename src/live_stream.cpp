@@ -66,10 +66,8 @@ detail::InstanceOffsets& Simulation::Impl::offsets() {
 
 void Simulation::Impl::instance_list_laid_out() {
     offsets_valid_ = false;
-    if (placed_) {  // laid out packed
-        placements_.assign_packed(instances_, data_->models);
-        placed_end_changed();
-    }
+    placed_ = data_ && backend_ && wants_placed();
+    if (placed_) placements_laid_out();
     lod_tracker_.invalidate();
     paused_count_ = uint64_t(std::count_if(instances_.begin(), instances_.end(), [](const Instance& i) { return !i.active; }));
 }

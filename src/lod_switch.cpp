@@ -300,7 +300,8 @@ Status Simulation::Impl::switch_models(const std::vector<std::pair<uint32_t, uin
         HMSM_TRY(run_at_rest(all, Pass::node_relative, outputs));
     }
     // The switched instances are posed from their angles.
-    HMSM_TRY(run_at_rest(detail::slices_covering(*data_, switched), Pass::compose));
+    if (placed_) HMSM_TRY(run_at_rest_placed(switched, Pass::compose));
+    else HMSM_TRY(run_at_rest(detail::slices_covering(*data_, switched), Pass::compose));
     return apply_pending();
 }
 

@@ -54,9 +54,28 @@ void Simulation::Impl::placed_end_changed() {
     data_->placed_vertex_end = end.vertices;
 }
 
+bool Simulation::Impl::wants_placed() const {
+    const detail::BackendCapabilities can = backend_->capabilities();
+    return config_.instance_layout == InstanceLayout::placed && can.runs_listed_groups && can.reshapes_in_place &&
+           detail::scene_can_be_listed(*data_);
+}
+
+void Simulation::Impl::placements_laid_out() {
+    placements_.assign_packed(instances_, data_->models);
+    placed_end_changed();
+    placed_list_.build(instances_, placements_, uint32_t(data_->models.size()));
+    program_dirty_ = true;
+}
+
+Status Simulation::Impl::run_at_rest_placed(std::span<const uint32_t> indices, Pass first, uint32_t passes) {
+    detail::list_instances(*data_, indices, instances_, placements_, one_off_listed_);
+    return run_one_off(first, passes);
+}
+
 Status Simulation::Impl::pack_layout() {
     if (!placed_) return {};
     detail::SceneData& d = *data_;
+    detail::lay_out_groups(d, instances_);  // the placed changes keep no groups
     auto size = [&](uint32_t i) { return detail::counts_of(d.models[instances_[i].model]); };
     bool packed = true;
     ElementCounts at;
@@ -65,8 +84,7 @@ Status Simulation::Impl::pack_layout() {
         at += size(i);
     }
     if (packed) {  // only free slots past the instances: dropped
-        placements_.assign_packed(instances_, d.models);
-        placed_end_changed();
+        placements_laid_out();
         return {};
     }
     // Every carried buffer's held chains through the host (halves back to back), each instance
@@ -95,9 +113,7 @@ Status Simulation::Impl::pack_layout() {
         };
         HMSM_TRY(scalar == detail::Scalar::f64 ? pack(0.0) : pack(0.0f));
     }
-    placements_.assign_packed(instances_, d.models);
-    placed_end_changed();
-    program_dirty_ = true;
+    placements_laid_out();
     std::vector<detail::InstanceGroup> all;
     for (const detail::InstanceGroup& g : d.groups)
         all.push_back(detail::group_slice(d, g, g.instance_begin, g.instance_count));
@@ -127,22 +143,15 @@ Result<bool> Simulation::Impl::append_placed(std::span<const Instance> added) {
 
     // Added instances start at rest in their slots: S = V = 0 and g = 0 (T, R, O are computed
     // from them), every slot in one write per buffer.
-    std::vector<ElementRange> slots, both_halves;
-    uint64_t chains = 0;
+    std::vector<ElementRange> slots;
     for (const Instance& inst : added) {
         const ElementCounts size = detail::counts_of(d.models[inst.model]);
         const ElementCounts at = placements_.allocate(inst.model, size);
         placements_.push_back(at);
         add_range(slots, at.chains, size.chains);
-        chains += size.chains;
     }
     placed_end_changed();
-    for (uint64_t half : {uint64_t(0), d.chain_capacity})
-        for (const ElementRange& r : slots) both_halves.push_back({half + r.first, r.count});
-    const std::vector<double> zeros(2 * chains * 4, 0.0);
-    HMSM_TRY(backend_->write_ranges(BufferId::chain_state, slots, zeros.data(), detail::Scalar::f64));
-    HMSM_TRY(backend_->write_ranges(BufferId::chain_force, slots, zeros.data(), detail::Scalar::f64));
-    if (d.coupled()) HMSM_TRY(backend_->write_ranges(BufferId::chain_load, both_halves, zeros.data(), detail::Scalar::f64));
+    HMSM_TRY(zero_chain_state(slots));
 
     std::vector<uint32_t> appended;
     appended.reserve(added.size());
@@ -156,17 +165,22 @@ Result<bool> Simulation::Impl::append_placed(std::span<const Instance> added) {
         d.instance_origin.push_back({inst.origin, 0.0});
         d.instance_yaw.push_back({std::cos(inst.yaw), std::sin(inst.yaw), 0.0, 0.0});
         lod_tracker_.append(uint64_t(id));
-        if (!inst.active) ++paused_count_;
+        if (inst.active) placed_list_.insert(i, inst.model, placements_[i]);
+        else ++paused_count_;
         dirty_instances_.push_back(i);
     }
-    offsets_valid_ = false;  // the packed offsets are not kept in this layout
+    placed_list_.resize(uint32_t(instances_.size()));
+    offsets_valid_ = false;  // the packed offsets, the groups and their totals are not kept here
+    d.groups.clear();
+    d.total_chains = grown.chains;
+    d.total_nodes = grown.nodes;
+    d.total_vertices = grown.vertices;
     d.instance_wind.resize(size_t(HMSM_INSTANCE_WIND_VEC4S) * 4 * instances_.size(), 0.0);
-    detail::relay_groups(d, instances_, appended);
     const ElementRange appended_run{first, instances_.size() - first};
     HMSM_TRY(detail::write_origins_and_yaws(*backend_, d, {&appended_run, 1}));
     instances_changed();
     header_dirty_ = program_dirty_ = true;
-    HMSM_TRY(run_at_rest(detail::slices_covering(d, appended), Pass::integrate));
+    HMSM_TRY(run_at_rest_placed(appended, Pass::integrate));
     HMSM_TRY(apply_pending());
     return true;
 }
@@ -196,10 +210,16 @@ Status Simulation::Impl::swap_remove_placed(const std::vector<uint32_t>& removed
         if (!instances_[r].active) --paused_count_;
         if (!ids_ascending_) id_index_.erase(uint64_t(instance_ids_[r]));
         placements_.release(instances_[r].model, placements_[r]);
+        placed_list_.erase(r);
+        const ElementCounts size = detail::counts_of(d.models[instances_[r].model]);
+        d.total_chains -= size.chains;
+        d.total_nodes -= size.nodes;
+        d.total_vertices -= size.vertices;
     }
     for (size_t j = 0; j < holes.size(); ++j) {
         const uint32_t h = holes[j], f = fillers[j];
         placements_.set(h, placements_[f]);
+        placed_list_.renumber(f, h);
         instances_[h] = instances_[f];
         instance_ids_[h] = instance_ids_[f];
         id_index_[uint64_t(instance_ids_[h])] = h;
@@ -208,14 +228,15 @@ Status Simulation::Impl::swap_remove_placed(const std::vector<uint32_t>& removed
         if (lod_tracker_.valid) lod_tracker_.key[h] = lod_tracker_.key[f];
     }
     placements_.resize(kept);
+    placed_list_.resize(kept);
     offsets_valid_ = false;
+    d.groups.clear();
     instances_.resize(kept);
     instance_ids_.resize(kept);
     d.instance_origin.resize(kept);
     d.instance_yaw.resize(kept);
     d.instance_wind.resize(size_t(HMSM_INSTANCE_WIND_VEC4S) * 4 * kept);
     if (lod_tracker_.valid) lod_tracker_.key.resize(kept);
-    detail::relay_groups(d, instances_, holes);
     instances_changed();
     header_dirty_ = program_dirty_ = true;
 
@@ -229,11 +250,8 @@ Status Simulation::Impl::swap_remove_placed(const std::vector<uint32_t>& removed
 Result<bool> Simulation::Impl::switch_placed(const std::vector<std::pair<uint32_t, uint32_t>>& models,
                                              const std::vector<const detail::LevelCarry*>& carries) {
     detail::SceneData& d = *data_;
-    std::vector<uint32_t> new_models, switched;
-    for (auto [i, model] : models) {
-        new_models.push_back(model);
-        switched.push_back(i);
-    }
+    std::vector<uint32_t> new_models;
+    for (auto [i, model] : models) new_models.push_back(model);
     // The staging lies above every slot held once the new slots are taken.
     const ElementCounts end = placements_.end_after(new_models, d.models);
     const detail::LevelStaging staging = detail::lay_out_staging(
@@ -274,14 +292,22 @@ Result<bool> Simulation::Impl::switch_placed(const std::vector<std::pair<uint32_
     HMSM_TRY(backend_->move_buffers(moves));
     for (size_t k = 0; k < models.size(); ++k) {
         const auto [i, model] = models[k];
+        const ElementCounts delta = detail::counts_of(d.models[model]) - detail::counts_of(d.models[instances_[i].model]);
+        d.total_chains += delta.chains;
+        d.total_nodes += delta.nodes;
+        d.total_vertices += delta.vertices;
         placements_.release(instances_[i].model, placements_[i]);
         placements_.set(i, slots[k]);
         instances_[i].model = model;
         instances_[i].level = lod_models_[model].level;
+        if (instances_[i].active) {
+            placed_list_.erase(i);
+            placed_list_.insert(i, model, slots[k]);
+        }
         lod_tracker_.examine_next(i, uint64_t(instance_ids_[i]));
     }
     offsets_valid_ = false;
-    detail::relay_groups(d, instances_, switched);
+    d.groups.clear();
     return true;
 }
 

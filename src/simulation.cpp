@@ -49,14 +49,25 @@ std::vector<Dispatch> Simulation::Impl::program_for(const std::vector<detail::In
 
 Status Simulation::Impl::run_at_rest(const std::vector<detail::InstanceGroup>& groups, Pass first, uint32_t passes) {
     const detail::RunStep at_rest[1] = {};
-    if (lists(groups, one_off_listed_)) {
-        if (one_off_listed_.entries() == 0) return {};  // the placed layout lists even none
-        HMSM_TRY(backend_->write(detail::BufferId::instance_table, 0, one_off_listed_.entries(),
-                                 one_off_listed_.table.data(), detail::Scalar::f64));
-        instance_table_dirty_ = instance_table_dirty_ || step_program_lists_;
-        return backend_->run(program_for(one_off_listed_.groups, first, passes), at_rest);
-    }
+    if (lists(groups, one_off_listed_)) return run_one_off(first, passes);
     return backend_->run(program_for(groups, first, passes), at_rest);
+}
+
+Status Simulation::Impl::run_one_off(Pass first, uint32_t passes) {
+    const detail::RunStep at_rest[1] = {};
+    if (one_off_listed_.entries() == 0) return {};  // the placed layout lists even none
+    // In the placed layout the step program's table stays where there is room behind it.
+    uint32_t base = 0;
+    if (placed_ && uint64_t(placed_list_.entries()) + one_off_listed_.entries() <= data_->instance_capacity) {
+        base = placed_list_.entries();
+        for (detail::InstanceGroup& g : one_off_listed_.groups) g.instance_begin += base;
+    } else if (placed_) {
+        placed_list_.write_all();
+    }
+    HMSM_TRY(backend_->write(detail::BufferId::instance_table, base, one_off_listed_.entries(),
+                             one_off_listed_.table.data(), detail::Scalar::f64));
+    if (base == 0) instance_table_dirty_ = instance_table_dirty_ || step_program_lists_;
+    return backend_->run(program_for(one_off_listed_.groups, first, passes), at_rest);
 }
 
 bool Simulation::Impl::lists(const std::vector<detail::InstanceGroup>& groups, detail::ListedGroups& into) const {
@@ -252,11 +263,7 @@ Result<std::unique_ptr<Simulation>> Simulation::Impl::create(const Scene& scene,
     const char* device_growth = std::getenv("HMSM_DEVICE_GROWTH");
     sim->device_growth_ = !(device_growth && std::string_view(device_growth) == "0");
     HMSM_TRY(sim->backend_->upload(*sim->data_));
-    // The placed layout starts packed.
-    const detail::BackendCapabilities can = sim->backend_->capabilities();
-    sim->placed_ = config.instance_layout == InstanceLayout::placed && can.runs_listed_groups &&
-                   can.reshapes_in_place && detail::scene_can_be_listed(*sim->data_);
-    sim->instance_list_laid_out();
+    sim->instance_list_laid_out();  // the placed layout starts packed
 
     // Pose at rest (every instance, active or not): with g = 0, integrate keeps S = V = 0 and
     // writes the rest transforms; the remaining passes then fill R, O, node positions and the mesh.

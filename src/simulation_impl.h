@@ -10,6 +10,7 @@
 #include "instance_placements.h"
 #include "level_carry.h"
 #include "listed_groups.h"
+#include "placed_list.h"
 #include "lod_tracker.h"
 #include "live_wind.h"
 #include "scene_data.h"
@@ -102,6 +103,21 @@ struct __attribute__((visibility("hidden"))) Simulation::Impl {
     // the layout first (pack_layout) and lay it out anew, packed.
     bool placed_ = false;
     detail::InstancePlacements placements_;
+    /// The step program's instance table in the placed layout, kept under changes.
+    detail::PlacedList placed_list_;
+    /// Whether the placed layout can be in force: the config asks for it, the backend runs
+    /// listed groups and reshapes in place, the scene fits the table's words.
+    bool wants_placed() const;
+    /// The layout was laid out packed (create, the general paths): the slots, the table anew.
+    void placements_laid_out();
+    /// run_at_rest over the instances `indices` (ascending, each once) at their slots.
+    Status run_at_rest_placed(std::span<const uint32_t> indices, Pass first, uint32_t passes = ~0u);
+    /// Puts the chains `ranges` at rest: S = V = 0, g = 0 and both halves of the loads (T, R, O
+    /// are computed from them by a run from pass 2), every range in one write per buffer.
+    Status zero_chain_state(std::span<const detail::ElementRange> ranges);
+    /// Runs one_off_listed_'s program at rest; in the placed layout its table goes behind the
+    /// step program's where the instance table has room for both.
+    Status run_one_off(Pass first, uint32_t passes);
     /// Instance i's first chain, node and vertex in the layout in force.
     detail::ElementCounts first_elements(uint32_t i);
     /// Copies the placed layout's end into the scene (SceneData::placed_*_end), which growth

@@ -5,6 +5,7 @@
 // that cannot list its instances keeps the packed layout.
 #include "forwarding_backend.h"
 #include "instance_placements.h"
+#include "placed_list.h"
 #include "simulation_access.h"
 #include "test_trees.h"
 
@@ -14,6 +15,7 @@
 
 #include <algorithm>
 #include <memory>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -21,6 +23,7 @@ namespace hmsm {
 namespace {
 
 using detail::ElementCounts;
+using detail::SceneData;
 
 TEST(InstancePlacements, FreedSlotsServeTheirModelAndTheEndGrowsOtherwise) {
     std::vector<detail::ModelRange> models(2);
@@ -44,6 +47,69 @@ TEST(InstancePlacements, FreedSlotsServeTheirModelAndTheEndGrowsOtherwise) {
     EXPECT_EQ(p.allocate(0, detail::counts_of(models[0])), end) << "then past the end";
     EXPECT_EQ(p.end(), end + detail::counts_of(models[0]));
     EXPECT_EQ(p.free_slots(), 0u);
+}
+
+// The step program's table under random inserts, erasures and renumberings: every listed
+// instance has one entry, in its model's segment, at its slot; the entries written since the
+// last take, applied to a copy of the table as a device would hold it, give the whole table.
+TEST(PlacedList, KeepsOneEntryPerListedInstanceAndWritesWhatChanged) {
+    constexpr uint32_t kModels = 4;
+    SceneData d;
+    d.models.resize(kModels);
+    for (uint32_t m = 0; m < kModels; ++m) d.models[m].chain_count = m + 1;
+    std::mt19937 rng(7);
+    std::vector<Instance> instances(40);
+    detail::InstancePlacements slots;
+    for (Instance& inst : instances) inst.model = rng() % kModels, inst.active = rng() % 5 != 0;
+    slots.assign_packed(instances, d.models);
+    detail::PlacedList list;
+    list.build(instances, slots, kModels);
+    std::vector<double> device;  // the table as written
+    auto sync = [&] {
+        std::vector<detail::ElementRange> ranges;
+        std::vector<double> values;
+        list.take_writes(ranges, values);
+        device.resize(size_t(4) * list.entries());
+        size_t v = 0;
+        for (const detail::ElementRange& r : ranges)
+            for (uint64_t e = r.first; e < r.first + r.count; ++e, v += 4) std::copy_n(&values[v], 4, &device[4 * e]);
+    };
+    std::vector<bool> listed(instances.size());
+    for (size_t i = 0; i < instances.size(); ++i) listed[i] = instances[i].active;
+    for (int round = 0; round < 400; ++round) {
+        const uint32_t i = rng() % uint32_t(instances.size());
+        const int op = int(rng() % 3);
+        if (op == 0 && listed[i]) {
+            list.erase(i);
+            listed[i] = false;
+        } else if (op == 1 && !listed[i]) {
+            instances[i].model = rng() % kModels;
+            list.insert(i, instances[i].model, slots[i]);
+            listed[i] = true;
+        } else if (op == 2 && listed[i]) {  // a swap removal's filler: i's entry names j
+            const uint32_t j = rng() % uint32_t(instances.size());
+            if (listed[j]) continue;
+            list.renumber(i, j);
+            instances[j] = instances[i];
+            slots.set(j, slots[i]);
+            listed[i] = false;
+            listed[j] = true;
+        }
+        if (round % 7 == 0) sync();
+    }
+    sync();
+    std::vector<detail::InstanceGroup> groups;
+    list.groups(d, groups);
+    std::vector<int> seen(instances.size(), 0);
+    for (const detail::InstanceGroup& g : groups)
+        for (uint32_t e = g.instance_begin; e < g.instance_begin + g.instance_count; ++e) {
+            const uint32_t i = uint32_t(device[4 * e + 3]);
+            ASSERT_LT(i, instances.size());
+            ++seen[i];
+            EXPECT_EQ(instances[i].model, g.model) << "entry " << e;
+            EXPECT_EQ(uint64_t(device[4 * e]), slots[i].chains) << "entry " << e;
+        }
+    for (size_t i = 0; i < instances.size(); ++i) EXPECT_EQ(seen[i], listed[i] ? 1 : 0) << "instance " << i;
 }
 
 /// Sums the elements the backend moves.
