@@ -196,4 +196,32 @@ inline MoveBatches plan_move_batches(std::span<const ElementMove> moves, uint64_
     return plan;
 }
 
+/// The batches of every buffer of one move_buffers call (plan_move_batches), planned once per
+/// distinct list of moves: the carried buffers of a level switch or a swap removal move the
+/// same elements (a ping-pong buffer's second half aside), and planning dominates such a call's
+/// host time. Every plan takes the scratch of the call's largest element (`element_bytes(id)`),
+/// so that one plan serves every buffer. plans[k] is moves[k]'s, valid while `storage` lives.
+template <class ElementBytes>
+std::vector<const MoveBatches*> plan_buffer_moves(std::span<const BufferMoves> moves, ElementBytes&& element_bytes,
+                                                  std::vector<MoveBatches>& storage) {
+    uint64_t largest = 1;
+    for (const BufferMoves& m : moves) largest = std::max<uint64_t>(largest, element_bytes(m.id));
+    const uint64_t scratch_elements = std::max<uint64_t>(1, kMoveScratchBytes / largest);
+    storage.clear();
+    storage.reserve(moves.size());
+    std::vector<const MoveBatches*> plans(moves.size(), nullptr);
+    for (size_t k = 0; k < moves.size(); ++k) {
+        for (size_t j = 0; j < k && !plans[k]; ++j)
+            if (moves[j].moves.size() == moves[k].moves.size() &&
+                (moves[j].moves.data() == moves[k].moves.data() ||
+                 std::equal(moves[j].moves.begin(), moves[j].moves.end(), moves[k].moves.begin(),
+                            [](const ElementMove& a, const ElementMove& b) {
+                                return a.src == b.src && a.dst == b.dst && a.count == b.count;
+                            })))
+                plans[k] = plans[j];
+        if (!plans[k]) plans[k] = &storage.emplace_back(plan_move_batches(moves[k].moves, scratch_elements));
+    }
+    return plans;
+}
+
 }  // namespace hmsm::detail

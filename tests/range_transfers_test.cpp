@@ -111,6 +111,25 @@ TEST(PlanMoveBatches, ShiftMovesMakeOneBatch) {
 // The intervals a batch has written, held as sorted runs with a map past them, answer every
 // overlap query as a search of all of them would: intervals added ascending, descending, in
 // interleaved sequences (more than the runs held) and at random.
+// Buffers moving the same elements share one plan (planning is most of a switch's host time),
+// sized for the largest element among them; other lists get their own.
+TEST(PlanMoveBatches, BuffersWithTheSameMovesShareOnePlan) {
+    const std::vector<detail::ElementMove> a = {{0, 100, 10}, {50, 200, 5}}, a_copy = a, b = {{0, 300, 10}};
+    const detail::BufferMoves moves[] = {{detail::BufferId::chain_state, a},
+                                         {detail::BufferId::joint_matrix, a_copy},
+                                         {detail::BufferId::chain_force, b}};
+    std::vector<detail::MoveBatches> held;
+    auto bytes = [](detail::BufferId id) { return id == detail::BufferId::joint_matrix ? 48u : 16u; };
+    const std::vector<const detail::MoveBatches*> plans = detail::plan_buffer_moves(moves, bytes, held);
+    ASSERT_EQ(plans.size(), 3u);
+    EXPECT_EQ(plans[0], plans[1]) << "equal move lists, one plan";
+    EXPECT_NE(plans[0], plans[2]);
+    EXPECT_EQ(held.size(), 2u);
+    const detail::MoveBatches alone = detail::plan_move_batches(a, detail::kMoveScratchBytes / 48);
+    EXPECT_EQ(plans[0]->ends, alone.ends);
+    EXPECT_EQ(plans[0]->pieces.size(), alone.pieces.size());
+}
+
 TEST(DisjointIntervals, AnswersAsASearchOfEveryInterval) {
     std::mt19937 random(3);
     for (int trial = 0; trial < 300; ++trial) {

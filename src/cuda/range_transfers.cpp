@@ -104,13 +104,17 @@ Status DeviceBuffers::move_buffers(std::span<const BufferMoves> moves, cudaStrea
     // Per buffer: its batches (plan_move_batches) and where its entries start in the one table.
     struct Planned {
         BufferId id;
-        MoveBatches plan;
+        const MoveBatches& plan;
         size_t first_entry = 0;
         std::vector<uint64_t> batch_words;
     };
     std::vector<Planned> planned;
     uint64_t scratch_bytes = 0;
-    for (const BufferMoves& m : moves) {
+    std::vector<MoveBatches> plans_held;
+    const std::vector<const MoveBatches*> plans =
+        plan_buffer_moves(moves, [&](BufferId id) { return device_element_bytes(id); }, plans_held);
+    for (size_t k = 0; k < moves.size(); ++k) {
+        const BufferMoves& m = moves[k];
         const uint64_t element_bytes = device_element_bytes(m.id);
         auto checked = largest_move_bytes(m.moves, element_bytes, [&](uint64_t first, uint64_t count) {
             return check_range(m.id, first, count);
@@ -121,8 +125,7 @@ Status DeviceBuffers::move_buffers(std::span<const BufferMoves> moves, cudaStrea
             HMSM_TRY(move_one_by_one(m.id, m.moves, stream));
             continue;
         }
-        const uint64_t scratch_elements = std::max<uint64_t>(1, kMoveScratchBytes / element_bytes);
-        planned.push_back({m.id, plan_move_batches(m.moves, scratch_elements), 0, {}});
+        planned.push_back({m.id, *plans[k], 0, {}});
         scratch_bytes = std::max(scratch_bytes, planned.back().plan.largest * element_bytes);
     }
     if (planned.empty()) return {};

@@ -169,19 +169,21 @@ bool VulkanBackend::copies_by_shader(std::span<const BufferId> ids) const {
 Status VulkanBackend::shader_moves(std::span<const BufferMoves> moves) {
     struct Planned {
         BufferId id;
-        MoveBatches plan;
+        const MoveBatches& plan;
     };
     std::vector<Planned> planned;
     uint64_t ranges = 0, scratch = 0;
     uint32_t dispatches = 0;
-    for (const BufferMoves& m : moves) {
-        const uint64_t element_bytes = device_element_bytes(m.id);
-        MoveBatches plan = plan_move_batches(m.moves, std::max<uint64_t>(1, kMoveScratchBytes / element_bytes));
+    std::vector<MoveBatches> plans_held;
+    const std::vector<const MoveBatches*> plans =
+        plan_buffer_moves(moves, [&](BufferId id) { return device_element_bytes(id); }, plans_held);
+    for (size_t k = 0; k < moves.size(); ++k) {
+        const MoveBatches& plan = *plans[k];
         if (plan.pieces.empty()) continue;
         ranges += 2 * plan.pieces.size();
         dispatches += 2 * uint32_t(plan.ends.size());
-        scratch = std::max(scratch, plan.largest * element_bytes);
-        planned.push_back({m.id, std::move(plan)});
+        scratch = std::max(scratch, plan.largest * device_element_bytes(moves[k].id));
+        planned.push_back({moves[k].id, plan});
     }
     if (planned.empty()) return {};
     HMSM_TRY(ensure_move_scratch(scratch));
