@@ -22,7 +22,7 @@ constexpr uint64_t kCallsBeforeRebuild = 1000000;
 
 /// What examining one instance gives: its level at this viewer and how far the viewer may
 /// travel before that level can change (less a margin over the rounding of the distances and
-/// of the summed travel, so that the heap never examines an instance too late).
+/// of the summed travel, so that the queue never examines an instance too late).
 struct Examined {
     uint32_t level = 0;
     double slack = 0.0;
@@ -80,9 +80,7 @@ Result<uint64_t> Simulation::update_lod(Vec3 viewer) {
         Result<uint64_t> changed = s.request_lods(changes, std::move(ended));
         if (!changed) return changed.status();
         tracker.key = std::move(keys);
-        tracker.heap.reserve(n);
-        for (uint32_t i = 0; i < n; ++i) tracker.heap.push_back({tracker.key[i], uint64_t(s.instance_ids_[i])});
-        std::make_heap(tracker.heap.begin(), tracker.heap.end(), std::greater<>());
+        for (uint32_t i = 0; i < n; ++i) tracker.push(tracker.key[i], uint64_t(s.instance_ids_[i]));
         tracker.travelled = 0.0;
         tracker.viewer = viewer;
         tracker.calls = 0;
@@ -95,18 +93,18 @@ Result<uint64_t> Simulation::update_lod(Vec3 viewer) {
     tracker.viewer = viewer;
     ++tracker.calls;
     std::vector<std::pair<uint32_t, double>> examined;  // (index, slack)
-    while (!tracker.heap.empty() && tracker.heap.front().key <= tracker.travelled) {
-        std::pop_heap(tracker.heap.begin(), tracker.heap.end(), std::greater<>());
-        const detail::LodTracker::Entry entry = tracker.heap.back();
-        tracker.heap.pop_back();
+    tracker.queue.take_until(tracker.travelled, [&](const detail::LodTracker::Entry& entry) {
         Result<uint64_t> index = index_of(InstanceId(entry.id));
-        if (!index || !(tracker.key[*index] == entry.key)) continue;  // removed, or a stale entry
+        if (!index || !(tracker.key[*index] == entry.key)) return;  // removed, or a stale entry
         const uint32_t i = uint32_t(*index);
         tracker.key[i] = std::numeric_limits<double>::quiet_NaN();  // later entries of i are stale
         const Examined e = examine(i, tracker.travelled);
         change_of(i, e.level);
         examined.emplace_back(i, e.slack);
-    }
+    });
+    // The queue hands entries over in no particular order; the switches below and the keys
+    // pushed back do not depend on it (request_lods sorts its requests).
+    std::sort(changes.begin(), changes.end());
     Result<uint64_t> changed = s.request_lods(changes, std::move(ended));
     if (!changed) {
         tracker.invalidate();
@@ -117,10 +115,9 @@ Result<uint64_t> Simulation::update_lod(Vec3 viewer) {
             tracker.key[i] = tracker.travelled + slack;
             tracker.push(tracker.key[i], uint64_t(s.instance_ids_[i]));
         }
-        if (tracker.heap.size() > 2 * size_t(n) + 1024) {  // stale entries: rebuilt from the keys
-            tracker.heap.clear();
-            for (uint32_t i = 0; i < n; ++i) tracker.heap.push_back({tracker.key[i], uint64_t(s.instance_ids_[i])});
-            std::make_heap(tracker.heap.begin(), tracker.heap.end(), std::greater<>());
+        if (tracker.queue.size() > 2 * size_t(n) + 1024) {  // stale entries: rebuilt from the keys
+            tracker.queue.clear();
+            for (uint32_t i = 0; i < n; ++i) tracker.push(tracker.key[i], uint64_t(s.instance_ids_[i]));
         }
     }
     return *changed;

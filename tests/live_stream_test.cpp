@@ -5,11 +5,13 @@
 // every backend, within a reserved capacity and growing past it.
 #include "test_trees.h"
 
+#include "lod_tracker.h"
 #include "simulation_access.h"
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <limits>
 #include <random>
 
 namespace hmsm {
@@ -72,6 +74,32 @@ void expect_same_lists(const Simulation& fast, const Simulation& slow, int frame
                     x.chain_begin == y.chain_begin && x.node_begin == y.node_begin && x.vertex_begin == y.vertex_begin)
             << "frame " << frame << ", group " << g;
     }
+}
+
+// update_lod's queue hands over exactly the entries whose key the travel reached, each once,
+// whatever the spread of the keys (the next call's, far ones, none).
+TEST(TravelQueue, TakesEveryEntryOnceItsTravelCame) {
+    detail::TravelQueue queue;
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<double> spread(0.0, 400.0);
+    std::vector<double> keys;
+    for (uint64_t id = 0; id < 2000; ++id) {
+        const double key = id % 97 == 0   ? -std::numeric_limits<double>::infinity()
+                           : id % 89 == 0 ? std::numeric_limits<double>::infinity()
+                                          : spread(rng);
+        keys.push_back(key);
+        queue.push({key, id});
+    }
+    std::vector<int> taken(keys.size(), 0);
+    for (double t = -1.0; t <= 450.0; t += 0.37) {
+        queue.take_until(t, [&](const detail::TravelEntry& e) {
+            ++taken[e.id];
+            EXPECT_LE(e.key, t);
+        });
+        for (size_t id = 0; id < keys.size(); ++id)
+            ASSERT_EQ(taken[id], keys[id] <= t ? 1 : 0) << "id " << id << " at travel " << t;
+    }
+    EXPECT_EQ(queue.size(), 0u) << "only the +infinity keys were never kept";
 }
 
 struct StreamCase {
