@@ -150,6 +150,17 @@ Status VulkanBackend::check_range(BufferId id, uint64_t first, uint64_t count) c
     if (first + count > element_counts_[uint32_t(id)] || first + count < first)
         return {ErrorCode::invalid_argument,
                 "vulkan: range past the end of buffer " + std::string(buffer_info(id).name)};
+    // A scene bound in windows places only the live chains of each ping-pong half.
+    if (count > 0 && plan_ && plan_->split() && buffer_info(id).scope == Scope::chain_halves) {
+        const uint64_t half = element_counts_[uint32_t(id)] / 2, mapped = plan_->mapped_chains();
+        bool past = false;  // the part of the range in each half it touches
+        for (uint64_t h = first / half; h * half < first + count; ++h)
+            past = past || std::min(first + count, (h + 1) * half) - h * half > mapped;
+        if (past)
+            return {ErrorCode::invalid_argument, "vulkan: range past the live chains of buffer " +
+                                                     std::string(buffer_info(id).name) +
+                                                     " in a scene bound in windows"};
+    }
     return {};
 }
 

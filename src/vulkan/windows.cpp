@@ -90,6 +90,7 @@ Result<WindowPlan> WindowPlan::build(const SceneData& scene, uint64_t window_byt
         return plan;
     }
 
+    plan.windowed_ = true;
     const ScopeRule instance_rule = scope_rule(scene, Scope::instance, alignment);
     const ScopeRule chain_rule = scope_rule(scene, Scope::chain, alignment);
     const ScopeRule halves_rule = scope_rule(scene, Scope::chain, alignment, true);
@@ -176,7 +177,7 @@ Result<WindowPlan> WindowPlan::build(const SceneData& scene, uint64_t window_byt
             current = grown;
         }
     }
-    if (current.instance_end > current.instance_begin) close(current);
+    if (current.instance_end > current.instance_begin || plan.segments_.empty()) close(current);
     return plan;
 }
 

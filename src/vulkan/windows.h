@@ -71,7 +71,13 @@ public:
     static Result<WindowPlan> build(const SceneData& scene, uint64_t window_bytes, uint64_t alignment,
                                     const std::string& device_name);
 
-    bool split() const { return segments_.size() > 1; }
+    /// Whether the scene is bound in windows: not the one capacity-wide window. A plan of one
+    /// segment is split too where the capacity does not fit a window but the live instances
+    /// do: its ping-pong halves are as long as its chains, not the capacity.
+    bool split() const { return windowed_; }
+    /// Chains per ping-pong half that have a physical place: the capacity unsplit, else the
+    /// live chains the segments cover.
+    uint64_t mapped_chains() const { return windowed_ ? segments_.back().chain.end : total_chains_; }
     const std::vector<Segment>& segments() const { return segments_; }
     uint64_t window_bytes() const { return window_bytes_; }
 
@@ -123,6 +129,7 @@ private:
     uint32_t dispatch_instances(const Dispatch& d) const;
 
     std::vector<Segment> segments_;
+    bool windowed_ = false;
     std::unordered_map<uint32_t, uint32_t> group_instances_;  // group instance_begin -> count
     uint64_t window_bytes_ = 0;
     uint64_t total_chains_ = 0;

@@ -269,6 +269,40 @@ TEST_F(VulkanTest, ReadAndWriteCrossSegments) {
     }
 }
 
+// A capacity beyond one window whose live instances fit in one: the scene is still bound in
+// windows (its ping-pong halves as long as its live chains, not the capacity), steps as the
+// unsplit run, and a range past the live chains of a half is refused instead of copied past
+// the buffer (which corrupted lavapipe's heap once a growth left such a plan).
+TEST_F(VulkanTest, CapacityBeyondAWindowWithOneSegmentStaysBound) {
+    const Scene scene = two_model_scene();
+    const SimulationConfig config = windy_config(Composition::pointer_jumping);
+    std::string skip;
+    auto whole = create_simulation_or_skip(scene, config, BackendKind::vulkan, skip);
+    if (!skip.empty()) GTEST_SKIP() << skip;
+    ASSERT_TRUE(whole && whole->step(20).ok());
+    const detail::SceneData& live = hmsm::detail::scene_data_of(*whole);
+    const uint64_t alignment = vulkan_of(*whole).device().limits().min_storage_buffer_offset_alignment;
+    const uint64_t window = 2 * live.instance_count() * instance_bytes(live, alignment);
+    std::unique_ptr<Simulation> reserved;
+    {
+        ForcedWindow forced(window, alignment);
+        reserved = create_simulation_or_skip(scene, config, BackendKind::vulkan, skip);
+    }
+    ASSERT_TRUE(reserved);
+    ASSERT_TRUE(reserved->reserve_instances(40 * scene.instances.size()).ok());  // re-uploaded, room past a window
+    const auto& plan = vulkan_of(*reserved).window_plan();
+    EXPECT_EQ(plan.segments().size(), 1u);
+    EXPECT_TRUE(plan.split());
+    ASSERT_TRUE(reserved->step(20).ok());
+    for (Output o : kEveryOutput) EXPECT_EQ(read_f32(*reserved, o), read_f32(*whole, o)) << int(o);
+    const detail::SceneData& data = hmsm::detail::scene_data_of(*reserved);
+    std::vector<float> values(12 * 4, 0.0f);
+    const Status past = hmsm::detail::backend_of(*reserved).write(BufferId::chain_rotation,
+                                                                  data.chain_capacity + data.total_chains, 4,
+                                                                  values.data(), detail::Scalar::f32);
+    EXPECT_EQ(past.code(), ErrorCode::invalid_argument) << past.message();
+}
+
 TEST_F(VulkanTest, SceneBeyondTheStorageBufferRangeRuns) {
     std::string skip;
     SimulationConfig config = windy_config(Composition::pointer_jumping);
