@@ -104,12 +104,18 @@ Status Simulation::swap_remove_instances(std::span<const InstanceId> ids) {
     if (indices->size() == n)
         return {ErrorCode::invalid_argument,
                 "cannot remove every instance: a simulation keeps at least one (deactivate it instead)"};
+    auto removed_fades = [&] {  // a removed instance fades no more
+        for (InstanceId id : ids) s.fades_.erase(uint64_t(id));
+    };
     if (s.streaming_paths_ && s.backend_->capabilities().reshapes_in_place) {
         std::vector<uint32_t> sorted(indices->begin(), indices->end());
         std::sort(sorted.begin(), sorted.end());
         Result<bool> in_place = s.swap_remove_in_place(sorted);
         if (!in_place) return in_place.status();
-        if (*in_place) return {};
+        if (*in_place) {
+            removed_fades();
+            return {};
+        }
         // No room to stage the fillers: the general path, in place where the moves allow,
         // else uploading anew with the room the staging asked for (growth_).
     }
@@ -128,7 +134,9 @@ Status Simulation::swap_remove_instances(std::span<const InstanceId> ids) {
         while (removed[from]) ++from;
         survivors[k] = from++;
     }
-    return s.reshape(survivors, {});
+    HMSM_TRY(s.reshape(survivors, {}));
+    removed_fades();
+    return {};
 }
 
 }  // namespace hmsm

@@ -325,9 +325,13 @@ Status Simulation::remove_instances(std::span<const uint64_t> indices) {
         return {ErrorCode::invalid_argument,
                 "cannot remove every instance: a simulation keeps at least one (deactivate it instead)"};
     std::vector<uint32_t> survivors;
+    std::vector<uint64_t> leaving;
     for (uint32_t i = 0; i < s.instances_.size(); ++i)
         if (!removed[i]) survivors.push_back(i);
-    return s.reshape(survivors, {});
+        else leaving.push_back(uint64_t(s.instance_ids_[i]));
+    HMSM_TRY(s.reshape(survivors, {}));
+    for (uint64_t id : leaving) s.fades_.erase(id);  // a removed instance fades no more
+    return {};
 }
 
 Status Simulation::reset_instances(std::span<const uint32_t> indices) {

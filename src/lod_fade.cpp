@@ -144,8 +144,13 @@ void Simulation::Impl::pause_fade(uint32_t index, bool active) {
     if (fade == fades_.end()) return;
     LodFade& f = fade->second;
     // A paused instance runs no step: its fade waits, the steps left kept aside.
-    if (active) f.end_step = steps_done_ + f.paused_left;
-    else f.paused_left = uint32_t(f.end_step > steps_done_ ? f.end_step - steps_done_ : 0);
+    if (active) {
+        f.end_step = steps_done_ + f.paused_left;
+        fade_ends_at(fade->first, f.end_step);
+    } else {
+        f.paused_left = uint32_t(f.end_step > steps_done_ ? f.end_step - steps_done_ : 0);
+        if (f.paused_left == 0) fade_ends_at(fade->first, steps_done_);  // over while paused
+    }
 }
 
 Result<std::vector<uint8_t>> Simulation::Impl::fades_at_rest(const std::vector<uint32_t>& indices) {
@@ -202,16 +207,32 @@ Result<std::vector<uint8_t>> Simulation::Impl::fades_at_rest(const std::vector<u
 
 std::vector<std::pair<uint32_t, uint32_t>> Simulation::Impl::ended_fades() {
     std::vector<std::pair<uint32_t, uint32_t>> ended;
-    for (auto it = fades_.begin(); it != fades_.end();) {
-        const int64_t index = live_index(it->first);
-        const bool gone = index < 0 || instances_[size_t(index)].model != it->second.from_model;
-        const bool over = !gone && (instances_[size_t(index)].active ? it->second.end_step <= steps_done_
-                                                                      : it->second.paused_left == 0);
-        if (over) ended.emplace_back(uint32_t(index), it->second.target_model);
-        if (index >= 0 && gone) dirty_instances_.push_back(uint32_t(index));  // its fade word
-        it = gone ? fades_.erase(it) : std::next(it);
+    std::vector<std::pair<uint64_t, uint64_t>> kept;  // entries of fades that are over: until they fold
+    for (auto it = fade_ends_.begin(); it != fade_ends_.end() && it->first <= steps_done_;) {
+        const auto [step, id] = *it;
+        it = fade_ends_.erase(it);
+        auto fade = fades_.find(id);
+        if (fade == fades_.end()) continue;  // folded, switched or removed since
+        const int64_t index = live_index(id);
+        const bool gone = index < 0 || instances_[size_t(index)].model != fade->second.from_model;
+        if (gone) {
+            if (index >= 0) dirty_instances_.push_back(uint32_t(index));  // its fade word
+            fades_.erase(fade);
+            continue;
+        }
+        const bool active = instances_[size_t(index)].active;
+        const bool over = active ? fade->second.end_step <= steps_done_ : fade->second.paused_left == 0;
+        // An entry of an earlier end, or of a fade paused with steps left (its resume adds one).
+        if (!over || (active && fade->second.end_step != step)) continue;
+        ended.emplace_back(uint32_t(index), fade->second.target_model);
+        kept.emplace_back(step, id);
     }
+    // A fade may have had two entries for one end (paused and resumed within a step).
+    std::sort(kept.begin(), kept.end());
+    kept.erase(std::unique(kept.begin(), kept.end()), kept.end());
+    for (const auto& [step, id] : kept) fade_ends_.emplace(step, id);
     std::sort(ended.begin(), ended.end());
+    ended.erase(std::unique(ended.begin(), ended.end()), ended.end());
     return ended;
 }
 
@@ -277,6 +298,7 @@ Result<uint64_t> Simulation::Impl::request_lods(std::vector<std::pair<uint32_t, 
             }
             const uint32_t steps = lod_bands_.fade_steps;
             fades_[id] = {instances_[i].model, run_model, steps_done_ + steps, steps};
+            fade_ends_at(id, steps_done_ + steps);
             started.push_back(i);
         }
     }

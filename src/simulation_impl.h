@@ -17,6 +17,7 @@
 #include "step_program.h"
 
 #include <array>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <unordered_map>
@@ -232,6 +233,13 @@ struct __attribute__((visibility("hidden"))) Simulation::Impl {
         uint32_t paused_left = 0;
     };
     std::unordered_map<uint64_t, LodFade> fades_;
+    /// The fades by the step their instance may end them at (end_step while active; the step
+    /// it was paused at with no steps left), id by id: ended_fades looks at the fades whose
+    /// step came, not at every fade. Entries outlive their fade or its end (they are checked
+    /// against fades_ when their step comes); every change of a fade's end adds one.
+    std::multimap<uint64_t, uint64_t> fade_ends_;
+    /// Adds fade_ends_'s entry of the fade of `id`, now ending at `step`.
+    void fade_ends_at(uint64_t id, uint64_t step) { fade_ends_.emplace(step, id); }
     /// Per run model: its rank among its scene model's levels by chain count, finest first (the
     /// fade word's level, gpu_layout.h HMSM_FADE_*).
     std::vector<uint32_t> fold_rank_;
@@ -258,7 +266,8 @@ struct __attribute__((visibility("hidden"))) Simulation::Impl {
                                   std::vector<std::pair<uint32_t, uint32_t>> ended = {});
     /// The fades that are over (all their steps run) as (index, target model), ascending; they
     /// stay in fades_ (an instance heads for its target) until request_lods switches them. Drops
-    /// the fades whose instance is gone or switched (their fade words are rewritten).
+    /// the fades whose instance was switched another way (their fade words are rewritten).
+    /// O(fades whose end came, log fades); removals drop their instances' fades themselves.
     std::vector<std::pair<uint32_t, uint32_t>> ended_fades();
     /// Switches the ended fades (ended_fades) at once.
     Status fold_ready_fades();

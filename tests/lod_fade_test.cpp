@@ -329,6 +329,7 @@ TEST(LodFadeRequests, InterruptRetargetPauseRemoveAndRest) {
     EXPECT_EQ(*sim->instance_lod(deep), 0u);
     EXPECT_EQ(*sim->instance_lod_target(deep), 3u);
     ASSERT_TRUE(sim->remove_instances_by_id({&removed, 1}).ok());
+    EXPECT_EQ(sim->fading_instance_count(), 2u) << "a removed instance's fade ends with it";
     ASSERT_TRUE(sim->step(LodBands{}.fade_steps).ok());
     ASSERT_EQ(*sim->request_instance_lods({&deep, 1}, {&three, 1}), 0u);  // the ended fade switches
     EXPECT_EQ(*sim->instance_lod(deep), 3u);
