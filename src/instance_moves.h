@@ -72,6 +72,41 @@ inline Status write_origins_and_yaws(Backend& backend, const SceneData& d, std::
     return {};
 }
 
+/// Appends a move of `count` elements from `src` to `dst`, joined to the move before where both
+/// continue it.
+inline void append_move(std::vector<ElementMove>& moves, uint64_t src, uint64_t dst, uint64_t count) {
+    if (count == 0) return;
+    if (!moves.empty() && moves.back().src + moves.back().count == src && moves.back().dst + moves.back().count == dst)
+        moves.back().count += count;
+    else
+        moves.push_back({src, dst, count});
+}
+
+/// Appends range [first, first + count), joined to the range before where it continues it.
+inline void append_range(std::vector<ElementRange>& ranges, uint64_t first, uint64_t count) {
+    if (count == 0) return;
+    if (!ranges.empty() && ranges.back().first + ranges.back().count == first) ranges.back().count += count;
+    else ranges.push_back({first, count});
+}
+
+/// A swap removal of `removed` (ascending, each once, fewer than `count`) from `count`
+/// instances: the holes below the new count take, in ascending order, the survivors at or past it.
+struct SwapFill {
+    std::vector<uint32_t> holes, fillers;
+    uint32_t kept = 0;
+};
+inline SwapFill swap_fill(const std::vector<uint32_t>& removed, uint32_t count) {
+    SwapFill fill;
+    fill.kept = count - uint32_t(removed.size());
+    size_t past = 0;
+    for (; past < removed.size() && removed[past] < fill.kept; ++past) fill.holes.push_back(removed[past]);
+    for (uint32_t i = fill.kept, r = uint32_t(past); i < count; ++i) {
+        if (r < removed.size() && removed[r] == i) ++r;
+        else fill.fillers.push_back(i);
+    }
+    return fill;
+}
+
 /// Neighbouring instances [first, end): read, carried and written as one range.
 struct IndexRun {
     uint32_t first = 0, end = 0;
@@ -85,6 +120,13 @@ inline std::vector<IndexRun> index_runs(std::span<const uint32_t> ascending) {
         else runs.push_back({i, i + 1});
     }
     return runs;
+}
+
+/// index_runs as ranges of indices.
+inline std::vector<ElementRange> index_ranges(std::span<const uint32_t> ascending) {
+    std::vector<ElementRange> ranges;
+    for (uint32_t i : ascending) append_range(ranges, i, 1);
+    return ranges;
 }
 
 /// `ascending` (moves in ascending order of source and destination) in an order that

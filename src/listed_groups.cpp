@@ -39,6 +39,23 @@ bool scene_can_be_listed(const SceneData& d) {
            d.vertex_capacity <= kMaxTableWord && d.instance_capacity <= kMaxTableWord;
 }
 
+void append_listed_groups(const SceneData& d, uint32_t model, uint32_t begin, uint32_t end,
+                          std::vector<InstanceGroup>& into) {
+    const ModelRange& m = d.models[model];
+    const uint64_t per_instance =
+        std::max({uint64_t(1), uint64_t(m.chain_count), uint64_t(m.node_count), uint64_t(m.vertex_count)});
+    const uint32_t most = uint32_t(std::max<uint64_t>(1, kMaxGroupElements / per_instance));
+    for (uint32_t at = begin; at < end;) {
+        InstanceGroup g;
+        g.model = model;
+        g.instance_begin = at;
+        g.instance_count = std::min(most, end - at);
+        g.listed = true;
+        into.push_back(g);
+        at += g.instance_count;
+    }
+}
+
 void list_groups(const SceneData& d, std::span<const InstanceGroup> groups, std::span<const Instance> instances,
                  ListedGroups& into, const InstancePlacements* placed) {
     auto active = [&](const InstanceGroup& g, uint32_t k) {
@@ -75,21 +92,8 @@ void list_groups(const SceneData& d, std::span<const InstanceGroup> groups, std:
         }
     }
     into.groups.clear();
-    for (uint32_t model = 0; model < d.models.size(); ++model) {
-        const ModelRange& m = d.models[model];
-        const uint64_t per_instance = std::max({uint64_t(1), uint64_t(m.chain_count), uint64_t(m.node_count),
-                                                uint64_t(m.vertex_count)});
-        const uint32_t most = uint32_t(std::max<uint64_t>(1, kMaxGroupElements / per_instance));
-        for (uint32_t begin = first[model]; begin < next[model];) {
-            InstanceGroup g;
-            g.model = model;
-            g.instance_begin = begin;
-            g.instance_count = std::min(most, next[model] - begin);
-            g.listed = true;
-            into.groups.push_back(g);
-            begin += g.instance_count;
-        }
-    }
+    for (uint32_t model = 0; model < d.models.size(); ++model)
+        append_listed_groups(d, model, first[model], next[model], into.groups);
 }
 
 void list_instances(const SceneData& d, std::span<const uint32_t> indices, std::span<const Instance> instances,
@@ -107,21 +111,8 @@ void list_instances(const SceneData& d, std::span<const uint32_t> indices, std::
         entry[3] = double(i);
     }
     into.groups.clear();
-    for (uint32_t model = 0; model < d.models.size(); ++model) {
-        const ModelRange& m = d.models[model];
-        const uint64_t per_instance = std::max({uint64_t(1), uint64_t(m.chain_count), uint64_t(m.node_count),
-                                                uint64_t(m.vertex_count)});
-        const uint32_t most = uint32_t(std::max<uint64_t>(1, kMaxGroupElements / per_instance));
-        for (uint32_t at = first[model]; at < next[model];) {
-            InstanceGroup g;
-            g.model = model;
-            g.instance_begin = at;
-            g.instance_count = std::min(most, next[model] - at);
-            g.listed = true;
-            into.groups.push_back(g);
-            at += g.instance_count;
-        }
-    }
+    for (uint32_t model = 0; model < d.models.size(); ++model)
+        append_listed_groups(d, model, first[model], next[model], into.groups);
 }
 
 }  // namespace hmsm::detail

@@ -27,6 +27,11 @@ struct ListedGroups {
     uint32_t entries() const { return uint32_t(table.size() / 4); }
 };
 
+/// Appends the listed groups of model `model`'s entries [begin, end) of a table, split so that
+/// no dispatch exceeds kMaxGroupElements threads.
+void append_listed_groups(const SceneData& d, uint32_t model, uint32_t begin, uint32_t end,
+                          std::vector<InstanceGroup>& into);
+
 /// Whether a scene can be listed at all: every state offset and instance index fits the
 /// table's 32-bit signed words.
 bool scene_can_be_listed(const SceneData& d);

@@ -137,24 +137,19 @@ const std::vector<detail::Dispatch>& Simulation::Impl::current_program() {
     if (program_dirty_) {
         // Without paused instances the runs are the groups themselves (not copied: a
         // fragmented world has hundreds of thousands).
+        std::vector<detail::InstanceGroup> runs;
         if (placed_) {
             // The placed layout's table is kept under changes (placed_list.h): a segment per model.
             placed_list_.groups(*data_, listed_.groups);
             step_program_lists_ = true;
-            instance_table_dirty_ = true;
-            step_program_ = program_for(listed_.groups, Pass::wind_force);
-            ++step_program_id_;
-            step_program_walks_ahead_ = std::any_of(step_program_.begin(), step_program_.end(), detail::is_walk_ahead);
-            program_dirty_ = false;
-            return step_program_;
+        } else {
+            if (paused_count_ > 0) runs = active_groups(*data_, instances_, paused_count_);
+            // A fragmented scene runs listed groups, a few per model, where the backend can
+            // (listed_groups.h); their instance table is written before the program runs
+            // (write_instance_table).
+            step_program_lists_ = lists(paused_count_ > 0 ? runs : data_->groups, listed_);
         }
-        std::vector<detail::InstanceGroup> runs;
-        if (paused_count_ > 0) runs = active_groups(*data_, instances_, paused_count_);
         const std::vector<detail::InstanceGroup>& groups = paused_count_ > 0 ? runs : data_->groups;
-        // A fragmented scene runs listed groups, a few per model, where the backend can
-        // (listed_groups.h); their instance table is written before the program runs
-        // (write_instance_table).
-        step_program_lists_ = lists(groups, listed_);
         instance_table_dirty_ = step_program_lists_;
         step_program_ = program_for(step_program_lists_ ? listed_.groups : groups, Pass::wind_force);
         ++step_program_id_;

@@ -238,11 +238,8 @@ Status Simulation::Impl::reset(std::span<const uint32_t> indices) {
     if (placed_) {
         // S = V = 0 and g = 0 in each instance's slot, then the run from pass 2 (as below).
         std::vector<detail::ElementRange> ranges;
-        for (uint32_t i : indices) {
-            const uint64_t first = placements_[i].chains, n = data_->models[instances_[i].model].chain_count;
-            if (!ranges.empty() && ranges.back().first + ranges.back().count == first) ranges.back().count += n;
-            else ranges.push_back({first, n});
-        }
+        for (uint32_t i : indices)
+            detail::append_range(ranges, placements_[i].chains, data_->models[instances_[i].model].chain_count);
         HMSM_TRY(zero_chain_state(ranges));
         ahead_schedule_.live_change();
         return run_at_rest_placed(indices, Pass::integrate);

@@ -18,15 +18,6 @@ using detail::BufferId;
 using detail::ElementCounts;
 using detail::ElementMove;
 
-/// Appends a move of `count` elements from `src` to `dst`, joined to the move before when both
-/// continue it.
-void add_move(std::vector<ElementMove>& moves, uint64_t src, uint64_t dst, uint64_t count) {
-    if (count == 0) return;
-    if (!moves.empty() && moves.back().src + moves.back().count == src && moves.back().dst + moves.back().count == dst)
-        moves.back().count += count;
-    else
-        moves.push_back({src, dst, count});
-}
 
 /// The moves of one scope (chains, nodes or vertices) of a swap removal, applied in order:
 /// the instances that fill the holes go to staging above every live element, the survivors
@@ -156,15 +147,8 @@ Result<bool> Simulation::Impl::swap_remove_in_place(const std::vector<uint32_t>&
     }
     detail::SceneData& d = *data_;
     const uint32_t n = uint32_t(instances_.size());
-    const uint32_t kept = n - uint32_t(removed.size());
-    // The holes below the new count take, in ascending order, the survivors at or past it.
-    std::vector<uint32_t> holes, fillers;
-    size_t past = 0;
-    for (; past < removed.size() && removed[past] < kept; ++past) holes.push_back(removed[past]);
-    for (uint32_t i = kept, r = uint32_t(past); i < n; ++i) {
-        if (r < removed.size() && removed[r] == i) ++r;
-        else fillers.push_back(i);
-    }
+    const detail::SwapFill fill = detail::swap_fill(removed, n);
+    const std::vector<uint32_t>&holes = fill.holes, &fillers = fill.fillers;
     detail::InstanceOffsets& offsets = this->offsets();
     auto size = [&](uint32_t i) { return detail::counts_of(d.models[instances_[i].model]); };
     const ElementCounts live{d.total_chains, d.total_nodes, d.total_vertices};
@@ -198,13 +182,13 @@ Result<bool> Simulation::Impl::swap_remove_in_place(const std::vector<uint32_t>&
         for (size_t j = 0; j < fillers.size(); ++j) {
             filler_at[j] = offsets.before(fillers[j]);
             for (int s = 0; s < 3; ++s)
-                add_move(scopes[s].stage, pick(filler_at[j], s), pick(at_staging, s), pick(size(fillers[j]), s));
+                detail::append_move(scopes[s].stage, pick(filler_at[j], s), pick(at_staging, s), pick(size(fillers[j]), s));
             at_staging += size(fillers[j]);
         }
         ElementCounts delta, staging = live;
         uint32_t begin = 0;  // first survivor of the run that keeps its instance
         for (size_t j = 0; j <= holes.size(); ++j) {
-            const uint32_t end = j < holes.size() ? holes[j] : kept;
+            const uint32_t end = j < holes.size() ? holes[j] : fill.kept;
             if (end > begin) {
                 const ElementCounts from = offsets.before(begin), to = offsets.before(end);
                 for (int s = 0; s < 3; ++s)
@@ -214,7 +198,7 @@ Result<bool> Simulation::Impl::swap_remove_in_place(const std::vector<uint32_t>&
             if (j == holes.size()) break;
             const ElementCounts hole_at = offsets.before(holes[j]) + delta;
             const ElementCounts source = same_sizes ? filler_at[j] : staging;
-            for (int s = 0; s < 3; ++s) add_move(scopes[s].unstage, pick(source, s), pick(hole_at, s), pick(size(fillers[j]), s));
+            for (int s = 0; s < 3; ++s) detail::append_move(scopes[s].unstage, pick(source, s), pick(hole_at, s), pick(size(fillers[j]), s));
             staging += size(fillers[j]);
             delta += size(fillers[j]);
             delta -= size(holes[j]);
@@ -242,7 +226,16 @@ Result<bool> Simulation::Impl::swap_remove_in_place(const std::vector<uint32_t>&
     }
 
     // The host's lists: each hole takes its filler, the end is cut.
-    if (ids_ascending_ && !holes.empty()) {
+    for (size_t j = 0; j < holes.size(); ++j) offsets.add(holes[j], size(fillers[j]) - size(holes[j]));
+    for (uint32_t k = fill.kept; k < n; ++k) offsets.pop_back();
+    HMSM_TRY(swap_instance_lists(removed, fill));
+    return true;
+}
+
+Status Simulation::Impl::swap_instance_lists(const std::vector<uint32_t>& removed, const detail::SwapFill& fill) {
+    detail::SceneData& d = *data_;
+    const uint32_t n = uint32_t(instances_.size()), kept = fill.kept;
+    if (ids_ascending_ && !fill.holes.empty()) {
         id_index_.clear();
         id_index_.reserve(instance_ids_.size());
         for (uint32_t i = 0; i < n; ++i) id_index_.emplace(uint64_t(instance_ids_[i]), i);
@@ -252,9 +245,8 @@ Result<bool> Simulation::Impl::swap_remove_in_place(const std::vector<uint32_t>&
         if (!instances_[r].active) --paused_count_;
         if (!ids_ascending_) id_index_.erase(uint64_t(instance_ids_[r]));
     }
-    for (size_t j = 0; j < holes.size(); ++j) {
-        const uint32_t h = holes[j], f = fillers[j];
-        offsets.add(h, size(f) - size(h));
+    for (size_t j = 0; j < fill.holes.size(); ++j) {
+        const uint32_t h = fill.holes[j], f = fill.fillers[j];
         instances_[h] = instances_[f];
         instance_ids_[h] = instance_ids_[f];
         id_index_[uint64_t(instance_ids_[h])] = h;
@@ -262,30 +254,21 @@ Result<bool> Simulation::Impl::swap_remove_in_place(const std::vector<uint32_t>&
         d.instance_yaw[h] = d.instance_yaw[f];
         if (lod_tracker_.valid) lod_tracker_.key[h] = lod_tracker_.key[f];
     }
-    for (uint32_t k = kept; k < n; ++k) offsets.pop_back();
     instances_.resize(kept);
     instance_ids_.resize(kept);
     d.instance_origin.resize(kept);
     d.instance_yaw.resize(kept);
     d.instance_wind.resize(size_t(HMSM_INSTANCE_WIND_VEC4S) * 4 * kept);
     if (lod_tracker_.valid) lod_tracker_.key.resize(kept);
-    detail::relay_groups(d, instances_, holes);
+    if (!placed_) detail::relay_groups(d, instances_, fill.holes);  // the placed layout keeps no groups
     instances_changed();
     header_dirty_ = program_dirty_ = true;
 
     // Origins, yaws and winds of the holes, run by run.
     std::erase_if(dirty_instances_, [&](uint32_t i) { return i >= kept; });
-    std::vector<detail::ElementRange> hole_runs;
-    for (size_t j = 0; j < holes.size();) {
-        size_t end = j + 1;
-        while (end < holes.size() && holes[end] == holes[end - 1] + 1) ++end;
-        hole_runs.push_back({holes[j], end - j});
-        j = end;
-    }
-    HMSM_TRY(detail::write_origins_and_yaws(*backend_, d, hole_runs));
-    dirty_instances_.insert(dirty_instances_.end(), holes.begin(), holes.end());
-    HMSM_TRY(apply_pending());
-    return true;
+    HMSM_TRY(detail::write_origins_and_yaws(*backend_, d, detail::index_ranges(fill.holes)));
+    dirty_instances_.insert(dirty_instances_.end(), fill.holes.begin(), fill.holes.end());
+    return apply_pending();
 }
 
 }  // namespace hmsm

@@ -292,17 +292,21 @@ Status Simulation::Impl::switch_models(const std::vector<std::pair<uint32_t, uin
     if (!in_place) {
         // Every output buffer is new: passes 4, 6 and 7 from the carried pose, element for
         // element what they were.
-        std::vector<InstanceGroup> all;
-        for (const InstanceGroup& g : data_->groups)
-            all.push_back(detail::group_slice(*data_, g, g.instance_begin, g.instance_count));
-        const uint32_t outputs = (1u << uint32_t(Pass::node_relative)) | (1u << uint32_t(Pass::node_world)) |
-                                 (1u << uint32_t(Pass::contour));
-        HMSM_TRY(run_at_rest(all, Pass::node_relative, outputs));
+        HMSM_TRY(recompute_outputs());
     }
     // The switched instances are posed from their angles.
     if (placed_) HMSM_TRY(run_at_rest_placed(switched, Pass::compose));
     else HMSM_TRY(run_at_rest(detail::slices_covering(*data_, switched), Pass::compose));
     return apply_pending();
+}
+
+Status Simulation::Impl::recompute_outputs() {
+    std::vector<InstanceGroup> all;
+    for (const InstanceGroup& g : data_->groups)
+        all.push_back(detail::group_slice(*data_, g, g.instance_begin, g.instance_count));
+    const uint32_t outputs = (1u << uint32_t(Pass::node_relative)) | (1u << uint32_t(Pass::node_world)) |
+                             (1u << uint32_t(Pass::contour));
+    return run_at_rest(all, Pass::node_relative, outputs);
 }
 
 Status Simulation::set_instance_lod(InstanceId id, uint32_t level) {

@@ -19,28 +19,6 @@ using detail::ElementCounts;
 using detail::ElementMove;
 using detail::ElementRange;
 
-/// Appends a move of `count` elements, joined to the move before where it continues it.
-void add_move(std::vector<ElementMove>& moves, uint64_t src, uint64_t dst, uint64_t count) {
-    if (count == 0) return;
-    if (!moves.empty() && moves.back().src + moves.back().count == src && moves.back().dst + moves.back().count == dst)
-        moves.back().count += count;
-    else
-        moves.push_back({src, dst, count});
-}
-
-/// Appends range [first, first + count), joined to the range before where it continues it.
-void add_range(std::vector<ElementRange>& ranges, uint64_t first, uint64_t count) {
-    if (count == 0) return;
-    if (!ranges.empty() && ranges.back().first + ranges.back().count == first) ranges.back().count += count;
-    else ranges.push_back({first, count});
-}
-
-std::vector<ElementRange> runs_of(std::span<const uint32_t> ascending) {
-    std::vector<ElementRange> runs;
-    for (const detail::IndexRun& r : detail::index_runs(ascending)) runs.push_back({r.first, r.end - r.first});
-    return runs;
-}
-
 }  // namespace
 
 detail::ElementCounts Simulation::Impl::first_elements(uint32_t i) {
@@ -114,12 +92,7 @@ Status Simulation::Impl::pack_layout() {
         HMSM_TRY(scalar == detail::Scalar::f64 ? pack(0.0) : pack(0.0f));
     }
     placements_laid_out();
-    std::vector<detail::InstanceGroup> all;
-    for (const detail::InstanceGroup& g : d.groups)
-        all.push_back(detail::group_slice(d, g, g.instance_begin, g.instance_count));
-    const uint32_t outputs = (1u << uint32_t(Pass::node_relative)) | (1u << uint32_t(Pass::node_world)) |
-                             (1u << uint32_t(Pass::contour));
-    return run_at_rest(all, Pass::node_relative, outputs);
+    return recompute_outputs();
 }
 
 Result<bool> Simulation::Impl::append_placed(std::span<const Instance> added) {
@@ -148,7 +121,7 @@ Result<bool> Simulation::Impl::append_placed(std::span<const Instance> added) {
         const ElementCounts size = detail::counts_of(d.models[inst.model]);
         const ElementCounts at = placements_.allocate(inst.model, size);
         placements_.push_back(at);
-        add_range(slots, at.chains, size.chains);
+        detail::append_range(slots, at.chains, size.chains);
     }
     placed_end_changed();
     HMSM_TRY(zero_chain_state(slots));
@@ -187,28 +160,11 @@ Result<bool> Simulation::Impl::append_placed(std::span<const Instance> added) {
 
 Status Simulation::Impl::swap_remove_placed(const std::vector<uint32_t>& removed) {
     detail::SceneData& d = *data_;
-    const uint32_t n = uint32_t(instances_.size());
-    const uint32_t kept = n - uint32_t(removed.size());
-    // The holes below the new count take, in ascending order, the survivors at or past it; each
-    // takes its filler's slot along, so nothing moves on the device.
-    std::vector<uint32_t> holes, fillers;
-    size_t past = 0;
-    for (; past < removed.size() && removed[past] < kept; ++past) holes.push_back(removed[past]);
-    for (uint32_t i = kept, r = uint32_t(past); i < n; ++i) {
-        if (r < removed.size() && removed[r] == i) ++r;
-        else fillers.push_back(i);
-    }
+    // Each hole takes its filler's slot along, so nothing moves on the device.
+    const detail::SwapFill fill = detail::swap_fill(removed, uint32_t(instances_.size()));
     detail::InstanceChangeBracket change(*backend_);
     ahead_schedule_.live_change();
-    if (ids_ascending_ && !holes.empty()) {
-        id_index_.clear();
-        id_index_.reserve(instance_ids_.size());
-        for (uint32_t i = 0; i < n; ++i) id_index_.emplace(uint64_t(instance_ids_[i]), i);
-        ids_ascending_ = false;
-    }
     for (uint32_t r : removed) {
-        if (!instances_[r].active) --paused_count_;
-        if (!ids_ascending_) id_index_.erase(uint64_t(instance_ids_[r]));
         placements_.release(instances_[r].model, placements_[r]);
         placed_list_.erase(r);
         const ElementCounts size = detail::counts_of(d.models[instances_[r].model]);
@@ -216,35 +172,15 @@ Status Simulation::Impl::swap_remove_placed(const std::vector<uint32_t>& removed
         d.total_nodes -= size.nodes;
         d.total_vertices -= size.vertices;
     }
-    for (size_t j = 0; j < holes.size(); ++j) {
-        const uint32_t h = holes[j], f = fillers[j];
-        placements_.set(h, placements_[f]);
-        placed_list_.renumber(f, h);
-        instances_[h] = instances_[f];
-        instance_ids_[h] = instance_ids_[f];
-        id_index_[uint64_t(instance_ids_[h])] = h;
-        d.instance_origin[h] = d.instance_origin[f];
-        d.instance_yaw[h] = d.instance_yaw[f];
-        if (lod_tracker_.valid) lod_tracker_.key[h] = lod_tracker_.key[f];
+    for (size_t j = 0; j < fill.holes.size(); ++j) {
+        placements_.set(fill.holes[j], placements_[fill.fillers[j]]);
+        placed_list_.renumber(fill.fillers[j], fill.holes[j]);
     }
-    placements_.resize(kept);
-    placed_list_.resize(kept);
+    placements_.resize(fill.kept);
+    placed_list_.resize(fill.kept);
     offsets_valid_ = false;
     d.groups.clear();
-    instances_.resize(kept);
-    instance_ids_.resize(kept);
-    d.instance_origin.resize(kept);
-    d.instance_yaw.resize(kept);
-    d.instance_wind.resize(size_t(HMSM_INSTANCE_WIND_VEC4S) * 4 * kept);
-    if (lod_tracker_.valid) lod_tracker_.key.resize(kept);
-    instances_changed();
-    header_dirty_ = program_dirty_ = true;
-
-    // Origins, yaws and winds of the holes, run by run.
-    std::erase_if(dirty_instances_, [&](uint32_t i) { return i >= kept; });
-    HMSM_TRY(detail::write_origins_and_yaws(*backend_, d, runs_of(holes)));
-    dirty_instances_.insert(dirty_instances_.end(), holes.begin(), holes.end());
-    return apply_pending();
+    return swap_instance_lists(removed, fill);
 }
 
 Result<bool> Simulation::Impl::switch_placed(const std::vector<std::pair<uint32_t, uint32_t>>& models,
@@ -269,11 +205,11 @@ Result<bool> Simulation::Impl::switch_placed(const std::vector<std::pair<uint32_
     // staging, their new chains built there, and each goes to its new slot (all halves).
     std::vector<ElementMove> stage, unstage;
     for (size_t k = 0; k < models.size(); ++k)
-        add_move(stage, placements_[models[k].first].chains, staging.old_at[k],
+        detail::append_move(stage, placements_[models[k].first].chains, staging.old_at[k],
                  d.models[instances_[models[k].first].model].chain_count);
     detail::append_build_moves(stage, staging, carries);
     for (size_t k = 0; k < models.size(); ++k)
-        add_move(unstage, staging.instance_at[k], slots[k].chains, d.models[models[k].second].chain_count);
+        detail::append_move(unstage, staging.instance_at[k], slots[k].chains, d.models[models[k].second].chain_count);
     const std::vector<BufferId> carried = detail::carried_buffers(d.coupled());
     std::vector<std::vector<ElementMove>> in_buffers(carried.size());
     std::vector<detail::BufferMoves> moves;

@@ -88,21 +88,8 @@ public:
     /// exceeds kMaxGroupElements threads.
     void groups(const SceneData& d, std::vector<InstanceGroup>& into) const {
         into.clear();
-        for (uint32_t model = 0; model + 1 < begin_.size(); ++model) {
-            const ModelRange& m = d.models[model];
-            const uint64_t per_instance = std::max({uint64_t(1), uint64_t(m.chain_count), uint64_t(m.node_count),
-                                                    uint64_t(m.vertex_count)});
-            const uint32_t most = uint32_t(std::max<uint64_t>(1, kMaxGroupElements / per_instance));
-            for (uint32_t at = begin_[model]; at < begin_[model + 1];) {
-                InstanceGroup g;
-                g.model = model;
-                g.instance_begin = at;
-                g.instance_count = std::min(most, begin_[model + 1] - at);
-                g.listed = true;
-                into.push_back(g);
-                at += g.instance_count;
-            }
-        }
+        for (uint32_t model = 0; model + 1 < begin_.size(); ++model)
+            append_listed_groups(d, model, begin_[model], begin_[model + 1], into);
     }
     /// The entries written since the last call (all of them after build), as ranges and their
     /// table words (4 scalars an entry, as Backend::write takes them for BufferId::instance_table).

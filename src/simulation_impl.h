@@ -6,6 +6,7 @@
 
 #include "backend.h"
 #include "cpu/thread_pool.h"
+#include "instance_moves.h"
 #include "instance_offsets.h"
 #include "instance_placements.h"
 #include "level_carry.h"
@@ -80,6 +81,14 @@ struct __attribute__((visibility("hidden"))) Simulation::Impl {
     /// staging of the instances that fill the holes does not fit the capacity (growth_ then
     /// says how much room the next upload takes).
     Result<bool> swap_remove_in_place(const std::vector<uint32_t>& removed);
+    /// The host's lists after a swap removal, in either layout: each hole takes its filler's
+    /// instance, handle, origin, yaw and LOD key, the lists are cut to the survivors; then the
+    /// holes' origins, yaws and winds are written and the pending changes applied. The caller
+    /// has carried the layout's own part (offsets or slots) first.
+    Status swap_instance_lists(const std::vector<uint32_t>& removed, const detail::SwapFill& fill);
+    /// Passes 4, 6 and 7 over every instance from the carried pose (every output buffer new or
+    /// moved): element for element the outputs they had.
+    Status recompute_outputs();
     /// Grows the capacities to hold `needed` elements and `instances` instances (1.5 times at a
     /// time, at least the reserve) on the device (Backend::grow, capacity_growth.cpp): true when
     /// they hold them now, false where the backend cannot grow so (the caller then takes the

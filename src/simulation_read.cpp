@@ -8,6 +8,7 @@
 
 #include "backend.h"
 #include "common/octahedral.h"
+#include "instance_moves.h"
 #include "scene_data.h"
 #include "simulation_impl.h"
 
@@ -77,12 +78,7 @@ Result<Simulation::Impl::ReadSource> Simulation::Impl::read_source(Output output
             const detail::ModelRange& m = data_->models[instances_[i].model];
             const uint64_t from = nodes ? placements_[i].nodes : vertices ? placements_[i].vertices : placements_[i].chains;
             const uint64_t n = nodes ? m.node_count : vertices ? m.vertex_count : m.chain_count;
-            if (n == 0) continue;
-            std::vector<detail::ElementMove>& gather = source.gather;
-            if (!gather.empty() && gather.back().src + gather.back().count == from && gather.back().dst + gather.back().count == at)
-                gather.back().count += n;
-            else
-                gather.push_back({from, at, n});
+            detail::append_move(source.gather, from, at, n);
             at += n;
         }
         if (source.gather.size() == 1 && source.gather[0].src == 0) source.gather.clear();  // the output's order
