@@ -142,6 +142,15 @@ TEST_F(WholeTreeCli, WritesTheReportAndPlots) {
     EXPECT_EQ(m["sway"][1]["speed_m_s"].get<double>(), 20.0);
     // A stronger wind leans the tree further.
     EXPECT_GT(m["sway"][1]["mean_lean_deg"].get<double>(), m["sway"][0]["mean_lean_deg"].get<double>());
+    // The linearized links: six modes, lowest first, and a sway below the trunk chain's own f0
+    // (the limbs bend); the paper dynamics reports none.
+    const auto& links = m["linearized_links"];
+    ASSERT_EQ(links["modes_hz"].size(), 6u);
+    EXPECT_TRUE(links["converged"].get<bool>());
+    for (size_t k = 1; k < 6; ++k)
+        EXPECT_GE(links["modes_hz"][k].get<double>(), links["modes_hz"][k - 1].get<double>());
+    EXPECT_GT(links["sway_along_hz"].get<double>(), 0.0);
+    EXPECT_LT(links["sway_along_hz"].get<double>(), links["trunk_f0_hz"][0].get<double>());
     for (const char* png : {"release.png", "sway.png"}) {
         const std::string bytes = test::read_text(path(png));
         ASSERT_GT(bytes.size(), 1000u) << png;
@@ -150,6 +159,7 @@ TEST_F(WholeTreeCli, WritesTheReportAndPlots) {
     ASSERT_EQ(run("analyze --preset paper-5" + quick_run).exit_code, 0) << last_.err;
     EXPECT_NE(last_.out.find("release test"), std::string::npos);
     EXPECT_NE(last_.out.find("paper dynamics"), std::string::npos);
+    EXPECT_EQ(last_.out.find("linearized links"), std::string::npos);
 }
 
 TEST_F(WholeTreeCli, RefusesBadInputWithoutPlots) {

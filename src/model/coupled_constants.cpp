@@ -4,6 +4,8 @@
 // transition of the exact oscillator step.
 #include "coupled_constants.h"
 
+#include "chain_bodies.h"
+
 #include <glm/geometric.hpp>
 #include <glm/matrix.hpp>
 
@@ -21,13 +23,6 @@ namespace {
 constexpr double kPi = std::numbers::pi;
 /// Pieces per segment of the cantilever's static deflection (docs/model.md 3.13).
 constexpr int kPiecesPerSegment = 8;
-
-/// A chain straightened along its arc length: node j (0 the attach node) at local position p[j],
-/// radius r[j], arc length s[j].
-struct ChainPath {
-    std::vector<glm::dvec3> p;
-    std::vector<double> r, s;
-};
 
 /// Squared distance of a point from the chain's local x axis (index 0) or z axis (index 1).
 double axis_distance2(const glm::dvec3& x, int axis) {
@@ -58,13 +53,6 @@ glm::dvec3 path_tangent(const ChainPath& path, size_t j) {
     const double n = glm::length(t);
     return n > 0.0 ? t / n : glm::dvec3(0.0, 1.0, 0.0);
 }
-
-/// A load in the chain's frame: mass and drag area at local position x.
-struct PointLoad {
-    int32_t path_index;
-    glm::dvec3 x;
-    double mass, drag_area;
-};
 
 bool float_safe(double v, bool may_be_zero) {
     if (v == 0.0) return may_be_zero;
@@ -263,43 +251,13 @@ std::array<double, 4> oscillator_transition(double inertia, double stiffness, do
 }
 
 Status fill_coupled_constants(const TreeModel& tree, const Parameters& parameters, Hierarchy& h) {
-    const auto& nodes = tree.nodes;
     const Material& material = parameters.material;
     const size_t chain_count = h.chains.size();
 
-    // Each node's index along its owner's path (the trunk's root: 0).
-    std::vector<int32_t> path_index(nodes.size(), 0);
-    std::vector<ChainPath> paths(chain_count);
-    for (size_t c = 0; c < chain_count; ++c) {
-        const Chain& chain = h.chains[c];
-        ChainPath& path = paths[c];
-        path.p.push_back(glm::dvec3(0.0));
-        // The base takes the attach node's radius for the trunk and the first member's for a
-        // branch (its attach node's radius is the parent's), as the mesh's base ring does.
-        // A link after the first continues its chain through the attach node.
-        const bool continues = c == 0 || chain.dynamics.link_index > 0;
-        path.r.push_back(continues ? nodes[chain.attach_node].radius : nodes[chain.members.front()].radius);
-        path.s.push_back(0.0);
-        for (size_t j = 0; j < chain.members.size(); ++j) {
-            const int32_t m = chain.members[j];
-            path_index[m] = int32_t(j + 1);
-            path.s.push_back(path.s.back() + glm::length(h.node_local[m] - path.p.back()));
-            path.p.push_back(h.node_local[m]);
-            path.r.push_back(nodes[m].radius);
-        }
-    }
-
-    // Leaves: mass and drag area from the card's area, at the node plus its offset.
-    std::vector<std::vector<PointLoad>> leaves(chain_count);
-    if (parameters.foliage.on) {
-        for (const TreeLeaf& leaf : tree.leaves) {
-            const int32_t owner = h.node_owner[leaf.node];
-            const double area = leaf.size.x * leaf.size.y;
-            const glm::dvec3 x = h.node_local[leaf.node] + glm::transpose(h.chains[owner].frame) * leaf.offset;
-            leaves[owner].push_back({path_index[leaf.node], x, parameters.foliage.mass_per_area * area,
-                                     parameters.foliage.drag_coefficient * area});
-        }
-    }
+    const ChainBodies bodies = chain_bodies(tree, h, parameters);
+    const std::vector<ChainPath>& paths = bodies.paths;
+    const std::vector<int32_t>& path_index = bodies.path_index;
+    const std::vector<std::vector<PointLoad>>& leaves = bodies.leaves;
 
     // Children: breadth-first numbering makes them one contiguous id range (docs/model.md 3.2).
     for (size_t c = 1; c < chain_count; ++c) {
@@ -325,29 +283,18 @@ Status fill_coupled_constants(const TreeModel& tree, const Parameters& parameter
         const ChainPath& path = paths[c];
         double inertia[2] = {0.0, 0.0}, drag_moment2[2] = {0.0, 0.0}, drag_moment3[2] = {0.0, 0.0};
         glm::dvec3 moment(0.0), mass_moment(0.0);
-        // Own wood: each segment a frustum, 3-point Gauss-Legendre along it (exact for the
-        // quartic integrands of mass and drag-area moments; the drag's third moment, not a
-        // polynomial, to the rule's accuracy).
-        const double gauss_t[3] = {0.5 - std::sqrt(0.15), 0.5, 0.5 + std::sqrt(0.15)};
-        const double gauss_w[3] = {5.0 / 18.0, 8.0 / 18.0, 5.0 / 18.0};
-        for (size_t j = 1; j < path.p.size(); ++j) {
-            const double len = path.s[j] - path.s[j - 1];
-            for (int q = 0; q < 3; ++q) {
-                const double r = path.r[j - 1] + (path.r[j] - path.r[j - 1]) * gauss_t[q];
-                const glm::dvec3 x = path.p[j - 1] + (path.p[j] - path.p[j - 1]) * gauss_t[q];
-                const double dm = material.density * kPi * r * r * len * gauss_w[q];
-                const double da = wood_cd * 2.0 * r * len * gauss_w[q];
-                d.mass += dm;
-                d.drag_area += da;
-                moment += da * x;
-                mass_moment += dm * x;
-                for (int a = 0; a < 2; ++a) {
-                    inertia[a] += dm * axis_distance2(x, a);
-                    drag_moment2[a] += da * axis_distance2(x, a);
-                    drag_moment3[a] += da * axis_distance3(x, a);
-                }
+        // Own wood (the drag's third moment, not a polynomial, to the Gauss rule's accuracy).
+        for_each_wood_point(path, material, wood_cd, [&](const glm::dvec3& x, double dm, double da) {
+            d.mass += dm;
+            d.drag_area += da;
+            moment += da * x;
+            mass_moment += dm * x;
+            for (int a = 0; a < 2; ++a) {
+                inertia[a] += dm * axis_distance2(x, a);
+                drag_moment2[a] += da * axis_distance2(x, a);
+                drag_moment3[a] += da * axis_distance3(x, a);
             }
-        }
+        });
         std::vector<NodeLoad>& node_load = node_loads[c];
         node_load.assign(path.p.size(), NodeLoad{});
         for (const PointLoad& leaf : leaves[c]) {

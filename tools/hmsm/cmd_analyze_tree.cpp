@@ -56,6 +56,21 @@ nlohmann::json to_json(const TreeResponse& r, const Dynamics dynamics, const Par
                         {"mean_lean_deg", s.mean_lean_rad * 180.0 / std::numbers::pi},
                         {"mean_top_over_height", s.mean_top_over_height}});
     j["sway"] = std::move(sway);
+    if (r.links) {
+        const LinkModesReport& l = *r.links;
+        nlohmann::json along = nlohmann::json::array(), across = nlohmann::json::array();
+        for (const auto& share : l.mass_share) {
+            along.push_back(share[0]);
+            across.push_back(share[1]);
+        }
+        j["linearized_links"] = {{"modes_hz", l.frequency_hz},
+                                 {"mass_share_along", along},
+                                 {"mass_share_across", across},
+                                 {"sway_along_hz", l.sway_hz[0]},
+                                 {"sway_across_hz", l.sway_hz[1]},
+                                 {"trunk_f0_hz", l.trunk_f0_hz},
+                                 {"converged", l.converged}};
+    }
     return j;
 }
 
@@ -81,6 +96,14 @@ void print_text(const TreeResponse& r, const Parameters& p, Dynamics dynamics) {
         std::printf("%9.1f  %6.2f  %5.3f-%-7.3f  %11.3f  %8.3f  %.5f  %.5f\n", w.speed, w.slope, w.band_low_hz,
                     w.band_high_hz, w.cross_ratio, w.mean_lean_rad * 180.0 / std::numbers::pi,
                     w.mean_top_over_height, w.rms_along_m);
+    if (!r.links) return;
+    const LinkModesReport& l = *r.links;
+    std::printf("linearized links (all joints coupled, rest pose)%s\n", l.converged ? "" : " (not converged)");
+    std::printf("  sway         %.4f Hz along the wind, %.4f Hz across (trunk chain's own f0 %.4f / %.4f Hz)\n",
+                l.sway_hz[0], l.sway_hz[1], l.trunk_f0_hz[0], l.trunk_f0_hz[1]);
+    std::printf("  mode  f_hz     mass share along  across\n");
+    for (size_t k = 0; k < l.frequency_hz.size(); ++k)
+        std::printf("  %4zu  %-8.4f %-17.4f %.4f\n", k + 1, l.frequency_hz[k], l.mass_share[k][0], l.mass_share[k][1]);
 }
 
 #ifdef HMSM_HAVE_PLOTS

@@ -1,6 +1,8 @@
 // See tree_response.h.
 #include "tree_response.h"
 
+#include "model/linearized_links.h"
+
 #include <glm/geometric.hpp>
 
 #include <algorithm>
@@ -244,6 +246,11 @@ Result<TreeResponse> analyze_tree_response(const TreeModel& tree, const std::str
         }
         fit_release(out.release, dt);
     }
+    if (s.options.dynamics == Dynamics::coupled) {
+        auto links = analyze_link_modes(tree, s, 6);
+        if (!links) return links.status();
+        out.links = std::move(links).value();
+    }
     const double f0 = out.release.frequency_hz > 0 ? out.release.frequency_hz : out.release.fft_frequency_hz;
 
     for (double speed : s.sway_speeds) {
@@ -281,6 +288,24 @@ Result<TreeResponse> analyze_tree_response(const TreeModel& tree, const std::str
         out.sway.push_back(std::move(run));
     }
     return out;
+}
+
+Result<LinkModesReport> analyze_link_modes(const TreeModel& tree, const TreeResponseSettings& s, int modes) {
+    const Parameters parameters = parameters_for_tree(tree, s.parameters);
+    auto h = build_hierarchy(tree, s.options, parameters);
+    if (!h) return h.status();
+    glm::dvec3 along(s.wind_direction.x, 0.0, s.wind_direction.z);
+    along = glm::length(along) > 1e-12 ? glm::normalize(along) : glm::dvec3(1, 0, 0);
+    const detail::LinearizedLinks links = detail::linearize_links(tree, *h, parameters);
+    const detail::LinkModes found =
+        detail::lowest_link_modes(links, modes, {along, glm::cross(glm::dvec3(0, 1, 0), along)});
+    LinkModesReport report;
+    report.frequency_hz = found.frequency_hz;
+    report.mass_share = found.mass_share;
+    report.sway_hz = found.sway_hz;
+    report.converged = found.converged;
+    for (int a = 0; a < 2; ++a) report.trunk_f0_hz[size_t(a)] = h->chains[0].dynamics.frequency[a];
+    return report;
 }
 
 }  // namespace hmsm::cli

@@ -8,7 +8,9 @@
 
 #include <hmsm/hmsm.h>
 
+#include <array>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -52,6 +54,18 @@ struct SwayRun {
     double mean_top_over_height = 0; ///< |mean horizontal top displacement| / height
 };
 
+/// The coupled links linearized about the rest pose (docs/model.md 3.13, "The links
+/// linearized"): the lowest modes of the whole tree with the joint-space mass matrix the dynamics
+/// keeps only on its diagonal, the share of the tree's mass each moves along and across the wind,
+/// the whole tree's sway from its static deflection, and the trunk chain's own f0 beside them.
+struct LinkModesReport {
+    std::vector<double> frequency_hz;
+    std::vector<std::array<double, 2>> mass_share;  ///< (along, across) the wind
+    std::array<double, 2> sway_hz{};                ///< along, across
+    std::array<double, 2> trunk_f0_hz{};            ///< the trunk chain's axes x, z
+    bool converged = false;
+};
+
 struct TreeResponse {
     std::string name;
     size_t nodes = 0;
@@ -60,10 +74,15 @@ struct TreeResponse {
     double dbh = 0;  ///< diameter at breast height: 2 r at 1.3 m above the root on the root-top path
     ReleaseTest release;
     std::vector<SwayRun> sway;
+    std::optional<LinkModesReport> links;  ///< Dynamics::coupled only
 };
 
 Result<TreeResponse> analyze_tree_response(const TreeModel& tree, const std::string& name,
                                            const TreeResponseSettings& settings);
+
+/// The linearized links of `tree` under the settings' coupled dynamics: `modes` lowest modes,
+/// the sway along and across the settings' wind direction.
+Result<LinkModesReport> analyze_link_modes(const TreeModel& tree, const TreeResponseSettings& settings, int modes);
 
 /// Frequency, damping and cycles of a free decay about zero (exposed for tests).
 void fit_release(ReleaseTest& release, double dt);
