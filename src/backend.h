@@ -348,7 +348,14 @@ inline uint32_t dispatch_writes(const Dispatch& d) {
 /// Whether a dispatch reads other chains' state anywhere in its instances though its pass is
 /// not hierarchical: coupled wind_force's gather of the loads of the last step (its chunks are
 /// planned by instance).
-inline bool reads_across_chains(const Dispatch& d) { return runs_coupled(d) && d.pass == Pass::wind_force; }
+/// The articulated exchange (docs/model.md 3.13; the CPU backends): integrate's work items are
+/// instances, each sweeping its chains up and down the hierarchy.
+inline bool sweeps_instances(Pass pass, const gpu::PassConstants& pc) {
+    return pass == Pass::integrate && pc.dynamics == HMSM_PASS_DYNAMICS_ARTICULATED;
+}
+inline bool reads_across_chains(const Dispatch& d) {
+    return (runs_coupled(d) && d.pass == Pass::wind_force) || sweeps_instances(d.pass, d.constants);
+}
 
 /// Number of threads of a dispatch and the mapping shared by every backend.
 inline uint32_t dispatch_thread_count(const Dispatch& d) { return d.constants.element_count; }

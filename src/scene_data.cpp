@@ -1,5 +1,6 @@
 #include "scene_data.h"
 
+#include "model/articulated_constants.h"
 #include "model/coupled_constants.h"
 
 #include <algorithm>
@@ -60,7 +61,9 @@ gpu::PassConstants group_constants(const SceneData& d, const InstanceGroup& g, u
     pc.total_model_chains = d.total_model_chains();
     pc.src_half = final_half;
     pc.dst_half = final_half;
-    pc.dynamics = d.coupled() ? HMSM_PASS_DYNAMICS_COUPLED : HMSM_PASS_DYNAMICS_PAPER;
+    pc.dynamics = d.articulated() ? HMSM_PASS_DYNAMICS_ARTICULATED
+                  : d.coupled()   ? HMSM_PASS_DYNAMICS_COUPLED
+                                  : HMSM_PASS_DYNAMICS_PAPER;
     pc.params = {float(d.dt), float(d.max_angle), float(d.fix_weight), g.covers_paused ? 1.0f : 0.0f};
     pc.instance_list = g.listed ? 1u : 0u;
     return pc;
@@ -279,6 +282,8 @@ SceneData flatten_scene(std::span<const Instance> instances, const std::vector<H
             d.vertex_parent_position.push_back(point(v.parent_position));
             d.vertex_parent_normal.push_back(point(v.parent_normal));
         }
+        if (options.dynamics == Dynamics::coupled && options.exchange == Exchange::articulated)
+            append_articulated_records(h, parameters.dt, d.chain_articulated);
         d.models.push_back(std::move(range));
     }
 
@@ -307,6 +312,7 @@ SceneData flatten_scene(std::span<const Instance> instances, const std::vector<H
     d.fix_weight = options.fix_weight;
     d.profile = wind.profile;
     d.dynamics = options.dynamics;
+    d.exchange = options.exchange;
     return d;
 }
 

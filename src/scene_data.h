@@ -60,6 +60,9 @@ struct SceneData {
     /// Dynamics::coupled: HMSM_CHAIN_DYNAMICS_VEC4S x 4 scalars per model chain (gpu_layout.h);
     /// empty under the paper's dynamics.
     std::vector<double> chain_dynamics;
+    /// Exchange::articulated: HMSM_CHAIN_ARTICULATED_VEC4S x 4 scalars per model chain
+    /// (gpu_layout.h, read by the CPU backends only); empty otherwise.
+    std::vector<double> chain_articulated;
     /// Per model node (the model's stepped_nodes, in that order): owner chain and l_n.
     std::vector<int32_t> node_owner;
     std::vector<glm::dvec4> node_local;
@@ -126,7 +129,9 @@ struct SceneData {
     double fix_weight = 0.5;
     WindProfile profile = WindProfile::none;
     Dynamics dynamics = Dynamics::paper;
+    Exchange exchange = Exchange::held;
     bool coupled() const { return dynamics == Dynamics::coupled; }
+    bool articulated() const { return coupled() && exchange == Exchange::articulated; }
     /// The contour pass's output layout; packed leaves vertex_normal without elements.
     VertexLayout vertex_layout = VertexLayout::separate;
     bool packed_vertices() const { return vertex_layout == VertexLayout::packed; }

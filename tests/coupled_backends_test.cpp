@@ -4,7 +4,8 @@
 // scale, one instance paused and resumed, one removed and one added. The path walk runs
 // wind_force and integrate in one dispatch, where a chain's load must not be overwritten before
 // its parent has read it (the two halves of chain_load). The CUDA kernels also run on the host
-// (cuda_emulation), so a machine without a GPU checks their arithmetic and indexing.
+// (cuda_emulation), so a machine without a GPU checks their arithmetic and indexing. The
+// articulated exchange runs on the CPU backends, by pointer jumping and level by level.
 #include "agreement/pass_agreement.h"
 #include "simulation_access.h"
 #include "test_trees.h"
@@ -21,6 +22,7 @@ struct CoupledCase {
     std::string backend;  // a name of test::backends_under_test(), or "cpu_parallel"
     WindProfile profile;
     Composition composition;
+    Exchange exchange = Exchange::held;
 };
 
 Result<std::unique_ptr<detail::Backend>> backend_named(const std::string& name) {
@@ -68,6 +70,7 @@ TEST_P(CoupledBackends, AgreeWithCpu64OverLiveChanges) {
     SimulationConfig config;
     config.backend = BackendKind::cpu64;
     config.model.dynamics = Dynamics::coupled;
+    config.model.exchange = GetParam().exchange;
     config.outputs = Outputs::joints_and_nodes;
     config.wind.profile = GetParam().profile;
     config.wind.strength = 4.0;
@@ -100,6 +103,8 @@ TEST_P(CoupledBackends, AgreeWithCpu64OverLiveChanges) {
 
 constexpr WindProfile kTurbulent = WindProfile::turbulent, kAtmospheric = WindProfile::atmospheric;
 constexpr Composition kWalk = Composition::path_walk, kJumping = Composition::pointer_jumping;
+constexpr Composition kLevels = Composition::level_by_level;
+constexpr Exchange kArticulated = Exchange::articulated;
 
 INSTANTIATE_TEST_SUITE_P(
     Backends, CoupledBackends,
@@ -108,9 +113,15 @@ INSTANTIATE_TEST_SUITE_P(
                       CoupledCase{"vulkan", kTurbulent, kWalk}, CoupledCase{"vulkan", kAtmospheric, kJumping},
                       CoupledCase{"cuda", kTurbulent, kWalk}, CoupledCase{"cuda", kAtmospheric, kWalk},
                       CoupledCase{"cuda", kAtmospheric, kJumping}, CoupledCase{"cuda_emulation", kTurbulent, kWalk},
-                      CoupledCase{"cuda_emulation", kAtmospheric, kJumping}),
+                      CoupledCase{"cuda_emulation", kAtmospheric, kJumping},
+                      // The articulated exchange: the CPU backends (each instance swept as one item).
+                      CoupledCase{"cpu", kTurbulent, kJumping, kArticulated},
+                      CoupledCase{"cpu", kAtmospheric, kLevels, kArticulated},
+                      CoupledCase{"cpu_parallel", kAtmospheric, kJumping, kArticulated},
+                      CoupledCase{"cpu_parallel", kTurbulent, kLevels, kArticulated}),
     [](const auto& info) {
-        return info.param.backend + "_" + to_string(info.param.profile) + "_" + to_string(info.param.composition);
+        return info.param.backend + "_" + to_string(info.param.profile) + "_" + to_string(info.param.composition) +
+               (info.param.exchange == Exchange::held ? "" : "_articulated");
     });
 
 }  // namespace

@@ -39,6 +39,13 @@ struct ChainDynamics {
     /// Drag of the chain's own motion in still air per unit rate: (1/2) rho_air times the third
     /// moment of drag area about the axis (N m s^2/rad^2; docs/model.md 3.13).
     double motion_drag[2] = {};
+    /// The chain's own wood and leaves as a rigid body about its joint, in its rest frame:
+    /// first mass moment sum m x (kg m), rotational inertia sum m (|x|^2 1 - x x^T) (kg m^2),
+    /// and first moment of drag area sum A x (m^3); its mass and drag area are `mass` and
+    /// `drag_area` (the articulated exchange, docs/model.md 3.13).
+    Vec3 own_mass_moment{0.0};
+    Mat3 own_inertia{0.0};
+    Vec3 own_wind_moment{0.0};
     int32_t first_child = 0;         ///< children: chains [first_child, first_child + child_count)
     int32_t child_count = 0;
     /// A chain longer than its tree's link length is split into links (3.13): this chain is link

@@ -88,6 +88,8 @@ enum { HMSM_INSTANCE_LAYOUT_PACKED = 0, HMSM_INSTANCE_LAYOUT_PLACED = 1 };
 enum { HMSM_GROUPING_DIRECTION = 0, HMSM_GROUPING_WIDTH = 1 };
 /* hmsm_config.dynamics (hmsm::Dynamics, docs/model.md 3.7 and 3.13) */
 enum { HMSM_DYNAMICS_PAPER = 0, HMSM_DYNAMICS_COUPLED = 1 };
+/* hmsm_config.exchange (hmsm::Exchange, docs/model.md 3.13): HMSM_DYNAMICS_COUPLED only */
+enum { HMSM_EXCHANGE_HELD = 0, HMSM_EXCHANGE_ARTICULATED = 1 };
 enum { /* hmsm_wind.profile (docs/model.md 3.5) */
     HMSM_WIND_NONE = 0,
     HMSM_WIND_CONSTANT = 1,
@@ -180,6 +182,10 @@ typedef struct hmsm_config {
     /* Appended: HMSM_INSTANCE_LAYOUT_*, where the instances' elements lie in the device
      * buffers (hmsm::InstanceLayout; hmsm_simulation_instance_placement). */
     int32_t instance_layout;
+    /* Appended: HMSM_EXCHANGE_*, how the coupled dynamics' chains exchange loads
+     * (hmsm::ModelOptions::exchange; articulated on the CPU backends only). 64 bits, so that
+     * the struct grows past the layout that ends with instance_layout. */
+    int64_t exchange;
 } hmsm_config;
 
 /* hmsm::Instance: a placed copy of model `model` (docs/model.md 3.6, 3.9) */

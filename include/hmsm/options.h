@@ -27,6 +27,15 @@ enum class Dynamics : uint32_t { paper = 0, coupled = 1 };
 inline constexpr NamedValue<Dynamics> kDynamicsNames[] = {{Dynamics::paper, "paper"},
                                                           {Dynamics::coupled, "coupled"}};
 
+/// How the coupled dynamics' chains exchange loads (docs/model.md 3.13): `held`, each chain takes
+/// its children's loads of the last step, one gather per step with the children's inertia lumped
+/// rigidly (every backend); or `articulated`, the joints of the whole tree solved together within
+/// each step, two sweeps over the hierarchy, so that a branch's motion loads and detunes its
+/// parent (the CPU backends: cpu, cpu64, cpu-parallel). Refused under `paper`.
+enum class Exchange : uint32_t { held = 0, articulated = 1 };
+inline constexpr NamedValue<Exchange> kExchangeNames[] = {{Exchange::held, "held"},
+                                                          {Exchange::articulated, "articulated"}};
+
 /// Options that shape the hierarchy and the branch mesh.
 struct ModelOptions {
     Grouping grouping = Grouping::direction;
@@ -34,6 +43,7 @@ struct ModelOptions {
     int32_t ring_sides = 8;          ///< vertices per branch-mesh ring, >= 3
     double fix_weight = 0.5;         ///< contour fix-up weight beta in [0, 1]
     Dynamics dynamics = Dynamics::paper;
+    Exchange exchange = Exchange::held;  ///< Dynamics::coupled only
 };
 
 /// Wood of the coupled dynamics (docs/model.md 3.13); the defaults are green broadleaf wood.
@@ -159,6 +169,8 @@ HMSM_API double wind_phase(const Wind& wind, const Vec3& origin);
 HMSM_API const char* to_string(Grouping grouping);
 HMSM_API const char* to_string(Dynamics dynamics);
 HMSM_API std::optional<Dynamics> parse_dynamics(std::string_view name);
+HMSM_API const char* to_string(Exchange exchange);
+HMSM_API std::optional<Exchange> parse_exchange(std::string_view name);
 HMSM_API const char* to_string(WindProfile profile);
 HMSM_API std::optional<Grouping> parse_grouping(std::string_view name);
 HMSM_API std::optional<WindProfile> parse_wind_profile(std::string_view name);

@@ -141,6 +141,8 @@ Status to_cpp(const hmsm_config& in, SimulationConfig& out) {
         return bad("config.coupled.leaves_on must be 0 or 1");
     if (in.instance_layout != HMSM_INSTANCE_LAYOUT_PACKED && in.instance_layout != HMSM_INSTANCE_LAYOUT_PLACED)
         return bad("config.instance_layout: unknown value " + std::to_string(in.instance_layout));
+    if (in.exchange != HMSM_EXCHANGE_HELD && in.exchange != HMSM_EXCHANGE_ARTICULATED)
+        return bad("config.exchange: unknown value " + std::to_string(in.exchange));
     config.backend = static_cast<BackendKind>(in.backend);
     config.composition = *kCompositions[size_t(in.composition)];
     config.vertex_layout = static_cast<VertexLayout>(in.vertex_layout);
@@ -155,6 +157,7 @@ Status to_cpp(const hmsm_config& in, SimulationConfig& out) {
     config.parameters = {p.density, p.stiffness, p.damping_ratio, p.wind_gain,
                          p.max_angle, p.dt, p.max_frequency};
     config.model.dynamics = static_cast<Dynamics>(in.dynamics);
+    config.model.exchange = static_cast<Exchange>(in.exchange);
     const hmsm_coupled_parameters& k = in.coupled;
     config.parameters.material = {k.modulus, k.wood_density};
     config.parameters.structural_damping = k.structural_damping;
@@ -191,6 +194,7 @@ void set_defaults(hmsm_config& out) {
     out.parameters = {p.density, p.stiffness, p.damping_ratio, p.wind_gain,
                       p.max_angle, p.dt, p.max_frequency};
     out.dynamics = static_cast<int32_t>(defaults.model.dynamics);
+    out.exchange = static_cast<int64_t>(defaults.model.exchange);
     out.coupled = {p.material.modulus, p.material.density, p.structural_damping, p.wood_drag_coefficient,
                    p.foliage.mass_per_area, p.foliage.drag_coefficient, p.foliage.on ? 1 : 0};
     set_defaults(out.wind);

@@ -76,7 +76,8 @@ struct CStruct<hmsm_config> {
         HMSM_C_FIELD(hmsm_config, profile_passes), HMSM_C_FIELD(hmsm_config, outputs),
         HMSM_C_FIELD(hmsm_config, model), HMSM_C_FIELD(hmsm_config, parameters),
         HMSM_C_FIELD(hmsm_config, wind), HMSM_C_FIELD(hmsm_config, dynamics),
-        HMSM_C_FIELD(hmsm_config, coupled), HMSM_C_FIELD(hmsm_config, instance_layout)});
+        HMSM_C_FIELD(hmsm_config, coupled), HMSM_C_FIELD(hmsm_config, instance_layout),
+        HMSM_C_FIELD(hmsm_config, exchange)});
 };
 template <>
 struct CStruct<hmsm_instance> {

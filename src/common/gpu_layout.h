@@ -59,6 +59,22 @@
 /// What PassConstants.dynamics says the passes integrate (hmsm::Dynamics values).
 #define HMSM_PASS_DYNAMICS_PAPER 0u
 #define HMSM_PASS_DYNAMICS_COUPLED 1u
+/// The coupled dynamics with the articulated exchange (ModelOptions::exchange): pass 1 stores
+/// each chain's own wind impulse, pass 2 solves the whole instance's joints in two sweeps
+/// (src/common/articulated_math.h; the CPU backends only).
+#define HMSM_PASS_DYNAMICS_ARTICULATED 2u
+/// A chain's record under the articulated exchange: HMSM_CHAIN_ARTICULATED_VEC4S vec4, as
+/// scalars (docs/model.md 3.13; spatial vectors in the chain's rest frame about its joint,
+/// angular first; I^A its articulated inertia, S = [e_x e_z] of the angular part):
+///   0-5: U_x = I^A S_x        6-11: U_z = I^A S_z
+///   12-15: (G_xx, G_xz, G_zz, eta): G = (S^T I^A S + the armature)^-1; eta as in coupled
+///   16 + 4 j (j = 0, 1, 2): (column j of Q_c, d_j): the rest rotation in the parent's frame
+///          and the joint's position d in the parent's frame
+///   28-31: (dt q_ref M_own, dt q_ref A_own): the own wind's impulse moment and force
+///   32-35: (dt K_x, dt K_z, dt D_x + theta_x dt^2 K_x, dt D_z + theta_z dt^2 K_z)
+///   36-39: (theta_x dt, theta_z dt, I_x, I_z): I the joint's articulated inertia S^T I^A S
+///   40-43: (aero_x dt / I_x, aero_z dt / I_z, first child, child count)
+#define HMSM_CHAIN_ARTICULATED_VEC4S 11u
 /// A chain's record of the coupled dynamics (binding HMSM_BINDING_CHAIN_DYNAMICS), vec4 j of
 /// HMSM_CHAIN_DYNAMICS_VEC4S; axis x is theta_x, axis z theta_z (docs/model.md 3.13). On the
 /// devices the records are stored by vec4 (structure of arrays): vec4 j of model chain c is

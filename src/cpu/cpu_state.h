@@ -35,6 +35,8 @@ struct State {
     std::vector<vec4> chain_constants, node_local;
     /// The coupled dynamics' records (gpu_layout.h HMSM_CHAIN_DYNAMICS_VEC4S; empty under paper).
     std::vector<std::array<T, 4 * HMSM_CHAIN_DYNAMICS_VEC4S>> chain_dynamics;
+    /// The articulated exchange's records (HMSM_CHAIN_ARTICULATED_VEC4S; empty otherwise).
+    std::vector<std::array<T, 4 * HMSM_CHAIN_ARTICULATED_VEC4S>> chain_articulated;
     std::vector<vec4> vertex_rest_position, vertex_rest_normal;
     std::vector<vec4> vertex_parent_position, vertex_parent_normal;
     std::vector<vec4> instance_origin, instance_yaw;
@@ -48,6 +50,9 @@ struct State {
     std::vector<vec4> chain_state;
     std::vector<vec2> chain_force;
     std::vector<vec2> chain_load;      // coupled: (g_x, g_z), the load of the last step
+    /// The articulated exchange: per chain, pass 1's impulse over the step (wind moment and
+    /// force, aerodynamic damping per axis) for pass 2's sweeps; within a step only.
+    std::vector<std::array<T, 8>> chain_impulse;
     std::vector<mat3> chain_local;
     std::vector<mat3> chain_rotation;  // two halves of total_chains (the allocated chains)
     std::vector<vec4> node_relative;
@@ -98,18 +103,20 @@ typename State<T>::vec3 joint_origin(const State<T>& s, uint64_t chain) {
 struct Range {
     uint32_t begin = 0, end = 0;
 };
-/// Whether a work item of a dispatch of `pass` is a group instance (see Range).
+/// Whether a work item of a dispatch of `pass` is a group instance (see Range): every round of
+/// pointer jumping in one dispatch, or the articulated exchange's sweeps.
 inline bool items_are_instances(Pass pass, const gpu::PassConstants& pc) {
-    return is_hierarchical(pass) && pc.kind == HMSM_DISPATCH_JUMP_ROUNDS_IN_DISPATCH;
+    return (is_hierarchical(pass) && pc.kind == HMSM_DISPATCH_JUMP_ROUNDS_IN_DISPATCH) || sweeps_instances(pass, pc);
 }
 /// Number of work items of a dispatch of `pass` (see Range).
 inline uint32_t work_items(Pass pass, const gpu::PassConstants& pc) {
     return items_are_instances(pass, pc) ? pc.element_count / pc.model_chain_count : pc.element_count;
 }
 /// Model elements (chains, nodes or vertices) one work item of `pass` touches, for chunking: an
-/// instance item runs every round over its chains.
+/// instance item runs every round over its chains (or both sweeps).
 inline uint32_t elements_per_item(Pass pass, const gpu::PassConstants& pc) {
-    return items_are_instances(pass, pc) ? pc.model_chain_count * pc.round : 1;
+    if (!items_are_instances(pass, pc)) return 1;
+    return pc.model_chain_count * (sweeps_instances(pass, pc) ? 2u : pc.round);
 }
 
 /// The three kinds of dispatch of a hierarchical pass (compose, root_positions) running the work
@@ -168,6 +175,18 @@ typename State<T>::vec2 coupled_force(const State<T>& s, const gpu::PassConstant
 template <class T>
 typename State<T>::vec2 coupled_integrate_angles(State<T>& s, uint32_t model_chain, uint64_t c,
                                                  const typename State<T>::vec2& g);
+/// The articulated exchange (articulated_dynamics.cpp, docs/model.md 3.13): pass 1 stores state
+/// chain c's impulse under the wind w_local in its frame; pass 2 sweeps the instances of `r`
+/// (work items are group instances), steps their joints, relaxes fading chains and stores T.
+template <class T>
+void articulated_impulse(State<T>& s, uint64_t c, uint32_t model_chain, const typename State<T>::vec3& w_local);
+template <class T>
+void articulated_integrate(State<T>& s, const gpu::PassConstants& pc, uint32_t wind_slot, Range r);
+/// Relaxes state chain c (static chain model_chain, group instance `instance`) by the fade of
+/// the step of wind-table slot wind_slot where one relaxes it; returns S.
+template <class T>
+typename State<T>::vec2 relax_fading(State<T>& s, const gpu::PassConstants& pc, uint32_t wind_slot, uint32_t instance,
+                                     uint32_t model_chain, uint64_t c);
 /// Pass 2's halves: the symplectic Euler step of state chain c of static chain model_chain under
 /// g (stores S/V, returns S), and the local transform T of static chain model_chain of global
 /// instance `instance` at angles S.

@@ -51,12 +51,20 @@ typename State<T>::mat3 local_transform(const State<T>& s, uint32_t model_chain,
 template <class T>
 typename State<T>::vec2 step_angles(State<T>& s, const gpu::PassConstants& pc, uint32_t wind_slot, uint32_t instance,
                                     uint32_t model_chain, uint64_t c, const typename State<T>::vec2& g) {
-    const auto angle = pc.dynamics == HMSM_PASS_DYNAMICS_COUPLED ? coupled_integrate_angles(s, model_chain, c, g)
-                                                                 : integrate_angles(s, model_chain, c, g);
+    // Both store S and V in chain_state, which the fade then reads.
+    if (pc.dynamics == HMSM_PASS_DYNAMICS_COUPLED) coupled_integrate_angles(s, model_chain, c, g);
+    else integrate_angles(s, model_chain, c, g);
+    return relax_fading(s, pc, wind_slot, instance, model_chain, c);
+}
+
+template <class T>
+typename State<T>::vec2 relax_fading(State<T>& s, const gpu::PassConstants& pc, uint32_t wind_slot, uint32_t instance,
+                                     uint32_t model_chain, uint64_t c) {
     // The fade (docs/model.md 3.12, fading to a coarser level): S and V of a chain the level the
     // instance fades to folds, times the step's factor (src/common/fade_math.h).
     const uint32_t word = uint32_t(s.instance_wind[pc.instance_begin + instance][3]);
-    if (word == 0u || !fade_relaxes(word, s.chain_keep_level[model_chain])) return angle;
+    if (word == 0u || !fade_relaxes(word, s.chain_keep_level[model_chain]))
+        return {s.chain_state[c].x, s.chain_state[c].y};
     const uint32_t clock = uint32_t(s.wind_table[HMSM_WIND_STEPS + HMSM_WIND_STEP_VEC4S * wind_slot].z);
     const T sigma = fade_factor<T>(word, clock);
     auto& sv = s.chain_state[c];
@@ -66,6 +74,7 @@ typename State<T>::vec2 step_angles(State<T>& s, const gpu::PassConstants& pc, u
 
 template <class T>
 void integrate(State<T>& s, const gpu::PassConstants& pc, uint32_t wind_slot, Range r) {
+    if (sweeps_instances(Pass::integrate, pc)) return articulated_integrate(s, pc, wind_slot, r);
     for (uint32_t i = r.begin; i < r.end; ++i) {
         Element e = element_of(i, pc.model_chain_count);
         if (instance_paused(s, pc, e.instance)) continue;
@@ -82,6 +91,10 @@ template State<float>::vec2 step_angles<float>(State<float>&, const gpu::PassCon
                                                uint64_t, const State<float>::vec2&);
 template State<double>::vec2 step_angles<double>(State<double>&, const gpu::PassConstants&, uint32_t, uint32_t,
                                                  uint32_t, uint64_t, const State<double>::vec2&);
+template State<float>::vec2 relax_fading<float>(State<float>&, const gpu::PassConstants&, uint32_t, uint32_t,
+                                                uint32_t, uint64_t);
+template State<double>::vec2 relax_fading<double>(State<double>&, const gpu::PassConstants&, uint32_t, uint32_t,
+                                                  uint32_t, uint64_t);
 template State<float>::vec2 integrate_angles<float>(State<float>&, uint32_t, uint64_t, const State<float>::vec2&);
 template State<double>::vec2 integrate_angles<double>(State<double>&, uint32_t, uint64_t, const State<double>::vec2&);
 template State<float>::mat3 local_transform<float>(const State<float>&, uint32_t, uint32_t, const State<float>::vec2&);

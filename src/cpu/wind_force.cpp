@@ -71,6 +71,10 @@ void wind_forces(State<T>& s, const gpu::PassConstants& pc, uint32_t wind_slot, 
             else if (distance >= T(1e-9)) w += (h * force.x / distance) * offset;
         }
         auto w_local = glm::transpose(from_joint ? joint_rotation(s, c) : s.chain_rotation[pose]) * w;
+        if (pc.dynamics == HMSM_PASS_DYNAMICS_ARTICULATED) {  // pass 2 sweeps the impulses
+            articulated_impulse(s, c, pc.model_chain_begin + e.index, w_local);
+            continue;
+        }
         if (pc.dynamics == HMSM_PASS_DYNAMICS_COUPLED) {
             const auto g = coupled_force(s, pc, e.instance, c, pc.model_chain_begin + e.index, w_local, 1 - load_written);
             s.chain_load[load_written * s.total_chains + c] = {g.x, g.y};  // the parent's next load

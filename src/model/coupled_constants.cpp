@@ -284,7 +284,14 @@ Status fill_coupled_constants(const TreeModel& tree, const Parameters& parameter
         double inertia[2] = {0.0, 0.0}, drag_moment2[2] = {0.0, 0.0}, drag_moment3[2] = {0.0, 0.0};
         glm::dvec3 moment(0.0), mass_moment(0.0);
         // Own wood (the drag's third moment, not a polynomial, to the Gauss rule's accuracy).
+        // The own body (d.own_*), for the articulated exchange.
+        auto add_own = [&](const glm::dvec3& x, double dm, double da) {
+            d.own_mass_moment += Vec3(dm * x);
+            d.own_inertia += Mat3(dm * (glm::dot(x, x) * glm::dmat3(1.0) - glm::outerProduct(x, x)));
+            d.own_wind_moment += Vec3(da * x);
+        };
         for_each_wood_point(path, material, wood_cd, [&](const glm::dvec3& x, double dm, double da) {
+            add_own(x, dm, da);
             d.mass += dm;
             d.drag_area += da;
             moment += da * x;
@@ -298,6 +305,7 @@ Status fill_coupled_constants(const TreeModel& tree, const Parameters& parameter
         std::vector<NodeLoad>& node_load = node_loads[c];
         node_load.assign(path.p.size(), NodeLoad{});
         for (const PointLoad& leaf : leaves[c]) {
+            add_own(leaf.x, leaf.mass, leaf.drag_area);
             d.mass += leaf.mass;
             d.drag_area += leaf.drag_area;
             moment += leaf.drag_area * leaf.x;

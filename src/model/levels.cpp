@@ -136,20 +136,50 @@ double natural_frequency(const Chain& chain) {
     return std::sqrt(chain.stiffness / chain.inertia) / (2.0 * std::numbers::pi);
 }
 
+/// A chain's own body (ChainDynamics' mass, drag area and own_* moments) with the chains folded
+/// into it, about its joint in its frame.
+struct FoldedBody {
+    double mass = 0.0, drag_area = 0.0;
+    glm::dvec3 moment{0.0}, wind_moment{0.0};
+    glm::dmat3 inertia{0.0};
+};
+
+/// Adds body b, given in a child's frame about the child's joint, which sits at `at` in this
+/// frame turned by the child's rest rotation q: the parallel-axis transport of its moments.
+void add_transported(FoldedBody& to, const FoldedBody& b, const glm::dmat3& q, const glm::dvec3& at) {
+    const glm::dvec3 h = q * b.moment;
+    const glm::dmat3 one(1.0);
+    to.mass += b.mass;
+    to.drag_area += b.drag_area;
+    to.moment += b.mass * at + h;
+    to.wind_moment += b.drag_area * at + q * b.wind_moment;
+    to.inertia += q * b.inertia * glm::transpose(q) + b.mass * (glm::dot(at, at) * one - glm::outerProduct(at, at)) +
+                  2.0 * glm::dot(at, h) * one - glm::outerProduct(at, h) - glm::outerProduct(h, at);
+}
+
 /// The coupled dynamics (docs/model.md 3.12, 3.13): a kept chain's record names its children
 /// among the level's chains, and its wind moment M takes the drag of the subtrees folded into
 /// it at their true lever arms, `Q_k M_sub(k)` with M_sub(k) = M_k + Σ_j Q_j M_sub(j) over the
 /// whole folded subtree: the moment about the attach node that a full child's load carried.
-/// I, K and D stay (the subtree's mass is lumped in I either way). Paper hierarchies: no-op.
+/// I, K and D stay (the subtree's mass is lumped in I either way). Its own body, which the
+/// articulated exchange turns, takes the folded chains' bodies rigidly. Paper hierarchies: no-op.
 void fold_coupled_records(const Hierarchy& full, const std::vector<char>& folded, DetailLevel& level) {
     const size_t chains = full.chains.size();
     if (full.chains[0].dynamics.link_count == 0) return;
     std::vector<glm::dvec3> subtree_moment(chains);
+    std::vector<FoldedBody> body(chains);
     for (size_t c = chains; c-- > 0;) {  // children have larger ids
         const ChainDynamics& d = full.chains[c].dynamics;
         glm::dvec3 moment(d.wind_moment);
-        for (int32_t k = d.first_child; k < d.first_child + d.child_count; ++k)
-            moment += glm::dmat3(full.chains[size_t(k)].rest_rotation) * subtree_moment[size_t(k)];
+        body[c] = {d.mass, d.drag_area, glm::dvec3(d.own_mass_moment), glm::dvec3(d.own_wind_moment),
+                   glm::dmat3(d.own_inertia)};
+        for (int32_t k = d.first_child; k < d.first_child + d.child_count; ++k) {
+            const Chain& child = full.chains[size_t(k)];
+            moment += glm::dmat3(child.rest_rotation) * subtree_moment[size_t(k)];
+            if (folded[size_t(k)])
+                add_transported(body[c], body[size_t(k)], glm::dmat3(child.rest_rotation),
+                                glm::dvec3(full.node_local[size_t(child.attach_node)]));
+        }
         subtree_moment[c] = moment;
     }
     for (size_t C = 0; C < level.hierarchy.chains.size(); ++C) {
@@ -170,6 +200,12 @@ void fold_coupled_records(const Hierarchy& full, const std::vector<char>& folded
         }
         d.wind_moment = Vec3(moment);
         chain.wind_area = detail::kReferencePressure * glm::length(moment);
+        const FoldedBody& b = body[size_t(level.source_chain[C])];
+        d.mass = b.mass;
+        d.drag_area = b.drag_area;
+        d.own_mass_moment = Vec3(b.moment);
+        d.own_wind_moment = Vec3(b.wind_moment);
+        d.own_inertia = Mat3(b.inertia);
     }
 }
 

@@ -102,6 +102,8 @@ glm::dvec3 wind_at(const Wind& wind, const glm::dvec3& origin, double t, double 
 const char* to_string(Grouping grouping) { return name_in(kGroupingNames, grouping); }
 const char* to_string(Dynamics dynamics) { return name_in(kDynamicsNames, dynamics); }
 std::optional<Dynamics> parse_dynamics(std::string_view name) { return value_named(kDynamicsNames, name); }
+const char* to_string(Exchange exchange) { return name_in(kExchangeNames, exchange); }
+std::optional<Exchange> parse_exchange(std::string_view name) { return value_named(kExchangeNames, name); }
 const char* to_string(WindProfile profile) { return name_in(kWindProfileNames, profile); }
 std::optional<Grouping> parse_grouping(std::string_view name) { return value_named(kGroupingNames, name); }
 std::optional<WindProfile> parse_wind_profile(std::string_view name) {
@@ -133,6 +135,12 @@ Status validate(const ModelOptions& o) {
     if (o.dynamics != Dynamics::paper && o.dynamics != Dynamics::coupled)
         return {ErrorCode::invalid_argument,
                 "dynamics " + std::to_string(static_cast<uint32_t>(o.dynamics)) + " does not exist"};
+    if (o.exchange != Exchange::held && o.exchange != Exchange::articulated)
+        return {ErrorCode::invalid_argument,
+                "exchange " + std::to_string(static_cast<uint32_t>(o.exchange)) + " does not exist"};
+    if (o.exchange == Exchange::articulated && o.dynamics != Dynamics::coupled)
+        return {ErrorCode::invalid_argument, "exchange articulated needs dynamics coupled (the paper's chains "
+                                             "exchange no loads)"};
     return {};
 }
 

@@ -294,7 +294,21 @@ static void test_bad_configs(void) {
     CHECK_CONFIG_FAILS(wind.profile, 8);
     CHECK_CONFIG_FAILS(wind.strength, NAN);
     CHECK_CONFIG_FAILS(wind.direction[0], 0.0);
+    CHECK_CONFIG_FAILS(exchange, 2);
+    CHECK(strstr(hmsm_status_message(), "config.exchange: unknown value 2") != NULL);
+    /* the articulated exchange needs the coupled dynamics, and runs on the CPU backends */
+    CHECK_CONFIG_FAILS(exchange, HMSM_EXCHANGE_ARTICULATED);
+    CHECK(strstr(hmsm_status_message(), "exchange articulated needs dynamics coupled") != NULL);
 #undef CHECK_CONFIG_FAILS
+    HMSM_INIT(hmsm_config_init, &config);
+    CHECK(config.exchange == HMSM_EXCHANGE_HELD);
+    config.backend = HMSM_BACKEND_CPU;
+    config.dynamics = HMSM_DYNAMICS_COUPLED;
+    config.exchange = HMSM_EXCHANGE_ARTICULATED;
+    CHECK_OK(hmsm_simulation_create(scene, &config, &simulation));
+    CHECK_OK(hmsm_simulation_step(simulation, 3));
+    hmsm_simulation_destroy(simulation);
+    simulation = NULL;
 
     HMSM_INIT(hmsm_config_init, &config);
     config.backend = HMSM_BACKEND_CPU;

@@ -171,6 +171,9 @@ void add_model_flags(CLI::App& app, ModelFlags& f) {
     app.add_option("--dynamics", f.dynamics,
                    "equations of motion: " + choices(kDynamicsNames, Spelling::as_is, Dynamics::paper) +
                        " (coupled: docs/model.md 3.13)");
+    app.add_option("--exchange", f.exchange,
+                   "coupled: how chains exchange loads: " + choices(kExchangeNames, Spelling::as_is, Exchange::held) +
+                       " (articulated: the joints solved together each step; CPU backends)");
 }
 
 Result<ModelOptions> model_options(const ModelFlags& f) {
@@ -178,9 +181,12 @@ Result<ModelOptions> model_options(const ModelFlags& f) {
     if (!grouping) return grouping.status();
     auto dynamics = parse_choice(kDynamicsNames, f.dynamics, "--dynamics", Spelling::as_is);
     if (!dynamics) return dynamics.status();
+    auto exchange = parse_choice(kExchangeNames, f.exchange, "--exchange", Spelling::as_is);
+    if (!exchange) return exchange.status();
     ModelOptions options = f.options;
     options.grouping = *grouping;
     options.dynamics = *dynamics;
+    options.exchange = *exchange;
     HMSM_TRY(validate(options));
     return options;
 }

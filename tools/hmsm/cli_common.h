@@ -120,6 +120,7 @@ Result<Scene> load_scene(const SourceFlags& flags, CLI::App& app, const ModelOpt
 struct ModelFlags {
     std::string grouping = "direction";
     std::string dynamics = "paper";
+    std::string exchange = "held";
     ModelOptions options;
 };
 void add_model_flags(CLI::App& app, ModelFlags& flags);

@@ -24,10 +24,11 @@ struct WholeTreeFlags {
     std::string plot_release, plot_sway;
 } flags;
 
-nlohmann::json to_json(const TreeResponse& r, const Dynamics dynamics, const Parameters& p) {
+nlohmann::json to_json(const TreeResponse& r, const ModelOptions& options, const Parameters& p) {
     nlohmann::json j;
     j["model"] = r.name;
-    j["dynamics"] = to_string(dynamics);
+    j["dynamics"] = to_string(options.dynamics);
+    if (options.dynamics == Dynamics::coupled) j["exchange"] = to_string(options.exchange);
     j["leaves_on"] = p.foliage.on;
     j["modulus_pa"] = p.material.modulus;
     j["wood_density_kg_m3"] = p.material.density;
@@ -74,11 +75,13 @@ nlohmann::json to_json(const TreeResponse& r, const Dynamics dynamics, const Par
     return j;
 }
 
-void print_text(const TreeResponse& r, const Parameters& p, Dynamics dynamics) {
+void print_text(const TreeResponse& r, const Parameters& p, const ModelOptions& options) {
     const TreeResponseSettings& s = flags.settings;
-    std::printf("model %s (%s dynamics%s): %zu nodes, height %.3f m, DBH %.3f m, top node %d\n", r.name.c_str(),
-                to_string(dynamics), dynamics == Dynamics::coupled ? (p.foliage.on ? ", leaves on" : ", leaves off") : "",
-                r.nodes, r.height, r.dbh, r.top_node);
+    const Dynamics dynamics = options.dynamics;
+    const bool coupled = dynamics == Dynamics::coupled;
+    std::printf("model %s (%s dynamics%s%s%s): %zu nodes, height %.3f m, DBH %.3f m, top node %d\n", r.name.c_str(),
+                to_string(dynamics), coupled ? ", exchange " : "", coupled ? to_string(options.exchange) : "",
+                coupled ? (p.foliage.on ? ", leaves on" : ", leaves off") : "", r.nodes, r.height, r.dbh, r.top_node);
     if (dynamics == Dynamics::coupled)
         std::printf("wood           E %.3g Pa, density %.4g kg/m^3, structural damping %.3g\n", p.material.modulus,
                     p.material.density, p.structural_damping);
@@ -225,12 +228,12 @@ int run_whole_tree(const Scene& scene, const ModelOptions& options, const Parame
         j["models"] = nlohmann::json::array();
         for (size_t m = 0; m < responses.size(); ++m)
             j["models"].push_back(
-                to_json(responses[m], options.dynamics, parameters_for_tree(scene.models[m], parameters)));
+                to_json(responses[m], options, parameters_for_tree(scene.models[m], parameters)));
         std::printf("%s\n", j.dump(2).c_str());
     } else {
         for (size_t m = 0; m < responses.size(); ++m) {
             if (m) std::printf("\n");
-            print_text(responses[m], parameters_for_tree(scene.models[m], parameters), options.dynamics);
+            print_text(responses[m], parameters_for_tree(scene.models[m], parameters), options);
         }
     }
     return kExitOk;
