@@ -342,7 +342,7 @@ TEST_F(CoupledCli, InfoSummarizesTheCoupledConstants) {
 }
 
 // hmsm bench --dynamics coupled: per backend a one-tree and a joints-only forest row, each with
-// the paper's and the coupled time per step, and their ratio in the table.
+// the paper's and the coupled time per step (held and articulated), and their ratios in the table.
 TEST_F(CoupledCli, BenchReportsCoupledBesidePaper) {
     const std::string file = path("bench.json");
     const test::CliRun r = run("bench --quick --no-progress --backends cpu --presets none --instances none "
@@ -358,7 +358,9 @@ TEST_F(CoupledCli, BenchReportsCoupledBesidePaper) {
         ASSERT_FALSE(row.contains("failed")) << row.dump();
         EXPECT_GT(row["paper_ms"].get<double>(), 0.0);
         EXPECT_GT(row["coupled_ms"].get<double>(), 0.0);
+        EXPECT_GT(row["articulated_ms"].get<double>(), 0.0);  // the CPU backends run the exchange
     }
     EXPECT_NE(r.out.find("coupled / paper"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("articulated / paper"), std::string::npos) << r.out;
     expect_bad_input("bench --quick --no-progress --backends cpu --dynamics flexible", "--dynamics");
 }

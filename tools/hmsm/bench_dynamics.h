@@ -1,4 +1,5 @@
-// hmsm bench --dynamics coupled: the coupled dynamics (docs/model.md 3.13) beside the paper's,
+// hmsm bench --dynamics coupled: the coupled dynamics (docs/model.md 3.13), with either exchange,
+// beside the paper's,
 // per step, on one tree with every output and on a joints-only forest.
 #pragma once
 
@@ -11,8 +12,9 @@
 
 namespace hmsm::cli::bench {
 
-/// Per available backend: wall milliseconds per step under Dynamics::paper and Dynamics::coupled
-/// of one `tree` with every output, and of `forest_count` joints-only instances of it on a grid
+/// Per available backend: wall milliseconds per step under Dynamics::paper, Dynamics::coupled
+/// and coupled with Exchange::articulated (where the backend runs it; else the row's
+/// "articulated_refused" says why) of one `tree` with every output, and of `forest_count` joints-only instances of it on a grid
 /// `spacing` apart (outputs joints, passes 1-5). About `steps` timed steps each after `warmup`,
 /// fewer where one step times the count would pass `case_budget` seconds.
 nlohmann::json measure_dynamics(const TreeModel& tree, const std::string& model_name,
