@@ -3,6 +3,8 @@
 
 #include "coupled_constants.h"
 
+#include "../common/gpu_layout.h"
+
 #include <glm/mat3x3.hpp>
 
 #include <algorithm>
@@ -83,13 +85,14 @@ void append_articulated_records(const Hierarchy& h, double dt, std::vector<doubl
         articulated[c] = body_inertia(d.mass, d.own_mass_moment, d.own_inertia);
     }
     const size_t first = out.size();
-    out.resize(first + n * 4 * 11, 0.0);
+    constexpr size_t record = 4 * HMSM_CHAIN_ARTICULATED_VEC4S;
+    out.resize(first + n * record, 0.0);
     // From the last chain up: every child's articulated inertia is complete before its parent's.
     for (size_t c = n; c-- > 0;) {
         const Chain& chain = h.chains[c];
         const ChainDynamics& d = chain.dynamics;
         const Mat6& ia = articulated[c];
-        double* r = &out[first + c * 44];
+        double* r = &out[first + c * record];  // scalars as gpu_layout.h lists them
         const int column[2] = {0, 2};
         double theta[2], effective[2], dmat[2][2];
         for (int a = 0; a < 2; ++a) {
