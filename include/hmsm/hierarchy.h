@@ -42,7 +42,8 @@ struct ChainDynamics {
     /// The chain's own wood and leaves as a rigid body about its joint, in its rest frame:
     /// first mass moment sum m x (kg m), rotational inertia sum m (|x|^2 1 - x x^T) (kg m^2),
     /// and first moment of drag area sum A x (m^3); its mass and drag area are `mass` and
-    /// `drag_area` (the articulated exchange, docs/model.md 3.13).
+    /// `drag_area` (the articulated exchange, docs/model.md 3.13). In a level of detail
+    /// (levels.h) these and `mass`, `drag_area` include the chains folded into the chain.
     Vec3 own_mass_moment{0.0};
     Mat3 own_inertia{0.0};
     Vec3 own_wind_moment{0.0};
