@@ -329,6 +329,8 @@ inline uint32_t dispatch_passes(const Dispatch& d) {
 /// over the passes it runs.
 /// A dispatch of the coupled dynamics adds pass_table.h's kCoupled* accesses.
 inline bool runs_coupled(const Dispatch& d) { return d.constants.dynamics == HMSM_PASS_DYNAMICS_COUPLED; }
+/// A dispatch of the articulated exchange adds pass_table.h's kArticulated* accesses.
+inline bool runs_articulated(const Dispatch& d) { return d.constants.dynamics == HMSM_PASS_DYNAMICS_ARTICULATED; }
 inline uint32_t dispatch_reads(const Dispatch& d) {
     if (is_top_poses_walk(d)) return kWalkTopPosesReads;
     if (is_walk_ahead(d)) return kWalkAheadReads;
@@ -336,6 +338,7 @@ inline uint32_t dispatch_reads(const Dispatch& d) {
     const uint32_t passes = dispatch_passes(d);
     if (runs_coupled(d) && (passes >> uint32_t(Pass::wind_force) & 1u)) reads |= kCoupledWindForceReads;
     if (runs_coupled(d) && (passes >> uint32_t(Pass::integrate) & 1u)) reads |= kCoupledIntegrateReads;
+    if (runs_articulated(d) && (passes >> uint32_t(Pass::wind_force) & 1u)) reads |= kArticulatedWindForceReads;
     return reads;
 }
 inline uint32_t dispatch_writes(const Dispatch& d) {
@@ -343,6 +346,8 @@ inline uint32_t dispatch_writes(const Dispatch& d) {
     if (is_walk_ahead(d)) return kWalkAheadWrites;
     uint32_t writes = runs_path_walk(d) ? pass_info(d.pass).walk_writes : writes_of_passes(dispatch_passes(d));
     if (runs_coupled(d) && (dispatch_passes(d) >> uint32_t(Pass::wind_force) & 1u)) writes |= kCoupledWindForceWrites;
+    if (runs_articulated(d) && (dispatch_passes(d) >> uint32_t(Pass::wind_force) & 1u))
+        writes |= kArticulatedWindForceWrites;
     return writes;
 }
 /// Whether a dispatch reads other chains' state anywhere in its instances though its pass is
@@ -350,7 +355,7 @@ inline uint32_t dispatch_writes(const Dispatch& d) {
 /// planned by instance).
 /// The articulated exchange (docs/model.md 3.13; the CPU backends): integrate's work items are
 /// instances, each sweeping its chains up and down the hierarchy.
-inline bool sweeps_instances(Pass pass, const gpu::PassConstants& pc) {
+inline bool sweeps_instances(Pass pass, const gpu::PassConstants& pc) {  // (see kArticulated*)
     return pass == Pass::integrate && pc.dynamics == HMSM_PASS_DYNAMICS_ARTICULATED;
 }
 inline bool reads_across_chains(const Dispatch& d) {

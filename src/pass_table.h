@@ -106,6 +106,12 @@ inline constexpr uint32_t kCoupledWindForceReads =
     HMSM_B(chain_state) | HMSM_B(chain_load) | HMSM_B(chain_dynamics);
 inline constexpr uint32_t kCoupledWindForceWrites = HMSM_B(chain_load);
 inline constexpr uint32_t kCoupledIntegrateReads = HMSM_B(chain_dynamics);
+/// The articulated exchange (docs/model.md 3.13; the CPU backends, whose records are their own):
+/// wind_force reads the chain's rates and stores its impulse in chain_force, alone or as a path
+/// walk's wind pair, which then runs pass 1 only (integrate follows as a dispatch of its own);
+/// integrate, one work item per instance, reads every chain's impulse and state there.
+inline constexpr uint32_t kArticulatedWindForceReads = HMSM_B(chain_state);
+inline constexpr uint32_t kArticulatedWindForceWrites = HMSM_B(chain_force);
 
 /// What one dispatch runs (PassConstants.kind): X(name, NAME, passes) with NAME the suffix of its
 /// HMSM_DISPATCH_* number in gpu_layout.h (shared with CUDA and GLSL) and `passes` the passes

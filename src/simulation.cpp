@@ -264,9 +264,6 @@ Result<std::unique_ptr<Simulation>> Simulation::Impl::create(const Scene& scene,
         if (kind == BackendKind::vulkan || kind == BackendKind::cuda)
             return Status{ErrorCode::invalid_argument, std::string("exchange articulated: the ") + to_string(kind) +
                                                            " backend does not run it (cpu, cpu64 and cpu-parallel do)"};
-        if (sim->config_.composition == Composition::path_walk)
-            return Status{ErrorCode::invalid_argument, "exchange articulated: composition path_walk does not run it "
-                                                       "(pointer_jumping and level_by_level do)"};
     }
     sim->backend_->set_profiling(config.profile_passes);
     const char* device_growth = std::getenv("HMSM_DEVICE_GROWTH");

@@ -182,7 +182,7 @@ std::vector<Dispatch> build_path_walk_program(const SceneData& d, const std::vec
     const bool wind_pair_runs = (wanted & walk_passes(Pass::wind_force)) == walk_passes(Pass::wind_force);
     bool all_active = instances == d.instance_count();
     for (const auto& g : groups) all_active = all_active && !g.covers_paused;
-    const bool ahead = walk_ahead && walk_poses && wind_pair_runs && !from_records && all_active;
+    const bool ahead = walk_ahead && walk_poses && wind_pair_runs && !from_records && all_active && !d.articulated();
     std::vector<Dispatch> program;
     program.reserve(4 * groups.size());  // a dispatch per group and pass pair (and top poses)
     uint32_t done = 0;
@@ -215,7 +215,9 @@ std::vector<Dispatch> build_path_walk_program(const SceneData& d, const std::vec
             dispatch.constants.kind = kind;
             if (dispatch.constants.element_count > 0) program.push_back(dispatch);
         }
-        done |= pair;
+        // The articulated exchange's wind pair runs pass 1 only: integrate, which sweeps whole
+        // instances, follows as a dispatch of its own.
+        done |= pass == Pass::wind_force && d.articulated() ? bit(pass) : pair;
     }
     return program;
 }

@@ -238,17 +238,12 @@ TEST(ArticulatedExchange, SplitRodSwaysAtItsLowestMode) {
     EXPECT_NEAR(measured, modes.frequency_hz[0], 0.01 * modes.frequency_hz[0]);
 }
 
-// The exchange runs on the CPU backends by pointer jumping and level by level; elsewhere, and
-// under the paper's dynamics, creation refuses it with a message naming what refuses.
+// The exchange runs on the CPU backends; elsewhere, and under the paper's dynamics, creation
+// refuses it with a message naming what refuses.
 TEST(ArticulatedExchange, RefusedWhereItDoesNotRun) {
     const Scene scene = single_tree_scene(test::rod());
     SimulationConfig config = test::coupled_config();
     config.model.exchange = Exchange::articulated;
-    config.composition = Composition::path_walk;
-    auto walk = Simulation::create(scene, config);
-    ASSERT_FALSE(walk.ok());
-    EXPECT_NE(walk.status().message().find("path_walk"), std::string::npos) << walk.status().message();
-    config.composition = Composition::automatic;
     config.model.dynamics = Dynamics::paper;
     auto paper = Simulation::create(scene, config);
     ASSERT_FALSE(paper.ok());

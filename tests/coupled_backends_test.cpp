@@ -5,7 +5,8 @@
 // wind_force and integrate in one dispatch, where a chain's load must not be overwritten before
 // its parent has read it (the two halves of chain_load). The CUDA kernels also run on the host
 // (cuda_emulation), so a machine without a GPU checks their arithmetic and indexing. The
-// articulated exchange runs on the CPU backends, by pointer jumping and level by level.
+// articulated exchange runs on the CPU backends, in every composition (the path walk's wind pair
+// then runs pass 1 only, and integrate sweeps whole instances after it).
 #include "agreement/pass_agreement.h"
 #include "simulation_access.h"
 #include "test_trees.h"
@@ -118,7 +119,9 @@ INSTANTIATE_TEST_SUITE_P(
                       CoupledCase{"cpu", kTurbulent, kJumping, kArticulated},
                       CoupledCase{"cpu", kAtmospheric, kLevels, kArticulated},
                       CoupledCase{"cpu_parallel", kAtmospheric, kJumping, kArticulated},
-                      CoupledCase{"cpu_parallel", kTurbulent, kLevels, kArticulated}),
+                      CoupledCase{"cpu_parallel", kTurbulent, kLevels, kArticulated},
+                      CoupledCase{"cpu", kAtmospheric, kWalk, kArticulated},
+                      CoupledCase{"cpu_parallel", kTurbulent, kWalk, kArticulated}),
     [](const auto& info) {
         return info.param.backend + "_" + to_string(info.param.profile) + "_" + to_string(info.param.composition) +
                (info.param.exchange == Exchange::held ? "" : "_articulated");

@@ -306,9 +306,8 @@ TEST_F(CoupledCli, SimulatesAndRefusesBadMaterials) {
     expect_bad_input("simulate --tree " + path("small.json") + " --dynamics coupled --exchange loose", "--exchange");
     expect_bad_input("simulate --tree " + path("small.json") + " --exchange articulated",
                      "exchange articulated needs dynamics coupled");
-    expect_bad_input("simulate --tree " + path("small.json") +
-                         " --dynamics coupled --exchange articulated --backend cpu --composition path-walk",
-                     "composition path_walk does not run it");
+    expect_bad_input("simulate --tree " + path("small.json") + " --dynamics coupled --exchange articulated --backend vulkan",
+                     "exchange articulated");
 }
 
 // hmsm info --dynamics coupled: the trunk's constants as build_hierarchy computes them, and the
