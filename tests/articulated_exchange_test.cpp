@@ -1,9 +1,9 @@
 // The coupled dynamics' articulated exchange (docs/model.md 3.13): the two sweeps solve the
 // linearized tree's implicit step exactly (against a dense solve with the mass matrix of the
-// linearized links), a released preset loses energy at every time step size, a split rod sways at
-// its lowest mode, and the option is refused where it does not run.
+// linearized links), a released preset loses energy at every time step size, levels keep the
+// folded bodies, and the option is refused where it does not run (the split rod's sway:
+// coupled_links_test.cpp).
 #include "test_trees.h"
-#include "tree_response.h"
 
 #include "common/articulated_math.h"
 #include "model/articulated_constants.h"
@@ -204,38 +204,6 @@ TEST(ArticulatedExchange, ReleasedPresetLosesEnergyAtEveryStepSize) {
             EXPECT_LT(last, 0.25 * released) << preset << " at dt 1/" << 1.0 / dt;
         }
     }
-}
-
-// Released from its wind-bent shape, a rod split into six links sways at the lowest mode of its
-// linearized links (which lies 1.3 % below the cantilever's first frequency), not at each link's
-// own: the links move as one beam.
-TEST(ArticulatedExchange, SplitRodSwaysAtItsLowestMode) {
-    SimulationConfig config = test::coupled_config();
-    config.model.exchange = Exchange::articulated;
-    config.wind.profile = WindProfile::constant;
-    config.wind.strength = 20.0;
-    const TreeModel rod = test::rod(12, 10.0, 0.1);
-    auto sim = Simulation::create(single_tree_scene(rod), config);
-    ASSERT_TRUE(sim.ok()) << sim.status().message();
-    ASSERT_TRUE((*sim)->step(240).ok());
-    Wind calm = config.wind;
-    calm.profile = WindProfile::none;
-    ASSERT_TRUE((*sim)->set_wind(calm).ok());
-    std::vector<double> top_x;
-    for (int i = 0; i < 720; ++i) {
-        ASSERT_TRUE((*sim)->step(1).ok());
-        top_x.push_back(test::read_output(**sim, Output::node_positions)[3 * 12]);
-    }
-    double mean = 0.0;
-    for (double v : top_x) mean += v / double(top_x.size());
-    for (double& v : top_x) v -= mean;
-    auto h = build_hierarchy(rod, config.model, config.parameters);
-    ASSERT_TRUE(h.ok());
-    const auto modes = detail::lowest_link_modes(detail::linearize_links(rod, *h, config.parameters), 2,
-                                                 {glm::dvec3(1, 0, 0), glm::dvec3(0, 0, 1)});
-    const double measured = cli::decay_frequency(top_x, config.parameters.dt);
-    std::printf("split rod, articulated: top sways at %.4f Hz, lowest mode %.4f Hz\n", measured, modes.frequency_hz[0]);
-    EXPECT_NEAR(measured, modes.frequency_hz[0], 0.01 * modes.frequency_hz[0]);
 }
 
 // The exchange runs on the CPU backends; elsewhere, and under the paper's dynamics, creation
