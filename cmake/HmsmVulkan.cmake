@@ -88,7 +88,7 @@ foreach(pass IN LISTS HMSM_PASSES ITEMS copy_bandwidth copy_ranges)
             --vn "hmsm_spirv_${pass}" -o "${_out}" "${_hmsm_glsl_dir}/${pass}.comp"
     DEPENDS "${_hmsm_glsl_dir}/${pass}.comp" "${_hmsm_glsl_dir}/common.glsl"
             "${_hmsm_glsl_dir}/octahedral.glsl" "${_hmsm_glsl_dir}/chain_math.glsl"
-            "${_hmsm_glsl_dir}/coupled_math.glsl"
+            "${_hmsm_glsl_dir}/coupled_math.glsl" "${_hmsm_glsl_dir}/articulated_math.glsl"
             "${CMAKE_CURRENT_SOURCE_DIR}/src/common/gpu_layout.h"
             "${CMAKE_CURRENT_SOURCE_DIR}/src/common/run_table_layout.h"
     COMMENT "hmsm: compiling shaders/glsl/${pass}.comp to SPIR-V"

@@ -339,6 +339,7 @@ inline uint32_t dispatch_reads(const Dispatch& d) {
     if (runs_coupled(d) && (passes >> uint32_t(Pass::wind_force) & 1u)) reads |= kCoupledWindForceReads;
     if (runs_coupled(d) && (passes >> uint32_t(Pass::integrate) & 1u)) reads |= kCoupledIntegrateReads;
     if (runs_articulated(d) && (passes >> uint32_t(Pass::wind_force) & 1u)) reads |= kArticulatedWindForceReads;
+    if (runs_articulated(d) && (passes >> uint32_t(Pass::integrate) & 1u)) reads |= kArticulatedIntegrateReads;
     return reads;
 }
 inline uint32_t dispatch_writes(const Dispatch& d) {
@@ -348,18 +349,18 @@ inline uint32_t dispatch_writes(const Dispatch& d) {
     if (runs_coupled(d) && (dispatch_passes(d) >> uint32_t(Pass::wind_force) & 1u)) writes |= kCoupledWindForceWrites;
     if (runs_articulated(d) && (dispatch_passes(d) >> uint32_t(Pass::wind_force) & 1u))
         writes |= kArticulatedWindForceWrites;
+    if (runs_articulated(d) && (dispatch_passes(d) >> uint32_t(Pass::integrate) & 1u))
+        writes |= kArticulatedIntegrateWrites;
     return writes;
 }
 /// Whether a dispatch reads other chains' state anywhere in its instances though its pass is
 /// not hierarchical: coupled wind_force's gather of the loads of the last step (its chunks are
 /// planned by instance).
-/// The articulated exchange (docs/model.md 3.13; the CPU backends): integrate's work items are
-/// instances, each sweeping its chains up and down the hierarchy.
-inline bool sweeps_instances(Pass pass, const gpu::PassConstants& pc) {  // (see kArticulated*)
-    return pass == Pass::integrate && pc.dynamics == HMSM_PASS_DYNAMICS_ARTICULATED;
-}
+/// The articulated exchange (docs/model.md 3.13): integrate's work items are instances, each
+/// sweeping its chains up and down the hierarchy (gpu_layout.h INSTANCE_SWEEP).
+inline bool sweeps_instances(const Dispatch& d) { return dispatch_kind(d) == DispatchKind::instance_sweep; }
 inline bool reads_across_chains(const Dispatch& d) {
-    return (runs_coupled(d) && d.pass == Pass::wind_force) || sweeps_instances(d.pass, d.constants);
+    return (runs_coupled(d) && d.pass == Pass::wind_force) || sweeps_instances(d);
 }
 
 /// Number of threads of a dispatch and the mapping shared by every backend.
@@ -380,7 +381,8 @@ inline uint32_t threads_per_instance(const Dispatch& d) {
 
 /// How a dispatch is launched: `workgroups` groups of `workgroup_size` threads. Every kind
 /// maps thread i to element i (gpu_layout.h) except JUMP_ROUNDS_IN_DISPATCH, whose workgroup k
-/// runs every round for group instance k, and CONTOUR_PACKED, whose thread places one model
+/// runs every round for group instance k, INSTANCE_SWEEP, whose workgroup k sweeps group
+/// instance k, and CONTOUR_PACKED, whose thread places one model
 /// vertex in HMSM_PACKED_CONTOUR_INSTANCES instances.
 struct LaunchShape {
     uint64_t workgroups = 0;
@@ -395,6 +397,7 @@ inline LaunchShape launch_shape(const Dispatch& d) {
     if (threads == 0) return {};
     if (runs_rounds_in_dispatch(d))
         return {threads / d.constants.model_chain_count, gpu::rounds_workgroup_size(d.constants.model_chain_count)};
+    if (sweeps_instances(d)) return {threads / d.constants.model_chain_count, HMSM_WORKGROUP_SIZE};
     const uint64_t launched = runs_packed_contour(d) ? gpu::packed_contour_threads(d.constants) : threads;
     return {(launched + HMSM_WORKGROUP_SIZE - 1) / HMSM_WORKGROUP_SIZE, HMSM_WORKGROUP_SIZE};
 }

@@ -39,6 +39,16 @@ std::vector<std::byte> padded(std::vector<std::byte> image, const SceneData& d, 
     image.resize(d.element_count(id) * device_element_bytes(id), std::byte{0});
     return image;
 }
+/// Records of `vec4s` vec4 per model chain, held record by record, as floats stored by vec4:
+/// vec4 j of chain c at j * chains + c (gpu_layout.h).
+std::vector<std::byte> by_vec4(const std::vector<double>& records, size_t vec4s) {
+    const size_t chains = records.size() / (4 * vec4s);
+    std::vector<float> words(records.size());
+    for (size_t c = 0; c < chains; ++c)
+        for (size_t j = 0; j < vec4s; ++j)
+            for (size_t k = 0; k < 4; ++k) words[4 * (j * chains + c) + k] = float(records[4 * (vec4s * c + j) + k]);
+    return raw_bytes(words);
+}
 }  // namespace
 
 std::vector<std::byte> device_image(const SceneData& d, BufferId id) {
@@ -57,16 +67,10 @@ std::vector<std::byte> device_image(const SceneData& d, BufferId id) {
         case BufferId::vertex_rest_normal: return float4_image(d.vertex_rest_normal);
         case BufferId::vertex_parent_position: return float4_image(d.vertex_parent_position);
         case BufferId::vertex_parent_normal: return float4_image(d.vertex_parent_normal);
-        case BufferId::chain_dynamics: {  // the coupled dynamics' records, as floats, by vec4 (gpu_layout.h)
-            constexpr size_t kVec4s = HMSM_CHAIN_DYNAMICS_VEC4S;
-            const size_t chains = d.chain_dynamics.size() / (4 * kVec4s);
-            std::vector<float> words(d.chain_dynamics.size());
-            for (size_t c = 0; c < chains; ++c)
-                for (size_t j = 0; j < kVec4s; ++j)
-                    for (size_t k = 0; k < 4; ++k)
-                        words[4 * (j * chains + c) + k] = float(d.chain_dynamics[4 * (kVec4s * c + j) + k]);
-            return raw_bytes(words);
-        }
+        // The coupled dynamics' records of its exchange, as floats, by vec4 (gpu_layout.h).
+        case BufferId::chain_dynamics:
+            if (d.articulated()) return by_vec4(d.chain_articulated, HMSM_CHAIN_ARTICULATED_VEC4S);
+            return by_vec4(d.chain_dynamics, HMSM_CHAIN_DYNAMICS_VEC4S);
         // Instance buffers: the live instances, then zeros up to the capacity.
         case BufferId::instance_origin: return padded(float4_image(d.instance_origin), d, id);
         case BufferId::instance_yaw: return padded(float4_image(d.instance_yaw), d, id);

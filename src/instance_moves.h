@@ -19,11 +19,12 @@ namespace hmsm::detail {
 
 /// The chain-scope state an instance carries: S, V, g, T, the joint matrices and both halves
 /// of R and O. Nodes and vertices are recomputed from R and O.
-/// The coupled dynamics adds the loads of the last step (docs/model.md 3.13).
-inline std::vector<BufferId> carried_buffers(bool coupled) {
+/// The held exchange of the coupled dynamics adds the loads of the last step (docs/model.md 3.13;
+/// `loads`: SceneData::holds_loads).
+inline std::vector<BufferId> carried_buffers(bool loads) {
     std::vector<BufferId> ids = {BufferId::chain_state, BufferId::chain_force, BufferId::chain_local,
                                  BufferId::joint_matrix, BufferId::chain_rotation, BufferId::chain_origin};
-    if (coupled) ids.push_back(BufferId::chain_load);
+    if (loads) ids.push_back(BufferId::chain_load);
     return ids;
 }
 

@@ -8,6 +8,7 @@
 #include "simulation_impl.h"
 
 #include <algorithm>
+#include <array>
 #include <limits>
 
 namespace hmsm {
@@ -260,16 +261,21 @@ Status Simulation::Impl::reset(std::span<const uint32_t> indices) {
 }
 
 Status Simulation::Impl::zero_chain_state(std::span<const detail::ElementRange> ranges) {
-    std::vector<detail::ElementRange> both_halves;
     uint64_t chains = 0;
     for (const detail::ElementRange& r : ranges) chains += r.count;
-    for (uint64_t half : {uint64_t(0), data_->chain_capacity})
-        for (const detail::ElementRange& r : ranges) both_halves.push_back({half + r.first, r.count});
-    const std::vector<double> zeros(2 * chains * 4, 0.0);
+    const std::vector<double> zeros(chains * 12, 0.0);  // a mat3x4 per chain at most
     HMSM_TRY(backend_->write_ranges(BufferId::chain_state, ranges, zeros.data(), detail::Scalar::f64));
     HMSM_TRY(backend_->write_ranges(BufferId::chain_force, ranges, zeros.data(), detail::Scalar::f64));
-    if (data_->coupled())  // both halves of the loads
+    if (data_->holds_loads()) {  // both halves of the loads
+        std::vector<detail::ElementRange> both_halves;
+        for (uint64_t half : {uint64_t(0), data_->chain_capacity})
+            for (const detail::ElementRange& r : ranges) both_halves.push_back({half + r.first, r.count});
         HMSM_TRY(backend_->write_ranges(BufferId::chain_load, both_halves, zeros.data(), detail::Scalar::f64));
+    }
+    // The articulated exchange's impulses, which a run at rest from integrate sweeps in place of
+    // pass 1's (they lie where T goes: gpu_layout.h).
+    if (data_->articulated())
+        HMSM_TRY(backend_->write_ranges(BufferId::chain_local, ranges, zeros.data(), detail::Scalar::f64));
     return {};
 }
 
@@ -284,7 +290,7 @@ Status Simulation::Impl::reshape_in_place(std::unique_ptr<detail::SceneData> nex
     next->instance_capacity = data_->instance_capacity;
     uint64_t at = 0;  // chains the survivors hold
     const std::vector<detail::ElementMove> moves = survivor_moves(survivors, old_chain, at);
-    for (BufferId id : carried_buffers(data_->coupled())) {
+    for (BufferId id : carried_buffers(data_->holds_loads())) {
         std::vector<detail::ElementMove> in_buffer;
         for (uint64_t h = 0; h < halves_of(id); ++h)
             for (detail::ElementMove m : moves) {
@@ -309,16 +315,9 @@ Status Simulation::Impl::reshape_in_place(std::unique_ptr<detail::SceneData> nex
         HMSM_TRY(backend_->move_elements(id, node_scope ? node_moves : vertex_moves));
     }
     // Added instances start at rest: S = V = 0 and g = 0 (T, R, O are computed from them).
+    // (The capacity and the dynamics are data_'s, which zero_chain_state reads.)
     const uint64_t added_chains = next->total_chains - at;
-    if (added_chains > 0) {
-        const std::vector<double> zeros(added_chains * 4, 0.0);
-        HMSM_TRY(backend_->write(BufferId::chain_state, at, added_chains, zeros.data(), detail::Scalar::f64));
-        HMSM_TRY(backend_->write(BufferId::chain_force, at, added_chains, zeros.data(), detail::Scalar::f64));
-        if (next->coupled())  // both halves of the loads
-            for (uint64_t half : {uint64_t(0), next->chain_capacity})
-                HMSM_TRY(backend_->write(BufferId::chain_load, half + at, added_chains, zeros.data(),
-                                         detail::Scalar::f64));
-    }
+    if (added_chains > 0) HMSM_TRY(zero_chain_state(std::array{detail::ElementRange{at, added_chains}}));
     // Origins and yaws of the instances that changed place or came, every run in one write.
     const uint32_t count = next->instance_count();
     std::vector<detail::ElementRange> runs;
@@ -371,7 +370,7 @@ Status Simulation::Impl::reshape_anew(std::unique_ptr<detail::SceneData> next,
         std::vector<double> f64;
         std::vector<float> f32;
     };
-    const std::vector<BufferId> carried = carried_buffers(data_->coupled());
+    const std::vector<BufferId> carried = carried_buffers(data_->holds_loads());
     std::vector<Saved> saved(std::size(carried));  // per buffer, the halves back to back
     const uint64_t live = data_->total_chains;
     for (size_t b = 0; b < std::size(carried); ++b) {

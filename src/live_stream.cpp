@@ -7,6 +7,7 @@
 #include "simulation_impl.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <string>
 
@@ -96,15 +97,7 @@ Result<bool> Simulation::Impl::append_in_place(std::span<const Instance> added) 
 
     // Added instances start at rest: S = V = 0 and g = 0 (T, R, O are computed from them).
     const uint64_t added_chains = grown.chains - live.chains;
-    if (added_chains > 0) {
-        const std::vector<double> zeros(added_chains * 4, 0.0);
-        HMSM_TRY(backend_->write(BufferId::chain_state, live.chains, added_chains, zeros.data(), detail::Scalar::f64));
-        HMSM_TRY(backend_->write(BufferId::chain_force, live.chains, added_chains, zeros.data(), detail::Scalar::f64));
-        if (d.coupled())  // both halves of the loads
-            for (uint64_t half : {uint64_t(0), d.chain_capacity})
-                HMSM_TRY(backend_->write(BufferId::chain_load, half + live.chains, added_chains, zeros.data(),
-                                         detail::Scalar::f64));
-    }
+    if (added_chains > 0) HMSM_TRY(zero_chain_state(std::array{detail::ElementRange{live.chains, added_chains}}));
     std::vector<uint32_t> appended;
     appended.reserve(added.size());
     for (const Instance& inst : added) {
@@ -218,7 +211,7 @@ Result<bool> Simulation::Impl::swap_remove_in_place(const std::vector<uint32_t>&
             in_order.insert(in_order.end(), part->begin(), part->end());
         return apply_moves(*backend_, id, in_order, d.chain_capacity);
     };
-    for (BufferId id : detail::carried_buffers(d.coupled())) HMSM_TRY(move_scope(id, scopes[0]));
+    for (BufferId id : detail::carried_buffers(d.holds_loads())) HMSM_TRY(move_scope(id, scopes[0]));
     // The survivors' outputs (nodes, vertices) move with them, bitwise what they were.
     for (BufferId id : detail::kMovedOutputs) {
         if (d.element_count(id) == 0) continue;

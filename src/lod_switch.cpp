@@ -136,7 +136,7 @@ Status Simulation::Impl::switch_models(const std::vector<std::pair<uint32_t, uin
 
     // The state as the backend stores it, so that everything carried is bit for bit.
     const detail::Scalar scalar = backend_->kind() == BackendKind::cpu64 ? detail::Scalar::f64 : detail::Scalar::f32;
-    const std::vector<BufferId> carried = carried_buffers(data_->coupled());
+    const std::vector<BufferId> carried = carried_buffers(data_->holds_loads());
     ahead_schedule_.live_change();  // the state moves, the angles integrated ahead with it
     const uint64_t staging_base = std::max(data_->chains_held(), totals.chains);
     const detail::LevelStaging staging = detail::lay_out_staging(

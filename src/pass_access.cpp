@@ -10,7 +10,9 @@ uint32_t pass_writes(Pass pass) { return pass_info(pass).writes; }
 uint64_t SceneData::element_count(BufferId id) const {
     switch (buffer_info(id).scope) {
         case Scope::model_chain:
-            if (id == BufferId::chain_dynamics) return chain_dynamics.size() / (4 * HMSM_CHAIN_DYNAMICS_VEC4S);
+            // The exchange's records in 24-scalar elements (gpu_layout.h: the articulated record
+            // is two of them).
+            if (id == BufferId::chain_dynamics) return (articulated() ? chain_articulated : chain_dynamics).size() / 24;
             return chain_parent.size();
         case Scope::model_chain_jump: return chain_jump.size();
         case Scope::model_chain_walk: return chain_walk.size();

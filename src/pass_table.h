@@ -106,12 +106,16 @@ inline constexpr uint32_t kCoupledWindForceReads =
     HMSM_B(chain_state) | HMSM_B(chain_load) | HMSM_B(chain_dynamics);
 inline constexpr uint32_t kCoupledWindForceWrites = HMSM_B(chain_load);
 inline constexpr uint32_t kCoupledIntegrateReads = HMSM_B(chain_dynamics);
-/// The articulated exchange (docs/model.md 3.13; the CPU backends, whose records are their own):
-/// wind_force reads the chain's rates and stores its impulse in chain_force, alone or as a path
-/// walk's wind pair, which then runs pass 1 only (integrate follows as a dispatch of its own);
-/// integrate, one work item per instance, reads every chain's impulse and state there.
-inline constexpr uint32_t kArticulatedWindForceReads = HMSM_B(chain_state);
-inline constexpr uint32_t kArticulatedWindForceWrites = HMSM_B(chain_force);
+/// The articulated exchange (docs/model.md 3.13): wind_force reads the chain's record and rates
+/// and stores its impulse where integrate writes T (chain_local), alone or as a path walk's wind
+/// pair, which then runs pass 1 only (integrate follows as a dispatch of its own); integrate, an
+/// INSTANCE_SWEEP, reads every record, impulse and state of its instances and keeps its sweeps'
+/// scratch in chain_local, chain_load and chain_force (gpu_layout.h).
+inline constexpr uint32_t kArticulatedWindForceReads = HMSM_B(chain_state) | HMSM_B(chain_dynamics);
+inline constexpr uint32_t kArticulatedWindForceWrites = HMSM_B(chain_local);
+inline constexpr uint32_t kArticulatedIntegrateReads =
+    HMSM_B(chain_dynamics) | HMSM_B(chain_local) | HMSM_B(chain_load) | HMSM_B(chain_force);
+inline constexpr uint32_t kArticulatedIntegrateWrites = HMSM_B(chain_load) | HMSM_B(chain_force);
 
 /// What one dispatch runs (PassConstants.kind): X(name, NAME, passes) with NAME the suffix of its
 /// HMSM_DISPATCH_* number in gpu_layout.h (shared with CUDA and GLSL) and `passes` the passes
@@ -129,7 +133,8 @@ inline constexpr uint32_t kArticulatedWindForceWrites = HMSM_B(chain_force);
     X(walk_top_poses, WALK_TOP_POSES, HMSM_P(compose))                                                  \
     X(walk_ahead, WALK_AHEAD, HMSM_P(compose))                                                          \
     X(contour_separate, CONTOUR_SEPARATE, HMSM_P(contour))                                              \
-    X(contour_packed, CONTOUR_PACKED, HMSM_P(contour))
+    X(contour_packed, CONTOUR_PACKED, HMSM_P(contour))                                                  \
+    X(instance_sweep, INSTANCE_SWEEP, HMSM_P(integrate))
 
 #define HMSM_P(name) (1u << uint32_t(Pass::name))
 enum class DispatchKind : uint32_t {

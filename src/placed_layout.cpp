@@ -72,7 +72,7 @@ Status Simulation::Impl::pack_layout() {
     ahead_schedule_.live_change();
     const detail::Scalar scalar = backend_->kind() == BackendKind::cpu64 ? detail::Scalar::f64 : detail::Scalar::f32;
     const uint64_t held = d.chains_held(), live = d.total_chains;
-    for (BufferId id : detail::carried_buffers(d.coupled())) {
+    for (BufferId id : detail::carried_buffers(d.holds_loads())) {
         const uint32_t per = detail::shape_scalars(detail::buffer_info(id).shape);
         auto pack = [&](auto zero) -> Status {
             using V = decltype(zero);
@@ -210,7 +210,7 @@ Result<bool> Simulation::Impl::switch_placed(const std::vector<std::pair<uint32_
     detail::append_build_moves(stage, staging, carries);
     for (size_t k = 0; k < models.size(); ++k)
         detail::append_move(unstage, staging.instance_at[k], slots[k].chains, d.models[models[k].second].chain_count);
-    const std::vector<BufferId> carried = detail::carried_buffers(d.coupled());
+    const std::vector<BufferId> carried = detail::carried_buffers(d.holds_loads());
     std::vector<std::vector<ElementMove>> in_buffers(carried.size());
     std::vector<detail::BufferMoves> moves;
     for (size_t b = 0; b < carried.size(); ++b) {

@@ -61,7 +61,7 @@ struct SceneData {
     /// empty under the paper's dynamics.
     std::vector<double> chain_dynamics;
     /// Exchange::articulated: HMSM_CHAIN_ARTICULATED_VEC4S x 4 scalars per model chain
-    /// (gpu_layout.h, read by the CPU backends only); empty otherwise.
+    /// (gpu_layout.h; on the devices in chain_dynamics' place); empty otherwise.
     std::vector<double> chain_articulated;
     /// Per model node (the model's stepped_nodes, in that order): owner chain and l_n.
     std::vector<int32_t> node_owner;
@@ -132,6 +132,9 @@ struct SceneData {
     Exchange exchange = Exchange::held;
     bool coupled() const { return dynamics == Dynamics::coupled; }
     bool articulated() const { return coupled() && exchange == Exchange::articulated; }
+    /// Whether chain_load holds the held exchange's loads, which a step reads from the last one
+    /// (the articulated exchange keeps only scratch of a step there).
+    bool holds_loads() const { return coupled() && !articulated(); }
     /// The contour pass's output layout; packed leaves vertex_normal without elements.
     VertexLayout vertex_layout = VertexLayout::separate;
     bool packed_vertices() const { return vertex_layout == VertexLayout::packed; }

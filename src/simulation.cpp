@@ -259,12 +259,6 @@ Result<std::unique_ptr<Simulation>> Simulation::Impl::create(const Scene& scene,
         sim->config_.composition =
             detail::automatic_composition(sim->backend_->capabilities().prefers_path_walk, deepest);
     }
-    if (config.model.exchange == Exchange::articulated) {
-        const BackendKind kind = sim->backend_->kind();
-        if (kind == BackendKind::vulkan || kind == BackendKind::cuda)
-            return Status{ErrorCode::invalid_argument, std::string("exchange articulated: the ") + to_string(kind) +
-                                                           " backend does not run it (cpu, cpu64 and cpu-parallel do)"};
-    }
     sim->backend_->set_profiling(config.profile_passes);
     const char* device_growth = std::getenv("HMSM_DEVICE_GROWTH");
     sim->device_growth_ = !(device_growth && std::string_view(device_growth) == "0");

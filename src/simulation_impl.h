@@ -122,8 +122,9 @@ struct __attribute__((visibility("hidden"))) Simulation::Impl {
     void placements_laid_out();
     /// run_at_rest over the instances `indices` (ascending, each once) at their slots.
     Status run_at_rest_placed(std::span<const uint32_t> indices, Pass first, uint32_t passes = ~0u);
-    /// Puts the chains `ranges` at rest: S = V = 0, g = 0 and both halves of the loads (T, R, O
-    /// are computed from them by a run from pass 2), every range in one write per buffer.
+    /// Puts the chains `ranges` at rest: S = V = 0, g = 0 and both halves of the loads and of the
+    /// articulated exchange's impulses (T, R, O are computed from them by a run from pass 2),
+    /// every range in one write per buffer.
     Status zero_chain_state(std::span<const detail::ElementRange> ranges);
     /// Runs one_off_listed_'s program at rest; in the placed layout its table goes behind the
     /// step program's where the instance table has room for both.

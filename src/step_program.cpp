@@ -67,6 +67,7 @@ void append_pass(std::vector<Dispatch>& program, const SceneData& d,
             if (pass_domain(pass) == PassDomain::vertex)
                 dispatch.constants.kind = d.packed_vertices() ? HMSM_DISPATCH_CONTOUR_PACKED
                                                               : HMSM_DISPATCH_CONTOUR_SEPARATE;
+            if (pass == Pass::integrate && d.articulated()) dispatch.constants.kind = HMSM_DISPATCH_INSTANCE_SWEEP;
             if (dispatch.constants.element_count > 0) program.push_back(dispatch);
         }
         return;

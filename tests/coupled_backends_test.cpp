@@ -5,8 +5,8 @@
 // wind_force and integrate in one dispatch, where a chain's load must not be overwritten before
 // its parent has read it (the two halves of chain_load). The CUDA kernels also run on the host
 // (cuda_emulation), so a machine without a GPU checks their arithmetic and indexing. The
-// articulated exchange runs on the CPU backends, in every composition (the path walk's wind pair
-// then runs pass 1 only, and integrate sweeps whole instances after it).
+// articulated exchange runs in every composition (the path walk's wind pair then runs pass 1
+// only, and integrate sweeps whole instances after it).
 #include "agreement/pass_agreement.h"
 #include "simulation_access.h"
 #include "test_trees.h"
@@ -115,13 +115,21 @@ INSTANTIATE_TEST_SUITE_P(
                       CoupledCase{"cuda", kTurbulent, kWalk}, CoupledCase{"cuda", kAtmospheric, kWalk},
                       CoupledCase{"cuda", kAtmospheric, kJumping}, CoupledCase{"cuda_emulation", kTurbulent, kWalk},
                       CoupledCase{"cuda_emulation", kAtmospheric, kJumping},
-                      // The articulated exchange: the CPU backends (each instance swept as one item).
+                      // The articulated exchange (each instance swept by one work item, on the
+                      // devices by one workgroup depth by depth).
                       CoupledCase{"cpu", kTurbulent, kJumping, kArticulated},
                       CoupledCase{"cpu", kAtmospheric, kLevels, kArticulated},
                       CoupledCase{"cpu_parallel", kAtmospheric, kJumping, kArticulated},
                       CoupledCase{"cpu_parallel", kTurbulent, kLevels, kArticulated},
                       CoupledCase{"cpu", kAtmospheric, kWalk, kArticulated},
-                      CoupledCase{"cpu_parallel", kTurbulent, kWalk, kArticulated}),
+                      CoupledCase{"cpu_parallel", kTurbulent, kWalk, kArticulated},
+                      CoupledCase{"vulkan", kTurbulent, kJumping, kArticulated},
+                      CoupledCase{"vulkan", kAtmospheric, kWalk, kArticulated},
+                      CoupledCase{"cuda", kTurbulent, kJumping, kArticulated},
+                      CoupledCase{"cuda", kAtmospheric, kWalk, kArticulated},
+                      CoupledCase{"cuda", kTurbulent, kLevels, kArticulated},
+                      CoupledCase{"cuda_emulation", kTurbulent, kJumping, kArticulated},
+                      CoupledCase{"cuda_emulation", kAtmospheric, kWalk, kArticulated}),
     [](const auto& info) {
         return info.param.backend + "_" + to_string(info.param.profile) + "_" + to_string(info.param.composition) +
                (info.param.exchange == Exchange::held ? "" : "_articulated");

@@ -299,8 +299,7 @@ TEST_F(CoupledCli, SimulatesAndRefusesBadMaterials) {
     expect_bad_input("simulate --tree " + path("small.json") + " --dynamics coupled --modulus 9",
                      "material.modulus = 9 is out of range");
     expect_bad_input("simulate --tree " + path("small.json") + " --dynamics flexible", "--dynamics");
-    // The articulated exchange: on the CPU backends; under paper, bad input (the GPU backends'
-    // refusal: ArticulatedExchange.RefusedWhereItDoesNotRun, where a build has them).
+    // The articulated exchange; under paper, bad input.
     const test::CliRun articulated = run("simulate --tree " + path("small.json") +
                                          " --dynamics coupled --exchange articulated --backend cpu64 --steps 30");
     EXPECT_EQ(articulated.exit_code, 0) << articulated.err;
@@ -356,7 +355,7 @@ TEST_F(CoupledCli, BenchReportsCoupledBesidePaper) {
         ASSERT_FALSE(row.contains("failed")) << row.dump();
         EXPECT_GT(row["paper_ms"].get<double>(), 0.0);
         EXPECT_GT(row["coupled_ms"].get<double>(), 0.0);
-        EXPECT_GT(row["articulated_ms"].get<double>(), 0.0);  // the CPU backends run the exchange
+        EXPECT_GT(row["articulated_ms"].get<double>(), 0.0);
     }
     EXPECT_NE(r.out.find("coupled / paper"), std::string::npos) << r.out;
     EXPECT_NE(r.out.find("articulated / paper"), std::string::npos) << r.out;

@@ -183,7 +183,7 @@ typedef struct hmsm_config {
      * buffers (hmsm::InstanceLayout; hmsm_simulation_instance_placement). */
     int32_t instance_layout;
     /* Appended: HMSM_EXCHANGE_*, how the coupled dynamics' chains exchange loads
-     * (hmsm::ModelOptions::exchange; articulated on the CPU backends only). 64 bits, so that
+     * (hmsm::ModelOptions::exchange; every backend runs both). 64 bits, so that
      * the struct grows past the layout that ends with instance_layout. */
     int64_t exchange;
 } hmsm_config;

@@ -31,7 +31,7 @@ inline constexpr NamedValue<Dynamics> kDynamicsNames[] = {{Dynamics::paper, "pap
 /// its children's loads of the last step, one gather per step with the children's inertia lumped
 /// rigidly (every backend); or `articulated`, the joints of the whole tree solved together within
 /// each step, two sweeps over the hierarchy, so that a branch's motion loads and detunes its
-/// parent (the CPU backends: cpu, cpu64, cpu-parallel). Refused under `paper`.
+/// parent (every backend). Refused under `paper`.
 enum class Exchange : uint32_t { held = 0, articulated = 1 };
 inline constexpr NamedValue<Exchange> kExchangeNames[] = {{Exchange::held, "held"},
                                                           {Exchange::articulated, "articulated"}};

@@ -129,6 +129,7 @@ __global__ void __launch_bounds__(kThreads)
 
 struct contour_pass {
     static constexpr bool kRounds = false;
+    static constexpr bool kSweeps = false;
     HMSM_CUDA_PASS_ELEMENT(contour)
 };
 

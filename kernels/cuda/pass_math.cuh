@@ -265,6 +265,17 @@ static __global__ void __launch_bounds__(HMSM_MAX_ROUNDS_WORKGROUP_SIZE)
                         });
 }
 
+/// INSTANCE_SWEEP: one block per instance runs P::sweep over its threads (the articulated
+/// exchange's integrate, articulated_math.cuh).
+template <class P, bool kMayPause = false>
+static __global__ void __launch_bounds__(HMSM_WORKGROUP_SIZE)
+    sweep_kernel(const BufferPointers b, const gpu::PassConstants pc_in) {
+    begin_pass();
+    const gpu::PassConstants pc = constants_for<kMayPause>(pc_in);
+    for (uint32_t k = blockIdx.x; k < dispatch_instances(pc); k += gridDim.x)
+        if (!instance_paused(b, pc, k)) P::sweep(b, pc, k, threadIdx.x, blockDim.x);  // uniform per block
+}
+
 /// The items of a per-element dispatch: element i runs P::element.
 template <class P>
 struct ElementItems {
@@ -305,7 +316,18 @@ static __global__ void __launch_bounds__(HMSM_MAX_ROUNDS_WORKGROUP_SIZE)
     }
 }
 
-/// Launches a listed dispatch of pass P (in-dispatch rounds: one block per listed instance),
+/// INSTANCE_SWEEP of a listed dispatch: block k sweeps listed instance k (and k + gridDim.x, ...).
+template <class P>
+static __global__ void __launch_bounds__(HMSM_WORKGROUP_SIZE)
+    listed_sweep_kernel(const BufferPointers b, const gpu::PassConstants pc) {
+    begin_pass();
+    for (uint32_t k = blockIdx.x; k < dispatch_instances(pc); k += gridDim.x) {
+        const gpu::PassConstants one = listed_instance_constants(pc, load(b.instance_table + pc.instance_begin + k));
+        if (!instance_paused(b, one, 0)) P::sweep(b, one, 0, threadIdx.x, blockDim.x);
+    }
+}
+
+/// Launches a listed dispatch of pass P (in-dispatch rounds and sweeps: one block per listed instance),
 /// `Items` the work of one thread of an instance.
 template <class Items, class P>
 cudaError_t launch_listed(const BufferPointers& b, const gpu::PassConstants& pc, cudaStream_t stream) {
@@ -313,6 +335,11 @@ cudaError_t launch_listed(const BufferPointers& b, const gpu::PassConstants& pc,
         if (pc.kind == HMSM_DISPATCH_JUMP_ROUNDS_IN_DISPATCH)
             return launch_pass(listed_rounds_kernel<P>, launch_blocks_per_instance(pc),
                                gpu::rounds_workgroup_size(pc.model_chain_count), stream, b, pc);
+    }
+    if constexpr (P::kSweeps) {
+        if (pc.kind == HMSM_DISPATCH_INSTANCE_SWEEP)
+            return launch_pass(listed_sweep_kernel<P>, launch_blocks_per_instance(pc), HMSM_WORKGROUP_SIZE, stream, b,
+                               pc);
     }
     return launch_pass(listed_kernel<Items>, launch_blocks(pc.element_count), HMSM_WORKGROUP_SIZE, stream, b, pc);
 }
@@ -330,6 +357,11 @@ cudaError_t launch(const BufferPointers& b, const gpu::PassConstants& pc, cudaSt
             return launch_pass(may_pause ? rounds_kernel<P, true> : rounds_kernel<P, false>,
                                launch_blocks_per_instance(pc), gpu::rounds_workgroup_size(pc.model_chain_count),
                                stream, b, pc);
+    }
+    if constexpr (P::kSweeps) {
+        if (pc.kind == HMSM_DISPATCH_INSTANCE_SWEEP)
+            return launch_pass(may_pause ? sweep_kernel<P, true> : sweep_kernel<P, false>,
+                               launch_blocks_per_instance(pc), HMSM_WORKGROUP_SIZE, stream, b, pc);
     }
     constexpr unsigned kThreads = HMSM_WORKGROUP_SIZE;
     return launch_pass(may_pause ? pass_kernel<P, kThreads, true> : pass_kernel<P, kThreads, false>,
@@ -349,6 +381,13 @@ void emulate(const BufferPointers& b, const gpu::PassConstants& pc) {
             emulate_rounds(b, pc, [&](uint32_t k, uint32_t c, uint32_t round, uint32_t src, uint32_t dst) {
                 P::template jump<false>(b, pc, k, c, round, src, dst);
             });
+            return;
+        }
+    }
+    if constexpr (P::kSweeps) {
+        if (pc.kind == HMSM_DISPATCH_INSTANCE_SWEEP) {
+            for (uint32_t k = 0; k < dispatch_instances(pc); ++k)
+                if (!instance_paused(b, pc, k)) P::sweep(b, pc, k, 0, 1);
             return;
         }
     }
@@ -392,6 +431,17 @@ static __global__ void __launch_bounds__(HMSM_MAX_ROUNDS_WORKGROUP_SIZE)
                         });
 }
 
+/// INSTANCE_SWEEP entries, one block per instance.
+template <class P, bool kMayPause>
+static __global__ void __launch_bounds__(HMSM_WORKGROUP_SIZE)
+    batch_sweep_kernel(const BufferPointers b, const BatchLaunch batch) {
+    const BatchBlock block = batch_block(batch.block_begin, batch.entries, blockIdx.x);
+    const gpu::PassConstants pc = constants_for<kMayPause>(batch_constants(batch, block.entry));
+    begin_pass();
+    for (uint32_t k = block.block; k < dispatch_instances(pc); k += block.blocks)
+        if (!instance_paused(b, pc, k)) P::sweep(b, pc, k, threadIdx.x, blockDim.x);
+}
+
 template <class Items, unsigned kThreads>
 cudaError_t launch_batch_items(const BufferPointers& b, const BatchLaunch& batch, const BatchShape& shape,
                                cudaStream_t stream) {
@@ -425,6 +475,13 @@ cudaError_t launch_batch(const BufferPointers& b, const BatchLaunch& batch, cons
                                shape.blocks, shape.threads, stream, b, batch);
         }
     }
+    if constexpr (P::kSweeps) {
+        if (shape.kind == HMSM_DISPATCH_INSTANCE_SWEEP) {
+            if (shape.blocks == 0) return cudaSuccess;
+            return launch_pass(shape.may_pause ? batch_sweep_kernel<P, true> : batch_sweep_kernel<P, false>,
+                               shape.blocks, HMSM_WORKGROUP_SIZE, stream, b, batch);
+        }
+    }
     return launch_batch_items<ElementItems<P>, HMSM_WORKGROUP_SIZE>(b, batch, shape, stream);
 }
 
@@ -441,6 +498,17 @@ void emulate_batch(const BufferPointers& b, const BatchLaunch& batch, const Batc
                         for (uint32_t c = 0; c < pc.model_chain_count; ++c)
                             P::template jump<false>(b, pc, k, c, round, HMSM_HALF_READ(round), HMSM_HALF_WRITTEN(round));
                 }
+            }
+            return;
+        }
+    }
+    if constexpr (P::kSweeps) {
+        if (shape.kind == HMSM_DISPATCH_INSTANCE_SWEEP) {
+            for (uint32_t g = 0; g < batch.block_begin[batch.entries]; ++g) {
+                const BatchBlock block = batch_block(batch.block_begin, batch.entries, g);
+                const gpu::PassConstants pc = batch_constants(batch, block.entry);
+                for (uint32_t k = block.block; k < dispatch_instances(pc); k += block.blocks)
+                    if (!instance_paused(b, pc, k)) P::sweep(b, pc, k, 0, 1);
             }
             return;
         }
@@ -474,8 +542,23 @@ void emulate_batch(const BufferPointers& b, const BatchLaunch& batch, const Batc
 #define HMSM_CUDA_PASS(name)                   \
     struct name##_pass {                       \
         static constexpr bool kRounds = false; \
+        static constexpr bool kSweeps = false; \
         HMSM_CUDA_PASS_ELEMENT(name)           \
     };                                         \
+    HMSM_CUDA_PASS_ENTRY_POINTS(name)
+
+/// The same for a pass whose INSTANCE_SWEEP dispatches sweep instances: NAME_element and
+/// NAME_sweep(b, pc, k, lane, lanes) (group instance k by lane `lane` of `lanes`).
+#define HMSM_CUDA_SWEEP_PASS(name)                                                               \
+    struct name##_pass {                                                                         \
+        static constexpr bool kRounds = false;                                                   \
+        static constexpr bool kSweeps = true;                                                    \
+        HMSM_CUDA_PASS_ELEMENT(name)                                                             \
+        static HMSM_HOST_DEVICE void sweep(const BufferPointers& b, const gpu::PassConstants& pc, \
+                                           uint32_t k, uint32_t lane, uint32_t lanes) {          \
+            name##_sweep(b, pc, k, lane, lanes);                                                 \
+        }                                                                                        \
+    };                                                                                           \
     HMSM_CUDA_PASS_ENTRY_POINTS(name)
 
 /// The same for a pointer-jumping pass: NAME_element and NAME_jump<kWrittenInBlock>.
@@ -487,6 +570,7 @@ void emulate_batch(const BufferPointers& b, const BatchLaunch& batch, const Batc
 #define HMSM_CUDA_ROUNDS_PASS_TYPE(name)                                                       \
     struct name##_pass {                                                                       \
         static constexpr bool kRounds = true;                                                  \
+        static constexpr bool kSweeps = false;                                                 \
         HMSM_CUDA_PASS_ELEMENT(name)                                                           \
         template <bool kWrittenInBlock>                                                        \
         static HMSM_HOST_DEVICE void jump(const BufferPointers& b, const gpu::PassConstants& pc, \

@@ -1,7 +1,7 @@
 // Pass 1: generalized wind force per chain (chain_math.cuh), R and O of the previous step read
 // from the pose half src_half (path walk: from the joint matrix); pc.wind_slot is the step's slot
 // of the wind table (gpu_layout.h), which holds tau and the turbulent phases reduced on the host.
-#include "chain_math.cuh"
+#include "articulated_math.cuh"
 
 namespace hmsm::detail::cuda {
 
@@ -10,6 +10,17 @@ static HMSM_HOST_DEVICE void wind_force_element(const BufferPointers& b,
     const Element e = element_of(i, pc.model_chain_count);
     if (instance_paused(b, pc, e.instance)) return;
     const uint64_t chain = pc.chain_begin + i;
+    // The articulated exchange: the impulse alone, which integrate's sweeps take (alone or as a
+    // path walk's wind pair, whose pose is the joint matrix's).
+    if (pc.dynamics == HMSM_PASS_DYNAMICS_ARTICULATED) {
+        const uint64_t half = half_begin(pc, pc.src_half) + chain;
+        const Pose pose = pc.kind == HMSM_DISPATCH_WIND_PAIR
+                              ? load_joint(b, chain)
+                              : Pose{load_mat3(b.chain_rotation, half), xyz(load(b.chain_origin + half))};
+        const float3 wind = instance_wind_vector(b, pc, e.instance, pc.wind_slot);
+        articulated_impulse(b, pc, e.index, chain, chain_local_wind(b, pose.origin, pose.rotation, wind));
+        return;
+    }
     // The wind pair (path walk): the previous pose is the joint matrix (the walk writes no R or O half), and
     // integrate's step follows in the same launch with g in hand; only the angles are stored
     // (the walk computes T from them; pass_table.h walk_reads, walk_writes).

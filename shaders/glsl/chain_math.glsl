@@ -7,13 +7,11 @@
 
 #include "coupled_math.glsl"
 
-/// Pass 1 for model chain c of group instance k: the generalized force
-/// g = A (w_loc.z, -w_loc.x) from the wind in the chain's previous-step frame w_loc = R^T w,
+/// The wind of group instance k in a chain's previous-step frame, w_loc = R^T w,
 /// w = lambda_i s Y(tau + phi_i) d (atmospheric: lambda_i s (e_x (1 + u') + e_y v' + e_z w'))
-/// plus the force fields at the chain's previous origin x, R
-/// the chain's previous rotation (docs/model.md 3.5, 3.7, 3.9; table in gpu_layout.h); under the
-/// coupled dynamics coupled_force's g.
-vec2 chain_wind_force(uint k, uint c, vec3 x, mat3 rotation) {
+/// plus the force fields at the chain's previous origin x, R the chain's previous rotation
+/// (docs/model.md 3.5, 3.7, 3.9; table in gpu_layout.h).
+vec3 chain_local_wind(uint k, vec3 x, mat3 rotation) {
     uint slot = HMSM_WIND_STEPS + HMSM_WIND_STEP_VEC4S * pc.wind_slot;
     uint instance = HMSM_INSTANCE_WIND_VEC4S * (pc.instance_begin + k);
     vec4 own = instance_wind[instance];  // (lambda, phi mod 2, 0, 0)
@@ -61,7 +59,14 @@ vec2 chain_wind_force(uint k, uint c, vec3 x, mat3 rotation) {
         if (force.w == 0.0) wind += h * force.xyz;
         else if (distance >= 1e-9) wind += (h * force.x / distance) * offset;
     }
-    vec3 wind_local = transpose(rotation) * wind;
+    return transpose(rotation) * wind;
+}
+
+/// Pass 1 for model chain c of group instance k: the generalized force g = A (w_loc.z, -w_loc.x)
+/// from the wind in its previous-step frame (chain_local_wind); under the coupled dynamics
+/// coupled_force's g.
+vec2 chain_wind_force(uint k, uint c, vec3 x, mat3 rotation) {
+    vec3 wind_local = chain_local_wind(k, x, rotation);
     if (pc.dynamics == HMSM_PASS_DYNAMICS_COUPLED) return coupled_force(k, c, wind_local);  // docs/model.md 3.13
     float area = chain_constants[pc.model_chain_begin + c].w;
     return vec2(area * wind_local.z, -area * wind_local.x);

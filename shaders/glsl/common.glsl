@@ -22,6 +22,11 @@ layout(local_size_x = HMSM_WORKGROUP_SIZE, local_size_y = 1, local_size_z = 1) i
 #ifndef HMSM_POSE_COHERENCE
 #define HMSM_POSE_COHERENCE
 #endif
+// The buffers where the articulated exchange's sweeps keep their scratch likewise (T, the loads
+// and the force: integrate.comp).
+#ifndef HMSM_SWEEP_COHERENCE
+#define HMSM_SWEEP_COHERENCE
+#endif
 
 layout(push_constant, std430) uniform PushBlock {
     PassConstants pushed;
@@ -85,8 +90,8 @@ layout(set = 0, binding = HMSM_BINDING_INSTANCE_YAW, std430) readonly buffer Ins
 
 // State, one element per chain/node/vertex of every instance (ping-pong: two halves).
 layout(set = 0, binding = HMSM_BINDING_CHAIN_STATE, std430) buffer ChainState { vec4 chain_state[]; };
-layout(set = 0, binding = HMSM_BINDING_CHAIN_FORCE, std430) buffer ChainForce { vec2 chain_force[]; };
-layout(set = 0, binding = HMSM_BINDING_CHAIN_LOCAL, std430) buffer ChainLocal { mat3x4 chain_local[]; };
+layout(set = 0, binding = HMSM_BINDING_CHAIN_FORCE, std430) HMSM_SWEEP_COHERENCE buffer ChainForce { vec2 chain_force[]; };
+layout(set = 0, binding = HMSM_BINDING_CHAIN_LOCAL, std430) HMSM_SWEEP_COHERENCE buffer ChainLocal { mat3x4 chain_local[]; };
 layout(set = 0, binding = HMSM_BINDING_CHAIN_ROTATION, std430) HMSM_POSE_COHERENCE buffer ChainRotation { mat3x4 chain_rotation[]; };
 layout(set = 0, binding = HMSM_BINDING_NODE_RELATIVE, std430) buffer NodeRelative { vec4 node_relative[]; };
 layout(set = 0, binding = HMSM_BINDING_CHAIN_ORIGIN, std430) HMSM_POSE_COHERENCE buffer ChainOrigin { vec4 chain_origin[]; };
@@ -97,9 +102,11 @@ layout(set = 0, binding = HMSM_BINDING_VERTEX_NORMAL, std430) buffer VertexNorma
 layout(set = 0, binding = HMSM_BINDING_JOINT_MATRIX, std430) buffer JointMatrix { mat3x4 joint_matrix[]; };
 
 // The coupled dynamics (docs/model.md 3.13; no elements under the paper's): HMSM_CHAIN_DYNAMICS_VEC4S
-// vec4 per model chain (its record), and per chain the load g of its last step.
+// vec4 per model chain (its record), and per chain the load g of its last step; under the
+// articulated exchange HMSM_CHAIN_ARTICULATED_VEC4S vec4 per model chain, and the loads' place
+// holds scratch of the sweeps (gpu_layout.h).
 layout(set = 0, binding = HMSM_BINDING_CHAIN_DYNAMICS, std430) readonly buffer ChainDynamics { vec4 chain_dynamics[]; };
-layout(set = 0, binding = HMSM_BINDING_CHAIN_LOAD, std430) buffer ChainLoad { vec2 chain_load[]; };
+layout(set = 0, binding = HMSM_BINDING_CHAIN_LOAD, std430) HMSM_SWEEP_COHERENCE buffer ChainLoad { vec2 chain_load[]; };
 
 // Live control, written by the host between steps (gpu_layout.h): 9 vec4 per instance, and the
 // wind table (turbulent amplitudes, wind vector, force fields, per-step slots).

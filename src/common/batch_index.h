@@ -71,13 +71,14 @@ HMSM_HOST_DEVICE uint32_t capped_blocks(uint64_t items, uint32_t threads, uint32
 
 /// Work items of a dispatch, which its threads take one by one: a vertex group of a packed
 /// contour (gpu_layout.h HMSM_PACKED_CONTOUR_INSTANCES, at most 2^32 - 1 counted for the grid),
-/// an instance of in-dispatch rounds (a block each), else an element.
+/// an instance of in-dispatch rounds or of a sweep (a block each), else an element.
 HMSM_HOST_DEVICE uint64_t dispatch_items(const gpu::PassConstants& pc) {
     if (pc.kind == HMSM_DISPATCH_CONTOUR_PACKED) {
         const uint64_t items = gpu::packed_contour_threads(pc);
         return items < 0xffffffffull ? items : 0xffffffffull;
     }
-    if (pc.kind == HMSM_DISPATCH_JUMP_ROUNDS_IN_DISPATCH) return pc.element_count / pc.model_chain_count;
+    if (pc.kind == HMSM_DISPATCH_JUMP_ROUNDS_IN_DISPATCH || pc.kind == HMSM_DISPATCH_INSTANCE_SWEEP)
+        return pc.element_count / pc.model_chain_count;
     return pc.element_count;
 }
 
@@ -86,7 +87,8 @@ HMSM_HOST_DEVICE uint64_t dispatch_items(const gpu::PassConstants& pc) {
 /// (HMSM_CUDA_MAX_BLOCKS) caps the per-element grids, HMSM_MAX_ROUNDS_BLOCKS the rounds'.
 HMSM_HOST_DEVICE uint32_t dispatch_blocks(const gpu::PassConstants& pc, uint32_t threads, uint32_t max_blocks) {
     if (pc.element_count == 0) return 0;
-    if (pc.kind == HMSM_DISPATCH_JUMP_ROUNDS_IN_DISPATCH) return capped_blocks(dispatch_items(pc), 1, HMSM_MAX_ROUNDS_BLOCKS);
+    if (pc.kind == HMSM_DISPATCH_JUMP_ROUNDS_IN_DISPATCH || pc.kind == HMSM_DISPATCH_INSTANCE_SWEEP)
+        return capped_blocks(dispatch_items(pc), 1, HMSM_MAX_ROUNDS_BLOCKS);
     return capped_blocks(dispatch_items(pc), threads, max_blocks);
 }
 

@@ -49,9 +49,9 @@
 #define HMSM_BINDING_JOINT_MATRIX 25         // mat3x4 per chain: rows (R row 0, O.x), (R row 1, O.y), (R row 2, O.z)
 // Model scope, for Composition::path_walk:
 #define HMSM_BINDING_CHAIN_WALK 26           // HMSM_WALK_RECORD_INTS int per model chain: its walk record (below)
-// The coupled dynamics (docs/model.md 3.13; no elements under the paper's):
-#define HMSM_BINDING_CHAIN_DYNAMICS 27       // HMSM_CHAIN_DYNAMICS_VEC4S vec4 per model chain: below
-#define HMSM_BINDING_CHAIN_LOAD 28           // vec2 per chain, 2 halves: (g_x, g_z), the load g of a step
+// The coupled dynamics (docs/model.md 3.13; no elements under the paper's), by its exchange:
+#define HMSM_BINDING_CHAIN_DYNAMICS 27       // held: HMSM_CHAIN_DYNAMICS_VEC4S vec4 per model chain; articulated: HMSM_CHAIN_ARTICULATED_VEC4S (below)
+#define HMSM_BINDING_CHAIN_LOAD 28           // vec2 per chain, 2 halves: (g_x, g_z), the load g of a step (articulated: scratch, below)
 // Listed dispatches (PassConstants.instance_list below), written by the host with the program:
 #define HMSM_BINDING_INSTANCE_TABLE 29       // uvec4 per list entry: (chain_begin, node_begin, vertex_begin, instance)
 #define HMSM_BINDING_COUNT 30
@@ -61,11 +61,12 @@
 #define HMSM_PASS_DYNAMICS_COUPLED 1u
 /// The coupled dynamics with the articulated exchange (ModelOptions::exchange): pass 1 stores
 /// each chain's own wind impulse, pass 2 solves the whole instance's joints in two sweeps
-/// (src/common/articulated_math.h; the CPU backends only).
+/// (src/common/articulated_math.h; an INSTANCE_SWEEP dispatch below).
 #define HMSM_PASS_DYNAMICS_ARTICULATED 2u
-/// A chain's record under the articulated exchange: HMSM_CHAIN_ARTICULATED_VEC4S vec4, as
-/// scalars (docs/model.md 3.13; spatial vectors in the chain's rest frame about its joint,
-/// angular first; I^A its articulated inertia, S = [e_x e_z] of the angular part):
+/// A chain's record under the articulated exchange (binding HMSM_BINDING_CHAIN_DYNAMICS, in the
+/// held exchange's place): HMSM_CHAIN_ARTICULATED_VEC4S vec4, on the devices stored by vec4 as
+/// the held records below, as scalars (docs/model.md 3.13; spatial vectors in the chain's rest frame about its
+/// joint, angular first; I^A its articulated inertia, S = [e_x e_z] of the angular part):
 ///   0-5: U_x = I^A S_x        6-11: U_z = I^A S_z
 ///   12-15: (G_xx, G_xz, G_zz, eta): G = (S^T I^A S + the armature)^-1; eta as in coupled
 ///   16 + 4 j (j = 0, 1, 2): (column j of Q_c, d_j): the rest rotation in the parent's frame
@@ -74,7 +75,16 @@
 ///   32-35: (dt K_x, dt K_z, dt D_x + theta_x dt^2 K_x, dt D_z + theta_z dt^2 K_z)
 ///   36-39: (theta_x dt, theta_z dt, I_x, I_z): I the joint's articulated inertia S^T I^A S
 ///   40-43: (aero_x dt / I_x, aero_z dt / I_z, first child, child count)
-#define HMSM_CHAIN_ARTICULATED_VEC4S 11u
+///   44-47: (first chain of its depth, end of its depth, 0, 0): the chains are breadth first,
+///          so a depth is a range, which the sweeps take one after the other
+/// Model-local chain ids are floats (< 2^24). Within a step a chain's T (chain_local), which
+/// integrate writes last, holds its scratch: pass 1 stores there its impulse (column 0: the
+/// wind's moment and force x; column 1: force y and z, the aerodynamic damping's impulse about x
+/// and z); the up sweep replaces it by the force the chain passes to its parent (column 0,
+/// column 1 xy) and its w (column 1 zw). On the way down its spatial change of motion goes to
+/// its halves of chain_load (angular x y, angular z and linear x) and chain_force (linear y z),
+/// which its children read before it writes T.
+#define HMSM_CHAIN_ARTICULATED_VEC4S 12u
 /// A chain's record of the coupled dynamics (binding HMSM_BINDING_CHAIN_DYNAMICS), vec4 j of
 /// HMSM_CHAIN_DYNAMICS_VEC4S; axis x is theta_x, axis z theta_z (docs/model.md 3.13). On the
 /// devices the records are stored by vec4 (structure of arrays): vec4 j of model chain c is
@@ -183,9 +193,14 @@
 ///   (hmsm::gpu::rounds_workgroup_size).
 /// LEVEL: compose or root_positions for the chains of one depth level (level_begin,
 ///   level_count per instance), in place in half dst_half.
+/// INSTANCE_SWEEP: integrate under the articulated exchange (PassConstants.dynamics
+///   HMSM_PASS_DYNAMICS_ARTICULATED): one workgroup of HMSM_WORKGROUP_SIZE per instance sweeps
+///   its chains depth by depth, up from the deepest and then down from the trunk, with a
+///   workgroup barrier between depths, then steps each joint (src/common/articulated_math.h).
 /// Composition::path_walk runs a pass that leads a walk (the pass table's `walk` column) and its
 /// walk partner in one dispatch, thread i handling element i of the leader's domain:
-/// WIND_PAIR: wind_force then integrate for chain i (only the new angles are stored).
+/// WIND_PAIR: wind_force then integrate for chain i (only the new angles are stored); under
+///   the articulated exchange wind_force alone (an INSTANCE_SWEEP integrate follows).
 /// POSE_WALK: compose then root_positions for chain i by the top-down walk (its ancestors from
 ///   the trunk down: R = R_parent T, O = O_parent + R_parent l_attach, written to the joint
 ///   matrix), the ancestors gathered by following chain_parent up.
@@ -219,7 +234,8 @@
 #define HMSM_DISPATCH_WALK_AHEAD 9u
 #define HMSM_DISPATCH_CONTOUR_SEPARATE 10u
 #define HMSM_DISPATCH_CONTOUR_PACKED 11u
-#define HMSM_DISPATCH_KIND_COUNT 12u
+#define HMSM_DISPATCH_INSTANCE_SWEEP 12u
+#define HMSM_DISPATCH_KIND_COUNT 13u
 #define HMSM_MAX_ROUNDS_WORKGROUP_SIZE 1024
 /// A chain's walk record (binding HMSM_BINDING_CHAIN_WALK, static, model-local indices): int 0
 /// its depth d; int u, 1 <= u <= HMSM_WALK_PATH_CAPACITY, its ancestor u levels up (-1 past the

@@ -16,8 +16,9 @@ template <class T>
 void articulated_impulse(State<T>& s, uint64_t c, uint32_t model_chain, const typename State<T>::vec3& w_local) {
     const auto& sv = s.chain_state[c];
     const T rate[2] = {sv.z, sv.w};
-    articulated_wind_impulse(s.chain_articulated[model_chain].data(), w_local.x, w_local.y, w_local.z, rate,
-                             s.chain_impulse[c].data());
+    T impulse[8];
+    articulated_wind_impulse(s.chain_articulated[model_chain].data(), w_local.x, w_local.y, w_local.z, rate, impulse);
+    for (int i = 0; i < 8; ++i) s.chain_local[c][i / 3][i % 3] = impulse[i];  // where T goes (cpu_state.h)
 }
 
 template <class T>
@@ -44,7 +45,9 @@ void articulated_integrate(State<T>& s, const gpu::PassConstants& pc, uint32_t w
             const uint64_t c = state_chain(pc, k, int32_t(j));
             const auto& sv = s.chain_state[c];
             const T angle[2] = {sv.x, sv.y}, rate[2] = {sv.z, sv.w};
-            articulated_up(record, angle, rate, s.chain_impulse[c].data(), p, free_rate[j].data(), passed[j].data());
+            T impulse[8];
+            for (int i = 0; i < 8; ++i) impulse[i] = s.chain_local[c][i / 3][i % 3];
+            articulated_up(record, angle, rate, impulse, p, free_rate[j].data(), passed[j].data());
         }
         for (uint32_t j = 0; j < n; ++j) {
             const uint32_t model_chain = pc.model_chain_begin + j;

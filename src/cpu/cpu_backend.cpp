@@ -246,7 +246,7 @@ private:
         s_.chain_constants = convert_vec4<T, vec4>(d.chain_constants);
         s_.node_local = convert_vec4<T, vec4>(d.node_local);
         constexpr size_t record = 4 * HMSM_CHAIN_DYNAMICS_VEC4S;
-        s_.chain_dynamics.assign(d.element_count(BufferId::chain_dynamics), {});
+        s_.chain_dynamics.assign(d.chain_dynamics.size() / record, {});
         for (size_t c = 0; c < s_.chain_dynamics.size(); ++c)
             for (size_t k = 0; k < record; ++k) s_.chain_dynamics[c][k] = T(d.chain_dynamics[record * c + k]);
         constexpr size_t articulated = 4 * HMSM_CHAIN_ARTICULATED_VEC4S;
@@ -271,7 +271,6 @@ private:
         s_.chain_state.assign(d.element_count(BufferId::chain_state), vec4(0));
         s_.chain_force.assign(d.element_count(BufferId::chain_force), typename State<T>::vec2(0));
         s_.chain_load.assign(d.element_count(BufferId::chain_load), typename State<T>::vec2(0));
-        s_.chain_impulse.assign(d.articulated() ? d.element_count(BufferId::chain_force) : 0, {});
         s_.chain_local.assign(d.element_count(BufferId::chain_local), typename State<T>::mat3(0));
         s_.chain_rotation.assign(d.element_count(BufferId::chain_rotation), typename State<T>::mat3(0));
         s_.node_relative.assign(d.element_count(BufferId::node_relative), vec4(0));

@@ -35,7 +35,8 @@ struct State {
     std::vector<vec4> chain_constants, node_local;
     /// The coupled dynamics' records (gpu_layout.h HMSM_CHAIN_DYNAMICS_VEC4S; empty under paper).
     std::vector<std::array<T, 4 * HMSM_CHAIN_DYNAMICS_VEC4S>> chain_dynamics;
-    /// The articulated exchange's records (HMSM_CHAIN_ARTICULATED_VEC4S; empty otherwise).
+    /// The articulated exchange's records (HMSM_CHAIN_ARTICULATED_VEC4S; empty otherwise; on the
+    /// devices in chain_dynamics' place).
     std::vector<std::array<T, 4 * HMSM_CHAIN_ARTICULATED_VEC4S>> chain_articulated;
     std::vector<vec4> vertex_rest_position, vertex_rest_normal;
     std::vector<vec4> vertex_parent_position, vertex_parent_normal;
@@ -50,9 +51,8 @@ struct State {
     std::vector<vec4> chain_state;
     std::vector<vec2> chain_force;
     std::vector<vec2> chain_load;      // coupled: (g_x, g_z), the load of the last step
-    /// The articulated exchange: per chain, pass 1's impulse over the step (wind moment and
-    /// force, aerodynamic damping per axis) for pass 2's sweeps; within a step only.
-    std::vector<std::array<T, 8>> chain_impulse;
+    /// T; under the articulated exchange pass 1's impulse for pass 2's sweeps within a step
+    /// (scalar i in column i / 3, row i % 3; the CPU sweeps keep their scratch to themselves).
     std::vector<mat3> chain_local;
     std::vector<mat3> chain_rotation;  // two halves of total_chains (the allocated chains)
     std::vector<vec4> node_relative;
@@ -106,7 +106,7 @@ struct Range {
 /// Whether a work item of a dispatch of `pass` is a group instance (see Range): every round of
 /// pointer jumping in one dispatch, or the articulated exchange's sweeps.
 inline bool items_are_instances(Pass pass, const gpu::PassConstants& pc) {
-    return (is_hierarchical(pass) && pc.kind == HMSM_DISPATCH_JUMP_ROUNDS_IN_DISPATCH) || sweeps_instances(pass, pc);
+    return (is_hierarchical(pass) && pc.kind == HMSM_DISPATCH_JUMP_ROUNDS_IN_DISPATCH) || pc.kind == HMSM_DISPATCH_INSTANCE_SWEEP;
 }
 /// Number of work items of a dispatch of `pass` (see Range).
 inline uint32_t work_items(Pass pass, const gpu::PassConstants& pc) {
@@ -116,7 +116,7 @@ inline uint32_t work_items(Pass pass, const gpu::PassConstants& pc) {
 /// instance item runs every round over its chains (or both sweeps).
 inline uint32_t elements_per_item(Pass pass, const gpu::PassConstants& pc) {
     if (!items_are_instances(pass, pc)) return 1;
-    return pc.model_chain_count * (sweeps_instances(pass, pc) ? 2u : pc.round);
+    return pc.model_chain_count * (pc.kind == HMSM_DISPATCH_INSTANCE_SWEEP ? 2u : pc.round);
 }
 
 /// The three kinds of dispatch of a hierarchical pass (compose, root_positions) running the work

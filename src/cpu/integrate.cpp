@@ -74,7 +74,7 @@ typename State<T>::vec2 relax_fading(State<T>& s, const gpu::PassConstants& pc, 
 
 template <class T>
 void integrate(State<T>& s, const gpu::PassConstants& pc, uint32_t wind_slot, Range r) {
-    if (sweeps_instances(Pass::integrate, pc)) return articulated_integrate(s, pc, wind_slot, r);
+    if (pc.kind == HMSM_DISPATCH_INSTANCE_SWEEP) return articulated_integrate(s, pc, wind_slot, r);
     for (uint32_t i = r.begin; i < r.end; ++i) {
         Element e = element_of(i, pc.model_chain_count);
         if (instance_paused(s, pc, e.instance)) continue;

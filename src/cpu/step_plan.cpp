@@ -30,7 +30,7 @@ bool instance_wide(const Dispatch& d) { return is_hierarchical(d.pass) || reads_
 
 /// Work items per instance of a dispatch (a dispatch covers whole instances of one group).
 uint32_t items_per_instance(const Dispatch& d) {
-    return runs_rounds_in_dispatch(d) || sweeps_instances(d.pass, d.constants) ? 1 : threads_per_instance(d);
+    return runs_rounds_in_dispatch(d) || sweeps_instances(d) ? 1 : threads_per_instance(d);
 }
 
 /// The first state element of a non-hierarchical dispatch's domain: its item i is element

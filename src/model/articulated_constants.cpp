@@ -87,6 +87,18 @@ void append_articulated_records(const Hierarchy& h, double dt, std::vector<doubl
     const size_t first = out.size();
     constexpr size_t record = 4 * HMSM_CHAIN_ARTICULATED_VEC4S;
     out.resize(first + n * record, 0.0);
+    // The depths as ranges of chains (breadth first: a depth's chains follow the one above's).
+    std::vector<uint32_t> depth(n, 0u);
+    for (size_t c = 1; c < n; ++c) depth[c] = depth[size_t(h.chains[c].parent)] + 1u;
+    for (size_t begin = 0; begin < n;) {
+        size_t end = begin + 1;
+        while (end < n && depth[end] == depth[begin]) ++end;
+        for (size_t c = begin; c < end; ++c) {
+            out[first + c * record + 44] = double(begin);
+            out[first + c * record + 45] = double(end);
+        }
+        begin = end;
+    }
     // From the last chain up: every child's articulated inertia is complete before its parent's.
     for (size_t c = n; c-- > 0;) {
         const Chain& chain = h.chains[c];

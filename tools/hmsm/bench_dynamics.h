@@ -13,8 +13,8 @@
 namespace hmsm::cli::bench {
 
 /// Per available backend: wall milliseconds per step under Dynamics::paper, Dynamics::coupled
-/// and coupled with Exchange::articulated (where the backend runs it; else the row's
-/// "articulated_refused" says why) of one `tree` with every output, and of `forest_count` joints-only instances of it on a grid
+/// and coupled with Exchange::articulated of one `tree` with every output, and of
+/// `forest_count` joints-only instances of it on a grid
 /// `spacing` apart (outputs joints, passes 1-5). About `steps` timed steps each after `warmup`,
 /// fewer where one step times the count would pass `case_budget` seconds.
 nlohmann::json measure_dynamics(const TreeModel& tree, const std::string& model_name,

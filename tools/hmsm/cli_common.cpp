@@ -173,7 +173,7 @@ void add_model_flags(CLI::App& app, ModelFlags& f) {
                        " (coupled: docs/model.md 3.13)");
     app.add_option("--exchange", f.exchange,
                    "coupled: how chains exchange loads: " + choices(kExchangeNames, Spelling::as_is, Exchange::held) +
-                       " (articulated: the joints solved together each step; CPU backends)");
+                       " (articulated: the joints solved together each step)");
 }
 
 Result<ModelOptions> model_options(const ModelFlags& f) {
