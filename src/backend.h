@@ -397,7 +397,10 @@ inline LaunchShape launch_shape(const Dispatch& d) {
     if (threads == 0) return {};
     if (runs_rounds_in_dispatch(d))
         return {threads / d.constants.model_chain_count, gpu::rounds_workgroup_size(d.constants.model_chain_count)};
-    if (sweeps_instances(d)) return {threads / d.constants.model_chain_count, HMSM_WORKGROUP_SIZE};
+    if (sweeps_instances(d)) {
+        const uint32_t instances = threads / d.constants.model_chain_count;
+        return {instances, gpu::sweep_workgroup_size(instances, d.constants.model_chain_count)};
+    }
     const uint64_t launched = runs_packed_contour(d) ? gpu::packed_contour_threads(d.constants) : threads;
     return {(launched + HMSM_WORKGROUP_SIZE - 1) / HMSM_WORKGROUP_SIZE, HMSM_WORKGROUP_SIZE};
 }

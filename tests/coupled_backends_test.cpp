@@ -135,5 +135,53 @@ INSTANTIATE_TEST_SUITE_P(
                (info.param.exchange == Exchange::held ? "" : "_articulated");
     });
 
+// A forest of at least HMSM_SWEEP_WIDE_BELOW instances sweeps in workgroups of
+// HMSM_WORKGROUP_SIZE, a wide depth in many turns (the nine trees above take wider workgroups):
+// the chain angles agree with cpu64 too.
+class ArticulatedForest : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(ArticulatedForest, NarrowSweepsAgreeWithCpu64) {
+    auto backend = backend_named(GetParam());
+    if (!backend && backend.status().code() == ErrorCode::no_device) GTEST_SKIP() << backend.status().message();
+    ASSERT_TRUE(backend.ok()) << backend.status().message();
+    auto preset = generate_preset("paper-5");
+    ASSERT_TRUE(preset.ok());
+    auto grid = grid_scene(*preset, HMSM_SWEEP_WIDE_BELOW + 7, 20.0, 1);
+    ASSERT_TRUE(grid.ok());
+    SimulationConfig config;
+    config.backend = BackendKind::cpu64;
+    config.model.dynamics = Dynamics::coupled;
+    config.model.exchange = Exchange::articulated;
+    config.outputs = Outputs::joints;
+    config.wind.profile = WindProfile::turbulent;
+    config.wind.strength = 4.0;
+    config.wind.turbulence = 0.5;
+    auto oracle = Simulation::create(*grid, config);
+    ASSERT_TRUE(oracle.ok()) << oracle.status().message();
+    auto tested = detail::SimulationAccess::create(*grid, config, std::move(backend).value());
+    ASSERT_TRUE(tested.ok()) << tested.status().message();
+    const auto& program = detail::SimulationAccess::step_program(**tested);
+    const bool narrow = std::any_of(program.begin(), program.end(), [](const detail::Dispatch& d) {
+        return detail::sweeps_instances(d) && detail::launch_shape(d).workgroup_size == HMSM_WORKGROUP_SIZE;
+    });
+    ASSERT_TRUE(narrow) << "the forest must sweep in narrow workgroups";
+    ASSERT_TRUE((*oracle)->step(30).ok());
+    ASSERT_TRUE((*tested)->step(30).ok());
+    std::vector<double> expected, actual;
+    ASSERT_TRUE((*oracle)->read(Output::chain_angles, expected).ok());
+    ASSERT_TRUE((*tested)->read(Output::chain_angles, actual).ok());
+    double swing = 0.0, scale = 0.0, worst = 0.0;
+    for (size_t i = 0; i < expected.size(); i += 4)
+        swing = std::max({swing, std::abs(expected[i]), std::abs(expected[i + 1])});
+    ASSERT_GT(swing, 1e-3) << "the trees must sway for the comparison to mean something";
+    ASSERT_TRUE(test::all_finite(actual));
+    for (double v : expected) scale = std::max(scale, std::abs(v));  // angles and rates
+    for (size_t i = 0; i < expected.size(); ++i) worst = std::max(worst, std::abs(actual[i] - expected[i]));
+    EXPECT_LT(worst, 1e-4 * scale);
+}
+
+INSTANTIATE_TEST_SUITE_P(Backends, ArticulatedForest, ::testing::Values("vulkan", "cuda"),
+                         [](const auto& info) { return info.param; });
+
 }  // namespace
 }  // namespace hmsm

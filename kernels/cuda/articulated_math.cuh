@@ -98,8 +98,17 @@ HMSM_HOST_DEVICE void articulated_sweep(const BufferPointers& b, const gpu::Pass
         for (uint32_t j = begin + lane; j < end; j += lanes) {  // U, G, Q and d, K and D, children
             const ArticulatedRecord record = load_articulated_record<0b10101111111u>(b, pc, pc.model_chain_begin + j);
             float p[6] = {0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f};
-            const uint32_t first = uint32_t(record.s[42]), count = uint32_t(record.s[43]);
-            for (uint32_t child = first; child < first + count; ++child) {
+            const uint32_t first = uint32_t(record.s[42]), last = first + uint32_t(record.s[43]);
+            uint32_t child = first;
+            for (; child + 4 <= last; child += 4) {  // four children's loads in flight together
+                float passed[4][8];
+#pragma unroll
+                for (int c = 0; c < 4; ++c) load_kept(b, state_chain(pc, k, int32_t(child) + c), passed[c]);
+#pragma unroll
+                for (int c = 0; c < 4; ++c)
+                    for (int i = 0; i < 6; ++i) p[i] += passed[c][i];
+            }
+            for (; child < last; ++child) {
                 float passed[8];
                 load_kept(b, state_chain(pc, k, int32_t(child)), passed);
                 for (int i = 0; i < 6; ++i) p[i] += passed[i];
@@ -128,14 +137,15 @@ HMSM_HOST_DEVICE void articulated_sweep(const BufferPointers& b, const gpu::Pass
             load_kept(b, chain, own);
             const float w[2] = {own[6], own[7]};
             articulated_down(record.s, parent >= 0 ? from_parent : nullptr, w, dv, motion);
-            store_motion(b, pc, chain, motion);
             const float4 state = b.chain_state[chain];
             float angle[2] = {state.x, state.y}, rate[2] = {state.z, state.w};
             articulated_step(record.s, dt, max_angle, dv, angle, rate);
             const float4 faded =
                 faded_state(b, pc, k, model_chain, pc.wind_slot, make_float4(angle[0], angle[1], rate[0], rate[1]));
-            store_mat3(b.chain_local, chain,
-                       local_transform(b, pc, k, model_chain, parent < 0, make_float2(faded.x, faded.y)));
+            const Mat3 local = local_transform(b, pc, k, model_chain, parent < 0, make_float2(faded.x, faded.y));
+            // Every load above before the first store, so that none waits behind one.
+            store_motion(b, pc, chain, motion);
+            store_mat3(b.chain_local, chain, local);
             b.chain_state[chain] = faded;
         }
         sweep_barrier();

@@ -265,10 +265,10 @@ static __global__ void __launch_bounds__(HMSM_MAX_ROUNDS_WORKGROUP_SIZE)
                         });
 }
 
-/// INSTANCE_SWEEP: one block per instance runs P::sweep over its threads (the articulated
-/// exchange's integrate, articulated_math.cuh).
+/// INSTANCE_SWEEP: one block per instance (gpu::sweep_workgroup_size threads) runs P::sweep
+/// over its threads (the articulated exchange's integrate, articulated_math.cuh).
 template <class P, bool kMayPause = false>
-static __global__ void __launch_bounds__(HMSM_WORKGROUP_SIZE)
+static __global__ void __launch_bounds__(HMSM_MAX_SWEEP_WORKGROUP_SIZE)
     sweep_kernel(const BufferPointers b, const gpu::PassConstants pc_in) {
     begin_pass();
     const gpu::PassConstants pc = constants_for<kMayPause>(pc_in);
@@ -318,7 +318,7 @@ static __global__ void __launch_bounds__(HMSM_MAX_ROUNDS_WORKGROUP_SIZE)
 
 /// INSTANCE_SWEEP of a listed dispatch: block k sweeps listed instance k (and k + gridDim.x, ...).
 template <class P>
-static __global__ void __launch_bounds__(HMSM_WORKGROUP_SIZE)
+static __global__ void __launch_bounds__(HMSM_MAX_SWEEP_WORKGROUP_SIZE)
     listed_sweep_kernel(const BufferPointers b, const gpu::PassConstants pc) {
     begin_pass();
     for (uint32_t k = blockIdx.x; k < dispatch_instances(pc); k += gridDim.x) {
@@ -338,8 +338,8 @@ cudaError_t launch_listed(const BufferPointers& b, const gpu::PassConstants& pc,
     }
     if constexpr (P::kSweeps) {
         if (pc.kind == HMSM_DISPATCH_INSTANCE_SWEEP)
-            return launch_pass(listed_sweep_kernel<P>, launch_blocks_per_instance(pc), HMSM_WORKGROUP_SIZE, stream, b,
-                               pc);
+            return launch_pass(listed_sweep_kernel<P>, launch_blocks_per_instance(pc),
+                               gpu::sweep_workgroup_size(dispatch_instances(pc), pc.model_chain_count), stream, b, pc);
     }
     return launch_pass(listed_kernel<Items>, launch_blocks(pc.element_count), HMSM_WORKGROUP_SIZE, stream, b, pc);
 }
@@ -361,7 +361,8 @@ cudaError_t launch(const BufferPointers& b, const gpu::PassConstants& pc, cudaSt
     if constexpr (P::kSweeps) {
         if (pc.kind == HMSM_DISPATCH_INSTANCE_SWEEP)
             return launch_pass(may_pause ? sweep_kernel<P, true> : sweep_kernel<P, false>,
-                               launch_blocks_per_instance(pc), HMSM_WORKGROUP_SIZE, stream, b, pc);
+                               launch_blocks_per_instance(pc),
+                               gpu::sweep_workgroup_size(dispatch_instances(pc), pc.model_chain_count), stream, b, pc);
     }
     constexpr unsigned kThreads = HMSM_WORKGROUP_SIZE;
     return launch_pass(may_pause ? pass_kernel<P, kThreads, true> : pass_kernel<P, kThreads, false>,
@@ -433,7 +434,7 @@ static __global__ void __launch_bounds__(HMSM_MAX_ROUNDS_WORKGROUP_SIZE)
 
 /// INSTANCE_SWEEP entries, one block per instance.
 template <class P, bool kMayPause>
-static __global__ void __launch_bounds__(HMSM_WORKGROUP_SIZE)
+static __global__ void __launch_bounds__(HMSM_MAX_SWEEP_WORKGROUP_SIZE)
     batch_sweep_kernel(const BufferPointers b, const BatchLaunch batch) {
     const BatchBlock block = batch_block(batch.block_begin, batch.entries, blockIdx.x);
     const gpu::PassConstants pc = constants_for<kMayPause>(batch_constants(batch, block.entry));
@@ -479,7 +480,7 @@ cudaError_t launch_batch(const BufferPointers& b, const BatchLaunch& batch, cons
         if (shape.kind == HMSM_DISPATCH_INSTANCE_SWEEP) {
             if (shape.blocks == 0) return cudaSuccess;
             return launch_pass(shape.may_pause ? batch_sweep_kernel<P, true> : batch_sweep_kernel<P, false>,
-                               shape.blocks, HMSM_WORKGROUP_SIZE, stream, b, batch);
+                               shape.blocks, shape.threads, stream, b, batch);
         }
     }
     return launch_batch_items<ElementItems<P>, HMSM_WORKGROUP_SIZE>(b, batch, shape, stream);

@@ -59,8 +59,20 @@ void articulated_impulse(uint c, uint chain, vec3 w) {
 void articulated_up_at(uint k, uint j) {
     uint m = pc.model_chain_begin + j;
     float p[6] = float[6](0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
-    uint first = uint(articulated_field(m, 42u)), count = uint(articulated_field(m, 43u));
-    for (uint child = first; child < first + count; ++child) {
+    uint first = uint(articulated_field(m, 42u)), last = first + uint(articulated_field(m, 43u));
+    uint child = first;
+    for (; child + 4u <= last; child += 4u) {  // four children's loads in flight together
+        vec4 low[4], rest[4];
+        for (uint c = 0u; c < 4u; ++c) {
+            low[c] = kept_at(state_chain(k, child + c), 0u);
+            rest[c] = kept_at(state_chain(k, child + c), 1u);
+        }
+        for (uint c = 0u; c < 4u; ++c) {
+            p[0] += low[c].x; p[1] += low[c].y; p[2] += low[c].z; p[3] += low[c].w;
+            p[4] += rest[c].x; p[5] += rest[c].y;
+        }
+    }
+    for (; child < last; ++child) {
         uint at = state_chain(k, child);
         vec4 low = kept_at(at, 0u);
         vec2 rest = kept_at(at, 1u).xy;
@@ -132,7 +144,6 @@ void articulated_down_at(uint k, uint j) {
                    w.y - (articulated_field(m, 13u) * ua.x + articulated_field(m, 14u) * ua.y));
     a[0] += dv.x;
     a[2] += dv.y;
-    store_motion(chain, a);
     vec4 s = chain_state[chain];
     float dt = pc.params.x, max_angle = pc.params.y;
     for (uint axis = 0u; axis < 2u; ++axis) {
@@ -145,6 +156,7 @@ void articulated_down_at(uint k, uint j) {
     }
     s = faded_state(k, m, s);
     mat3 t = local_transform(k, m, parent < 0, s.xy);
+    store_motion(chain, a);  // after every load, as in the CUDA kernel
     chain_state[chain] = s;
     chain_local[chain] = as_mat3x4(t);
 }

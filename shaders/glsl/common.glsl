@@ -10,8 +10,9 @@
 #include "octahedral.glsl"  // oct_encode / oct_decode for VertexLayout::packed
 
 #ifdef HMSM_SPECIALIZED_WORKGROUP_SIZE
-// compose and root_positions: the size is specialization constant 0, set per pipeline
-// (HMSM_WORKGROUP_SIZE, or gpu::rounds_workgroup_size for in-dispatch rounds).
+// compose, root_positions and integrate: the size is specialization constant 0, set per pipeline
+// (HMSM_WORKGROUP_SIZE, or gpu::rounds_workgroup_size for in-dispatch rounds,
+// gpu::sweep_workgroup_size for instance sweeps).
 layout(local_size_x_id = 0, local_size_y = 1, local_size_z = 1) in;
 #else
 layout(local_size_x = HMSM_WORKGROUP_SIZE, local_size_y = 1, local_size_z = 1) in;

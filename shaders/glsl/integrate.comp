@@ -4,6 +4,7 @@
 // (chain_math.glsl; src/cpu/integrate.cpp). INSTANCE_SWEEP (the articulated exchange): workgroup
 // k sweeps group instance k (articulated_math.glsl).
 #extension GL_GOOGLE_include_directive : require
+#define HMSM_SPECIALIZED_WORKGROUP_SIZE
 #define HMSM_SWEEP_COHERENCE coherent
 #include "common.glsl"
 #include "chain_math.glsl"

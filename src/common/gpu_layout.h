@@ -194,7 +194,7 @@
 /// LEVEL: compose or root_positions for the chains of one depth level (level_begin,
 ///   level_count per instance), in place in half dst_half.
 /// INSTANCE_SWEEP: integrate under the articulated exchange (PassConstants.dynamics
-///   HMSM_PASS_DYNAMICS_ARTICULATED): one workgroup of HMSM_WORKGROUP_SIZE per instance sweeps
+///   HMSM_PASS_DYNAMICS_ARTICULATED): one workgroup per instance (hmsm::gpu::sweep_workgroup_size) sweeps
 ///   its chains depth by depth, up from the deepest and then down from the trunk, with a
 ///   workgroup barrier between depths, then steps each joint (src/common/articulated_math.h).
 /// Composition::path_walk runs a pass that leads a walk (the pass table's `walk` column) and its
@@ -334,6 +334,20 @@ HMSM_HOST_DEVICE constexpr uint64_t packed_contour_threads(const PassConstants& 
 constexpr uint32_t rounds_workgroup_size(uint32_t chains) {
     uint32_t size = 64;
     while (size < chains && size < HMSM_MAX_ROUNDS_WORKGROUP_SIZE) size *= 2;
+    return size;
+}
+
+/// Workgroup size of an INSTANCE_SWEEP dispatch over `instances` instances of `chains` chains
+/// each: a forest's instances fill the device in workgroups of HMSM_WORKGROUP_SIZE, which keep
+/// most of their invocations busy at every depth; fewer than HMSM_SWEEP_WIDE_BELOW instances
+/// take a power of two from 64 to HMSM_MAX_SWEEP_WORKGROUP_SIZE that is >= `chains` (or the
+/// maximum), so that a wide depth is swept in one or two turns instead of many.
+#define HMSM_SWEEP_WIDE_BELOW 256u
+#define HMSM_MAX_SWEEP_WORKGROUP_SIZE 512u
+HMSM_HOST_DEVICE constexpr uint32_t sweep_workgroup_size(uint32_t instances, uint32_t chains) {
+    if (instances >= HMSM_SWEEP_WIDE_BELOW) return HMSM_WORKGROUP_SIZE;
+    uint32_t size = HMSM_WORKGROUP_SIZE;
+    while (size < chains && size < HMSM_MAX_SWEEP_WORKGROUP_SIZE) size *= 2;
     return size;
 }
 

@@ -19,6 +19,8 @@ bool batch_runs_enabled() {
 uint32_t dispatch_threads(const gpu::PassConstants& pc) {
     if (pc.kind == HMSM_DISPATCH_JUMP_ROUNDS_IN_DISPATCH) return gpu::rounds_workgroup_size(pc.model_chain_count);
     if (pc.kind == HMSM_DISPATCH_CONTOUR_SEPARATE) return 256;  // contour.cu kSeparateThreads
+    if (pc.kind == HMSM_DISPATCH_INSTANCE_SWEEP)
+        return gpu::sweep_workgroup_size(pc.element_count / pc.model_chain_count, pc.model_chain_count);
     return HMSM_WORKGROUP_SIZE;
 }
 

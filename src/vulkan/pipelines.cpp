@@ -114,11 +114,14 @@ Result<std::unique_ptr<Pipelines>> Pipelines::create(const Device& device) {
 
 namespace {
 
-/// The hierarchical passes (compose, root_positions) take their workgroup size as
-/// specialization constant 0.
-bool has_specialized_workgroup_size(Pass pass) { return is_hierarchical(pass); }
+/// The hierarchical passes (compose, root_positions) and integrate (its instance sweeps) take
+/// their workgroup size as specialization constant 0.
+bool has_specialized_workgroup_size(Pass pass) { return is_hierarchical(pass) || pass == Pass::integrate; }
 
-uint32_t rounds_slot(Pass pass) { return pass == Pass::compose ? 0 : 1; }
+uint32_t rounds_slot(Pass pass) { return pass == Pass::compose ? 0 : pass == Pass::root_positions ? 1 : 2; }
+
+/// Whether a dispatch takes a workgroup per instance, of a size of its own.
+bool sized_per_instance(const Dispatch& d) { return runs_rounds_in_dispatch(d) || sweeps_instances(d); }
 
 uint32_t size_index(uint32_t workgroup_size) {
     uint32_t index = 0;
@@ -144,20 +147,21 @@ uint32_t Pipelines::rounds_size(const Dispatch& dispatch) const {
     // create()); the shaders loop over an instance's chains with any size.
     const DeviceLimits& limits = device_.limits();
     const uint32_t device_max = std::min(limits.max_workgroup_size_x, limits.max_workgroup_invocations);
-    uint32_t size = gpu::rounds_workgroup_size(dispatch.constants.model_chain_count);
+    uint32_t size = sweeps_instances(dispatch) ? launch_shape(dispatch).workgroup_size
+                                               : gpu::rounds_workgroup_size(dispatch.constants.model_chain_count);
     while (size > device_max) size /= 2;
     return size;
 }
 
 Pipelines::Choice Pipelines::pipeline_for(const Dispatch& dispatch) const {
-    if (!runs_rounds_in_dispatch(dispatch)) return {pipeline(dispatch.pass), HMSM_WORKGROUP_SIZE};
+    if (!sized_per_instance(dispatch)) return {pipeline(dispatch.pass), HMSM_WORKGROUP_SIZE};
     const uint32_t size = rounds_size(dispatch);
     return {rounds_pipelines_[rounds_slot(dispatch.pass)][size_index(size)], size};
 }
 
 Status Pipelines::prepare(std::span<const Dispatch> program) {
     for (const Dispatch& dispatch : program) {
-        if (!runs_rounds_in_dispatch(dispatch)) continue;
+        if (!sized_per_instance(dispatch)) continue;
         const uint32_t size = rounds_size(dispatch);
         VkPipeline& slot = rounds_pipelines_[rounds_slot(dispatch.pass)][size_index(size)];
         if (slot) continue;

@@ -69,9 +69,10 @@ private:
     uint32_t rounds_size(const Dispatch& dispatch) const;
 
     std::array<VkPipeline, kPassCount> pipelines_{};
-    /// In-dispatch rounds pipelines: [compose, root_positions][log2(size / 64)].
+    /// Pipelines of a workgroup per instance, by size: [compose, root_positions (in-dispatch
+    /// rounds), integrate (instance sweeps)][log2(size / 64)].
     static constexpr uint32_t kRoundsSizes = 5;  // 64 .. HMSM_MAX_ROUNDS_WORKGROUP_SIZE
-    std::array<std::array<VkPipeline, kRoundsSizes>, 2> rounds_pipelines_{};
+    std::array<std::array<VkPipeline, kRoundsSizes>, 3> rounds_pipelines_{};
 };
 
 }  // namespace hmsm::detail::vk
