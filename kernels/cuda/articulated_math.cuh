@@ -131,11 +131,11 @@ HMSM_HOST_DEVICE void articulated_sweep(const BufferPointers& b, const gpu::Pass
             const uint32_t model_chain = pc.model_chain_begin + j;
             const ArticulatedRecord record = load_articulated_record<0b1001111111u>(b, pc, model_chain);
             const int32_t parent = load(b.chain_parent + model_chain);
-            float from_parent[6], own[8], motion[6], dv[2];
+            float from_parent[6], motion[6], dv[2];
             if (parent >= 0) load_motion(b, pc, state_chain(pc, k, parent), from_parent);
             const uint64_t chain = state_chain(pc, k, int32_t(j));
-            load_kept(b, chain, own);
-            const float w[2] = {own[6], own[7]};
+            const float4 kept = b.chain_local[3 * chain + 1];  // its w in z and w
+            const float w[2] = {kept.z, kept.w};
             articulated_down(record.s, parent >= 0 ? from_parent : nullptr, w, dv, motion);
             const float4 state = b.chain_state[chain];
             float angle[2] = {state.x, state.y}, rate[2] = {state.z, state.w};

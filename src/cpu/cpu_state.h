@@ -106,7 +106,8 @@ struct Range {
 /// Whether a work item of a dispatch of `pass` is a group instance (see Range): every round of
 /// pointer jumping in one dispatch, or the articulated exchange's sweeps.
 inline bool items_are_instances(Pass pass, const gpu::PassConstants& pc) {
-    return (is_hierarchical(pass) && pc.kind == HMSM_DISPATCH_JUMP_ROUNDS_IN_DISPATCH) || pc.kind == HMSM_DISPATCH_INSTANCE_SWEEP;
+    return (is_hierarchical(pass) && pc.kind == HMSM_DISPATCH_JUMP_ROUNDS_IN_DISPATCH) ||
+           pc.kind == HMSM_DISPATCH_INSTANCE_SWEEP;
 }
 /// Number of work items of a dispatch of `pass` (see Range).
 inline uint32_t work_items(Pass pass, const gpu::PassConstants& pc) {
