@@ -296,7 +296,7 @@ static void test_bad_configs(void) {
     CHECK_CONFIG_FAILS(wind.direction[0], 0.0);
     CHECK_CONFIG_FAILS(exchange, 2);
     CHECK(strstr(hmsm_status_message(), "config.exchange: unknown value 2") != NULL);
-    /* the articulated exchange needs the coupled dynamics, and runs on the CPU backends */
+    /* the articulated exchange needs the coupled dynamics */
     CHECK_CONFIG_FAILS(exchange, HMSM_EXCHANGE_ARTICULATED);
     CHECK(strstr(hmsm_status_message(), "exchange articulated needs dynamics coupled") != NULL);
 #undef CHECK_CONFIG_FAILS
