@@ -12,7 +12,8 @@ uint64_t SceneData::element_count(BufferId id) const {
         case Scope::model_chain:
             // The exchange's records in 24-scalar elements (gpu_layout.h: the articulated record
             // is two of them).
-            if (id == BufferId::chain_dynamics) return (articulated() ? chain_articulated : chain_dynamics).size() / 24;
+            if (id == BufferId::chain_dynamics)
+                return (articulated() ? chain_articulated : chain_dynamics).size() / (4 * HMSM_CHAIN_DYNAMICS_VEC4S);
             return chain_parent.size();
         case Scope::model_chain_jump: return chain_jump.size();
         case Scope::model_chain_walk: return chain_walk.size();

@@ -12,29 +12,15 @@
 
 namespace hmsm::detail::cuda {
 
-/// A chain's record (gpu_layout.h HMSM_CHAIN_ARTICULATED_VEC4S, stored by vec4 in chain_dynamics'
-/// place) as scalars: the
-/// vec4s whose bits are set in kVec4s, the others 0.
-struct ArticulatedRecord {
-    float s[4 * HMSM_CHAIN_ARTICULATED_VEC4S];
-};
+/// A chain's record (gpu_layout.h HMSM_CHAIN_ARTICULATED_VEC4S, in the held records' place) as
+/// scalars: the vec4s whose bits are set in kVec4s, the others 0 (coupled_math.cuh load_record).
+using ArticulatedRecord = RecordScalars<HMSM_CHAIN_ARTICULATED_VEC4S>;
 template <uint32_t kVec4s>
 HMSM_HOST_DEVICE ArticulatedRecord load_articulated_record(const BufferPointers& b, const gpu::PassConstants& pc,
                                                            uint32_t model_chain) {
-    ArticulatedRecord record;
-#pragma unroll
-    for (uint32_t j = 0; j < HMSM_CHAIN_ARTICULATED_VEC4S; ++j) {
-        const float4 x = (kVec4s >> j & 1u)
-                             ? load(b.chain_dynamics + uint64_t(j) * pc.total_model_chains + model_chain)
-                             : make_float4(0.0f, 0.0f, 0.0f, 0.0f);
-        record.s[4 * j] = x.x;
-        record.s[4 * j + 1] = x.y;
-        record.s[4 * j + 2] = x.z;
-        record.s[4 * j + 3] = x.w;
-    }
-    return record;
+    return load_record<HMSM_CHAIN_ARTICULATED_VEC4S, kVec4s>(b, pc, model_chain);
 }
-/// Vec4 11 of a chain's record: (first chain of its depth, end of its depth, 0, 0).
+/// Vec4 11 of model chain c's record: (first chain of its depth, end of its depth, 0, 0).
 HMSM_HOST_DEVICE float4 articulated_depth(const BufferPointers& b, const gpu::PassConstants& pc, uint32_t c) {
     return load(b.chain_dynamics + uint64_t(11) * pc.total_model_chains + pc.model_chain_begin + c);
 }

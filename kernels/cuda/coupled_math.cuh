@@ -17,18 +17,20 @@ HMSM_HOST_DEVICE const float4* coupled_vec4(const BufferPointers& b, const gpu::
     return b.chain_dynamics + uint64_t(j) * pc.total_model_chains + model_chain;
 }
 
-/// A chain's record (gpu_layout.h HMSM_CHAIN_DYNAMICS_VEC4S) as scalars: the vec4s whose bits are
-/// set in kVec4s loaded whole through the read-only path (the compiler keeps read-only loads
-/// whose values go unused), the others 0.
-struct CoupledRecord {
-    float s[4 * HMSM_CHAIN_DYNAMICS_VEC4S];
+/// A chain's record of kCount vec4 in chain_dynamics (the held exchange's,
+/// HMSM_CHAIN_DYNAMICS_VEC4S, or the articulated exchange's, HMSM_CHAIN_ARTICULATED_VEC4S) as
+/// scalars: the vec4s whose bits are set in kVec4s loaded whole through the read-only path (the
+/// compiler keeps read-only loads whose values go unused), the others 0.
+template <uint32_t kCount>
+struct RecordScalars {
+    float s[4 * kCount];
 };
-template <uint32_t kVec4s>
-HMSM_HOST_DEVICE CoupledRecord load_coupled_record(const BufferPointers& b, const gpu::PassConstants& pc,
+template <uint32_t kCount, uint32_t kVec4s>
+HMSM_HOST_DEVICE RecordScalars<kCount> load_record(const BufferPointers& b, const gpu::PassConstants& pc,
                                                    uint32_t model_chain) {
-    CoupledRecord record;
+    RecordScalars<kCount> record;
 #pragma unroll
-    for (uint32_t j = 0; j < HMSM_CHAIN_DYNAMICS_VEC4S; ++j) {
+    for (uint32_t j = 0; j < kCount; ++j) {
         const float4 x =
             (kVec4s >> j & 1u) ? load(coupled_vec4(b, pc, model_chain, j)) : make_float4(0.0f, 0.0f, 0.0f, 0.0f);
         record.s[4 * j] = x.x;
@@ -37,6 +39,12 @@ HMSM_HOST_DEVICE CoupledRecord load_coupled_record(const BufferPointers& b, cons
         record.s[4 * j + 3] = x.w;
     }
     return record;
+}
+using CoupledRecord = RecordScalars<HMSM_CHAIN_DYNAMICS_VEC4S>;
+template <uint32_t kVec4s>
+HMSM_HOST_DEVICE CoupledRecord load_coupled_record(const BufferPointers& b, const gpu::PassConstants& pc,
+                                                   uint32_t model_chain) {
+    return load_record<HMSM_CHAIN_DYNAMICS_VEC4S, kVec4s>(b, pc, model_chain);
 }
 
 /// The half of chain_load the step of wind-table slot pc.wind_slot writes; it reads the other

@@ -88,6 +88,15 @@ inline unsigned launch_blocks(uint32_t n, uint32_t threads = HMSM_WORKGROUP_SIZE
     return blocks < max_blocks ? blocks : max_blocks;
 }
 
+/// Calls f(k) for group instances k = block, block + blocks, ... of a dispatch that one block
+/// each takes, skipping paused ones (the whole block: its barriers stay uniform).
+template <class F>
+__device__ void for_each_block_instance(const BufferPointers& b, const gpu::PassConstants& pc, uint32_t block,
+                                        uint32_t blocks, F&& f) {
+    for (uint32_t k = block; k < dispatch_instances(pc); k += blocks)
+        if (!instance_paused(b, pc, k)) f(k);
+}
+
 /// In-dispatch pointer jumping (compose, root_positions): block `block` of a grid of `blocks`
 /// runs every round for group instance `block` (and block + blocks, ...), calling jump(k, chain,
 /// round, src_half, dst_half) for each of the instance's chains, with __syncthreads() between
@@ -95,14 +104,13 @@ inline unsigned launch_blocks(uint32_t n, uint32_t threads = HMSM_WORKGROUP_SIZE
 template <class Jump>
 __device__ void run_rounds_in_block(const BufferPointers& b, const gpu::PassConstants& pc, uint32_t block,
                                     uint32_t blocks, Jump jump) {
-    for (uint32_t k = block; k < dispatch_instances(pc); k += blocks) {
-        if (instance_paused(b, pc, k)) continue;  // the whole block: its barriers stay uniform
+    for_each_block_instance(b, pc, block, blocks, [&](uint32_t k) {
         for (uint32_t round = 0; round < pc.round; ++round) {
             for (uint32_t c = threadIdx.x; c < pc.model_chain_count; c += blockDim.x)
                 jump(k, c, round, HMSM_HALF_READ(round), HMSM_HALF_WRITTEN(round));
             __syncthreads();
         }
-    }
+    });
 }
 
 /// The same on the host (emulate_NAME): round after round over every chain of every instance.
@@ -172,8 +180,8 @@ static __global__ void __launch_bounds__(HMSM_MAX_SWEEP_WORKGROUP_SIZE)
     sweep_kernel(const BufferPointers b, const gpu::PassConstants pc_in) {
     begin_pass();
     const gpu::PassConstants pc = constants_for<kMayPause>(pc_in);
-    for (uint32_t k = blockIdx.x; k < dispatch_instances(pc); k += gridDim.x)
-        if (!instance_paused(b, pc, k)) P::sweep(b, pc, k, threadIdx.x, blockDim.x);  // uniform per block
+    for_each_block_instance(b, pc, blockIdx.x, gridDim.x,
+                            [&](uint32_t k) { P::sweep(b, pc, k, threadIdx.x, blockDim.x); });
 }
 
 /// The items of a per-element dispatch: element i runs P::element.
@@ -201,30 +209,35 @@ static __global__ void __launch_bounds__(HMSM_WORKGROUP_SIZE)
     }
 }
 
-/// JUMP_ROUNDS_IN_DISPATCH of a listed dispatch: block k runs every round for listed instance k
-/// (and k + gridDim.x, ...), as rounds_kernel for a dispatch over that instance alone.
+/// Block k of a listed dispatch that takes a block per instance calls f with the constants of a
+/// dispatch over listed instance k alone (and k + gridDim.x, ...; a list holds no paused one).
+template <class F>
+__device__ void for_each_listed_instance(const BufferPointers& b, const gpu::PassConstants& pc, F&& f) {
+    for (uint32_t k = blockIdx.x; k < dispatch_instances(pc); k += gridDim.x)
+        f(listed_instance_constants(pc, load(b.instance_table + pc.instance_begin + k)));
+}
+
+/// JUMP_ROUNDS_IN_DISPATCH of a listed dispatch: block k runs every round for listed instance k,
+/// as rounds_kernel for a dispatch over that instance alone.
 template <class P>
 static __global__ void __launch_bounds__(HMSM_MAX_ROUNDS_WORKGROUP_SIZE)
     listed_rounds_kernel(const BufferPointers b, const gpu::PassConstants pc) {
     begin_pass();
-    for (uint32_t k = blockIdx.x; k < dispatch_instances(pc); k += gridDim.x) {
-        const gpu::PassConstants one = listed_instance_constants(pc, load(b.instance_table + pc.instance_begin + k));
+    for_each_listed_instance(b, pc, [&](const gpu::PassConstants& one) {
         run_rounds_in_block(b, one, 0, 1,
                             [&](uint32_t instance, uint32_t c, uint32_t round, uint32_t src, uint32_t dst) {
                                 P::template jump<true>(b, one, instance, c, round, src, dst);
                             });
-    }
+    });
 }
 
-/// INSTANCE_SWEEP of a listed dispatch: block k sweeps listed instance k (and k + gridDim.x, ...).
+/// INSTANCE_SWEEP of a listed dispatch: block k sweeps listed instance k.
 template <class P>
 static __global__ void __launch_bounds__(HMSM_MAX_SWEEP_WORKGROUP_SIZE)
     listed_sweep_kernel(const BufferPointers b, const gpu::PassConstants pc) {
     begin_pass();
-    for (uint32_t k = blockIdx.x; k < dispatch_instances(pc); k += gridDim.x) {
-        const gpu::PassConstants one = listed_instance_constants(pc, load(b.instance_table + pc.instance_begin + k));
-        if (!instance_paused(b, one, 0)) P::sweep(b, one, 0, threadIdx.x, blockDim.x);
-    }
+    for_each_listed_instance(b, pc,
+                             [&](const gpu::PassConstants& one) { P::sweep(b, one, 0, threadIdx.x, blockDim.x); });
 }
 
 /// Launches a listed dispatch of pass P (in-dispatch rounds and sweeps: one block per listed instance),
@@ -339,8 +352,8 @@ static __global__ void __launch_bounds__(HMSM_MAX_SWEEP_WORKGROUP_SIZE)
     const BatchBlock block = batch_block(batch.block_begin, batch.entries, blockIdx.x);
     const gpu::PassConstants pc = constants_for<kMayPause>(batch_constants(batch, block.entry));
     begin_pass();
-    for (uint32_t k = block.block; k < dispatch_instances(pc); k += block.blocks)
-        if (!instance_paused(b, pc, k)) P::sweep(b, pc, k, threadIdx.x, blockDim.x);
+    for_each_block_instance(b, pc, block.block, block.blocks,
+                            [&](uint32_t k) { P::sweep(b, pc, k, threadIdx.x, blockDim.x); });
 }
 
 template <class Items, unsigned kThreads>

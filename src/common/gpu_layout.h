@@ -65,8 +65,9 @@
 #define HMSM_PASS_DYNAMICS_ARTICULATED 2u
 /// A chain's record under the articulated exchange (binding HMSM_BINDING_CHAIN_DYNAMICS, in the
 /// held exchange's place): HMSM_CHAIN_ARTICULATED_VEC4S vec4, on the devices stored by vec4 as
-/// the held records below, as scalars (docs/model.md 3.13; spatial vectors in the chain's rest frame about its
-/// joint, angular first; I^A its articulated inertia, S = [e_x e_z] of the angular part):
+/// the held records below, as scalars (docs/model.md 3.13; spatial vectors in the chain's rest
+/// frame about its joint, angular first; I^A its articulated inertia, S = [e_x e_z] of the
+/// angular part):
 ///   0-5: U_x = I^A S_x        6-11: U_z = I^A S_z
 ///   12-15: (G_xx, G_xz, G_zz, eta): G = (S^T I^A S + the armature)^-1; eta as in coupled
 ///   16 + 4 j (j = 0, 1, 2): (column j of Q_c, d_j): the rest rotation in the parent's frame
@@ -194,9 +195,10 @@
 /// LEVEL: compose or root_positions for the chains of one depth level (level_begin,
 ///   level_count per instance), in place in half dst_half.
 /// INSTANCE_SWEEP: integrate under the articulated exchange (PassConstants.dynamics
-///   HMSM_PASS_DYNAMICS_ARTICULATED): one workgroup per instance (hmsm::gpu::sweep_workgroup_size) sweeps
-///   its chains depth by depth, up from the deepest and then down from the trunk, with a
-///   workgroup barrier between depths, then steps each joint (src/common/articulated_math.h).
+///   HMSM_PASS_DYNAMICS_ARTICULATED): one workgroup per instance (of
+///   hmsm::gpu::sweep_workgroup_size invocations) sweeps its chains depth by depth, up from the
+///   deepest and then down from the trunk, with a workgroup barrier between depths, then steps
+///   each joint (src/common/articulated_math.h).
 /// Composition::path_walk runs a pass that leads a walk (the pass table's `walk` column) and its
 /// walk partner in one dispatch, thread i handling element i of the leader's domain:
 /// WIND_PAIR: wind_force then integrate for chain i (only the new angles are stored); under
@@ -344,11 +346,10 @@ constexpr uint32_t rounds_workgroup_size(uint32_t chains) {
 /// maximum), so that a wide depth is swept in one or two turns instead of many.
 #define HMSM_SWEEP_WIDE_BELOW 256u
 #define HMSM_MAX_SWEEP_WORKGROUP_SIZE 512u
-HMSM_HOST_DEVICE constexpr uint32_t sweep_workgroup_size(uint32_t instances, uint32_t chains) {
+constexpr uint32_t sweep_workgroup_size(uint32_t instances, uint32_t chains) {
     if (instances >= HMSM_SWEEP_WIDE_BELOW) return HMSM_WORKGROUP_SIZE;
-    uint32_t size = HMSM_WORKGROUP_SIZE;
-    while (size < chains && size < HMSM_MAX_SWEEP_WORKGROUP_SIZE) size *= 2;
-    return size;
+    const uint32_t size = rounds_workgroup_size(chains);
+    return size < HMSM_MAX_SWEEP_WORKGROUP_SIZE ? size : HMSM_MAX_SWEEP_WORKGROUP_SIZE;
 }
 
 }  // namespace hmsm::gpu

@@ -142,27 +142,27 @@ Result<VkPipeline> Pipelines::create_pipeline(std::span<const uint32_t> code, bo
     return compute_pipeline(device_, layout_, code, specialized ? &workgroup_size : nullptr);
 }
 
-uint32_t Pipelines::rounds_size(const Dispatch& dispatch) const {
-    // The largest power of two the device allows (at least HMSM_WORKGROUP_SIZE, checked in
-    // create()); the shaders loop over an instance's chains with any size.
+uint32_t Pipelines::per_instance_size(const Dispatch& dispatch) const {
+    // The launch shape's size, or the largest power of two below it the device allows (at least
+    // HMSM_WORKGROUP_SIZE, checked in create()); the shaders loop over an instance's chains with
+    // any size.
     const DeviceLimits& limits = device_.limits();
     const uint32_t device_max = std::min(limits.max_workgroup_size_x, limits.max_workgroup_invocations);
-    uint32_t size = sweeps_instances(dispatch) ? launch_shape(dispatch).workgroup_size
-                                               : gpu::rounds_workgroup_size(dispatch.constants.model_chain_count);
+    uint32_t size = launch_shape(dispatch).workgroup_size;
     while (size > device_max) size /= 2;
     return size;
 }
 
 Pipelines::Choice Pipelines::pipeline_for(const Dispatch& dispatch) const {
     if (!sized_per_instance(dispatch)) return {pipeline(dispatch.pass), HMSM_WORKGROUP_SIZE};
-    const uint32_t size = rounds_size(dispatch);
+    const uint32_t size = per_instance_size(dispatch);
     return {rounds_pipelines_[rounds_slot(dispatch.pass)][size_index(size)], size};
 }
 
 Status Pipelines::prepare(std::span<const Dispatch> program) {
     for (const Dispatch& dispatch : program) {
         if (!sized_per_instance(dispatch)) continue;
-        const uint32_t size = rounds_size(dispatch);
+        const uint32_t size = per_instance_size(dispatch);
         VkPipeline& slot = rounds_pipelines_[rounds_slot(dispatch.pass)][size_index(size)];
         if (slot) continue;
         auto pipeline = create_pipeline(dispatch.pass, size);

@@ -66,7 +66,7 @@ private:
     /// specialization when `specialized` is false.
     Result<VkPipeline> create_pipeline(std::span<const uint32_t> code, bool specialized,
                                        uint32_t workgroup_size) const;
-    uint32_t rounds_size(const Dispatch& dispatch) const;
+    uint32_t per_instance_size(const Dispatch& dispatch) const;
 
     std::array<VkPipeline, kPassCount> pipelines_{};
     /// Pipelines of a workgroup per instance, by size: [compose, root_positions (in-dispatch
