@@ -97,6 +97,11 @@ struct BackendCapabilities {
     /// The backend copies outputs to host memory of its own asynchronously (request_read and
     /// take_read below); otherwise the simulation reads them at the request.
     bool reads_async = false;
+    /// copy_patterns() expands its patterns on the device: the host's work is in proportion to
+    /// the copies and the patterns' moves, not to every move of every copy; level switches then
+    /// copy kept chains straight from slot to slot (placed_layout.cpp). False: the default
+    /// copy_patterns() through move_buffers(). HMSM_PATTERN_COPIES=0 turns it off on CUDA.
+    bool copies_patterns = false;
     /// grow() below reallocates the capacity-sized buffers keeping their contents on the
     /// device; otherwise growth past the capacity uploads the scene anew (its state read back
     /// and written again).
@@ -127,6 +132,19 @@ struct BufferRangesWrite {
 struct BufferMoves {
     BufferId id{};
     std::span<const ElementMove> moves;
+};
+
+/// Element moves relative to a source and a destination element, shared by the copies of one
+/// copy_patterns call (a level switch's kept chains, the same for every tree that switches
+/// between the same two levels).
+struct MovePattern {
+    std::span<const ElementMove> moves;
+};
+/// One copy of copy_patterns: each move m of the call's patterns[pattern] copies elements
+/// [src + m.src, + m.count) to [dst + m.dst, + m.count).
+struct PatternCopy {
+    uint64_t src = 0, dst = 0;
+    uint32_t pattern = 0;
 };
 
 /// Host bytes of one element of buffer `id` read or written as `as`.
@@ -226,6 +244,13 @@ public:
         return {};
     }
 
+    /// In every buffer of `ids` (chain scope; a ping-pong buffer's second half, from element
+    /// `capacity` on, alike), every copy of `copies` (PatternCopy). No copy may write an
+    /// element that another copy reads or writes, so order does not matter; nothing goes
+    /// through the host. A pattern index past `patterns` is an internal error. This default
+    /// expands every copy into move_buffers().
+    virtual Status copy_patterns(std::span<const BufferId> ids, uint64_t capacity,
+                                 std::span<const MovePattern> patterns, std::span<const PatternCopy> copies);
     /// Moves element ranges of buffer `id` on the device, in order, each as if through a
     /// temporary (source and destination may overlap): the state of instances that change place
     /// (live_reshape.cpp, lod_switch.cpp). Nothing goes through the host. A device backend

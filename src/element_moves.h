@@ -29,6 +29,14 @@ inline bool batch_transfers_enabled() {
     return !(value && std::string_view(value) == "0");
 }
 
+/// Whether a device backend expands Backend::copy_patterns on the device
+/// (BackendCapabilities::copies_patterns): yes unless the environment sets
+/// HMSM_PATTERN_COPIES=0 (for A/B measurements and tests).
+inline bool pattern_copies_enabled() {
+    const char* value = std::getenv("HMSM_PATTERN_COPIES");
+    return !(value && std::string_view(value) == "0");
+}
+
 /// Whether two of `ranges` share an element (a batched write of them could then leave either
 /// value). O(n log n).
 inline bool ranges_overlap(std::span<const ElementRange> ranges) {

@@ -1,5 +1,6 @@
 // Where a level switch within the capacity builds the switched instances' new chains on the
-// device (lod_switch.cpp in the packed layout, placed_layout.cpp in the placed one): in a
+// device (lod_switch.cpp in the packed layout, placed_layout.cpp in the placed one where the
+// backend does not copy patterns; with pattern copies only the templates are staged): in a
 // staging area above every chain the layout holds, first a copy of the switched instances' old
 // chains, then each switched instance in its new layout, back to back, then a template of each
 // new model that unfolds chains (every chain at rest, rest_chains), which the unfolded chains
@@ -33,22 +34,13 @@ struct LevelStaging {
     uint64_t end = 0;                   // the chains the staging needs below it
 };
 
-/// The staging from chain `base` on for the switches `models` (instance index, new run model;
-/// `from_model` gives an index's run model before the switch) carried by `carries`.
-template <class FromModel>
-LevelStaging lay_out_staging(uint64_t base, const std::vector<std::pair<uint32_t, uint32_t>>& models,
-                             FromModel&& from_model, const std::vector<ModelRange>& ranges,
-                             const std::vector<const LevelCarry*>& carries) {
+/// The templates alone from chain `base` on (old_at and instance_at empty): what a switch that
+/// copies kept chains straight from slot to slot (Backend::copy_patterns) stages.
+inline LevelStaging lay_out_templates(uint64_t base, const std::vector<std::pair<uint32_t, uint32_t>>& models,
+                                      const std::vector<ModelRange>& ranges,
+                                      const std::vector<const LevelCarry*>& carries) {
     LevelStaging staging;
     uint64_t at = base;
-    for (auto [i, model] : models) {
-        staging.old_at.push_back(at);
-        at += ranges[from_model(i)].chain_count;
-    }
-    for (auto [i, model] : models) {
-        staging.instance_at.push_back(at);
-        at += ranges[model].chain_count;
-    }
     for (size_t k = 0; k < models.size(); ++k) {
         const uint32_t model = models[k].second;
         int32_t found = -1;
@@ -64,6 +56,28 @@ LevelStaging lay_out_staging(uint64_t base, const std::vector<std::pair<uint32_t
         staging.template_of.push_back(found);
     }
     staging.end = at;
+    return staging;
+}
+
+/// The staging from chain `base` on for the switches `models` (instance index, new run model;
+/// `from_model` gives an index's run model before the switch) carried by `carries`.
+template <class FromModel>
+LevelStaging lay_out_staging(uint64_t base, const std::vector<std::pair<uint32_t, uint32_t>>& models,
+                             FromModel&& from_model, const std::vector<ModelRange>& ranges,
+                             const std::vector<const LevelCarry*>& carries) {
+    uint64_t at = base;
+    std::vector<uint64_t> old_at, instance_at;
+    for (auto [i, model] : models) {
+        old_at.push_back(at);
+        at += ranges[from_model(i)].chain_count;
+    }
+    for (auto [i, model] : models) {
+        instance_at.push_back(at);
+        at += ranges[model].chain_count;
+    }
+    LevelStaging staging = lay_out_templates(at, models, ranges, carries);
+    staging.old_at = std::move(old_at);
+    staging.instance_at = std::move(instance_at);
     return staging;
 }
 

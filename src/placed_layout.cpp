@@ -183,30 +183,45 @@ Status Simulation::Impl::swap_remove_placed(const std::vector<uint32_t>& removed
     return swap_instance_lists(removed, fill);
 }
 
-Result<bool> Simulation::Impl::switch_placed(const std::vector<std::pair<uint32_t, uint32_t>>& models,
-                                             const std::vector<const detail::LevelCarry*>& carries) {
-    detail::SceneData& d = *data_;
-    std::vector<uint32_t> new_models;
-    for (auto [i, model] : models) new_models.push_back(model);
-    // The staging lies above every slot held once the new slots are taken.
-    const ElementCounts end = placements_.end_after(new_models, d.models);
-    const detail::LevelStaging staging = detail::lay_out_staging(
-        end.chains, models, [&](uint32_t i) { return instances_[i].model; }, d.models, carries);
-    if (staging.end > d.chain_capacity || end.nodes > d.node_capacity || end.vertices > d.vertex_capacity) {
-        Result<bool> grown = grow_on_device({staging.end, end.nodes, end.vertices}, instances_.size());
-        if (!grown) return grown;
-        if (!*grown || staging.end > d.chain_capacity) return false;  // not where the growth met its limit
+Status Simulation::Impl::copy_switched_chains(const std::vector<std::pair<uint32_t, uint32_t>>& models,
+                                               const std::vector<const detail::LevelCarry*>& carries,
+                                               const detail::LevelStaging& staging,
+                                               const std::vector<ElementCounts>& slots) {
+    // Each switched tree straight from its old slot to its new one: its kept chains by its
+    // carry's pattern, its unfolded chains from its model's template. One pair of patterns per
+    // distinct carry; the new slots are apart from every old slot and template.
+    std::vector<const detail::LevelCarry*> distinct;
+    std::vector<detail::PatternCopy> copies;
+    for (size_t k = 0; k < models.size(); ++k) {
+        const auto found = std::find(distinct.begin(), distinct.end(), carries[k]);
+        const uint32_t c = uint32_t(found - distinct.begin());
+        if (found == distinct.end()) distinct.push_back(carries[k]);
+        copies.push_back({placements_[models[k].first].chains, slots[k].chains, 2 * c});
+        if (staging.template_of[k] >= 0)
+            copies.push_back({staging.templates[size_t(staging.template_of[k])].at, slots[k].chains, 2 * c + 1});
     }
-    // New slots first: the old ones are read by the moves below and freed after them.
-    std::vector<ElementCounts> slots;
-    for (uint32_t model : new_models) slots.push_back(placements_.allocate(model, detail::counts_of(d.models[model])));
-    placed_end_changed();
+    std::vector<std::vector<ElementMove>> unfolded(distinct.size());
+    std::vector<detail::MovePattern> patterns;
+    for (size_t c = 0; c < distinct.size(); ++c) {
+        for (const ElementRange& r : distinct[c]->unfolded) unfolded[c].push_back({r.first, r.first, r.count});
+        patterns.push_back({distinct[c]->kept});
+        patterns.push_back({unfolded[c]});
+    }
+    return backend_->copy_patterns(detail::carried_buffers(data_->holds_loads()), data_->chain_capacity, patterns,
+                                   copies);
+}
+
+Status Simulation::Impl::move_switched_chains(const std::vector<std::pair<uint32_t, uint32_t>>& models,
+                                              const std::vector<const detail::LevelCarry*>& carries,
+                                              const detail::LevelStaging& staging,
+                                              const std::vector<ElementCounts>& slots) {
     // In each carried buffer, in order: the switched instances' old chains are copied into the
     // staging, their new chains built there, and each goes to its new slot (all halves).
+    const detail::SceneData& d = *data_;
     std::vector<ElementMove> stage, unstage;
     for (size_t k = 0; k < models.size(); ++k)
         detail::append_move(stage, placements_[models[k].first].chains, staging.old_at[k],
-                 d.models[instances_[models[k].first].model].chain_count);
+                            d.models[instances_[models[k].first].model].chain_count);
     detail::append_build_moves(stage, staging, carries);
     for (size_t k = 0; k < models.size(); ++k)
         detail::append_move(unstage, staging.instance_at[k], slots[k].chains, d.models[models[k].second].chain_count);
@@ -223,9 +238,35 @@ Result<bool> Simulation::Impl::switch_placed(const std::vector<std::pair<uint32_
                 }
         moves.push_back({carried[b], in_buffers[b]});
     }
+    return backend_->move_buffers(moves);
+}
+
+Result<bool> Simulation::Impl::switch_placed(const std::vector<std::pair<uint32_t, uint32_t>>& models,
+                                             const std::vector<const detail::LevelCarry*>& carries) {
+    detail::SceneData& d = *data_;
+    std::vector<uint32_t> new_models;
+    for (auto [i, model] : models) new_models.push_back(model);
+    // The staging lies above every slot held once the new slots are taken: where the backend
+    // copies patterns, the templates alone.
+    const bool direct = backend_->capabilities().copies_patterns;
+    const ElementCounts end = placements_.end_after(new_models, d.models);
+    const detail::LevelStaging staging =
+        direct ? detail::lay_out_templates(end.chains, models, d.models, carries)
+               : detail::lay_out_staging(
+                     end.chains, models, [&](uint32_t i) { return instances_[i].model; }, d.models, carries);
+    if (staging.end > d.chain_capacity || end.nodes > d.node_capacity || end.vertices > d.vertex_capacity) {
+        Result<bool> grown = grow_on_device({staging.end, end.nodes, end.vertices}, instances_.size());
+        if (!grown) return grown;
+        if (!*grown || staging.end > d.chain_capacity) return false;  // not where the growth met its limit
+    }
+    // New slots first: the old ones are read by the copies below and freed after them.
+    std::vector<ElementCounts> slots;
+    for (uint32_t model : new_models) slots.push_back(placements_.allocate(model, detail::counts_of(d.models[model])));
+    placed_end_changed();
+    const std::vector<BufferId> carried = detail::carried_buffers(d.holds_loads());
     const detail::Scalar scalar = backend_->kind() == BackendKind::cpu64 ? detail::Scalar::f64 : detail::Scalar::f32;
     HMSM_TRY(detail::write_staging_templates(*backend_, carried, d.chain_capacity, scalar, staging));
-    HMSM_TRY(backend_->move_buffers(moves));
+    HMSM_TRY(direct ? copy_switched_chains(models, carries, staging, slots) : move_switched_chains(models, carries, staging, slots));
     for (size_t k = 0; k < models.size(); ++k) {
         const auto [i, model] = models[k];
         const ElementCounts delta = detail::counts_of(d.models[model]) - detail::counts_of(d.models[instances_[i].model]);

@@ -24,6 +24,10 @@
 #include <unordered_map>
 #include <vector>
 
+namespace hmsm::detail {
+struct LevelStaging;
+}
+
 namespace hmsm {
 
 // Hidden: a nested class of the exported Simulation would otherwise be exported from libhmsm.so.
@@ -142,10 +146,19 @@ struct __attribute__((visibility("hidden"))) Simulation::Impl {
     Result<bool> append_placed(std::span<const Instance> added);
     Status swap_remove_placed(const std::vector<uint32_t>& removed);
     /// Builds the switched instances (`models`: index, new run model; their carries) in new
-    /// slots, through the staging above every slot held, and frees their old slots. False where
-    /// the slots and the staging do not fit the capacity even after growing it.
+    /// slots, straight from their old slots where the backend copies patterns, otherwise
+    /// through the staging above every slot held, and frees their old slots. False where the
+    /// slots and the staging do not fit the capacity even after growing it.
     Result<bool> switch_placed(const std::vector<std::pair<uint32_t, uint32_t>>& models,
                                const std::vector<const detail::LevelCarry*>& carries);
+    /// switch_placed's copies into the new `slots`: by pattern (Backend::copy_patterns, the
+    /// staging holding the templates alone) or through the whole staging (move_buffers).
+    Status copy_switched_chains(const std::vector<std::pair<uint32_t, uint32_t>>& models,
+                                const std::vector<const detail::LevelCarry*>& carries,
+                                const detail::LevelStaging& staging, const std::vector<detail::ElementCounts>& slots);
+    Status move_switched_chains(const std::vector<std::pair<uint32_t, uint32_t>>& models,
+                                const std::vector<const detail::LevelCarry*>& carries,
+                                const detail::LevelStaging& staging, const std::vector<detail::ElementCounts>& slots);
     /// Paused instances (Instance::active false): none lets the step program take the groups
     /// as they are.
     uint64_t paused_count_ = 0;

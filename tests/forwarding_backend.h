@@ -61,6 +61,12 @@ public:
         HMSM_TRY(gate());
         return inner_->move_buffers(moves);
     }
+    Status copy_patterns(std::span<const detail::BufferId> ids, uint64_t capacity,
+                         std::span<const detail::MovePattern> patterns,
+                         std::span<const detail::PatternCopy> copies) override {
+        HMSM_TRY(gate());
+        return inner_->copy_patterns(ids, capacity, patterns, copies);
+    }
     Status move_elements(detail::BufferId id, std::span<const detail::ElementMove> moves) override {
         HMSM_TRY(gate());
         return inner_->move_elements(id, moves);

@@ -371,6 +371,58 @@ TEST_P(RangeTransfers, CallsOverSeveralBuffersAgreeWithCallsBufferByBuffer) {
     });
 }
 
+// copy_patterns (a level switch's kept chains in the placed layout) agrees with its copies
+// expanded into moves and applied one by one, in every carried buffer and both halves of the
+// ping-pong ones, for patterns of moves of odd lengths; a copy past a buffer's end and a pattern
+// that does not exist are refused.
+TEST_P(RangeTransfers, PatternCopiesAgreeWithTheirMovesOneByOne) {
+    for_scalar(scalar_, [&](auto zero) {
+        using V = decltype(zero);
+        std::mt19937 random(53);
+        const uint64_t capacity = detail::scene_data_of(*sim_).chain_capacity;
+        constexpr uint64_t kSlot = 20;  // every pattern reaches less than a slot from src and from dst
+        ASSERT_GE(capacity, 4 * kSlot);
+        // Three patterns: moves into disjoint pieces of a slot, from anywhere in a slot.
+        std::vector<std::vector<ElementMove>> pattern_moves(3);
+        for (std::vector<ElementMove>& moves : pattern_moves) {
+            for (uint64_t at = random() % 3; at < kSlot;) {
+                const uint64_t count = 1 + random() % 7, end = std::min(kSlot, at + count);
+                moves.push_back({random() % (kSlot - (end - at) + 1), at, end - at});
+                at = end + random() % 3;
+            }
+        }
+        std::vector<detail::MovePattern> patterns;
+        for (const std::vector<ElementMove>& moves : pattern_moves) patterns.push_back({moves});
+        // Sources below capacity / 2, destinations in slots above it.
+        std::vector<detail::PatternCopy> copies;
+        const uint64_t sources = capacity / 2 - kSlot;
+        for (uint64_t dst = capacity / 2; dst + kSlot <= capacity; dst += kSlot)
+            copies.push_back({random() % (sources + 1), dst, uint32_t(random() % patterns.size())});
+        const std::vector<BufferId> ids = detail::carried_buffers(false);
+        std::vector<std::vector<V>> expected;
+        for (BufferId id : ids) {
+            expected.push_back(whole<V>(id));
+            for (uint64_t h = 0; h < detail::halves_of(id); ++h)
+                for (const detail::PatternCopy& c : copies)
+                    for (const ElementMove& m : pattern_moves[c.pattern])
+                        std::copy_n(expected.back().begin() + std::ptrdiff_t((h * capacity + c.src + m.src) * width(id)),
+                                    m.count * width(id),
+                                    expected.back().begin() + std::ptrdiff_t((h * capacity + c.dst + m.dst) * width(id)));
+        }
+        ASSERT_TRUE(backend().copy_patterns(ids, capacity, patterns, copies).ok());
+        for (size_t b = 0; b < ids.size(); ++b)
+            EXPECT_EQ(whole<V>(ids[b]), expected[b]) << detail::buffer_info(ids[b]).name;
+
+        const detail::PatternCopy past_the_end{0, capacity - 1, 0}, no_pattern{0, capacity / 2, 3};
+        const Status past = backend().copy_patterns(ids, capacity, patterns, {&past_the_end, 1});
+        EXPECT_FALSE(past.ok());
+        EXPECT_NE(past.message().find("chain_state"), std::string::npos) << past.message();
+        const Status missing = backend().copy_patterns(ids, capacity, patterns, {&no_pattern, 1});
+        EXPECT_EQ(missing.code(), ErrorCode::internal);
+        EXPECT_NE(missing.message().find("pattern 3 of 3"), std::string::npos) << missing.message();
+    });
+}
+
 std::string param_name(const ::testing::TestParamInfo<std::string>& info) {
     std::string name = info.param;
     std::replace(name.begin(), name.end(), '-', '_');

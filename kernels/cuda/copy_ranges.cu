@@ -32,4 +32,29 @@ void emulate_copy_ranges(uint32_t* buffer, uint32_t* packed, const WordRange* ra
     for (uint64_t t = 0; t < total; ++t) copy_range_word(buffer, packed, ranges, range_count, t, direction);
 }
 
+static __global__ void __launch_bounds__(kCopyThreads)
+    copy_patterns_kernel(uint32_t* buffer, uint32_t words_per_element, uint64_t half_words,
+                         const PatternCopyEntry* entries, uint32_t entry_count, const PatternMoveEntry* moves) {
+    uint32_t* half = buffer + blockIdx.y * half_words;
+    for (uint32_t e = blockIdx.x; e < entry_count; e += gridDim.x)
+        copy_pattern_words(half, words_per_element, entries[e], moves, threadIdx.x, blockDim.x);
+}
+
+cudaError_t launch_copy_patterns(uint32_t* buffer, uint32_t words_per_element, uint64_t half_words, uint32_t halves,
+                                 const PatternCopyEntry* entries, uint32_t entry_count, const PatternMoveEntry* moves,
+                                 cudaStream_t stream) {
+    if (entry_count == 0 || halves == 0) return cudaSuccess;
+    const dim3 grid(unsigned(std::min<uint64_t>(entry_count, kMostCopyBlocks)), halves);
+    copy_patterns_kernel<<<grid, kCopyThreads, 0, stream>>>(buffer, words_per_element, half_words, entries,
+                                                            entry_count, moves);
+    return cudaGetLastError();
+}
+
+void emulate_copy_patterns(uint32_t* buffer, uint32_t words_per_element, uint64_t half_words, uint32_t halves,
+                           const PatternCopyEntry* entries, uint32_t entry_count, const PatternMoveEntry* moves) {
+    for (uint32_t h = 0; h < halves; ++h)
+        for (uint32_t e = 0; e < entry_count; ++e)
+            copy_pattern_words(buffer + h * half_words, words_per_element, entries[e], moves, 0, 1);
+}
+
 }  // namespace hmsm::detail::cuda

@@ -12,7 +12,9 @@
 #ifndef __CUDACC__  // the host side (C++20); kernels compile as C++17
 #include "../../src/backend.h"
 
+#include <algorithm>
 #include <span>
+#include <string>
 #include <vector>
 #endif
 
@@ -43,6 +45,30 @@ HMSM_HOST_DEVICE void copy_range_word(uint32_t* buffer, uint32_t* packed, const 
     else buffer[r.target + offset] = packed[t];
 }
 
+/// One copy of Backend::copy_patterns (src/backend.h PatternCopy) as the device reads it: its
+/// source and destination element and its pattern's moves, [first_move, first_move +
+/// move_count) of the call's PatternMoveEntry table.
+struct PatternCopyEntry {
+    uint64_t src = 0, dst = 0;
+    uint32_t first_move = 0, move_count = 0;
+};
+/// One move of a pattern, in elements (ElementMove's fields).
+struct PatternMoveEntry {
+    uint64_t src = 0, dst = 0, count = 0;
+};
+
+/// The words of copy `entry` in `buffer` (elements of `words_per_element` words), taken by
+/// threads `thread`, `thread + threads`, ... of each of its moves in turn.
+HMSM_HOST_DEVICE void copy_pattern_words(uint32_t* buffer, uint32_t words_per_element, const PatternCopyEntry& entry,
+                                         const PatternMoveEntry* moves, uint32_t thread, uint32_t threads) {
+    for (uint32_t k = 0; k < entry.move_count; ++k) {
+        const PatternMoveEntry& m = moves[entry.first_move + k];
+        const uint64_t src = (entry.src + m.src) * words_per_element, dst = (entry.dst + m.dst) * words_per_element;
+        const uint64_t words = m.count * words_per_element;
+        for (uint64_t w = thread; w < words; w += threads) buffer[dst + w] = buffer[src + w];
+    }
+}
+
 #ifndef __CUDACC__
 /// Appends the ranges of `pieces` (elements of `words_per_element` words; src is gathered from,
 /// dst scattered to) to `out`, packed after what `out` holds; returns the words they span.
@@ -57,6 +83,41 @@ inline uint64_t append_word_ranges(std::vector<WordRange>& out, std::span<const 
     }
     return total;
 }
+
+/// The device tables of Backend::copy_patterns: an entry per copy and every pattern's moves
+/// once, and per entry the elements its pattern reaches from its src and from its dst (the
+/// ranges a backend checks).
+struct PatternTables {
+    std::vector<PatternCopyEntry> entries;
+    std::vector<PatternMoveEntry> moves;
+    std::vector<uint64_t> src_reach, dst_reach;
+};
+
+inline Result<PatternTables> pattern_tables(std::span<const MovePattern> patterns, std::span<const PatternCopy> copies) {
+    PatternTables t;
+    std::vector<uint32_t> first_move;
+    std::vector<uint64_t> src_reach, dst_reach;
+    for (const MovePattern& p : patterns) {
+        first_move.push_back(uint32_t(t.moves.size()));
+        uint64_t src = 0, dst = 0;
+        for (const ElementMove& m : p.moves) {
+            src = std::max(src, m.src + m.count);
+            dst = std::max(dst, m.dst + m.count);
+            t.moves.push_back({m.src, m.dst, m.count});
+        }
+        src_reach.push_back(src);
+        dst_reach.push_back(dst);
+    }
+    for (const PatternCopy& c : copies) {
+        if (c.pattern >= patterns.size())
+            return Status{ErrorCode::internal, "copy_patterns: pattern " + std::to_string(c.pattern) + " of " +
+                                                   std::to_string(patterns.size())};
+        t.entries.push_back({c.src, c.dst, first_move[c.pattern], uint32_t(patterns[c.pattern].moves.size())});
+        t.src_reach.push_back(src_reach[c.pattern]);
+        t.dst_reach.push_back(dst_reach[c.pattern]);
+    }
+    return t;
+}
 #endif
 
 /// Enqueues one launch copying every word of `ranges` (device memory, range_count entries, `total`
@@ -66,5 +127,15 @@ cudaError_t launch_copy_ranges(uint32_t* buffer, uint32_t* packed, const WordRan
 /// The same on the host, word by word (ranges in host memory).
 void emulate_copy_ranges(uint32_t* buffer, uint32_t* packed, const WordRange* ranges, uint32_t range_count,
                          uint64_t total, RangeCopy direction);
+
+/// Enqueues one launch copying every entry of `entries` (device memory, with their `moves`) in
+/// each of `halves` halves of `buffer`, the second `half_words` words after the first: a block
+/// per entry and half. The entries' destinations are apart from every source and destination.
+cudaError_t launch_copy_patterns(uint32_t* buffer, uint32_t words_per_element, uint64_t half_words, uint32_t halves,
+                                 const PatternCopyEntry* entries, uint32_t entry_count, const PatternMoveEntry* moves,
+                                 cudaStream_t stream);
+/// The same on the host (tables in host memory).
+void emulate_copy_patterns(uint32_t* buffer, uint32_t words_per_element, uint64_t half_words, uint32_t halves,
+                           const PatternCopyEntry* entries, uint32_t entry_count, const PatternMoveEntry* moves);
 
 }  // namespace hmsm::detail::cuda

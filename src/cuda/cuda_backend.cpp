@@ -35,6 +35,7 @@ Result<std::unique_ptr<Backend>> CudaBackend::create() {
     backend->batch_runs_ = batch_runs_enabled();
     const char* at_once = std::getenv("HMSM_CUDA_CAPTURE_AT_ONCE");
     backend->capture_at_once_ = at_once && std::string_view(at_once) == "1";
+    backend->copies_patterns_ = pattern_copies_enabled();
     return std::unique_ptr<Backend>(std::move(backend));
 }
 
@@ -110,6 +111,13 @@ Status CudaBackend::read_buffers(std::span<const BufferRangesRead> reads, Scalar
 Status CudaBackend::move_buffers(std::span<const BufferMoves> moves) {
     HMSM_TRY(make_current());
     return buffers_.move_buffers(moves, stream_);
+}
+
+Status CudaBackend::copy_patterns(std::span<const BufferId> ids, uint64_t capacity,
+                                  std::span<const MovePattern> patterns, std::span<const PatternCopy> copies) {
+    if (!copies_patterns_) return Backend::copy_patterns(ids, capacity, patterns, copies);
+    HMSM_TRY(make_current());
+    return buffers_.copy_patterns(ids, capacity, patterns, copies, stream_);
 }
 
 Status CudaBackend::move_elements(BufferId id, std::span<const ElementMove> moves) {

@@ -44,11 +44,14 @@ public:
     Status move_elements(BufferId id, std::span<const ElementMove> moves) override;
     Status read_buffers(std::span<const BufferRangesRead> reads, Scalar as) const override;
     Status move_buffers(std::span<const BufferMoves> moves) override;
+    Status copy_patterns(std::span<const BufferId> ids, uint64_t capacity, std::span<const MovePattern> patterns,
+                         std::span<const PatternCopy> copies) override;
     Status request_read(uint32_t slot, BufferId id, uint64_t first, uint64_t count) const override;
     Result<const float*> take_read(uint32_t slot) const override;
     void set_profiling(bool enabled) override { profiling_ = enabled; }
-    /// The path walk, integrating ahead unless HMSM_CUDA_WALK_AHEAD=0 (read when the backend is
-    /// created; for A/B measurements and tests).
+    /// The path walk, integrating ahead unless HMSM_CUDA_WALK_AHEAD=0, and pattern copies unless
+    /// HMSM_PATTERN_COPIES=0 (both read when the backend is created; for A/B measurements and
+    /// tests).
     BackendCapabilities capabilities() const override {
         BackendCapabilities can;
         can.walks_ahead = walk_ahead_;
@@ -56,6 +59,7 @@ public:
         can.reads_async = true;
         can.grows_on_device = true;
         can.runs_listed_groups = true;
+        can.copies_patterns = copies_patterns_;
         return can;
     }
     /// Steps run without their wind_force dispatches, taking the angles the step before
@@ -130,6 +134,7 @@ private:
     std::array<uint64_t, 8> run_once_{};
     size_t run_once_next_ = 0;
     bool capture_at_once_ = false;  // HMSM_CUDA_CAPTURE_AT_ONCE=1
+    bool copies_patterns_ = true;   // HMSM_PATTERN_COPIES=0 turns it off
     std::vector<cudaEvent_t> events_;  // profiling: one before and one after each dispatch
     bool profiling_ = false;
     bool waits_for_steps_ = true;

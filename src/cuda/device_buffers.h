@@ -61,6 +61,10 @@ public:
     Status read_buffers(std::span<const BufferRangesRead> reads, Scalar as, cudaStream_t stream) const;
     /// Backend::move_buffers: every buffer's batches as in move(), one wait in all.
     Status move_buffers(std::span<const BufferMoves> moves, cudaStream_t stream);
+    /// Backend::copy_patterns: the copies and their patterns' moves in one table (through the
+    /// upload ring), one launch per buffer (both halves), in stream order without waiting.
+    Status copy_patterns(std::span<const BufferId> ids, uint64_t capacity, std::span<const MovePattern> patterns,
+                         std::span<const PatternCopy> copies, cudaStream_t stream);
     /// Backend::write_ranges: per scratch-full one host-to-device copy and one scatter launch,
     /// in stream order without waiting (`src` may be reused at once).
     Status write_ranges(BufferId id, std::span<const ElementRange> ranges, const void* src, Scalar as,
@@ -93,6 +97,8 @@ private:
     Status ensure_scratch(uint64_t bytes, cudaStream_t stream) const;
     /// Copies `ranges` into the device range table (in stream order, without waiting).
     Status upload_range_table(const std::vector<WordRange>& ranges, cudaStream_t stream) const;
+    /// The same for `bytes` of any table (the device table grows as needed).
+    Status upload_table(const void* data, uint64_t bytes, cudaStream_t stream) const;
     /// The next slot of the upload ring.
     HostSlot& next_upload_slot() const;
 

@@ -76,7 +76,10 @@ Status DeviceBuffers::ensure_scratch(uint64_t bytes, cudaStream_t stream) const 
 }
 
 Status DeviceBuffers::upload_range_table(const std::vector<WordRange>& ranges, cudaStream_t stream) const {
-    const uint64_t bytes = ranges.size() * sizeof(WordRange);
+    return upload_table(ranges.data(), ranges.size() * sizeof(WordRange), stream);
+}
+
+Status DeviceBuffers::upload_table(const void* data, uint64_t bytes, cudaStream_t stream) const {
     if (bytes == 0) return {};
     if (range_table_bytes_ < bytes) {
         CUDA_TRY(cudaStreamSynchronize(stream));  // earlier launches may still read the table
@@ -90,9 +93,42 @@ Status DeviceBuffers::upload_range_table(const std::vector<WordRange>& ranges, c
     HostSlot& slot = next_upload_slot();
     auto staging = slot.acquire(bytes);
     if (!staging) return staging.status();
-    std::memcpy(*staging, ranges.data(), bytes);
+    std::memcpy(*staging, data, bytes);
     CUDA_TRY(cudaMemcpyAsync(range_table_, *staging, bytes, cudaMemcpyHostToDevice, stream));
     return slot.mark(stream);
+}
+
+Status DeviceBuffers::copy_patterns(std::span<const BufferId> ids, uint64_t capacity,
+                                    std::span<const MovePattern> patterns, std::span<const PatternCopy> copies,
+                                    cudaStream_t stream) {
+    // One table: the copies' entries, then every pattern's moves once.
+    Result<PatternTables> tables = pattern_tables(patterns, copies);
+    if (!tables) return tables.status();
+    const std::vector<PatternCopyEntry>& entries = tables->entries;
+    const std::vector<PatternMoveEntry>& moves = tables->moves;
+    for (BufferId id : ids) {
+        const uint64_t half = buffer_info(id).scope == Scope::chain_halves ? capacity : 0;
+        for (size_t k = 0; k < entries.size(); ++k) {
+            HMSM_TRY(check_range(id, entries[k].src + half, tables->src_reach[k]));
+            HMSM_TRY(check_range(id, entries[k].dst + half, tables->dst_reach[k]));
+        }
+    }
+    if (entries.empty() || moves.empty()) return {};
+    const uint64_t entries_bytes = entries.size() * sizeof(PatternCopyEntry);
+    std::vector<std::byte> table(entries_bytes + moves.size() * sizeof(PatternMoveEntry));
+    std::memcpy(table.data(), entries.data(), entries_bytes);
+    std::memcpy(table.data() + entries_bytes, moves.data(), moves.size() * sizeof(PatternMoveEntry));
+    HMSM_TRY(upload_table(table.data(), table.size(), stream));
+    const auto* device_entries = static_cast<const PatternCopyEntry*>(range_table_);
+    const auto* device_moves =
+        reinterpret_cast<const PatternMoveEntry*>(static_cast<const std::byte*>(range_table_) + entries_bytes);
+    for (BufferId id : ids) {
+        const uint32_t words = uint32_t(device_element_bytes(id) / 4);
+        const uint32_t halves = buffer_info(id).scope == Scope::chain_halves ? 2u : 1u;
+        CUDA_TRY(launch_copy_patterns(static_cast<uint32_t*>(bases_[uint32_t(id)]), words, capacity * words, halves,
+                                      device_entries, uint32_t(entries.size()), device_moves, stream));
+    }
+    return {};
 }
 
 Status DeviceBuffers::move(BufferId id, std::span<const ElementMove> moves, cudaStream_t stream) {

@@ -31,6 +31,7 @@ public:
         can.walks_ahead = ahead_ != nullptr;
         can.prefers_path_walk = true;  // as the CUDA backend
         can.grows_on_device = true;
+        can.copies_patterns = true;
         return can;
     }
 
@@ -141,6 +142,29 @@ public:
         return {};
     }
 
+    /// As the CUDA backend (src/cuda/range_transfers.cpp): the same tables, each buffer's
+    /// copies through the kernel's body.
+    Status copy_patterns(std::span<const BufferId> ids, uint64_t capacity,
+                         std::span<const detail::MovePattern> patterns,
+                         std::span<const detail::PatternCopy> copies) override {
+        Result<detail::cuda::PatternTables> tables = detail::cuda::pattern_tables(patterns, copies);
+        if (!tables) return tables.status();
+        for (BufferId id : ids) {
+            const uint64_t half = detail::buffer_info(id).scope == detail::Scope::chain_halves ? capacity : 0;
+            for (size_t k = 0; k < tables->entries.size(); ++k) {
+                HMSM_TRY(check_range(id, tables->entries[k].src + half, tables->src_reach[k]));
+                HMSM_TRY(check_range(id, tables->entries[k].dst + half, tables->dst_reach[k]));
+            }
+        }
+        for (BufferId id : ids) {
+            const uint32_t words = uint32_t(detail::device_element_bytes(id) / 4);
+            detail::cuda::emulate_copy_patterns(reinterpret_cast<uint32_t*>(bytes_[uint32_t(id)].data()), words,
+                                                capacity * words, half_count(id), tables->entries.data(),
+                                                uint32_t(tables->entries.size()), tables->moves.data());
+        }
+        return {};
+    }
+
     /// The range copy's gather into scratch, then the words converted as read() does.
     Status read_ranges(BufferId id, std::span<const detail::ElementRange> ranges, void* dst,
                        detail::Scalar as) const override {
@@ -199,6 +223,9 @@ private:
                                           detail::cuda::RangeCopy::gather);
         detail::cuda::emulate_copy_ranges(buffer, scratch.data(), table.data(), uint32_t(table.size()), words,
                                           detail::cuda::RangeCopy::scatter);
+    }
+    static uint32_t half_count(BufferId id) {
+        return detail::buffer_info(id).scope == detail::Scope::chain_halves ? 2u : 1u;
     }
     void bind() {
 #define HMSM_EMULATION_BIND(name, binding, shape, scope) \
