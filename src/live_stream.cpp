@@ -110,7 +110,7 @@ Result<bool> Simulation::Impl::append_in_place(std::span<const Instance> added) 
         d.instance_origin.push_back({inst.origin, 0.0});
         d.instance_yaw.push_back({std::cos(inst.yaw), std::sin(inst.yaw), 0.0, 0.0});
         offsets.push_back(detail::counts_of(d.models[inst.model]));
-        lod_tracker_.append(uint64_t(id));
+        lod_tracker_.append();
         if (!inst.active) ++paused_count_;
         dirty_instances_.push_back(i);
     }
@@ -245,14 +245,14 @@ Status Simulation::Impl::swap_instance_lists(const std::vector<uint32_t>& remove
         id_index_[uint64_t(instance_ids_[h])] = h;
         d.instance_origin[h] = d.instance_origin[f];
         d.instance_yaw[h] = d.instance_yaw[f];
-        if (lod_tracker_.valid) lod_tracker_.key[h] = lod_tracker_.key[f];
+        lod_tracker_.moved(f, h);
     }
     instances_.resize(kept);
     instance_ids_.resize(kept);
     d.instance_origin.resize(kept);
     d.instance_yaw.resize(kept);
     d.instance_wind.resize(size_t(HMSM_INSTANCE_WIND_VEC4S) * 4 * kept);
-    if (lod_tracker_.valid) lod_tracker_.key.resize(kept);
+    lod_tracker_.resize(kept);
     if (!placed_) detail::relay_groups(d, instances_, fill.holes);  // the placed layout keeps no groups
     instances_changed();
     header_dirty_ = program_dirty_ = true;

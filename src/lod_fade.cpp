@@ -298,6 +298,7 @@ Result<uint64_t> Simulation::Impl::request_lods(std::vector<std::pair<uint32_t, 
             }
             const uint32_t steps = lod_bands_.fade_steps;
             fades_[id] = {instances_[i].model, run_model, steps_done_ + steps, steps};
+            lod_tracker_.fade_started(i);
             fade_ends_at(id, steps_done_ + steps);
             started.push_back(i);
         }

@@ -224,7 +224,7 @@ Status Simulation::Impl::switch_models(const std::vector<std::pair<uint32_t, uin
             offsets.add(i, detail::counts_of(data_->models[model]) - detail::counts_of(data_->models[instances_[i].model]));
             instances_[i].model = model;
             instances_[i].level = lod_models_[model].level;
-            lod_tracker_.examine_next(i, uint64_t(instance_ids_[i]));
+            lod_tracker_.examine_next(i);
         }
         detail::relay_groups(*data_, instances_, switched);
     } else if (!in_place) {

@@ -5,7 +5,11 @@
 // instances whose travel came, so a moving viewer costs in proportion to the instances near a
 // band edge, not to the scene. The queue keeps its entries in buckets of a metre of travel (a
 // binary heap over half a million trees cost a cache miss per level of every pop: about 8 ms
-// a frame in the open-world bench).
+// a frame in the open-world bench). Entries name instances by index, not id (a lookup of the id
+// per entry was a third of update_lod): an entry is live while its key is the one `key` holds
+// for its index; a swap removal queues the instance it moves again under its new index, and
+// whatever entry a later instance at an old index inherits at most examines that instance early,
+// which changes nothing but the work.
 #pragma once
 
 #include <hmsm/types.h>
@@ -19,10 +23,10 @@
 
 namespace hmsm::detail {
 
-/// An instance (by id) to examine once the travel reaches `key`.
+/// An instance (by index) to examine once the travel reaches `key`.
 struct TravelEntry {
     double key = 0.0;
-    uint64_t id = 0;
+    uint32_t index = 0;
 };
 
 /// Entries by key, in buckets of kBucketMetres of travel: a push costs O(log buckets), taking
@@ -81,6 +85,9 @@ struct LodTracker {
     bool valid = false;
     /// Per instance (by index): the key of its live entry; entries whose key differs are stale.
     std::vector<double> key;
+    /// Per instance (by index): 0 where it certainly has no fade, so that update_lod looks up
+    /// only the others' fades (set when a fade starts, cleared when a lookup finds none).
+    std::vector<uint8_t> may_fade;
     TravelQueue queue;
     double travelled = 0.0;   // the viewer's travel summed over the calls since the queue was built
     Vec3 viewer{0.0};
@@ -89,20 +96,41 @@ struct LodTracker {
     void invalidate() {
         valid = false;
         key.clear();
+        may_fade.clear();
         queue.clear();
     }
-    void push(double at, uint64_t id) { queue.push({at, id}); }
-    /// Instance `index` (id `id`) is examined at the next call (added, or switched by hand).
-    void examine_next(uint32_t index, uint64_t id) {
+    void push(double at, uint32_t index) { queue.push({at, index}); }
+    /// Whether `e` is the live entry of its instance (`count` instances now).
+    bool live(const TravelEntry& e, size_t count) const { return e.index < count && key[e.index] == e.key; }
+    /// Instance `index` is examined at the next call (added, or switched by hand).
+    void examine_next(uint32_t index) {
         if (!valid) return;
         key[index] = -std::numeric_limits<double>::infinity();
-        push(key[index], id);
+        push(key[index], index);
     }
-    /// An instance appended with id `id`.
-    void append(uint64_t id) {
+    /// An instance appended at the end.
+    void append() {
         if (!valid) return;
         key.push_back(-std::numeric_limits<double>::infinity());
-        push(key.back(), id);
+        may_fade.push_back(0);
+        push(key.back(), uint32_t(key.size() - 1));
+    }
+    /// A swap removal moved the instance at `from` to `to`: it keeps its key under its new index.
+    void moved(uint32_t from, uint32_t to) {
+        if (!valid) return;
+        key[to] = key[from];
+        may_fade[to] = may_fade[from];
+        push(key[to], to);
+    }
+    /// The instances past `count` were removed.
+    void resize(size_t count) {
+        if (!valid) return;
+        key.resize(count);
+        may_fade.resize(count);
+    }
+    /// Instance `index` started a fade.
+    void fade_started(uint32_t index) {
+        if (valid) may_fade[index] = 1;
     }
 };
 

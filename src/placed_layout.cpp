@@ -137,7 +137,7 @@ Result<bool> Simulation::Impl::append_placed(std::span<const Instance> added) {
         if (!ids_ascending_) id_index_.emplace(uint64_t(id), i);
         d.instance_origin.push_back({inst.origin, 0.0});
         d.instance_yaw.push_back({std::cos(inst.yaw), std::sin(inst.yaw), 0.0, 0.0});
-        lod_tracker_.append(uint64_t(id));
+        lod_tracker_.append();
         if (inst.active) placed_list_.insert(i, inst.model, placements_[i]);
         else ++paused_count_;
         dirty_instances_.push_back(i);
@@ -281,7 +281,7 @@ Result<bool> Simulation::Impl::switch_placed(const std::vector<std::pair<uint32_
             placed_list_.erase(i);
             placed_list_.insert(i, model, slots[k]);
         }
-        lod_tracker_.examine_next(i, uint64_t(instance_ids_[i]));
+        lod_tracker_.examine_next(i);
     }
     offsets_valid_ = false;
     d.groups.clear();

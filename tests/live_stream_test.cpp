@@ -88,12 +88,12 @@ TEST(TravelQueue, TakesEveryEntryOnceItsTravelCame) {
                            : id % 89 == 0 ? std::numeric_limits<double>::infinity()
                                           : spread(rng);
         keys.push_back(key);
-        queue.push({key, id});
+        queue.push({key, uint32_t(id)});
     }
     std::vector<int> taken(keys.size(), 0);
     for (double t = -1.0; t <= 450.0; t += 0.37) {
         queue.take_until(t, [&](const detail::TravelEntry& e) {
-            ++taken[e.id];
+            ++taken[e.index];
             EXPECT_LE(e.key, t);
         });
         for (size_t id = 0; id < keys.size(); ++id)
