@@ -132,7 +132,7 @@ const std::vector<double>& Simulation::Impl::subtree_extent(uint32_t model) cons
 
 
 double Simulation::Impl::fade_word(uint32_t index) const {
-    if (fades_.empty()) return 0.0;
+    if (fades_.empty() || (lod_tracker_.valid && lod_tracker_.may_fade[index] == 0)) return 0.0;
     auto fade = fades_.find(uint64_t(instance_ids_[index]));
     if (fade == fades_.end() || instances_[index].model != fade->second.from_model) return 0.0;
     const uint64_t end = fade->second.end_step & HMSM_FADE_END_MASK;
@@ -184,6 +184,7 @@ Result<std::vector<uint8_t>> Simulation::Impl::fades_at_rest(const std::vector<u
         }
         std::vector<V> state(size_t(total * 4));
         HMSM_TRY(backend_->read_ranges(BufferId::chain_state, ranges, state.data(), scalar));
+        std::unordered_map<uint64_t, std::vector<uint8_t>> folded_of;  // by (model, target): few a call
         size_t k = 0;         // indices ascend, and so do their runs
         uint64_t packed = 0;  // the run's first chain in state
         for (size_t j = 0; j < runs.size(); packed += ranges[j].count, ++j) {
@@ -192,10 +193,12 @@ Result<std::vector<uint8_t>> Simulation::Impl::fades_at_rest(const std::vector<u
             for (uint32_t i = r.first; i < r.end; ++i, ++k) {
                 const LodFade& fade = fades_.at(uint64_t(instance_ids_[i]));
                 const uint32_t model = instances_[i].model;
-                const std::vector<uint8_t> folded =
-                    folded_chains(lod_models_[model].source_chain, lod_models_[fade.target_model].source_chain);
+                auto [folded, made] = folded_of.try_emplace((uint64_t(model) << 32) | fade.target_model);
+                if (made)
+                    folded->second = folded_chains(lod_models_[model].source_chain,
+                                                   lod_models_[fade.target_model].source_chain);
                 const double d = deflection_bound(state.data() + 4 * (packed + chain_of(i) - first), hierarchies_[model],
-                                                  folded, subtree_extent(model));
+                                                  folded->second, subtree_extent(model));
                 at_rest[k] = d <= lod_bands_.fade_bound_m;
             }
         }
