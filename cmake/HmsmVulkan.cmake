@@ -77,9 +77,10 @@ set(_hmsm_glsl_dir "${CMAKE_CURRENT_SOURCE_DIR}/shaders/glsl")
 set(_hmsm_spirv_dir "${CMAKE_CURRENT_BINARY_DIR}/hmsm_spirv")
 file(MAKE_DIRECTORY "${_hmsm_spirv_dir}")
 set(_hmsm_spirv_headers "")
-# copy_bandwidth and copy_ranges are no passes: the device copy `hmsm bench` measures its
-# roofline with, and the range copies of the transfers (src/vulkan/range_copy.h).
-foreach(pass IN LISTS HMSM_PASSES ITEMS copy_bandwidth copy_ranges)
+# copy_bandwidth, copy_ranges and copy_patterns are no passes: the device copy `hmsm bench`
+# measures its roofline with, and the range and pattern copies of the transfers
+# (src/vulkan/range_copy.h).
+foreach(pass IN LISTS HMSM_PASSES ITEMS copy_bandwidth copy_ranges copy_patterns)
   set(_out "${_hmsm_spirv_dir}/${pass}.h")
   add_custom_command(
     OUTPUT "${_out}"

@@ -12,6 +12,7 @@
 #include <iterator>
 #include <map>
 #include <span>
+#include <string>
 #include <string_view>
 #include <vector>
 
@@ -230,6 +231,60 @@ std::vector<const MoveBatches*> plan_buffer_moves(std::span<const BufferMoves> m
         if (!plans[k]) plans[k] = &storage.emplace_back(plan_move_batches(moves[k].moves, scratch_elements));
     }
     return plans;
+}
+
+/// The tables a device backend expands Backend::copy_patterns from: an entry per copy and every
+/// pattern's moves once, and per entry the elements its pattern reaches from its src and from
+/// its dst (the ranges a backend checks).
+struct PatternTables {
+    struct Entry {
+        uint64_t src = 0, dst = 0;
+        uint32_t first_move = 0, move_count = 0;
+    };
+    std::vector<Entry> entries;
+    std::vector<ElementMove> moves;
+    std::vector<uint64_t> src_reach, dst_reach;
+};
+
+inline Result<PatternTables> pattern_tables(std::span<const MovePattern> patterns, std::span<const PatternCopy> copies) {
+    PatternTables t;
+    std::vector<uint32_t> first_move;
+    std::vector<uint64_t> src_reach, dst_reach;
+    for (const MovePattern& p : patterns) {
+        first_move.push_back(uint32_t(t.moves.size()));
+        uint64_t src = 0, dst = 0;
+        for (const ElementMove& m : p.moves) {
+            src = std::max(src, m.src + m.count);
+            dst = std::max(dst, m.dst + m.count);
+            t.moves.push_back(m);
+        }
+        src_reach.push_back(src);
+        dst_reach.push_back(dst);
+    }
+    for (const PatternCopy& c : copies) {
+        if (c.pattern >= patterns.size())
+            return Status{ErrorCode::internal, "copy_patterns: pattern " + std::to_string(c.pattern) + " of " +
+                                                   std::to_string(patterns.size())};
+        t.entries.push_back({c.src, c.dst, first_move[c.pattern], uint32_t(patterns[c.pattern].moves.size())});
+        t.src_reach.push_back(src_reach[c.pattern]);
+        t.dst_reach.push_back(dst_reach[c.pattern]);
+    }
+    return t;
+}
+
+/// Checks every entry of `t` against `check_range(first, count)` in each buffer of `ids` (both
+/// halves of a ping-pong buffer, the second from element `capacity` on).
+template <class CheckRange>
+Status check_pattern_ranges(const PatternTables& t, std::span<const BufferId> ids, uint64_t capacity,
+                            CheckRange&& check_range) {
+    for (BufferId id : ids) {
+        const uint64_t half = buffer_info(id).scope == Scope::chain_halves ? capacity : 0;
+        for (size_t k = 0; k < t.entries.size(); ++k) {
+            HMSM_TRY(check_range(id, t.entries[k].src + half, t.src_reach[k]));
+            HMSM_TRY(check_range(id, t.entries[k].dst + half, t.dst_reach[k]));
+        }
+    }
+    return {};
 }
 
 }  // namespace hmsm::detail

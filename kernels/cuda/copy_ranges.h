@@ -10,11 +10,9 @@
 
 #include <cstdint>
 #ifndef __CUDACC__  // the host side (C++20); kernels compile as C++17
-#include "../../src/backend.h"
+#include "../../src/element_moves.h"
 
-#include <algorithm>
 #include <span>
-#include <string>
 #include <vector>
 #endif
 
@@ -56,6 +54,10 @@ struct PatternCopyEntry {
 struct PatternMoveEntry {
     uint64_t src = 0, dst = 0, count = 0;
 };
+#ifndef __CUDACC__
+static_assert(sizeof(PatternCopyEntry) == sizeof(PatternTables::Entry) && sizeof(PatternMoveEntry) == sizeof(ElementMove),
+              "the host's pattern tables are copied to the device as they are");
+#endif
 
 /// The words of copy `entry` in `buffer` (elements of `words_per_element` words), taken by
 /// threads `thread`, `thread + threads`, ... of each of its moves in turn.
@@ -84,40 +86,6 @@ inline uint64_t append_word_ranges(std::vector<WordRange>& out, std::span<const 
     return total;
 }
 
-/// The device tables of Backend::copy_patterns: an entry per copy and every pattern's moves
-/// once, and per entry the elements its pattern reaches from its src and from its dst (the
-/// ranges a backend checks).
-struct PatternTables {
-    std::vector<PatternCopyEntry> entries;
-    std::vector<PatternMoveEntry> moves;
-    std::vector<uint64_t> src_reach, dst_reach;
-};
-
-inline Result<PatternTables> pattern_tables(std::span<const MovePattern> patterns, std::span<const PatternCopy> copies) {
-    PatternTables t;
-    std::vector<uint32_t> first_move;
-    std::vector<uint64_t> src_reach, dst_reach;
-    for (const MovePattern& p : patterns) {
-        first_move.push_back(uint32_t(t.moves.size()));
-        uint64_t src = 0, dst = 0;
-        for (const ElementMove& m : p.moves) {
-            src = std::max(src, m.src + m.count);
-            dst = std::max(dst, m.dst + m.count);
-            t.moves.push_back({m.src, m.dst, m.count});
-        }
-        src_reach.push_back(src);
-        dst_reach.push_back(dst);
-    }
-    for (const PatternCopy& c : copies) {
-        if (c.pattern >= patterns.size())
-            return Status{ErrorCode::internal, "copy_patterns: pattern " + std::to_string(c.pattern) + " of " +
-                                                   std::to_string(patterns.size())};
-        t.entries.push_back({c.src, c.dst, first_move[c.pattern], uint32_t(patterns[c.pattern].moves.size())});
-        t.src_reach.push_back(src_reach[c.pattern]);
-        t.dst_reach.push_back(dst_reach[c.pattern]);
-    }
-    return t;
-}
 #endif
 
 /// Enqueues one launch copying every word of `ranges` (device memory, range_count entries, `total`

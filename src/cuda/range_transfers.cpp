@@ -104,20 +104,14 @@ Status DeviceBuffers::copy_patterns(std::span<const BufferId> ids, uint64_t capa
     // One table: the copies' entries, then every pattern's moves once.
     Result<PatternTables> tables = pattern_tables(patterns, copies);
     if (!tables) return tables.status();
-    const std::vector<PatternCopyEntry>& entries = tables->entries;
-    const std::vector<PatternMoveEntry>& moves = tables->moves;
-    for (BufferId id : ids) {
-        const uint64_t half = buffer_info(id).scope == Scope::chain_halves ? capacity : 0;
-        for (size_t k = 0; k < entries.size(); ++k) {
-            HMSM_TRY(check_range(id, entries[k].src + half, tables->src_reach[k]));
-            HMSM_TRY(check_range(id, entries[k].dst + half, tables->dst_reach[k]));
-        }
-    }
-    if (entries.empty() || moves.empty()) return {};
-    const uint64_t entries_bytes = entries.size() * sizeof(PatternCopyEntry);
-    std::vector<std::byte> table(entries_bytes + moves.size() * sizeof(PatternMoveEntry));
-    std::memcpy(table.data(), entries.data(), entries_bytes);
-    std::memcpy(table.data() + entries_bytes, moves.data(), moves.size() * sizeof(PatternMoveEntry));
+    HMSM_TRY(check_pattern_ranges(*tables, ids, capacity,
+                                  [&](BufferId id, uint64_t first, uint64_t count) { return check_range(id, first, count); }));
+    const uint64_t entry_count = tables->entries.size();
+    if (entry_count == 0 || tables->moves.empty()) return {};
+    const uint64_t entries_bytes = entry_count * sizeof(PatternCopyEntry);
+    std::vector<std::byte> table(entries_bytes + tables->moves.size() * sizeof(PatternMoveEntry));
+    std::memcpy(table.data(), tables->entries.data(), entries_bytes);
+    std::memcpy(table.data() + entries_bytes, tables->moves.data(), tables->moves.size() * sizeof(PatternMoveEntry));
     HMSM_TRY(upload_table(table.data(), table.size(), stream));
     const auto* device_entries = static_cast<const PatternCopyEntry*>(range_table_);
     const auto* device_moves =
@@ -126,7 +120,7 @@ Status DeviceBuffers::copy_patterns(std::span<const BufferId> ids, uint64_t capa
         const uint32_t words = uint32_t(device_element_bytes(id) / 4);
         const uint32_t halves = buffer_info(id).scope == Scope::chain_halves ? 2u : 1u;
         CUDA_TRY(launch_copy_patterns(static_cast<uint32_t*>(bases_[uint32_t(id)]), words, capacity * words, halves,
-                                      device_entries, uint32_t(entries.size()), device_moves, stream));
+                                      device_entries, uint32_t(entry_count), device_moves, stream));
     }
     return {};
 }

@@ -3,6 +3,7 @@
 #include "pipelines.h"
 #include "vk_error.h"
 
+#include "hmsm_spirv/copy_patterns.h"
 #include "hmsm_spirv/copy_ranges.h"
 
 #include <algorithm>
@@ -17,6 +18,10 @@ constexpr uint32_t kBindings = 3;             // data, packed, ranges
 struct CopyConstants {
     uint32_t first_range, range_count, packed_begin, words, gather;
 };
+struct PatternConstants {
+    uint32_t first_entry, entry_count, first_move, words_per_element, half_words;
+};
+static_assert(sizeof(PatternConstants) == sizeof(CopyConstants), "one push-constant range serves both");
 
 }  // namespace
 
@@ -24,6 +29,7 @@ RangeCopier::~RangeCopier() {
     const VolkDeviceTable& vk = device_.vk();
     VkDevice dev = device_.handle();
     if (pipeline_) vk.vkDestroyPipeline(dev, pipeline_, nullptr);
+    if (patterns_pipeline_) vk.vkDestroyPipeline(dev, patterns_pipeline_, nullptr);
     if (layout_) vk.vkDestroyPipelineLayout(dev, layout_, nullptr);
     if (pool_) vk.vkDestroyDescriptorPool(dev, pool_, nullptr);
     if (set_layout_) vk.vkDestroyDescriptorSetLayout(dev, set_layout_, nullptr);
@@ -44,6 +50,9 @@ Result<std::unique_ptr<RangeCopier>> RangeCopier::create(const Device& device) {
     auto pipeline = compute_pipeline(device, c->layout_, hmsm_spirv_copy_ranges);
     if (!pipeline) return pipeline.status();
     c->pipeline_ = *pipeline;
+    auto patterns = compute_pipeline(device, c->layout_, hmsm_spirv_copy_patterns);
+    if (!patterns) return patterns.status();
+    c->patterns_pipeline_ = *patterns;
     return c;
 }
 
@@ -86,14 +95,12 @@ Status RangeCopier::prepare(uint64_t ranges, uint32_t dispatches) {
     return {};
 }
 
-Status RangeCopier::record(VkCommandBuffer cmd, const Buffer& data, const Buffer& packed,
-                           std::span<const WordSpan> ranges, bool gather) {
-    if (ranges.empty()) return {};
+Result<uint32_t> RangeCopier::append_rows(VkCommandBuffer cmd, const void* rows, uint64_t count) {
     const VolkDeviceTable& vk = device_.vk();
-    const VkDeviceSize first = table_used_ * sizeof(WordSpan), bytes = ranges.size_bytes();
+    const VkDeviceSize first = table_used_ * sizeof(WordSpan), bytes = count * sizeof(WordSpan);
     if (first + bytes > table_prepared_)
-        return {ErrorCode::internal, "vulkan: range copy table smaller than prepared"};
-    std::memcpy(static_cast<std::byte*>(table_host_.mapped()) + first, ranges.data(), bytes);
+        return Status{ErrorCode::internal, "vulkan: range copy table smaller than prepared"};
+    std::memcpy(static_cast<std::byte*>(table_host_.mapped()) + first, rows, bytes);
     if (table_used_ == 0) {
         // The whole prepared table in one copy ahead of the first dispatch: the host has written
         // every entry by the time the submission runs.
@@ -105,7 +112,13 @@ Status RangeCopier::record(VkCommandBuffer cmd, const Buffer& data, const Buffer
         vk.vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, 0, 1,
                                 &table_ready, 0, nullptr, 0, nullptr);
     }
+    const uint32_t at = uint32_t(table_used_);
+    table_used_ += count;
+    return at;
+}
 
+Result<VkDescriptorSet> RangeCopier::descriptor_set(const Buffer& data, const Buffer& packed) {
+    const VolkDeviceTable& vk = device_.vk();
     VkDescriptorSet set = VK_NULL_HANDLE;
     VkDescriptorSetAllocateInfo allocate{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO};
     allocate.descriptorPool = pool_;
@@ -120,18 +133,50 @@ Status RangeCopier::record(VkCommandBuffer cmd, const Buffer& data, const Buffer
     write.descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
     write.pBufferInfo = buffers;
     vk.vkUpdateDescriptorSets(device_.handle(), 1, &write, 0, nullptr);
+    return set;
+}
 
+Status RangeCopier::record(VkCommandBuffer cmd, const Buffer& data, const Buffer& packed,
+                           std::span<const WordSpan> ranges, bool gather) {
+    if (ranges.empty()) return {};
+    const VolkDeviceTable& vk = device_.vk();
+    Result<uint32_t> first = append_rows(cmd, ranges.data(), ranges.size());
+    if (!first) return first.status();
+    Result<VkDescriptorSet> set = descriptor_set(data, packed);
+    if (!set) return set.status();
     const uint64_t words = uint64_t(ranges.back().packed) + ranges.back().words - ranges.front().packed;
-    const CopyConstants constants{uint32_t(table_used_), uint32_t(ranges.size()), ranges.front().packed,
-                                  uint32_t(words), gather ? 1u : 0u};
+    const CopyConstants constants{*first, uint32_t(ranges.size()), ranges.front().packed, uint32_t(words),
+                                  gather ? 1u : 0u};
     vk.vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline_);
-    vk.vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, layout_, 0, 1, &set, 0, nullptr);
+    vk.vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, layout_, 0, 1, &*set, 0, nullptr);
     vk.vkCmdPushConstants(cmd, layout_, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof constants, &constants);
     const uint64_t needed = (words + kCopyWorkgroupSize - 1) / kCopyWorkgroupSize;
     const uint32_t groups = uint32_t(
         std::clamp<uint64_t>(needed, 1, std::min<uint64_t>(65535, device_.limits().max_workgroup_count[0])));
     vk.vkCmdDispatch(cmd, groups, 1, 1);
-    table_used_ += ranges.size();
+    ++dispatches_;
+    return {};
+}
+
+Status RangeCopier::record_patterns(VkCommandBuffer cmd, const Buffer& data, std::span<const PatternRow> entries,
+                                    std::span<const PatternRow> moves, uint32_t words_per_element,
+                                    uint32_t half_words, uint32_t halves) {
+    if (entries.empty() || moves.empty()) return {};
+    const VolkDeviceTable& vk = device_.vk();
+    Result<uint32_t> first_entry = append_rows(cmd, entries.data(), entries.size());
+    if (!first_entry) return first_entry.status();
+    Result<uint32_t> first_move = append_rows(cmd, moves.data(), moves.size());
+    if (!first_move) return first_move.status();
+    Result<VkDescriptorSet> set = descriptor_set(data, data);  // binding 1 is not read
+    if (!set) return set.status();
+    const PatternConstants constants{*first_entry, uint32_t(entries.size()), *first_move, words_per_element,
+                                     half_words};
+    vk.vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, patterns_pipeline_);
+    vk.vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, layout_, 0, 1, &*set, 0, nullptr);
+    vk.vkCmdPushConstants(cmd, layout_, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof constants, &constants);
+    const uint32_t groups = uint32_t(
+        std::clamp<uint64_t>(entries.size(), 1, std::min<uint64_t>(65535, device_.limits().max_workgroup_count[0])));
+    vk.vkCmdDispatch(cmd, groups, halves, 1);
     ++dispatches_;
     return {};
 }

@@ -27,6 +27,13 @@ namespace hmsm::detail::vk {
 struct WordSpan {
     uint32_t packed = 0, words = 0, source = 0, target = 0;
 };
+/// One row of a pattern copy's table (shaders/glsl/copy_patterns.comp), in elements: an entry
+/// (src, dst, first move, move count) or a move (src, dst, count, 0). As large as a WordSpan,
+/// so that both kinds share the table.
+struct PatternRow {
+    uint32_t x = 0, y = 0, z = 0, w = 0;
+};
+static_assert(sizeof(PatternRow) == sizeof(WordSpan));
 
 class RangeCopier {
 public:
@@ -42,16 +49,29 @@ public:
     Status record(VkCommandBuffer cmd, const Buffer& data, const Buffer& packed, std::span<const WordSpan> ranges,
                   bool gather);
 
+    /// Records a dispatch of copy_patterns.comp over `data`: `entries` copies, their moves
+    /// `moves` (PatternRow), each in `halves` halves `half_words` words apart, elements of
+    /// `words_per_element` words. prepare() counts the entries and moves as ranges.
+    Status record_patterns(VkCommandBuffer cmd, const Buffer& data, std::span<const PatternRow> entries,
+                           std::span<const PatternRow> moves, uint32_t words_per_element, uint32_t half_words,
+                           uint32_t halves);
+
     /// Dispatches recorded so far (a test hook).
     uint64_t dispatches() const { return dispatches_; }
 
 private:
     explicit RangeCopier(const Device& device) : device_(device) {}
+    /// Appends `rows` to the table (the first append of a prepare() also records the table's
+    /// copy to the device); returns the index of their first row.
+    Result<uint32_t> append_rows(VkCommandBuffer cmd, const void* rows, uint64_t count);
+    /// A descriptor set of `data`, `packed` and the table.
+    Result<VkDescriptorSet> descriptor_set(const Buffer& data, const Buffer& packed);
 
     const Device& device_;
     VkDescriptorSetLayout set_layout_ = VK_NULL_HANDLE;
     VkPipelineLayout layout_ = VK_NULL_HANDLE;
     VkPipeline pipeline_ = VK_NULL_HANDLE;
+    VkPipeline patterns_pipeline_ = VK_NULL_HANDLE;  // copy_patterns.comp, the same layout
     VkDescriptorPool pool_ = VK_NULL_HANDLE;
     uint32_t pool_sets_ = 0;
     Buffer table_host_;    // the WordSpans of the dispatches since prepare(), written by the host

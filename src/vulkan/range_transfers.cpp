@@ -159,6 +159,45 @@ Status VulkanBackend::move_buffers(std::span<const BufferMoves> moves) {
     return device_->take_validation_messages();
 }
 
+Status VulkanBackend::copy_patterns(std::span<const BufferId> ids, uint64_t capacity,
+                                    std::span<const MovePattern> patterns, std::span<const PatternCopy> copies) {
+    if (!pattern_copies_ || holding_back() || record_target_ || !copies_by_shader(ids))
+        return Backend::copy_patterns(ids, capacity, patterns, copies);
+    HMSM_TRY(check_device_lost());
+    if (!capabilities().reshapes_in_place)
+        return {ErrorCode::unsupported, "vulkan: a scene split into windows cannot move state in place"};
+    Result<PatternTables> tables = pattern_tables(patterns, copies);
+    if (!tables) return tables.status();
+    HMSM_TRY(check_pattern_ranges(*tables, ids, capacity,
+                                  [&](BufferId id, uint64_t first, uint64_t count) { return check_range(id, first, count); }));
+    if (tables->entries.empty() || tables->moves.empty()) return {};
+    // Elements fit 32 bits: copies_by_shader holds every buffer's words within them.
+    std::vector<PatternRow> entries, moves;
+    for (const PatternTables::Entry& e : tables->entries)
+        entries.push_back({uint32_t(e.src), uint32_t(e.dst), e.first_move, e.move_count});
+    for (const ElementMove& m : tables->moves) moves.push_back({uint32_t(m.src), uint32_t(m.dst), uint32_t(m.count), 0});
+    HMSM_TRY(submit_held_back());
+    HMSM_TRY(range_copier_->prepare(ids.size() * (entries.size() + moves.size()), uint32_t(ids.size())));
+    Status recorded;
+    HMSM_TRY(transfer_->submit([&](VkCommandBuffer cmd) {
+        auto after_copies = [&] {
+            barrier_after_all_writes(*device_, cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
+                                     VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT);
+        };
+        after_copies();
+        for (BufferId id : ids) {
+            const auto words = uint32_t(device_element_bytes(id) / 4);
+            const uint32_t halves = buffer_info(id).scope == Scope::chain_halves ? 2u : 1u;
+            if (recorded.ok())
+                recorded = range_copier_->record_patterns(cmd, buffers_[uint32_t(id)], entries, moves, words,
+                                                          uint32_t(capacity * words), halves);
+        }
+        after_copies();
+    }));
+    HMSM_TRY(recorded);
+    return device_->take_validation_messages();
+}
+
 bool VulkanBackend::copies_by_shader(std::span<const BufferId> ids) const {
     if (!batch_transfers_ || !range_copier_) return false;
     for (BufferId id : ids)

@@ -65,6 +65,10 @@ public:
     Status write_buffers(std::span<const BufferRangesWrite> writes, Scalar as) override;
     /// Every buffer's moves in one submission (held back: buffer by buffer, as move_elements).
     Status move_buffers(std::span<const BufferMoves> moves) override;
+    /// Through copy_patterns.comp (range_copy.h) in one submission; held back or recorded into
+    /// an engine's command buffer, or where the range copies are off, the default.
+    Status copy_patterns(std::span<const BufferId> ids, uint64_t capacity, std::span<const MovePattern> patterns,
+                         std::span<const PatternCopy> copies) override;
     void set_profiling(bool enabled) override { profiling_ = enabled; }
     /// Once the simulation has recorded steps into an engine's command buffer, an instance
     /// change within the capacity holds its writes, moves and at-rest runs back for the next
@@ -131,6 +135,7 @@ public:
         // A listed dispatch reads state anywhere, so only within one window (windows.h).
         can.runs_listed_groups = can.reshapes_in_place;
         can.reads_async = true;
+        can.copies_patterns = can.reshapes_in_place && range_copier_ && batch_transfers_ && pattern_copies_;
         return can;
     }
 
@@ -222,6 +227,7 @@ private:
     std::array<uint64_t, kBufferCount> element_counts_{};  // logical (read/write) counts
     Buffer move_scratch_;  // move_elements(), grown on demand
     bool batch_transfers_ = batch_transfers_enabled();  // element_moves.h
+    bool pattern_copies_ = pattern_copies_enabled();    // element_moves.h
     uint64_t window_bytes_ = 0;  // vulkan_set_window_bytes() when the backend was made; 0: none
     uint64_t window_alignment_ = 0;
     std::unique_ptr<WindowPlan> plan_;

@@ -147,20 +147,21 @@ public:
     Status copy_patterns(std::span<const BufferId> ids, uint64_t capacity,
                          std::span<const detail::MovePattern> patterns,
                          std::span<const detail::PatternCopy> copies) override {
-        Result<detail::cuda::PatternTables> tables = detail::cuda::pattern_tables(patterns, copies);
+        Result<detail::PatternTables> tables = detail::pattern_tables(patterns, copies);
         if (!tables) return tables.status();
-        for (BufferId id : ids) {
-            const uint64_t half = detail::buffer_info(id).scope == detail::Scope::chain_halves ? capacity : 0;
-            for (size_t k = 0; k < tables->entries.size(); ++k) {
-                HMSM_TRY(check_range(id, tables->entries[k].src + half, tables->src_reach[k]));
-                HMSM_TRY(check_range(id, tables->entries[k].dst + half, tables->dst_reach[k]));
-            }
-        }
+        HMSM_TRY(detail::check_pattern_ranges(*tables, ids, capacity, [&](BufferId id, uint64_t first, uint64_t count) {
+            return check_range(id, first, count);
+        }));
+        // The host tables as the device reads them (the same layout: copy_ranges.h).
+        std::vector<detail::cuda::PatternCopyEntry> entries(tables->entries.size());
+        std::vector<detail::cuda::PatternMoveEntry> moves(tables->moves.size());
+        std::memcpy(entries.data(), tables->entries.data(), entries.size() * sizeof entries[0]);
+        std::memcpy(moves.data(), tables->moves.data(), moves.size() * sizeof moves[0]);
         for (BufferId id : ids) {
             const uint32_t words = uint32_t(detail::device_element_bytes(id) / 4);
             detail::cuda::emulate_copy_patterns(reinterpret_cast<uint32_t*>(bytes_[uint32_t(id)].data()), words,
-                                                capacity * words, half_count(id), tables->entries.data(),
-                                                uint32_t(tables->entries.size()), tables->moves.data());
+                                                capacity * words, half_count(id), entries.data(),
+                                                uint32_t(entries.size()), moves.data());
         }
         return {};
     }

@@ -309,6 +309,21 @@ TEST_F(VulkanTest, MovesGoThroughTheRangeCopy) {
     EXPECT_GE(backend.range_copy_dispatches() - before, 2u);
     ASSERT_TRUE(mutable_backend.read(BufferId::chain_force, 0, chains, whole.data(), detail::Scalar::f32).ok());
     EXPECT_EQ(whole, expected);
+
+    // Pattern copies: one dispatch of copy_patterns.comp per buffer, the copies as expanded.
+    ASSERT_TRUE(backend.capabilities().copies_patterns);
+    const detail::ElementMove pattern[] = {{0, 1, 3}, {7, 5, 2}};
+    const detail::MovePattern patterns[] = {{pattern}};
+    const detail::PatternCopy copies[] = {{20, 150, 0}, {40, 170, 0}, {3, 230, 0}};
+    for (const detail::PatternCopy& c : copies)
+        for (const detail::ElementMove& m : pattern)
+            std::copy_n(expected.begin() + 2 * (c.src + m.src), 2 * m.count, expected.begin() + 2 * (c.dst + m.dst));
+    const uint64_t before_patterns = backend.range_copy_dispatches();
+    const BufferId ids[] = {BufferId::chain_force};
+    ASSERT_TRUE(mutable_backend.copy_patterns(ids, 0, patterns, copies).ok());
+    EXPECT_EQ(backend.range_copy_dispatches() - before_patterns, 1u);
+    ASSERT_TRUE(mutable_backend.read(BufferId::chain_force, 0, chains, whole.data(), detail::Scalar::f32).ok());
+    EXPECT_EQ(whole, expected);
 }
 
 }  // namespace
