@@ -70,6 +70,9 @@ Status VulkanBackend::write_ranges(BufferId id, std::span<const ElementRange> ra
     HMSM_TRY(check_device_lost());
     for (const ElementRange& r : ranges) HMSM_TRY(check_range(id, r.first, r.count));
     HMSM_TRY(submit_held_back());
+    const BufferId ids[] = {id};
+    if (range_writes_ && ranges.size() >= kShaderWriteRanges && copies_by_shader(ids))
+        return shader_write(id, ranges, src, as);
     const Shape shape = buffer_info(id).shape;
     const uint64_t element_bytes = device_element_bytes(id), scalar_bytes = as == Scalar::f64 ? 8 : 4;
     const std::vector<VkBufferCopy> regions = buffer_regions(ranges, element_bytes);
@@ -106,6 +109,8 @@ Status VulkanBackend::read_buffers(std::span<const BufferRangesRead> reads, Scal
 
 Status VulkanBackend::write_buffers(std::span<const BufferRangesWrite> writes, Scalar as) {
     bool at_once = device_bytes(writes) <= Transfer::most_staged_bytes();
+    for (const BufferRangesWrite& w : writes)  // many ranges: each buffer through the range copy
+        at_once = at_once && !(range_writes_ && w.ranges.size() >= kShaderWriteRanges);
     for (const BufferRangesWrite& w : writes) at_once = at_once && copies_ranges_at_once(w.ranges, true);
     if (!at_once) return Backend::write_buffers(writes, as);
     HMSM_TRY(check_device_lost());
@@ -192,6 +197,40 @@ Status VulkanBackend::copy_patterns(std::span<const BufferId> ids, uint64_t capa
                 recorded = range_copier_->record_patterns(cmd, buffers_[uint32_t(id)], entries, moves, words,
                                                           uint32_t(capacity * words), halves);
         }
+        after_copies();
+    }));
+    HMSM_TRY(recorded);
+    return device_->take_validation_messages();
+}
+
+Status VulkanBackend::shader_write(BufferId id, std::span<const ElementRange> ranges, const void* src, Scalar as) {
+    // The values back to back into the scratch (one copy command per staging-full), then one
+    // scatter of the range copy: a copy region per range costs microseconds on some drivers.
+    const Shape shape = buffer_info(id).shape;
+    const uint64_t element_bytes = device_element_bytes(id), scalar_bytes = as == Scalar::f64 ? 8 : 4;
+    std::vector<WordSpan> scatter;
+    uint64_t packed = 0;
+    for (const ElementRange& r : ranges) {
+        if (r.count == 0) continue;
+        const auto words = uint32_t(r.count * element_bytes / 4);
+        scatter.push_back({uint32_t(packed), words, 0, uint32_t(r.first * element_bytes / 4)});
+        packed += words;
+    }
+    if (scatter.empty()) return {};
+    HMSM_TRY(ensure_move_scratch(packed * 4));
+    const auto* in = static_cast<const std::byte*>(src);
+    HMSM_TRY(transfer_->upload(move_scratch_, 0, packed * 4, [&](void* staging, VkDeviceSize first_byte, VkDeviceSize bytes) {
+        scalars_to_words(shape, in + first_byte / 4 * scalar_bytes, bytes / 4, staging, as);
+    }));
+    HMSM_TRY(range_copier_->prepare(scatter.size(), 1));
+    Status recorded;
+    HMSM_TRY(transfer_->submit([&](VkCommandBuffer cmd) {
+        auto after_copies = [&] {
+            barrier_after_all_writes(*device_, cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
+                                     VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT);
+        };
+        after_copies();
+        recorded = range_copier_->record(cmd, buffers_[uint32_t(id)], move_scratch_, scatter, false);
         after_copies();
     }));
     HMSM_TRY(recorded);

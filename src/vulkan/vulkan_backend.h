@@ -207,6 +207,8 @@ private:
     /// move_buffers through the range copies: per buffer and batch of its moves
     /// (plan_move_batches), a gather into the scratch and a scatter from it, all in one submission.
     Status shader_moves(std::span<const BufferMoves> moves);
+    /// write_ranges through the scratch and the range copy's scatter (ranges apart, checked).
+    Status shader_write(BufferId id, std::span<const ElementRange> ranges, const void* src, Scalar as);
     /// write() inside a recording: the data goes to the ring, the copy into the command buffer.
     Status stage_write(BufferId id, uint64_t first, uint64_t count, const void* src, Scalar as);
     /// For a write of wind table elements [first, first + count) from `src` that reaches the
@@ -228,6 +230,10 @@ private:
     Buffer move_scratch_;  // move_elements(), grown on demand
     bool batch_transfers_ = batch_transfers_enabled();  // element_moves.h
     bool pattern_copies_ = pattern_copies_enabled();    // element_moves.h
+    /// Writes of at least kShaderWriteRanges ranges go through the range copy's scatter (one
+    /// dispatch) rather than a copy region per range; HMSM_VULKAN_RANGE_WRITES=0 turns it off.
+    static constexpr size_t kShaderWriteRanges = 64;
+    bool range_writes_ = true;
     uint64_t window_bytes_ = 0;  // vulkan_set_window_bytes() when the backend was made; 0: none
     uint64_t window_alignment_ = 0;
     std::unique_ptr<WindowPlan> plan_;

@@ -324,6 +324,24 @@ TEST_F(VulkanTest, MovesGoThroughTheRangeCopy) {
     EXPECT_EQ(backend.range_copy_dispatches() - before_patterns, 1u);
     ASSERT_TRUE(mutable_backend.read(BufferId::chain_force, 0, chains, whole.data(), detail::Scalar::f32).ok());
     EXPECT_EQ(whole, expected);
+
+    // A write of many ranges: one scatter of the range copy instead of a copy region each.
+    const char* writes_off = std::getenv("HMSM_VULKAN_RANGE_WRITES");
+    if (writes_off && std::string_view(writes_off) == "0") return;
+    std::vector<detail::ElementRange> ranges;
+    std::vector<float> values;
+    for (uint64_t e = 1; e + 1 < chains && ranges.size() < 100; e += 2) {
+        ranges.push_back({e, 1});
+        values.insert(values.end(), {float(e), -float(e)});
+        expected[2 * e] = float(e);
+        expected[2 * e + 1] = -float(e);
+    }
+    ASSERT_GE(ranges.size(), 64u);
+    const uint64_t before_writes = backend.range_copy_dispatches();
+    ASSERT_TRUE(mutable_backend.write_ranges(BufferId::chain_force, ranges, values.data(), detail::Scalar::f32).ok());
+    EXPECT_EQ(backend.range_copy_dispatches() - before_writes, 1u);
+    ASSERT_TRUE(mutable_backend.read(BufferId::chain_force, 0, chains, whole.data(), detail::Scalar::f32).ok());
+    EXPECT_EQ(whole, expected);
 }
 
 }  // namespace
