@@ -29,44 +29,58 @@ struct TravelEntry {
     uint32_t index = 0;
 };
 
-/// Entries by key, in buckets of kBucketMetres of travel: a push costs O(log buckets), taking
-/// the entries whose key is at most t costs O(entries taken + those left in t's own bucket).
-/// Entries of key +infinity (an instance no band edge can reach) are not kept.
+/// Entries by key, in buckets of kBucketMetres of travel: a push costs O(1) (a ring of
+/// kRingBuckets buckets from the lowest untaken one; keys past it wait in an ordered overflow
+/// until the ring reaches them), taking the entries whose key is at most t costs O(entries
+/// taken + those left in t's own bucket + buckets passed). Entries of key +infinity (an
+/// instance no band edge can reach) are not kept; keys below the ring (-infinity: the next
+/// call) are taken by the next take_until.
 class TravelQueue {
 public:
     static constexpr double kBucketMetres = 1.0;
+    static constexpr int64_t kRingBuckets = 4096;  // a power of two
     void push(const TravelEntry& e) {
         if (e.key == std::numeric_limits<double>::infinity()) return;
-        buckets_[bucket_of(e.key)].push_back(e);
+        const int64_t bucket = bucket_of(e.key);
+        if (bucket <= base_) due_.push_back(e);  // the next take_until looks at every one of them
+        else if (bucket < base_ + kRingBuckets) ring_[size_t(bucket & (kRingBuckets - 1))].push_back(e);
+        else overflow_[bucket].push_back(e);
         ++size_;
     }
-    /// Calls `take(entry)` for every entry of key <= t and drops it (in no particular order).
+    /// Calls `take(entry)` for every entry of key <= t and drops it (in no particular order);
+    /// `take` must not push. t never decreases between clear()s.
     template <class Take>
     void take_until(double t, Take&& take) {
         const int64_t last = bucket_of(t);
-        while (!buckets_.empty() && buckets_.begin()->first <= last) {
-            auto bucket = buckets_.begin();
-            if (bucket->first < last) {  // every key below t
-                for (const TravelEntry& e : bucket->second) take(e);
-                size_ -= bucket->second.size();
-                buckets_.erase(bucket);
-                continue;
+        // The buckets up to t's become due (t's own may hold keys above t).
+        if (last - base_ >= kRingBuckets) {  // all of the ring at once
+            for (std::vector<TravelEntry>& bucket : ring_) {
+                due_.insert(due_.end(), bucket.begin(), bucket.end());
+                bucket.clear();
             }
-            std::vector<TravelEntry>& entries = bucket->second;  // t's own bucket: keys on both sides
-            size_t kept = 0;
-            for (const TravelEntry& e : entries) {
-                if (e.key <= t) take(e);
-                else entries[kept++] = e;
-            }
-            size_ -= entries.size() - kept;
-            entries.resize(kept);
-            if (kept == 0) buckets_.erase(bucket);
-            break;
+            base_ = last;
         }
+        while (base_ < last) {
+            ++base_;
+            std::vector<TravelEntry>& bucket = ring_[size_t(base_ & (kRingBuckets - 1))];
+            due_.insert(due_.end(), bucket.begin(), bucket.end());
+            bucket.clear();
+        }
+        refill_from_overflow();
+        size_t kept = 0;
+        for (const TravelEntry& e : due_) {
+            if (e.key <= t) take(e);
+            else due_[kept++] = e;
+        }
+        size_ -= due_.size() - kept;
+        due_.resize(kept);
     }
     size_t size() const { return size_; }
     void clear() {
-        buckets_.clear();
+        for (std::vector<TravelEntry>& bucket : ring_) bucket.clear();
+        due_.clear();
+        overflow_.clear();
+        base_ = kLowestBase;
         size_ = 0;
     }
 
@@ -75,7 +89,21 @@ private:
         if (!(key > -1e15)) return std::numeric_limits<int64_t>::min();  // -infinity: the next call
         return int64_t(std::floor(std::min(key, 1e15) / kBucketMetres));
     }
-    std::map<int64_t, std::vector<TravelEntry>> buckets_;
+    /// Overflow buckets the ring now reaches move into it.
+    void refill_from_overflow() {
+        while (!overflow_.empty() && overflow_.begin()->first < base_ + kRingBuckets) {
+            auto first = overflow_.begin();
+            std::vector<TravelEntry>& into =
+                first->first <= base_ ? due_ : ring_[size_t(first->first & (kRingBuckets - 1))];
+            into.insert(into.end(), first->second.begin(), first->second.end());
+            overflow_.erase(first);
+        }
+    }
+    std::vector<std::vector<TravelEntry>> ring_ = std::vector<std::vector<TravelEntry>>(kRingBuckets);
+    static constexpr int64_t kLowestBase = std::numeric_limits<int64_t>::min() / 2;
+    int64_t base_ = kLowestBase;    // buckets <= base_ are due
+    std::vector<TravelEntry> due_;  // entries of buckets <= base_ (their keys may still exceed t)
+    std::map<int64_t, std::vector<TravelEntry>> overflow_;
     size_t size_ = 0;
 };
 

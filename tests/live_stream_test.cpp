@@ -102,6 +102,44 @@ TEST(TravelQueue, TakesEveryEntryOnceItsTravelCame) {
     EXPECT_EQ(queue.size(), 0u) << "only the +infinity keys were never kept";
 }
 
+// The same with keys far past the queue's ring of buckets, entries pushed while the travel
+// goes on (each at a key not below it), jumps of the travel past the whole ring, and a clear()
+// after which the travel starts again from zero.
+TEST(TravelQueue, TakesFarKeysAndLatePushesOnceEach) {
+    std::mt19937 rng(7);
+    for (int round = 0; round < 2; ++round) {
+        detail::TravelQueue queue;
+        if (round == 1) {  // a queue used far ahead, then cleared
+            queue.push({50000.0, 0});
+            queue.take_until(60000.0, [](const detail::TravelEntry&) {});
+            queue.clear();
+        }
+        std::vector<double> keys;
+        std::vector<int> taken;
+        auto push = [&](double key) {
+            keys.push_back(key);
+            taken.push_back(0);
+            queue.push({key, uint32_t(keys.size() - 1)});
+        };
+        std::uniform_real_distribution<double> far(0.0, 30000.0);
+        for (int k = 0; k < 3000; ++k) push(k % 101 == 0 ? -std::numeric_limits<double>::infinity() : far(rng));
+        double t = -1.0;
+        while (t < 31000.0) {
+            t += rng() % 50 == 0 ? 5000.0 : 13.7;  // now and then past the whole ring
+            queue.take_until(t, [&](const detail::TravelEntry& e) {
+                ++taken[e.index];
+                EXPECT_LE(e.key, t);
+            });
+            for (size_t i = 0; i < keys.size(); ++i)
+                ASSERT_EQ(taken[i], keys[i] <= t ? 1 : 0) << "entry " << i << " at travel " << t << ", round " << round;
+            for (int k = 0; k < 5; ++k) push(t + std::uniform_real_distribution<double>(0.0, 9000.0)(rng));
+        }
+        queue.take_until(1e9, [&](const detail::TravelEntry& e) { ++taken[e.index]; });
+        EXPECT_EQ(queue.size(), 0u);
+        for (size_t i = 0; i < keys.size(); ++i) EXPECT_EQ(taken[i], 1) << "entry " << i;
+    }
+}
+
 struct StreamCase {
     BackendKind backend;
     bool reserved;  // room reserved up front (in place throughout) or grown on the way
