@@ -89,15 +89,9 @@ double released_rod_frequency(Exchange exchange) {
     auto sim = Simulation::create(single_tree_scene(test::rod(kRodSegments, kRodLength, kRodRadius)), config);
     EXPECT_TRUE(sim.ok()) << sim.status().message();
     if (!sim.ok()) return 0.0;
-    EXPECT_TRUE((*sim)->step(240).ok());
-    Wind calm = config.wind;
-    calm.profile = WindProfile::none;
-    EXPECT_TRUE((*sim)->set_wind(calm).ok());
-    std::vector<double> top_x;
-    for (int i = 0; i < 720; ++i) {
-        EXPECT_TRUE((*sim)->step(1).ok());
-        top_x.push_back(test::read_output(**sim, Output::node_positions)[3 * kRodSegments]);
-    }
+    std::vector<double> top_x = test::released_record(**sim, 240, 720, [](const Simulation& s) {
+        return test::read_output(s, Output::node_positions)[3 * kRodSegments];
+    });
     double mean = 0.0;  // the sway is measured about its mean
     for (double v : top_x) mean += v / double(top_x.size());
     for (double& v : top_x) v -= mean;

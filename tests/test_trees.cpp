@@ -127,6 +127,25 @@ std::vector<double> read_output(const Simulation& sim, Output output) {
     return values;
 }
 
+std::vector<double> released_record(Simulation& sim, uint32_t bend_steps, uint32_t record_steps,
+                                    const std::function<double(const Simulation&)>& probe) {
+    std::vector<double> record;
+    const Status bent = sim.step(bend_steps);
+    EXPECT_TRUE(bent.ok()) << bent.message();
+    Wind calm = sim.wind();
+    calm.profile = WindProfile::none;
+    const Status calmed = sim.set_wind(calm);
+    EXPECT_TRUE(calmed.ok()) << calmed.message();
+    if (!bent.ok() || !calmed.ok()) return record;
+    for (uint32_t i = 0; i < record_steps; ++i) {
+        const Status stepped = sim.step(1);
+        EXPECT_TRUE(stepped.ok()) << stepped.message();
+        if (!stepped.ok()) break;
+        record.push_back(probe(sim));
+    }
+    return record;
+}
+
 std::vector<uint64_t> first_elements(const Simulation& sim, Output output) {
     std::vector<uint64_t> first{0};
     for (const Instance& inst : sim.instances()) {

@@ -5,6 +5,7 @@
 #include <hmsm/hmsm.h>
 
 #include <cstring>
+#include <functional>
 #include <initializer_list>
 #include <ostream>
 #include <string>
@@ -77,6 +78,12 @@ bool same_bits(const std::vector<std::vector<T>>& a, const std::vector<std::vect
 std::vector<std::vector<float>> every_output(const Simulation& sim);
 /// One output as double; a failed read fails the test.
 std::vector<double> read_output(const Simulation& sim, Output output);
+
+/// A release: `sim` steps `bend_steps` under its wind, the wind calms (WindProfile::none), and
+/// `probe(sim)` is recorded after each of the next `record_steps` steps. A failed step or wind
+/// change fails the test and ends the record there.
+std::vector<double> released_record(Simulation& sim, uint32_t bend_steps, uint32_t record_steps,
+                                    const std::function<double(const Simulation&)>& probe);
 
 /// The coupled dynamics on `backend` with joints and nodes out, at time step dt.
 inline SimulationConfig coupled_config(BackendKind backend = BackendKind::cpu64, double dt = 1.0 / 120.0) {
