@@ -55,7 +55,8 @@ struct PatternMoveEntry {
     uint64_t src = 0, dst = 0, count = 0;
 };
 #ifndef __CUDACC__
-static_assert(sizeof(PatternCopyEntry) == sizeof(PatternTables::Entry) && sizeof(PatternMoveEntry) == sizeof(ElementMove),
+static_assert(sizeof(PatternCopyEntry) == sizeof(PatternTables::Entry) &&
+                  sizeof(PatternMoveEntry) == sizeof(ElementMove),
               "the host's pattern tables are copied to the device as they are");
 #endif
 
@@ -85,7 +86,6 @@ inline uint64_t append_word_ranges(std::vector<WordRange>& out, std::span<const 
     }
     return total;
 }
-
 #endif
 
 /// Enqueues one launch copying every word of `ranges` (device memory, range_count entries, `total`
