@@ -10,6 +10,7 @@
 #include "../device_words.h"
 
 #include <algorithm>
+#include <functional>
 #include <vector>
 
 namespace hmsm::detail::vk {
@@ -185,24 +186,15 @@ Status VulkanBackend::copy_patterns(std::span<const BufferId> ids, uint64_t capa
     for (const ElementMove& m : tables->moves) moves.push_back({uint32_t(m.src), uint32_t(m.dst), uint32_t(m.count), 0});
     HMSM_TRY(submit_held_back());
     HMSM_TRY(range_copier_->prepare(ids.size() * (entries.size() + moves.size()), uint32_t(ids.size())));
-    Status recorded;
-    HMSM_TRY(transfer_->submit([&](VkCommandBuffer cmd) {
-        auto after_copies = [&] {
-            barrier_after_all_writes(*device_, cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
-                                     VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT);
-        };
-        after_copies();
-        for (BufferId id : ids) {
+    return submit_copy_dispatches([&](VkCommandBuffer cmd, const std::function<void()>&) -> Status {
+        for (BufferId id : ids) {  // the buffers are apart: no barrier between them
             const auto words = uint32_t(device_element_bytes(id) / 4);
             const uint32_t halves = buffer_info(id).scope == Scope::chain_halves ? 2u : 1u;
-            if (recorded.ok())
-                recorded = range_copier_->record_patterns(cmd, buffers_[uint32_t(id)], entries, moves, words,
-                                                          uint32_t(capacity * words), halves);
+            HMSM_TRY(range_copier_->record_patterns(cmd, buffers_[uint32_t(id)], entries, moves, words,
+                                                    uint32_t(capacity * words), halves));
         }
-        after_copies();
-    }));
-    HMSM_TRY(recorded);
-    return device_->take_validation_messages();
+        return {};
+    });
 }
 
 Status VulkanBackend::shader_write(BufferId id, std::span<const ElementRange> ranges, const void* src, Scalar as) {
@@ -225,15 +217,22 @@ Status VulkanBackend::shader_write(BufferId id, std::span<const ElementRange> ra
         scalars_to_words(shape, in + first_byte / 4 * scalar_bytes, bytes / 4, staging, as);
     }));
     HMSM_TRY(range_copier_->prepare(scatter.size(), 1));
+    return submit_copy_dispatches([&](VkCommandBuffer cmd, const std::function<void()>&) {
+        return range_copier_->record(cmd, buffers_[uint32_t(id)], move_scratch_, scatter, false);
+    });
+}
+
+Status VulkanBackend::submit_copy_dispatches(
+    const std::function<Status(VkCommandBuffer, const std::function<void()>&)>& record) {
     Status recorded;
     HMSM_TRY(transfer_->submit([&](VkCommandBuffer cmd) {
-        auto after_copies = [&] {
+        const std::function<void()> barrier = [&] {
             barrier_after_all_writes(*device_, cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
                                      VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT);
         };
-        after_copies();
-        recorded = range_copier_->record(cmd, buffers_[uint32_t(id)], move_scratch_, scatter, false);
-        after_copies();
+        barrier();
+        recorded = record(cmd, barrier);
+        barrier();
     }));
     HMSM_TRY(recorded);
     return device_->take_validation_messages();
@@ -268,13 +267,7 @@ Status VulkanBackend::shader_moves(std::span<const BufferMoves> moves) {
     if (planned.empty()) return {};
     HMSM_TRY(ensure_move_scratch(scratch));
     HMSM_TRY(range_copier_->prepare(ranges, dispatches));
-    Status recorded;
-    HMSM_TRY(transfer_->submit([&](VkCommandBuffer cmd) {
-        auto after_copies = [&] {
-            barrier_after_all_writes(*device_, cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
-                                     VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT);
-        };
-        after_copies();
+    return submit_copy_dispatches([&](VkCommandBuffer cmd, const std::function<void()>& barrier) -> Status {
         std::vector<WordSpan> gather, scatter;
         for (const Planned& p : planned) {
             const uint64_t words = device_element_bytes(p.id) / 4;
@@ -291,16 +284,15 @@ Status VulkanBackend::shader_moves(std::span<const BufferMoves> moves) {
                     scatter.push_back({uint32_t(packed), count, 0, uint32_t(m.dst * words)});
                     packed += count;
                 }
-                if (recorded.ok()) recorded = range_copier_->record(cmd, buffer, move_scratch_, gather, true);
-                after_copies();
-                if (recorded.ok()) recorded = range_copier_->record(cmd, buffer, move_scratch_, scatter, false);
-                after_copies();
+                HMSM_TRY(range_copier_->record(cmd, buffer, move_scratch_, gather, true));
+                barrier();
+                HMSM_TRY(range_copier_->record(cmd, buffer, move_scratch_, scatter, false));
+                barrier();
                 begin = end;
             }
         }
-    }));
-    HMSM_TRY(recorded);
-    return device_->take_validation_messages();
+        return {};
+    });
 }
 
 }  // namespace hmsm::detail::vk

@@ -28,6 +28,7 @@
 #include "../element_moves.h"
 
 #include <array>
+#include <functional>
 #include <memory>
 
 namespace hmsm::detail::vk {
@@ -209,6 +210,10 @@ private:
     Status shader_moves(std::span<const BufferMoves> moves);
     /// write_ranges through the scratch and the range copy's scatter (ranges apart, checked).
     Status shader_write(BufferId id, std::span<const ElementRange> ranges, const void* src, Scalar as);
+    /// One submission of range-copy dispatches between barriers against every earlier write;
+    /// `record(cmd, barrier)` records them, barrier() between dispatches that depend on each
+    /// other. The first error of `record` is returned; recording stops there.
+    Status submit_copy_dispatches(const std::function<Status(VkCommandBuffer, const std::function<void()>&)>& record);
     /// write() inside a recording: the data goes to the ring, the copy into the command buffer.
     Status stage_write(BufferId id, uint64_t first, uint64_t count, const void* src, Scalar as);
     /// For a write of wind table elements [first, first + count) from `src` that reaches the
