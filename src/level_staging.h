@@ -5,9 +5,9 @@
 // chains, then each switched instance in its new layout, back to back, then a template of each
 // new model that unfolds chains (every chain at rest, rest_chains), which the unfolded chains
 // are copied from. The fine-grained copies (a chain or a few each) stay within the staging; the
-// live chains are read and written only in whole instances and runs of them (on an H100's
-// Vulkan driver, shader copies of single chains out of and into the live chains left the
-// standing step slower afterwards: docs/benchmarks/nvidia-h100.md).
+// live chains are read and written only in whole instances and runs of them (shader copies of
+// single chains once seemed to slow the standing step after them, which on the H200 was the
+// GPU's clock: docs/vulkan.md).
 #pragma once
 
 #include "backend.h"

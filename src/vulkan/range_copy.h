@@ -4,10 +4,9 @@
 // scatters them back, as the CUDA backend's copy_ranges kernel does. A copy command with a region
 // per range costs about 2-5 microseconds per region on an H100 (measured: docs/vulkan.md).
 // The same copier runs copy_patterns.comp (Backend::copy_patterns: a level switch's kept chains
-// by pattern, a workgroup per copy). Reads and writes of many ranges keep copy commands unless
-// HMSM_VULKAN_RANGE_WRITES=1 sends writes through the scatter: with the range copy for them,
-// the standing step of the open-world bench measured 1.3-2x slower afterwards on the H100 and
-// 1.4x on the H200, for a reason not yet found (docs/vulkan.md).
+// by pattern, a workgroup per copy), and writes of many ranges (the values packed into the
+// scratch, then one scatter; HMSM_VULKAN_RANGE_WRITES=0 keeps a copy region per range). Reads
+// of many ranges keep copy commands.
 //
 // Use within one submission that is waited for before the next: prepare() sizes the range table
 // and the descriptor sets for the dispatches to come and forgets those of the submission before;

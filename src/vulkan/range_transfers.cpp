@@ -3,8 +3,8 @@
 // and wait per staging-full. Inside an engine's recording or a held-back instance change the
 // ranges go range by range the way write() goes (the ring, deferred_changes.cpp). Moves of
 // many ranges go through the range copy (range_copy.h) in one submission per call, pattern
-// copies through copy_patterns.comp, and with HMSM_VULKAN_RANGE_WRITES=1 writes of many ranges
-// through the range copy's scatter.
+// copies through copy_patterns.comp, and writes of many ranges through the range copy's
+// scatter (HMSM_VULKAN_RANGE_WRITES=0: copy regions, for side-by-side measurements).
 #include "vulkan_backend.h"
 
 #include "../device_words.h"

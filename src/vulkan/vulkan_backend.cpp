@@ -57,7 +57,7 @@ Result<std::unique_ptr<VulkanBackend>> VulkanBackend::create(std::shared_ptr<Dev
     if (!transfer) return transfer.status();
     b->transfer_ = std::move(transfer).value();
     const char* range_writes = std::getenv("HMSM_VULKAN_RANGE_WRITES");
-    b->range_writes_ = range_writes && std::string_view(range_writes) == "1";
+    b->range_writes_ = !(range_writes && std::string_view(range_writes) == "0");
     const char* range_copies = std::getenv("HMSM_VULKAN_RANGE_COPIES");
     if (!(range_copies && std::string_view(range_copies) == "0")) {
         auto copier = RangeCopier::create(dev);

@@ -235,12 +235,11 @@ private:
     Buffer move_scratch_;  // move_elements(), grown on demand
     bool batch_transfers_ = batch_transfers_enabled();  // element_moves.h
     bool pattern_copies_ = pattern_copies_enabled();    // element_moves.h
-    /// With HMSM_VULKAN_RANGE_WRITES=1, writes of at least kShaderWriteRanges ranges go through
-    /// the range copy's scatter (one dispatch) rather than a copy region per range. Off by
-    /// default: on an H200 it made the open world's moving frame 1.9x faster but its standing
-    /// step 1.4x slower afterwards (docs/vulkan.md).
+    /// Writes of at least kShaderWriteRanges ranges go through the range copy's scatter (one
+    /// dispatch) rather than a copy region per range; HMSM_VULKAN_RANGE_WRITES=0 when the
+    /// backend is made keeps copy regions (side-by-side measurements, docs/vulkan.md).
     static constexpr size_t kShaderWriteRanges = 64;
-    bool range_writes_ = false;
+    bool range_writes_ = true;
     uint64_t window_bytes_ = 0;  // vulkan_set_window_bytes() when the backend was made; 0: none
     uint64_t window_alignment_ = 0;
     std::unique_ptr<WindowPlan> plan_;

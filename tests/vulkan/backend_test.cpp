@@ -289,7 +289,7 @@ TEST_F(VulkanTest, MovesGoThroughTheRangeCopy) {
     std::string skip;
     const char* writes_were = std::getenv("HMSM_VULKAN_RANGE_WRITES");
     const std::string writes_before = writes_were ? writes_were : "";
-    ::setenv("HMSM_VULKAN_RANGE_WRITES", "1", 1);  // read when the backend is created
+    ::setenv("HMSM_VULKAN_RANGE_WRITES", "1", 1);  // the default, whatever the environment says
     auto sim = create_simulation_or_skip(*grid_scene(small_tree(), 40, 5.0, 1), windy_config(), BackendKind::vulkan, skip);
     if (writes_were) ::setenv("HMSM_VULKAN_RANGE_WRITES", writes_before.c_str(), 1);
     else ::unsetenv("HMSM_VULKAN_RANGE_WRITES");
@@ -330,8 +330,7 @@ TEST_F(VulkanTest, MovesGoThroughTheRangeCopy) {
     ASSERT_TRUE(mutable_backend.read(BufferId::chain_force, 0, chains, whole.data(), detail::Scalar::f32).ok());
     EXPECT_EQ(whole, expected);
 
-    // A write of many ranges (HMSM_VULKAN_RANGE_WRITES=1): one scatter of the range copy
-    // instead of a copy region each.
+    // A write of many ranges: one scatter of the range copy instead of a copy region each.
     std::vector<detail::ElementRange> ranges;
     std::vector<float> values;
     for (uint64_t e = 1; e + 1 < chains && ranges.size() < 100; e += 2) {

@@ -10,6 +10,7 @@
 #include <glm/geometric.hpp>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -200,6 +201,15 @@ json pop_json(const json& jumps, const std::vector<double>& fading) {
 }
 
 Status profile_standing_step(Simulation& sim, json& row) {
+    // A GPU's clock follows its load: after frames that kept it mostly idle (the host-bound
+    // frames before) it may run at a fraction of its clock for a while, and the steps below
+    // would measure the governor, not the step (on an H200: 0.7-1.3 GHz after some moving
+    // phases, 1.98 GHz after others; the same step 2x apart). Half a second of back-to-back
+    // steps brings the clock up first.
+    using Clock = std::chrono::steady_clock;
+    const auto warm_until = Clock::now() + std::chrono::milliseconds(500);
+    for (int batch = 0; batch < 1000 && Clock::now() < warm_until; ++batch)
+        if (Status status = sim.step(10); !status) return status;
     // Where a standing step's device time goes: ten profiled steps (timers serialize the
     // passes, so their sum exceeds the unprofiled step).
     {

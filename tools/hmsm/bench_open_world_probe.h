@@ -53,7 +53,8 @@ double percentile(std::vector<double> values, double p);
 /// jump_m, motion_m); `fading` the motion over one frame of trees that were fading.
 nlohmann::json pop_json(const nlohmann::json& jumps, const std::vector<double>& fading);
 
-/// Where a standing step's time goes, into `row`: ten profiled steps' device seconds per pass
+/// Where a standing step's time goes, into `row`, after half a second of steps that bring a
+/// GPU's clock up: ten profiled steps' device seconds per pass
 /// (still_pass_seconds), the scene's groups and dispatches per step, and the step as an engine
 /// issues it (still_engine: CUDA enqueued on its stream, Vulkan recorded into its command
 /// buffer; the host time of the call and the whole frame, medians of 20).
