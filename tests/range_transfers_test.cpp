@@ -163,8 +163,8 @@ TEST(DisjointIntervals, AnswersAsASearchOfEveryInterval) {
     }
 }
 
-/// The backend under test by name: a registered kind, "vulkan_region_writes" (Vulkan with
-/// HMSM_VULKAN_RANGE_WRITES=0) or "cuda_emulation" (the CUDA backend's range copies on the
+/// The backend under test by name: a registered kind, "vulkan_regions" (Vulkan with
+/// HMSM_VULKAN_SHADER_RANGES=0) or "cuda_emulation" (the CUDA backend's range copies on the
 /// host); no_device where it is absent.
 Result<std::unique_ptr<detail::Backend>> backend_named(const std::string& name) {
     if (name == "cuda_emulation") {
@@ -174,13 +174,13 @@ Result<std::unique_ptr<detail::Backend>> backend_named(const std::string& name) 
         return Status{ErrorCode::no_device, "cuda emulation: this build of hmsm has no CUDA kernels"};
 #endif
     }
-    if (name == "vulkan_region_writes") {  // writes of many ranges as copy regions (vulkan_backend.h)
-        const char* was = std::getenv("HMSM_VULKAN_RANGE_WRITES");
+    if (name == "vulkan_regions") {  // reads and writes of many ranges as copy regions (vulkan_backend.h)
+        const char* was = std::getenv("HMSM_VULKAN_SHADER_RANGES");
         const std::string before = was ? was : "";
-        ::setenv("HMSM_VULKAN_RANGE_WRITES", "0", 1);
+        ::setenv("HMSM_VULKAN_SHADER_RANGES", "0", 1);
         auto backend = detail::create_backend(BackendKind::vulkan);
-        if (was) ::setenv("HMSM_VULKAN_RANGE_WRITES", before.c_str(), 1);
-        else ::unsetenv("HMSM_VULKAN_RANGE_WRITES");
+        if (was) ::setenv("HMSM_VULKAN_SHADER_RANGES", before.c_str(), 1);
+        else ::unsetenv("HMSM_VULKAN_SHADER_RANGES");
         return backend;
     }
     for (BackendKind kind :
@@ -445,7 +445,7 @@ std::string param_name(const ::testing::TestParamInfo<std::string>& info) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Backends, RangeTransfers,
-                         ::testing::Values("cpu64", "cpu", "cpu-parallel", "vulkan", "vulkan_region_writes", "cuda",
+                         ::testing::Values("cpu64", "cpu", "cpu-parallel", "vulkan", "vulkan_regions", "cuda",
                                            "cuda_emulation"),
                          param_name);
 

@@ -4,9 +4,9 @@
 // scatters them back, as the CUDA backend's copy_ranges kernel does. A copy command with a region
 // per range costs about 2-5 microseconds per region on an H100 (measured: docs/vulkan.md).
 // The same copier runs copy_patterns.comp (Backend::copy_patterns: a level switch's kept chains
-// by pattern, a workgroup per copy), and writes of many ranges (the values packed into the
-// scratch, then one scatter; HMSM_VULKAN_RANGE_WRITES=0 keeps a copy region per range). Reads
-// of many ranges keep copy commands.
+// by pattern, a workgroup per copy), and reads and writes of many ranges (a gather into the
+// scratch and one download, or one upload into it and a scatter; HMSM_VULKAN_SHADER_RANGES=0
+// keeps a copy region per range).
 //
 // Use within one submission that is waited for before the next: prepare() sizes the range table
 // and the descriptor sets for the dispatches to come and forgets those of the submission before;

@@ -3,8 +3,9 @@
 // and wait per staging-full. Inside an engine's recording or a held-back instance change the
 // ranges go range by range the way write() goes (the ring, deferred_changes.cpp). Moves of
 // many ranges go through the range copy (range_copy.h) in one submission per call, pattern
-// copies through copy_patterns.comp, and writes of many ranges through the range copy's
-// scatter (HMSM_VULKAN_RANGE_WRITES=0: copy regions, for side-by-side measurements).
+// copies through copy_patterns.comp, and reads and writes of many ranges through the range
+// copy's gather or scatter (HMSM_VULKAN_SHADER_RANGES=0: copy regions, for side-by-side
+// measurements).
 #include "vulkan_backend.h"
 
 #include "../device_words.h"
@@ -56,6 +57,7 @@ Status VulkanBackend::read_ranges(BufferId id, std::span<const ElementRange> ran
     for (const ElementRange& r : ranges) HMSM_TRY(check_range(id, r.first, r.count));
     // A read sees every change made before it (read()).
     HMSM_TRY(const_cast<VulkanBackend*>(this)->submit_held_back());
+    if (transfers_by_shader(id, ranges)) return const_cast<VulkanBackend*>(this)->shader_read(id, ranges, dst, as);
     const Shape shape = buffer_info(id).shape;
     const uint64_t element_bytes = device_element_bytes(id), scalar_bytes = as == Scalar::f64 ? 8 : 4;
     const std::vector<VkBufferCopy> regions = buffer_regions(ranges, element_bytes);
@@ -73,9 +75,7 @@ Status VulkanBackend::write_ranges(BufferId id, std::span<const ElementRange> ra
     HMSM_TRY(check_device_lost());
     for (const ElementRange& r : ranges) HMSM_TRY(check_range(id, r.first, r.count));
     HMSM_TRY(submit_held_back());
-    const BufferId ids[] = {id};
-    if (range_writes_ && ranges.size() >= kShaderWriteRanges && copies_by_shader(ids))
-        return shader_write(id, ranges, src, as);
+    if (transfers_by_shader(id, ranges)) return shader_write(id, ranges, src, as);
     const Shape shape = buffer_info(id).shape;
     const uint64_t element_bytes = device_element_bytes(id), scalar_bytes = as == Scalar::f64 ? 8 : 4;
     const std::vector<VkBufferCopy> regions = buffer_regions(ranges, element_bytes);
@@ -90,7 +90,8 @@ Status VulkanBackend::write_ranges(BufferId id, std::span<const ElementRange> ra
 
 Status VulkanBackend::read_buffers(std::span<const BufferRangesRead> reads, Scalar as) const {
     bool at_once = device_bytes(reads) <= Transfer::most_staged_bytes();
-    for (const BufferRangesRead& r : reads) at_once = at_once && copies_ranges_at_once(r.ranges, false);
+    for (const BufferRangesRead& r : reads)  // many ranges: each buffer through the range copy
+        at_once = at_once && !transfers_by_shader(r.id, r.ranges) && copies_ranges_at_once(r.ranges, false);
     if (!at_once) return Backend::read_buffers(reads, as);
     HMSM_TRY(check_device_lost());
     for (const BufferRangesRead& r : reads)
@@ -113,8 +114,7 @@ Status VulkanBackend::read_buffers(std::span<const BufferRangesRead> reads, Scal
 Status VulkanBackend::write_buffers(std::span<const BufferRangesWrite> writes, Scalar as) {
     bool at_once = device_bytes(writes) <= Transfer::most_staged_bytes();
     for (const BufferRangesWrite& w : writes)  // many ranges: each buffer through the range copy
-        at_once = at_once && !(range_writes_ && w.ranges.size() >= kShaderWriteRanges);
-    for (const BufferRangesWrite& w : writes) at_once = at_once && copies_ranges_at_once(w.ranges, true);
+        at_once = at_once && !transfers_by_shader(w.id, w.ranges) && copies_ranges_at_once(w.ranges, true);
     if (!at_once) return Backend::write_buffers(writes, as);
     HMSM_TRY(check_device_lost());
     for (const BufferRangesWrite& w : writes)
@@ -220,6 +220,38 @@ Status VulkanBackend::shader_write(BufferId id, std::span<const ElementRange> ra
     return submit_copy_dispatches([&](VkCommandBuffer cmd, const std::function<void()>&) {
         return range_copier_->record(cmd, buffers_[uint32_t(id)], move_scratch_, scatter, false);
     });
+}
+
+Status VulkanBackend::shader_read(BufferId id, std::span<const ElementRange> ranges, void* dst, Scalar as) {
+    // One gather of the range copy packs the ranges into the scratch, which comes back as one
+    // region: a copy region per range costs microseconds on some drivers.
+    const Shape shape = buffer_info(id).shape;
+    const uint64_t element_bytes = device_element_bytes(id), scalar_bytes = as == Scalar::f64 ? 8 : 4;
+    std::vector<WordSpan> gather;
+    uint64_t packed = 0;
+    for (const ElementRange& r : ranges) {
+        if (r.count == 0) continue;
+        const auto words = uint32_t(r.count * element_bytes / 4);
+        gather.push_back({uint32_t(packed), words, uint32_t(r.first * element_bytes / 4), 0});
+        packed += words;
+    }
+    if (gather.empty()) return {};
+    HMSM_TRY(ensure_move_scratch(packed * 4));
+    HMSM_TRY(range_copier_->prepare(gather.size(), 1));
+    HMSM_TRY(submit_copy_dispatches([&](VkCommandBuffer cmd, const std::function<void()>&) {
+        return range_copier_->record(cmd, buffers_[uint32_t(id)], move_scratch_, gather, true);
+    }));
+    auto* out = static_cast<std::byte*>(dst);
+    HMSM_TRY(transfer_->download(move_scratch_, 0, packed * 4, [&](const void* staging, VkDeviceSize first_byte,
+                                                                    VkDeviceSize bytes) {
+        words_to_scalars(shape, staging, bytes / 4, out + first_byte / 4 * scalar_bytes, as);
+    }));
+    return device_->take_validation_messages();
+}
+
+bool VulkanBackend::transfers_by_shader(BufferId id, std::span<const ElementRange> ranges) const {
+    const BufferId ids[] = {id};
+    return shader_ranges_ && ranges.size() >= kShaderRanges && copies_by_shader(ids);
 }
 
 Status VulkanBackend::submit_copy_dispatches(

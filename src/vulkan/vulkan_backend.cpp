@@ -56,8 +56,8 @@ Result<std::unique_ptr<VulkanBackend>> VulkanBackend::create(std::shared_ptr<Dev
     auto transfer = Transfer::create(dev);
     if (!transfer) return transfer.status();
     b->transfer_ = std::move(transfer).value();
-    const char* range_writes = std::getenv("HMSM_VULKAN_RANGE_WRITES");
-    b->range_writes_ = !(range_writes && std::string_view(range_writes) == "0");
+    const char* shader_ranges = std::getenv("HMSM_VULKAN_SHADER_RANGES");
+    b->shader_ranges_ = !(shader_ranges && std::string_view(shader_ranges) == "0");
     const char* range_copies = std::getenv("HMSM_VULKAN_RANGE_COPIES");
     if (!(range_copies && std::string_view(range_copies) == "0")) {
         auto copier = RangeCopier::create(dev);

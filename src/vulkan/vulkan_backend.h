@@ -210,6 +210,10 @@ private:
     Status shader_moves(std::span<const BufferMoves> moves);
     /// write_ranges through the scratch and the range copy's scatter (ranges apart, checked).
     Status shader_write(BufferId id, std::span<const ElementRange> ranges, const void* src, Scalar as);
+    /// read_ranges through the range copy's gather into the scratch and one download of it.
+    Status shader_read(BufferId id, std::span<const ElementRange> ranges, void* dst, Scalar as);
+    /// Whether a read or write of `ranges` of buffer `id` goes through the range copy.
+    bool transfers_by_shader(BufferId id, std::span<const ElementRange> ranges) const;
     /// One submission of range-copy dispatches between barriers against every earlier write;
     /// `record(cmd, barrier)` records them, barrier() between dispatches that depend on each
     /// other. The first error of `record` is returned; recording stops there.
@@ -235,11 +239,11 @@ private:
     Buffer move_scratch_;  // move_elements(), grown on demand
     bool batch_transfers_ = batch_transfers_enabled();  // element_moves.h
     bool pattern_copies_ = pattern_copies_enabled();    // element_moves.h
-    /// Writes of at least kShaderWriteRanges ranges go through the range copy's scatter (one
-    /// dispatch) rather than a copy region per range; HMSM_VULKAN_RANGE_WRITES=0 when the
-    /// backend is made keeps copy regions (side-by-side measurements, docs/vulkan.md).
-    static constexpr size_t kShaderWriteRanges = 64;
-    bool range_writes_ = true;
+    /// Reads and writes of at least kShaderRanges ranges go through the range copy (a gather or
+    /// a scatter: one dispatch) rather than a copy region per range; HMSM_VULKAN_SHADER_RANGES=0
+    /// when the backend is made keeps copy regions (side-by-side measurements, docs/vulkan.md).
+    static constexpr size_t kShaderRanges = 64;
+    bool shader_ranges_ = true;
     uint64_t window_bytes_ = 0;  // vulkan_set_window_bytes() when the backend was made; 0: none
     uint64_t window_alignment_ = 0;
     std::unique_ptr<WindowPlan> plan_;

@@ -287,12 +287,12 @@ TEST_F(VulkanTest, MovesGoThroughTheRangeCopy) {
     const char* off = std::getenv("HMSM_VULKAN_RANGE_COPIES");
     if (off && std::string_view(off) == "0") GTEST_SKIP() << "HMSM_VULKAN_RANGE_COPIES=0";
     std::string skip;
-    const char* writes_were = std::getenv("HMSM_VULKAN_RANGE_WRITES");
-    const std::string writes_before = writes_were ? writes_were : "";
-    ::setenv("HMSM_VULKAN_RANGE_WRITES", "1", 1);  // the default, whatever the environment says
+    const char* shader_ranges_were = std::getenv("HMSM_VULKAN_SHADER_RANGES");
+    const std::string shader_ranges_before = shader_ranges_were ? shader_ranges_were : "";
+    ::setenv("HMSM_VULKAN_SHADER_RANGES", "1", 1);  // the default, whatever the environment says
     auto sim = create_simulation_or_skip(*grid_scene(small_tree(), 40, 5.0, 1), windy_config(), BackendKind::vulkan, skip);
-    if (writes_were) ::setenv("HMSM_VULKAN_RANGE_WRITES", writes_before.c_str(), 1);
-    else ::unsetenv("HMSM_VULKAN_RANGE_WRITES");
+    if (shader_ranges_were) ::setenv("HMSM_VULKAN_SHADER_RANGES", shader_ranges_before.c_str(), 1);
+    else ::unsetenv("HMSM_VULKAN_SHADER_RANGES");
     if (!skip.empty()) GTEST_SKIP() << skip;
     ASSERT_TRUE(sim);
     ASSERT_TRUE(sim->step(3).ok());
@@ -345,6 +345,13 @@ TEST_F(VulkanTest, MovesGoThroughTheRangeCopy) {
     EXPECT_EQ(backend.range_copy_dispatches() - before_writes, 1u);
     ASSERT_TRUE(mutable_backend.read(BufferId::chain_force, 0, chains, whole.data(), detail::Scalar::f32).ok());
     EXPECT_EQ(whole, expected);
+
+    // A read of many ranges: one gather of the range copy, the ranges back to back.
+    std::vector<float> read_back(values.size(), -1.0f);
+    const uint64_t before_reads = backend.range_copy_dispatches();
+    ASSERT_TRUE(backend.read_ranges(BufferId::chain_force, ranges, read_back.data(), detail::Scalar::f32).ok());
+    EXPECT_EQ(backend.range_copy_dispatches() - before_reads, 1u);
+    EXPECT_EQ(read_back, values);
 }
 
 }  // namespace
