@@ -11,7 +11,7 @@ Status Backend::copy_patterns(std::span<const BufferId> ids, uint64_t capacity, 
     std::vector<std::vector<ElementMove>> expanded(ids.size());
     std::vector<BufferMoves> moves;
     for (size_t b = 0; b < ids.size(); ++b) {
-        const uint32_t halves = buffer_info(ids[b]).scope == Scope::chain_halves ? 2u : 1u;
+        const uint32_t halves = halves_of(ids[b]);
         for (uint32_t h = 0; h < halves; ++h)
             for (const PatternCopy& copy : copies) {
                 if (copy.pattern >= patterns.size())

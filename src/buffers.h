@@ -99,6 +99,9 @@ inline constexpr std::array<BufferInfo, kBufferCount> kBufferTable = {{
 
 constexpr const BufferInfo& buffer_info(BufferId id) { return kBufferTable[static_cast<uint32_t>(id)]; }
 
+/// Halves of a chain-scope buffer: 2 for the ping-pong buffers, chain_capacity elements apart.
+constexpr uint32_t halves_of(BufferId id) { return buffer_info(id).scope == Scope::chain_halves ? 2u : 1u; }
+
 /// True for the buffers uploaded from SceneData (model and instance scope). instance_wind is
 /// uploaded too and rewritten by live control; wind_table starts zeroed and is written before
 /// every run.

@@ -74,7 +74,7 @@ inline GrowthPlan growth_plan(BufferId id, uint64_t old_count, uint64_t new_coun
     GrowthPlan plan;
     if (!sized_by_capacity(id) || new_count == old_count) return plan;
     plan.reallocates = true;
-    const uint64_t halves = buffer_info(id).scope == Scope::chain_halves ? 2 : 1;
+    const uint64_t halves = halves_of(id);
     const uint64_t old_half = old_count / halves, new_half = new_count / halves;
     const uint64_t kept = std::min({live, old_half, new_half});
     for (uint64_t h = 0; h < halves; ++h) {

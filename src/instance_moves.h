@@ -44,9 +44,6 @@ struct InstanceChangeBracket {
     InstanceChangeBracket& operator=(const InstanceChangeBracket&) = delete;
 };
 
-/// Halves of a chain-scope buffer: 2 for the ping-pong buffers, chain_capacity elements apart.
-inline uint32_t halves_of(BufferId id) { return buffer_info(id).scope == Scope::chain_halves ? 2u : 1u; }
-
 /// Whether half `h` of chain-scope buffer `id` holds values a later step reads, so that it moves
 /// with a shifted instance. R and O hold the pose only in the pose half (HMSM_FINAL_HALF of the
 /// scene's rounds): every later reader reads that half, and the rounds of passes 3 and 5 write

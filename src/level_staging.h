@@ -104,7 +104,7 @@ Status write_templates(Backend& backend, const std::vector<BufferId>& carried, u
     std::vector<BufferRangesWrite> writes;
     for (size_t b = 0; b < carried.size(); ++b) {
         const uint32_t per = shape_scalars(buffer_info(carried[b]).shape);
-        const uint32_t halves = buffer_info(carried[b]).scope == Scope::chain_halves ? 2u : 1u;
+        const uint32_t halves = halves_of(carried[b]);
         for (const LevelStaging::Template& t : staging.templates) {
             const std::vector<V> rest = rest_chains<V>(*t.carry, per, carried[b]);
             for (uint32_t h = 0; h < halves; ++h) {

@@ -188,7 +188,6 @@ TEST_P(BackendGrowth, KeepsLiveElementsAndMovesTheSecondHalf) {
     grown.vertex_capacity = live.vertex_capacity + 5;
     grown.instance_capacity = live.instance_capacity + 7;
     const detail::Scalar as = detail::Scalar::f64;
-    auto halves = [](BufferId id) { return detail::buffer_info(id).scope == detail::Scope::chain_halves ? 2u : 1u; };
     auto scalars = [](BufferId id) { return detail::shape_scalars(detail::buffer_info(id).shape); };
     const uint64_t model_chains = live.element_count(BufferId::chain_constants);
     std::vector<double> model_before(model_chains * 4);
@@ -198,8 +197,8 @@ TEST_P(BackendGrowth, KeepsLiveElementsAndMovesTheSecondHalf) {
     std::vector<std::vector<double>> stored(detail::kBufferCount);
     for (const detail::BufferInfo& info : detail::kBufferTable) {
         if (!detail::sized_by_capacity(info.id) || live.element_count(info.id) == 0) continue;
-        const uint64_t n = detail::live_elements(live, info.id), half = live.element_count(info.id) / halves(info.id);
-        for (uint32_t h = 0; h < halves(info.id); ++h) {
+        const uint64_t n = detail::live_elements(live, info.id), half = live.element_count(info.id) / detail::halves_of(info.id);
+        for (uint32_t h = 0; h < detail::halves_of(info.id); ++h) {
             std::vector<double> values(n * scalars(info.id));
             for (uint64_t e = 0; e < n; ++e)
                 for (uint32_t k = 0; k < scalars(info.id); ++k) values[e * scalars(info.id) + k] = marker(info.id, e + h * 7, k);
@@ -213,8 +212,8 @@ TEST_P(BackendGrowth, KeepsLiveElementsAndMovesTheSecondHalf) {
     for (const detail::BufferInfo& info : detail::kBufferTable) {
         if (!detail::sized_by_capacity(info.id) || grown.element_count(info.id) == 0) continue;
         SCOPED_TRACE(std::string(info.name));
-        const uint64_t n = detail::live_elements(live, info.id), half = grown.element_count(info.id) / halves(info.id);
-        for (uint32_t h = 0; h < halves(info.id); ++h) {
+        const uint64_t n = detail::live_elements(live, info.id), half = grown.element_count(info.id) / detail::halves_of(info.id);
+        for (uint32_t h = 0; h < detail::halves_of(info.id); ++h) {
             std::vector<double> values(half * scalars(info.id));
             ASSERT_TRUE(backend.read(info.id, h * half, half, values.data(), as).ok());
             bool kept = true, zeroed = true;

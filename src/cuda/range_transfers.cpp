@@ -118,7 +118,7 @@ Status DeviceBuffers::copy_patterns(std::span<const BufferId> ids, uint64_t capa
         reinterpret_cast<const PatternMoveEntry*>(static_cast<const std::byte*>(range_table_) + entries_bytes);
     for (BufferId id : ids) {
         const uint32_t words = uint32_t(device_element_bytes(id) / 4);
-        const uint32_t halves = buffer_info(id).scope == Scope::chain_halves ? 2u : 1u;
+        const uint32_t halves = halves_of(id);
         CUDA_TRY(launch_copy_patterns(static_cast<uint32_t*>(bases_[uint32_t(id)]), words, capacity * words, halves,
                                       device_entries, uint32_t(entry_count), device_moves, stream));
     }

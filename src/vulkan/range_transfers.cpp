@@ -189,7 +189,7 @@ Status VulkanBackend::copy_patterns(std::span<const BufferId> ids, uint64_t capa
     return submit_copy_dispatches([&](VkCommandBuffer cmd, const std::function<void()>&) -> Status {
         for (BufferId id : ids) {  // the buffers are apart: no barrier between them
             const auto words = uint32_t(device_element_bytes(id) / 4);
-            const uint32_t halves = buffer_info(id).scope == Scope::chain_halves ? 2u : 1u;
+            const uint32_t halves = halves_of(id);
             HMSM_TRY(range_copier_->record_patterns(cmd, buffers_[uint32_t(id)], entries, moves, words,
                                                     uint32_t(capacity * words), halves));
         }

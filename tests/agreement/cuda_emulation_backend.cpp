@@ -160,7 +160,7 @@ public:
         for (BufferId id : ids) {
             const uint32_t words = uint32_t(detail::device_element_bytes(id) / 4);
             detail::cuda::emulate_copy_patterns(reinterpret_cast<uint32_t*>(bytes_[uint32_t(id)].data()), words,
-                                                capacity * words, half_count(id), entries.data(),
+                                                capacity * words, detail::halves_of(id), entries.data(),
                                                 uint32_t(entries.size()), moves.data());
         }
         return {};
@@ -224,9 +224,6 @@ private:
                                           detail::cuda::RangeCopy::gather);
         detail::cuda::emulate_copy_ranges(buffer, scratch.data(), table.data(), uint32_t(table.size()), words,
                                           detail::cuda::RangeCopy::scatter);
-    }
-    static uint32_t half_count(BufferId id) {
-        return detail::buffer_info(id).scope == detail::Scope::chain_halves ? 2u : 1u;
     }
     void bind() {
 #define HMSM_EMULATION_BIND(name, binding, shape, scope) \
