@@ -28,10 +28,20 @@ std::vector<VkBufferCopy> buffer_regions(std::span<const ElementRange> ranges, u
     return regions;
 }
 
-/// The regions of `ranges` in a buffer of `element_bytes` elements (srcOffset, size).
-std::vector<VkBufferCopy> byte_regions(std::span<const ElementRange> ranges, uint64_t element_bytes) {
-    const std::vector<VkBufferCopy> regions = buffer_regions(ranges, element_bytes);
-    return regions;
+/// The word spans of the range copy for `ranges` of a buffer of `element_bytes` elements,
+/// packed back to back in the scratch from word 0: each range read from its place (`gather`)
+/// or written to it (scatter). `packed` receives the words packed.
+std::vector<WordSpan> packed_spans(std::span<const ElementRange> ranges, uint64_t element_bytes, bool gather,
+                                   uint64_t& packed) {
+    std::vector<WordSpan> spans;
+    packed = 0;
+    for (const ElementRange& r : ranges) {
+        if (r.count == 0) continue;
+        const auto words = uint32_t(r.count * element_bytes / 4), at = uint32_t(r.first * element_bytes / 4);
+        spans.push_back({uint32_t(packed), words, gather ? at : 0, gather ? 0 : at});
+        packed += words;
+    }
+    return spans;
 }
 
 /// The device bytes of every range of `parts` (BufferRangesRead or BufferRangesWrite).
@@ -101,7 +111,7 @@ Status VulkanBackend::read_buffers(std::span<const BufferRangesRead> reads, Scal
     std::vector<Transfer::BufferRegions> parts;
     regions.reserve(reads.size());
     for (const BufferRangesRead& r : reads)
-        parts.push_back({&buffers_[uint32_t(r.id)], regions.emplace_back(byte_regions(r.ranges, device_element_bytes(r.id)))});
+        parts.push_back({&buffers_[uint32_t(r.id)], regions.emplace_back(buffer_regions(r.ranges, device_element_bytes(r.id)))});
     HMSM_TRY(transfer_->download_parts(parts, [&](size_t k, const void* packed) {
         uint64_t elements = 0;
         for (const ElementRange& range : reads[k].ranges) elements += range.count;
@@ -124,7 +134,7 @@ Status VulkanBackend::write_buffers(std::span<const BufferRangesWrite> writes, S
     std::vector<Transfer::BufferRegions> parts;
     regions.reserve(writes.size());
     for (const BufferRangesWrite& w : writes)
-        parts.push_back({&buffers_[uint32_t(w.id)], regions.emplace_back(byte_regions(w.ranges, device_element_bytes(w.id)))});
+        parts.push_back({&buffers_[uint32_t(w.id)], regions.emplace_back(buffer_regions(w.ranges, device_element_bytes(w.id)))});
     HMSM_TRY(transfer_->upload_parts(parts, [&](size_t k, void* packed) {
         uint64_t elements = 0;
         for (const ElementRange& range : writes[k].ranges) elements += range.count;
@@ -201,15 +211,9 @@ Status VulkanBackend::shader_write(BufferId id, std::span<const ElementRange> ra
     // The values back to back into the scratch (one copy command per staging-full), then one
     // scatter of the range copy: a copy region per range costs microseconds on some drivers.
     const Shape shape = buffer_info(id).shape;
-    const uint64_t element_bytes = device_element_bytes(id), scalar_bytes = as == Scalar::f64 ? 8 : 4;
-    std::vector<WordSpan> scatter;
+    const uint64_t scalar_bytes = as == Scalar::f64 ? 8 : 4;
     uint64_t packed = 0;
-    for (const ElementRange& r : ranges) {
-        if (r.count == 0) continue;
-        const auto words = uint32_t(r.count * element_bytes / 4);
-        scatter.push_back({uint32_t(packed), words, 0, uint32_t(r.first * element_bytes / 4)});
-        packed += words;
-    }
+    const std::vector<WordSpan> scatter = packed_spans(ranges, device_element_bytes(id), false, packed);
     if (scatter.empty()) return {};
     HMSM_TRY(ensure_move_scratch(packed * 4));
     const auto* in = static_cast<const std::byte*>(src);
@@ -226,15 +230,9 @@ Status VulkanBackend::shader_read(BufferId id, std::span<const ElementRange> ran
     // One gather of the range copy packs the ranges into the scratch, which comes back as one
     // region: a copy region per range costs microseconds on some drivers.
     const Shape shape = buffer_info(id).shape;
-    const uint64_t element_bytes = device_element_bytes(id), scalar_bytes = as == Scalar::f64 ? 8 : 4;
-    std::vector<WordSpan> gather;
+    const uint64_t scalar_bytes = as == Scalar::f64 ? 8 : 4;
     uint64_t packed = 0;
-    for (const ElementRange& r : ranges) {
-        if (r.count == 0) continue;
-        const auto words = uint32_t(r.count * element_bytes / 4);
-        gather.push_back({uint32_t(packed), words, uint32_t(r.first * element_bytes / 4), 0});
-        packed += words;
-    }
+    const std::vector<WordSpan> gather = packed_spans(ranges, device_element_bytes(id), true, packed);
     if (gather.empty()) return {};
     HMSM_TRY(ensure_move_scratch(packed * 4));
     HMSM_TRY(range_copier_->prepare(gather.size(), 1));
