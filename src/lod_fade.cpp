@@ -43,14 +43,14 @@ std::vector<uint8_t> folded_chains(const std::vector<int32_t>& from_source, cons
 }
 
 /// D, the bound of the vertex displacement a switch would make, from the instance's chain state
-/// (θx, θz, ωx, ωz per chain): the largest P_c = (|θx| + |θz|) e_c + P_parent over the folded chains.
+/// (θx, θz, ωx, ωz per chain): the largest P_c = (|θx| + |θz|) e_c + P_parent over the folded
+/// chains. `path` is scratch of at least the model's chain count.
 template <class V>
 double deflection_bound(const V* state, const Hierarchy& h, const std::vector<uint8_t>& folded,
-                        const std::vector<double>& extent) {
-    std::vector<double> path(h.chains.size(), 0.0);
+                        const std::vector<double>& extent, std::vector<double>& path) {
     double largest = 0.0;
     for (size_t c = 0; c < h.chains.size(); ++c) {
-        if (!folded[c]) continue;
+        if (!folded[c]) continue;  // a kept chain: no folded chain below it reads its path
         const V* s = state + 4 * c;
         const int32_t parent = h.chains[c].parent;
         const double above = parent >= 0 && folded[size_t(parent)] ? path[size_t(parent)] : 0.0;
@@ -153,9 +153,9 @@ void Simulation::Impl::pause_fade(uint32_t index, bool active) {
     }
 }
 
-Result<std::vector<uint8_t>> Simulation::Impl::fades_at_rest(const std::vector<uint32_t>& indices) {
-    std::vector<uint8_t> at_rest(indices.size(), 0);
-    if (indices.empty()) return at_rest;
+Result<std::vector<uint8_t>> Simulation::Impl::fades_at_rest(const std::vector<std::pair<uint32_t, uint32_t>>& fading) {
+    std::vector<uint8_t> at_rest(fading.size(), 0);
+    if (fading.empty()) return at_rest;
     const detail::Scalar scalar = backend_->kind() == BackendKind::cpu64 ? detail::Scalar::f64 : detail::Scalar::f32;
     // The first state chain of instance i, and one past its last, from the group holding it.
     const std::vector<detail::InstanceGroup>& groups = data_->groups;
@@ -172,10 +172,13 @@ Result<std::vector<uint8_t>> Simulation::Impl::fades_at_rest(const std::vector<u
         // Every run's chains in one read, back to back (in the placed layout, each instance's
         // slot is a run of its own).
         std::vector<IndexRun> runs;
-        if (placed_)
-            for (uint32_t i : indices) runs.push_back({i, i + 1});
-        else
+        if (placed_) {
+            for (const auto& [i, target] : fading) runs.push_back({i, i + 1});
+        } else {
+            std::vector<uint32_t> indices;
+            for (const auto& [i, target] : fading) indices.push_back(i);
             runs = index_runs(indices);
+        }
         std::vector<detail::ElementRange> ranges;
         uint64_t total = 0;
         for (const IndexRun& r : runs) {
@@ -185,20 +188,21 @@ Result<std::vector<uint8_t>> Simulation::Impl::fades_at_rest(const std::vector<u
         std::vector<V> state(size_t(total * 4));
         HMSM_TRY(backend_->read_ranges(BufferId::chain_state, ranges, state.data(), scalar));
         std::unordered_map<uint64_t, std::vector<uint8_t>> folded_of;  // by (model, target): few a call
+        std::vector<double> path;
         size_t k = 0;         // indices ascend, and so do their runs
         uint64_t packed = 0;  // the run's first chain in state
         for (size_t j = 0; j < runs.size(); packed += ranges[j].count, ++j) {
             const IndexRun& r = runs[j];
             const uint64_t first = ranges[j].first;
             for (uint32_t i = r.first; i < r.end; ++i, ++k) {
-                const LodFade& fade = fades_.at(uint64_t(instance_ids_[i]));
-                const uint32_t model = instances_[i].model;
-                auto [folded, made] = folded_of.try_emplace((uint64_t(model) << 32) | fade.target_model);
+                const uint32_t model = instances_[i].model, target = fading[k].second;
+                auto [folded, made] = folded_of.try_emplace((uint64_t(model) << 32) | target);
                 if (made)
-                    folded->second = folded_chains(lod_models_[model].source_chain,
-                                                   lod_models_[fade.target_model].source_chain);
-                const double d = deflection_bound(state.data() + 4 * (packed + chain_of(i) - first), hierarchies_[model],
-                                                  folded->second, subtree_extent(model));
+                    folded->second = folded_chains(lod_models_[model].source_chain, lod_models_[target].source_chain);
+                const Hierarchy& h = hierarchies_[model];
+                if (path.size() < h.chains.size()) path.resize(h.chains.size());
+                const double d = deflection_bound(state.data() + 4 * (packed + chain_of(i) - first), h, folded->second,
+                                                  subtree_extent(model), path);
                 at_rest[k] = d <= lod_bands_.fade_bound_m;
             }
         }
@@ -209,31 +213,29 @@ Result<std::vector<uint8_t>> Simulation::Impl::fades_at_rest(const std::vector<u
 }
 
 std::vector<std::pair<uint32_t, uint32_t>> Simulation::Impl::ended_fades() {
+    // The entries of the steps that came go: every fade found over is handed to request_lods,
+    // which drops it from fades_ (a later entry of it then finds no fade).
     std::vector<std::pair<uint32_t, uint32_t>> ended;
-    std::vector<std::pair<uint64_t, uint64_t>> kept;  // entries of fades that are over: until they fold
-    for (auto it = fade_ends_.begin(); it != fade_ends_.end() && it->first <= steps_done_;) {
-        const auto [step, id] = *it;
-        it = fade_ends_.erase(it);
-        auto fade = fades_.find(id);
-        if (fade == fades_.end()) continue;  // folded, switched or removed since
-        const int64_t index = live_index(id);
-        const bool gone = index < 0 || instances_[size_t(index)].model != fade->second.from_model;
-        if (gone) {
-            if (index >= 0) dirty_instances_.push_back(uint32_t(index));  // its fade word
-            fades_.erase(fade);
-            continue;
+    for (auto it = fade_ends_.begin(); it != fade_ends_.end() && it->first <= steps_done_; it = fade_ends_.erase(it)) {
+        const uint64_t step = it->first;
+        for (uint64_t id : it->second) {
+            auto fade = fades_.find(id);
+            if (fade == fades_.end()) continue;  // folded, switched or removed since
+            const int64_t index = live_index(id);
+            const bool gone = index < 0 || instances_[size_t(index)].model != fade->second.from_model;
+            if (gone) {
+                if (index >= 0) dirty_instances_.push_back(uint32_t(index));  // its fade word
+                fades_.erase(fade);
+                continue;
+            }
+            const bool active = instances_[size_t(index)].active;
+            const bool over = active ? fade->second.end_step <= steps_done_ : fade->second.paused_left == 0;
+            // An entry of an earlier end, or of a fade paused with steps left (its resume adds one).
+            if (!over || (active && fade->second.end_step != step)) continue;
+            ended.emplace_back(uint32_t(index), fade->second.target_model);
         }
-        const bool active = instances_[size_t(index)].active;
-        const bool over = active ? fade->second.end_step <= steps_done_ : fade->second.paused_left == 0;
-        // An entry of an earlier end, or of a fade paused with steps left (its resume adds one).
-        if (!over || (active && fade->second.end_step != step)) continue;
-        ended.emplace_back(uint32_t(index), fade->second.target_model);
-        kept.emplace_back(step, id);
     }
     // A fade may have had two entries for one end (paused and resumed within a step).
-    std::sort(kept.begin(), kept.end());
-    kept.erase(std::unique(kept.begin(), kept.end()), kept.end());
-    for (const auto& [step, id] : kept) fade_ends_.emplace(step, id);
     std::sort(ended.begin(), ended.end());
     ended.erase(std::unique(ended.begin(), ended.end()), ended.end());
     return ended;
@@ -274,7 +276,7 @@ Result<uint64_t> Simulation::Impl::request_lods(std::vector<std::pair<uint32_t, 
         }
         switches[a].first < requests[b].first ? ++a : ++b;
     }
-    std::vector<uint32_t> started;                         // fades to measure, ascending
+    std::vector<std::pair<uint32_t, uint32_t>> started;  // fades to measure (index, target), ascending
     uint64_t changed = 0;
     for (const auto& [i, level] : requests) {
         const LodModel& now = lod_models_[instances_[i].model];
@@ -303,7 +305,7 @@ Result<uint64_t> Simulation::Impl::request_lods(std::vector<std::pair<uint32_t, 
             fades_[id] = {instances_[i].model, run_model, steps_done_ + steps, steps};
             lod_tracker_.fade_started(i);
             fade_ends_at(id, steps_done_ + steps);
-            started.push_back(i);
+            started.emplace_back(i, run_model);
         }
     }
     // A fade whose deflection is within the bound already (an instance at rest) switches now.
@@ -311,9 +313,8 @@ Result<uint64_t> Simulation::Impl::request_lods(std::vector<std::pair<uint32_t, 
     if (!at_rest) return at_rest.status();
     for (size_t k = 0; k < started.size(); ++k) {
         if (!(*at_rest)[k]) continue;
-        auto fade = fades_.find(uint64_t(instance_ids_[started[k]]));
-        switches.emplace_back(started[k], fade->second.target_model);
-        fades_.erase(fade);
+        fades_.erase(uint64_t(instance_ids_[started[k].first]));
+        switches.push_back(started[k]);
     }
     std::sort(switches.begin(), switches.end());
     HMSM_TRY(switch_models(switches));

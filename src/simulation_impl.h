@@ -259,10 +259,11 @@ struct __attribute__((visibility("hidden"))) Simulation::Impl {
     /// The fades by the step their instance may end them at (end_step while active; the step
     /// it was paused at with no steps left), id by id: ended_fades looks at the fades whose
     /// step came, not at every fade. Entries outlive their fade or its end (they are checked
-    /// against fades_ when their step comes); every change of a fade's end adds one.
-    std::multimap<uint64_t, uint64_t> fade_ends_;
+    /// against fades_ when their step comes); every change of a fade's end adds one. Ids by
+    /// step: the fades of a step share one entry of the map (about fade_steps of them).
+    std::map<uint64_t, std::vector<uint64_t>> fade_ends_;
     /// Adds fade_ends_'s entry of the fade of `id`, now ending at `step`.
-    void fade_ends_at(uint64_t id, uint64_t step) { fade_ends_.emplace(step, id); }
+    void fade_ends_at(uint64_t id, uint64_t step) { fade_ends_[step].push_back(id); }
     /// Per run model: its rank among its scene model's levels by chain count, finest first (the
     /// fade word's level, gpu_layout.h HMSM_FADE_*).
     std::vector<uint32_t> fold_rank_;
@@ -275,9 +276,9 @@ struct __attribute__((visibility("hidden"))) Simulation::Impl {
     /// Keeps the steps left of instance `index`'s fade while it is paused (`active` false) and
     /// counts them on from the current step when it resumes.
     void pause_fade(uint32_t index, bool active);
-    /// Per mark of `indices` (ascending, fading): whether the instance is at rest, its deflection
-    /// bound D within LodBands::fade_bound_m (read through the host).
-    Result<std::vector<uint8_t>> fades_at_rest(const std::vector<uint32_t>& indices);
+    /// Per mark of `fading` (index, target run model; ascending indices): whether the instance
+    /// is at rest, its deflection bound D within LodBands::fade_bound_m (read through the host).
+    Result<std::vector<uint8_t>> fades_at_rest(const std::vector<std::pair<uint32_t, uint32_t>>& fading);
     /// Per run model, per chain: e_c, the largest rest distance from the chain's attach node
     /// to a node or mesh vertex of its subtree (filled on first use).
     mutable std::vector<std::vector<double>> subtree_extent_;
