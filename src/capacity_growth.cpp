@@ -31,6 +31,7 @@ Result<bool> Simulation::Impl::grow_on_device(const detail::ElementCounts& neede
     d.node_capacity = nodes;
     d.vertex_capacity = vertices;
     d.instance_capacity = uint32_t(instance_room);
+    template_zone_.forget();  // the growth carries the slots, not what lies above them
     const Status grown = backend_->grow(d);
     if (!grown) {
         // The backend left every buffer as it was: so are the capacities.

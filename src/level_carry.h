@@ -44,12 +44,13 @@ void rest_chain(V* chain, BufferId id, const glm::dmat3& rest_rotation) {
         for (int row = 0; row < 3; ++row) chain[4 * col + row] = V(rest_rotation[col][row]);
 }
 
-/// Every new chain of `carry` at rest (rest_chain), back to back: the template the unfolded
-/// chains of switched instances are copied from on the device.
+/// Every chain of a run model whose chains' Q_c are `rest_rotation` at rest (rest_chain), back
+/// to back: the template the unfolded chains of instances switched into it are copied from on
+/// the device.
 template <class V>
-std::vector<V> rest_chains(const LevelCarry& carry, uint32_t per, BufferId id) {
-    std::vector<V> values(carry.rest_rotation.size() * per, V(0));
-    for (size_t j = 0; j < carry.rest_rotation.size(); ++j) rest_chain(values.data() + j * per, id, carry.rest_rotation[j]);
+std::vector<V> rest_chains(const std::vector<glm::dmat3>& rest_rotation, uint32_t per, BufferId id) {
+    std::vector<V> values(rest_rotation.size() * per, V(0));
+    for (size_t j = 0; j < rest_rotation.size(); ++j) rest_chain(values.data() + j * per, id, rest_rotation[j]);
     return values;
 }
 

@@ -4,7 +4,8 @@
 // staging area above every chain the layout holds, first a copy of the switched instances' old
 // chains, then each switched instance in its new layout, back to back, then a template of each
 // new model that unfolds chains (every chain at rest, rest_chains), which the unfolded chains
-// are copied from. The fine-grained copies (a chain or a few each) stay within the staging; the
+// are copied from (in the placed layout with pattern copies, kept on the device: TemplateZone).
+// The fine-grained copies (a chain or a few each) stay within the staging; the
 // live chains are read and written only in whole instances and runs of them (shader copies of
 // single chains once seemed to slow the standing step after them, which on the H200 was the
 // GPU's clock: docs/vulkan.md).
@@ -21,17 +22,56 @@
 namespace hmsm::detail {
 
 struct LevelStaging {
-    /// A template: a model's chains at rest, from a carry into that model.
+    /// A template: a model's chains at rest (rest_chains of the model's Q_c).
     struct Template {
         uint32_t model = 0;
         uint64_t at = 0;  // its first chain
-        const LevelCarry* carry = nullptr;
+        const std::vector<glm::dmat3>* rest_rotation = nullptr;
     };
     std::vector<uint64_t> old_at;       // per switch, its old chains' copy
     std::vector<uint64_t> instance_at;  // per switch, its first staged chain
     std::vector<int32_t> template_of;   // per switch, its template in `templates`, or -1
     std::vector<Template> templates;    // one per model that unfolds chains
     uint64_t end = 0;                   // the chains the staging needs below it
+};
+
+/// Templates kept on the device from switch to switch (the placed layout with pattern copies):
+/// every run model of a scene model with levels has its template in a zone at the top of the
+/// chain capacity, written once and valid while the capacity stays, the buffers are not laid
+/// out anew and no slot reaches the zone (slots are taken upwards: their end only grows until
+/// the layout is packed anew).
+struct TemplateZone {
+    uint64_t capacity = 0;    // the chain capacity they were written for (0: none written)
+    uint64_t base = 0;        // the zone's first chain
+    std::vector<int64_t> at;  // per run model, its template's first chain, or -1
+    void forget() {
+        capacity = 0;
+        at.clear();
+    }
+    bool valid_for(uint64_t chain_capacity, uint64_t slots_end) const {
+        return capacity != 0 && capacity == chain_capacity && slots_end <= base;
+    }
+    /// The staging of `models` (index, new run model) carried by `carries` from the zone:
+    /// templates only, the slots ending at `slots_end`.
+    LevelStaging staging(uint64_t slots_end, const std::vector<std::pair<uint32_t, uint32_t>>& models,
+                         const std::vector<const LevelCarry*>& carries) const {
+        LevelStaging out;
+        for (size_t k = 0; k < models.size(); ++k) {
+            const uint32_t model = models[k].second;
+            int32_t found = -1;
+            if (!carries[k]->unfolded.empty()) {
+                for (size_t t = 0; t < out.templates.size() && found < 0; ++t)
+                    if (out.templates[t].model == model) found = int32_t(t);
+                if (found < 0) {
+                    found = int32_t(out.templates.size());
+                    out.templates.push_back({model, uint64_t(at[model]), &carries[k]->rest_rotation});
+                }
+            }
+            out.template_of.push_back(found);
+        }
+        out.end = slots_end;
+        return out;
+    }
 };
 
 /// The templates alone from chain `base` on (old_at and instance_at empty): what a switch that
@@ -49,7 +89,7 @@ inline LevelStaging lay_out_templates(uint64_t base, const std::vector<std::pair
                 if (staging.templates[t].model == model) found = int32_t(t);
             if (found < 0) {
                 found = int32_t(staging.templates.size());
-                staging.templates.push_back({model, at, carries[k]});
+                staging.templates.push_back({model, at, &carries[k]->rest_rotation});
                 at += ranges[model].chain_count;
             }
         }
@@ -106,7 +146,7 @@ Status write_templates(Backend& backend, const std::vector<BufferId>& carried, u
         const uint32_t per = shape_scalars(buffer_info(carried[b]).shape);
         const uint32_t halves = halves_of(carried[b]);
         for (const LevelStaging::Template& t : staging.templates) {
-            const std::vector<V> rest = rest_chains<V>(*t.carry, per, carried[b]);
+            const std::vector<V> rest = rest_chains<V>(*t.rest_rotation, per, carried[b]);
             for (uint32_t h = 0; h < halves; ++h) {
                 ranges[b].push_back({h * capacity + t.at, rest.size() / per});
                 values[b].insert(values[b].end(), rest.begin(), rest.end());

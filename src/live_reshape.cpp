@@ -384,6 +384,7 @@ Status Simulation::Impl::reshape_anew(std::unique_ptr<detail::SceneData> next,
             HMSM_TRY(backend_->read(carried[b], h * data_->chain_capacity, live, dst, scalar));
         }
     }
+    template_zone_.forget();
     HMSM_TRY(backend_->upload(*next));
     data_ = std::move(next);
     ++full_uploads_;

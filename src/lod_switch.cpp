@@ -269,6 +269,7 @@ Status Simulation::Impl::switch_models(const std::vector<std::pair<uint32_t, uin
                                         reserved_.chains);
         whole.node_capacity = std::max(grown(data_->node_capacity, whole.total_nodes), reserved_.nodes);
         whole.vertex_capacity = std::max(grown(data_->vertex_capacity, whole.total_vertices), reserved_.vertices);
+        template_zone_.forget();
         HMSM_TRY(backend_->upload(whole));
         *data_ = std::move(whole);
         ++full_uploads_;

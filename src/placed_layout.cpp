@@ -39,6 +39,7 @@ bool Simulation::Impl::wants_placed() const {
 }
 
 void Simulation::Impl::placements_laid_out() {
+    template_zone_.forget();  // the slots start again from the packed end
     placements_.assign_packed(instances_, data_->models);
     placed_end_changed();
     placed_list_.build(instances_, placements_, uint32_t(data_->models.size()));
@@ -241,6 +242,47 @@ Status Simulation::Impl::move_switched_chains(const std::vector<std::pair<uint32
     return backend_->move_buffers(moves);
 }
 
+Result<bool> Simulation::Impl::staging_from_template_zone(uint64_t slots_end,
+                                                          const std::vector<std::pair<uint32_t, uint32_t>>& models,
+                                                          const std::vector<const detail::LevelCarry*>& carries,
+                                                          detail::LevelStaging& staging) {
+    const detail::SceneData& d = *data_;
+    const bool unfolds = std::any_of(carries.begin(), carries.end(),
+                                     [](const detail::LevelCarry* c) { return !c->unfolded.empty(); });
+    if (unfolds && !template_zone_.valid_for(d.chain_capacity, slots_end)) {
+        template_zone_.forget();
+        // Every run model of a scene model with levels, back to back below the capacity.
+        std::vector<int64_t> at(d.models.size(), -1);
+        uint64_t zone = 0;
+        for (const std::vector<uint32_t>& levels : levels_of_)
+            if (levels.size() > 1)
+                for (uint32_t m : levels) {
+                    at[m] = int64_t(zone);
+                    zone += d.models[m].chain_count;
+                }
+        if (zone == 0 || slots_end + zone > d.chain_capacity) return false;
+        const uint64_t base = d.chain_capacity - zone;
+        std::vector<std::vector<glm::dmat3>> rest;
+        rest.reserve(at.size());
+        detail::LevelStaging all;
+        for (uint32_t m = 0; m < at.size(); ++m) {
+            if (at[m] < 0) continue;
+            at[m] += int64_t(base);
+            std::vector<glm::dmat3>& q = rest.emplace_back();
+            for (const Chain& chain : hierarchies_[m].chains) q.push_back(chain.rest_rotation);
+            all.templates.push_back({m, uint64_t(at[m]), &q});
+        }
+        const detail::Scalar scalar = backend_->kind() == BackendKind::cpu64 ? detail::Scalar::f64 : detail::Scalar::f32;
+        HMSM_TRY(detail::write_staging_templates(*backend_, detail::carried_buffers(d.holds_loads()), d.chain_capacity,
+                                                 scalar, all));
+        template_zone_ = {d.chain_capacity, base, std::move(at)};
+    }
+    for (size_t k = 0; k < models.size(); ++k)
+        if (!carries[k]->unfolded.empty() && template_zone_.at[models[k].second] < 0) return false;
+    staging = template_zone_.staging(slots_end, models, carries);
+    return true;
+}
+
 Result<bool> Simulation::Impl::switch_placed(const std::vector<std::pair<uint32_t, uint32_t>>& models,
                                              const std::vector<const detail::LevelCarry*>& carries) {
     detail::SceneData& d = *data_;
@@ -265,8 +307,15 @@ Result<bool> Simulation::Impl::switch_placed(const std::vector<std::pair<uint32_
     placed_end_changed();
     const std::vector<BufferId> carried = detail::carried_buffers(d.holds_loads());
     const detail::Scalar scalar = backend_->kind() == BackendKind::cpu64 ? detail::Scalar::f64 : detail::Scalar::f32;
-    HMSM_TRY(detail::write_staging_templates(*backend_, carried, d.chain_capacity, scalar, staging));
-    HMSM_TRY(direct ? copy_switched_chains(models, carries, staging, slots) : move_switched_chains(models, carries, staging, slots));
+    detail::LevelStaging zoned;
+    Result<bool> from_zone = direct ? staging_from_template_zone(end.chains, models, carries, zoned) : Result<bool>(false);
+    if (!from_zone) return from_zone.status();
+    if (!*from_zone) {
+        template_zone_.forget();  // the staging above the slots may lie in the zone
+        HMSM_TRY(detail::write_staging_templates(*backend_, carried, d.chain_capacity, scalar, staging));
+    }
+    const detail::LevelStaging& used = *from_zone ? zoned : staging;
+    HMSM_TRY(direct ? copy_switched_chains(models, carries, used, slots) : move_switched_chains(models, carries, used, slots));
     for (size_t k = 0; k < models.size(); ++k) {
         const auto [i, model] = models[k];
         const ElementCounts delta = detail::counts_of(d.models[model]) - detail::counts_of(d.models[instances_[i].model]);

@@ -10,6 +10,7 @@
 #include "instance_offsets.h"
 #include "instance_placements.h"
 #include "level_carry.h"
+#include "level_staging.h"
 #include "listed_groups.h"
 #include "placed_list.h"
 #include "lod_tracker.h"
@@ -159,6 +160,13 @@ struct __attribute__((visibility("hidden"))) Simulation::Impl {
     Status move_switched_chains(const std::vector<std::pair<uint32_t, uint32_t>>& models,
                                 const std::vector<const detail::LevelCarry*>& carries,
                                 const detail::LevelStaging& staging, const std::vector<detail::ElementCounts>& slots);
+    /// The templates of switch_placed's pattern copies (the slots ending at `slots_end`) from
+    /// template_zone_, written first where they are not: false, and the zone forgotten, where
+    /// the zone does not fit above the slots.
+    Result<bool> staging_from_template_zone(uint64_t slots_end, const std::vector<std::pair<uint32_t, uint32_t>>& models,
+                                            const std::vector<const detail::LevelCarry*>& carries,
+                                            detail::LevelStaging& staging);
+    detail::TemplateZone template_zone_;
     /// Paused instances (Instance::active false): none lets the step program take the groups
     /// as they are.
     uint64_t paused_count_ = 0;

@@ -132,7 +132,12 @@ public:
             for (const detail::ElementMove& m : patterns[c.pattern].moves) moved += m.count * ids.size();
         return ForwardingBackend::copy_patterns(ids, capacity, patterns, copies);
     }
+    Status write_buffers(std::span<const detail::BufferRangesWrite> writes, detail::Scalar as) override {
+        ++buffer_writes;  // templates (level_staging.h)
+        return ForwardingBackend::write_buffers(writes, as);
+    }
     uint64_t moved = 0;
+    uint64_t buffer_writes = 0;
 };
 
 struct Forest {
@@ -305,6 +310,55 @@ TEST_P(PlacedLayout, TheBufferHoldsEachInstanceAtItsPlacement) {
         EXPECT_TRUE(std::equal(raw.begin(), raw.end(), joints.begin() + std::ptrdiff_t(at * 12))) << "instance " << i;
         at += chains;
     }
+}
+
+TEST_P(PlacedLayout, TemplatesStayOnTheDeviceUntilSlotsReachThem) {
+    std::string skip;
+    Forest placed = forest(GetParam(), InstanceLayout::placed, skip);
+    if (!skip.empty()) GTEST_SKIP() << skip;
+    Forest packed = forest(GetParam(), InstanceLayout::packed, skip);
+    ASSERT_TRUE(placed.sim && packed.sim);
+    if (!detail::backend_of(*placed.sim).capabilities().copies_patterns)
+        GTEST_SKIP() << "the backend does not copy patterns (HMSM_PATTERN_COPIES=0)";
+    auto both = [&](auto&& change) {
+        for (Simulation* sim : {placed.sim.get(), packed.sim.get()}) ASSERT_TRUE(change(*sim).ok());
+    };
+    auto set_level = [&](uint32_t index, uint32_t level) {
+        both([&](Simulation& sim) { return sim.set_instance_lod(sim.instance_ids()[index], level); });
+    };
+    both([](Simulation& sim) { return sim.reserve_instances(48); });  // no growth below
+    for (uint32_t i : {1u, 4u, 8u}) set_level(i, 3);  // folds: no template
+    both([](Simulation& sim) { return sim.step(6); });
+    // The first unfolding switch writes the templates; the next ones copy from them.
+    placed.backend->buffer_writes = 0;
+    set_level(1, 0);
+    EXPECT_EQ(placed.backend->buffer_writes, 1u);
+    set_level(4, 1);
+    both([](Simulation& sim) { return sim.step(4); });
+    set_level(8, 0);
+    EXPECT_EQ(placed.backend->buffer_writes, 1u) << "the templates were written again";
+    expect_same_outputs(*placed.sim, *packed.sim);
+    // Whole trees added past every slot until the slots reach the templates: an unfolding
+    // switch then may not copy from what the adds overwrote.
+    const detail::SceneData& d = detail::scene_data_of(*placed.sim);
+    uint64_t zone = 0;
+    for (const detail::ModelRange& m : d.models) zone += m.chain_count;
+    const uint64_t capacity = d.chain_capacity;
+    for (int k = 0; k < 36 && d.placed_chain_end <= capacity - zone; ++k) {
+        const Instance tree{0, {60.0 + 4.0 * k, 0.0, 0.0}, 0.1 * k, 1.0, 0.2};
+        both([&](Simulation& sim) { return sim.add_instances({&tree, 1}); });
+        both([](Simulation& sim) { return sim.step(1); });
+    }
+    ASSERT_EQ(d.chain_capacity, capacity) << "the capacity grew";
+    ASSERT_GT(d.placed_chain_end, capacity - zone) << "the slots never reached the templates";
+    const uint32_t last = uint32_t(placed.sim->instance_count() - 1);
+    set_level(last, 3);
+    both([](Simulation& sim) { return sim.step(3); });
+    set_level(last, 0);
+    set_level(4, 0);
+    expect_same_outputs(*placed.sim, *packed.sim);
+    both([](Simulation& sim) { return sim.step(10); });
+    expect_same_outputs(*placed.sim, *packed.sim);
 }
 
 std::string backend_name(const ::testing::TestParamInfo<BackendKind>& info) {
