@@ -105,15 +105,34 @@ Result<uint64_t> Simulation::update_lod(Vec3 viewer) {
     tracker.travelled += glm::length(glm::dvec3(viewer) - glm::dvec3(tracker.viewer));
     tracker.viewer = viewer;
     ++tracker.calls;
+    // The entries due, then their instances examined with the memory of those a few entries
+    // ahead requested early: each is a cache miss in arrays over the whole scene, and in the
+    // queue's order they follow one another only through the loop.
+    std::vector<detail::LodTracker::Entry> due;
+    tracker.queue.take_until(tracker.travelled, [&](const detail::LodTracker::Entry& entry) { due.push_back(entry); });
+    constexpr size_t kAhead = 8;
+    for (size_t k = 0; k < std::min(kAhead, due.size()); ++k)
+        if (due[k].index < n) __builtin_prefetch(&tracker.key[due[k].index]);
+    std::vector<uint32_t> live;  // indices
+    live.reserve(due.size());
+    for (size_t k = 0; k < due.size(); ++k) {
+        if (k + kAhead < due.size() && due[k + kAhead].index < n) {
+            __builtin_prefetch(&tracker.key[due[k + kAhead].index]);
+            __builtin_prefetch(&s.instances_[due[k + kAhead].index]);
+        }
+        if (!tracker.live(due[k], n)) continue;  // a stale entry
+        tracker.key[due[k].index] = std::numeric_limits<double>::quiet_NaN();  // later entries of it are stale
+        live.push_back(due[k].index);
+    }
     std::vector<std::pair<uint32_t, double>> examined;  // (index, slack)
-    tracker.queue.take_until(tracker.travelled, [&](const detail::LodTracker::Entry& entry) {
-        if (!tracker.live(entry, n)) return;  // a stale entry
-        const uint32_t i = entry.index;
-        tracker.key[i] = std::numeric_limits<double>::quiet_NaN();  // later entries of i are stale
+    examined.reserve(live.size());
+    for (size_t k = 0; k < live.size(); ++k) {
+        if (k + kAhead < live.size()) __builtin_prefetch(&tracker.may_fade[live[k + kAhead]]);
+        const uint32_t i = live[k];
         const Examined e = examine(i, tracker.travelled);
         change_of(i, e);
         examined.emplace_back(i, e.slack);
-    });
+    }
     // The queue hands entries over in no particular order; the switches below and the keys
     // pushed back do not depend on it (request_lods sorts its requests).
     std::sort(changes.begin(), changes.end());
