@@ -224,7 +224,10 @@ std::vector<std::pair<uint32_t, uint32_t>> Simulation::Impl::ended_fades() {
             const int64_t index = live_index(id);
             const bool gone = index < 0 || instances_[size_t(index)].model != fade->second.from_model;
             if (gone) {
-                if (index >= 0) dirty_instances_.push_back(uint32_t(index));  // its fade word
+                if (index >= 0) {
+                    dirty_instances_.push_back(uint32_t(index));  // its fade word
+                    lod_tracker_.fade_dropped(uint32_t(index));
+                }
                 fades_.erase(fade);
                 continue;
             }
@@ -263,6 +266,7 @@ Result<uint64_t> Simulation::Impl::request_lods(std::vector<std::pair<uint32_t, 
     std::sort(requests.begin(), requests.end());
     for (auto [i, model] : ended) {  // the ended fades fold: their fade words are rewritten
         fades_.erase(uint64_t(instance_ids_[i]));
+        lod_tracker_.fade_dropped(i);
         dirty_instances_.push_back(i);
     }
     // An instance both folding and asked for a level folds first, as if asked after the fold;
@@ -282,10 +286,11 @@ Result<uint64_t> Simulation::Impl::request_lods(std::vector<std::pair<uint32_t, 
         const LodModel& now = lod_models_[instances_[i].model];
         const uint32_t run_model = levels_of_[now.scene_model][level];
         const uint64_t id = uint64_t(instance_ids_[i]);
-        auto fade = fades_.find(id);
+        auto fade = fade_of(i);
         if (level <= now.level) {
             if (fade != fades_.end()) {
                 fades_.erase(fade);
+                lod_tracker_.fade_dropped(i);
                 dirty_instances_.push_back(i);  // its fade word
                 ++changed;
             }
@@ -298,6 +303,7 @@ Result<uint64_t> Simulation::Impl::request_lods(std::vector<std::pair<uint32_t, 
             dirty_instances_.push_back(i);  // its fade word
             if (lod_bands_.fade_steps == 0) {
                 if (fade != fades_.end()) fades_.erase(fade);
+                lod_tracker_.fade_dropped(i);
                 switches.emplace_back(i, run_model);
                 continue;
             }
@@ -314,6 +320,7 @@ Result<uint64_t> Simulation::Impl::request_lods(std::vector<std::pair<uint32_t, 
     for (size_t k = 0; k < started.size(); ++k) {
         if (!(*at_rest)[k]) continue;
         fades_.erase(uint64_t(instance_ids_[started[k].first]));
+        lod_tracker_.fade_dropped(started[k].first);
         switches.push_back(started[k]);
     }
     std::sort(switches.begin(), switches.end());

@@ -342,8 +342,11 @@ Status Simulation::set_instance_lods(std::span<const InstanceId> ids, std::span<
     std::sort(changes.begin(), changes.end());
     HMSM_TRY(impl_->switch_models(changes));
     for (InstanceId id : ids)  // switched now: no fade goes on, its fade word is rewritten
-        if (impl_->fades_.erase(uint64_t(id)) != 0)
-            impl_->dirty_instances_.push_back(uint32_t(impl_->live_index(uint64_t(id))));
+        if (impl_->fades_.erase(uint64_t(id)) != 0) {
+            const uint32_t index = uint32_t(impl_->live_index(uint64_t(id)));
+            impl_->dirty_instances_.push_back(index);
+            impl_->lod_tracker_.fade_dropped(index);
+        }
     return {};
 }
 

@@ -160,6 +160,10 @@ struct LodTracker {
     void fade_started(uint32_t index) {
         if (valid) may_fade[index] = 1;
     }
+    /// Instance `index`'s fade was dropped (folded, switched or given up): no lookup needed.
+    void fade_dropped(uint32_t index) {
+        if (valid) may_fade[index] = 0;
+    }
 };
 
 }  // namespace hmsm::detail

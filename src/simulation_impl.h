@@ -281,6 +281,12 @@ struct __attribute__((visibility("hidden"))) Simulation::Impl {
     Result<std::vector<uint32_t>> chain_keep_ranks();
     /// The fade word of instance `index` (0: it does not fade), for instance_wind.
     double fade_word(uint32_t index) const;
+    /// fades_'s entry of instance `index`, or fades_.end(): looked up only where the LOD
+    /// tracker does not know that the instance has none.
+    std::unordered_map<uint64_t, LodFade>::iterator fade_of(uint32_t index) {
+        if (fades_.empty() || (lod_tracker_.valid && lod_tracker_.may_fade[index] == 0)) return fades_.end();
+        return fades_.find(uint64_t(instance_ids_[index]));
+    }
     /// Keeps the steps left of instance `index`'s fade while it is paused (`active` false) and
     /// counts them on from the current step when it resumes.
     void pause_fade(uint32_t index, bool active);
