@@ -20,6 +20,13 @@ namespace {
 /// rounding stays far below the margin below.
 constexpr uint64_t kCallsBeforeRebuild = 1000000;
 
+/// Instances examined per range on the readback threads (Impl::in_ranges): an examination is
+/// a few cache misses, so a range of this many outweighs waking a thread.
+constexpr uint64_t kExaminedPerRange = 256;
+
+/// How far ahead the examinations request their instances' memory.
+constexpr size_t kAhead = 8;
+
 /// What examining one instance gives: its level at this viewer and how far the viewer may
 /// travel before that level can change (less a margin over the rounding of the distances and
 /// of the summed travel, so that the queue never examines an instance too late).
@@ -77,12 +84,17 @@ Result<uint64_t> Simulation::update_lod(Vec3 viewer) {
         if (e.level != e.heading) changes.emplace_back(i, e.level);
     };
 
+    // Examinations read the scene and write only their own instance's may_fade flag and
+    // result, so ranges of them run on the readback threads; the results are taken in order.
     if (!tracker.valid || tracker.calls >= kCallsBeforeRebuild) {
+        std::vector<Examined> all(n);
+        s.in_ranges(n, kExaminedPerRange, [&](uint64_t begin, uint64_t end) {
+            for (uint64_t i = begin; i < end; ++i) all[i] = examine(uint32_t(i), 0.0);
+        });
         std::vector<double> keys(n);
         for (uint32_t i = 0; i < n; ++i) {
-            const Examined e = examine(i, 0.0);
-            change_of(i, e);
-            keys[i] = e.slack;
+            change_of(i, all[i]);
+            keys[i] = all[i].slack;
         }
         tracker.invalidate();
         Result<uint64_t> changed = s.request_lods(changes, std::move(ended));
@@ -110,7 +122,6 @@ Result<uint64_t> Simulation::update_lod(Vec3 viewer) {
     // queue's order they follow one another only through the loop.
     std::vector<detail::LodTracker::Entry> due;
     tracker.queue.take_until(tracker.travelled, [&](const detail::LodTracker::Entry& entry) { due.push_back(entry); });
-    constexpr size_t kAhead = 8;
     for (size_t k = 0; k < std::min(kAhead, due.size()); ++k)
         if (due[k].index < n) __builtin_prefetch(&tracker.key[due[k].index]);
     std::vector<uint32_t> live;  // indices
@@ -124,14 +135,18 @@ Result<uint64_t> Simulation::update_lod(Vec3 viewer) {
         tracker.key[due[k].index] = std::numeric_limits<double>::quiet_NaN();  // later entries of it are stale
         live.push_back(due[k].index);
     }
+    std::vector<Examined> results(live.size());
+    s.in_ranges(live.size(), kExaminedPerRange, [&](uint64_t begin, uint64_t end) {
+        for (uint64_t k = begin; k < end; ++k) {
+            if (k + kAhead < end) __builtin_prefetch(&tracker.may_fade[live[k + kAhead]]);
+            results[k] = examine(live[k], tracker.travelled);
+        }
+    });
     std::vector<std::pair<uint32_t, double>> examined;  // (index, slack)
     examined.reserve(live.size());
     for (size_t k = 0; k < live.size(); ++k) {
-        if (k + kAhead < live.size()) __builtin_prefetch(&tracker.may_fade[live[k + kAhead]]);
-        const uint32_t i = live[k];
-        const Examined e = examine(i, tracker.travelled);
-        change_of(i, e);
-        examined.emplace_back(i, e.slack);
+        change_of(live[k], results[k]);
+        examined.emplace_back(live[k], results[k].slack);
     }
     // The queue hands entries over in no particular order; the switches below and the keys
     // pushed back do not depend on it (request_lods sorts its requests).

@@ -18,10 +18,12 @@
 #include "scene_data.h"
 #include "step_program.h"
 
+#include <algorithm>
 #include <array>
 #include <map>
 #include <memory>
 #include <mutex>
+#include <thread>
 #include <unordered_map>
 #include <vector>
 
@@ -216,7 +218,31 @@ struct __attribute__((visibility("hidden"))) Simulation::Impl {
     /// Calls body(begin, end) over disjoint element ranges covering [0, count): one range
     /// when the output is small, else ranges of about a MiB spread over the readback threads.
     template <class F>
-    void for_element_ranges(uint64_t count, uint64_t bytes_per_element, F&& body) const;
+    void for_element_ranges(uint64_t count, uint64_t bytes_per_element, F&& body) const {
+        constexpr uint64_t kRangeBytes = uint64_t(1) << 20;  // amortizes waking a thread
+        in_ranges(count, std::max<uint64_t>(1, kRangeBytes / std::max<uint64_t>(1, bytes_per_element)),
+                  std::forward<F>(body));
+    }
+    /// Calls body(begin, end) over disjoint ranges covering [0, count), each of about
+    /// `per_range` items (one range where count is below two of them), spread over the
+    /// readback threads (at most eight: they saturate the memory bus); the split depends on
+    /// count and per_range only. `body` must not throw; the ranges must be independent.
+    template <class F>
+    void in_ranges(uint64_t count, uint64_t per_range, F&& body) const {
+        constexpr uint32_t kMostThreads = 8;
+        const uint64_t ranges = std::min<uint64_t>(count / std::max<uint64_t>(1, per_range), 64 * kMostThreads);
+        const uint32_t threads = std::min(kMostThreads, std::max(1u, std::thread::hardware_concurrency()));
+        if (ranges < 2 || threads < 2) {
+            if (count > 0) body(uint64_t(0), count);
+            return;
+        }
+        std::lock_guard lock(unpack_mutex_);
+        if (!unpack_pool_) unpack_pool_ = std::make_unique<detail::cpu::ThreadPool>(threads);
+        unpack_pool_->for_each(uint32_t(ranges), [&](uint32_t k) {
+            const uint64_t begin = k * count / ranges, end = (k + 1) * count / ranges;
+            if (begin < end) body(begin, end);
+        });
+    }
     template <class Out>
     Status read_into(Output output, std::vector<Out>& out) const;
     Status request_read(Output output);
@@ -371,8 +397,9 @@ struct __attribute__((visibility("hidden"))) Simulation::Impl {
     // and a queue submission on Vulkan, pinned memory on CUDA) are shared, and const calls may
     // run concurrently (the threading contract in include/hmsm/simulation.h).
     mutable std::mutex read_mutex_;
-    // The threads that convert large readbacks (started on the first one), and the lock that
-    // keeps read() and take_read() from sharing them at once.
+    // The threads that convert large readbacks and examine many instances in update_lod
+    // (in_ranges; started on first use), and the lock that keeps read(), take_read() and
+    // update_lod from sharing them at once.
     mutable std::unique_ptr<detail::cpu::ThreadPool> unpack_pool_;
     mutable std::mutex unpack_mutex_;
     /// request_read's requests, one per Output: what was requested and, where the backend does

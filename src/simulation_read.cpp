@@ -97,25 +97,6 @@ const Stored* Simulation::Impl::gathered(const ReadSource& source, const Stored*
     return into.data();
 }
 
-template <class F>
-void Simulation::Impl::for_element_ranges(uint64_t count, uint64_t bytes_per_element, F&& body) const {
-    // A range of about a MiB amortizes waking a thread; eight threads saturate the memory bus.
-    constexpr uint64_t kRangeBytes = uint64_t(1) << 20;
-    constexpr uint32_t kMostThreads = 8;
-    const uint64_t ranges = std::min<uint64_t>(count * bytes_per_element / kRangeBytes, 64 * kMostThreads);
-    const uint32_t threads = std::min(kMostThreads, std::max(1u, std::thread::hardware_concurrency()));
-    if (ranges < 2 || threads < 2) {
-        if (count > 0) body(uint64_t(0), count);
-        return;
-    }
-    std::lock_guard lock(unpack_mutex_);
-    if (!unpack_pool_) unpack_pool_ = std::make_unique<detail::cpu::ThreadPool>(threads);
-    unpack_pool_->for_each(uint32_t(ranges), [&](uint32_t k) {
-        const uint64_t begin = k * count / ranges, end = (k + 1) * count / ranges;
-        if (begin < end) body(begin, end);
-    });
-}
-
 template <class Stored, class Out>
 void Simulation::Impl::unpack(const ReadSource& source, const Stored* raw, std::vector<Out>& out) const {
     if constexpr (std::is_same_v<Stored, double>) raw = gathered(source, raw, gathered_f64_);

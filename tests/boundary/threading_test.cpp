@@ -2,13 +2,15 @@
 // (tools/tsan.sh) can check it: distinct simulations run concurrently, const calls (read()
 // included) on one simulation run concurrently with each other, cpu-parallel's threads hand
 // each other their chunks' results within and across steps, Vulkan simulations are created
-// and destroyed from several threads at once, and the C ABI's last message is per thread. Also
+// and destroyed from several threads at once, update_lod examines instances on the readback
+// threads, and the C ABI's last message is per thread. Also
 // read()'s own argument check (PublicApi), on the same small scene.
 #include <hmsm/hmsm.h>
 #include <hmsm/hmsm_c.h>
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <string>
 #include <thread>
 #include <vector>
@@ -132,6 +134,40 @@ TEST(Threading, CpuParallelThreadsShareAStepOnOneTreeAndOnAForest) {
     auto forest = hmsm::grid_scene(small_scene().models[0], 300, 5.0, 3);
     ASSERT_TRUE(forest) << forest.status().message();
     expect_parallel_equals_serial(*forest, hmsm::Composition::pointer_jumping);
+}
+
+TEST(Threading, UpdateLodExaminesManyInstancesOnTheReadbackThreads) {
+    // Thousands of instances around a band edge: update_lod examines them in ranges on the
+    // readback threads (the first call every instance, later ones those the viewer's travel
+    // may have carried across the edge); the levels are the bands' with hysteresis.
+    auto forest = hmsm::grid_scene(small_scene().models[0], 3000, 2.0, 3);
+    ASSERT_TRUE(forest) << forest.status().message();
+    forest->lod_budgets = {{1}};
+    auto sim = hmsm::Simulation::create(*forest, config_for(hmsm::BackendKind::cpu));
+    ASSERT_TRUE(sim) << sim.status().message();
+    hmsm::LodBands bands;
+    bands.edges = {30.0};
+    bands.hysteresis = 0.1;
+    bands.fade_steps = 0;  // switches at once
+    ASSERT_TRUE((*sim)->set_lod_bands(bands).ok());
+    const std::vector<hmsm::Instance> instances((*sim)->instances().begin(), (*sim)->instances().end());
+    const std::vector<hmsm::InstanceId> ids((*sim)->instance_ids().begin(), (*sim)->instance_ids().end());
+    std::vector<uint32_t> expected(instances.size(), 0);
+    uint64_t switched = 0;
+    for (int call = 0; call < 8; ++call) {
+        const hmsm::Vec3 viewer{12.0 * call, 0.0, 40.0 - 6.0 * call};
+        auto changed = (*sim)->update_lod(viewer);
+        ASSERT_TRUE(changed) << changed.status().message();
+        switched += *changed;
+        for (size_t i = 0; i < instances.size(); ++i) {
+            const hmsm::Vec3 d = instances[i].origin - viewer;
+            const double distance = std::sqrt(d.x * d.x + d.y * d.y + d.z * d.z);
+            if (expected[i] == 0 && distance > 30.0 * 1.1) expected[i] = 1;
+            else if (expected[i] == 1 && distance < 30.0 * 0.9) expected[i] = 0;
+            ASSERT_EQ(*(*sim)->instance_lod(ids[i]), expected[i]) << "instance " << i << ", call " << call;
+        }
+    }
+    EXPECT_GT(switched, 3000u) << "too few switches to examine many instances per call";
 }
 
 TEST(Threading, ConcurrentReadsOnOneVulkanSimulation) {
