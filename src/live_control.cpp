@@ -91,7 +91,8 @@ Status Simulation::Impl::apply_pending() {
         ahead_schedule_.live_change();
     if (header_dirty_) {
         wind_scratch_.assign(detail::kWindHeaderScalars, 0.0);
-        detail::fill_wind_header(config_.wind, modes_, force_fields_, wind_scratch_.data());
+        const double step_span = data_->coupled() ? wind_clock_rate(config_.wind) * config_.parameters.dt : 0.0;
+        detail::fill_wind_header(config_.wind, modes_, force_fields_, step_span, wind_scratch_.data());
         HMSM_TRY(backend_->write(BufferId::wind_table, 0, HMSM_WIND_STEPS, wind_scratch_.data(),
                                  detail::Scalar::f64));
         header_dirty_ = false;

@@ -5,6 +5,7 @@
 #include <glm/geometric.hpp>
 
 #include <cmath>
+#include <numbers>
 
 namespace hmsm::detail {
 namespace {
@@ -44,12 +45,21 @@ void fill_instance_wind(const Wind& wind, const WindModes& modes, const Instance
         out[4 + k] = wind.profile == WindProfile::turbulent ? frac(modes.turbulent.multiple[k] * phi) : 0.0;
 }
 
+double step_mean_factor(double cycles_per_step) {
+    const double x = std::numbers::pi * cycles_per_step;
+    return x == 0.0 ? 1.0 : std::sin(x) / x;
+}
+
 void fill_wind_header(const Wind& wind, const WindModes& modes, std::span<const ForceField> fields,
-                      double* out) {
+                      double step_span, double* out) {
     for (uint32_t i = 0; i < kWindHeaderScalars; ++i) out[i] = 0.0;
     const bool atmospheric = wind.profile == WindProfile::atmospheric;
-    for (uint32_t k = 0; k < kTurbulentModes; ++k)
-        out[4 * HMSM_WIND_AMPLITUDES + k] = atmospheric ? modes.atmospheric.amplitude[k] : modes.turbulent.amplitude[k];
+    for (uint32_t k = 0; k < kTurbulentModes; ++k) {
+        // A mode's cycles per unit of the clock: kx_k (per metre of travel) or m_k.
+        const double rate = atmospheric ? modes.atmospheric.wavenumber[k] : modes.turbulent.multiple[k];
+        const double amplitude = atmospheric ? modes.atmospheric.amplitude[k] : modes.turbulent.amplitude[k];
+        out[4 * HMSM_WIND_AMPLITUDES + k] = amplitude * step_mean_factor(rate * step_span);
+    }
     const Vec3 w = wind.strength * glm::normalize(wind.direction);
     double* vector = out + 4 * HMSM_WIND_VECTOR;
     vector[0] = w.x;

@@ -29,6 +29,11 @@ struct WindClock {
     double tau(double frequency, double dt, uint64_t step) const {
         return base_tau + (frequency * dt) * double(step - base_step);
     }
+    /// The clock at which step n samples the wind: tau_n, the step's start, under the paper's
+    /// dynamics; the step's midpoint tau_n + f dt / 2 under `coupled` (docs/model.md 3.5).
+    double sample(double frequency, double dt, uint64_t step, bool midpoint) const {
+        return tau(frequency, dt, step) + (midpoint ? 0.5 * frequency * dt : 0.0);
+    }
 };
 
 /// The mode constants of a wind setting's turbulent and atmospheric profiles (its turbulence
@@ -47,8 +52,14 @@ double instance_wind_phase(const Wind& wind, const Instance& instance);
 void fill_instance_wind(const Wind& wind, const WindModes& modes, const Instance& instance, double fade_word,
                         double* out);
 /// Wind table header: amplitudes a_k, (s d, field count), s e_y and s e_z, the force fields.
+/// `step_span` is the clock's advance over one step when each turbulent or atmospheric mode is
+/// averaged over the step (`coupled`: f dt; a_k then carries the factor sinc), 0 where the
+/// wind is sampled (docs/model.md 3.5).
 void fill_wind_header(const Wind& wind, const WindModes& modes, std::span<const ForceField> fields,
-                      double* out);
+                      double step_span, double* out);
+/// The factor sin(pi c) / (pi c) by which the mean of a cosine of c cycles per step over the step
+/// is smaller than its value at the step's midpoint.
+double step_mean_factor(double cycles_per_step);
 /// One step slot: (tau mod 2, 0, 0, 0), then frac(m_k tau + u_k) (atmospheric: kx_k for m_k).
 void fill_wind_step(const Wind& wind, const WindModes& modes, double tau, double* out);
 

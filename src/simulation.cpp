@@ -292,7 +292,7 @@ Status Simulation::Impl::step(uint32_t count) {
         run_steps_.resize(steps);
         for (uint32_t k = 0; k <= steps; ++k) {
             const uint64_t n = steps_done_ + k + 1;  // steps_done_ counts the earlier chunks
-            const double tau = clock_.tau(wind_clock_rate(wind), dt, n);
+            const double tau = clock_.sample(wind_clock_rate(wind), dt, n, data_->coupled());
             if (!(std::abs(tau) <= detail::kMaxWindPhase) && k == steps) {  // the step after: its own step() will say
                 std::fill_n(&wind_scratch_[size_t(k) * detail::kWindStepScalars], detail::kWindStepScalars, 0.0);
                 continue;

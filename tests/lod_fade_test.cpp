@@ -84,7 +84,10 @@ TEST_P(LodFade, CoarseningSwitchPopsWithoutFadeAndNotWithIt) {
     auto instant = create(c, 0), faded = create(c, c.fade_steps), twin = create(c, 0);
     ASSERT_TRUE(instant && faded && twin);
     const uint32_t coarsest = instant->lod_level_count(0) - 1;
-    for (Simulation* s : {instant.get(), faded.get(), twin.get()}) ASSERT_TRUE(s->step(240).ok());
+    // 2.5 s into the wind, its branches bent. The comparison is at one moment: the stiff deep
+    // tree's frame motion follows the 8.75 Hz term of the storm's profile, so in some frames
+    // it moves by more than the pop a switch there would make.
+    for (Simulation* s : {instant.get(), faded.get(), twin.get()}) ASSERT_TRUE(s->step(300).ok());
 
     auto before = positions(*instant);
     ASSERT_TRUE(instant->step(1).ok());
