@@ -54,33 +54,15 @@ struct TemplateZone {
     /// The staging of `models` (index, new run model) carried by `carries` from the zone:
     /// templates only, the slots ending at `slots_end`.
     LevelStaging staging(uint64_t slots_end, const std::vector<std::pair<uint32_t, uint32_t>>& models,
-                         const std::vector<const LevelCarry*>& carries) const {
-        LevelStaging out;
-        for (size_t k = 0; k < models.size(); ++k) {
-            const uint32_t model = models[k].second;
-            int32_t found = -1;
-            if (!carries[k]->unfolded.empty()) {
-                for (size_t t = 0; t < out.templates.size() && found < 0; ++t)
-                    if (out.templates[t].model == model) found = int32_t(t);
-                if (found < 0) {
-                    found = int32_t(out.templates.size());
-                    out.templates.push_back({model, uint64_t(at[model]), &carries[k]->rest_rotation});
-                }
-            }
-            out.template_of.push_back(found);
-        }
-        out.end = slots_end;
-        return out;
-    }
+                         const std::vector<const LevelCarry*>& carries) const;
 };
 
-/// The templates alone from chain `base` on (old_at and instance_at empty): what a switch that
-/// copies kept chains straight from slot to slot (Backend::copy_patterns) stages.
-inline LevelStaging lay_out_templates(uint64_t base, const std::vector<std::pair<uint32_t, uint32_t>>& models,
-                                      const std::vector<ModelRange>& ranges,
-                                      const std::vector<const LevelCarry*>& carries) {
-    LevelStaging staging;
-    uint64_t at = base;
+/// Adds to `staging` a template for each model of `models` (index, new run model) whose carry
+/// unfolds chains, one per model, at `template_at(model)` (asked once per model, in the order
+/// the models first appear), and fills template_of.
+template <class TemplateAt>
+void add_templates(LevelStaging& staging, const std::vector<std::pair<uint32_t, uint32_t>>& models,
+                   const std::vector<const LevelCarry*>& carries, TemplateAt&& template_at) {
     for (size_t k = 0; k < models.size(); ++k) {
         const uint32_t model = models[k].second;
         int32_t found = -1;
@@ -89,12 +71,33 @@ inline LevelStaging lay_out_templates(uint64_t base, const std::vector<std::pair
                 if (staging.templates[t].model == model) found = int32_t(t);
             if (found < 0) {
                 found = int32_t(staging.templates.size());
-                staging.templates.push_back({model, at, &carries[k]->rest_rotation});
-                at += ranges[model].chain_count;
+                staging.templates.push_back({model, template_at(model), &carries[k]->rest_rotation});
             }
         }
         staging.template_of.push_back(found);
     }
+}
+
+inline LevelStaging TemplateZone::staging(uint64_t slots_end, const std::vector<std::pair<uint32_t, uint32_t>>& models,
+                                          const std::vector<const LevelCarry*>& carries) const {
+    LevelStaging out;
+    add_templates(out, models, carries, [&](uint32_t model) { return uint64_t(at[model]); });
+    out.end = slots_end;
+    return out;
+}
+
+/// The templates alone from chain `base` on (old_at and instance_at empty): what a switch that
+/// copies kept chains straight from slot to slot (Backend::copy_patterns) stages.
+inline LevelStaging lay_out_templates(uint64_t base, const std::vector<std::pair<uint32_t, uint32_t>>& models,
+                                      const std::vector<ModelRange>& ranges,
+                                      const std::vector<const LevelCarry*>& carries) {
+    LevelStaging staging;
+    uint64_t at = base;
+    add_templates(staging, models, carries, [&](uint32_t model) {
+        const uint64_t first = at;
+        at += ranges[model].chain_count;
+        return first;
+    });
     staging.end = at;
     return staging;
 }

@@ -277,8 +277,11 @@ Result<bool> Simulation::Impl::staging_from_template_zone(uint64_t slots_end,
                                                  scalar, all));
         template_zone_ = {d.chain_capacity, base, std::move(at)};
     }
-    for (size_t k = 0; k < models.size(); ++k)
-        if (!carries[k]->unfolded.empty() && template_zone_.at[models[k].second] < 0) return false;
+    for (size_t k = 0; k < models.size(); ++k) {
+        const uint32_t model = models[k].second;
+        if (!carries[k]->unfolded.empty() && (model >= template_zone_.at.size() || template_zone_.at[model] < 0))
+            return false;
+    }
     staging = template_zone_.staging(slots_end, models, carries);
     return true;
 }
