@@ -18,7 +18,9 @@
 
 #include <cmath>
 #include <cstdio>
+#include <numbers>
 #include <random>
+#include <string>
 
 using namespace hmsm;
 
@@ -58,6 +60,50 @@ ModelOptions articulated_options() {
 }
 
 }  // namespace
+
+namespace {
+
+/// The lower of the trees' sway frequencies along the model's x and z (Hz): Rayleigh's quotient
+/// with the static deflection q = K^-1 F under a uniform acceleration F, by the dense links.
+double rayleigh_sway_hz(const detail::LinearizedLinks& links) {
+    double lowest = 0.0;
+    for (const glm::dvec3 along : {glm::dvec3(1, 0, 0), glm::dvec3(0, 0, 1)}) {
+        const std::vector<double> f = detail::uniform_load(links, along);
+        std::vector<double> q(f.size()), mq;
+        for (size_t j = 0; j < f.size(); ++j) q[j] = f[j] / links.links[j / 2].stiffness[j % 2];
+        detail::link_mass_times(links, q, mq);
+        double work = 0.0, kinetic = 0.0;
+        for (size_t j = 0; j < f.size(); ++j) {
+            work += q[j] * f[j];
+            kinetic += q[j] * mq[j];
+        }
+        const double hz = std::sqrt(work / kinetic) / (2 * std::numbers::pi);
+        lowest = lowest == 0.0 ? hz : std::min(lowest, hz);
+    }
+    return lowest;
+}
+
+}  // namespace
+
+// The whole tree's sway frequency of the records' inertia scale is Rayleigh's of the dense
+// links (paper-1: 1.19 Hz, its fundamental mode's 1.19, docs/model.md 3.13).
+TEST(ArticulatedExchange, SwayFrequencyIsTheLinkedTreesRayleighQuotient) {
+    for (const char* preset : {"paper-1", "paper-5"}) {
+        auto tree = generate_preset(preset);
+        ASSERT_TRUE(tree.ok());
+        Parameters parameters;
+        auto h = build_hierarchy(*tree, articulated_options(), parameters);
+        ASSERT_TRUE(h.ok()) << h.status().message();
+        const double dense = rayleigh_sway_hz(detail::linearize_links(*tree, *h, parameters));
+        EXPECT_NEAR(detail::whole_tree_sway_hz(*h), dense, 1e-9 * dense) << preset;
+        if (std::string(preset) == "paper-1") EXPECT_NEAR(dense, 1.19, 0.01);
+    }
+    // The scale: (x / tan x)^2 with x = pi f dt, capped at x = 1/2; 1 for a tree that does not sway.
+    const double x = std::numbers::pi * 1.2 / 30.0;
+    EXPECT_NEAR(detail::articulated_inertia_scale(1.2, 1.0 / 30.0), std::pow(x / std::tan(x), 2), 1e-15);
+    EXPECT_EQ(detail::articulated_inertia_scale(50.0, 1.0 / 30.0), std::pow(0.5 / std::tan(0.5), 2));
+    EXPECT_EQ(detail::articulated_inertia_scale(0.0, 1.0 / 30.0), 1.0);
+}
 
 // One step from a random state under random impulses: the sweeps' change of rate dV equals the
 // solution of (M + dt Theta D + dt^2 Theta^2 K) dV = b + J^T f, with M assembled column by column
@@ -101,14 +147,17 @@ TEST(ArticulatedExchange, SweepsSolveTheLinearizedStepExactly) {
                                  free_rate[j].data(), &swept[2 * j], motion[j].data());
     }
 
-    // The dense step.
+    // The dense step, its inertia scaled as the records' (the fundamental's frequency from the
+    // linearized links' static deflection under a uniform lateral load).
     const detail::LinearizedLinks links = detail::linearize_links(*tree, *h, parameters);
+    const double scale = detail::articulated_inertia_scale(rayleigh_sway_hz(links), parameters.dt);
+    EXPECT_LT(scale, 1.0);
     std::vector<double> a(n * n), b(n, 0.0), e(n), column;
     for (size_t j = 0; j < n; ++j) {
         std::fill(e.begin(), e.end(), 0.0);
         e[j] = 1.0;
         detail::link_mass_times(links, e, column);
-        for (size_t i = 0; i < n; ++i) a[i * n + j] = column[i];
+        for (size_t i = 0; i < n; ++i) a[i * n + j] = scale * column[i];
     }
     const double dt = parameters.dt;
     for (size_t c = 0; c < chains; ++c) {

@@ -5,7 +5,9 @@
 
 #include "../common/gpu_layout.h"
 
+#include <glm/geometric.hpp>
 #include <glm/mat3x3.hpp>
+#include <glm/matrix.hpp>
 
 #include <algorithm>
 #include <array>
@@ -67,7 +69,77 @@ Mat6 motion_transform(const Mat3& q, const Vec3& d) {
     return x;
 }
 
+/// y = a x for a spatial 6-vector x.
+std::array<double, 6> apply(const Mat6& a, const std::array<double, 6>& x) {
+    std::array<double, 6> y{};
+    for (int r = 0; r < 6; ++r)
+        for (int c = 0; c < 6; ++c) y[size_t(r)] += a[size_t(6 * r + c)] * x[size_t(c)];
+    return y;
+}
+
+/// y = a^T x.
+std::array<double, 6> apply_transposed(const Mat6& a, const std::array<double, 6>& x) {
+    std::array<double, 6> y{};
+    for (int r = 0; r < 6; ++r)
+        for (int c = 0; c < 6; ++c) y[size_t(c)] += a[size_t(6 * r + c)] * x[size_t(r)];
+    return y;
+}
+
+/// Rayleigh's sway frequency (Hz) along the model direction `along`.
+double sway_hz_along(const Hierarchy& h, const Vec3& along) {
+    const size_t n = h.chains.size();
+    std::vector<Vec3> local(n);                      // the direction in each chain's frame
+    std::vector<Mat6> transform(n);                  // X_c from the parent's joint
+    std::vector<std::array<double, 6>> force(n);     // the load each chain passes to its joint
+    for (size_t c = 0; c < n; ++c) {
+        const Chain& chain = h.chains[c];
+        const Vec3 outer = chain.parent < 0 ? along : local[size_t(chain.parent)];
+        local[c] = glm::transpose(chain.rest_rotation) * outer;
+        const Vec3 attach = c == 0 ? Vec3(0.0) : h.node_local[size_t(chain.attach_node)];
+        transform[c] = motion_transform(chain.rest_rotation, attach);
+        const ChainDynamics& d = chain.dynamics;
+        const Vec3 moment = glm::cross(d.own_mass_moment, local[c]);  // sum x cross m u
+        force[c] = {moment.x, moment.y, moment.z, d.mass * local[c].x, d.mass * local[c].y, d.mass * local[c].z};
+    }
+    for (size_t c = n; c-- > 1;) {  // up: each chain's load includes its subtree's
+        const std::array<double, 6> up = apply_transposed(transform[c], force[c]);
+        std::array<double, 6>& parent = force[size_t(h.chains[c].parent)];
+        for (int i = 0; i < 6; ++i) parent[size_t(i)] += up[size_t(i)];
+    }
+    double work = 0.0, kinetic = 0.0;
+    std::vector<std::array<double, 6>> motion(n);
+    for (size_t c = 0; c < n; ++c) {  // down: the static deflection q = K^-1 F as a motion
+        const Chain& chain = h.chains[c];
+        const ChainDynamics& d = chain.dynamics;
+        std::array<double, 6> v = chain.parent < 0 ? std::array<double, 6>{}
+                                                   : apply(transform[c], motion[size_t(chain.parent)]);
+        const int column[2] = {0, 2};
+        for (int a = 0; a < 2; ++a) {
+            const double f = force[c][size_t(column[a])];
+            const double q = d.stiffness[a] > 0.0 ? f / d.stiffness[a] : 0.0;
+            work += q * f;
+            v[size_t(column[a])] += q;
+        }
+        motion[c] = v;
+        const std::array<double, 6> p = apply(body_inertia(d.mass, d.own_mass_moment, d.own_inertia), v);
+        for (int i = 0; i < 6; ++i) kinetic += v[size_t(i)] * p[size_t(i)];
+    }
+    return kinetic > 0.0 && work > 0.0 ? std::sqrt(work / kinetic) / (2.0 * std::numbers::pi) : 0.0;
+}
+
 }  // namespace
+
+double whole_tree_sway_hz(const Hierarchy& h) {
+    if (h.chains.empty()) return 0.0;
+    const double x = sway_hz_along(h, Vec3(1.0, 0.0, 0.0)), z = sway_hz_along(h, Vec3(0.0, 0.0, 1.0));
+    if (x <= 0.0 || z <= 0.0) return std::max(x, z);
+    return std::min(x, z);
+}
+
+double articulated_inertia_scale(double frequency, double dt) {
+    const double x = std::min(std::numbers::pi * frequency * dt, 0.5);
+    return x > 0.0 ? std::pow(x / std::tan(x), 2) : 1.0;
+}
 
 double articulated_theta(double frequency, double dt) {
     return std::clamp(std::numbers::pi * frequency * dt, 0.5, 1.0);
@@ -80,9 +152,11 @@ double articulated_damping(const ChainDynamics& d, int axis) {
 void append_articulated_records(const Hierarchy& h, double dt, std::vector<double>& out) {
     const size_t n = h.chains.size();
     std::vector<Mat6> articulated(n);
+    const double scale = articulated_inertia_scale(whole_tree_sway_hz(h), dt);
     for (size_t c = 0; c < n; ++c) {
         const ChainDynamics& d = h.chains[c].dynamics;
         articulated[c] = body_inertia(d.mass, d.own_mass_moment, d.own_inertia);
+        for (double& v : articulated[c]) v *= scale;
     }
     const size_t first = out.size();
     constexpr size_t record = 4 * HMSM_CHAIN_ARTICULATED_VEC4S;
