@@ -1,7 +1,7 @@
 // The records of the coupled dynamics' articulated exchange (docs/model.md 3.13, "The
 // articulated exchange"; gpu_layout.h HMSM_CHAIN_ARTICULATED_VEC4S): each chain's articulated
-// inertia from the leaves up, the joints' armature of the theta step, folded on the host in
-// double.
+// inertia from the leaves up (every body's scaled so that the step sways the tree's fundamental
+// at its frequency), the joints' armature of the theta step, folded on the host in double.
 #pragma once
 
 #include <hmsm/hierarchy.h>
