@@ -159,7 +159,8 @@ HMSM_API double wind_profile_value(WindProfile profile, double x);
 HMSM_API double wind_value(const Wind& wind, double x);
 /// w for an instance at `origin` with the wind fixed since the start: s Y(f t + phi) d, with
 /// the instance's wind phase p and wind scale lambda (docs/model.md 3.5); for `atmospheric`
-/// lambda s (e_x (1 + u') + e_y v' + e_z w') at the clock U t + p.
+/// lambda s (e_x (1 + u') + e_y v' + e_z w') at the clock U t + p. (A step of the coupled
+/// dynamics takes this wind's mean over the step, docs/model.md 3.5.)
 HMSM_API Vec3 wind_at(const Wind& wind, const Vec3& origin, double t, double instance_phase = 0.0,
              double instance_scale = 1.0);
 /// Front phase of an instance at `origin`: -f (o.d)/v with d normalized, or 0 without a front
