@@ -59,11 +59,7 @@ ModelOptions articulated_options() {
     return options;
 }
 
-}  // namespace
-
-namespace {
-
-/// The lower of the trees' sway frequencies along the model's x and z (Hz): Rayleigh's quotient
+/// The lower of the tree's sway frequencies along the model's x and z (Hz): Rayleigh's quotient
 /// with the static deflection q = K^-1 F under a uniform acceleration F, by the dense links.
 double rayleigh_sway_hz(const detail::LinearizedLinks& links) {
     double lowest = 0.0;

@@ -1,7 +1,7 @@
 // Chains split into links under the coupled dynamics (docs/model.md 3.13): a long rod becomes
 // several links that keep the cantilever's first frequency, bend like the beam under a steady
-// load, and leave the paper's decomposition alone; and the convergence of a preset's twig tips
-// in dt.
+// load, and leave the paper's decomposition alone; and the convergence in dt of the twig tips
+// of a preset and of a scanned tree.
 #include "simulation_access.h"
 #include "test_trees.h"
 #include "tree_response.h"

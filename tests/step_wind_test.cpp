@@ -90,7 +90,7 @@ TEST(StepWind, TheMeanFactorIsOneForASteadyWindAndFallsWithTheCycles) {
     EXPECT_EQ(detail::step_mean_factor(0.0), 1.0);
     EXPECT_NEAR(detail::step_mean_factor(0.5), 2.0 / std::numbers::pi, 1e-15);
     EXPECT_NEAR(detail::step_mean_factor(1.0), 0.0, 1e-15);
-    EXPECT_NEAR(detail::step_mean_factor(-0.25), detail::step_mean_factor(0.25), 0.0);
+    EXPECT_EQ(detail::step_mean_factor(-0.25), detail::step_mean_factor(0.25));
 }
 
 }  // namespace
