@@ -19,6 +19,7 @@
 #include <cmath>
 #include <cstdio>
 #include <numbers>
+#include <optional>
 #include <random>
 #include <string>
 
@@ -59,6 +60,21 @@ ModelOptions articulated_options() {
     return options;
 }
 
+/// A preset and its hierarchy under the articulated exchange for `parameters`.
+struct ArticulatedPreset {
+    TreeModel tree;
+    Hierarchy hierarchy;
+};
+std::optional<ArticulatedPreset> articulated_preset(const char* name, const Parameters& parameters) {
+    auto tree = generate_preset(name);
+    EXPECT_TRUE(tree.ok()) << name;
+    if (!tree.ok()) return std::nullopt;
+    auto h = build_hierarchy(*tree, articulated_options(), parameters);
+    EXPECT_TRUE(h.ok()) << name << ": " << h.status().message();
+    if (!h.ok()) return std::nullopt;
+    return ArticulatedPreset{std::move(*tree), std::move(*h)};
+}
+
 /// The lower of the tree's sway frequencies along the model's x and z (Hz): Rayleigh's quotient
 /// with the static deflection q = K^-1 F under a uniform acceleration F, by the dense links.
 double rayleigh_sway_hz(const detail::LinearizedLinks& links) {
@@ -85,11 +101,11 @@ double rayleigh_sway_hz(const detail::LinearizedLinks& links) {
 // links (paper-1: 1.19 Hz, its fundamental mode's 1.19, docs/model.md 3.13).
 TEST(ArticulatedExchange, SwayFrequencyIsTheLinkedTreesRayleighQuotient) {
     for (const char* preset : {"paper-1", "paper-5"}) {
-        auto tree = generate_preset(preset);
-        ASSERT_TRUE(tree.ok());
         Parameters parameters;
-        auto h = build_hierarchy(*tree, articulated_options(), parameters);
-        ASSERT_TRUE(h.ok()) << h.status().message();
+        const auto built = articulated_preset(preset, parameters);
+        ASSERT_TRUE(built);
+        const TreeModel* tree = &built->tree;
+        const Hierarchy* h = &built->hierarchy;
         const double dense = rayleigh_sway_hz(detail::linearize_links(*tree, *h, parameters));
         EXPECT_NEAR(detail::whole_tree_sway_hz(*h), dense, 1e-9 * dense) << preset;
         if (std::string(preset) == "paper-1") EXPECT_NEAR(dense, 1.19, 0.01);
@@ -107,12 +123,12 @@ TEST(ArticulatedExchange, SwayFrequencyIsTheLinkedTreesRayleighQuotient) {
 // - the aerodynamic impulse, and J^T f each chain's own impulse (about its joint, in its frame)
 // as generalized forces on its joint and every joint below it.
 TEST(ArticulatedExchange, SweepsSolveTheLinearizedStepExactly) {
-    auto tree = generate_preset("paper-5");
-    ASSERT_TRUE(tree.ok());
     Parameters parameters;
     parameters.dt = 1.0 / 45.0;  // some joints resolved (theta 1/2), some not (theta up to 1)
-    auto h = build_hierarchy(*tree, articulated_options(), parameters);
-    ASSERT_TRUE(h.ok()) << h.status().message();
+    const auto built = articulated_preset("paper-5", parameters);
+    ASSERT_TRUE(built);
+    const TreeModel* tree = &built->tree;
+    const Hierarchy* h = &built->hierarchy;
     const size_t chains = h->chains.size(), n = 2 * chains;
     std::vector<double> records;
     detail::append_articulated_records(*h, parameters.dt, records);
@@ -217,11 +233,10 @@ double joint_energy(const detail::LinearizedLinks& links, const std::vector<doub
 // range before its own, so that a barrier after each range orders every parent and child.
 TEST(ArticulatedExchange, RecordsNameEachDepthAsARange) {
     for (const char* preset : {"paper-1", "paper-5"}) {
-        auto tree = generate_preset(preset);
-        ASSERT_TRUE(tree.ok());
         Parameters parameters;
-        auto h = build_hierarchy(*tree, articulated_options(), parameters);
-        ASSERT_TRUE(h.ok()) << h.status().message();
+        const auto built = articulated_preset(preset, parameters);
+        ASSERT_TRUE(built);
+        const Hierarchy* h = &built->hierarchy;
         std::vector<double> records;
         detail::append_articulated_records(*h, parameters.dt, records);
         const size_t chains = h->chains.size();

@@ -3,9 +3,10 @@
 # builds the library and tests/boundary's threading tests with -fsanitize=thread (RelWithDebInfo,
 # in ${HMSM_TSAN_BUILD_DIR:-build-tsan}) and runs them: simulations stepping in parallel,
 # concurrent reads of one simulation (CPU and Vulkan), Vulkan simulations created from two
-# threads at once, update_lod examining thousands of instances on the readback threads, the C ABI's per-thread message, and live control and streaming (instances
-# added, removed and reset, wind and fields replaced) in several threads. Any report fails the run. Extra arguments go
-# to cmake.
+# threads at once, update_lod examining thousands of instances on the readback threads, the C
+# ABI's per-thread message, and live control and streaming (instances added, removed and reset,
+# wind and fields replaced) in several threads. Any report fails the run. Extra arguments go to
+# cmake.
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 build="${HMSM_TSAN_BUILD_DIR:-$root/build-tsan}"
