@@ -1,8 +1,10 @@
 // The coupled dynamics' articulated exchange (docs/model.md 3.13): the two sweeps solve the
 // linearized tree's implicit step exactly (against a dense solve with the mass matrix of the
 // linearized links), a released preset loses energy at every time step size, levels keep the
-// folded bodies, and the option is refused where it does not run (the split rod's sway:
+// folded bodies and scale their inertia by their own sway, and the option is refused where it
+// does not run (the split rod's sway:
 // coupled_links_test.cpp).
+#include "simulation_access.h"
 #include "test_trees.h"
 
 #include "common/articulated_math.h"
@@ -402,4 +404,36 @@ TEST(ArticulatedExchange, LevelsKeepTheFoldedBodies) {
     for (double v : expected) scale = std::max(scale, std::abs(v));
     EXPECT_TRUE(test::all_finite(actual));
     EXPECT_LT(test::max_abs_difference(actual, expected), 1e-5 * scale);
+}
+
+// Each level is a model of its own: its records' inertia scale comes from its own whole-tree
+// sway frequency, not from the full model's (the levels' frequencies differ, so records made
+// with one frequency for all would not match).
+TEST(ArticulatedExchange, EachLevelScalesItsInertiaByItsOwnSway) {
+    auto tree = generate_preset("paper-5");
+    ASSERT_TRUE(tree.ok());
+    Scene scene = single_tree_scene(*tree);
+    scene.lod_budgets = {{64, 16}};
+    SimulationConfig config = test::coupled_config(BackendKind::cpu64, 1.0 / 30.0);
+    config.model.exchange = Exchange::articulated;
+    auto sim = Simulation::create(scene, config);
+    ASSERT_TRUE(sim.ok()) << sim.status().message();
+    const detail::SceneData& d = detail::scene_data_of(**sim);
+    const std::vector<Hierarchy>& levels = detail::SimulationAccess::impl(**sim).hierarchies_;
+    ASSERT_EQ(levels.size(), 3u);
+    ASSERT_EQ(d.models.size(), levels.size());
+    std::vector<double> hz;
+    for (size_t m = 0; m < levels.size(); ++m) {
+        SCOPED_TRACE("level " + std::to_string(m));
+        hz.push_back(detail::whole_tree_sway_hz(levels[m]));
+        std::vector<double> own;
+        detail::append_articulated_records(levels[m], d.dt, own);
+        ASSERT_EQ(own.size(), size_t(d.models[m].chain_count) * kRecord);
+        const double* flat = d.chain_articulated.data() + size_t(d.models[m].chain_begin) * kRecord;
+        for (size_t k = 0; k < own.size(); ++k) ASSERT_EQ(flat[k], own[k]) << "scalar " << k;
+        EXPECT_LT(detail::articulated_inertia_scale(hz[m], d.dt), 1.0);
+    }
+    EXPECT_NE(hz[1], hz[0]);
+    EXPECT_NE(hz[2], hz[0]);
+    EXPECT_NEAR(hz[1], hz[0], 0.05 * hz[0]) << "a level keeps the full model's sway within 5 %";
 }
