@@ -1,6 +1,7 @@
 // `hmsm bench --open-world` through the CLI binary on the serial CPU backend at a small size:
 // the row's fields, level shares near the asked ones, a finite pop against a moving tree, call
-// distributions in order, the memory estimate and the markdown. No timing thresholds.
+// distributions in order, the memory estimate and the markdown; on Vulkan also the frames
+// through the engine's path. No timing thresholds.
 #include "cli_fixture.h"
 
 #include <hmsm/simulation.h>
@@ -8,6 +9,7 @@
 #include <nlohmann/json.hpp>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -120,6 +122,35 @@ TEST_F(BenchOpenWorld, SmallWorldOnCpuReportsCallsSharesPopAndMemory) {
 
     EXPECT_NE(r.out.find("### Open world"), std::string::npos) << r.out;
     EXPECT_NE(r.out.find("| cpu | update_lod | 4 |"), std::string::npos) << r.out;
+}
+
+// On a backend with an engine path (Vulkan: record_steps) the open world also moves through
+// that path: the changes and the recorded step per frame, with their own distributions and
+// rows in the markdown.
+TEST_F(BenchOpenWorld, VulkanAlsoMovesThroughTheEnginesPath) {
+    const auto kinds = hmsm::compiled_backends();
+    if (std::find(kinds.begin(), kinds.end(), hmsm::BackendKind::vulkan) == kinds.end())
+        GTEST_SKIP() << "the Vulkan backend is not compiled into this build";
+    const std::string file = path("open_world_vulkan.json");
+    const CliRun r = run("bench --no-progress --backends vulkan --presets none --instances none --joint-instances none "
+                         "--open-world-trees 200 --open-world-frames 3 --open-world-changes 10 --json " + file);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const json d = json::parse(read_text(file), nullptr, false);
+    ASSERT_TRUE(d.contains("open_world") && d["open_world"].size() == 1) << d.dump();
+    const json& row = d["open_world"][0];
+    SCOPED_TRACE(row.dump());
+    if (row.contains("skipped") || row.contains("failed"))
+        GTEST_SKIP() << "no Vulkan device: " << row.value("skipped", row.value("failed", std::string()));
+    ASSERT_TRUE(row.contains("engine_moving") && row["engine_moving"].size() == 1);
+    const json& engine = row["engine_moving"][0];
+    EXPECT_EQ(engine["path"], "record");
+    const json& calls = engine["calls"];
+    EXPECT_EQ(calls["update_lod"]["calls"], 3);
+    EXPECT_EQ(calls["frame"]["calls"], 3);
+    EXPECT_GT(number(calls["frame"], "median_seconds"), 0.0);
+    EXPECT_GE(number(calls["frame"], "median_seconds"), number(calls["changes_and_step_call"], "median_seconds"));
+    EXPECT_TRUE(std::isfinite(number(engine, "changes_add_seconds")));
+    EXPECT_NE(r.out.find("| vulkan (record) | update_lod | 3 |"), std::string::npos) << r.out;
 }
 
 TEST_F(BenchOpenWorld, BadSizesExitTwoWithOneLine) {

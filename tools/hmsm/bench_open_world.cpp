@@ -165,11 +165,11 @@ public:
         return sim_.swap_remove_instances(ids);
     }
 
-    /// One frame: the viewer moves by `move`; the trees that left are removed and those that
-    /// came are added (first, so that update_lod puts them on their level before the step);
-    /// update_lod; one step. Each call's wall time goes to `calls` (when given); `changes`
-    /// receives the trees added, removed and switched.
-    Status frame(glm::dvec2 move, Calls* calls, uint64_t* changes, uint64_t* switched) {
+    /// A frame's changes: the viewer moves by `move`; the trees that left are removed and those
+    /// that came are added (first, so that update_lod puts them on their level before the
+    /// step); update_lod. Each call's wall time goes to `calls` (when given); `changes` receives
+    /// the trees added, removed and switched.
+    Status changes(glm::dvec2 move, Calls* calls, uint64_t* changes, uint64_t* switched) {
         const glm::dvec2 to = viewer_ + move;
         stream_cells(grid_, viewer_, to, leaving_, entering_);
         viewer_ = to;
@@ -181,17 +181,27 @@ public:
         Result<uint64_t> lod = sim_.update_lod(eye());
         HMSM_TRY(lod.status());
         const auto t3 = Clock::now();
-        HMSM_TRY(sim_.step(1));
-        const auto t4 = Clock::now();
         if (calls) {
             if (!leaving_.empty()) calls->remove.push_back(seconds(t0, t1));
             if (!entering_.empty()) calls->add.push_back(seconds(t1, t2));
             calls->update_lod.push_back(seconds(t2, t3));
-            calls->step.push_back(seconds(t3, t4));
-            calls->frame.push_back(seconds(t0, t4));
         }
         if (changes) *changes = leaving_.size() + entering_.size() + *lod;
         if (switched) *switched = *lod;
+        return {};
+    }
+
+    /// One frame: its changes, then one step (Simulation::step, blocking).
+    Status frame(glm::dvec2 move, Calls* calls, uint64_t* changes, uint64_t* switched) {
+        const auto t0 = Clock::now();
+        HMSM_TRY(this->changes(move, calls, changes, switched));
+        const auto t3 = Clock::now();
+        HMSM_TRY(sim_.step(1));
+        const auto t4 = Clock::now();
+        if (calls) {
+            calls->step.push_back(seconds(t3, t4));
+            calls->frame.push_back(seconds(t0, t4));
+        }
         return {};
     }
 
@@ -362,6 +372,33 @@ json run_backend(const TreeModel& model, const std::string& model_name, BackendK
         if (Status status = world.frame({0.0, 0.0}, &still, nullptr, nullptr); !status) return stop(status);
 
     if (Status status = profile_standing_step(sim, row); !status) return stop(status);
+
+    // Moving again as an engine drives its frames (CUDA: the step enqueued on its stream;
+    // Vulkan: recorded into its command buffer, the changes held back and recorded with it),
+    // after the standing frames of the same path: each frame's changes and step call, and the
+    // frame until its outputs are ready.
+    json engine_moving = json::array();
+    for (const std::unique_ptr<FrameDriver>& driver : engine_drivers(sim)) {
+        Calls calls;
+        const FrameChange change = [&](Simulation&, uint32_t) { return world.changes(move, &calls, nullptr, nullptr); };
+        FrameTimes warm, times;
+        if (Status status = time_frames(sim, *driver, warmup, change, warm); !status) return stop(status);
+        calls = {};
+        if (Status status = time_frames(sim, *driver, std::min<uint32_t>(s.frames, 100), change, times); !status)
+            return stop(status);
+        double standing = 0.0;
+        for (const json& e : row["still_engine"])
+            if (e.value("path", std::string()) == driver->path()) standing = e.value("frame_median_seconds", 0.0);
+        engine_moving.push_back({{"path", driver->path()},
+                                 {"calls",
+                                  {{"update_lod", distribution(calls.update_lod)},
+                                   {"swap_remove", distribution(calls.remove)},
+                                   {"add", distribution(calls.add)},
+                                   {"changes_and_step_call", distribution(times.call)},
+                                   {"frame", distribution(times.whole)}}},
+                                 {"changes_add_seconds", percentile(times.whole, 0.5) - standing}});
+    }
+    row["engine_moving"] = engine_moving;
 
     row["frames"] = s.frames;
     row["warmup_frames"] = warmup;

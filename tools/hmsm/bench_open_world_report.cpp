@@ -99,16 +99,29 @@ std::string render_open_world(const json& rows) {
                             std::to_string(r.value("dispatches_per_step", 0ull)) + " | " + cells + " | " + engine +
                             " |\n";
         }
-        for (const char* name : {"update_lod", "swap_remove", "add", "step", "frame"}) {
-            const json d = calls.value(name, json::object());
-            std::snprintf(line, sizeof line, "| %s | %s | %llu | %.3f | %.3f | %.3f |\n", backend.c_str(), name,
-                          (unsigned long long)d.value("calls", 0ull), seconds_of(d, "median_seconds"),
-                          seconds_of(d, "p99_seconds"), seconds_of(d, "max_seconds"));
+        auto add_calls = [&](const std::string& who, const json& of, std::initializer_list<const char*> names) {
+            for (const char* name : names) {
+                const json d = of.value(name, json::object());
+                std::snprintf(line, sizeof line, "| %s | %s | %llu | %.3f | %.3f | %.3f |\n", who.c_str(), name,
+                              (unsigned long long)d.value("calls", 0ull), seconds_of(d, "median_seconds"),
+                              seconds_of(d, "p99_seconds"), seconds_of(d, "max_seconds"));
+                calls_table += line;
+            }
+        };
+        add_calls(backend, calls, {"update_lod", "swap_remove", "add", "step", "frame"});
+        for (const json& e : r.value("engine_moving", json::array())) {
+            const std::string who = backend + " (" + e.value("path", std::string()) + ")";
+            add_calls(who, e.value("calls", json::object()),
+                      {"update_lod", "swap_remove", "add", "changes_and_step_call", "frame"});
+            std::snprintf(line, sizeof line, "| %s | changes add | | %.3f | | |\n", who.c_str(),
+                          e.value("changes_add_seconds", 0.0) * 1e3);
             calls_table += line;
         }
     }
     if (!calls_table.empty())
-        out += "\nPer call while moving (ms of wall time):\n\n| backend | call | calls | median | p99 | max |\n"
+        out += "\nPer call while moving (ms of wall time; \"(enqueue)\", \"(record)\": the engine's path, after the "
+               "standing frames, the frame until its outputs are ready, changes add against its standing frame):\n\n"
+               "| backend | call | calls | median | p99 | max |\n"
                "|---|---|--:|--:|--:|--:|\n" + calls_table;
     if (!passes_table.empty())
         out += "\nA standing step: device ms per pass (profiled: the timers serialize the passes), and as an "
