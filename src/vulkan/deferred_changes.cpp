@@ -5,7 +5,9 @@
 // record_steps, ahead of its ring copies and steps, so that the change travels in the engine's
 // command buffer like the other live changes and hmsm neither submits nor waits. Any
 // operation that is not itself held back (step(), read(), reset, an upload when the
-// capacity grows) first submits them.
+// capacity grows) first submits them. A write of many ranges and a level switch's pattern
+// copies are held back as one change each and go as range-copy dispatches (range_copy.h),
+// submitted or, in a recording, with their tables and values staged in the frame's ring slot.
 #include "vulkan_backend.h"
 
 #include "../device_words.h"
@@ -16,6 +18,23 @@
 #include <utility>
 
 namespace hmsm::detail::vk {
+
+namespace {
+
+/// A range-copy dispatch in a recording comes after every earlier write and read of what it
+/// writes (earlier changes, the steps of earlier frames)...
+void barrier_before_dispatch(const Device& device, VkCommandBuffer cmd) {
+    barrier_after_all_writes(device, cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
+                             VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT);
+}
+/// ... and later copies, dispatches and the steps see what it wrote.
+void barrier_after_dispatch(const Device& device, VkCommandBuffer cmd) {
+    barrier_after_all_writes(device, cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_TRANSFER_BIT,
+                             VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT | VK_ACCESS_TRANSFER_READ_BIT |
+                                 VK_ACCESS_TRANSFER_WRITE_BIT);
+}
+
+}  // namespace
 
 Status VulkanBackend::hold_back_write(BufferId id, uint64_t first, uint64_t count, const void* src, Scalar as) {
     HeldBack change{HeldBack::Kind::write, id, first, count, as};
@@ -32,9 +51,13 @@ Status VulkanBackend::submit_held_back() {
     releasing_ = true;
     Status status;
     for (const HeldBack& c : changes) {
-        if (c.kind == HeldBack::Kind::write) status = write(c.id, c.first, c.count, c.data.data(), c.as);
-        else if (c.kind == HeldBack::Kind::move) status = move_elements(c.id, c.moves);
-        else status = run(c.program, c.steps);
+        switch (c.kind) {
+            case HeldBack::Kind::write: status = write(c.id, c.first, c.count, c.data.data(), c.as); break;
+            case HeldBack::Kind::move: status = move_elements(c.id, c.moves); break;
+            case HeldBack::Kind::run: status = run(c.program, c.steps); break;
+            case HeldBack::Kind::ranges: status = write_ranges(c.id, c.ranges, c.data.data(), c.as); break;
+            case HeldBack::Kind::patterns: status = patterns_now(c.ids, c.count, c.entries, c.rows); break;
+        }
         if (!status) break;
     }
     releasing_ = false;
@@ -47,18 +70,63 @@ Status VulkanBackend::record_held_back() {
     releasing_ = true;
     Status status;
     for (const HeldBack& c : changes) {
-        if (c.kind == HeldBack::Kind::write) {
-            status = stage_write(c.id, c.first, c.count, c.data.data(), c.as);
-        } else if (c.kind == HeldBack::Kind::move) {
-            ring_->record_copies(record_target_);  // the writes staged before the moves first
-            record_moves(record_target_, c.id, c.moves);
-        } else {
-            status = run(c.program, c.steps);
+        switch (c.kind) {
+            case HeldBack::Kind::write: status = stage_write(c.id, c.first, c.count, c.data.data(), c.as); break;
+            case HeldBack::Kind::move:
+                ring_->record_copies(record_target_);  // the writes staged before the moves first
+                record_moves(record_target_, c.id, c.moves);
+                break;
+            case HeldBack::Kind::run: status = run(c.program, c.steps); break;
+            case HeldBack::Kind::ranges: status = record_ranges_in_frame(c.id, c.ranges, c.data.data(), c.as); break;
+            case HeldBack::Kind::patterns: status = record_patterns_in_frame(c.ids, c.count, c.entries, c.rows); break;
         }
         if (!status) break;
     }
     releasing_ = false;
     return status;
+}
+
+bool VulkanBackend::scatters_in_frame(BufferId id, std::span<const ElementRange> ranges) const {
+    const BufferId ids[] = {id};
+    return shader_ranges_ && ranges.size() >= kShaderRanges && plan_ && !plan_->split() && copies_by_shader(ids) &&
+           !ranges_overlap(ranges) && id != BufferId::wind_table;
+}
+
+Status VulkanBackend::record_ranges_in_frame(BufferId id, std::span<const ElementRange> ranges, const void* src,
+                                             Scalar as) {
+    if (!scatters_in_frame(id, ranges)) {  // few ranges: a ring copy each
+        const auto* in = static_cast<const std::byte*>(src);
+        for (const ElementRange& r : ranges) {
+            HMSM_TRY(stage_write(id, r.first, r.count, in, as));
+            in += r.count * range_scalar_bytes(id, as);
+        }
+        return {};
+    }
+    // The scatter's own ring copies record what this recording staged before them first.
+    barrier_before_dispatch(*device_, record_target_);
+    const Shape shape = buffer_info(id).shape;
+    uint64_t words = 0;
+    const std::vector<WordSpan> scatter = packed_word_spans(ranges, device_element_bytes(id), false, words);
+    HMSM_TRY(range_copier_->record_scatter_in_frame(record_target_, *ring_, recordings_, buffers_[uint32_t(id)],
+                                                    scatter, words, [&](void* staged) {
+                                                        scalars_to_words(shape, src, words, staged, as);
+                                                    }));
+    barrier_after_dispatch(*device_, record_target_);
+    return device_->take_validation_messages();
+}
+
+Status VulkanBackend::record_patterns_in_frame(std::span<const BufferId> ids, uint64_t capacity,
+                                               std::span<const PatternRow> entries,
+                                               std::span<const PatternRow> moves) {
+    std::vector<RangeCopier::PatternTarget> targets;
+    for (BufferId id : ids) {
+        const auto words = uint32_t(device_element_bytes(id) / 4);
+        targets.push_back({&buffers_[uint32_t(id)], words, uint32_t(capacity * words), halves_of(id)});
+    }
+    barrier_before_dispatch(*device_, record_target_);
+    HMSM_TRY(range_copier_->record_patterns_in_frame(record_target_, *ring_, recordings_, entries, moves, targets));
+    barrier_after_dispatch(*device_, record_target_);
+    return device_->take_validation_messages();
 }
 
 Status VulkanBackend::ensure_move_scratch(uint64_t bytes) {

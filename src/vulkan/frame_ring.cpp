@@ -113,9 +113,11 @@ void FrameRing::record_copies(VkCommandBuffer cmd) {
     // submission, which makes host-coherent writes visible to the device.
     barrier_after_all_writes(device_, cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT);
     // Neighbouring copies between the same buffers go as one command while their destinations
-    // stay apart (a later copy over an earlier one's bytes starts a command of its own, which
-    // keeps the order). Destinations in ascending order are apart without a look-up; the
-    // interval index is built only for a copy that starts below the end of the ones before.
+    // stay apart (a later copy over an earlier one's bytes starts a command of its own, after a
+    // barrier that keeps the order: copies without one may run in any order). Destinations in
+    // ascending order are apart without a look-up; the interval index is built only for a copy
+    // that starts below the end of the ones before.
+    destinations_.clear();
     for (size_t k = 0; k < copies_.size();) {
         const Copy& first = copies_[k];
         regions_.clear();
@@ -136,6 +138,15 @@ void FrameRing::record_copies(VkCommandBuffer cmd) {
             end = std::max(end, r.dstOffset + r.size);
             regions_.push_back(r);
         }
+        if (std::find(destinations_.begin(), destinations_.end(), first.dst) != destinations_.end()) {
+            VkMemoryBarrier ordered{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
+            ordered.srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
+            ordered.dstAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
+            device_.vk().vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_TRANSFER_BIT, 0, 1,
+                                              &ordered, 0, nullptr, 0, nullptr);
+            destinations_.clear();
+        }
+        destinations_.push_back(first.dst);
         device_.vk().vkCmdCopyBuffer(cmd, first.src, first.dst, uint32_t(regions_.size()), regions_.data());
         ++copy_commands_;
     }

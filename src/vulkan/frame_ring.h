@@ -115,6 +115,7 @@ private:
     // record_copies' scratch, kept so that a frame's recording allocates nothing.
     std::vector<VkBufferCopy> regions_;
     DisjointIntervals written_;
+    std::vector<VkBuffer> destinations_;  // of the commands since the last barrier
 };
 
 }  // namespace hmsm::detail::vk

@@ -32,6 +32,8 @@ RangeCopier::~RangeCopier() {
     if (patterns_pipeline_) vk.vkDestroyPipeline(dev, patterns_pipeline_, nullptr);
     if (layout_) vk.vkDestroyPipelineLayout(dev, layout_, nullptr);
     if (pool_) vk.vkDestroyDescriptorPool(dev, pool_, nullptr);
+    for (Frame& frame : frames_)
+        for (VkDescriptorPool pool : frame.pools) vk.vkDestroyDescriptorPool(dev, pool, nullptr);
     if (set_layout_) vk.vkDestroyDescriptorSetLayout(dev, set_layout_, nullptr);
 }
 
@@ -177,6 +179,162 @@ Status RangeCopier::record_patterns(VkCommandBuffer cmd, const Buffer& data, std
     const uint32_t groups = uint32_t(
         std::clamp<uint64_t>(entries.size(), 1, std::min<uint64_t>(65535, device_.limits().max_workgroup_count[0])));
     vk.vkCmdDispatch(cmd, groups, halves, 1);
+    ++dispatches_;
+    return {};
+}
+
+std::vector<WordSpan> packed_word_spans(std::span<const ElementRange> ranges, uint64_t element_bytes, bool gather,
+                                   uint64_t& packed) {
+    std::vector<WordSpan> spans;
+    packed = 0;
+    for (const ElementRange& r : ranges) {
+        if (r.count == 0) continue;
+        const auto words = uint32_t(r.count * element_bytes / 4), at = uint32_t(r.first * element_bytes / 4);
+        spans.push_back({uint32_t(packed), words, gather ? at : 0, gather ? 0 : at});
+        packed += words;
+    }
+    return spans;
+}
+
+// --- In an engine's command buffer ---------------------------------------------------------
+
+Result<RangeCopier::Frame*> RangeCopier::begin_in_frame(const FrameRing& ring, uint64_t recording) {
+    Frame& frame = frames_[ring.current()];
+    if (frame.recording != recording) {
+        // The command buffer that used this frame's sets, ring.frames() recordings ago, has
+        // completed (the ring's rule), and so has every one before it.
+        const VolkDeviceTable& vk = device_.vk();
+        for (VkDescriptorPool pool : frame.pools) HMSM_VK_TRY(vk.vkResetDescriptorPool(device_.handle(), pool, 0));
+        if (frame.pools.size() > 1) {  // keep one pool, as large as the frame needed
+            for (size_t k = 0; k + 1 < frame.pools.size(); ++k)
+                vk.vkDestroyDescriptorPool(device_.handle(), frame.pools[k], nullptr);
+            frame.pools.erase(frame.pools.begin(), frame.pools.end() - 1);
+        }
+        frame.pool_used = 0;
+        frame.recording = recording;
+        std::erase_if(outgrown_, [&](const auto& o) { return o.first + ring.frames() <= recording; });
+    }
+    return &frame;
+}
+
+Result<VkDescriptorSet> RangeCopier::frame_set(Frame& frame, const Buffer& data, const Buffer& packed,
+                                               const Buffer& table) {
+    const VolkDeviceTable& vk = device_.vk();
+    constexpr uint32_t kSetsPerPool = 64;
+    if (frame.pools.empty() || frame.pool_used == kSetsPerPool) {
+        VkDescriptorPoolSize size{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, kBindings * kSetsPerPool};
+        VkDescriptorPoolCreateInfo pool_info{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
+        pool_info.maxSets = kSetsPerPool;
+        pool_info.poolSizeCount = 1;
+        pool_info.pPoolSizes = &size;
+        VkDescriptorPool pool = VK_NULL_HANDLE;
+        HMSM_VK_TRY(vk.vkCreateDescriptorPool(device_.handle(), &pool_info, nullptr, &pool));
+        frame.pools.push_back(pool);
+        frame.pool_used = 0;
+    }
+    VkDescriptorSet set = VK_NULL_HANDLE;
+    VkDescriptorSetAllocateInfo allocate{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO};
+    allocate.descriptorPool = frame.pools.back();
+    allocate.descriptorSetCount = 1;
+    allocate.pSetLayouts = &set_layout_;
+    HMSM_VK_TRY(vk.vkAllocateDescriptorSets(device_.handle(), &allocate, &set));
+    ++frame.pool_used;
+    const VkDescriptorBufferInfo buffers[kBindings] = {
+        {data.handle(), 0, VK_WHOLE_SIZE}, {packed.handle(), 0, VK_WHOLE_SIZE}, {table.handle(), 0, VK_WHOLE_SIZE}};
+    VkWriteDescriptorSet write{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
+    write.dstSet = set;
+    write.descriptorCount = kBindings;
+    write.descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+    write.pBufferInfo = buffers;
+    vk.vkUpdateDescriptorSets(device_.handle(), 1, &write, 0, nullptr);
+    return set;
+}
+
+Status RangeCopier::ensure_frame_buffer(Buffer& buffer, VkDeviceSize bytes, uint64_t recording, const char* name) {
+    if (buffer.handle() && buffer.size() >= bytes) return {};
+    const VkDeviceSize grown = std::max<VkDeviceSize>({bytes, 2 * buffer.size(), VkDeviceSize(64) << 10});
+    if (buffer.handle()) outgrown_.emplace_back(recording, std::move(buffer));
+    auto made = Buffer::create(device_, grown, VK_BUFFER_USAGE_TRANSFER_DST_BIT | VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
+                               MemoryUse::device_local, name);
+    if (!made) return made.status();
+    buffer = std::move(made).value();
+    return {};
+}
+
+Status RangeCopier::stage_frame_rows(VkCommandBuffer cmd, FrameRing& ring, uint64_t recording,
+                                     std::span<const std::pair<const void*, VkDeviceSize>> rows) {
+    VkDeviceSize bytes = 0;
+    for (const auto& [src, size] : rows) bytes += size;
+    HMSM_TRY(ensure_frame_buffer(frame_table_, bytes, recording, "range copy table (frames)"));
+    VkDeviceSize at = 0;
+    for (const auto& [src, size] : rows) {
+        if (size == 0) continue;
+        Result<void*> staged = ring.stage(frame_table_.handle(), at, size);
+        if (!staged) return staged.status();
+        std::memcpy(*staged, src, size);
+        at += size;
+    }
+    // The ring's copies behind earlier work on their destinations (an earlier dispatch of this
+    // recording or of one before may still read the table), then visible to the dispatches,
+    // which also write where copies staged before them (other writes of the frame) may have.
+    ring.record_copies(cmd);
+    VkMemoryBarrier ready{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
+    ready.srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
+    ready.dstAccessMask = VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT;
+    device_.vk().vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, 0, 1,
+                                      &ready, 0, nullptr, 0, nullptr);
+    return {};
+}
+
+Status RangeCopier::record_patterns_in_frame(VkCommandBuffer cmd, FrameRing& ring, uint64_t recording,
+                                             std::span<const PatternRow> entries, std::span<const PatternRow> moves,
+                                             std::span<const PatternTarget> targets) {
+    if (entries.empty() || moves.empty() || targets.empty()) return {};
+    Result<Frame*> frame = begin_in_frame(ring, recording);
+    if (!frame) return frame.status();
+    const std::pair<const void*, VkDeviceSize> rows[] = {{entries.data(), entries.size_bytes()},
+                                                         {moves.data(), moves.size_bytes()}};
+    HMSM_TRY(stage_frame_rows(cmd, ring, recording, rows));
+    const VolkDeviceTable& vk = device_.vk();
+    vk.vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, patterns_pipeline_);
+    for (const PatternTarget& t : targets) {  // the targets are apart: no barrier between them
+        Result<VkDescriptorSet> set = frame_set(**frame, *t.data, *t.data, frame_table_);  // binding 1 unread
+        if (!set) return set.status();
+        const PatternConstants constants{0, uint32_t(entries.size()), uint32_t(entries.size()), t.words_per_element,
+                                         t.half_words};
+        vk.vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, layout_, 0, 1, &*set, 0, nullptr);
+        vk.vkCmdPushConstants(cmd, layout_, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof constants, &constants);
+        const uint32_t groups = uint32_t(std::clamp<uint64_t>(
+            entries.size(), 1, std::min<uint64_t>(65535, device_.limits().max_workgroup_count[0])));
+        vk.vkCmdDispatch(cmd, groups, t.halves, 1);
+        ++dispatches_;
+    }
+    return {};
+}
+
+Status RangeCopier::record_scatter_in_frame(VkCommandBuffer cmd, FrameRing& ring, uint64_t recording,
+                                            const Buffer& data, std::span<const WordSpan> ranges, uint64_t words,
+                                            const std::function<void(void*)>& fill) {
+    if (ranges.empty() || words == 0) return {};
+    Result<Frame*> frame = begin_in_frame(ring, recording);
+    if (!frame) return frame.status();
+    HMSM_TRY(ensure_frame_buffer(frame_scratch_, words * 4, recording, "range copy scratch (frames)"));
+    Result<void*> values = ring.stage(frame_scratch_.handle(), 0, words * 4);
+    if (!values) return values.status();
+    fill(*values);
+    const std::pair<const void*, VkDeviceSize> rows[] = {{ranges.data(), ranges.size_bytes()}};
+    HMSM_TRY(stage_frame_rows(cmd, ring, recording, rows));  // records the values' copy too
+    Result<VkDescriptorSet> set = frame_set(**frame, data, frame_scratch_, frame_table_);
+    if (!set) return set.status();
+    const VolkDeviceTable& vk = device_.vk();
+    const CopyConstants constants{0, uint32_t(ranges.size()), ranges.front().packed, uint32_t(words), 0u};
+    vk.vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline_);
+    vk.vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, layout_, 0, 1, &*set, 0, nullptr);
+    vk.vkCmdPushConstants(cmd, layout_, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof constants, &constants);
+    const uint64_t needed = (words + kCopyWorkgroupSize - 1) / kCopyWorkgroupSize;
+    const uint32_t groups = uint32_t(
+        std::clamp<uint64_t>(needed, 1, std::min<uint64_t>(65535, device_.limits().max_workgroup_count[0])));
+    vk.vkCmdDispatch(cmd, groups, 1, 1);
     ++dispatches_;
     return {};
 }

@@ -10,16 +10,24 @@
 //
 // Use within one submission that is waited for before the next: prepare() sizes the range table
 // and the descriptor sets for the dispatches to come and forgets those of the submission before;
-// record() then appends one dispatch (the first also copies the whole table to the device). Not
-// for an engine's command buffer, which may still be pending when the next call prepares (those
-// keep copy commands, deferred_changes.cpp).
+// record() then appends one dispatch (the first also copies the whole table to the device).
+// In an engine's command buffer (record_steps), which may still be pending when the next call
+// records, the *_in_frame calls stage the table rows (and a scatter's values) in the frame's ring
+// slot (frame_ring.h), copied into device buffers of the copier's own ahead of the dispatch, and
+// take descriptor sets from pools of that frame, reset when the ring comes round to it again.
 #pragma once
 
 #include "device_buffer.h"
+#include "frame_ring.h"
 
+#include "../backend.h"
+
+#include <array>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <span>
+#include <vector>
 
 namespace hmsm::detail::vk {
 
@@ -35,6 +43,12 @@ struct PatternRow {
     uint32_t x = 0, y = 0, z = 0, w = 0;
 };
 static_assert(sizeof(PatternRow) == sizeof(WordSpan));
+
+/// The word spans of the range copy for `ranges` of a buffer of `element_bytes` elements,
+/// packed back to back in the scratch from word 0: each range read from its place (`gather`)
+/// or written to it (scatter). `packed` receives the words packed.
+std::vector<WordSpan> packed_word_spans(std::span<const ElementRange> ranges, uint64_t element_bytes, bool gather,
+                                         uint64_t& packed);
 
 class RangeCopier {
 public:
@@ -57,6 +71,27 @@ public:
                            std::span<const PatternRow> moves, uint32_t words_per_element, uint32_t half_words,
                            uint32_t halves);
 
+    /// The target of a pattern copy in a frame: the buffer, its elements' words, the words
+    /// between its halves and its halves (as record_patterns takes them).
+    struct PatternTarget {
+        const Buffer* data = nullptr;
+        uint32_t words_per_element = 0, half_words = 0, halves = 1;
+    };
+    /// record_patterns into an engine's command buffer, once per target, the rows staged in
+    /// `ring`'s current slot. `recording` numbers the engine's recordings: the first call of a
+    /// recording resets the frame's descriptor pools (the command buffer that used them, `ring`'s
+    /// frames recordings ago, has completed). The caller orders the dispatches' writes before
+    /// the work after them.
+    Status record_patterns_in_frame(VkCommandBuffer cmd, FrameRing& ring, uint64_t recording,
+                                    std::span<const PatternRow> entries, std::span<const PatternRow> moves,
+                                    std::span<const PatternTarget> targets);
+    /// A scatter into an engine's command buffer: `fill` writes the packed words (`words` in
+    /// all, as the ranges pack them from 0) into the ring slot, whence they are copied into a
+    /// device scratch of the copier's own and scattered to `ranges` of `data`.
+    Status record_scatter_in_frame(VkCommandBuffer cmd, FrameRing& ring, uint64_t recording, const Buffer& data,
+                                   std::span<const WordSpan> ranges, uint64_t words,
+                                   const std::function<void(void*)>& fill);
+
     /// Dispatches recorded so far (a test hook).
     uint64_t dispatches() const { return dispatches_; }
 
@@ -67,6 +102,23 @@ private:
     Result<uint32_t> append_rows(VkCommandBuffer cmd, const void* rows, uint64_t count);
     /// A descriptor set of `data`, `packed` and the table.
     Result<VkDescriptorSet> descriptor_set(const Buffer& data, const Buffer& packed);
+
+    /// What the *_in_frame calls use of ring frame `ring.current()`: its pools reset for
+    /// `recording`, the outgrown device buffers freed whose last recording has completed.
+    struct Frame {
+        std::vector<VkDescriptorPool> pools;  // sets of the frame's dispatches; the last has room
+        uint32_t pool_used = 0;               // sets taken from pools.back()
+        uint64_t recording = 0;
+    };
+    Result<Frame*> begin_in_frame(const FrameRing& ring, uint64_t recording);
+    Result<VkDescriptorSet> frame_set(Frame& frame, const Buffer& data, const Buffer& packed, const Buffer& table);
+    /// Makes `buffer` (device-local, storage and transfer destination) hold at least `bytes`;
+    /// an outgrown one lives until `recording`'s command buffer has completed.
+    Status ensure_frame_buffer(Buffer& buffer, VkDeviceSize bytes, uint64_t recording, const char* name);
+    /// Stages `bytes` bytes of rows into the frame table and records the ring's copies, then a
+    /// barrier that makes them visible to the dispatches.
+    Status stage_frame_rows(VkCommandBuffer cmd, FrameRing& ring, uint64_t recording,
+                            std::span<const std::pair<const void*, VkDeviceSize>> rows);
 
     const Device& device_;
     VkDescriptorSetLayout set_layout_ = VK_NULL_HANDLE;
@@ -80,6 +132,9 @@ private:
     uint64_t table_used_ = 0;          // entries recorded since prepare()
     VkDeviceSize table_prepared_ = 0;  // bytes prepare() made room for
     uint64_t dispatches_ = 0;
+    std::array<Frame, kMaxFramesInFlight> frames_;
+    Buffer frame_table_, frame_scratch_;  // the *_in_frame calls' table rows and scattered words
+    std::vector<std::pair<uint64_t, Buffer>> outgrown_;  // (last recording using it, buffer)
 };
 
 }  // namespace hmsm::detail::vk

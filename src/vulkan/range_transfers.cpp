@@ -28,22 +28,6 @@ std::vector<VkBufferCopy> buffer_regions(std::span<const ElementRange> ranges, u
     return regions;
 }
 
-/// The word spans of the range copy for `ranges` of a buffer of `element_bytes` elements,
-/// packed back to back in the scratch from word 0: each range read from its place (`gather`)
-/// or written to it (scatter). `packed` receives the words packed.
-std::vector<WordSpan> packed_spans(std::span<const ElementRange> ranges, uint64_t element_bytes, bool gather,
-                                   uint64_t& packed) {
-    std::vector<WordSpan> spans;
-    packed = 0;
-    for (const ElementRange& r : ranges) {
-        if (r.count == 0) continue;
-        const auto words = uint32_t(r.count * element_bytes / 4), at = uint32_t(r.first * element_bytes / 4);
-        spans.push_back({uint32_t(packed), words, gather ? at : 0, gather ? 0 : at});
-        packed += words;
-    }
-    return spans;
-}
-
 /// The device bytes of every range of `parts` (BufferRangesRead or BufferRangesWrite).
 template <class Part>
 uint64_t device_bytes(std::span<const Part> parts) {
@@ -81,6 +65,22 @@ Status VulkanBackend::read_ranges(BufferId id, std::span<const ElementRange> ran
 }
 
 Status VulkanBackend::write_ranges(BufferId id, std::span<const ElementRange> ranges, const void* src, Scalar as) {
+    const bool held_back = holding_back() && batch_transfers_ && plan_ && !plan_->split() &&
+                           id != BufferId::wind_table && !ranges_overlap(ranges);
+    if (held_back || (record_target_ && scatters_in_frame(id, ranges))) {
+        HMSM_TRY(check_device_lost());
+        for (const ElementRange& r : ranges) HMSM_TRY(check_range(id, r.first, r.count));
+        if (record_target_) return record_ranges_in_frame(id, ranges, src, as);
+        HeldBack change{HeldBack::Kind::ranges, id};  // one change, however many ranges
+        change.as = as;
+        change.ranges.assign(ranges.begin(), ranges.end());
+        uint64_t elements = 0;
+        for (const ElementRange& r : ranges) elements += r.count;
+        const auto* bytes = static_cast<const std::byte*>(src);
+        change.data.assign(bytes, bytes + elements * range_scalar_bytes(id, as));
+        held_back_.push_back(std::move(change));
+        return {};
+    }
     if (!copies_ranges_at_once(ranges, true)) return Backend::write_ranges(id, ranges, src, as);
     HMSM_TRY(check_device_lost());
     for (const ElementRange& r : ranges) HMSM_TRY(check_range(id, r.first, r.count));
@@ -179,8 +179,7 @@ Status VulkanBackend::move_buffers(std::span<const BufferMoves> moves) {
 
 Status VulkanBackend::copy_patterns(std::span<const BufferId> ids, uint64_t capacity,
                                     std::span<const MovePattern> patterns, std::span<const PatternCopy> copies) {
-    if (!pattern_copies_ || holding_back() || record_target_ || !copies_by_shader(ids))
-        return Backend::copy_patterns(ids, capacity, patterns, copies);
+    if (!pattern_copies_ || !copies_by_shader(ids)) return Backend::copy_patterns(ids, capacity, patterns, copies);
     HMSM_TRY(check_device_lost());
     if (!capabilities().reshapes_in_place)
         return {ErrorCode::unsupported, "vulkan: a scene split into windows cannot move state in place"};
@@ -194,7 +193,22 @@ Status VulkanBackend::copy_patterns(std::span<const BufferId> ids, uint64_t capa
     for (const PatternTables::Entry& e : tables->entries)
         entries.push_back({uint32_t(e.src), uint32_t(e.dst), e.first_move, e.move_count});
     for (const ElementMove& m : tables->moves) moves.push_back({uint32_t(m.src), uint32_t(m.dst), uint32_t(m.count), 0});
+    if (record_target_) return record_patterns_in_frame(ids, capacity, entries, moves);
+    if (holding_back()) {
+        HeldBack change{HeldBack::Kind::patterns};
+        change.ids.assign(ids.begin(), ids.end());
+        change.count = capacity;
+        change.entries = std::move(entries);
+        change.rows = std::move(moves);
+        held_back_.push_back(std::move(change));
+        return {};
+    }
     HMSM_TRY(submit_held_back());
+    return patterns_now(ids, capacity, entries, moves);
+}
+
+Status VulkanBackend::patterns_now(std::span<const BufferId> ids, uint64_t capacity,
+                                   std::span<const PatternRow> entries, std::span<const PatternRow> moves) {
     HMSM_TRY(range_copier_->prepare(ids.size() * (entries.size() + moves.size()), uint32_t(ids.size())));
     return submit_copy_dispatches([&](VkCommandBuffer cmd, const std::function<void()>&) -> Status {
         for (BufferId id : ids) {  // the buffers are apart: no barrier between them
@@ -213,7 +227,7 @@ Status VulkanBackend::shader_write(BufferId id, std::span<const ElementRange> ra
     const Shape shape = buffer_info(id).shape;
     const uint64_t scalar_bytes = as == Scalar::f64 ? 8 : 4;
     uint64_t packed = 0;
-    const std::vector<WordSpan> scatter = packed_spans(ranges, device_element_bytes(id), false, packed);
+    const std::vector<WordSpan> scatter = packed_word_spans(ranges, device_element_bytes(id), false, packed);
     if (scatter.empty()) return {};
     HMSM_TRY(ensure_move_scratch(packed * 4));
     const auto* in = static_cast<const std::byte*>(src);
@@ -232,7 +246,7 @@ Status VulkanBackend::shader_read(BufferId id, std::span<const ElementRange> ran
     const Shape shape = buffer_info(id).shape;
     const uint64_t scalar_bytes = as == Scalar::f64 ? 8 : 4;
     uint64_t packed = 0;
-    const std::vector<WordSpan> gather = packed_spans(ranges, device_element_bytes(id), true, packed);
+    const std::vector<WordSpan> gather = packed_word_spans(ranges, device_element_bytes(id), true, packed);
     if (gather.empty()) return {};
     HMSM_TRY(ensure_move_scratch(packed * 4));
     HMSM_TRY(range_copier_->prepare(gather.size(), 1));

@@ -172,9 +172,10 @@ private:
     /// replayed secondaries as they are, so a streaming frame records none of them again.
     Status prepare_one_off(std::span<const Dispatch> program);
     Status ensure_timestamp_capacity(Slot& slot, uint32_t queries);
-    /// A write, move or run of an instance change held back for the next recording.
+    /// A write, move or run of an instance change held back for the next recording; `ranges`:
+    /// a write of many ranges (data packed), `patterns`: a pattern copy of buffers `ids`.
     struct HeldBack {
-        enum class Kind { write, move, run } kind;
+        enum class Kind { write, move, run, ranges, patterns } kind;
         BufferId id{};
         uint64_t first = 0, count = 0;
         Scalar as = Scalar::f32;
@@ -182,6 +183,9 @@ private:
         std::vector<ElementMove> moves;
         std::vector<Dispatch> program;
         std::vector<RunStep> steps;
+        std::vector<ElementRange> ranges;
+        std::vector<BufferId> ids;
+        std::vector<PatternRow> entries, rows;  // a pattern copy's entries and moves
     };
     /// Whether a write, move or run is held back rather than done now.
     bool holding_back() const { return in_instance_change_ && engine_recorded_ && !record_target_ && !releasing_; }
@@ -190,6 +194,19 @@ private:
     /// Records the held-back changes into the recording's command buffer, in order.
     Status record_held_back();
     Status hold_back_write(BufferId id, uint64_t first, uint64_t count, const void* src, Scalar as);
+    /// Whether a write of `ranges` of buffer `id` that cannot be submitted now (held back, or
+    /// inside a recording) goes as one scatter in the recording (range_copy.h, *_in_frame)
+    /// rather than a ring copy per range.
+    bool scatters_in_frame(BufferId id, std::span<const ElementRange> ranges) const;
+    /// A write of `ranges` (`src` as `as`, packed) into the recording's command buffer: the
+    /// scatter where scatters_in_frame, else a ring copy per range.
+    Status record_ranges_in_frame(BufferId id, std::span<const ElementRange> ranges, const void* src, Scalar as);
+    /// Pattern copies (copy_patterns' tables as PatternRows) of buffers `ids`, whose halves lie
+    /// `capacity` elements apart: submitted now, or recorded into the recording's command buffer.
+    Status patterns_now(std::span<const BufferId> ids, uint64_t capacity, std::span<const PatternRow> entries,
+                        std::span<const PatternRow> moves);
+    Status record_patterns_in_frame(std::span<const BufferId> ids, uint64_t capacity,
+                                    std::span<const PatternRow> entries, std::span<const PatternRow> moves);
     /// The moves into `cmd` through the scratch buffer (vkCmdCopyBuffer forbids overlapping
     /// regions), after a barrier against all earlier work, also an engine's reads.
     void record_moves(VkCommandBuffer cmd, BufferId id, std::span<const ElementMove> moves) const;

@@ -30,6 +30,7 @@ struct RecordedAndReference {
         Dynamics dynamics = Dynamics::paper;
         std::vector<int32_t> lod_budgets{3, 1};  // of the one model, small_tree()
         bool replay = true;                      // false: recorded without the step replay
+        InstanceLayout layout = InstanceLayout::packed;
     };
 
     /// Small trees on a grid in a wind of strength 6. Empty `skip` and both simulations made,
@@ -41,6 +42,7 @@ struct RecordedAndReference {
         SimulationConfig config;
         config.wind.strength = 6.0;
         config.model.dynamics = options.dynamics;
+        config.instance_layout = options.layout;
         Scene scene = *grid_scene(small_tree(), options.trees, 5.0, 4);
         if (!options.lod_budgets.empty()) scene.lod_budgets = {options.lod_budgets};
         if (!options.replay) detail::vulkan_set_step_replay(false);

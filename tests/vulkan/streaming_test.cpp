@@ -230,5 +230,73 @@ TEST_F(VulkanTest, RecordedStepsFadeAsStepDoes) {
     pair.expect_same({Output::node_positions, Output::joint_matrices});
 }
 
+// Many trees switched, added and removed at once in the placed layout while the engine records:
+// each level switch's pattern copies and each write of ranges are held back as one change and
+// recorded as range-copy dispatches in the frame's command buffer (tables and values staged in
+// the frame's ring slot), not as a ring copy or a move per range, or submitted as one where a
+// read comes first; the results equal the same changes stepped with step(), under
+// synchronization validation with three frames in flight.
+TEST_F(VulkanTest, ManyRangesAndPatternCopiesTravelAsDispatches) {
+    RecordedAndReference::Options options;
+    options.trees = 90;
+    options.layout = InstanceLayout::placed;
+    std::string skip;
+    RecordedAndReference pair = RecordedAndReference::create(options, skip);
+    if (!skip.empty()) GTEST_SKIP() << skip;
+    ASSERT_TRUE(pair.recorded && pair.reference);
+    Simulation &sim = *pair.recorded, &reference = *pair.reference;
+    const auto& backend = dynamic_cast<const detail::vk::VulkanBackend&>(detail::backend_of(sim));
+    for (Simulation* s : {&sim, &reference}) ASSERT_TRUE(s->reserve_instances(400).ok());
+    uint64_t dispatches = 0, ranges = 0;
+    size_t most_held_back = 0;
+    {
+        EngineFrames frames(*pair.engine, 3);
+        if (HasFailure()) return;
+        ASSERT_TRUE(pair.step_both(frames, 0, 1).ok());
+        for (uint32_t f = 1; f < 8; ++f) {
+            if (f % 2 == 1) {  // every tree to another level
+                std::vector<InstanceId> ids(sim.instance_ids().begin(), sim.instance_ids().end());
+                std::vector<uint32_t> levels;
+                for (size_t k = 0; k < ids.size(); ++k) levels.push_back(uint32_t((k + f) % 3));
+                for (Simulation* s : {&sim, &reference}) ASSERT_TRUE(s->set_instance_lods(ids, levels).ok());
+                ranges += ids.size();
+            }
+            if (f % 3 == 1) {  // seventy trees in
+                std::vector<Instance> added;
+                for (uint32_t k = 0; k < 70; ++k)
+                    added.push_back({0, {-20.0 - 3.0 * k, 0.0, 4.0 + f}, 0.1 * k, 1.0, 0.0, true, k % 3});
+                for (Simulation* s : {&sim, &reference}) ASSERT_TRUE(s->add_instances(added).ok());
+                ranges += added.size();
+            }
+            if (f % 3 == 2) {  // sixty-six out, from everywhere
+                std::vector<InstanceId> gone;
+                for (size_t k = 0; k < 66; ++k) gone.push_back(sim.instance_ids()[k * sim.instance_count() / 66]);
+                for (Simulation* s : {&sim, &reference}) ASSERT_TRUE(s->swap_remove_instances(gone).ok());
+                ranges += gone.size();
+            }
+            most_held_back = std::max(most_held_back, backend.held_back_changes());
+            if (f == 5) {  // a read submits what is held back, through the backend's own submissions
+                frames.wait_all();
+                std::vector<float> a, b;
+                ASSERT_TRUE(sim.read(Output::joint_matrices, a).ok());
+                ASSERT_TRUE(reference.read(Output::joint_matrices, b).ok());
+                EXPECT_EQ(a, b);
+                EXPECT_EQ(backend.held_back_changes(), 0u);
+            }
+            const uint64_t dispatched = backend.range_copy_dispatches();
+            const Status status = pair.step_both(frames, f, 1);
+            ASSERT_TRUE(status.ok()) << "frame " << f << ": " << status.message();
+            EXPECT_EQ(backend.held_back_changes(), 0u);
+            dispatches += backend.range_copy_dispatches() - dispatched;
+        }
+        frames.wait_all();
+    }
+    std::printf("%llu ranges changed: %llu range-copy dispatches, at most %zu changes held back\n",
+                (unsigned long long)ranges, dispatches, most_held_back);
+    EXPECT_GT(dispatches, 0u);
+    EXPECT_LT(most_held_back, 20u) << "a change held back per range";
+    pair.expect_same({Output::node_positions, Output::joint_matrices});
+}
+
 }  // namespace
 }  // namespace hmsm::test
