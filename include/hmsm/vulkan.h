@@ -141,8 +141,10 @@ HMSM_API Result<DeviceHandles> device_handles(const Simulation& simulation);
 /// them. All recorded steps must have completed before Simulation::step(), read(),
 /// reset_instances() or the simulation's destruction. add_instances() and remove_instances()
 /// within the capacity (reserve_instances) after a first record_steps neither submit nor wait:
-/// the change is recorded at the start of the next record_steps; growth past the capacity
-/// submits, waits and reallocates (docs/vulkan.md, "Streaming instances").
+/// the change is recorded at the start of the next record_steps; so are level switches
+/// (set_instance_lod(s)), but update_lod() and request_instance_lods() that start fades read the
+/// fading trees' state as read() does; growth past the capacity submits, waits and
+/// reallocates (docs/vulkan.md, "Streaming instances").
 ///
 /// hmsm binds its own compute pipeline, descriptor set and push constants (rebind yours
 /// afterwards) and starts with a barrier against earlier compute and transfer work; before the
