@@ -263,6 +263,10 @@ public:
     /// other call sees them done.
     virtual void begin_instance_change() {}
     virtual void end_instance_change() {}
+    /// Whether the instance changes bracketed so are held back for an engine's frames (Vulkan,
+    /// after a first record_steps): a read would then wait for frames the engine has in flight,
+    /// so level requests do without one (lod_fade.cpp: a coarsening always fades).
+    virtual bool holds_back_instance_changes() const { return false; }
     /// What the backend can do and prefers (BackendCapabilities); may change with upload()
     /// (Vulkan: whether the scene is split into windows).
     virtual BackendCapabilities capabilities() const { return {}; }

@@ -40,8 +40,9 @@ struct InstancePlacement {
 /// keeps its level while the chains the coarser level folds relax to rest relative to their
 /// parents over `fade_steps` steps (on the backend, in each step), and it switches then; an
 /// instance whose switch would move no vertex by more than `fade_bound_m` (at rest) switches
-/// at the request. fade_steps 0 switches at once (the folded branches' deflection vanishes in
-/// one frame). Refining always switches at once.
+/// at the request (measured with a read of its state; not on a Vulkan simulation that an
+/// engine drives with record_steps, where it fades too). fade_steps 0 switches at once (the
+/// folded branches' deflection vanishes in one frame). Refining always switches at once.
 struct LodBands {
     std::vector<double> edges;  ///< strictly increasing, finite, > 0 (metres); empty: level 0
     double hysteresis = 0.1;    ///< fraction of an edge, in [0, 1)

@@ -142,8 +142,8 @@ HMSM_API Result<DeviceHandles> device_handles(const Simulation& simulation);
 /// reset_instances() or the simulation's destruction. add_instances() and remove_instances()
 /// within the capacity (reserve_instances) after a first record_steps neither submit nor wait:
 /// the change is recorded at the start of the next record_steps; so are level switches
-/// (set_instance_lod(s)), but update_lod() and request_instance_lods() that start fades read the
-/// fading trees' state as read() does; growth past the capacity submits, waits and
+/// (set_instance_lod(s), update_lod(), request_instance_lods(): these read no state then, and a
+/// coarsening fades even for an instance at rest); growth past the capacity submits, waits and
 /// reallocates (docs/vulkan.md, "Streaming instances").
 ///
 /// hmsm binds its own compute pipeline, descriptor set and push constants (rebind yours

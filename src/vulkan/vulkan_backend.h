@@ -77,6 +77,7 @@ public:
     /// wait. Any other operation (step(), read(), upload, ...) submits them first.
     void begin_instance_change() override { in_instance_change_ = true; }
     void end_instance_change() override { in_instance_change_ = false; }
+    bool holds_back_instance_changes() const override { return engine_recorded_; }
     /// Changes held back for the next recording (a test hook).
     size_t held_back_changes() const { return held_back_.size(); }
     PassTimes pass_times() const override { return times_; }

@@ -230,6 +230,44 @@ TEST_F(VulkanTest, RecordedStepsFadeAsStepDoes) {
     pair.expect_same({Output::node_positions, Output::joint_matrices});
 }
 
+// Level requests while the engine records read no state: a tree just added (at rest) fades to
+// the coarser level asked for, where a simulation stepped with step() measures it at rest and
+// switches at once; the request neither submits nor waits, and the fade ends in a recording.
+TEST_F(VulkanTest, LevelRequestsWhileRecordingReadNothing) {
+    std::string skip;
+    RecordedAndReference pair = RecordedAndReference::create(4, skip);
+    if (!skip.empty()) GTEST_SKIP() << skip;
+    ASSERT_TRUE(pair.recorded && pair.reference);
+    Simulation &sim = *pair.recorded, &reference = *pair.reference;
+    const auto& backend = dynamic_cast<const detail::vk::VulkanBackend&>(detail::backend_of(sim));
+    LodBands bands;
+    bands.edges = {100.0};
+    bands.fade_steps = 4;  // two frames of two steps
+    for (Simulation* s : {&sim, &reference}) ASSERT_TRUE(s->set_lod_bands(bands).ok());
+    {
+        EngineFrames frames(*pair.engine, 3);
+        if (HasFailure()) return;
+        ASSERT_TRUE(pair.step_both(frames, 0, 2).ok());
+        const Instance still[] = {{0, {30.0, 0.0, 30.0}, 0.5}};
+        const uint32_t coarser[] = {2};
+        InstanceId added[2] = {};  // in sim, in reference
+        for (int k = 0; k < 2; ++k) {
+            Simulation& s = k == 0 ? sim : reference;
+            ASSERT_TRUE(s.add_instances(still, std::span<InstanceId>(&added[k], 1)).ok());
+            const uint64_t submitted = backend.submissions();
+            ASSERT_TRUE(s.request_instance_lods({&added[k], 1}, coarser).ok());
+            if (k == 0) EXPECT_EQ(backend.submissions(), submitted) << "the request read the state";
+        }
+        EXPECT_EQ(sim.fading_instance_count(), 1u) << "recording: the tree at rest fades";
+        EXPECT_EQ(reference.fading_instance_count(), 0u) << "step(): measured at rest, switched at once";
+        EXPECT_EQ(*reference.instance_lod(added[1]), 2u);
+        for (uint32_t f = 1; f < 4; ++f) ASSERT_TRUE(pair.step_both(frames, f, 2).ok()) << "frame " << f;
+        frames.wait_all();
+        EXPECT_EQ(sim.fading_instance_count(), 0u);
+        EXPECT_EQ(*sim.instance_lod(added[0]), 2u);
+    }
+}
+
 // Many trees switched, added and removed at once in the placed layout while the engine records:
 // each level switch's pattern copies and each write of ranges are held back as one change and
 // recorded as range-copy dispatches in the frame's command buffer (tables and values staged in
