@@ -150,6 +150,8 @@ TEST_F(BenchOpenWorld, VulkanAlsoMovesThroughTheEnginesPath) {
     EXPECT_GT(number(calls["frame"], "median_seconds"), 0.0);
     EXPECT_GE(number(calls["frame"], "median_seconds"), number(calls["changes_and_step_call"], "median_seconds"));
     EXPECT_TRUE(std::isfinite(number(engine, "changes_add_seconds")));
+    EXPECT_GE(number(engine, "device_growths"), 0.0);
+    EXPECT_EQ(number(engine, "scene_uploads"), 0.0);
     EXPECT_NE(r.out.find("| vulkan (record) | update_lod | 3 |"), std::string::npos) << r.out;
 }
 

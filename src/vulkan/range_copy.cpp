@@ -205,7 +205,7 @@ Result<RangeCopier::Frame*> RangeCopier::begin_in_frame(const FrameRing& ring, u
         // completed (the ring's rule), and so has every one before it.
         const VolkDeviceTable& vk = device_.vk();
         for (VkDescriptorPool pool : frame.pools) HMSM_VK_TRY(vk.vkResetDescriptorPool(device_.handle(), pool, 0));
-        if (frame.pools.size() > 1) {  // keep one pool, as large as the frame needed
+        if (frame.pools.size() > 1) {  // keep one pool
             for (size_t k = 0; k + 1 < frame.pools.size(); ++k)
                 vk.vkDestroyDescriptorPool(device_.handle(), frame.pools[k], nullptr);
             frame.pools.erase(frame.pools.begin(), frame.pools.end() - 1);

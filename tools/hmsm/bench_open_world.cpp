@@ -384,6 +384,7 @@ json run_backend(const TreeModel& model, const std::string& model_name, BackendK
         FrameTimes warm, times;
         if (Status status = time_frames(sim, *driver, warmup, change, warm); !status) return stop(status);
         calls = {};
+        const uint64_t uploads_before = detail::full_uploads_of(sim), growths_before = detail::device_growths_of(sim);
         if (Status status = time_frames(sim, *driver, std::min<uint32_t>(s.frames, 100), change, times); !status)
             return stop(status);
         double standing = 0.0;
@@ -396,7 +397,9 @@ json run_backend(const TreeModel& model, const std::string& model_name, BackendK
                                    {"add", distribution(calls.add)},
                                    {"changes_and_step_call", distribution(times.call)},
                                    {"frame", distribution(times.whole)}}},
-                                 {"changes_add_seconds", percentile(times.whole, 0.5) - standing}});
+                                 {"changes_add_seconds", percentile(times.whole, 0.5) - standing},
+                                 {"scene_uploads", detail::full_uploads_of(sim) - uploads_before},
+                                 {"device_growths", detail::device_growths_of(sim) - growths_before}});
     }
     row["engine_moving"] = engine_moving;
 
