@@ -174,7 +174,7 @@ private:
     Status prepare_one_off(std::span<const Dispatch> program);
     Status ensure_timestamp_capacity(Slot& slot, uint32_t queries);
     /// A write, move or run of an instance change held back for the next recording; `ranges`:
-    /// a write of many ranges (data packed), `patterns`: a pattern copy of buffers `ids`.
+    /// one write_ranges call (its data packed), `patterns`: a pattern copy of buffers `ids`.
     struct HeldBack {
         enum class Kind { write, move, run, ranges, patterns } kind;
         BufferId id{};
