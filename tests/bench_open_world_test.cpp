@@ -25,6 +25,20 @@ using hmsm::test::read_text;
 class BenchOpenWorld : public hmsm::test::CliFixture {
 protected:
     BenchOpenWorld() : CliFixture(/*small_tree=*/false) {}
+
+    /// Runs `hmsm bench` with the open world alone on `backend`, `sizes` its --open-world-*
+    /// flags, into `r`; returns the one open-world row of its JSON (null, the failure reported,
+    /// where there is none).
+    json open_world_row(const std::string& backend, const std::string& sizes, CliRun& r) {
+        const std::string file = path("open_world_" + backend + ".json");
+        r = run("bench --no-progress --backends " + backend +
+                " --presets none --instances none --joint-instances none " + sizes + " --json " + file);
+        EXPECT_EQ(r.exit_code, 0) << r.err;
+        const json d = json::parse(read_text(file), nullptr, false);
+        const bool one = d.is_object() && d.contains("open_world") && d["open_world"].size() == 1;
+        EXPECT_TRUE(one) << d.dump();
+        return one ? d["open_world"][0] : json();
+    }
 };
 
 double number(const json& j, const char* key) {
@@ -33,14 +47,10 @@ double number(const json& j, const char* key) {
 }
 
 TEST_F(BenchOpenWorld, SmallWorldOnCpuReportsCallsSharesPopAndMemory) {
-    const std::string file = path("open_world.json");
     const uint32_t trees = 1000, frames = 4;
-    const CliRun r = run("bench --no-progress --backends cpu --presets none --instances none --joint-instances none "
-                         "--open-world-trees 1000 --open-world-frames 4 --open-world-changes 40 --json " + file);
-    ASSERT_EQ(r.exit_code, 0) << r.err;
-    const json d = json::parse(read_text(file), nullptr, false);
-    ASSERT_TRUE(d.contains("open_world") && d["open_world"].size() == 1) << d.dump();
-    const json& row = d["open_world"][0];
+    CliRun r;
+    const json row = open_world_row("cpu", "--open-world-trees 1000 --open-world-frames 4 --open-world-changes 40", r);
+    ASSERT_FALSE(row.is_null());
     SCOPED_TRACE(row.dump());
     ASSERT_FALSE(row.contains("skipped") || row.contains("failed"));
     EXPECT_EQ(row["backend"], "cpu");
@@ -131,13 +141,9 @@ TEST_F(BenchOpenWorld, VulkanAlsoMovesThroughTheEnginesPath) {
     const auto kinds = hmsm::compiled_backends();
     if (std::find(kinds.begin(), kinds.end(), hmsm::BackendKind::vulkan) == kinds.end())
         GTEST_SKIP() << "the Vulkan backend is not compiled into this build";
-    const std::string file = path("open_world_vulkan.json");
-    const CliRun r = run("bench --no-progress --backends vulkan --presets none --instances none --joint-instances none "
-                         "--open-world-trees 200 --open-world-frames 3 --open-world-changes 10 --json " + file);
-    ASSERT_EQ(r.exit_code, 0) << r.err;
-    const json d = json::parse(read_text(file), nullptr, false);
-    ASSERT_TRUE(d.contains("open_world") && d["open_world"].size() == 1) << d.dump();
-    const json& row = d["open_world"][0];
+    CliRun r;
+    const json row = open_world_row("vulkan", "--open-world-trees 200 --open-world-frames 3 --open-world-changes 10", r);
+    ASSERT_FALSE(row.is_null());
     SCOPED_TRACE(row.dump());
     if (row.contains("skipped") || row.contains("failed"))
         GTEST_SKIP() << "no Vulkan device: " << row.value("skipped", row.value("failed", std::string()));

@@ -94,14 +94,8 @@ bool VulkanBackend::scatters_in_frame(BufferId id, std::span<const ElementRange>
 
 Status VulkanBackend::record_ranges_in_frame(BufferId id, std::span<const ElementRange> ranges, const void* src,
                                              Scalar as) {
-    if (!scatters_in_frame(id, ranges)) {  // few ranges: a ring copy each
-        const auto* in = static_cast<const std::byte*>(src);
-        for (const ElementRange& r : ranges) {
-            HMSM_TRY(stage_write(id, r.first, r.count, in, as));
-            in += r.count * range_scalar_bytes(id, as);
-        }
-        return {};
-    }
+    // Few ranges: a ring copy each (write() inside a recording stages them).
+    if (!scatters_in_frame(id, ranges)) return Backend::write_ranges(id, ranges, src, as);
     // The scatter's own ring copies record what this recording staged before them first.
     barrier_before_dispatch(*device_, record_target_);
     const Shape shape = buffer_info(id).shape;

@@ -120,15 +120,20 @@ Result<uint32_t> RangeCopier::append_rows(VkCommandBuffer cmd, const void* rows,
 }
 
 Result<VkDescriptorSet> RangeCopier::descriptor_set(const Buffer& data, const Buffer& packed) {
+    return allocate_set(pool_, data, packed, table_device_);
+}
+
+Result<VkDescriptorSet> RangeCopier::allocate_set(VkDescriptorPool pool, const Buffer& data, const Buffer& packed,
+                                                  const Buffer& table) {
     const VolkDeviceTable& vk = device_.vk();
     VkDescriptorSet set = VK_NULL_HANDLE;
     VkDescriptorSetAllocateInfo allocate{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO};
-    allocate.descriptorPool = pool_;
+    allocate.descriptorPool = pool;
     allocate.descriptorSetCount = 1;
     allocate.pSetLayouts = &set_layout_;
     HMSM_VK_TRY(vk.vkAllocateDescriptorSets(device_.handle(), &allocate, &set));
     const VkDescriptorBufferInfo buffers[kBindings] = {
-        {data.handle(), 0, VK_WHOLE_SIZE}, {packed.handle(), 0, VK_WHOLE_SIZE}, {table_device_.handle(), 0, VK_WHOLE_SIZE}};
+        {data.handle(), 0, VK_WHOLE_SIZE}, {packed.handle(), 0, VK_WHOLE_SIZE}, {table.handle(), 0, VK_WHOLE_SIZE}};
     VkWriteDescriptorSet write{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
     write.dstSet = set;
     write.descriptorCount = kBindings;
@@ -141,7 +146,6 @@ Result<VkDescriptorSet> RangeCopier::descriptor_set(const Buffer& data, const Bu
 Status RangeCopier::record(VkCommandBuffer cmd, const Buffer& data, const Buffer& packed,
                            std::span<const WordSpan> ranges, bool gather) {
     if (ranges.empty()) return {};
-    const VolkDeviceTable& vk = device_.vk();
     Result<uint32_t> first = append_rows(cmd, ranges.data(), ranges.size());
     if (!first) return first.status();
     Result<VkDescriptorSet> set = descriptor_set(data, packed);
@@ -149,22 +153,25 @@ Status RangeCopier::record(VkCommandBuffer cmd, const Buffer& data, const Buffer
     const uint64_t words = uint64_t(ranges.back().packed) + ranges.back().words - ranges.front().packed;
     const CopyConstants constants{*first, uint32_t(ranges.size()), ranges.front().packed, uint32_t(words),
                                   gather ? 1u : 0u};
-    vk.vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline_);
-    vk.vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, layout_, 0, 1, &*set, 0, nullptr);
-    vk.vkCmdPushConstants(cmd, layout_, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof constants, &constants);
-    const uint64_t needed = (words + kCopyWorkgroupSize - 1) / kCopyWorkgroupSize;
-    const uint32_t groups = uint32_t(
-        std::clamp<uint64_t>(needed, 1, std::min<uint64_t>(65535, device_.limits().max_workgroup_count[0])));
-    vk.vkCmdDispatch(cmd, groups, 1, 1);
-    ++dispatches_;
+    dispatch(cmd, pipeline_, *set, &constants, (words + kCopyWorkgroupSize - 1) / kCopyWorkgroupSize, 1);
     return {};
+}
+
+void RangeCopier::dispatch(VkCommandBuffer cmd, VkPipeline pipeline, VkDescriptorSet set, const void* constants,
+                           uint64_t groups, uint32_t groups_y) {
+    const VolkDeviceTable& vk = device_.vk();
+    vk.vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline);
+    vk.vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, layout_, 0, 1, &set, 0, nullptr);
+    vk.vkCmdPushConstants(cmd, layout_, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(CopyConstants), constants);
+    const uint64_t most = std::min<uint64_t>(65535, device_.limits().max_workgroup_count[0]);
+    vk.vkCmdDispatch(cmd, uint32_t(std::clamp<uint64_t>(groups, 1, most)), groups_y, 1);
+    ++dispatches_;
 }
 
 Status RangeCopier::record_patterns(VkCommandBuffer cmd, const Buffer& data, std::span<const PatternRow> entries,
                                     std::span<const PatternRow> moves, uint32_t words_per_element,
                                     uint32_t half_words, uint32_t halves) {
     if (entries.empty() || moves.empty()) return {};
-    const VolkDeviceTable& vk = device_.vk();
     Result<uint32_t> first_entry = append_rows(cmd, entries.data(), entries.size());
     if (!first_entry) return first_entry.status();
     Result<uint32_t> first_move = append_rows(cmd, moves.data(), moves.size());
@@ -173,13 +180,7 @@ Status RangeCopier::record_patterns(VkCommandBuffer cmd, const Buffer& data, std
     if (!set) return set.status();
     const PatternConstants constants{*first_entry, uint32_t(entries.size()), *first_move, words_per_element,
                                      half_words};
-    vk.vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, patterns_pipeline_);
-    vk.vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, layout_, 0, 1, &*set, 0, nullptr);
-    vk.vkCmdPushConstants(cmd, layout_, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof constants, &constants);
-    const uint32_t groups = uint32_t(
-        std::clamp<uint64_t>(entries.size(), 1, std::min<uint64_t>(65535, device_.limits().max_workgroup_count[0])));
-    vk.vkCmdDispatch(cmd, groups, halves, 1);
-    ++dispatches_;
+    dispatch(cmd, patterns_pipeline_, *set, &constants, entries.size(), halves);
     return {};
 }
 
@@ -232,21 +233,8 @@ Result<VkDescriptorSet> RangeCopier::frame_set(Frame& frame, const Buffer& data,
         frame.pools.push_back(pool);
         frame.pool_used = 0;
     }
-    VkDescriptorSet set = VK_NULL_HANDLE;
-    VkDescriptorSetAllocateInfo allocate{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO};
-    allocate.descriptorPool = frame.pools.back();
-    allocate.descriptorSetCount = 1;
-    allocate.pSetLayouts = &set_layout_;
-    HMSM_VK_TRY(vk.vkAllocateDescriptorSets(device_.handle(), &allocate, &set));
-    ++frame.pool_used;
-    const VkDescriptorBufferInfo buffers[kBindings] = {
-        {data.handle(), 0, VK_WHOLE_SIZE}, {packed.handle(), 0, VK_WHOLE_SIZE}, {table.handle(), 0, VK_WHOLE_SIZE}};
-    VkWriteDescriptorSet write{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
-    write.dstSet = set;
-    write.descriptorCount = kBindings;
-    write.descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
-    write.pBufferInfo = buffers;
-    vk.vkUpdateDescriptorSets(device_.handle(), 1, &write, 0, nullptr);
+    Result<VkDescriptorSet> set = allocate_set(frame.pools.back(), data, packed, table);
+    if (set) ++frame.pool_used;
     return set;
 }
 
@@ -295,19 +283,12 @@ Status RangeCopier::record_patterns_in_frame(VkCommandBuffer cmd, FrameRing& rin
     const std::pair<const void*, VkDeviceSize> rows[] = {{entries.data(), entries.size_bytes()},
                                                          {moves.data(), moves.size_bytes()}};
     HMSM_TRY(stage_frame_rows(cmd, ring, recording, rows));
-    const VolkDeviceTable& vk = device_.vk();
-    vk.vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, patterns_pipeline_);
     for (const PatternTarget& t : targets) {  // the targets are apart: no barrier between them
         Result<VkDescriptorSet> set = frame_set(**frame, *t.data, *t.data, frame_table_);  // binding 1 unread
         if (!set) return set.status();
         const PatternConstants constants{0, uint32_t(entries.size()), uint32_t(entries.size()), t.words_per_element,
                                          t.half_words};
-        vk.vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, layout_, 0, 1, &*set, 0, nullptr);
-        vk.vkCmdPushConstants(cmd, layout_, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof constants, &constants);
-        const uint32_t groups = uint32_t(std::clamp<uint64_t>(
-            entries.size(), 1, std::min<uint64_t>(65535, device_.limits().max_workgroup_count[0])));
-        vk.vkCmdDispatch(cmd, groups, t.halves, 1);
-        ++dispatches_;
+        dispatch(cmd, patterns_pipeline_, *set, &constants, entries.size(), t.halves);
     }
     return {};
 }
@@ -326,16 +307,8 @@ Status RangeCopier::record_scatter_in_frame(VkCommandBuffer cmd, FrameRing& ring
     HMSM_TRY(stage_frame_rows(cmd, ring, recording, rows));  // records the values' copy too
     Result<VkDescriptorSet> set = frame_set(**frame, data, frame_scratch_, frame_table_);
     if (!set) return set.status();
-    const VolkDeviceTable& vk = device_.vk();
     const CopyConstants constants{0, uint32_t(ranges.size()), ranges.front().packed, uint32_t(words), 0u};
-    vk.vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline_);
-    vk.vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, layout_, 0, 1, &*set, 0, nullptr);
-    vk.vkCmdPushConstants(cmd, layout_, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof constants, &constants);
-    const uint64_t needed = (words + kCopyWorkgroupSize - 1) / kCopyWorkgroupSize;
-    const uint32_t groups = uint32_t(
-        std::clamp<uint64_t>(needed, 1, std::min<uint64_t>(65535, device_.limits().max_workgroup_count[0])));
-    vk.vkCmdDispatch(cmd, groups, 1, 1);
-    ++dispatches_;
+    dispatch(cmd, pipeline_, *set, &constants, (words + kCopyWorkgroupSize - 1) / kCopyWorkgroupSize, 1);
     return {};
 }
 

@@ -102,6 +102,13 @@ private:
     Result<uint32_t> append_rows(VkCommandBuffer cmd, const void* rows, uint64_t count);
     /// A descriptor set of `data`, `packed` and the table.
     Result<VkDescriptorSet> descriptor_set(const Buffer& data, const Buffer& packed);
+    /// A descriptor set of `data`, `packed` and `table` from `pool`.
+    Result<VkDescriptorSet> allocate_set(VkDescriptorPool pool, const Buffer& data, const Buffer& packed,
+                                         const Buffer& table);
+    /// Binds `pipeline` and `set`, pushes `constants` (CopyConstants or PatternConstants, of one
+    /// size) and dispatches `groups` workgroups (clamped to the device's limit) by `groups_y`.
+    void dispatch(VkCommandBuffer cmd, VkPipeline pipeline, VkDescriptorSet set, const void* constants,
+                  uint64_t groups, uint32_t groups_y);
 
     /// What the *_in_frame calls use of ring frame `ring.current()`: its pools reset for
     /// `recording`, the outgrown device buffers freed whose last recording has completed.
