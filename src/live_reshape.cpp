@@ -89,39 +89,6 @@ std::vector<detail::InstanceGroup> groups_from(const detail::SceneData& d, uint3
 
 }  // namespace
 
-Status Simulation::reserve_instances(uint64_t count) {
-    Impl& s = *impl_;
-    if (count > kMaxInstances)
-        return {ErrorCode::unsupported, "reserve_instances: " + std::to_string(count) + " instances, at most " +
-                                            std::to_string(kMaxInstances) + " are supported"};
-    Impl::Reserved room;
-    for (const detail::ModelRange& m : s.data_->models) {
-        room.chains = std::max(room.chains, count * m.chain_count);
-        room.nodes = std::max(room.nodes, count * m.node_count);
-        room.vertices = std::max(room.vertices, count * m.vertex_count);
-    }
-    room.instances = count;
-    if (room.chains > kMaxStateElements || room.nodes > kMaxStateElements || room.vertices > kMaxStateElements)
-        return {ErrorCode::unsupported, "reserve_instances: room for " + std::to_string(count) +
-                                            " instances of the largest model would take more than " +
-                                            std::to_string(kMaxStateElements) + " elements of one buffer"};
-    const detail::SceneData& d = *s.data_;
-    const bool fits = room.chains <= d.chain_capacity && room.nodes <= d.node_capacity &&
-                      room.vertices <= d.vertex_capacity && room.instances <= d.instance_capacity;
-    const Impl::Reserved before = s.reserved_;
-    s.reserved_ = room;
-    if (fits || !s.backend_->capabilities().reshapes_in_place) return {};
-    const detail::ElementCounts live{d.total_chains, d.total_nodes, d.total_vertices};
-    Result<bool> on_device = s.grow_on_device(live, d.instance_count());
-    if (!on_device) s.reserved_ = before;
-    if (!on_device || *on_device) return on_device.status();
-    std::vector<uint32_t> everyone(s.instances_.size());
-    for (uint32_t i = 0; i < everyone.size(); ++i) everyone[i] = i;
-    Status grown_now = s.reshape(everyone, {}, /*reupload=*/true);
-    if (!grown_now) s.reserved_ = before;
-    return grown_now;
-}
-
 Status Simulation::Impl::reshape(const std::vector<uint32_t>& survivors, std::span<const Instance> added,
                                  bool reupload) {
     struct InstanceChange {

@@ -378,6 +378,10 @@ struct __attribute__((visibility("hidden"))) Simulation::Impl {
         uint64_t chains = 0, nodes = 0, vertices = 0, instances = 0;
     };
     Reserved reserved_;
+    /// Keeps `room` as the reserve and grows the capacities to it now if they are smaller (on
+    /// the device, or by uploading the scene anew); nothing changes on an error
+    /// (capacity_reserve.cpp).
+    Status reserve_room(const Reserved& room);
     /// Room the next upload takes at least (a swap removal's staging asked for it); cleared by it.
     Reserved growth_;
     detail::WindClock clock_;

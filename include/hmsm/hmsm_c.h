@@ -360,6 +360,11 @@ HMSM_API hmsm_status hmsm_simulation_reset_instances(hmsm_simulation* simulation
 /* Room on the device for `count` instances in all (Simulation::reserve_instances): adding up to
  * that many then costs only what the added instances cost. */
 HMSM_API hmsm_status hmsm_simulation_reserve_instances(hmsm_simulation* simulation, uint64_t count);
+/* The same for a world of levels of detail (Simulation::reserve_instances(per_level)): room for
+ * per_level[k] instances at level k, finest first, `count` levels. NULL with a non-zero count,
+ * no levels or more levels than the scene's models have are refused and change nothing. */
+HMSM_API hmsm_status hmsm_simulation_reserve_level_instances(hmsm_simulation* simulation,
+                                                             const uint64_t* per_level, size_t count);
 /* Stable instance handles (Simulation::index_of and friends, docs/driving.md): the instances of
  * the scene get ids 0 .. n-1, each added one the next unused id; an id stays valid while its
  * instance lives and is never given again. A removed, unknown or repeated id is refused, naming

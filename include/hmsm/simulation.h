@@ -101,6 +101,18 @@ public:
     /// one growth of the capacity now if the room is smaller, nothing otherwise. The room is
     /// kept when a later addition outgrows it. At most kMaxInstances (docs/driving.md).
     Status reserve_instances(uint64_t count);
+    /// The same for a world of levels of detail: room for `per_level[k]` instances at level k
+    /// (finest first, Scene::lod_budgets; level k of each scene model that has it, the room of
+    /// the largest), and for one template of every level, which the level switches of the GPU
+    /// backends stage, so that adding up to that many instances and switching them among those
+    /// levels costs only what the changes touch. Room for every instance at its full level, as
+    /// reserve_instances(count) gives, is often tens of times larger. Count an instance fading
+    /// to a coarser level at its finer level too (it runs both until the fade ends), and on the
+    /// CPU backends the instances one switch moves (their state is staged above the others).
+    /// Fails with invalid_argument for no counts or more counts than the scene's models have
+    /// levels, and with unsupported past kMaxInstances in all or past the largest buffer;
+    /// nothing changes then (docs/driving.md, streaming budgets).
+    Status reserve_instances(std::span<const uint64_t> per_level);
     /// As add_instances(instances), and `ids` (as many as `instances`) receives the added
     /// instances' handles, in order.
     Status add_instances(std::span<const Instance> instances, std::span<InstanceId> ids);

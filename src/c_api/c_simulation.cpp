@@ -275,6 +275,15 @@ hmsm_status hmsm_simulation_reserve_instances(hmsm_simulation* simulation, uint6
     });
 }
 
+hmsm_status hmsm_simulation_reserve_level_instances(hmsm_simulation* simulation, const uint64_t* per_level,
+                                                    size_t count) {
+    return guarded([&]() -> Status {
+        if (!simulation) return bad("hmsm_simulation_reserve_level_instances: simulation is NULL");
+        if (!per_level && count > 0) return bad("hmsm_simulation_reserve_level_instances: per_level is NULL");
+        return simulation->simulation->reserve_instances(std::span<const uint64_t>(per_level, count));
+    });
+}
+
 hmsm_status hmsm_simulation_remove_instances(hmsm_simulation* simulation, const uint64_t* indices,
                                              size_t count) {
     return guarded([&]() -> Status {

@@ -46,6 +46,16 @@ int main(void) {
     CHECK_STATUS(HMSM_OK, hmsm_simulation_reserve_instances(simulation, 16));
     CHECK_STATUS(HMSM_UNSUPPORTED, hmsm_simulation_reserve_instances(simulation, 1ull << 40));
     CHECK_STATUS(HMSM_INVALID_ARGUMENT, hmsm_simulation_reserve_instances(NULL, 4));
+    {
+        /* The scene has no levels of detail: one level count (level 0), no more. */
+        const uint64_t per_level[] = {20, 5};
+        CHECK_STATUS(HMSM_OK, hmsm_simulation_reserve_level_instances(simulation, per_level, 1));
+        CHECK_STATUS(HMSM_INVALID_ARGUMENT, hmsm_simulation_reserve_level_instances(simulation, per_level, 2));
+        CHECK(strstr(hmsm_status_message(), "at most 1 levels") != NULL);
+        CHECK_STATUS(HMSM_INVALID_ARGUMENT, hmsm_simulation_reserve_level_instances(simulation, per_level, 0));
+        CHECK_STATUS(HMSM_INVALID_ARGUMENT, hmsm_simulation_reserve_level_instances(simulation, NULL, 1));
+        CHECK_STATUS(HMSM_INVALID_ARGUMENT, hmsm_simulation_reserve_level_instances(NULL, per_level, 1));
+    }
 
     CHECK_STATUS(HMSM_OK, hmsm_simulation_id_of(simulation, 2, &id));
     CHECK(id == 2);
