@@ -33,7 +33,8 @@ std::string render_open_world(const json& rows) {
     if (!rows.is_array() || rows.empty()) return "";
     std::string out =
         "\n### Open world: trees streamed around a moving viewer, levels by distance\n\n"
-        "Joints only. Per frame: swap-remove the trees that left the radius, add those that came, "
+        "Joints only. Room for twice each level's share of the trees is reserved before they stream in "
+        "(`reserve_instances` by level). Per frame: swap-remove the trees that left the radius, add those that came, "
         "`update_lod(viewer)`, one `step`. Frame: the four calls; standing still: the same frames "
         "with the viewer at rest (update_lod and step); changes add: frame median moving minus standing "
         "still. Pop: the largest vertex jump of a switched tree (skinned from its joint matrices) "
