@@ -88,8 +88,9 @@ Status Simulation::reserve_instances(std::span<const uint64_t> per_level) {
         room.vertices += count * largest.vertices;
         room.instances += count;
     }
-    // A level switch on a device that copies patterns (CUDA, Vulkan) stages one template of
-    // each level involved above the instances (docs/model.md 3.12): room for all of them.
+    // A level switch on a device that copies patterns (CUDA, Vulkan) unfolds chains from one
+    // template of each level at rest, kept above the instances (docs/architecture.md): room
+    // for all of them.
     for (const detail::ModelRange& m : s.data_->models) room.chains += m.chain_count;
     if (room.chains > detail::kMaxStateElements || room.nodes > detail::kMaxStateElements ||
         room.vertices > detail::kMaxStateElements)
