@@ -69,6 +69,30 @@ inline bool destinations_apart_from_sources(std::span<const ElementMove> moves) 
     return highest_dst_end <= lowest_src;
 }
 
+/// Whether `moves` may be copied all at once, in any order: no destination shares an element
+/// with a source or with another destination (a swap removal's moves in each half of a
+/// ping-pong buffer, which destinations_apart_from_sources does not see). O(n log n).
+inline bool moves_independent(std::span<const ElementMove> moves) {
+    std::vector<ElementRange> sources, targets;
+    for (const ElementMove& m : moves) {
+        if (m.src == m.dst || m.count == 0) continue;
+        sources.push_back({m.src, m.count});
+        targets.push_back({m.dst, m.count});
+    }
+    if (ranges_overlap(targets)) return false;
+    std::sort(sources.begin(), sources.end(), [](const ElementRange& a, const ElementRange& b) { return a.first < b.first; });
+    std::vector<uint64_t> reach(sources.size());  // the furthest end of sources [0, k]
+    for (size_t k = 0; k < sources.size(); ++k)
+        reach[k] = std::max(k > 0 ? reach[k - 1] : 0, sources[k].first + sources[k].count);
+    for (const ElementRange& t : targets) {
+        // The sources that begin before the target ends overlap it where one reaches past its start.
+        const auto before = std::lower_bound(sources.begin(), sources.end(), t.first + t.count,
+                                             [](const ElementRange& r, uint64_t end) { return r.first < end; });
+        if (before != sources.begin() && reach[size_t(before - sources.begin()) - 1] > t.first) return false;
+    }
+    return true;
+}
+
 /// Calls `chunk(src, dst, count)` for pieces of `m` of at most `most` elements, in the order
 /// that reads every piece of the source before a piece of the destination overwrites it
 /// (ascending when the move goes down, descending when it goes up).

@@ -130,6 +130,44 @@ TEST(PlanMoveBatches, BuffersWithTheSameMovesShareOnePlan) {
     EXPECT_EQ(plans[0]->pieces.size(), alone.pieces.size());
 }
 
+// moves_independent answers as a comparison of every pair of moves does: random moves, apart
+// or overlapping, with in-place and empty ones, and a swap removal's moves in both halves of a
+// ping-pong buffer (independent, though not every destination lies below every source).
+TEST(MovesIndependent, AnswersAsAComparisonOfEveryPair) {
+    auto brute_force = [](std::span<const ElementMove> moves) {
+        auto overlap = [](uint64_t a, uint64_t n, uint64_t b, uint64_t m) { return a < b + m && b < a + n; };
+        for (size_t i = 0; i < moves.size(); ++i) {
+            const ElementMove& a = moves[i];
+            if (a.src == a.dst || a.count == 0) continue;
+            for (size_t j = 0; j < moves.size(); ++j) {
+                const ElementMove& b = moves[j];
+                if (b.src == b.dst || b.count == 0) continue;
+                if (overlap(a.dst, a.count, b.src, b.count)) return false;
+                if (i != j && overlap(a.dst, a.count, b.dst, b.count)) return false;
+            }
+        }
+        return true;
+    };
+    std::mt19937 random(5);
+    int independent = 0;
+    for (int trial = 0; trial < 2000; ++trial) {
+        const uint64_t size = 20 + random() % 400;
+        const std::vector<ElementMove> moves = random_moves(random, size, 1 + random() % 6, 1 + random() % 12);
+        const bool expected = brute_force(moves);
+        independent += expected;
+        ASSERT_EQ(detail::moves_independent(moves), expected) << "trial " << trial;
+    }
+    EXPECT_GT(independent, 100) << "the trials hardly ever meet independent moves";
+    // Holes 0, 2, ..., 128 of 200 filled from the back, in each half of 256 elements.
+    std::vector<ElementMove> swap_fill;
+    for (uint64_t half = 0; half < 2; ++half)
+        for (uint64_t k = 0; k < 65; ++k) swap_fill.push_back({half * 256 + 199 - k, half * 256 + 2 * k, 1});
+    EXPECT_TRUE(detail::moves_independent(swap_fill));
+    EXPECT_FALSE(detail::destinations_apart_from_sources(swap_fill));
+    swap_fill.push_back({300, 130, 3});  // writes [130, 133), which another move reads
+    EXPECT_FALSE(detail::moves_independent(swap_fill));
+}
+
 TEST(DisjointIntervals, AnswersAsASearchOfEveryInterval) {
     std::mt19937 random(3);
     for (int trial = 0; trial < 300; ++trial) {

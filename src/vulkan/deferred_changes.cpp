@@ -7,7 +7,8 @@
 // operation that is not itself held back (step(), read(), reset, an upload when the
 // capacity grows) first submits them. A write of many ranges and a level switch's pattern
 // copies are held back as one change each and go as range-copy dispatches (range_copy.h),
-// submitted or, in a recording, with their tables and values staged in the frame's ring slot.
+// submitted or, in a recording, with their tables and values staged in the frame's ring slot;
+// so do a swap removal's many moves of a buffer in a recording (as a pattern copy).
 #include "vulkan_backend.h"
 
 #include "../device_words.h"
@@ -15,6 +16,7 @@
 
 #include <algorithm>
 #include <cstring>
+#include <unordered_map>
 #include <utility>
 
 namespace hmsm::detail::vk {
@@ -73,8 +75,13 @@ Status VulkanBackend::record_held_back() {
         switch (c.kind) {
             case HeldBack::Kind::write: status = stage_write(c.id, c.first, c.count, c.data.data(), c.as); break;
             case HeldBack::Kind::move:
+                if (moves_in_frame(c.id, c.moves)) {
+                    status = record_moves_in_frame(c.id, c.moves);
+                    break;
+                }
                 ring_->record_copies(record_target_);  // the writes staged before the moves first
                 record_moves(record_target_, c.id, c.moves);
+                ++moves_recorded_as_copies_;
                 break;
             case HeldBack::Kind::run: status = run(c.program, c.steps); break;
             case HeldBack::Kind::ranges: status = record_ranges_in_frame(c.id, c.ranges, c.data.data(), c.as); break;
@@ -119,6 +126,41 @@ Status VulkanBackend::record_patterns_in_frame(std::span<const BufferId> ids, ui
     }
     barrier_before_dispatch(*device_, record_target_);
     HMSM_TRY(range_copier_->record_patterns_in_frame(record_target_, *ring_, recordings_, entries, moves, targets));
+    barrier_after_dispatch(*device_, record_target_);
+    return device_->take_validation_messages();
+}
+
+bool VulkanBackend::moves_in_frame(BufferId id, std::span<const ElementMove> moves) const {
+    const BufferId ids[] = {id};
+    return shader_ranges_ && moves.size() >= kShaderRanges && plan_ && !plan_->split() && copies_by_shader(ids) &&
+           moves_independent(moves);
+}
+
+Status VulkanBackend::record_moves_in_frame(BufferId id, std::span<const ElementMove> moves) {
+    // Elements fit 32 bits (copies_by_shader). No move reads what another writes, so the
+    // pattern copy's workgroups need no order among them.
+    std::vector<PatternRow> entries, patterns;
+    std::unordered_map<uint64_t, uint32_t> pattern_of;  // by length: a few model levels
+    entries.reserve(moves.size());
+    for (const ElementMove& m : moves) {
+        if (m.src == m.dst || m.count == 0) continue;
+        const auto [pattern, made] = pattern_of.try_emplace(m.count, uint32_t(patterns.size()));
+        if (made) patterns.push_back({0, 0, uint32_t(m.count), 0});
+        entries.push_back({uint32_t(m.src), uint32_t(m.dst), pattern->second, 1});
+    }
+    if (entries.empty()) return {};
+    // Behind every earlier command, also the engine's draws that may still read the outputs
+    // (joint matrices, vertices) being moved, as record_moves.
+    VkMemoryBarrier before{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
+    before.srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT | VK_ACCESS_TRANSFER_WRITE_BIT;
+    before.dstAccessMask = VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT;
+    device_->vk().vkCmdPipelineBarrier(record_target_, VK_PIPELINE_STAGE_ALL_COMMANDS_BIT,
+                                       VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, 0, 1, &before, 0, nullptr, 0, nullptr);
+    // The elements index the whole buffer, both halves of a ping-pong one: one half each.
+    const auto words = uint32_t(device_element_bytes(id) / 4);
+    const RangeCopier::PatternTarget target{&buffers_[uint32_t(id)], words, 0, 1};
+    HMSM_TRY(range_copier_->record_patterns_in_frame(record_target_, *ring_, recordings_, entries, patterns,
+                                                     {&target, 1}));
     barrier_after_dispatch(*device_, record_target_);
     return device_->take_validation_messages();
 }

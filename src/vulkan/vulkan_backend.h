@@ -105,6 +105,9 @@ public:
     uint64_t submissions() const { return submissions_ + transfer_->submissions() + read_slots_->submissions(); }
     /// Dispatches of the range copy (range_copy.h) so far (a test hook).
     uint64_t range_copy_dispatches() const { return range_copier_ ? range_copier_->dispatches() : 0; }
+    /// Held-back moves recorded into engines' command buffers as copy commands rather than as a
+    /// dispatch (a test hook: few moves, or moves that overlap their sources).
+    uint64_t moves_recorded_as_copies() const { return moves_recorded_as_copies_; }
     /// Secondary command buffers recorded for recorded steps, and their vkCmdExecuteCommands
     /// (test hooks; step_replay.h): a frame loop whose program stays records none after the
     /// first frames in flight. Both 0 with replay off.
@@ -208,6 +211,14 @@ private:
                         std::span<const PatternRow> moves);
     Status record_patterns_in_frame(std::span<const BufferId> ids, uint64_t capacity,
                                     std::span<const PatternRow> entries, std::span<const PatternRow> moves);
+    /// Whether held-back moves of buffer `id` are recorded as one dispatch of the pattern copy
+    /// (record_moves_in_frame): at least kShaderRanges moves, none writing what another reads or
+    /// writes (a swap removal's), with the range copies on.
+    bool moves_in_frame(BufferId id, std::span<const ElementMove> moves) const;
+    /// Records `moves` into the recording's command buffer as a pattern copy: an entry per move,
+    /// a pattern per distinct length; after a barrier against all earlier work, also an
+    /// engine's reads of the outputs moved.
+    Status record_moves_in_frame(BufferId id, std::span<const ElementMove> moves);
     /// The moves into `cmd` through the scratch buffer (vkCmdCopyBuffer forbids overlapping
     /// regions), after a barrier against all earlier work, also an engine's reads.
     void record_moves(VkCommandBuffer cmd, BufferId id, std::span<const ElementMove> moves) const;
@@ -262,6 +273,7 @@ private:
     /// when the backend is made keeps copy regions (side-by-side measurements, docs/vulkan.md).
     static constexpr size_t kShaderRanges = 64;
     bool shader_ranges_ = true;
+    uint64_t moves_recorded_as_copies_ = 0;
     uint64_t window_bytes_ = 0;  // vulkan_set_window_bytes() when the backend was made; 0: none
     uint64_t window_alignment_ = 0;
     std::unique_ptr<WindowPlan> plan_;

@@ -336,5 +336,46 @@ TEST_F(VulkanTest, ManyRangesAndPatternCopiesTravelAsDispatches) {
     pair.expect_same({Output::node_positions, Output::joint_matrices});
 }
 
+// A swap removal of many trees near the front of a packed forest while the engine records:
+// each hole takes a tree from the back, so every buffer's moves lie apart from their sources,
+// and its 65 moves are recorded as one pattern-copy dispatch (its table staged in the frame's
+// ring slot) rather than as a copy command of 65 regions; a removal of a few still goes as
+// copy regions. The results equal the same removals stepped with step(), under
+// synchronization validation with three frames in flight.
+TEST_F(VulkanTest, ManySwapRemovalMovesTravelAsADispatch) {
+    RecordedAndReference::Options options;
+    options.trees = 200;
+    options.lod_budgets.clear();
+    std::string skip;
+    RecordedAndReference pair = RecordedAndReference::create(options, skip);
+    if (!skip.empty()) GTEST_SKIP() << skip;
+    ASSERT_TRUE(pair.recorded && pair.reference);
+    const auto& backend = dynamic_cast<const detail::vk::VulkanBackend&>(detail::backend_of(*pair.recorded));
+    uint64_t dispatched = 0, copied = 0;
+    pair.run_frames(
+        4,
+        [&](uint32_t f) {
+            dispatched = backend.range_copy_dispatches();
+            copied = backend.moves_recorded_as_copies();
+            std::vector<InstanceId> gone;  // every other one of the first 140, then the first three
+            const std::span<const InstanceId> ids = pair.recorded->instance_ids();
+            if (f == 1)
+                for (size_t k = 0; k < 140; k += 2) gone.push_back(ids[k]);
+            if (f == 2) gone.assign(ids.begin(), ids.begin() + 3);
+            for (Simulation* s : {pair.recorded.get(), pair.reference.get()})
+                ASSERT_TRUE(s->swap_remove_instances(gone).ok()) << "frame " << f;
+        },
+        [](uint32_t) { return 2u; },
+        [&](uint32_t f) {
+            if (f == 1) {
+                EXPECT_EQ(backend.moves_recorded_as_copies(), copied) << "65 moves of a buffer as copy regions";
+                EXPECT_GT(backend.range_copy_dispatches(), dispatched) << "no pattern copy of the moves";
+            }
+            if (f == 2) EXPECT_GT(backend.moves_recorded_as_copies(), copied) << "3 moves of a buffer not as copy regions";
+        });
+    EXPECT_EQ(pair.recorded->instance_count(), 127u);
+    pair.expect_same({Output::node_positions, Output::joint_matrices, Output::vertex_positions});
+}
+
 }  // namespace
 }  // namespace hmsm::test
