@@ -7,9 +7,9 @@
 // no host round trip per step and step(n) runs its steps in one go. A fade is over after its
 // last step, its folded chains then exactly at rest, and switches at the next call that folds
 // (a call boundary). An instance at rest switches at the request: its deflection bound D,
-// measured then through the host, is within LodBands::fade_bound_m. Where the backend holds
-// instance changes back for an engine's frames (Vulkan after record_steps), no request reads
-// the state, and an instance at rest fades as any other.
+// measured then through the host, is within LodBands::fade_bound_m. With fade_bound_m 0, and
+// where the backend holds instance changes back for an engine's frames (Vulkan after
+// record_steps), no request reads the state, and an instance at rest fades as any other.
 #include "instance_moves.h"
 #include "simulation_impl.h"
 
@@ -157,8 +157,10 @@ void Simulation::Impl::pause_fade(uint32_t index, bool active) {
 
 Result<std::vector<uint8_t>> Simulation::Impl::fades_at_rest(const std::vector<std::pair<uint32_t, uint32_t>>& fading) {
     std::vector<uint8_t> at_rest(fading.size(), 0);
-    // Under an engine's recording the state is read by no request: every coarsening fades.
-    if (fading.empty() || backend_->holds_back_instance_changes()) return at_rest;
+    // With no bound, and under an engine's recording, the state is read by no request: every
+    // coarsening fades.
+    if (fading.empty() || lod_bands_.fade_bound_m == 0.0 || backend_->holds_back_instance_changes()) return at_rest;
+    ++at_rest_reads_;
     const detail::Scalar scalar = backend_->kind() == BackendKind::cpu64 ? detail::Scalar::f64 : detail::Scalar::f32;
     // The first state chain of instance i, and one past its last, from the group holding it.
     const std::vector<detail::InstanceGroup>& groups = data_->groups;

@@ -387,9 +387,9 @@ Status Simulation::set_lod_bands(const LodBands& bands) {
     if (bands.fade_steps > kMaxLodFadeSteps)
         return {ErrorCode::invalid_argument, "set_lod_bands: fade_steps " + std::to_string(bands.fade_steps) +
                                                  " is above " + std::to_string(kMaxLodFadeSteps)};
-    if (!std::isfinite(bands.fade_bound_m) || bands.fade_bound_m <= 0.0 || bands.fade_bound_m > 1.0)
+    if (!std::isfinite(bands.fade_bound_m) || bands.fade_bound_m < 0.0 || bands.fade_bound_m > 1.0)
         return {ErrorCode::invalid_argument,
-                "set_lod_bands: fade_bound_m " + std::to_string(bands.fade_bound_m) + " m is not in (0, 1]"};
+                "set_lod_bands: fade_bound_m " + std::to_string(bands.fade_bound_m) + " m is not in [0, 1]"};
     impl_->lod_bands_ = bands;
     impl_->lod_tracker_.invalidate();
     return {};

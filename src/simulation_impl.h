@@ -317,7 +317,8 @@ struct __attribute__((visibility("hidden"))) Simulation::Impl {
     /// counts them on from the current step when it resumes.
     void pause_fade(uint32_t index, bool active);
     /// Per mark of `fading` (index, target run model; ascending indices): whether the instance
-    /// is at rest, its deflection bound D within LodBands::fade_bound_m (read through the host).
+    /// is at rest, its deflection bound D within LodBands::fade_bound_m (read through the host);
+    /// none where fade_bound_m is 0 or the backend holds instance changes back (nothing read).
     Result<std::vector<uint8_t>> fades_at_rest(const std::vector<std::pair<uint32_t, uint32_t>>& fading);
     /// Per run model, per chain: e_c, the largest rest distance from the chain's attach node
     /// to a node or mesh vertex of its subtree (filled on first use).
@@ -422,6 +423,9 @@ struct __attribute__((visibility("hidden"))) Simulation::Impl {
     uint64_t full_uploads_ = 0;
     /// Times growth past the capacity took grow_on_device instead.
     uint64_t device_growths_ = 0;
+    /// Reads of fading instances' state by fades_at_rest (a test hook: fade_bound_m 0 and an
+    /// engine's recording read none).
+    uint64_t at_rest_reads_ = 0;
 };
 
 }  // namespace hmsm

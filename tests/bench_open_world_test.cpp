@@ -49,11 +49,13 @@ double number(const json& j, const char* key) {
 TEST_F(BenchOpenWorld, SmallWorldOnCpuReportsCallsSharesPopAndMemory) {
     const uint32_t trees = 1000, frames = 4;
     CliRun r;
-    const json row = open_world_row("cpu", "--open-world-trees 1000 --open-world-frames 4 --open-world-changes 40", r);
+    const json row = open_world_row(
+        "cpu", "--open-world-trees 1000 --open-world-frames 4 --open-world-changes 40 --open-world-fade-bound 0", r);
     ASSERT_FALSE(row.is_null());
     SCOPED_TRACE(row.dump());
     ASSERT_FALSE(row.contains("skipped") || row.contains("failed"));
     EXPECT_EQ(row["backend"], "cpu");
+    EXPECT_EQ(number(row, "fade_bound_m"), 0.0);
     EXPECT_EQ(row["model"], "paper-1");
     EXPECT_EQ(row["frames"], frames);
     // About `trees` within the radius (the lattice points of a disc of that area).
@@ -172,6 +174,8 @@ TEST_F(BenchOpenWorld, BadSizesExitTwoWithOneLine) {
                      "--open-world-changes");
     expect_bad_input("bench --backends cpu --presets none --open-world-fade-steps -1", "--open-world-fade-steps");
     expect_bad_input("bench --backends cpu --presets none --open-world-fade-steps 70000", "--open-world-fade-steps");
+    expect_bad_input("bench --backends cpu --presets none --open-world-fade-bound -0.1", "--open-world-fade-bound");
+    expect_bad_input("bench --backends cpu --presets none --open-world-fade-bound 2", "--open-world-fade-bound");
 }
 
 }  // namespace

@@ -5,6 +5,7 @@
 // frame, and the relaxation itself adds at most a centimetre a frame. Every backend agrees with
 // cpu64 through fades, a refine during a fade returns without a jump, and bad fade settings
 // are refused without a change.
+#include "simulation_access.h"
 #include "test_trees.h"
 
 #include <hmsm/hmsm_c.h>
@@ -346,6 +347,33 @@ TEST(LodFadeRequests, InterruptRetargetPauseRemoveAndRest) {
     EXPECT_EQ(*sim->instance_lod(deep), 0u);
 }
 
+// With fade_bound_m 0 no request reads the state: an instance at rest fades as any other (and
+// switches once its fade is over), where the default bound measures it with a read and
+// switches it at once.
+TEST(LodFadeRequests, NoBoundReadsNothingAndFadesEvenAtRest) {
+    auto sim = windy_forest();
+    ASSERT_TRUE(sim);
+    const uint64_t& reads = detail::SimulationAccess::impl(*sim).at_rest_reads_;
+    const InstanceId small{0}, deep{1};
+    const uint32_t two = 2;
+    ASSERT_EQ(*sim->request_instance_lods({&deep, 1}, {&two, 1}), 1u);
+    EXPECT_EQ(*sim->instance_lod(deep), 2u) << "at rest: switched at once";
+    EXPECT_EQ(reads, 1u);
+    LodBands bands = sim->lod_bands();
+    bands.fade_bound_m = 0.0;
+    ASSERT_TRUE(sim->set_lod_bands(bands).ok());
+    ASSERT_EQ(*sim->request_instance_lods({&small, 1}, {&two, 1}), 1u);
+    EXPECT_EQ(*sim->instance_lod(small), 0u) << "at rest too, but fading";
+    EXPECT_EQ(*sim->instance_lod_target(small), 2u);
+    EXPECT_EQ(sim->fading_instance_count(), 1u);
+    EXPECT_EQ(reads, 1u) << "the state was read";
+    ASSERT_TRUE(sim->step(bands.fade_steps).ok());
+    ASSERT_TRUE(sim->step(1).ok());  // switches the fades that are over first
+    EXPECT_EQ(*sim->instance_lod(small), 2u) << "the fade is over: switched";
+    EXPECT_EQ(sim->fading_instance_count(), 0u);
+    EXPECT_EQ(reads, 1u);
+}
+
 // A fade word names the level faded to in 7 bits: a model with more than 128 levels (level 0
 // included) is refused at create, naming the model; 128 levels are fine.
 TEST(LodFadeInput, MoreLevelsThanAFadeWordNamesAreRefused) {
@@ -376,7 +404,6 @@ TEST(LodFadeInput, BadSettingsAndRequestsChangeNothing) {
         EXPECT_EQ(sim->lod_bands().fade_bound_m, good.fade_bound_m);
     };
     refused({{10.0}, 0.1, kMaxLodFadeSteps + 1, 1e-3}, "fade_steps");
-    refused({{10.0}, 0.1, 30, 0.0}, "fade_bound_m");
     refused({{10.0}, 0.1, 30, -1e-3}, "fade_bound_m");
     refused({{10.0}, 0.1, 30, std::nan("")}, "fade_bound_m");
     refused({{10.0}, 0.1, 30, 2.0}, "fade_bound_m");

@@ -412,8 +412,9 @@ HMSM_API hmsm_status hmsm_simulation_set_lod_bands(hmsm_simulation* simulation, 
                                                    double hysteresis);
 /* The fade of coarsening switches (hmsm::LodBands::fade_steps and fade_bound_m): steps (0 to
  * 65536; 0 switches at once) steps of relaxing the chains the coarser level folds, then the
- * switch; an instance that deflects no vertex by more than bound_m metres (in (0, 1]) at the
- * request switches at once. Keeps
+ * switch; an instance that deflects no vertex by more than bound_m metres (in [0, 1]) at the
+ * request switches at once (measured with a read of its state; 0: nothing is read, every
+ * coarsening fades). Keeps
  * the edges and hysteresis; hmsm_simulation_set_lod_bands keeps the fade. */
 HMSM_API hmsm_status hmsm_simulation_set_lod_fade(hmsm_simulation* simulation, uint32_t steps, double bound_m);
 /* Chooses every instance's level from its distance to viewer (x, y, z metres): finer levels

@@ -40,14 +40,16 @@ struct InstancePlacement {
 /// keeps its level while the chains the coarser level folds relax to rest relative to their
 /// parents over `fade_steps` steps (on the backend, in each step), and it switches then; an
 /// instance whose switch would move no vertex by more than `fade_bound_m` (at rest) switches
-/// at the request (measured with a read of its state; not on a Vulkan simulation that an
-/// engine drives with record_steps, where it fades too). fade_steps 0 switches at once (the
-/// folded branches' deflection vanishes in one frame). Refining always switches at once.
+/// at the request (measured with a read of its state, which waits for the device; not on a
+/// Vulkan simulation that an engine drives with record_steps, where it fades too).
+/// fade_bound_m 0 reads nothing and fades every coarsening: for worlds in wind, where hardly
+/// a tree is ever at rest. fade_steps 0 switches at once (the folded branches' deflection
+/// vanishes in one frame). Refining always switches at once.
 struct LodBands {
     std::vector<double> edges;  ///< strictly increasing, finite, > 0 (metres); empty: level 0
     double hysteresis = 0.1;    ///< fraction of an edge, in [0, 1)
     uint32_t fade_steps = 60;   ///< steps a coarsening fade takes, 0 to kMaxLodFadeSteps
-    double fade_bound_m = 1e-3; ///< deflection (metres) that switches at the request, in (0, 1]
+    double fade_bound_m = 1e-3; ///< deflection (metres) that switches at the request, in [0, 1]; 0: none
 };
 /// The longest fade LodBands::fade_steps may ask for (about 10 minutes at the default dt).
 inline constexpr uint32_t kMaxLodFadeSteps = 1u << 16;

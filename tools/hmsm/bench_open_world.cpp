@@ -294,6 +294,7 @@ json run_backend(const TreeModel& model, const std::string& model_name, BackendK
     LodBands bands;
     bands.hysteresis = 0.05;
     bands.fade_steps = s.fade_steps;
+    bands.fade_bound_m = s.fade_bound_m;
     double cumulative = 0.0;
     for (size_t k = 0; k + 1 < std::size(kOpenWorldShares); ++k) {
         cumulative += kOpenWorldShares[k];

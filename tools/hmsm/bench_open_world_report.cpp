@@ -9,7 +9,7 @@ namespace hmsm::cli::bench {
 using nlohmann::json;
 
 Result<OpenWorldSettings> open_world_settings(int64_t trees, int64_t frames, int64_t changes, bool changes_given,
-                                              int64_t fade_steps) {
+                                              int64_t fade_steps, double fade_bound_m) {
     auto bad = [](const std::string& message) { return Status{ErrorCode::invalid_argument, message}; };
     if (trees < 1 || trees > kMaxInstances)
         return bad("--open-world-trees " + std::to_string(trees) + ": must be in [1, " + std::to_string(kMaxInstances) + "]");
@@ -20,8 +20,11 @@ Result<OpenWorldSettings> open_world_settings(int64_t trees, int64_t frames, int
     if (fade_steps < 0 || fade_steps > int64_t(kMaxLodFadeSteps))
         return bad("--open-world-fade-steps " + std::to_string(fade_steps) + ": must be in [0, " +
                    std::to_string(kMaxLodFadeSteps) + "]");
+    if (!(fade_bound_m >= 0.0 && fade_bound_m <= 1.0))
+        return bad("--open-world-fade-bound " + std::to_string(fade_bound_m) + ": must be in [0, 1] (metres)");
     OpenWorldSettings settings;
     settings.fade_steps = uint32_t(fade_steps);
+    settings.fade_bound_m = fade_bound_m;
     settings.trees = uint32_t(trees);
     settings.frames = uint32_t(frames);
     settings.changes = changes_given ? uint32_t(changes)

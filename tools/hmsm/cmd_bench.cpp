@@ -48,6 +48,7 @@ struct BenchFlags {
     bool open_world = false;  // the open-world case (bench_open_world.h)
     int64_t open_world_trees = 500000, open_world_frames = 300, open_world_changes = 0;
     int64_t open_world_fade_steps = LodBands{}.fade_steps;
+    double open_world_fade_bound = LodBands{}.fade_bound_m;
     std::string dynamics = "paper";  // coupled: also the dynamics table (bench_dynamics.h)
     std::string open_world_layout = "placed";  // SimulationConfig::instance_layout of the open world
     bool quick = false, no_progress = false;
@@ -139,6 +140,10 @@ void register_bench_flags(CLI::App& app) {
     add_integer_option(app, "--open-world-fade-steps", flags.open_world_fade_steps,
                        "steps a coarsening LOD switch fades over (LodBands::fade_steps, default " +
                            std::to_string(LodBands{}.fade_steps) + "; 0: instantaneous switches; implies --open-world)");
+    app.add_option("--open-world-fade-bound", flags.open_world_fade_bound,
+                   "metres a coarsening tree may deflect and still switch at once, measured with a read of "
+                   "its state (LodBands::fade_bound_m, default 0.001; 0: nothing is read, every coarsening "
+                   "fades; implies --open-world)");
     app.add_option("--open-world-layout", flags.open_world_layout,
                    "where the open world's instances lie (SimulationConfig::instance_layout): placed (default) "
                    "or packed, for comparison; implies --open-world");
@@ -188,10 +193,10 @@ int run_bench(CLI::App& app) {
         return fail_input("--frame-steps " + std::to_string(flags.frame_steps) + ": must be in [1, 64]");
     flags.open_world |= app.count("--open-world-trees") + app.count("--open-world-frames") +
                             app.count("--open-world-changes") + app.count("--open-world-fade-steps") +
-                            app.count("--open-world-layout") > 0;
+                            app.count("--open-world-fade-bound") + app.count("--open-world-layout") > 0;
     auto world_settings = bench::open_world_settings(flags.open_world_trees, flags.open_world_frames,
                                                      flags.open_world_changes, app.count("--open-world-changes") > 0,
-                                                     flags.open_world_fade_steps);
+                                                     flags.open_world_fade_steps, flags.open_world_fade_bound);
     if (!world_settings) return fail(world_settings.status());
     const auto world_layout =
         parse_choice(kInstanceLayoutNames, flags.open_world_layout, "--open-world-layout", Spelling::as_is);
