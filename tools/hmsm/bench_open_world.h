@@ -33,8 +33,9 @@ struct OpenWorldSettings {
     /// LodBands::fade_steps of coarsening switches; 0: instantaneous switches
     uint32_t fade_steps = LodBands{}.fade_steps;
     /// LodBands::fade_bound_m: a coarsening tree deflected less switches at once (measured with a
-    /// read of its state); 0: nothing is read, every coarsening fades
-    double fade_bound_m = LodBands{}.fade_bound_m;
+    /// read of its state); 0, as an engine sets it for a world in wind: nothing is read, every
+    /// coarsening fades
+    double fade_bound_m = 0.0;
     InstanceLayout layout = InstanceLayout::placed;  ///< SimulationConfig::instance_layout
     uint64_t device_copy_bytes = 1 << 30, host_copy_bytes = 256 << 20;  ///< roofline block sizes
 };
@@ -43,7 +44,7 @@ struct OpenWorldSettings {
 /// a value out of range is invalid_argument naming the flag.
 Result<OpenWorldSettings> open_world_settings(int64_t trees, int64_t frames, int64_t changes, bool changes_given,
                                               int64_t fade_steps = LodBands{}.fade_steps,
-                                              double fade_bound_m = LodBands{}.fade_bound_m);
+                                              double fade_bound_m = 0.0);
 
 /// One JSON row per backend (or one skipped row naming why the case does not run there).
 nlohmann::json measure_open_world(const TreeModel& model, const std::string& model_name,

@@ -48,7 +48,7 @@ struct BenchFlags {
     bool open_world = false;  // the open-world case (bench_open_world.h)
     int64_t open_world_trees = 500000, open_world_frames = 300, open_world_changes = 0;
     int64_t open_world_fade_steps = LodBands{}.fade_steps;
-    double open_world_fade_bound = LodBands{}.fade_bound_m;
+    double open_world_fade_bound = 0.0;  // as an engine sets it for a world in wind (docs/driving.md)
     std::string dynamics = "paper";  // coupled: also the dynamics table (bench_dynamics.h)
     std::string open_world_layout = "placed";  // SimulationConfig::instance_layout of the open world
     bool quick = false, no_progress = false;
@@ -142,8 +142,8 @@ void register_bench_flags(CLI::App& app) {
                            std::to_string(LodBands{}.fade_steps) + "; 0: instantaneous switches; implies --open-world)");
     app.add_option("--open-world-fade-bound", flags.open_world_fade_bound,
                    "metres a coarsening tree may deflect and still switch at once, measured with a read of "
-                   "its state (LodBands::fade_bound_m, default 0.001; 0: nothing is read, every coarsening "
-                   "fades; implies --open-world)");
+                   "its state (LodBands::fade_bound_m; default 0: nothing is read, every coarsening fades, "
+                   "as an engine sets it for a world in wind; implies --open-world)");
     app.add_option("--open-world-layout", flags.open_world_layout,
                    "where the open world's instances lie (SimulationConfig::instance_layout): placed (default) "
                    "or packed, for comparison; implies --open-world");
