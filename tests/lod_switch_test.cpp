@@ -433,6 +433,10 @@ TEST(LodSwitchC, SwitchesAndRefusals) {
     const double edges[] = {10.0, 20.0};
     EXPECT_EQ(hmsm_simulation_set_lod_bands(sim, edges, 2, 1.5), HMSM_INVALID_ARGUMENT);
     ASSERT_EQ(hmsm_simulation_set_lod_bands(sim, edges, 2, 0.1), HMSM_OK);
+    // The fade: a bound of 0 reads nothing (accepted); one past a metre is refused, naming it.
+    EXPECT_EQ(hmsm_simulation_set_lod_fade(sim, 30, 2.0), HMSM_INVALID_ARGUMENT);
+    EXPECT_NE(std::string(hmsm_status_message()).find("fade_bound_m"), std::string::npos) << hmsm_status_message();
+    ASSERT_EQ(hmsm_simulation_set_lod_fade(sim, 30, 0.0), HMSM_OK) << hmsm_status_message();
     const double viewer[3] = {0.0, 0.0, 0.0};
     uint64_t switched = 0;
     ASSERT_EQ(hmsm_simulation_update_lod(sim, viewer, &switched), HMSM_OK);
