@@ -200,6 +200,31 @@ Status Transfer::upload(const Buffer& dst, VkDeviceSize offset, VkDeviceSize byt
     return {};
 }
 
+Status Transfer::upload_then(const Buffer& dst, VkDeviceSize offset, VkDeviceSize bytes,
+                             const std::function<void(void*, VkDeviceSize, VkDeviceSize)>& fill,
+                             const std::function<Status(VkCommandBuffer)>& then) {
+    if (bytes > most_staged_bytes())
+        return {ErrorCode::internal, "vulkan: upload_then of " + std::to_string(bytes) + " bytes, past the staging"};
+    HMSM_TRY(ensure_staging(bytes));
+    if (bytes > 0) fill(staging_.mapped(), 0, bytes);
+    Status recorded;
+    HMSM_TRY(submit([&](VkCommandBuffer cmd) {
+        if (bytes > 0) {
+            const VkBufferCopy region{0, offset, bytes};
+            device_.vk().vkCmdCopyBuffer(cmd, staging_.handle(), dst.handle(), 1, &region);
+        }
+        barrier_after_all_writes(device_, cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_TRANSFER_BIT,
+                                 VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT |
+                                     VK_ACCESS_TRANSFER_READ_BIT | VK_ACCESS_TRANSFER_WRITE_BIT);
+        recorded = then(cmd);
+        // What `then` wrote, before whatever later submissions read or write.
+        barrier_after_all_writes(device_, cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_TRANSFER_BIT,
+                                 VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT |
+                                     VK_ACCESS_TRANSFER_READ_BIT | VK_ACCESS_TRANSFER_WRITE_BIT);
+    }));
+    return recorded;
+}
+
 Status Transfer::download(const Buffer& src, VkDeviceSize offset, VkDeviceSize bytes,
                           const std::function<void(const void*, VkDeviceSize, VkDeviceSize)>& consume) {
     HMSM_TRY(ensure_staging(bytes));

@@ -77,6 +77,13 @@ public:
     Status upload_parts(std::span<const BufferRegions> parts, const std::function<void(size_t, void*)>& fill);
     /// Records `commands` into a one-shot command buffer, submits it and waits.
     Status submit(const std::function<void(VkCommandBuffer)>& commands);
+    /// upload() of at most most_staged_bytes() whose copy is followed, in the same submission,
+    /// by `then(cmd)` (after a barrier that makes the copy visible to compute shaders): one
+    /// submission and one wait where upload() and a later submit() take two. The first error of
+    /// `then` is returned.
+    Status upload_then(const Buffer& dst, VkDeviceSize offset, VkDeviceSize bytes,
+                       const std::function<void(void*, VkDeviceSize, VkDeviceSize)>& fill,
+                       const std::function<Status(VkCommandBuffer)>& then);
     /// Submissions made so far (a test hook).
     uint64_t submissions() const { return submissions_; }
 

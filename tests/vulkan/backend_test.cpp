@@ -330,7 +330,8 @@ TEST_F(VulkanTest, MovesGoThroughTheRangeCopy) {
     ASSERT_TRUE(mutable_backend.read(BufferId::chain_force, 0, chains, whole.data(), detail::Scalar::f32).ok());
     EXPECT_EQ(whole, expected);
 
-    // A write of many ranges: one scatter of the range copy instead of a copy region each.
+    // A write of many ranges: one scatter of the range copy instead of a copy region each, in
+    // the submission that copies the values into the scratch (one submission waited for).
     std::vector<detail::ElementRange> ranges;
     std::vector<float> values;
     for (uint64_t e = 1; e + 1 < chains && ranges.size() < 100; e += 2) {
@@ -340,9 +341,10 @@ TEST_F(VulkanTest, MovesGoThroughTheRangeCopy) {
         expected[2 * e + 1] = -float(e);
     }
     ASSERT_GE(ranges.size(), 64u);
-    const uint64_t before_writes = backend.range_copy_dispatches();
+    const uint64_t before_writes = backend.range_copy_dispatches(), submitted = backend.submissions();
     ASSERT_TRUE(mutable_backend.write_ranges(BufferId::chain_force, ranges, values.data(), detail::Scalar::f32).ok());
     EXPECT_EQ(backend.range_copy_dispatches() - before_writes, 1u);
+    EXPECT_EQ(backend.submissions() - submitted, 1u);
     ASSERT_TRUE(mutable_backend.read(BufferId::chain_force, 0, chains, whole.data(), detail::Scalar::f32).ok());
     EXPECT_EQ(whole, expected);
 
