@@ -21,15 +21,9 @@ using detail::BufferId;
 using detail::device_growths_of;
 using detail::full_uploads_of;
 
-constexpr int32_t kBudgets[] = {6, 3, 1};
-
 Scene growth_scene() {
-    Scene scene = *grid_scene(test::small_tree(), 3, 5.0, 11);
-    scene.models.push_back(test::deep_tree(4));
-    scene.model_names.push_back("deep");
-    scene.instances.push_back({1, {9, 0, -3}, 1.9, 0.7, 0.3});
+    Scene scene = test::small_and_deep_with_levels(3);
     scene.instances[2].active = false;  // a paused instance moves with the others
-    scene.lod_budgets = {{std::begin(kBudgets), std::end(kBudgets)}, {std::begin(kBudgets), std::end(kBudgets)}};
     return scene;
 }
 

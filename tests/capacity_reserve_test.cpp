@@ -15,16 +15,10 @@ namespace {
 using detail::device_growths_of;
 using detail::full_uploads_of;
 
-constexpr int32_t kBudgets[] = {6, 3, 1};
-
 /// Two models with levels 0-3, four trees that start on the coarsest.
 Scene level_scene() {
-    Scene scene = *grid_scene(test::small_tree(), 3, 5.0, 11);
-    scene.models.push_back(test::deep_tree(4));
-    scene.model_names.push_back("deep");
-    scene.instances.push_back({1, {9, 0, -3}, 1.9, 0.7, 0.3});
+    Scene scene = test::small_and_deep_with_levels(3);
     for (Instance& instance : scene.instances) instance.level = 3;
-    scene.lod_budgets = {{std::begin(kBudgets), std::end(kBudgets)}, {std::begin(kBudgets), std::end(kBudgets)}};
     return scene;
 }
 

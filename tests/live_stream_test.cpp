@@ -17,16 +17,7 @@
 namespace hmsm {
 namespace {
 
-constexpr int32_t kBudgets[] = {6, 3, 1};
-
-Scene stream_scene() {
-    Scene scene = *grid_scene(test::small_tree(), 4, 5.0, 11);
-    scene.models.push_back(test::deep_tree(4));
-    scene.model_names.push_back("deep");
-    scene.instances.push_back({1, {9, 0, -3}, 1.9, 0.7, 0.3});
-    scene.lod_budgets = {{std::begin(kBudgets), std::end(kBudgets)}, {std::begin(kBudgets), std::end(kBudgets)}};
-    return scene;
-}
+Scene stream_scene() { return test::small_and_deep_with_levels(4); }
 
 Instance random_instance(std::mt19937& rng) {
     std::uniform_real_distribution<double> place(-30.0, 30.0), unit(0.0, 1.0);

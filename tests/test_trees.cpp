@@ -81,6 +81,16 @@ TreeModel deep_tree(int depth) {
     return tree;
 }
 
+Scene small_and_deep_with_levels(uint32_t small_trees) {
+    Scene scene = *grid_scene(small_tree(), small_trees, 5.0, 11);
+    scene.models.push_back(deep_tree(4));
+    scene.model_names.push_back("deep");
+    scene.instances.push_back({1, {9, 0, -3}, 1.9, 0.7, 0.3});
+    const std::vector<int32_t> budgets = {6, 3, 1};
+    scene.lod_budgets = {budgets, budgets};
+    return scene;
+}
+
 std::unique_ptr<Simulation> create_simulation_or_skip(const Scene& scene, SimulationConfig config,
                                                       BackendKind kind, std::string& skip) {
     config.backend = kind;

@@ -35,6 +35,10 @@ TreeModel deep_tree(int depth);
 /// `branches` chains, of depth <= 1 (for models of a chosen chain count).
 TreeModel broom(uint32_t branches);
 
+/// `small_trees` small trees on a grid (5 m apart, seed 11), then one deep tree (depth 4) of a
+/// second model, "deep": both models with levels of detail of 6, 3 and 1 chains.
+Scene small_and_deep_with_levels(uint32_t small_trees);
+
 /// Simulation::create() on `kind`; null with `skip` set to the reason when that backend is not
 /// compiled in or has no device (the caller then GTEST_SKIPs); any other error fails the test.
 std::unique_ptr<Simulation> create_simulation_or_skip(const Scene& scene, SimulationConfig config,
