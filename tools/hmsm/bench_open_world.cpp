@@ -380,6 +380,12 @@ json run_backend(const TreeModel& model, const std::string& model_name, BackendK
     }
     row["scene_uploads"] = detail::full_uploads_of(sim) - uploads;
     row["device_growths"] = detail::device_growths_of(sim) - growths;
+    // Standing still, untimed until the fades the moving frames started have ended and switched
+    // (a frame then makes no change at all: the baseline the changes are measured against; at
+    // most 1,000 frames, the fades still under way then reported).
+    for (uint32_t k = 0; k <= std::min<uint32_t>(s.fade_steps, 1000) && sim.fading_instance_count() > 0; ++k)
+        if (Status status = world.frame({0.0, 0.0}, nullptr, nullptr, nullptr); !status) return stop(status);
+    row["fading_after_settling"] = sim.fading_instance_count();
     for (uint32_t k = 0; k < std::min<uint32_t>(s.frames, 100); ++k)
         if (Status status = world.frame({0.0, 0.0}, &still, nullptr, nullptr); !status) return stop(status);
 

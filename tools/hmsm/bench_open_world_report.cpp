@@ -39,7 +39,7 @@ std::string render_open_world(const json& rows) {
         "Joints only. Room for twice each level's share of the trees is reserved before they stream in "
         "(`reserve_instances` by level). Per frame: swap-remove the trees that left the radius, add those that came, "
         "`update_lod(viewer)`, one `step`. Frame: the four calls; standing still: the same frames "
-        "with the viewer at rest (update_lod and step); changes add: frame median moving minus standing "
+        "with the viewer at rest (update_lod and step), timed once the fades begun while moving have ended; changes add: frame median moving minus standing "
         "still. Pop: the largest vertex jump of a switched tree (skinned from its joint matrices) "
         "against that tree's motion over the frame before; coarsening fades over the steps given "
         "(`fade`, 0: instantaneous switches; a tree at rest switches at once only where the JSON's "
