@@ -21,6 +21,7 @@ add_library(hmsm_cuda_objects OBJECT
   src/cuda/device_buffers.cpp
   src/cuda/range_transfers.cpp
   src/cuda/host_slot.cpp
+  src/cuda/upload_ring.cpp
   src/cuda/cuda_interop.cpp
   src/cuda/launch_dispatch.cpp
   src/cuda/launch_plan.cpp

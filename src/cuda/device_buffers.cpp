@@ -336,9 +336,8 @@ Status DeviceBuffers::write(BufferId id, uint64_t first, uint64_t count, const v
     const uint64_t scalar_bytes = as == Scalar::f64 ? 8 : 4;
     if (count == 0) return {};
     if (count * element_bytes <= kUploadSlotBytes) {
-        // The next slot of the ring: its previous copy has long run unless four writes were
-        // enqueued since (acquire waits for it then).
-        HostSlot& slot = next_upload_slot();
+        // Converted into the upload ring, which waits only where it has gone round since.
+        UploadRing& slot = upload_ring();
         auto staging = slot.acquire(count * element_bytes);
         if (!staging) return staging.status();
         scalars_to_words(shape, src, count * scalars, *staging, as);

@@ -1,8 +1,8 @@
 // The device buffers of the buffer table (buffers.h), one cudaMalloc each, sized from a
 // SceneData; uploads converted to float (src/device_words.h) and the typed read/write hooks, which
 // move data through pinned host memory (copies from or into pageable memory run at a fraction
-// of the PCIe/NVLink rate): writes through a ring of upload slots without waiting for the copy,
-// output reads with one copy into a slot per output (host_slot.h).
+// of the PCIe/NVLink rate): writes through the upload ring without waiting for the copy
+// (upload_ring.h), output reads with one copy into a slot per output (host_slot.h).
 #pragma once
 
 #include "../backend.h"
@@ -10,6 +10,7 @@
 #include "../../kernels/cuda/copy_ranges.h"
 #include "../../kernels/cuda/launchers.h"
 #include "host_slot.h"
+#include "upload_ring.h"
 
 #include <array>
 #include <cstdint>
@@ -37,7 +38,7 @@ public:
     /// Backend::read / Backend::write over elements [first, first + count) of `id`.
     Status read(BufferId id, uint64_t first, uint64_t count, void* dst, Scalar as,
                 cudaStream_t stream) const;
-    /// Up to 4 MiB (kUploadSlotBytes), a write is converted into the next slot of the upload ring and
+    /// Up to 4 MiB (kUploadSlotBytes), a write is converted into the upload ring and
     /// copied in stream order without waiting (a later kernel on `stream` sees it; `src` may be
     /// reused at once); larger ones go through the staging buffer and are complete on return.
     Status write(BufferId id, uint64_t first, uint64_t count, const void* src, Scalar as,
@@ -99,8 +100,8 @@ private:
     Status upload_range_table(const std::vector<WordRange>& ranges, cudaStream_t stream) const;
     /// The same for `bytes` of any table (the device table grows as needed).
     Status upload_table(const void* data, uint64_t bytes, cudaStream_t stream) const;
-    /// The next slot of the upload ring.
-    HostSlot& next_upload_slot() const;
+    /// The host memory of uploads not waited for (upload_ring.h).
+    UploadRing& upload_ring() const { return upload_ring_; }
 
     bool batch_transfers_ = batch_transfers_enabled();
     mutable void* move_scratch_ = nullptr;  // moves and range transfers, grown on demand
@@ -109,9 +110,7 @@ private:
     mutable uint64_t range_table_bytes_ = 0;
     mutable HostSlot range_read_slot_;  // read_ranges' device-to-host copy
     mutable std::array<HostSlot, kReadSlots> read_slots_;
-    static constexpr uint32_t kUploadSlots = 4;
-    mutable std::array<HostSlot, kUploadSlots> upload_slots_;
-    mutable uint32_t next_upload_ = 0;
+    mutable UploadRing upload_ring_;
     mutable std::byte* pinned_ = nullptr;
     mutable bool pinned_refused_ = false;
     std::array<uint64_t, kBufferCount> counts_{};

@@ -1,8 +1,7 @@
-// Host memory for copies the host does not wait for: a pinned (page-locked) buffer, grown as
+// Host memory for readbacks the host takes later: a pinned (page-locked) buffer, grown as
 // needed and kept, and an event marking the last copy that uses it. A slot is reused only
-// after that copy has run (acquire() waits for it), so a buffer an upload reads is never
-// overwritten under the copy, and a buffer a readback fills is never handed out before the
-// copy has finished.
+// after that copy has run (acquire() waits for it), so a buffer a readback fills is never
+// handed out before the copy has finished. (Uploads go through upload_ring.h.)
 #pragma once
 
 #include <hmsm/status.h>

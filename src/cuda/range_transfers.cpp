@@ -58,12 +58,6 @@ std::vector<WordRange> word_ranges(std::span<const ElementRange> ranges, const R
 
 }  // namespace
 
-HostSlot& DeviceBuffers::next_upload_slot() const {
-    HostSlot& slot = upload_slots_[next_upload_];
-    next_upload_ = (next_upload_ + 1) % kUploadSlots;
-    return slot;
-}
-
 Status DeviceBuffers::ensure_scratch(uint64_t bytes, cudaStream_t stream) const {
     if (move_scratch_bytes_ >= bytes) return {};
     CUDA_TRY(cudaStreamSynchronize(stream));  // earlier launches may still use the scratch
@@ -90,7 +84,7 @@ Status DeviceBuffers::upload_table(const void* data, uint64_t bytes, cudaStream_
         CUDA_TRY(cudaMalloc(&range_table_, grown));
         range_table_bytes_ = grown;
     }
-    HostSlot& slot = next_upload_slot();
+    UploadRing& slot = upload_ring();
     auto staging = slot.acquire(bytes);
     if (!staging) return staging.status();
     std::memcpy(*staging, data, bytes);
@@ -292,7 +286,7 @@ Status DeviceBuffers::write_ranges(BufferId id, std::span<const ElementRange> ra
         } else if (g.elements > 0) {
             const uint64_t bytes = g.elements * element_bytes;
             HMSM_TRY(ensure_scratch(bytes, stream));
-            HostSlot& slot = next_upload_slot();
+            UploadRing& slot = upload_ring();
             auto staging = slot.acquire(bytes);
             if (!staging) return staging.status();
             scalars_to_words(shape, in, g.elements * shape_scalars(shape), *staging, as);
