@@ -8,14 +8,18 @@
 // capacity grows) first submits them. A write of many ranges and a level switch's pattern
 // copies are held back as one change each and go as range-copy dispatches (range_copy.h),
 // submitted or, in a recording, with their tables and values staged in the frame's ring slot;
-// so do a swap removal's many moves of a buffer in a recording (as a pattern copy).
+// so do a swap removal's many moves of a buffer in a recording (as a pattern copy). Between
+// blocking steps the same changes are held back too (up to kBlockingHeldBytes staged) and go
+// as one command buffer of hmsm's own, recorded the same way, in one submission.
 #include "vulkan_backend.h"
 
 #include "../device_words.h"
 #include "../element_moves.h"
 
 #include <algorithm>
+#include <cstdlib>
 #include <cstring>
+#include <string_view>
 #include <unordered_map>
 #include <utility>
 
@@ -38,18 +42,47 @@ void barrier_after_dispatch(const Device& device, VkCommandBuffer cmd) {
 
 }  // namespace
 
+bool blocking_hold_back_requested() {
+    const char* env = std::getenv("HMSM_VULKAN_HOLD_BACK");
+    return !(env && std::string_view(env) == "0");
+}
+
+void VulkanBackend::hold_back(HeldBack change, uint64_t staged_bytes) {
+    held_back_bytes_ += staged_bytes;
+    held_back_.push_back(std::move(change));
+}
+
 Status VulkanBackend::hold_back_write(BufferId id, uint64_t first, uint64_t count, const void* src, Scalar as) {
     HeldBack change{HeldBack::Kind::write, id, first, count, as};
     const uint64_t bytes = count * shape_scalars(buffer_info(id).shape) * (as == Scalar::f64 ? 8 : 4);
     change.data.resize(bytes);
     std::memcpy(change.data.data(), src, bytes);
-    held_back_.push_back(std::move(change));
+    hold_back(std::move(change), count * device_element_bytes(id));
     return {};
 }
 
 Status VulkanBackend::submit_held_back() {
     if (held_back_.empty() || releasing_) return {};
+    if (!engine_recorded_) {
+        // Blocking steps: every change recorded as an engine's recording would record it, into
+        // one command buffer of hmsm's own, through the frame ring's next slot (free: each such
+        // submission is waited for, and no engine records into the ring).
+        Status recorded;
+        Status submitted = transfer_->submit([&](VkCommandBuffer cmd) {
+            record_target_ = cmd;
+            ++recordings_;
+            ring_->next_frame();
+            run_table_->next_recording(ring_->frames());
+            recorded = record_held_back();
+            ring_->record_copies(cmd);
+            record_target_ = VK_NULL_HANDLE;
+        });
+        HMSM_TRY(recorded);
+        HMSM_TRY(submitted);
+        return device_->take_validation_messages();
+    }
     std::vector<HeldBack> changes = std::exchange(held_back_, {});
+    held_back_bytes_ = 0;
     releasing_ = true;
     Status status;
     for (const HeldBack& c : changes) {
@@ -69,6 +102,7 @@ Status VulkanBackend::submit_held_back() {
 Status VulkanBackend::record_held_back() {
     if (held_back_.empty()) return {};
     std::vector<HeldBack> changes = std::exchange(held_back_, {});
+    held_back_bytes_ = 0;
     releasing_ = true;
     Status status;
     for (const HeldBack& c : changes) {

@@ -65,7 +65,11 @@ Status VulkanBackend::read_ranges(BufferId id, std::span<const ElementRange> ran
 }
 
 Status VulkanBackend::write_ranges(BufferId id, std::span<const ElementRange> ranges, const void* src, Scalar as) {
-    const bool held_back = holding_back() && batch_transfers_ && plan_ && !plan_->split() &&
+    uint64_t elements = 0;
+    for (const ElementRange& r : ranges) elements += r.count;
+    // Held back, the values and a table row per range are staged.
+    const uint64_t staged = elements * device_element_bytes(id) + ranges.size() * sizeof(PatternRow);
+    const bool held_back = holding_back(staged) && batch_transfers_ && plan_ && !plan_->split() &&
                            id != BufferId::wind_table && !ranges_overlap(ranges);
     if (held_back || (record_target_ && scatters_in_frame(id, ranges))) {
         HMSM_TRY(check_device_lost());
@@ -74,11 +78,9 @@ Status VulkanBackend::write_ranges(BufferId id, std::span<const ElementRange> ra
         HeldBack change{HeldBack::Kind::ranges, id};  // one change, however many ranges
         change.as = as;
         change.ranges.assign(ranges.begin(), ranges.end());
-        uint64_t elements = 0;
-        for (const ElementRange& r : ranges) elements += r.count;
         const auto* bytes = static_cast<const std::byte*>(src);
         change.data.assign(bytes, bytes + elements * range_scalar_bytes(id, as));
-        held_back_.push_back(std::move(change));
+        hold_back(std::move(change), staged);
         return {};
     }
     if (!copies_ranges_at_once(ranges, true)) return Backend::write_ranges(id, ranges, src, as);
@@ -194,13 +196,14 @@ Status VulkanBackend::copy_patterns(std::span<const BufferId> ids, uint64_t capa
         entries.push_back({uint32_t(e.src), uint32_t(e.dst), e.first_move, e.move_count});
     for (const ElementMove& m : tables->moves) moves.push_back({uint32_t(m.src), uint32_t(m.dst), uint32_t(m.count), 0});
     if (record_target_) return record_patterns_in_frame(ids, capacity, entries, moves);
-    if (holding_back()) {
+    const uint64_t staged = (entries.size() + moves.size()) * sizeof(PatternRow);
+    if (holding_back(staged)) {
         HeldBack change{HeldBack::Kind::patterns};
         change.ids.assign(ids.begin(), ids.end());
         change.count = capacity;
         change.entries = std::move(entries);
         change.rows = std::move(moves);
-        held_back_.push_back(std::move(change));
+        hold_back(std::move(change), staged);
         return {};
     }
     HMSM_TRY(submit_held_back());

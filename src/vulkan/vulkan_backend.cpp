@@ -234,10 +234,10 @@ Status VulkanBackend::move_elements(BufferId id, std::span<const ElementMove> mo
     auto staged = move_scratch_bytes(id, moves);
     if (!staged) return staged.status();
     HMSM_TRY(ensure_move_scratch(*staged));
-    if (holding_back()) {
+    if (holding_back(moves.size() * sizeof(PatternRow))) {  // as a pattern copy's table at most
         HeldBack change{HeldBack::Kind::move, id};
         change.moves.assign(moves.begin(), moves.end());
-        held_back_.push_back(std::move(change));
+        hold_back(std::move(change), moves.size() * sizeof(PatternRow));
         return {};
     }
     HMSM_TRY(submit_held_back());
@@ -331,7 +331,7 @@ Status VulkanBackend::run(std::span<const Dispatch> program, std::span<const Run
         HeldBack change{HeldBack::Kind::run};
         change.program.assign(program.begin(), program.end());
         change.steps.assign(steps.begin(), steps.end());
-        held_back_.push_back(std::move(change));
+        hold_back(std::move(change), 0);
         return {};
     }
     if (!record_target_) HMSM_TRY(submit_held_back());
@@ -423,7 +423,7 @@ Status VulkanBackend::write(BufferId id, uint64_t first, uint64_t count, const v
     HMSM_TRY(check_range(id, first, count));
     if (count == 0) return {};
     if (record_target_) return stage_write(id, first, count, src, as);
-    if (holding_back()) return hold_back_write(id, first, count, src, as);
+    if (holding_back(count * device_element_bytes(id))) return hold_back_write(id, first, count, src, as);
     HMSM_TRY(submit_held_back());
     if (id == BufferId::wind_table) keep_wind_header(first, count, src, as);
     const Shape shape = buffer_info(id).shape;

@@ -33,6 +33,10 @@
 
 namespace hmsm::detail::vk {
 
+/// Whether blocking steps hold instance changes back until the next submission (the default;
+/// HMSM_VULKAN_HOLD_BACK=0 submits each as it is made).
+bool blocking_hold_back_requested();
+
 class VulkanBackend final : public Backend {
 public:
     /// `frames_in_flight` (1 to kMaxFramesInFlight) sizes the ring of live parameters of
@@ -191,9 +195,19 @@ private:
         std::vector<BufferId> ids;
         std::vector<PatternRow> entries, rows;  // a pattern copy's entries and moves
     };
-    /// Whether a write, move or run is held back rather than done now.
-    bool holding_back() const { return in_instance_change_ && engine_recorded_ && !record_target_ && !releasing_; }
-    /// Submits the held-back changes (before any operation that is not itself held back).
+    /// Whether a write, move or run that stages `staged_bytes` is held back rather than done
+    /// now: within an instance change, under an engine's recording always, and otherwise
+    /// (blocking steps) while what is held stays within kBlockingHeldBytes.
+    bool holding_back(uint64_t staged_bytes = 0) const {
+        if (!in_instance_change_ || record_target_ || releasing_) return false;
+        return engine_recorded_ ||
+               (hold_back_blocking_ && held_back_bytes_ + staged_bytes <= kBlockingHeldBytes);
+    }
+    /// Queues a held-back change that stages `staged_bytes`.
+    void hold_back(HeldBack change, uint64_t staged_bytes);
+    /// Submits the held-back changes (before any operation that is not itself held back):
+    /// outside an engine's recording recorded into one command buffer through the frame ring
+    /// (one submission and one wait), else each as it would have run.
     Status submit_held_back();
     /// Records the held-back changes into the recording's command buffer, in order.
     Status record_held_back();
@@ -302,6 +316,11 @@ private:
     bool in_instance_change_ = false;
     bool engine_recorded_ = false;  // record_steps has recorded into an engine's command buffer
     bool releasing_ = false;        // held-back changes being submitted or recorded
+    /// Blocking steps hold instance changes back too (HMSM_VULKAN_HOLD_BACK=0: not), at most
+    /// this many staged bytes, so that the ring's slots stay small.
+    static constexpr uint64_t kBlockingHeldBytes = 16ull << 20;
+    bool hold_back_blocking_ = blocking_hold_back_requested();
+    uint64_t held_back_bytes_ = 0;
     std::vector<HeldBack> held_back_;
 };
 
