@@ -171,8 +171,10 @@ void measure_driver(Simulation& s, FrameDriver& driver, const nlohmann::json& he
 
 std::unique_ptr<FrameDriver> blocking_step(uint32_t steps) { return std::make_unique<BlockingStep>(steps); }
 
-Status time_frames(Simulation& s, FrameDriver& driver, uint32_t frames, const FrameChange& change, FrameTimes& times) {
+Status time_frames(Simulation& s, FrameDriver& driver, uint32_t frames, const FrameChange& change, FrameTimes& times,
+                   const FrameChange& prepare) {
     for (uint32_t k = 0; k < frames; ++k) {
+        if (prepare) HMSM_TRY(prepare(s, k));
         HMSM_TRY(driver.begin(s));
         const auto start = Clock::now();
         if (change) HMSM_TRY(change(s, k));

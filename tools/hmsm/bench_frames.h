@@ -55,10 +55,11 @@ struct FrameTimes {
     std::vector<double> device;  // FrameDriver::device_seconds, where the driver has them
 };
 
-/// Runs `frames` frames of `change` then `driver`'s step on `simulation`, timing each; stops at
-/// the first error, which it returns (the times hold the frames before it).
+/// Runs `frames` frames of `change` then `driver`'s step on `simulation`, timing each (after
+/// `prepare`, the engine's own work before its calls, not timed); stops at the first error,
+/// which it returns (the times hold the frames before it).
 Status time_frames(Simulation& simulation, FrameDriver& driver, uint32_t frames, const FrameChange& change,
-                   FrameTimes& times);
+                   FrameTimes& times, const FrameChange& prepare = {});
 
 struct FrameSettings {
     std::vector<uint32_t> counts;  // forest sizes

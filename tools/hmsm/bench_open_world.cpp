@@ -4,6 +4,7 @@
 
 #include "bench_model.h"
 #include "bench_frames.h"
+#include "bench_open_world_grid.h"
 #include "bench_open_world_probe.h"
 #include "simulation_access.h"
 
@@ -22,60 +23,6 @@ using nlohmann::json;
 using Clock = std::chrono::steady_clock;
 
 double seconds(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double>(b - a).count(); }
-
-/// The endless grid: the tree of cell (i, j) stands at (i, 0, j) * spacing with a yaw drawn
-/// from its cell, so a tree streamed out and back in is the same tree. The simulated trees are
-/// the cells strictly within `radius` of the viewer (on the ground plane).
-struct Grid {
-    double spacing = 25.0, radius = 0.0;
-
-    static uint64_t key(int64_t i, int64_t j) {
-        return (uint64_t(uint32_t(int32_t(i))) << 32) | uint64_t(uint32_t(int32_t(j)));
-    }
-    Instance tree(int64_t i, int64_t j) const {
-        uint64_t h = key(i, j) * 0x9E3779B97F4A7C15ull;
-        h ^= h >> 29;
-        Instance t;
-        t.origin = {double(i) * spacing, 0.0, double(j) * spacing};
-        t.yaw = double(h % 62832) * 1e-4;
-        t.wind_phase = double((h >> 20) % 1000) * 1e-3;
-        return t;
-    }
-    /// The cells of row j within the radius of (x, z): [first, last] (first > last: none).
-    std::pair<int64_t, int64_t> row(int64_t j, double x, double z) const {
-        const double dz = double(j) * spacing - z;
-        if (std::abs(dz) >= radius) return {1, 0};
-        const double half = std::sqrt(radius * radius - dz * dz);
-        int64_t first = int64_t(std::ceil((x - half) / spacing)), last = int64_t(std::floor((x + half) / spacing));
-        if (std::hypot(double(first) * spacing - x, dz) >= radius) ++first;
-        if (std::hypot(double(last) * spacing - x, dz) >= radius) --last;
-        return {first, last};
-    }
-    std::pair<int64_t, int64_t> rows(double z0, double z1) const {
-        return {int64_t(std::floor((std::min(z0, z1) - radius) / spacing)),
-                int64_t(std::ceil((std::max(z0, z1) + radius) / spacing))};
-    }
-};
-
-struct Cell {
-    int64_t i, j;
-};
-
-/// The cells within the radius of `from` but not of `to` (leaving) and the reverse (entering).
-void stream_cells(const Grid& g, glm::dvec2 from, glm::dvec2 to, std::vector<Cell>& leaving,
-                  std::vector<Cell>& entering) {
-    leaving.clear();
-    entering.clear();
-    const auto [j0, j1] = g.rows(from.y, to.y);
-    for (int64_t j = j0; j <= j1; ++j) {
-        const auto [a0, b0] = g.row(j, from.x, from.y);
-        const auto [a1, b1] = g.row(j, to.x, to.y);
-        for (int64_t i = a0; i <= b0; ++i)
-            if (i < a1 || i > b1) leaving.push_back({i, j});
-        for (int64_t i = a1; i <= b1; ++i)
-            if (i < a0 || i > b0) entering.push_back({i, j});
-    }
-}
 
 struct Calls {
     std::vector<double> update_lod, remove, add, step, frame;
@@ -130,21 +77,11 @@ public:
         return {};
     }
 
-    /// Adds the trees of `cells`, each on the level its distance to the viewer falls in (the
-    /// bands without hysteresis, as an engine streaming trees in would ask), and records their
-    /// handles.
+    /// Adds the trees of `cells`, each on its band's level, and records their handles.
     Status add(const std::vector<Cell>& cells) {
+        record_added();
         if (cells.empty()) return {};
-        std::vector<Instance> trees;
-        trees.reserve(cells.size());
-        const std::vector<double>& edges = sim_.lod_bands().edges;
-        for (const Cell& c : cells) {
-            Instance tree = grid_.tree(c.i, c.j);
-            const double distance = glm::length(glm::dvec3(tree.origin) - glm::dvec3(eye()));
-            const auto band = uint32_t(std::upper_bound(edges.begin(), edges.end(), distance) - edges.begin());
-            tree.level = std::min(band, sim_.lod_level_count(tree.model) - 1);
-            trees.push_back(tree);
-        }
+        const std::vector<Instance> trees = trees_of(cells);
         std::vector<InstanceId> ids(cells.size());
         HMSM_TRY(sim_.add_instances(trees, ids));
         for (size_t k = 0; k < cells.size(); ++k) live_[Grid::key(cells[k].i, cells[k].j)] = ids[k];
@@ -153,48 +90,56 @@ public:
 
     /// Swap-removes the trees of `cells` by handle.
     Status remove(const std::vector<Cell>& cells) {
-        if (cells.empty()) return {};
         std::vector<InstanceId> ids;
-        ids.reserve(cells.size());
-        for (const Cell& c : cells) {
-            auto found = live_.find(Grid::key(c.i, c.j));
-            if (found == live_.end()) return Status{ErrorCode::internal, "open world: a leaving tree is not live"};
-            ids.push_back(found->second);
-            live_.erase(found);
-        }
-        return sim_.swap_remove_instances(ids);
+        HMSM_TRY(take_handles(cells, ids));
+        return ids.empty() ? Status{} : sim_.swap_remove_instances(ids);
     }
 
-    /// A frame's changes: the viewer moves by `move`; the trees that left are removed and those
-    /// that came are added (first, so that update_lod puts them on their level before the
-    /// step); update_lod. Each call's wall time goes to `calls` (when given); `changes` receives
-    /// the trees added, removed and switched.
-    Status changes(glm::dvec2 move, Calls* calls, uint64_t* changes, uint64_t* switched) {
+    /// The engine's own work before a frame's calls, not timed: the viewer moves by `move`; the
+    /// cells that left the radius and those that came, the handles of the trees leaving and
+    /// the trees coming, each on the level of the band its distance falls in.
+    Status prepare(glm::dvec2 move) {
+        record_added();
         const glm::dvec2 to = viewer_ + move;
         stream_cells(grid_, viewer_, to, leaving_, entering_);
         viewer_ = to;
+        HMSM_TRY(take_handles(leaving_, gone_));
+        coming_ = trees_of(entering_);
+        coming_cells_ = entering_;
+        return {};
+    }
+
+    /// A frame's calls after prepare(): the trees that left are swap-removed by handle, those
+    /// that came are added (first, so that update_lod puts them on their level before the
+    /// step); update_lod. Each call's wall time goes to `calls` (when given); `changes`
+    /// receives the trees added, removed and switched.
+    Status calls(Calls* calls, uint64_t* changes, uint64_t* switched) {
         const auto t0 = Clock::now();
-        HMSM_TRY(remove(leaving_));
+        if (!gone_.empty()) HMSM_TRY(sim_.swap_remove_instances(gone_));
         const auto t1 = Clock::now();
-        HMSM_TRY(add(entering_));
+        coming_ids_.resize(coming_.size());
+        if (!coming_.empty()) HMSM_TRY(sim_.add_instances(coming_, coming_ids_));
         const auto t2 = Clock::now();
         Result<uint64_t> lod = sim_.update_lod(eye());
         HMSM_TRY(lod.status());
         const auto t3 = Clock::now();
         if (calls) {
-            if (!leaving_.empty()) calls->remove.push_back(seconds(t0, t1));
-            if (!entering_.empty()) calls->add.push_back(seconds(t1, t2));
+            if (!gone_.empty()) calls->remove.push_back(seconds(t0, t1));
+            if (!coming_.empty()) calls->add.push_back(seconds(t1, t2));
             calls->update_lod.push_back(seconds(t2, t3));
         }
-        if (changes) *changes = leaving_.size() + entering_.size() + *lod;
+        if (changes) *changes = gone_.size() + coming_.size() + *lod;
         if (switched) *switched = *lod;
+        pending_ = true;  // the added trees' handles, recorded by the next prepare()
         return {};
     }
 
-    /// One frame: its changes, then one step (Simulation::step, blocking).
+    /// One frame: prepare(), then its calls and one step (Simulation::step, blocking); the
+    /// frame's time is that of the calls.
     Status frame(glm::dvec2 move, Calls* calls, uint64_t* changes, uint64_t* switched) {
+        HMSM_TRY(prepare(move));
         const auto t0 = Clock::now();
-        HMSM_TRY(this->changes(move, calls, changes, switched));
+        HMSM_TRY(this->calls(calls, changes, switched));
         const auto t3 = Clock::now();
         HMSM_TRY(sim_.step(1));
         const auto t4 = Clock::now();
@@ -270,11 +215,50 @@ public:
     Vec3 eye() const { return Vec3(viewer_.x, 0.0, viewer_.y); }
 
 private:
+    /// The trees of `cells`, each on the level its distance to the viewer falls in (the bands
+    /// without hysteresis, as an engine streaming trees in would ask).
+    std::vector<Instance> trees_of(const std::vector<Cell>& cells) const {
+        std::vector<Instance> trees;
+        trees.reserve(cells.size());
+        const std::vector<double>& edges = sim_.lod_bands().edges;
+        for (const Cell& c : cells) {
+            Instance tree = grid_.tree(c.i, c.j);
+            const double distance = glm::length(glm::dvec3(tree.origin) - glm::dvec3(eye()));
+            const auto band = uint32_t(std::upper_bound(edges.begin(), edges.end(), distance) - edges.begin());
+            tree.level = std::min(band, sim_.lod_level_count(tree.model) - 1);
+            trees.push_back(tree);
+        }
+        return trees;
+    }
+    /// The handles of the trees of `cells`, which are no longer live once the caller removes them.
+    Status take_handles(const std::vector<Cell>& cells, std::vector<InstanceId>& ids) {
+        record_added();
+        ids.clear();
+        ids.reserve(cells.size());
+        for (const Cell& c : cells) {
+            auto found = live_.find(Grid::key(c.i, c.j));
+            if (found == live_.end()) return Status{ErrorCode::internal, "open world: a leaving tree is not live"};
+            ids.push_back(found->second);
+            live_.erase(found);
+        }
+        return {};
+    }
+    /// The handles the last calls() added, by their cells.
+    void record_added() {
+        if (!pending_) return;
+        for (size_t k = 0; k < coming_cells_.size(); ++k)
+            live_[Grid::key(coming_cells_[k].i, coming_cells_[k].j)] = coming_ids_[k];
+        pending_ = false;
+    }
+
     Simulation& sim_;
     Grid grid_;
     glm::dvec2 viewer_{0.0};
     std::unordered_map<uint64_t, InstanceId> live_;
-    std::vector<Cell> leaving_, entering_;
+    std::vector<Cell> leaving_, entering_, coming_cells_;
+    std::vector<InstanceId> gone_, coming_ids_;
+    std::vector<Instance> coming_;
+    bool pending_ = false;  // coming_ids_ not yet in live_
 };
 
 json run_backend(const TreeModel& model, const std::string& model_name, BackendKind kind,
@@ -398,12 +382,13 @@ json run_backend(const TreeModel& model, const std::string& model_name, BackendK
     json engine_moving = json::array();
     for (const std::unique_ptr<FrameDriver>& driver : engine_drivers(sim)) {
         Calls calls;
-        const FrameChange change = [&](Simulation&, uint32_t) { return world.changes(move, &calls, nullptr, nullptr); };
+        const FrameChange prepare = [&](Simulation&, uint32_t) { return world.prepare(move); };
+        const FrameChange change = [&](Simulation&, uint32_t) { return world.calls(&calls, nullptr, nullptr); };
         FrameTimes warm, times;
-        if (Status status = time_frames(sim, *driver, warmup, change, warm); !status) return stop(status);
+        if (Status status = time_frames(sim, *driver, warmup, change, warm, prepare); !status) return stop(status);
         calls = {};
         const uint64_t uploads_before = detail::full_uploads_of(sim), growths_before = detail::device_growths_of(sim);
-        if (Status status = time_frames(sim, *driver, std::min<uint32_t>(s.frames, 100), change, times); !status)
+        if (Status status = time_frames(sim, *driver, std::min<uint32_t>(s.frames, 100), change, times, prepare); !status)
             return stop(status);
         double standing = 0.0;
         for (const json& e : row["still_engine"])
