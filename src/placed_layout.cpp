@@ -329,10 +329,7 @@ Result<bool> Simulation::Impl::switch_placed(const std::vector<std::pair<uint32_
         placements_.set(i, slots[k]);
         instances_[i].model = model;
         instances_[i].level = lod_models_[model].level;
-        if (instances_[i].active) {
-            placed_list_.erase(i);
-            placed_list_.insert(i, model, slots[k]);
-        }
+        if (instances_[i].active) placed_list_.move_to(i, model, slots[k]);
         lod_tracker_.examine_next(i);
     }
     offsets_valid_ = false;

@@ -3,8 +3,9 @@
 // index) per active instance, the entries of each run model together in a segment, segments in
 // model order, so that each model is one listed dispatch per pass (listed_groups.h). An
 // instance's entry moves only when it changes; an entry joining or leaving a segment moves one
-// entry of each later segment (its first to its end, or its last to its start), so a change
-// costs O(models) entry writes and the table is written where it changed.
+// entry of each later segment (its first to its end, or its last to its start), and one that
+// changes segment one entry of each segment between, so a change costs O(models) entry writes
+// (two for a switch between neighbouring levels) and the table is written where it changed.
 #pragma once
 
 #include "instance_placements.h"
@@ -69,6 +70,27 @@ public:
         }
         --begin_[models];
         entries_.pop_back();
+    }
+    /// Instance i's entry (it has one) goes to run model `model`'s segment, at `at` (a level
+    /// switch): the hole it leaves travels to that segment through those between, one entry of
+    /// each moving to the hole's side, so a switch between neighbouring segments writes two
+    /// entries where an erase and an insert wrote one for every later segment as well.
+    void move_to(uint32_t i, uint32_t model, const ElementCounts& at) {
+        uint32_t free = entry_of_[i];
+        uint32_t from = uint32_t(std::upper_bound(begin_.begin(), begin_.end(), free) - begin_.begin()) - 1;
+        for (; from < model; ++from) {  // free lies in segment `from`: its last entry fills it
+            const uint32_t last = begin_[from + 1] - 1;
+            if (last != free) move(last, free);
+            free = last;
+            --begin_[from + 1];  // and free is the next segment's first
+        }
+        for (; from > model; --from) {  // its first entry fills it
+            const uint32_t first = begin_[from];
+            if (first != free) move(first, free);
+            free = first;
+            ++begin_[from];  // and free is the previous segment's last
+        }
+        put(free, {at, i});
     }
     /// Instance `from`'s entry now names index `to` (a swap removal's filler taking a hole).
     void renumber(uint32_t from, uint32_t to) {

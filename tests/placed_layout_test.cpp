@@ -49,7 +49,7 @@ TEST(InstancePlacements, FreedSlotsServeTheirModelAndTheEndGrowsOtherwise) {
     EXPECT_EQ(p.free_slots(), 0u);
 }
 
-// The step program's table under random inserts, erasures and renumberings: every listed
+// The step program's table under random inserts, erasures, renumberings and switches: every listed
 // instance has one entry, in its model's segment, at its slot; the entries written since the
 // last take, applied to a copy of the table as a device would hold it, give the whole table.
 TEST(PlacedList, KeepsOneEntryPerListedInstanceAndWritesWhatChanged) {
@@ -78,7 +78,7 @@ TEST(PlacedList, KeepsOneEntryPerListedInstanceAndWritesWhatChanged) {
     for (size_t i = 0; i < instances.size(); ++i) listed[i] = instances[i].active;
     for (int round = 0; round < 400; ++round) {
         const uint32_t i = rng() % uint32_t(instances.size());
-        const int op = int(rng() % 3);
+        const int op = int(rng() % 4);
         if (op == 0 && listed[i]) {
             list.erase(i);
             listed[i] = false;
@@ -94,6 +94,12 @@ TEST(PlacedList, KeepsOneEntryPerListedInstanceAndWritesWhatChanged) {
             slots.set(j, slots[i]);
             listed[i] = false;
             listed[j] = true;
+        } else if (op == 3 && listed[i]) {  // a level switch: i's entry changes segment and slot
+            instances[i].model = rng() % kModels;
+            detail::ElementCounts at = slots[i];
+            at.chains += 1000;
+            slots.set(i, at);
+            list.move_to(i, instances[i].model, slots[i]);
         }
         if (round % 7 == 0) sync();
     }
@@ -110,6 +116,17 @@ TEST(PlacedList, KeepsOneEntryPerListedInstanceAndWritesWhatChanged) {
             EXPECT_EQ(uint64_t(device[4 * e]), slots[i].chains) << "entry " << e;
         }
     for (size_t i = 0; i < instances.size(); ++i) EXPECT_EQ(seen[i], listed[i] ? 1 : 0) << "instance " << i;
+
+    // A switch to the neighbouring segment writes two entries, however many segments follow.
+    for (Instance& inst : instances) inst.active = true;
+    instances[0].model = 0;
+    list.build(instances, slots, kModels);
+    sync();
+    list.move_to(0, 1, slots[0]);
+    std::vector<detail::ElementRange> ranges;
+    std::vector<double> values;
+    list.take_writes(ranges, values);
+    EXPECT_EQ(values.size(), 2u * 4u);
 }
 
 /// Sums the elements the backend moves or copies (per buffer).
