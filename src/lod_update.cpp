@@ -157,7 +157,12 @@ Result<uint64_t> Simulation::update_lod(Vec3 viewer) {
         return changed.status();
     }
     if (tracker.valid) {  // a switch past the capacity lays the list out anew: the next call examines all
-        for (const auto& [i, slack] : examined) {
+        for (size_t k = 0; k < examined.size(); ++k) {
+            if (k + kAhead < examined.size()) {  // each push misses twice: its key and its bucket
+                __builtin_prefetch(&tracker.key[examined[k + kAhead].first], 1);
+                tracker.queue.prefetch(tracker.travelled + examined[k + kAhead].second);
+            }
+            const auto [i, slack] = examined[k];
             tracker.key[i] = tracker.travelled + slack;
             tracker.push(tracker.key[i], i);
         }
