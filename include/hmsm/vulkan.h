@@ -23,10 +23,13 @@ namespace hmsm::vulkan {
 /// A Vulkan context owned by the engine. hmsm never destroys these handles; they must outlive
 /// every Simulation created on them. The device needs Vulkan 1.1 and no extra feature or
 /// extension. `queue` must belong to `queue_family_index`, which must support compute; hmsm
-/// submits to it inside Simulation::create(), step(), read(), add_instances(),
-/// remove_instances() and reset_instances(), never inside record_steps(), so the engine must
-/// not use the queue from another thread during those calls (Vulkan's external
-/// synchronization rule).
+/// may submit to it inside Simulation::create(), step(), read() and its other reads,
+/// add_instances(), remove_instances(), swap_remove_instances(), reset_instances(),
+/// reserve_instances() and the level calls (set_instance_lod(s), request_instance_lods(),
+/// update_lod()), never inside record_steps(), so the engine must not use the queue from
+/// another thread during those calls (Vulkan's external synchronization rule). With step(),
+/// instance changes within the capacity are held back and submitted with the next step() or
+/// before the next read (docs/vulkan.md, "Instance changes between blocking steps").
 struct ExternalContext {
     VkInstance instance = VK_NULL_HANDLE;
     VkPhysicalDevice physical_device = VK_NULL_HANDLE;
