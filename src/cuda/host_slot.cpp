@@ -3,6 +3,7 @@
 #include "cuda_error.h"
 
 #include <algorithm>
+#include <string>
 
 namespace hmsm::detail::cuda {
 namespace {
@@ -13,10 +14,34 @@ constexpr uint64_t kGrain = 1ull << 20;
 
 }  // namespace
 
-HostSlot::~HostSlot() {
-    if (in_flight_) (void)cudaEventSynchronize(event_);
-    if (event_) (void)cudaEventDestroy(event_);
+HostBuffer::~HostBuffer() {
     if (pinned_) (void)cudaFreeHost(pinned_);
+}
+
+Status HostBuffer::allocate(uint64_t bytes, const char* what) {
+    if (pinned_) CUDA_TRY(cudaFreeHost(pinned_));
+    pinned_ = nullptr;
+    pageable_ = {};
+    size_ = 0;
+    void* host = nullptr;
+    if (cudaHostAlloc(&host, bytes, cudaHostAllocDefault) == cudaSuccess) {
+        pinned_ = static_cast<std::byte*>(host);
+    } else {
+        (void)cudaGetLastError();
+        try {
+            pageable_.resize(bytes);
+        } catch (const std::bad_alloc&) {
+            return Status{ErrorCode::out_of_memory, std::string("cuda: not enough host memory for ") + what + " of " +
+                                                        std::to_string(bytes) + " bytes"};
+        }
+    }
+    size_ = bytes;
+    return {};
+}
+
+HostSlot::~HostSlot() {
+    if (in_flight_) (void)cudaEventSynchronize(event_);  // before memory_ is freed
+    if (event_) (void)cudaEventDestroy(event_);
 }
 
 Status HostSlot::wait() {
@@ -27,31 +52,14 @@ Status HostSlot::wait() {
 
 Result<std::byte*> HostSlot::acquire(uint64_t bytes) {
     HMSM_TRY(wait());
-    if (pinned_ && capacity_ >= bytes) return pinned_;
-    if (!pinned_ && !pageable_.empty() && pageable_.size() >= bytes) return pageable_.data();
+    if (memory_.size() >= bytes && memory_.size() > 0) return memory_.data();
     // Geometric growth: a slot asked for a little more each call (a streaming world's writes
     // grow with its instances) is reallocated, which pins memory anew, a logarithmic number of
     // times.
-    const uint64_t held = pinned_ ? capacity_ : uint64_t(pageable_.size());
+    const uint64_t held = memory_.size();
     const uint64_t grown = std::max((bytes / kGrain + 1) * kGrain, (held + held / 2) / kGrain * kGrain);
-    if (pinned_) CUDA_TRY(cudaFreeHost(pinned_));
-    pinned_ = nullptr;
-    capacity_ = 0;
-    void* host = nullptr;
-    if (cudaHostAlloc(&host, grown, cudaHostAllocDefault) == cudaSuccess) {
-        pinned_ = static_cast<std::byte*>(host);
-        capacity_ = grown;
-        pageable_ = {};
-        return pinned_;
-    }
-    (void)cudaGetLastError();
-    try {
-        pageable_.resize(grown);
-    } catch (const std::bad_alloc&) {
-        return Status{ErrorCode::out_of_memory,
-                      "cuda: not enough host memory for a staging buffer of " + std::to_string(grown) + " bytes"};
-    }
-    return pageable_.data();
+    HMSM_TRY(memory_.allocate(grown, "a staging buffer"));
+    return memory_.data();
 }
 
 Status HostSlot::mark(cudaStream_t stream) {

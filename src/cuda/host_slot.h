@@ -14,6 +14,29 @@
 
 namespace hmsm::detail::cuda {
 
+/// Host memory for copies: pinned where the runtime grants it, pageable where it refuses (copies
+/// then run at pageable speed; still correct, the CUDA runtime stages them). Freed when it is
+/// allocated again and on destruction; the owner makes sure no copy still uses it then.
+class HostBuffer {
+public:
+    HostBuffer() = default;
+    ~HostBuffer();
+    HostBuffer(const HostBuffer&) = delete;
+    HostBuffer& operator=(const HostBuffer&) = delete;
+
+    /// Frees what it holds and takes `bytes` anew; out_of_memory names `what` where neither
+    /// kind of memory is to be had (and then it holds nothing).
+    Status allocate(uint64_t bytes, const char* what);
+    std::byte* data() { return pinned_ ? pinned_ : pageable_.data(); }
+    const std::byte* data() const { return pinned_ ? pinned_ : pageable_.data(); }
+    uint64_t size() const { return size_; }
+
+private:
+    std::byte* pinned_ = nullptr;
+    std::vector<std::byte> pageable_;
+    uint64_t size_ = 0;
+};
+
 class HostSlot {
 public:
     HostSlot() = default;
@@ -29,12 +52,10 @@ public:
     Status mark(cudaStream_t stream);
     /// Waits for the marked copies; the memory acquire() returned then holds their result.
     Status wait();
-    const std::byte* data() const { return pinned_ ? pinned_ : pageable_.data(); }
+    const std::byte* data() const { return memory_.data(); }
 
 private:
-    std::byte* pinned_ = nullptr;
-    uint64_t capacity_ = 0;
-    std::vector<std::byte> pageable_;
+    HostBuffer memory_;
     cudaEvent_t event_ = nullptr;
     bool in_flight_ = false;
 };

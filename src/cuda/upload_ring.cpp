@@ -22,7 +22,6 @@ UploadRing::~UploadRing() {
         (void)cudaEventDestroy(r.copied);
     }
     for (cudaEvent_t e : spare_events_) (void)cudaEventDestroy(e);
-    if (pinned_) (void)cudaFreeHost(pinned_);
 }
 
 Status UploadRing::retire_oldest() {
@@ -41,25 +40,8 @@ Status UploadRing::retire_oldest() {
 
 Status UploadRing::grow(uint64_t bytes) {
     while (!in_flight_.empty()) HMSM_TRY(retire_oldest());
-    const uint64_t wanted = std::max({kFirstCapacity, 2 * capacity_, 4 * bytes});
-    if (pinned_) CUDA_TRY(cudaFreeHost(pinned_));
-    pinned_ = nullptr;
-    pageable_ = {};
-    capacity_ = head_ = 0;
-    void* host = nullptr;
-    if (cudaHostAlloc(&host, wanted, cudaHostAllocDefault) == cudaSuccess) {
-        pinned_ = static_cast<std::byte*>(host);
-    } else {
-        (void)cudaGetLastError();
-        try {
-            pageable_.resize(wanted);
-        } catch (const std::bad_alloc&) {
-            return Status{ErrorCode::out_of_memory,
-                          "cuda: not enough host memory for an upload ring of " + std::to_string(wanted) + " bytes"};
-        }
-    }
-    capacity_ = wanted;
-    return {};
+    head_ = 0;
+    return memory_.allocate(std::max({kFirstCapacity, 2 * memory_.size(), 4 * bytes}), "an upload ring");
 }
 
 Result<std::byte*> UploadRing::acquire(uint64_t bytes) {
@@ -68,13 +50,10 @@ Result<std::byte*> UploadRing::acquire(uint64_t bytes) {
     if (pending_) head_ = last_.begin;
     pending_ = false;
     const uint64_t size = std::max<uint64_t>(kAlignment, (bytes + kAlignment - 1) / kAlignment * kAlignment);
-    if (size > capacity_ / 2) HMSM_TRY(grow(size));
+    if (size > memory_.size() / 2) HMSM_TRY(grow(size));
     // Opportunistically forget copies that have run, so the queue stays short.
-    while (!in_flight_.empty() && cudaEventQuery(in_flight_.front().copied) == cudaSuccess) {
-        spare_events_.push_back(in_flight_.front().copied);
-        in_flight_.pop_front();
-    }
-    if (head_ + size > capacity_) head_ = 0;
+    while (!in_flight_.empty() && cudaEventQuery(in_flight_.front().copied) == cudaSuccess) HMSM_TRY(retire_oldest());
+    if (head_ + size > memory_.size()) head_ = 0;
     const uint64_t begin = head_, end = head_ + size;
     // The regions still read are the oldest ones ahead of the head, in ring order: retiring from
     // the oldest frees the bytes wanted before any newer region.
@@ -87,7 +66,7 @@ Result<std::byte*> UploadRing::acquire(uint64_t bytes) {
     last_ = {begin, end, nullptr};
     pending_ = true;
     head_ = end;
-    return (pinned_ ? pinned_ : pageable_.data()) + begin;
+    return memory_.data() + begin;
 }
 
 Status UploadRing::mark(cudaStream_t stream) {

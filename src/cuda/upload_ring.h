@@ -6,6 +6,8 @@
 // oldest copy of the same frame, and with it for every launch enqueued before that copy.
 #pragma once
 
+#include "host_slot.h"
+
 #include <hmsm/status.h>
 
 #include <cuda_runtime_api.h>
@@ -32,7 +34,7 @@ public:
     Status mark(cudaStream_t stream);
 
     /// Ring bytes and the acquires that had to wait for a copy (tests and benchmarks).
-    uint64_t capacity() const { return capacity_; }
+    uint64_t capacity() const { return memory_.size(); }
     uint64_t waits() const { return waits_; }
 
 private:
@@ -44,9 +46,7 @@ private:
     Status retire_oldest();
     Status grow(uint64_t bytes);
 
-    std::byte* pinned_ = nullptr;
-    std::vector<std::byte> pageable_;
-    uint64_t capacity_ = 0;
+    HostBuffer memory_;
     uint64_t head_ = 0;  // the next byte handed out
     bool pending_ = false;
     Region last_;  // the last acquire's bytes, until marked
